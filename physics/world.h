@@ -1,0 +1,45 @@
+#pragma once
+// The physics pipeline a scene asks for: it builds only the listed effects and steps them in a
+// fixed order. Plain data in (instrument input), plain data out (snapshot, local force model).
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "physics/instrument_input.h"
+#include "physics/local_force_model.h"
+#include "physics/world_snapshot.h"
+#include "physics/world_spec.h"
+
+namespace pcisim::physics {
+
+struct EffectCost {
+  std::string name;           // the scene's effect name
+  double last_step_ms = 0.0;  // wall time of that effect in the last step
+};
+
+class World {
+ public:
+  // throws std::invalid_argument naming the bad field when the spec cannot be built
+  explicit World(const WorldSpec& spec);
+  ~World();
+  World(const World&) = delete;
+  World& operator=(const World&) = delete;
+
+  // one fixed step of spec.step_s; allocates nothing
+  void step(const InstrumentInput& input);
+
+  // copies the state out; `out` keeps its capacity so repeated calls do not allocate
+  void write_snapshot(WorldSnapshot& out) const;
+  LocalForceModel force_model() const;
+
+  // effects in step order, with their cost in the last step
+  std::span<const EffectCost> effect_costs() const;
+  double time_s() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace pcisim::physics

@@ -27,8 +27,4 @@ struct VesselTree {
   int find(std::string_view name) const;
 };
 
-// centerline JSON (format in docs/anatomy.md); read throws std::runtime_error naming path and field
-void write_vessel_tree_json(const VesselTree& tree, const std::string& path);
-VesselTree read_vessel_tree_json(const std::string& path);
-
 }  // namespace pcisim::physics

@@ -27,4 +27,13 @@ struct VesselTree {
   int find(std::string_view name) const;
 };
 
+// the branch whose centerline (as a polyline) is closest to p_m, or -1 for an empty tree.
+// Brute force over segments, allocates nothing; meant for a few queries per step (the wire tip).
+// Ties go to the lower index, so inside the aortic root the aorta wins over the LM's first stretch.
+int nearest_branch(const VesselTree& tree, const Eigen::Vector3d& p_m,
+                   double* distance_to_centerline_m = nullptr);
+
+// arc length of a branch's centerline polyline
+double branch_length_m(const VesselBranch& branch);
+
 }  // namespace pcisim::physics

@@ -1,0 +1,65 @@
+#pragma once
+// One 1 kHz tick of force: evaluate the newest local force model at the newest instrument
+// sample, blend across model changes, then apply the safety layers in a fixed order:
+// NaN guard -> fade (stale model / silent instrument / fault) -> ramp-in -> clamp -> slew.
+// Plain arithmetic on preallocated state: no allocation, lock, log or syscall.
+#include <cstdint>
+
+#include "haptics/haptic_params.h"
+#include "physics/local_force_model.h"
+
+namespace pcisim::haptics {
+
+struct InstrumentSample {
+  int64_t received_us = 0;  // monotonic time the sample arrived; 0 = never
+  double insertion_m = 0.0;
+  double rotation_rad = 0.0;
+  double insertion_rate_m_per_s = 0.0;
+  double rotation_rate_rad_per_s = 0.0;
+};
+
+enum ForceFlags : int32_t {
+  kFlagClamped = 1,
+  kFlagFaded = 2,
+  kFlagStale = 4,
+  kFlagFault = 8,
+  kFlagRamping = 16,
+};
+
+struct ForceOutput {
+  double axial_force_n = 0.0;
+  double torque_nm = 0.0;
+  int32_t flags = 0;
+};
+
+class ForceEvaluator {
+ public:
+  explicit ForceEvaluator(const HapticParams& params) : params_(params) {}
+
+  // a new model arrived (models carry made_utime on the same monotonic clock as now_us)
+  void set_model(const physics::LocalForceModel& model, int64_t now_us);
+  ForceOutput tick(const InstrumentSample& sample, int64_t now_us);
+
+  int64_t faults() const { return faults_; }
+  const HapticParams& params() const { return params_; }
+
+ private:
+  struct Raw {
+    double force_n, torque_nm;
+  };
+  static Raw evaluate(const physics::LocalForceModel& m, const InstrumentSample& s);
+  bool model_stale(int64_t now_us) const;
+
+  HapticParams params_;
+  physics::LocalForceModel model_{}, previous_model_{};
+  int64_t model_arrived_us_ = 0;
+  bool has_model_ = false, has_previous_ = false;
+
+  double gain_ = 0.0;  // fade/ramp gain in [0, 1]
+  bool ramping_in_ = true;
+  double last_force_n_ = 0.0, last_torque_nm_ = 0.0;
+  int64_t last_tick_us_ = 0;
+  int64_t faults_ = 0;
+};
+
+}  // namespace pcisim::haptics

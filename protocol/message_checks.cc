@@ -1,0 +1,51 @@
+#include "protocol/message_checks.h"
+
+#include <cmath>
+
+namespace pcisim::protocol {
+namespace {
+
+template <class... T>
+bool finite(T... v) {
+  return (std::isfinite(static_cast<double>(v)) && ...);
+}
+
+}  // namespace
+
+bool is_well_formed(const pcisim_lcm::instrument_state_t& m) {
+  return finite(m.insertion_mm, m.rotation_rad, m.insertion_rate_mm_s, m.rotation_rate_rad_s);
+}
+
+bool is_well_formed(const pcisim_lcm::force_command_t& m) {
+  return finite(m.axial_force_n, m.torque_nmm);
+}
+
+bool is_well_formed(const pcisim_lcm::session_command_t& m) {
+  return finite(m.primary_angle_deg, m.secondary_angle_deg, m.contrast_ml, m.contrast_ml_s);
+}
+
+bool is_well_formed(const pcisim_lcm::wire_state_t& m) {
+  if (m.num_nodes < 0 || m.node_mm.size() != static_cast<size_t>(m.num_nodes)) return false;
+  for (const auto& p : m.node_mm)
+    if (!finite(p[0], p[1], p[2])) return false;
+  return finite(m.sim_time_s, m.insertion_mm, m.rotation_rad, m.tip_mm[0], m.tip_mm[1],
+                m.tip_mm[2], m.heart_phase);
+}
+
+bool is_well_formed(const pcisim_lcm::sim_status_t& m) {
+  if (m.num_effects < 0) return false;
+  for (double v : m.effect_step_ms_p50)
+    if (!finite(v)) return false;
+  return finite(m.haptic_rate_hz, m.haptic_period_us_p50, m.haptic_period_us_p99,
+                m.haptic_period_us_p999, m.haptic_period_us_max, m.haptic_compute_us_p50,
+                m.haptic_compute_us_p99, m.haptic_compute_us_max, m.physics_rate_hz,
+                m.physics_step_ms_p50, m.physics_step_ms_p99, m.physics_step_ms_max, m.xray_fps);
+}
+
+bool is_well_formed(const pcisim_lcm::xray_frame_t& m) {
+  if (m.width < 0 || m.height < 0 || m.num_bytes < 0) return false;
+  return finite(m.primary_angle_deg, m.secondary_angle_deg, m.source_to_image_mm,
+                m.source_to_axis_mm, m.pixel_mm, m.sim_time_s);
+}
+
+}  // namespace pcisim::protocol

@@ -1,0 +1,137 @@
+#include "server/lcm_io.h"
+
+#include <spdlog/spdlog.h>
+
+#include "protocol/channels.h"
+#include "protocol/message_checks.h"
+#include "server/realtime/clock.h"
+
+namespace pcisim::server {
+
+LcmIo::LcmIo(lcm::LCM& lcm, SharedState& state, StatusSource status, BranchNamer branch_name)
+    : lcm_(lcm), state_(state), status_(std::move(status)), branch_name_(std::move(branch_name)) {
+  lcm_.subscribe(protocol::kInstrumentChannel, &LcmIo::on_instrument, this);
+  lcm_.subscribe(protocol::kSessionChannel, &LcmIo::on_session, this);
+}
+
+LcmIo::~LcmIo() { stop(); }
+
+void LcmIo::start() {
+  running_ = true;
+  rx_ = std::thread([this] { rx_loop(); });
+  tx_ = std::thread([this] { tx_loop(); });
+}
+
+void LcmIo::stop() {
+  if (!running_.exchange(false)) return;
+  if (rx_.joinable()) rx_.join();
+  if (tx_.joinable()) tx_.join();
+  publish_zero_force();
+}
+
+void LcmIo::publish_zero_force() {
+  pcisim_lcm::force_command_t zero{};
+  zero.utime = monotonic_us();
+  zero.seq = -1;  // not a haptic tick: the server's last word
+  zero.instrument_seq = last_instrument_seq_;
+  zero.flags = pcisim_lcm::force_command_t::FLAG_FADED;
+  lcm_.publish(protocol::kForceChannel, &zero);
+  state_.lcm_tx.fetch_add(1, std::memory_order_relaxed);
+}
+
+void LcmIo::on_instrument(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+  state_.lcm_rx.fetch_add(1, std::memory_order_relaxed);
+  if (!protocol::decode_checked(*rbuf, instrument_msg_)) {
+    state_.lcm_dropped_bad.fetch_add(1, std::memory_order_relaxed);
+    state_.instrument_rejected.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  // a device in fault sends no motion: leave the last sample to go stale and fade
+  if (instrument_msg_.status == pcisim_lcm::instrument_state_t::STATUS_FAULT) return;
+  const auto& m = instrument_msg_;
+  InstrumentSlot slot;
+  slot.seq = m.seq;
+  slot.buttons = m.buttons;
+  slot.sample.received_us = monotonic_us();
+  slot.sample.insertion_m = m.insertion_mm * 1e-3;
+  slot.sample.rotation_rad = m.rotation_rad;
+  slot.sample.insertion_rate_m_per_s = m.insertion_rate_mm_s * 1e-3;
+  slot.sample.rotation_rate_rad_per_s = m.rotation_rate_rad_s;
+  last_instrument_seq_ = m.seq;
+  state_.instrument_for_haptics.write_slot() = slot;
+  state_.instrument_for_haptics.publish();
+  state_.instrument_for_physics.write_slot() = slot;
+  state_.instrument_for_physics.publish();
+}
+
+void LcmIo::on_session(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+  state_.lcm_rx.fetch_add(1, std::memory_order_relaxed);
+  if (!protocol::decode_checked(*rbuf, session_msg_)) {
+    state_.lcm_dropped_bad.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  using C = pcisim_lcm::session_command_t;
+  switch (session_msg_.command) {
+    case C::CMD_PAUSE: state_.paused = true; spdlog::info("session: paused"); break;
+    case C::CMD_RESUME: state_.paused = false; spdlog::info("session: resumed"); break;
+    case C::CMD_RESET: state_.reset_requested = true; spdlog::info("session: reset"); break;
+    default:
+      spdlog::warn("session: command {} is not handled by this build (needs the X-ray or scene-reload work)",
+                   static_cast<int>(session_msg_.command));
+  }
+}
+
+void LcmIo::rx_loop() {
+  while (running_.load(std::memory_order_relaxed)) lcm_.handleTimeout(20);
+}
+
+void LcmIo::publish_wire(const physics::WorldSnapshot& s) {
+  auto& m = wire_msg_;
+  m.utime = monotonic_us();
+  m.seq = s.step;
+  m.sim_time_s = s.time_s;
+  m.insertion_mm = s.insertion_m * 1e3;
+  m.rotation_rad = s.rotation_rad;
+  m.num_nodes = static_cast<int32_t>(s.wire_nodes_m.size());
+  m.node_mm.resize(s.wire_nodes_m.size());
+  m.contact.resize(s.wire_nodes_m.size());
+  for (size_t i = 0; i < s.wire_nodes_m.size(); ++i) {
+    for (int k = 0; k < 3; ++k) m.node_mm[i][k] = static_cast<float>(s.wire_nodes_m[i][k] * 1e3);
+    m.contact[i] = i < s.wire_contact.size() ? static_cast<int8_t>(s.wire_contact[i]) : 0;
+  }
+  for (int k = 0; k < 3; ++k) m.tip_mm[k] = s.tip_m[k] * 1e3;
+  m.tip_branch = branch_name_ ? branch_name_(s.tip_branch) : std::string();
+  m.heart_phase = s.heart_phase;
+  lcm_.publish(protocol::kWireChannel, &m);
+  state_.lcm_tx.fetch_add(1, std::memory_order_relaxed);
+}
+
+void LcmIo::tx_loop() {
+  ForceSlot slot;
+  int64_t next_status_us = monotonic_us() + 1'000'000;
+  while (running_.load(std::memory_order_relaxed)) {
+    // force commands first: they are the latency-critical stream
+    while (state_.forces.pop(slot)) {
+      force_msg_.utime = slot.utime;
+      force_msg_.seq = slot.tick;
+      force_msg_.instrument_seq = slot.instrument_seq;
+      force_msg_.axial_force_n = slot.force.axial_force_n;
+      force_msg_.torque_nmm = slot.force.torque_nm * 1e3;
+      force_msg_.flags = slot.force.flags;
+      lcm_.publish(protocol::kForceChannel, &force_msg_);
+      state_.lcm_tx.fetch_add(1, std::memory_order_relaxed);
+    }
+    if (state_.snapshot_for_tx.refresh()) publish_wire(state_.snapshot_for_tx.read_slot());
+    const int64_t now_us = monotonic_us();
+    if (now_us >= next_status_us && status_) {
+      auto status = status_();
+      status.seq = status_seq_++;
+      lcm_.publish(protocol::kStatusChannel, &status);
+      state_.lcm_tx.fetch_add(1, std::memory_order_relaxed);
+      next_status_us += 1'000'000;
+    }
+    sleep_until_ns(monotonic_ns() + 200'000);
+  }
+}
+
+}  // namespace pcisim::server

@@ -1,0 +1,53 @@
+#pragma once
+// LCM I/O for the control instance: a receive thread (lcm handle is single-threaded) and a send
+// thread that drains the haptic ring and the physics snapshots. Bad messages are counted and
+// dropped; nothing here can stall the 1 kHz loop.
+#include <functional>
+#include <lcm/lcm-cpp.hpp>
+#include <thread>
+
+#include "pcisim_lcm/force_command_t.hpp"
+#include "pcisim_lcm/instrument_state_t.hpp"
+#include "pcisim_lcm/session_command_t.hpp"
+#include "pcisim_lcm/sim_status_t.hpp"
+#include "pcisim_lcm/wire_state_t.hpp"
+#include "server/shared_state.h"
+
+namespace pcisim::server {
+
+class LcmIo {
+ public:
+  using StatusSource = std::function<pcisim_lcm::sim_status_t()>;
+  using BranchNamer = std::function<std::string(int)>;
+
+  // `lcm` must outlive this object; status() is called once a second from the send thread
+  LcmIo(lcm::LCM& lcm, SharedState& state, StatusSource status, BranchNamer branch_name);
+  ~LcmIo();
+
+  void start();
+  void stop();  // joins both threads; publishes a final zero force command
+  void publish_zero_force();
+
+ private:
+  void on_instrument(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void on_session(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void rx_loop();
+  void tx_loop();
+  void publish_wire(const physics::WorldSnapshot& s);
+
+  lcm::LCM& lcm_;
+  SharedState& state_;
+  StatusSource status_;
+  BranchNamer branch_name_;
+  std::thread rx_, tx_;
+  std::atomic<bool> running_{false};
+  // preallocated messages, reused every time
+  pcisim_lcm::instrument_state_t instrument_msg_{};
+  pcisim_lcm::session_command_t session_msg_{};
+  pcisim_lcm::force_command_t force_msg_{};
+  pcisim_lcm::wire_state_t wire_msg_{};
+  int64_t last_instrument_seq_ = -1;
+  int64_t status_seq_ = 0;
+};
+
+}  // namespace pcisim::server

@@ -1,0 +1,86 @@
+// pcisim-server: the real-time PCI training server (see docs/ and DESIGN.md).
+#include <CLI/CLI.hpp>
+#include <csignal>
+#include <fstream>
+#include <iostream>
+#include <spdlog/spdlog.h>
+
+#include "server/scene/json_reader.h"
+#include "server/scene/scene.h"
+#include "server/server.h"
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+extern "C" void on_signal(int) { g_stop = true; }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace pcisim::server;
+  CLI::App app{
+      "pcisim-server: simulates a coronary guidewire for a PCI trainee. It reads the instrument "
+      "over LCM, returns force at 1 kHz and publishes the wire's state. With no options it runs the "
+      "built-in scene (a procedural coronary phantom) until Ctrl-C."};
+  std::string scene_path, lcm_url = "udpm://239.255.76.67:7667?ttl=0", stats_path, write_scene_path;
+  std::string log_level = "info";
+  double duration_s = 0;
+  app.add_option("--scene", scene_path, "scene file (JSON with comments); default: the built-in scene");
+  app.add_option("--duration", duration_s, "seconds to run; 0 = until SIGINT/SIGTERM")->check(CLI::Range(0.0, 1e7));
+  app.add_option("--lcm-url", lcm_url, "LCM URL of the control traffic (instrument, force, wire, status)")
+      ->capture_default_str();
+  app.add_option("--stats-json", stats_path, "write loop statistics to this file at exit");
+  app.add_option("--log-level", log_level, "trace, debug, info, warn, error or off")
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}))
+      ->capture_default_str();
+  app.add_option("--write-scene", write_scene_path, "write the built-in scene to this file and exit");
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_level(spdlog::level::from_str(log_level));
+
+  if (!write_scene_path.empty()) {
+    std::ofstream out(write_scene_path);
+    out << default_scene_text();
+    if (!out.flush()) {
+      std::cerr << "pcisim-server: cannot write " << write_scene_path << "\n";
+      return 1;
+    }
+    std::cout << "wrote the built-in scene to " << write_scene_path << "\n";
+    return 0;
+  }
+
+  Scene scene;
+  try {
+    scene = scene_path.empty() ? default_scene() : load_scene_file(scene_path);
+  } catch (const SceneError& e) {
+    std::cerr << "pcisim-server: bad scene: " << e.what() << "\n";
+    return 2;
+  }
+
+  lcm::LCM lcm(lcm_url);
+  if (!lcm.good()) {
+    std::cerr << "pcisim-server: cannot open LCM at " << lcm_url
+              << " (for udpm, is there a multicast route? see docs/protocol.md)\n";
+    return 3;
+  }
+
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  try {
+    Server server(scene, lcm);
+    const StatsReport stats = server.run(duration_s, g_stop);
+    std::cout << human_summary(stats) << "\n";
+    if (!stats_path.empty()) {
+      std::ofstream out(stats_path);
+      out << to_json(stats).dump(2) << "\n";
+      if (!out.flush()) {
+        std::cerr << "pcisim-server: cannot write stats to " << stats_path << "\n";
+        return 1;
+      }
+      std::cout << "  stats   " << stats_path << "\n";
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "pcisim-server: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

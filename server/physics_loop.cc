@@ -1,0 +1,74 @@
+#include "server/physics_loop.h"
+
+#include <cmath>
+
+#include "server/realtime/clock.h"
+#include "server/realtime/deadline_schedule.h"
+
+namespace pcisim::server {
+
+PhysicsLoop::PhysicsLoop(const Scene& scene, SharedState& state)
+    : spec_(scene.world), state_(state), rate_hz_(scene.physics_rate_hz),
+      world_(std::make_unique<physics::World>(spec_)) {
+  for (const auto& cost : world_->effect_costs()) {
+    effects_.push_back(std::make_unique<EffectStats>());
+    effects_.back()->name = cost.name;
+  }
+}
+
+void PhysicsLoop::step_once(int64_t now_ns) {
+  if (state_.instrument_for_physics.refresh()) instrument_ = state_.instrument_for_physics.read_slot();
+  physics::InstrumentInput input;
+  input.insertion_m = instrument_.sample.insertion_m;
+  input.rotation_rad = instrument_.sample.rotation_rad;
+  input.insertion_rate_m_per_s = instrument_.sample.insertion_rate_m_per_s;
+  input.rotation_rate_rad_per_s = instrument_.sample.rotation_rate_rad_per_s;
+  input.buttons = static_cast<uint32_t>(instrument_.buttons);
+  world_->step(input);
+
+  physics::WorldSnapshot& snap = state_.snapshot_for_tx.write_slot();
+  world_->write_snapshot(snap);
+  state_.wire_insertion_mm.store(snap.insertion_m * 1e3, std::memory_order_relaxed);
+  state_.wire_rotation_rad.store(snap.rotation_rad, std::memory_order_relaxed);
+  state_.wire_tip_branch.store(snap.tip_branch, std::memory_order_relaxed);
+  int contacts = 0;
+  for (uint8_t c : snap.wire_contact) contacts += c;
+  state_.wire_contacts.store(contacts, std::memory_order_relaxed);
+  state_.snapshot_for_tx.publish();
+
+  // the model is stamped on the haptic thread's clock; two physics periods of validity
+  physics::LocalForceModel model = world_->force_model();
+  model.made_utime = now_ns / 1000;
+  state_.force_model.write_slot() = model;
+  state_.force_model.publish();
+
+  const auto costs = world_->effect_costs();
+  for (size_t i = 0; i < costs.size() && i < effects_.size(); ++i)
+    effects_[i]->step_ns.record(static_cast<int64_t>(costs[i].last_step_ms * 1e6));
+}
+
+void PhysicsLoop::run() {
+  const auto period_ns = static_cast<int64_t>(std::llround(1e9 / rate_hz_));
+  DeadlineSchedule schedule(monotonic_ns(), period_ns);
+  int64_t last_wake_ns = 0;
+  while (!state_.stop.load(std::memory_order_relaxed)) {
+    const int64_t deadline_ns = schedule.deadline_ns();
+    sleep_until_ns(deadline_ns);
+    const int64_t wake_ns = monotonic_ns();
+
+    // a reset rebuilds the world between steps (allocation is fine here, not inside step)
+    if (state_.reset_requested.exchange(false)) world_ = std::make_unique<physics::World>(spec_);
+    if (!state_.paused.load(std::memory_order_relaxed)) step_once(wake_ns);
+
+    const int64_t done_ns = monotonic_ns();
+    if (last_wake_ns > 0) state_.physics.period_ns.record(wake_ns - last_wake_ns);
+    last_wake_ns = wake_ns;
+    state_.physics.late_ns.record(wake_ns - deadline_ns);
+    state_.physics.compute_ns.record(done_ns - wake_ns);
+    state_.physics.iterations.fetch_add(1, std::memory_order_relaxed);
+    if (const int64_t missed = schedule.complete(done_ns))
+      state_.physics.overruns.fetch_add(missed, std::memory_order_relaxed);
+  }
+}
+
+}  // namespace pcisim::server

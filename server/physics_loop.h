@@ -1,0 +1,40 @@
+#pragma once
+// The physics thread: a fixed step at the scene's rate. Each step reads the newest instrument
+// sample, steps the world (only the scene's effects), publishes a snapshot and a fresh local
+// force model. An overrun is counted and the loop skips ahead instead of bursting to catch up.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "physics/world.h"
+#include "server/scene/scene.h"
+#include "server/shared_state.h"
+
+namespace pcisim::server {
+
+struct EffectStats {
+  std::string name;
+  LatencyHistogram step_ns;
+};
+
+class PhysicsLoop {
+ public:
+  // builds the world now (may take a while: SDF), so the loop itself starts at once
+  PhysicsLoop(const Scene& scene, SharedState& state);
+  void run();  // until state.stop
+
+  const std::vector<std::unique_ptr<EffectStats>>& effects() const { return effects_; }
+  double rate_hz() const { return rate_hz_; }
+
+ private:
+  void step_once(int64_t now_ns);
+
+  physics::WorldSpec spec_;
+  SharedState& state_;
+  double rate_hz_;
+  std::unique_ptr<physics::World> world_;
+  std::vector<std::unique_ptr<EffectStats>> effects_;
+  InstrumentSlot instrument_;
+};
+
+}  // namespace pcisim::server

@@ -1,0 +1,90 @@
+#include "server/server.h"
+
+#include <spdlog/spdlog.h>
+#include <thread>
+
+#include "server/haptic_loop.h"
+#include "server/lcm_io.h"
+#include "server/physics_loop.h"
+#include "server/realtime/clock.h"
+#include "server/realtime/realtime_setup.h"
+
+namespace pcisim::server {
+
+struct Server::Impl {
+  Scene scene;
+  lcm::LCM& lcm;
+  SharedState state;
+  std::unique_ptr<PhysicsLoop> physics;
+  int64_t start_ns = 0;
+  std::atomic<bool> haptic_fifo{false};
+  // status rates are over the last second, not since start
+  int64_t last_status_ns = 0, last_haptic_ticks = 0, last_physics_steps = 0;
+
+  Impl(const Scene& s, lcm::LCM& l) : scene(s), lcm(l) {}
+
+  pcisim_lcm::sim_status_t status() {
+    const int64_t now = monotonic_ns();
+    StatsReport r = collect_stats(state, *physics, (now - start_ns) * 1e-9, haptic_fifo);
+    const double window_s = (now - last_status_ns) * 1e-9;
+    if (window_s > 0) {
+      r.haptic_rate_hz = (r.haptic_ticks - last_haptic_ticks) / window_s;
+      r.physics_rate_hz = (r.physics_steps - last_physics_steps) / window_s;
+    }
+    last_status_ns = now;
+    last_haptic_ticks = r.haptic_ticks;
+    last_physics_steps = r.physics_steps;
+    return to_message(r, now / 1000, 0, state.paused);
+  }
+};
+
+Server::Server(const Scene& scene, lcm::LCM& control) : impl_(std::make_unique<Impl>(scene, control)) {
+  spdlog::info("scene '{}' ({}): effects [{}], physics {} Hz", scene.name, scene.source,
+               fmt::format("{}", fmt::join(scene.effects, ", ")), scene.physics_rate_hz);
+  const int64_t t0 = monotonic_ns();
+  impl_->physics = std::make_unique<PhysicsLoop>(scene, impl_->state);
+  spdlog::info("world built in {:.0f} ms", (monotonic_ns() - t0) * 1e-6);
+}
+
+Server::~Server() = default;
+
+StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
+  Impl& m = *impl_;
+  const bool locked = try_mlockall();
+  LcmIo io(m.lcm, m.state, [&m] { return m.status(); }, branch_namer);
+
+  m.start_ns = m.last_status_ns = monotonic_ns();
+  io.start();
+  HapticLoopConfig haptic_config;
+  haptic_config.params = m.scene.haptics;
+  std::thread haptic([&] { m.haptic_fifo = run_haptic_loop(haptic_config, m.state); });
+  std::thread physics([&] { m.physics->run(); });
+  spdlog::info("running: haptic 1000 Hz, physics {} Hz{}{}", m.scene.physics_rate_hz,
+               locked ? ", memory locked" : "", duration_s > 0 ? fmt::format(", for {} s", duration_s) : "");
+
+  // the main thread only watches the clock and logs once a second
+  int64_t next_log_ns = m.start_ns + 1'000'000'000;
+  const int64_t end_ns = duration_s > 0 ? m.start_ns + static_cast<int64_t>(duration_s * 1e9) : INT64_MAX;
+  while (!stop.load() && monotonic_ns() < end_ns) {
+    sleep_until_ns(std::min(end_ns, monotonic_ns() + 20'000'000));
+    if (monotonic_ns() >= next_log_ns) {
+      next_log_ns += 1'000'000'000;
+      const int branch = m.state.wire_tip_branch.load();
+      spdlog::info("t={:5.1f}s  insertion {:6.1f} mm  rotation {:6.2f} rad  tip in {}  contacts {:3d}  haptic {} ticks",
+                   (monotonic_ns() - m.start_ns) * 1e-9, m.state.wire_insertion_mm.load(),
+                   m.state.wire_rotation_rad.load(),
+                   branch_namer && branch >= 0 ? branch_namer(branch) : std::string("-"),
+                   m.state.wire_contacts.load(), m.state.haptic.iterations.load());
+    }
+  }
+
+  // stop the loops first, then the I/O, which sends the zero force command last
+  m.state.stop = true;
+  haptic.join();
+  physics.join();
+  const double elapsed_s = (monotonic_ns() - m.start_ns) * 1e-9;
+  io.stop();
+  return collect_stats(m.state, *m.physics, elapsed_s, m.haptic_fifo);
+}
+
+}  // namespace pcisim::server

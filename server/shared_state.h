@@ -1,0 +1,63 @@
+#pragma once
+// Everything the server's threads hand each other. Each channel has one writer and one reader:
+// triple buffers for "newest wins" state, an SPSC ring for the force command stream, relaxed
+// atomics for counters. Nothing here locks.
+#include <atomic>
+#include <cstdint>
+
+#include "haptics/force_evaluator.h"
+#include "physics/local_force_model.h"
+#include "physics/world_snapshot.h"
+#include "server/realtime/latency_histogram.h"
+#include "server/realtime/spsc_ring.h"
+#include "server/realtime/triple_buffer.h"
+
+namespace pcisim::server {
+
+struct InstrumentSlot {
+  haptics::InstrumentSample sample;  // SI, stamped with the monotonic receive time
+  int64_t seq = -1;
+  int32_t buttons = 0;
+};
+
+struct ForceSlot {
+  int64_t utime = 0;
+  int64_t tick = 0;
+  int64_t instrument_seq = -1;
+  haptics::ForceOutput force;
+};
+
+struct LoopStats {
+  LatencyHistogram period_ns;   // wake-to-wake
+  LatencyHistogram compute_ns;  // work per iteration
+  LatencyHistogram late_ns;     // wake time minus deadline
+  std::atomic<int64_t> iterations{0};
+  std::atomic<int64_t> overruns{0};
+};
+
+struct SharedState {
+  // lcm rx -> haptic, lcm rx -> physics (a triple buffer has one reader, so one each)
+  TripleBuffer<InstrumentSlot> instrument_for_haptics;
+  TripleBuffer<InstrumentSlot> instrument_for_physics;
+  // physics -> haptic, physics -> lcm tx
+  TripleBuffer<physics::LocalForceModel> force_model;
+  TripleBuffer<physics::WorldSnapshot> snapshot_for_tx;
+  // haptic -> lcm tx
+  SpscRing<ForceSlot, 1024> forces;
+  std::atomic<int64_t> forces_dropped{0};
+
+  LoopStats haptic, physics;
+  std::atomic<int64_t> lcm_rx{0}, lcm_tx{0}, lcm_dropped_bad{0};
+  std::atomic<int64_t> instrument_rejected{0};  // non-finite or fault samples (also in dropped_bad)
+
+  // session control from lcm rx, read by physics
+  std::atomic<bool> paused{false};
+  std::atomic<bool> reset_requested{false};
+  std::atomic<bool> stop{false};
+
+  // a few figures of the newest step for the once-a-second log line
+  std::atomic<double> wire_insertion_mm{0}, wire_rotation_rad{0};
+  std::atomic<int> wire_tip_branch{-1}, wire_contacts{0};
+};
+
+}  // namespace pcisim::server

@@ -1,0 +1,119 @@
+#include "server/stats.h"
+
+#include <fmt/format.h>
+
+namespace pcisim::server {
+
+Percentiles percentiles(const LatencyHistogram& h, double scale) {
+  return {h.quantile_ns(0.5) * scale, h.quantile_ns(0.99) * scale, h.quantile_ns(0.999) * scale,
+          h.max_ns() * scale};
+}
+
+StatsReport collect_stats(const SharedState& state, const PhysicsLoop& physics, double elapsed_s,
+                          bool haptic_fifo) {
+  StatsReport r;
+  r.elapsed_s = elapsed_s;
+  const double per_s = elapsed_s > 0 ? 1.0 / elapsed_s : 0.0;
+  r.haptic_ticks = state.haptic.iterations.load();
+  r.haptic_rate_hz = static_cast<double>(r.haptic_ticks) * per_s;
+  r.haptic_period_us = percentiles(state.haptic.period_ns, 1e-3);
+  r.haptic_compute_us = percentiles(state.haptic.compute_ns, 1e-3);
+  r.haptic_late_us = percentiles(state.haptic.late_ns, 1e-3);
+  r.haptic_overruns = state.haptic.overruns.load();
+  r.forces_dropped = state.forces_dropped.load();
+  r.haptic_fifo = haptic_fifo;
+  r.physics_steps = state.physics.iterations.load();
+  r.physics_rate_hz = static_cast<double>(r.physics_steps) * per_s;
+  r.physics_target_hz = physics.rate_hz();
+  r.physics_step_ms = percentiles(state.physics.compute_ns, 1e-6);
+  r.physics_period_ms = percentiles(state.physics.period_ns, 1e-6);
+  r.physics_overruns = state.physics.overruns.load();
+  for (const auto& e : physics.effects()) r.effect_step_ms_p50.emplace_back(e->name, e->step_ns.quantile_ns(0.5) * 1e-6);
+  r.lcm_rx = state.lcm_rx.load();
+  r.lcm_tx = state.lcm_tx.load();
+  r.lcm_dropped_bad = state.lcm_dropped_bad.load();
+  return r;
+}
+
+nlohmann::json to_json(const StatsReport& r) {
+  auto pct = [](const Percentiles& p, bool with_p999) {
+    nlohmann::json j = {{"p50", p.p50}, {"p99", p.p99}, {"max", p.max}};
+    if (with_p999) j["p999"] = p.p999;
+    return j;
+  };
+  nlohmann::json effects = nlohmann::json::object();
+  for (const auto& [name, ms] : r.effect_step_ms_p50) effects[name] = {{"step_ms_p50", ms}};
+  return {
+      {"elapsed_s", r.elapsed_s},
+      {"haptic",
+       {{"rate_hz", r.haptic_rate_hz},
+        {"ticks", r.haptic_ticks},
+        {"period_us", pct(r.haptic_period_us, true)},
+        {"compute_us", pct(r.haptic_compute_us, false)},
+        {"wake_late_us", pct(r.haptic_late_us, true)},
+        {"overruns", r.haptic_overruns},
+        {"forces_dropped", r.forces_dropped},
+        {"sched_fifo", r.haptic_fifo}}},
+      {"physics",
+       {{"rate_hz", r.physics_rate_hz},
+        {"target_hz", r.physics_target_hz},
+        {"steps", r.physics_steps},
+        {"step_ms", pct(r.physics_step_ms, false)},
+        {"period_ms", pct(r.physics_period_ms, false)},
+        {"overruns", r.physics_overruns},
+        {"effects", effects}}},
+      {"xray", {{"frames", r.xray_frames}, {"fps", r.xray_fps}}},
+      {"lcm", {{"rx", r.lcm_rx}, {"tx", r.lcm_tx}, {"dropped_bad", r.lcm_dropped_bad}}},
+  };
+}
+
+pcisim_lcm::sim_status_t to_message(const StatsReport& r, int64_t utime, int64_t seq, bool paused) {
+  pcisim_lcm::sim_status_t m{};
+  m.utime = utime;
+  m.seq = seq;
+  m.haptic_rate_hz = r.haptic_rate_hz;
+  m.haptic_period_us_p50 = r.haptic_period_us.p50;
+  m.haptic_period_us_p99 = r.haptic_period_us.p99;
+  m.haptic_period_us_p999 = r.haptic_period_us.p999;
+  m.haptic_period_us_max = r.haptic_period_us.max;
+  m.haptic_compute_us_p50 = r.haptic_compute_us.p50;
+  m.haptic_compute_us_p99 = r.haptic_compute_us.p99;
+  m.haptic_compute_us_max = r.haptic_compute_us.max;
+  m.haptic_overruns = r.haptic_overruns;
+  m.physics_rate_hz = r.physics_rate_hz;
+  m.physics_step_ms_p50 = r.physics_step_ms.p50;
+  m.physics_step_ms_p99 = r.physics_step_ms.p99;
+  m.physics_step_ms_max = r.physics_step_ms.max;
+  m.physics_overruns = r.physics_overruns;
+  m.num_effects = static_cast<int32_t>(r.effect_step_ms_p50.size());
+  for (const auto& [name, ms] : r.effect_step_ms_p50) {
+    m.effect_name.push_back(name);
+    m.effect_step_ms_p50.push_back(ms);
+  }
+  m.xray_frames = r.xray_frames;
+  m.xray_fps = r.xray_fps;
+  m.lcm_rx = r.lcm_rx;
+  m.lcm_tx = r.lcm_tx;
+  m.lcm_dropped_bad = r.lcm_dropped_bad;
+  m.paused = paused ? 1 : 0;
+  return m;
+}
+
+std::string human_summary(const StatsReport& r) {
+  std::string effects;
+  for (const auto& [name, ms] : r.effect_step_ms_p50) effects += fmt::format(" {} {:.3f} ms", name, ms);
+  return fmt::format(
+      "ran {:.1f} s\n"
+      "  haptic  {:.1f} Hz ({})  period p50 {:.0f} / p99 {:.0f} / p99.9 {:.0f} / max {:.0f} us  "
+      "compute p99 {:.1f} us  overruns {}\n"
+      "  physics {:.1f} Hz of {:.0f}  step p50 {:.2f} / p99 {:.2f} / max {:.2f} ms  overruns {}\n"
+      "  effects (p50):{}\n"
+      "  lcm     rx {}  tx {}  dropped (bad) {}",
+      r.elapsed_s, r.haptic_rate_hz, r.haptic_fifo ? "SCHED_FIFO" : "SCHED_OTHER", r.haptic_period_us.p50,
+      r.haptic_period_us.p99, r.haptic_period_us.p999, r.haptic_period_us.max, r.haptic_compute_us.p99,
+      r.haptic_overruns, r.physics_rate_hz, r.physics_target_hz, r.physics_step_ms.p50, r.physics_step_ms.p99,
+      r.physics_step_ms.max, r.physics_overruns, effects.empty() ? " none" : effects, r.lcm_rx, r.lcm_tx,
+      r.lcm_dropped_bad);
+}
+
+}  // namespace pcisim::server

@@ -1,0 +1,41 @@
+#pragma once
+// The figures the server reports: at exit as JSON (--stats-json), once a second as sim_status_t.
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "pcisim_lcm/sim_status_t.hpp"
+#include "server/physics_loop.h"
+#include "server/shared_state.h"
+
+namespace pcisim::server {
+
+struct Percentiles {
+  double p50 = 0, p99 = 0, p999 = 0, max = 0;
+};
+
+struct StatsReport {
+  double elapsed_s = 0;
+  double haptic_rate_hz = 0;
+  Percentiles haptic_period_us, haptic_compute_us, haptic_late_us;
+  int64_t haptic_ticks = 0, haptic_overruns = 0, forces_dropped = 0;
+  bool haptic_fifo = false;
+  double physics_rate_hz = 0, physics_target_hz = 0;
+  Percentiles physics_step_ms, physics_period_ms;
+  int64_t physics_steps = 0, physics_overruns = 0;
+  std::vector<std::pair<std::string, double>> effect_step_ms_p50;
+  int64_t xray_frames = 0;
+  double xray_fps = 0;
+  int64_t lcm_rx = 0, lcm_tx = 0, lcm_dropped_bad = 0;
+};
+
+Percentiles percentiles(const LatencyHistogram& h, double scale);
+
+// rates are counts over elapsed_s
+StatsReport collect_stats(const SharedState& state, const PhysicsLoop& physics, double elapsed_s,
+                          bool haptic_fifo);
+nlohmann::json to_json(const StatsReport& r);
+pcisim_lcm::sim_status_t to_message(const StatsReport& r, int64_t utime, int64_t seq, bool paused);
+std::string human_summary(const StatsReport& r);
+
+}  // namespace pcisim::server

@@ -1,0 +1,30 @@
+#include "server/realtime/deadline_schedule.h"
+
+#include <gtest/gtest.h>
+
+namespace pcisim::server {
+namespace {
+
+constexpr int64_t kMs = 1'000'000;
+
+TEST(DeadlineSchedule, OnTimeIterationsKeepAbsoluteDeadlines) {
+  DeadlineSchedule s(0, kMs);
+  for (int k = 1; k <= 1000; ++k) {
+    EXPECT_EQ(s.deadline_ns(), k * kMs);
+    EXPECT_EQ(s.complete(s.deadline_ns() + kMs / 3), 0);  // work done within the period
+  }
+}
+
+TEST(DeadlineSchedule, OverrunIsCountedAndSkippedNotCaughtUpInABurst) {
+  const int64_t period = 33 * kMs;
+  DeadlineSchedule s(0, period);
+  const int64_t woke = s.deadline_ns();
+  const int64_t done = woke + 100 * kMs;  // a physics step three periods long
+  EXPECT_EQ(s.complete(done), 3);
+  EXPECT_GT(s.deadline_ns(), done) << "the next deadline lies in the future: no burst";
+  EXPECT_LE(s.deadline_ns() - done, period);
+  EXPECT_EQ((s.deadline_ns() - woke) % period, 0) << "deadlines stay on the original grid";
+}
+
+}  // namespace
+}  // namespace pcisim::server

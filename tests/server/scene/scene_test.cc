@@ -1,0 +1,110 @@
+#include "server/scene/scene.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "server/scene/json_reader.h"
+
+namespace pcisim::server {
+namespace {
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// the message of the SceneError a scene text raises, or "" when it parses
+std::string error_of(const std::string& text) {
+  try {
+    parse_scene(text, "test.json");
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Scene, BuiltInSceneIsTheRepositoryFileAndListsItsEffects) {
+  EXPECT_EQ(default_scene_text(), read_file(PCISIM_SOURCE_DIR "/scenes/default.json"));
+  const Scene s = default_scene();
+  EXPECT_EQ(s.name, "default");
+  EXPECT_EQ(s.source, "built-in");
+  EXPECT_DOUBLE_EQ(s.physics_rate_hz, 30.0);
+  EXPECT_EQ(s.effects, (std::vector<std::string>{"guidewire", "blood_flow", "vessel_contact", "friction"}));
+  ASSERT_TRUE(s.world.guidewire.has_value());
+  EXPECT_EQ(s.world.guidewire->segment_count, 200);
+  EXPECT_DOUBLE_EQ(s.world.guidewire->length_m, 0.300);
+  ASSERT_TRUE(s.world.vessel_contact.has_value());
+  EXPECT_DOUBLE_EQ(s.world.vessel_contact->sdf_spacing_m, 0.2e-3);
+}
+
+TEST(Scene, MinimalSceneBuildsOnlyTheWire) {
+  const Scene s = load_scene_file(PCISIM_SOURCE_DIR "/scenes/minimal.json");
+  EXPECT_EQ(s.effects, std::vector<std::string>{"guidewire"});
+  EXPECT_TRUE(s.world.guidewire.has_value());
+  EXPECT_FALSE(s.world.vessel_contact.has_value());
+  EXPECT_FALSE(s.world.friction.has_value());
+  EXPECT_FALSE(s.world.blood_flow.has_value());
+}
+
+TEST(Scene, CommentsAreAllowedAndUnitsConvert) {
+  const Scene s = parse_scene(R"({ // a comment
+      "physics_rate_hz": 60, /* another */
+      "effects": {"guidewire": {"length_mm": 150, "segments": 50}}})", "t");
+  EXPECT_DOUBLE_EQ(s.world.step_s, 1.0 / 60.0);
+  EXPECT_DOUBLE_EQ(s.world.guidewire->length_m, 0.150);
+  EXPECT_EQ(s.world.guidewire->segment_count, 50);
+}
+
+TEST(Scene, EachBadInputNamesItsJsonPathAndWhatWasExpected) {
+  EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"segmnts": 10}}})"),
+            "test.json: effects.guidewire.segmnts: unknown key (this object accepts: body_alpha_max, "
+            "body_alpha_min, body_beta_deg, length_mm, optimisation_passes, segments, tip_alpha_max, "
+            "tip_alpha_min, tip_angle_deg, tip_beta_deg, tip_length_mm)");
+  EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"segments": "many"}}})"),
+            "test.json: effects.guidewire.segments: expected an integer in [4, 4000], got \"many\"");
+  EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"segments": 2}}})"),
+            "test.json: effects.guidewire.segments: expected an integer in [4, 4000], got 2");
+  EXPECT_EQ(error_of(R"({"physics_rate_hz": -3, "effects": {}})"),
+            "test.json: physics_rate_hz: expected a number in [1, 1000], got -3");
+  EXPECT_EQ(error_of(R"({"effects": {"vessel_contact": {"sdf_spacing_mm": 5}, "guidewire": {}}})"),
+            "test.json: effects.vessel_contact.sdf_spacing_mm: expected a number in [0.02, 2], got 5");
+  EXPECT_EQ(error_of(R"({"effects": {"teleport": {}}})"),
+            "test.json: effects.teleport: unknown effect (known: guidewire, blood_flow, vessel_contact, friction)");
+  EXPECT_EQ(error_of(R"({"effects": {"guidewire": {}, "friction": {}}})"),
+            "test.json: effects.friction: needs effect \"vessel_contact\" in the same scene");
+  EXPECT_EQ(error_of(R"({"effects": {"guidewire": {}, "vessel_contact": {}, "friction": {"tip_static": 0.1, "tip_kinetic": 0.3}}})"),
+            "test.json: effects.friction.tip_kinetic: expected at most tip_static");
+  EXPECT_EQ(error_of(R"({"name": "x"})"), "test.json: effects: expected an object listing the effects to simulate");
+  EXPECT_EQ(error_of(R"({"effects": [1, 2]})"), "test.json: effects: expected an object");
+  EXPECT_EQ(error_of(R"({"effects": {}, "colour": "red"})"),
+            "test.json: colour: unknown key (this object accepts: anatomy, effects, haptics, name, physics_rate_hz)");
+  EXPECT_EQ(error_of(R"({"haptics": {"peak_force_n": 1e9}, "effects": {}})"),
+            "test.json: haptics.peak_force_n: expected a number in [0, 20], got 1000000000.0");
+  EXPECT_NE(error_of(R"({"effects": {)").find("test.json: not valid JSON"), std::string::npos);
+}
+
+TEST(Scene, MissingFileIsAClearError) {
+  try {
+    load_scene_file("/nonexistent/scene.json");
+    FAIL() << "expected SceneError";
+  } catch (const SceneError& e) {
+    EXPECT_STREQ(e.what(), "/nonexistent/scene.json: cannot read the scene file (missing or not a file)");
+  }
+}
+
+TEST(Scene, WrittenSceneLoadsBackIdentically) {
+  const auto path = std::filesystem::temp_directory_path() / "pcisim_scene_roundtrip.json";
+  std::ofstream(path) << default_scene_text();
+  const Scene a = load_scene_file(path.string()), b = default_scene();
+  EXPECT_EQ(a.effects, b.effects);
+  EXPECT_EQ(a.world.guidewire->segment_count, b.world.guidewire->segment_count);
+  std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace pcisim::server

@@ -11,7 +11,7 @@ namespace {
 
 TEST(LatencyHistogram, BucketsCoverEveryValueMonotonically) {
   int previous = -1;
-  for (int64_t v : {0LL, 1LL, 127LL, 128LL, 129LL, 1000LL, 1'000'000LL, 1'000'000'000LL, (1LL << 62)}) {
+  for (int64_t v : {0LL, 1LL, 127LL, 128LL, 130LL, 1000LL, 1'000'000LL, 1'000'000'000LL, (1LL << 62)}) {
     const int b = LatencyHistogram::bucket_of(v);
     EXPECT_GT(b, previous);
     EXPECT_LE(LatencyHistogram::bucket_low_ns(b), v);

@@ -1,6 +1,7 @@
 #pragma once
 // The physics pipeline a scene asks for: it builds only the listed effects and steps them in a
 // fixed order. Plain data in (instrument input), plain data out (snapshot, local force model).
+#include <cstdint>
 #include <memory>
 #include <span>
 #include <string>
@@ -36,6 +37,11 @@ class World {
   // effects in step order, with their cost in the last step
   std::span<const EffectCost> effect_costs() const;
   double time_s() const;
+
+  // instrument samples refused (NaN, Inf, absurd) since construction; the previous one was kept
+  int64_t rejected_inputs() const;
+  // feed the wire refused at the catheter exit in the last step (0 without guidewire)
+  double refused_feed_m() const;
 
  private:
   struct Impl;

@@ -1,18 +1,31 @@
 #pragma once
-// Scene parameters of the guidewire effects (chain-mail paper, sections III-IV).
+// Scene parameters of the guidewire effects (chain-mail paper, sections III-V).
 // Defaults describe a 0.014" workhorse wire with a soft angled tip.
 
 namespace pcisim::physics {
 
 struct GuidewireParams {
-  double length_m = 0.30;            // simulated distal length of the wire
-  int segment_count = 200;           // chain-mail links
-  int optimisation_passes = 2;       // physical-optimisation passes per step (eqs 5-10)
-  double tip_length_m = 0.012;       // soft shaped tip
-  double tip_angle_deg = 45.0;       // pre-bend of the tip
-  // body / tip chain-mail limits: link length ratios and shear angle (eqs 1-4)
-  double body_alpha_min = 0.98, body_alpha_max = 1.02, body_beta_deg = 2.0;
-  double tip_alpha_min = 0.95, tip_alpha_max = 1.05, tip_beta_deg = 12.0;
+  double length_m = 0.30;            // simulated distal length of the wire, (tip_length_m, 2]
+  int segment_count = 200;           // chain-mail links, [4, 4000]
+  int optimisation_passes = 2;       // physical-optimisation passes per step (eqs 5-10), [0, 64]
+  double tip_length_m = 0.012;       // soft shaped tip, [0, length_m)
+  double tip_angle_deg = 45.0;       // pre-bend of the tip, spread evenly over the tip, [0, 180]
+  // body / tip chain-mail limits (eqs 1-4). alpha: link length ratios (compress, stretch),
+  // alpha_min in [0.5, 1], alpha_max in [1, 2]. beta: largest bend of a link away from its rest
+  // direction, in degrees per millimetre of wire (scaled by the link length, so a segment
+  // sweep keeps the same wire), [0, 90].
+  double body_alpha_min = 0.98, body_alpha_max = 1.02, body_beta_deg = 6.0;
+  double tip_alpha_min = 0.95, tip_alpha_max = 1.05, tip_beta_deg = 25.0;
+  // twist a held (statically stuck) stretch of wire stores before it turns, degrees per
+  // millimetre of wire between the catheter exit and the held link, [0, 90]
+  double twist_limit_deg_per_mm = 0.5;
+  // haptic force (eqs 19-20): axial stiffness of the wire's refused feed and first link, N/m,
+  // [0, 1e5]; damping along insertion, N s/m, [0, 100]
+  double axial_stiffness_n_per_m = 200.0;
+  double axial_damping_n_s_per_m = 0.5;
+  // torsional rigidity GJ of the core, N m^2, [0, 1e-2]; rotational damping N m s/rad, [0, 1]
+  double torsional_rigidity_nm2 = 1.2e-5;
+  double torsion_damping_nm_s_per_rad = 1e-5;
 };
 
 struct VesselContactParams {

@@ -1,0 +1,85 @@
+#pragma once
+// The guidewire as a generalized 3D chain-mail (paper section III): nodes joined by links with
+// compress/stretch/shear limits, moved by geometric propagation from a sponsoring node
+// (eqs 1-4) and relaxed by physical-optimisation passes (eqs 5-10).
+//
+// Node 0 is proximal, node N the tip. The proximal part lives in the guide catheter: a node is
+// kinematic (placed on the catheter path) while its arc length from the tip exceeds the fed
+// length, and free once it has left the catheter exit. Twist is a material angle per link,
+// measured from a frame parallel-transported down the wire from the catheter exit.
+#include <Eigen/Core>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "physics/guidewire/catheter_path.h"
+#include "physics/guidewire/guidewire_params.h"
+#include "physics/guidewire/link_spec.h"
+
+namespace pcisim::physics {
+
+class ChainMailWire {
+ public:
+  // allocates everything the wire will ever need; throws std::invalid_argument on bad params
+  ChainMailWire(const GuidewireParams& params, CatheterPath path);
+
+  // feed and twist from the instrument, then geometric propagation from the exit (eqs 1-4).
+  // insertion is clamped to [0, length]; inputs must be finite (see InputGuard).
+  void begin_step(double insertion_m, double rotation_rad);
+  // one physical-optimisation pass (eqs 5-10), alternating sweep direction, plus twist relaxation
+  void optimise_pass(int pass_index);
+  // after contact: compression is pushed back towards the exit, where the catheter refuses that
+  // much feed, then the limits are swept forward again; afterwards every free link is valid
+  void restore_limits();
+  // replaces a non-finite state by a straight wire out of the catheter (counted)
+  void end_step();
+
+  int segment_count() const { return n_; }
+  int node_count() const { return n_ + 1; }
+  int first_free_node() const { return first_free_; }  // == node_count() when none is out
+  std::span<const Eigen::Vector3d> nodes_m() const { return nodes_; }
+  std::span<Eigen::Vector3d> mutable_nodes_m() { return nodes_; }
+  std::span<const Eigen::Vector3d> step_start_nodes_m() const { return start_; }
+  std::span<const LinkSpec> links() const { return links_; }
+  bool node_in_tip(int i) const { return i > 0 && links_[i - 1].tip; }
+  std::span<const double> twist_rad() const { return twist_; }
+  std::span<uint8_t> twist_hold() { return hold_; }  // links held by static friction
+  std::span<const uint8_t> twist_held() const { return hold_; }
+  double commanded_feed_m() const { return commanded_feed_; }
+  double fed_length_m() const { return fed_; }        // what the wire accepted
+  double rotation_rad() const { return rotation_; }
+  // unit direction of the tip's bend plane (material director of the last link)
+  Eigen::Vector3d tip_bend_direction() const;
+  const CatheterPath& path() const { return path_; }
+  int64_t recoveries() const { return recoveries_; }
+
+ private:
+  struct Frame {
+    Eigen::Vector3d t, b, m;  // tangent, transported reference, material bend direction
+  };
+  Frame exit_frame() const;
+  void advance(Frame& f, const Eigen::Vector3d& t_new, double twist) const;
+  int first_free_for(double fed_m) const;
+  void place_kinematic();
+  void sweep_twist();
+  void relax_twist();
+  void compute_frames();
+  void forward_sweep();
+  void backward_sweep_compression();
+
+  GuidewireParams params_;
+  CatheterPath path_;
+  int n_ = 0;
+  double rest_m_ = 0.0;
+  Eigen::Vector3d ref_b_;  // reference director at the exit, fixed in the world
+  std::vector<LinkSpec> links_;
+  std::vector<Eigen::Vector3d> nodes_, start_;
+  std::vector<double> twist_;
+  std::vector<uint8_t> hold_;
+  std::vector<Eigen::Vector3d> frame_t_, frame_m_;  // per link, refreshed each pass
+  int first_free_ = 0;
+  double commanded_feed_ = 0.0, fed_ = 0.0, rotation_ = 0.0;
+  int64_t recoveries_ = 0;
+};
+
+}  // namespace pcisim::physics

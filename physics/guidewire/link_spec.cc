@@ -1,0 +1,75 @@
+#include "physics/guidewire/link_spec.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+namespace pcisim::physics {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+void check(bool ok, const char* field, const char* expected) {
+  if (!ok) throw std::invalid_argument(std::string("guidewire.") + field + ": expected " + expected);
+}
+
+}  // namespace
+
+void validate(const GuidewireParams& p) {
+  check(std::isfinite(p.length_m) && p.length_m > 0.0 && p.length_m <= 2.0, "length_m", "(0, 2]");
+  check(p.segment_count >= 4 && p.segment_count <= 4000, "segment_count", "[4, 4000]");
+  check(p.optimisation_passes >= 0 && p.optimisation_passes <= 64, "optimisation_passes", "[0, 64]");
+  check(std::isfinite(p.tip_length_m) && p.tip_length_m >= 0.0 && p.tip_length_m < p.length_m,
+        "tip_length_m", "[0, length_m)");
+  check(p.tip_angle_deg >= 0.0 && p.tip_angle_deg <= 180.0, "tip_angle_deg", "[0, 180]");
+  check(p.body_alpha_min >= 0.5 && p.body_alpha_min <= 1.0, "body_alpha_min", "[0.5, 1]");
+  check(p.body_alpha_max >= 1.0 && p.body_alpha_max <= 2.0, "body_alpha_max", "[1, 2]");
+  check(p.tip_alpha_min >= 0.5 && p.tip_alpha_min <= 1.0, "tip_alpha_min", "[0.5, 1]");
+  check(p.tip_alpha_max >= 1.0 && p.tip_alpha_max <= 2.0, "tip_alpha_max", "[1, 2]");
+  check(p.body_beta_deg >= 0.0 && p.body_beta_deg <= 90.0, "body_beta_deg", "[0, 90]");
+  check(p.tip_beta_deg >= 0.0 && p.tip_beta_deg <= 90.0, "tip_beta_deg", "[0, 90]");
+  check(p.twist_limit_deg_per_mm >= 0.0 && p.twist_limit_deg_per_mm <= 90.0,
+        "twist_limit_deg_per_mm", "[0, 90]");
+  check(p.axial_stiffness_n_per_m >= 0.0 && p.axial_stiffness_n_per_m <= 1e5,
+        "axial_stiffness_n_per_m", "[0, 1e5]");
+  check(p.axial_damping_n_s_per_m >= 0.0 && p.axial_damping_n_s_per_m <= 100.0,
+        "axial_damping_n_s_per_m", "[0, 100]");
+  check(p.torsional_rigidity_nm2 >= 0.0 && p.torsional_rigidity_nm2 <= 1e-2,
+        "torsional_rigidity_nm2", "[0, 1e-2]");
+  check(p.torsion_damping_nm_s_per_rad >= 0.0 && p.torsion_damping_nm_s_per_rad <= 1.0,
+        "torsion_damping_nm_s_per_rad", "[0, 1]");
+}
+
+std::vector<LinkSpec> make_link_specs(const GuidewireParams& p) {
+  validate(p);
+  const int n = p.segment_count;
+  const double h = p.length_m / n;
+  const double h_mm = h * 1e3;
+  // links touching the last tip_length_m are tip links; a non-zero tip gets at least one
+  int tip_links = static_cast<int>(std::ceil(p.tip_length_m / h - 1e-9));
+  if (p.tip_length_m > 0.0) tip_links = std::max(tip_links, 1);
+  tip_links = std::min(tip_links, n - 1);
+  // the pre-bend is spread evenly over the joints inside the tip (a smooth angled shape)
+  const double bend_per_link = tip_links > 0 ? p.tip_angle_deg * kDeg / tip_links : 0.0;
+
+  std::vector<LinkSpec> links(n);
+  for (int j = 0; j < n; ++j) {
+    LinkSpec& l = links[j];
+    l.tip = j >= n - tip_links;
+    l.rest_m = h;
+    l.length_min_m = (l.tip ? p.tip_alpha_min : p.body_alpha_min) * h;
+    l.length_max_m = (l.tip ? p.tip_alpha_max : p.body_alpha_max) * h;
+    // beta is given per millimetre of wire; a link never bends more than a right angle
+    l.beta_rad = std::min((l.tip ? p.tip_beta_deg : p.body_beta_deg) * kDeg * h_mm, std::numbers::pi / 2);
+    l.cos_beta = std::cos(l.beta_rad);
+    l.bend_rad = l.tip ? bend_per_link : 0.0;
+    l.cos_bend = std::cos(l.bend_rad);
+    l.sin_bend = std::sin(l.bend_rad);
+    l.twist_limit_rad = p.twist_limit_deg_per_mm * kDeg * h_mm;
+  }
+  return links;
+}
+
+}  // namespace pcisim::physics

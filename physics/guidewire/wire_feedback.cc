@@ -1,0 +1,85 @@
+#include "physics/guidewire/wire_feedback.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+
+namespace pcisim::physics {
+namespace {
+
+// unit wire direction at node i (distal), from its neighbours
+Eigen::Vector3d tangent(std::span<const Eigen::Vector3d> x, int i) {
+  const int a = std::max(i - 1, 0), b = std::min(i + 1, static_cast<int>(x.size()) - 1);
+  const Eigen::Vector3d d = x[b] - x[a];
+  const double n = d.norm();
+  return n > 1e-12 ? Eigen::Vector3d(d / n) : Eigen::Vector3d::Zero();
+}
+
+}  // namespace
+
+WireFeedback compute_feedback(const ChainMailWire& wire, const GuidewireParams& params,
+                              const WallContact* contact, const CoulombFriction* friction) {
+  WireFeedback f;
+  const auto x = wire.nodes_m();
+  const double k_wall = contact ? contact->params().wall_stiffness_n_per_m : 0.0;
+  // eq 17 gives friction as a displacement; the wall's penalty stiffness turns it into newtons
+  if (friction) {
+    const auto c = friction->step_correction_m();
+    double along = 0.0;
+    for (int i = wire.first_free_node(); i < wire.node_count(); ++i) along -= c[i].dot(tangent(x, i));
+    f.friction_n = k_wall * along;
+  }
+  // eq 20 reads k times the change of the first link's length since the last step. The change
+  // that matters to the hand is the first link's compression against the instrument, i.e. the
+  // feed the wire refused this step (commanded minus accepted insertion).
+  const double refused = wire.commanded_feed_m() - wire.fed_length_m();
+  f.internal_n = params.axial_stiffness_n_per_m * refused;
+  if (refused > 1e-9) {
+    f.stiffness_n_per_m = params.axial_stiffness_n_per_m;  // blocked: more push is refused 1:1
+  } else if (contact) {
+    // contacts facing along the wire resist insertion with the wall's penalty stiffness
+    const auto n = contact->normal();
+    const auto touched = contact->touched();
+    double k = 0.0;
+    for (int i = wire.first_free_node(); i < wire.node_count(); ++i) {
+      if (touched[i]) k += k_wall * std::pow(n[i].dot(tangent(x, i)), 2);
+    }
+    f.stiffness_n_per_m = std::min(k, params.axial_stiffness_n_per_m);
+  }
+  // torque: twist stored between the catheter exit and the first link held by static friction
+  const auto twist = wire.twist_rad();
+  const auto links = wire.links();
+  double length = 0.0;
+  for (int j = std::max(wire.first_free_node() - 1, 0); j < wire.segment_count(); ++j) {
+    length += links[j].rest_m;
+    if (wire.twist_held()[j]) {
+      const double kt = params.torsional_rigidity_nm2 / length;
+      f.torsion_stiffness_nm_per_rad = kt;
+      f.torque_nm = kt * (wire.rotation_rad() - twist[j]);
+      break;
+    }
+  }
+  return f;
+}
+
+LocalForceModel to_local_force_model(const WireFeedback& f, const InstrumentInput& at,
+                                     const GuidewireParams& params, double time_s, double step_s) {
+  LocalForceModel m;
+  m.made_utime = static_cast<int64_t>(std::llround(time_s * 1e6));
+  m.valid_for_us = static_cast<int64_t>(std::llround(2.0 * step_s * 1e6));  // two physics periods
+  m.x0_m = at.insertion_m;
+  m.f0_n = f.friction_n + f.internal_n;  // eq 19
+  m.k_n_per_m = std::max(f.stiffness_n_per_m, 0.0);
+  m.b_n_s_per_m = params.axial_damping_n_s_per_m;
+  m.q0_rad = at.rotation_rad;
+  m.t0_nm = f.torque_nm;
+  m.kt_nm_per_rad = std::max(f.torsion_stiffness_nm_per_rad, 0.0);
+  m.bt_nm_s_per_rad = params.torsion_damping_nm_s_per_rad;
+  if (!std::isfinite(m.f0_n) || !std::isfinite(m.k_n_per_m) || !std::isfinite(m.t0_nm) ||
+      !std::isfinite(m.kt_nm_per_rad)) {
+    m = LocalForceModel{};  // valid_for_us = 0: the haptic loop fades to zero
+  }
+  return m;
+}
+
+}  // namespace pcisim::physics

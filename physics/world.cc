@@ -1,0 +1,208 @@
+#include "physics/world.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "physics/guidewire/blood_drift.h"
+#include "physics/guidewire/catheter_path.h"
+#include "physics/guidewire/chain_mail_wire.h"
+#include "physics/guidewire/coulomb_friction.h"
+#include "physics/guidewire/input_guard.h"
+#include "physics/guidewire/link_spec.h"
+#include "physics/guidewire/tube_lumen.h"
+#include "physics/guidewire/wall_contact.h"
+#include "physics/guidewire/wire_feedback.h"
+#include "physics/vessel/coronary_phantom.h"
+#include "physics/vessel/vessel_tree.h"
+
+namespace pcisim::physics {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument(what);
+}
+
+bool in(double x, double lo, double hi) { return std::isfinite(x) && x >= lo && x <= hi; }
+
+void validate(const WorldSpec& s) {
+  require(in(s.step_s, 1e-5, 1.0), "step_s: expected [1e-5, 1] s");
+  require(!s.vessel_contact || s.guidewire, "vessel_contact: needs guidewire");
+  require(!s.friction || s.vessel_contact, "friction: needs vessel_contact");
+  require(!s.blood_flow || s.guidewire, "blood_flow: needs guidewire");
+  if (s.guidewire) validate(*s.guidewire);
+  if (const auto& c = s.vessel_contact) {
+    require(in(c->sdf_spacing_m, 1e-5, 5e-3), "vessel_contact.sdf_spacing_m: expected [1e-5, 5e-3] m");
+    require(in(c->wall_margin_m, 0.0, 1e-3), "vessel_contact.wall_margin_m: expected [0, 1e-3] m");
+    require(in(c->wall_stiffness_n_per_m, 0.0, 1e5), "vessel_contact.wall_stiffness_n_per_m: expected [0, 1e5]");
+  }
+  if (const auto& f = s.friction) {
+    require(in(f->body_static, 0.0, 2.0), "friction.body_static: expected [0, 2]");
+    require(in(f->body_kinetic, 0.0, f->body_static), "friction.body_kinetic: expected [0, body_static]");
+    require(in(f->tip_static, 0.0, 2.0), "friction.tip_static: expected [0, 2]");
+    require(in(f->tip_kinetic, 0.0, f->tip_static), "friction.tip_kinetic: expected [0, tip_static]");
+  }
+  if (const auto& b = s.blood_flow) {
+    require(in(b->mean_velocity_m_per_s, 0.0, 2.0), "blood_flow.mean_velocity_m_per_s: expected [0, 2]");
+    require(in(b->drift_gain, 0.0, 1.0), "blood_flow.drift_gain: expected [0, 1]");
+  }
+}
+
+}  // namespace
+
+struct World::Impl {
+  WorldSpec spec;
+  VesselTree tree;
+  std::unique_ptr<LumenQuery> lumen;
+  std::optional<ChainMailWire> wire;
+  std::optional<WallContact> contact;
+  std::optional<CoulombFriction> friction;
+  std::optional<BloodDrift> drift;
+  InputGuard guard;
+  InstrumentInput used;
+  std::vector<EffectCost> costs;
+  int cost_wire = -1, cost_blood = -1, cost_contact = -1, cost_friction = -1;
+  LocalForceModel model;
+  double time_s = 0.0;
+  int64_t step = 0;
+  int tip_branch = -1;
+
+  static double ms(Clock::time_point a, Clock::time_point b) {
+    return std::chrono::duration<double, std::milli>(b - a).count();
+  }
+};
+
+World::World(const WorldSpec& spec) : impl_(std::make_unique<Impl>()) {
+  validate(spec);
+  Impl& w = *impl_;
+  w.spec = spec;
+  // effects in step order; only the listed ones exist
+  if (spec.guidewire) {
+    w.cost_wire = static_cast<int>(w.costs.size());
+    w.costs.push_back({"guidewire", 0.0});
+  }
+  if (spec.blood_flow) {
+    w.cost_blood = static_cast<int>(w.costs.size());
+    w.costs.push_back({"blood_flow", 0.0});
+  }
+  if (spec.vessel_contact) {
+    w.cost_contact = static_cast<int>(w.costs.size());
+    w.costs.push_back({"vessel_contact", 0.0});
+  }
+  if (spec.friction) {
+    w.cost_friction = static_cast<int>(w.costs.size());
+    w.costs.push_back({"friction", 0.0});
+  }
+  if (!spec.guidewire) return;  // nothing else needs the anatomy
+
+  w.tree = make_coronary_phantom(CoronaryPhantomSpec{spec.anatomy.seed});
+  auto path = guide_catheter_path(w.tree);
+  require(path.size() >= 2, "anatomy: the phantom has no guide catheter path (aorta and LM needed)");
+  w.wire.emplace(*spec.guidewire, CatheterPath(std::move(path)));
+  if (spec.vessel_contact) {
+    // the analytic tube lumen stands in until the SDF of the lofted lumen is available
+    w.lumen = std::make_unique<TubeLumen>(w.tree);
+    w.contact.emplace(*spec.vessel_contact, *w.lumen, w.wire->node_count());
+  }
+  if (spec.friction) w.friction.emplace(*spec.friction, w.wire->node_count());
+  if (spec.blood_flow) w.drift.emplace(*spec.blood_flow, w.tree);
+}
+
+World::~World() = default;
+
+void World::step(const InstrumentInput& input) {
+  Impl& w = *impl_;
+  w.used = w.guard.accept(input);
+  if (w.wire) {
+    ChainMailWire& wire = *w.wire;
+    auto t0 = Clock::now();
+    wire.begin_step(w.used.insertion_m, w.used.rotation_rad);
+    if (w.contact) w.contact->begin_step();
+    if (w.friction) w.friction->begin_step(wire);
+    auto t1 = Clock::now();
+    double c_wire = Impl::ms(t0, t1), c_blood = 0.0, c_contact = 0.0, c_friction = 0.0;
+    if (w.drift) {
+      w.drift->apply(wire, w.spec.step_s);
+      const auto t2 = Clock::now();
+      c_blood = Impl::ms(t1, t2);
+      t1 = t2;
+    }
+    // each pass: optimisation, contact, friction, then the chain-mail limits hold again
+    const int passes = w.spec.guidewire->optimisation_passes;
+    for (int k = 0; k < std::max(passes, 1); ++k) {
+      auto a = Clock::now();
+      if (k < passes) wire.optimise_pass(k);
+      auto b = Clock::now();
+      c_wire += Impl::ms(a, b);
+      if (w.contact) {
+        w.contact->project(wire);
+        a = b;
+        b = Clock::now();
+        c_contact += Impl::ms(a, b);
+      }
+      if (w.friction) {
+        w.friction->apply(wire, *w.contact);
+        a = b;
+        b = Clock::now();
+        c_friction += Impl::ms(a, b);
+      }
+      wire.restore_limits();
+      c_wire += Impl::ms(b, Clock::now());
+    }
+    const auto t3 = Clock::now();
+    wire.end_step();
+    const auto nodes = wire.nodes_m();
+    w.tip_branch = nearest_branch(w.tree, nodes.back());
+    const WireFeedback f = compute_feedback(wire, *w.spec.guidewire, w.contact ? &*w.contact : nullptr,
+                                            w.friction ? &*w.friction : nullptr);
+    w.model = to_local_force_model(f, w.used, *w.spec.guidewire, w.time_s + w.spec.step_s, w.spec.step_s);
+    c_wire += Impl::ms(t3, Clock::now());
+    w.costs[w.cost_wire].last_step_ms = c_wire;
+    if (w.cost_blood >= 0) w.costs[w.cost_blood].last_step_ms = c_blood;
+    if (w.cost_contact >= 0) w.costs[w.cost_contact].last_step_ms = c_contact;
+    if (w.cost_friction >= 0) w.costs[w.cost_friction].last_step_ms = c_friction;
+  }
+  w.time_s += w.spec.step_s;
+  ++w.step;
+}
+
+void World::write_snapshot(WorldSnapshot& out) const {
+  const Impl& w = *impl_;
+  out.time_s = w.time_s;
+  out.step = w.step;
+  out.insertion_m = w.used.insertion_m;
+  out.rotation_rad = w.used.rotation_rad;
+  out.heart_phase = 0.0;
+  out.tip_branch = w.tip_branch;
+  if (!w.wire) {
+    out.wire_nodes_m.clear();
+    out.wire_contact.clear();
+    out.tip_m.setZero();
+    return;
+  }
+  const auto nodes = w.wire->nodes_m();
+  out.wire_nodes_m.assign(nodes.begin(), nodes.end());
+  out.wire_contact.resize(nodes.size());
+  if (w.contact) {
+    const auto t = w.contact->touched();
+    std::copy(t.begin(), t.end(), out.wire_contact.begin());
+  } else {
+    std::fill(out.wire_contact.begin(), out.wire_contact.end(), 0);
+  }
+  out.tip_m = nodes.back();
+}
+
+LocalForceModel World::force_model() const { return impl_->model; }
+std::span<const EffectCost> World::effect_costs() const { return impl_->costs; }
+double World::time_s() const { return impl_->time_s; }
+int64_t World::rejected_inputs() const { return impl_->guard.rejected(); }
+double World::refused_feed_m() const {
+  return impl_->wire ? impl_->wire->commanded_feed_m() - impl_->wire->fed_length_m() : 0.0;
+}
+
+}  // namespace pcisim::physics

@@ -52,6 +52,10 @@ int main(int argc, char** argv) {
   app.add_option("--duration", duration_s, "seconds to run; 0 = until SIGINT/SIGTERM")->check(CLI::Range(0.0, 1e7));
   app.add_option("--rate-hz", rate_hz, "publish rate")->check(CLI::Range(1.0, 10000.0))->capture_default_str();
   app.add_option("--device-id", device_id, "instrument_state_t.device_id")->capture_default_str();
+  double wait_for_server_s = 0;
+  app.add_option("--wait-for-server", wait_for_server_s,
+                 "hold the script at t=0 until the server answers (up to this many seconds)")
+      ->check(CLI::Range(0.0, 600.0));
   bool print_script = false;
   app.add_flag("--print-script", print_script, "print the built-in trainee script and exit");
   CLI11_PARSE(app, argc, argv);
@@ -88,12 +92,19 @@ int main(int argc, char** argv) {
   m.device_id = device_id;
   m.status = pcisim_lcm::instrument_state_t::STATUS_OK;
   const auto period_ns = static_cast<int64_t>(1e9 / rate_hz);
-  const int64_t start_ns = server::monotonic_ns();
+  int64_t start_ns = server::monotonic_ns();
+  bool waiting = wait_for_server_s > 0;
   server::DeadlineSchedule schedule(start_ns, period_ns);
   int64_t next_log_ns = start_ns + 1'000'000'000;
   for (int64_t seq = 0; !g_stop; ++seq) {
     const int64_t now_ns = server::monotonic_ns();
-    const double t_s = (now_ns - start_ns) * 1e-9;
+    if (waiting && (forces.received > 0 || (now_ns - start_ns) * 1e-9 > wait_for_server_s)) {
+      waiting = false;
+      if (forces.received == 0) spdlog::warn("bridge: no answer from the server after {} s, starting anyway", wait_for_server_s);
+      start_ns = now_ns;  // the script's clock starts now
+      next_log_ns = now_ns + 1'000'000'000;
+    }
+    const double t_s = waiting ? 0.0 : (now_ns - start_ns) * 1e-9;
     if (duration_s > 0 && t_s >= duration_s) break;
     const auto r = script.sample(t_s);
     m.utime = now_ns / 1000;
@@ -104,7 +115,7 @@ int main(int argc, char** argv) {
     m.insertion_rate_mm_s = r.insertion_rate_mm_s;
     m.rotation_rate_rad_s = r.rotation_rate_rad_s;
     lcm.publish(protocol::kInstrumentChannel, &m);
-    if (now_ns >= next_log_ns) {
+    if (!waiting && now_ns >= next_log_ns) {
       next_log_ns += 1'000'000'000;
       spdlog::info("bridge: t={:5.1f}s insertion {:6.1f} mm rotation {:6.2f} rad buttons {:#x} | force {:+.3f} N "
                    "torque {:+.3f} N·mm flags {:#x} ({} commands)",

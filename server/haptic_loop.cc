@@ -20,6 +20,7 @@ bool run_haptic_loop(const HapticLoopConfig& config, SharedState& state) {
     sleep_until_ns(deadline_ns);
     const int64_t wake_ns = monotonic_ns();
     const int64_t now_us = wake_ns / 1000;
+    state.haptic.mark_wake(wake_ns);
 
     if (state.instrument_for_haptics.refresh()) instrument = state.instrument_for_haptics.read_slot();
     if (state.force_model.refresh()) evaluator.set_model(state.force_model.read_slot(), now_us);

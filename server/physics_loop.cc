@@ -55,6 +55,7 @@ void PhysicsLoop::run() {
     const int64_t deadline_ns = schedule.deadline_ns();
     sleep_until_ns(deadline_ns);
     const int64_t wake_ns = monotonic_ns();
+    state_.physics.mark_wake(wake_ns);
 
     // a reset rebuilds the world between steps (allocation is fine here, not inside step)
     if (state_.reset_requested.exchange(false)) world_ = std::make_unique<physics::World>(spec_);

@@ -33,6 +33,17 @@ struct LoopStats {
   LatencyHistogram late_ns;     // wake time minus deadline
   std::atomic<int64_t> iterations{0};
   std::atomic<int64_t> overruns{0};
+  std::atomic<int64_t> first_wake_ns{0}, last_wake_ns{0};
+
+  // the rate the loop achieved while it ran (a stopped loop does not dilute it)
+  double rate_hz() const {
+    const int64_t span = last_wake_ns.load() - first_wake_ns.load();
+    return span > 0 ? static_cast<double>(iterations.load() - 1) * 1e9 / static_cast<double>(span) : 0.0;
+  }
+  void mark_wake(int64_t wake_ns) {
+    if (first_wake_ns.load(std::memory_order_relaxed) == 0) first_wake_ns.store(wake_ns, std::memory_order_relaxed);
+    last_wake_ns.store(wake_ns, std::memory_order_relaxed);
+  }
 };
 
 struct SharedState {

@@ -13,9 +13,8 @@ StatsReport collect_stats(const SharedState& state, const PhysicsLoop& physics, 
                           bool haptic_fifo) {
   StatsReport r;
   r.elapsed_s = elapsed_s;
-  const double per_s = elapsed_s > 0 ? 1.0 / elapsed_s : 0.0;
   r.haptic_ticks = state.haptic.iterations.load();
-  r.haptic_rate_hz = static_cast<double>(r.haptic_ticks) * per_s;
+  r.haptic_rate_hz = state.haptic.rate_hz();
   r.haptic_period_us = percentiles(state.haptic.period_ns, 1e-3);
   r.haptic_compute_us = percentiles(state.haptic.compute_ns, 1e-3);
   r.haptic_late_us = percentiles(state.haptic.late_ns, 1e-3);
@@ -23,7 +22,7 @@ StatsReport collect_stats(const SharedState& state, const PhysicsLoop& physics, 
   r.forces_dropped = state.forces_dropped.load();
   r.haptic_fifo = haptic_fifo;
   r.physics_steps = state.physics.iterations.load();
-  r.physics_rate_hz = static_cast<double>(r.physics_steps) * per_s;
+  r.physics_rate_hz = state.physics.rate_hz();
   r.physics_target_hz = physics.rate_hz();
   r.physics_step_ms = percentiles(state.physics.compute_ns, 1e-6);
   r.physics_period_ms = percentiles(state.physics.period_ns, 1e-6);

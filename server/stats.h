@@ -31,7 +31,7 @@ struct StatsReport {
 
 Percentiles percentiles(const LatencyHistogram& h, double scale);
 
-// rates are counts over elapsed_s
+// rates are those the loops achieved while running; elapsed_s is the whole run
 StatsReport collect_stats(const SharedState& state, const PhysicsLoop& physics, double elapsed_s,
                           bool haptic_fifo);
 nlohmann::json to_json(const StatsReport& r);

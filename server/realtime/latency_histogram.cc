@@ -6,17 +6,17 @@
 namespace pcisim::server {
 
 int LatencyHistogram::bucket_of(int64_t value_ns) {
-  if (value_ns < 128) return value_ns < 0 ? 0 : static_cast<int>(value_ns);
+  if (value_ns < 256) return value_ns < 0 ? 0 : static_cast<int>(value_ns);
   const int msb = 63 - std::countl_zero(static_cast<uint64_t>(value_ns));
-  const int64_t mantissa = value_ns >> (msb - 6);  // in [64, 127]
-  return 128 + (msb - 7) * 64 + static_cast<int>(mantissa - 64);
+  const int64_t mantissa = value_ns >> (msb - 7);  // in [128, 255]
+  return 256 + (msb - 8) * 128 + static_cast<int>(mantissa - 128);
 }
 
 int64_t LatencyHistogram::bucket_low_ns(int bucket) {
-  if (bucket < 128) return bucket;
-  const int msb = 7 + (bucket - 128) / 64;
-  const int64_t mantissa = 64 + (bucket - 128) % 64;
-  return mantissa << (msb - 6);
+  if (bucket < 256) return bucket;
+  const int msb = 8 + (bucket - 256) / 128;
+  const int64_t mantissa = 128 + (bucket - 256) % 128;
+  return mantissa << (msb - 7);
 }
 
 void LatencyHistogram::record(int64_t value_ns) {
@@ -46,7 +46,7 @@ double LatencyHistogram::quantile_ns(double q) const {
   for (int b = 0; b < kBuckets; ++b) {
     seen += counts_[b].load(std::memory_order_relaxed);
     if (seen >= rank) {
-      if (b < 128) return static_cast<double>(b);
+      if (b < 256) return static_cast<double>(b);
       const double low = static_cast<double>(bucket_low_ns(b));
       const double high = static_cast<double>(bucket_low_ns(b + 1));
       return std::min(0.5 * (low + high), max_ns());

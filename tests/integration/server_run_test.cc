@@ -1,0 +1,141 @@
+// The whole server on a real in-process LCM (memq): threads, rates, effects, forces.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <mutex>
+#include <thread>
+
+#include "pcisim_lcm/force_command_t.hpp"
+#include "pcisim_lcm/instrument_state_t.hpp"
+#include "protocol/channels.h"
+#include "protocol/message_checks.h"
+#include "server/realtime/clock.h"
+#include "server/realtime/deadline_schedule.h"
+#include "server/scene/scene.h"
+#include "server/server.h"
+
+namespace pcisim::server {
+namespace {
+
+// plays the instrument at 1 kHz on the shared LCM and keeps what the server sends back
+struct FakeTrainee {
+  lcm::LCM& lcm;
+  std::atomic<bool> publishing{true}, done{false};
+  std::atomic<int64_t> silent_after_seq{-1};
+  std::mutex mutex;
+  std::vector<pcisim_lcm::force_command_t> forces;
+  std::thread thread;
+
+  explicit FakeTrainee(lcm::LCM& l) : lcm(l) {
+    lcm.subscribe(protocol::kForceChannel, &FakeTrainee::on_force, this);
+    thread = std::thread([this] { run(); });
+  }
+  ~FakeTrainee() {
+    done = true;
+    thread.join();
+  }
+  void on_force(const lcm::ReceiveBuffer* r, const std::string&) {
+    pcisim_lcm::force_command_t m;
+    if (!protocol::decode_checked(*r, m)) return;
+    std::lock_guard lock(mutex);
+    forces.push_back(m);
+  }
+  void run() {
+    pcisim_lcm::instrument_state_t m{};
+    DeadlineSchedule schedule(monotonic_ns(), 1'000'000);
+    for (int64_t seq = 0; !done; ++seq) {
+      if (publishing) {
+        m.seq = seq;
+        m.utime = monotonic_us();
+        m.insertion_mm = 0.005 * static_cast<double>(seq);  // 5 mm/s
+        m.insertion_rate_mm_s = 5.0;
+        lcm.publish(protocol::kInstrumentChannel, &m);
+      }
+      sleep_until_ns(schedule.deadline_ns());
+      schedule.complete(monotonic_ns());
+    }
+  }
+};
+
+StatsReport run_server(const Scene& scene, lcm::LCM& lcm, double seconds,
+                       const std::function<void()>& midway = {}) {
+  Server server(scene, lcm);
+  std::atomic<bool> stop{false};
+  std::thread helper;
+  if (midway) helper = std::thread([&] {
+      std::this_thread::sleep_for(std::chrono::duration<double>(seconds / 2));
+      midway();
+    });
+  StatsReport r = server.run(seconds, stop);
+  if (helper.joinable()) helper.join();
+  return r;
+}
+
+TEST(ServerRun, MinimalSceneRunsBothLoopsAtTheirRatesAndBuildsOnlyTheWire) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  FakeTrainee trainee(lcm);
+  const Scene scene = load_scene_file(PCISIM_SOURCE_DIR "/scenes/minimal.json");
+  const StatsReport r = run_server(scene, lcm, 3.0);
+
+  EXPECT_NEAR(r.haptic_rate_hz, 1000.0, 10.0);
+  EXPECT_NEAR(r.physics_rate_hz, 30.0, 0.5);
+  EXPECT_GT(r.haptic_ticks, 2900);
+  ASSERT_EQ(r.effect_step_ms_p50.size(), 1u);
+  EXPECT_EQ(r.effect_step_ms_p50[0].first, "guidewire");
+  EXPECT_GT(r.lcm_rx, 2500) << "the instrument stream arrived";
+  EXPECT_EQ(r.lcm_dropped_bad, 0);
+
+  // the server's receive thread has stopped: deliver what is still queued here
+  trainee.done = true;
+  while (lcm.handleTimeout(50) > 0) {
+  }
+  std::lock_guard lock(trainee.mutex);
+  ASSERT_GT(trainee.forces.size(), 2500u);
+  EXPECT_GE(trainee.forces[trainee.forces.size() / 2].instrument_seq, 0) << "forces answer instrument samples";
+  EXPECT_EQ(trainee.forces.back().seq, -1) << "the last command is the zero force of shutdown";
+  EXPECT_EQ(trainee.forces.back().axial_force_n, 0.0);
+}
+
+TEST(ServerRun, StatsListExactlyTheSceneEffects) {
+  lcm::LCM lcm("memq://");
+  FakeTrainee trainee(lcm);
+  const StatsReport r = run_server(default_scene(), lcm, 1.0);
+  std::vector<std::string> names;
+  for (const auto& [name, ms] : r.effect_step_ms_p50) names.push_back(name);
+  std::vector<std::string> expected = default_scene().effects;
+  std::sort(names.begin(), names.end());
+  std::sort(expected.begin(), expected.end());
+  EXPECT_EQ(names, expected);
+  const auto json = to_json(r);
+  for (const char* key : {"p50", "p99", "p999", "max"}) EXPECT_TRUE(json["haptic"]["period_us"].contains(key)) << key;
+  for (const char* key : {"p50", "p99", "max"}) {
+    EXPECT_TRUE(json["haptic"]["compute_us"].contains(key)) << key;
+    EXPECT_TRUE(json["physics"]["step_ms"].contains(key)) << key;
+  }
+  for (const auto& name : expected) EXPECT_TRUE(json["physics"]["effects"][name].contains("step_ms_p50")) << name;
+  EXPECT_TRUE(json["haptic"].contains("overruns"));
+  EXPECT_TRUE(json["haptic"].contains("rate_hz"));
+  EXPECT_TRUE(json["physics"].contains("rate_hz"));
+  EXPECT_TRUE(json["xray"].contains("frames"));
+  EXPECT_TRUE(json["xray"].contains("fps"));
+  for (const char* key : {"rx", "tx", "dropped_bad"}) EXPECT_TRUE(json["lcm"].contains(key)) << key;
+}
+
+TEST(ServerRun, SilentInstrumentFadesTheForce) {
+  lcm::LCM lcm("memq://");
+  FakeTrainee trainee(lcm);
+  run_server(load_scene_file(PCISIM_SOURCE_DIR "/scenes/minimal.json"), lcm, 2.0,
+             [&] { trainee.publishing = false; });
+  std::lock_guard lock(trainee.mutex);
+  // the commands well after the instrument fell silent are faded and zero
+  const auto& f = trainee.forces;
+  ASSERT_GT(f.size(), 1500u);
+  int faded_zero = 0;
+  for (size_t i = f.size() - 300; i + 1 < f.size(); ++i)
+    faded_zero += (f[i].flags & pcisim_lcm::force_command_t::FLAG_FADED) && f[i].axial_force_n == 0.0;
+  EXPECT_EQ(faded_zero, 299);
+}
+
+}  // namespace
+}  // namespace pcisim::server

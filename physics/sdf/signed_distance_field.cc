@@ -95,8 +95,7 @@ SdfSample SignedDistanceField::sample(const Eigen::Vector3d& p_m) const {
   return s;
 }
 
-void SignedDistanceField::sample_many(std::span<const Eigen::Vector3d> points_m, std::span<SdfSample> out) const {
-  const size_t n = std::min(points_m.size(), out.size());
+void SignedDistanceField::sample_many(const Eigen::Vector3d* points_m, size_t n, SdfSample* out) const {
   for (size_t i = 0; i < n; ++i) out[i] = sample(points_m[i]);
 }
 

@@ -7,7 +7,6 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
-#include <span>
 #include <vector>
 
 #include "physics/geometry/triangle_mesh.h"
@@ -39,8 +38,8 @@ class SignedDistanceField {
   // trilinear sample. Outside the grid the answer is safe and finite: see the implementation
   // comment for the exact rule. Allocates nothing.
   SdfSample sample(const Eigen::Vector3d& p_m) const;
-  // sample() for each point; out.size() must equal points_m.size()
-  void sample_many(std::span<const Eigen::Vector3d> points_m, std::span<SdfSample> out) const;
+  // sample() for each of n points (plain pointers: this header is also read by nvcc in C++17)
+  void sample_many(const Eigen::Vector3d* points_m, size_t n, SdfSample* out) const;
 
   double spacing_m() const { return spacing_m_; }
   const Eigen::Vector3d& origin_m() const { return origin_m_; }

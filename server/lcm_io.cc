@@ -5,6 +5,7 @@
 #include "protocol/channels.h"
 #include "protocol/message_checks.h"
 #include "server/realtime/clock.h"
+#include "server/scene/json_reader.h"
 
 namespace pcisim::server {
 
@@ -75,9 +76,24 @@ void LcmIo::on_session(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     case C::CMD_PAUSE: state_.paused = true; spdlog::info("session: paused"); break;
     case C::CMD_RESUME: state_.paused = false; spdlog::info("session: resumed"); break;
     case C::CMD_RESET: state_.reset_requested = true; spdlog::info("session: reset"); break;
+    case C::CMD_LOAD_SCENE: request_scene(session_msg_.scene_path); break;
     default:
-      spdlog::warn("session: command {} is not handled by this build (needs the X-ray or scene-reload work)",
+      spdlog::warn("session: command {} is not handled by this build (needs the X-ray work)",
                    static_cast<int>(session_msg_.command));
+  }
+}
+
+// parsing happens here, off the loops; a bad scene is refused and the running one stays
+void LcmIo::request_scene(const std::string& path) {
+  try {
+    Scene scene = load_scene_file(path);
+    std::lock_guard lock(state_.scene_mutex);
+    state_.requested_scene = std::move(scene);
+    state_.scene_requested = true;
+    spdlog::info("session: scene {} accepted, restarting the pipeline", path);
+  } catch (const SceneError& e) {
+    state_.scene_rejected.fetch_add(1);
+    spdlog::error("session: refused scene: {}", e.what());
   }
 }
 

@@ -31,6 +31,7 @@ class LcmIo {
  private:
   void on_instrument(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void on_session(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void request_scene(const std::string& path);
   void rx_loop();
   void tx_loop();
   void publish_wire(const physics::WorldSnapshot& s);

@@ -1,5 +1,6 @@
 // pcisim-server: the real-time PCI training server (see docs/ and DESIGN.md).
 #include <CLI/CLI.hpp>
+#include <chrono>
 #include <csignal>
 #include <fstream>
 #include <iostream>
@@ -65,18 +66,32 @@ int main(int argc, char** argv) {
 
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
+  // a scene loaded over LCM restarts the pipeline with it; --duration counts the whole session
   try {
-    Server server(scene, lcm);
-    const StatsReport stats = server.run(duration_s, g_stop);
-    std::cout << human_summary(stats) << "\n";
-    if (!stats_path.empty()) {
-      std::ofstream out(stats_path);
-      out << to_json(stats).dump(2) << "\n";
-      if (!out.flush()) {
-        std::cerr << "pcisim-server: cannot write stats to " << stats_path << "\n";
-        return 1;
+    const auto start = std::chrono::steady_clock::now();
+    for (;;) {
+      Server server(scene, lcm);
+      double left_s = 0;
+      if (duration_s > 0) {
+        left_s = duration_s - std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (left_s <= 0) left_s = 1e-3;
       }
-      std::cout << "  stats   " << stats_path << "\n";
+      const StatsReport stats = server.run(left_s, g_stop);
+      if (auto next = server.take_requested_scene(); next && !g_stop) {
+        scene = std::move(*next);
+        continue;
+      }
+      std::cout << human_summary(stats) << "\n";
+      if (!stats_path.empty()) {
+        std::ofstream out(stats_path);
+        out << to_json(stats).dump(2) << "\n";
+        if (!out.flush()) {
+          std::cerr << "pcisim-server: cannot write stats to " << stats_path << "\n";
+          return 1;
+        }
+        std::cout << "  stats   " << stats_path << "\n";
+      }
+      break;
     }
   } catch (const std::exception& e) {
     std::cerr << "pcisim-server: " << e.what() << "\n";

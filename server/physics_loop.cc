@@ -25,6 +25,7 @@ void PhysicsLoop::step_once(int64_t now_ns) {
   input.rotation_rate_rad_per_s = instrument_.sample.rotation_rate_rad_per_s;
   input.buttons = static_cast<uint32_t>(instrument_.buttons);
   world_->step(input);
+  if (const int64_t stall_us = state_.inject_stall_us.exchange(0)) sleep_until_ns(now_ns + stall_us * 1000);
 
   physics::WorldSnapshot& snap = state_.snapshot_for_tx.write_slot();
   world_->write_snapshot(snap);

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 #include <thread>
 
+#include "physics/vessel/coronary_phantom.h"
 #include "server/haptic_loop.h"
 #include "server/lcm_io.h"
 #include "server/physics_loop.h"
@@ -44,6 +45,10 @@ Server::Server(const Scene& scene, lcm::LCM& control) : impl_(std::make_unique<I
   const int64_t t0 = monotonic_ns();
   impl_->physics = std::make_unique<PhysicsLoop>(scene, impl_->state);
   spdlog::info("world built in {:.0f} ms", (monotonic_ns() - t0) * 1e-6);
+  // branch names for wire_state_t and the log: the scene's phantom, same seed, same tree
+  std::vector<std::string> names;
+  for (const auto& b : physics::make_coronary_phantom({scene.world.anatomy.seed}).branches) names.push_back(b.name);
+  branch_namer = [names](int i) { return i >= 0 && i < static_cast<int>(names.size()) ? names[i] : std::string(); };
 }
 
 Server::~Server() = default;
@@ -65,7 +70,7 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   // the main thread only watches the clock and logs once a second
   int64_t next_log_ns = m.start_ns + 1'000'000'000;
   const int64_t end_ns = duration_s > 0 ? m.start_ns + static_cast<int64_t>(duration_s * 1e9) : INT64_MAX;
-  while (!stop.load() && monotonic_ns() < end_ns) {
+  while (!stop.load() && !m.state.scene_requested.load() && monotonic_ns() < end_ns) {
     sleep_until_ns(std::min(end_ns, monotonic_ns() + 20'000'000));
     if (monotonic_ns() >= next_log_ns) {
       next_log_ns += 1'000'000'000;
@@ -85,6 +90,17 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   const double elapsed_s = (monotonic_ns() - m.start_ns) * 1e-9;
   io.stop();
   return collect_stats(m.state, *m.physics, elapsed_s, m.haptic_fifo);
+}
+
+void Server::inject_physics_stall(double seconds) {
+  impl_->state.inject_stall_us = static_cast<int64_t>(seconds * 1e6);
+}
+
+std::optional<Scene> Server::take_requested_scene() {
+  std::lock_guard lock(impl_->state.scene_mutex);
+  std::optional<Scene> scene = std::move(impl_->state.requested_scene);
+  impl_->state.requested_scene.reset();
+  return scene;
 }
 
 }  // namespace pcisim::server

@@ -5,6 +5,7 @@
 #include <functional>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "server/scene/scene.h"
@@ -21,6 +22,12 @@ class Server {
   // runs until duration_s elapses (0 = no limit) or *stop becomes true; on the way out it stops
   // the loops and publishes a zero force command. Returns the final figures.
   StatsReport run(double duration_s, const std::atomic<bool>& stop);
+
+  // fault injection for tests and benchmarks: the next physics step takes seconds longer
+  void inject_physics_stall(double seconds);
+
+  // a scene a session command asked for while running (run() returned early for it)
+  std::optional<Scene> take_requested_scene();
 
   // names of the vessel branches, for wire_state_t (index -> name, "" when unknown)
   std::function<std::string(int)> branch_namer;

@@ -4,6 +4,8 @@
 // atomics for counters. Nothing here locks.
 #include <atomic>
 #include <cstdint>
+#include <mutex>
+#include <optional>
 
 #include "haptics/force_evaluator.h"
 #include "physics/local_force_model.h"
@@ -11,6 +13,7 @@
 #include "server/realtime/latency_histogram.h"
 #include "server/realtime/spsc_ring.h"
 #include "server/realtime/triple_buffer.h"
+#include "server/scene/scene.h"
 
 namespace pcisim::server {
 
@@ -65,6 +68,13 @@ struct SharedState {
   std::atomic<bool> paused{false};
   std::atomic<bool> reset_requested{false};
   std::atomic<bool> stop{false};
+  std::atomic<int64_t> inject_stall_us{0};  // fault injection: the next physics step takes this long
+
+  // a validated scene asked for over LCM; the server restarts its pipeline with it
+  std::mutex scene_mutex;
+  std::optional<Scene> requested_scene;
+  std::atomic<bool> scene_requested{false};
+  std::atomic<int64_t> scene_rejected{0};
 
   // a few figures of the newest step for the once-a-second log line
   std::atomic<double> wire_insertion_mm{0}, wire_rotation_rad{0};

@@ -122,6 +122,34 @@ TEST(ServerRun, StatsListExactlyTheSceneEffects) {
   for (const char* key : {"rx", "tx", "dropped_bad"}) EXPECT_TRUE(json["lcm"].contains(key)) << key;
 }
 
+TEST(ServerRun, OverrunningPhysicsIsCountedAndNeverCatchesUpInABurst) {
+  lcm::LCM lcm("memq://");
+  FakeTrainee trainee(lcm);
+  Server server(load_scene_file(PCISIM_SOURCE_DIR "/scenes/minimal.json"), lcm);
+  std::thread fault([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    server.inject_physics_stall(0.200);  // one step takes 200 ms: six 30 Hz periods
+  });
+  std::atomic<bool> stop{false};
+  const StatsReport r = server.run(2.0, stop);
+  fault.join();
+  EXPECT_GE(r.physics_overruns, 5);
+  EXPECT_LE(r.physics_overruns, 7);
+  EXPECT_GE(r.physics_step_ms.max, 200.0);
+  // skipping ahead: the steps lost to the stall are not made up afterwards
+  EXPECT_LE(r.physics_steps, static_cast<int64_t>((2.0 - 0.2) * 30) + 2);
+  EXPECT_GE(r.physics_steps, static_cast<int64_t>((2.0 - 0.2) * 30) - 3);
+
+  // the stall outlived the model's validity: the force went stale, then recovered
+  trainee.done = true;
+  std::lock_guard lock(trainee.mutex);
+  int stale = 0;
+  for (const auto& f : trainee.forces) stale += (f.flags & pcisim_lcm::force_command_t::FLAG_STALE) != 0;
+  EXPECT_GT(stale, 130);
+  EXPECT_LT(stale, 270);  // stale from 2 periods after the last good step until the step after the stall
+  EXPECT_EQ(trainee.forces[trainee.forces.size() - 100].flags & pcisim_lcm::force_command_t::FLAG_STALE, 0);
+}
+
 TEST(ServerRun, SilentInstrumentFadesTheForce) {
   lcm::LCM lcm("memq://");
   FakeTrainee trainee(lcm);

@@ -1,0 +1,167 @@
+// Session commands over a real in-process LCM: pause/resume, reset and scene loading.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <mutex>
+#include <thread>
+
+#include "pcisim_lcm/force_command_t.hpp"
+#include "pcisim_lcm/instrument_state_t.hpp"
+#include "pcisim_lcm/session_command_t.hpp"
+#include "pcisim_lcm/wire_state_t.hpp"
+#include "protocol/channels.h"
+#include "protocol/message_checks.h"
+#include "server/realtime/clock.h"
+#include "server/server.h"
+
+namespace pcisim::server {
+namespace {
+
+using C = pcisim_lcm::session_command_t;
+using F = pcisim_lcm::force_command_t;
+
+struct Timed {
+  double t_s;
+  int32_t flags;
+  double sim_time_s;
+};
+
+// records when wire states and force commands arrive, relative to the test's start
+struct Recorder {
+  int64_t start_ns = monotonic_ns();
+  std::mutex mutex;
+  std::vector<Timed> wires, forces;
+  double now_s() const { return (monotonic_ns() - start_ns) * 1e-9; }
+  void on_wire(const lcm::ReceiveBuffer* r, const std::string&) {
+    pcisim_lcm::wire_state_t m;
+    if (!protocol::decode_checked(*r, m)) return;
+    std::lock_guard lock(mutex);
+    wires.push_back({now_s(), 0, m.sim_time_s});
+  }
+  void on_force(const lcm::ReceiveBuffer* r, const std::string&) {
+    F m;
+    if (!protocol::decode_checked(*r, m)) return;
+    std::lock_guard lock(mutex);
+    forces.push_back({now_s(), m.flags, 0});
+  }
+};
+
+void send(lcm::LCM& lcm, int8_t command, const std::string& scene_path = "") {
+  C c{};
+  c.command = command;
+  c.scene_path = scene_path;
+  lcm.publish(protocol::kSessionChannel, &c);
+}
+
+// publishes a steady instrument at 1 kHz until destroyed
+struct Instrument {
+  lcm::LCM& lcm;
+  std::atomic<bool> done{false};
+  std::thread thread{[this] {
+    pcisim_lcm::instrument_state_t m{};
+    for (int64_t seq = 0; !done; ++seq) {
+      m.seq = seq;
+      lcm.publish(protocol::kInstrumentChannel, &m);
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+  }};
+  explicit Instrument(lcm::LCM& l) : lcm(l) {}
+  ~Instrument() {
+    done = true;
+    thread.join();
+  }
+};
+
+Scene minimal() { return load_scene_file(PCISIM_SOURCE_DIR "/scenes/minimal.json"); }
+
+TEST(SessionCommands, PauseFreezesPhysicsAndFadesTheForceResumeBringsBothBack) {
+  lcm::LCM lcm("memq://");
+  Recorder rec;
+  lcm.subscribe(protocol::kWireChannel, &Recorder::on_wire, &rec);
+  lcm.subscribe(protocol::kForceChannel, &Recorder::on_force, &rec);
+  Instrument instrument(lcm);
+  Server server(minimal(), lcm);
+  std::thread console([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(800));
+    send(lcm, C::CMD_PAUSE);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1000));
+    send(lcm, C::CMD_RESUME);
+  });
+  std::atomic<bool> stop{false};
+  server.run(3.0, stop);
+  console.join();
+
+  std::lock_guard lock(rec.mutex);
+  double longest_gap = 0;
+  for (size_t i = 1; i < rec.wires.size(); ++i) longest_gap = std::max(longest_gap, rec.wires[i].t_s - rec.wires[i - 1].t_s);
+  EXPECT_GT(longest_gap, 0.8) << "no physics step while paused";
+  int stale_while_paused = 0, paused_samples = 0, stale_after = 0, after_samples = 0;
+  for (const auto& f : rec.forces) {
+    if (f.t_s > 1.2 && f.t_s < 1.7) {
+      ++paused_samples;
+      stale_while_paused += (f.flags & F::FLAG_STALE) != 0;
+    }
+    if (f.t_s > 2.6 && f.t_s < 2.9) {
+      ++after_samples;
+      stale_after += (f.flags & F::FLAG_STALE) != 0;
+    }
+  }
+  ASSERT_GT(paused_samples, 300);
+  EXPECT_EQ(stale_while_paused, paused_samples);
+  ASSERT_GT(after_samples, 200);
+  EXPECT_EQ(stale_after, 0);
+}
+
+TEST(SessionCommands, ResetRestartsTheWorld) {
+  lcm::LCM lcm("memq://");
+  Recorder rec;
+  lcm.subscribe(protocol::kWireChannel, &Recorder::on_wire, &rec);
+  Instrument instrument(lcm);
+  Server server(minimal(), lcm);
+  std::thread console([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1000));
+    send(lcm, C::CMD_RESET);
+  });
+  std::atomic<bool> stop{false};
+  server.run(1.6, stop);
+  console.join();
+  std::lock_guard lock(rec.mutex);
+  ASSERT_GT(rec.wires.size(), 30u);
+  bool went_back = false;
+  for (size_t i = 1; i < rec.wires.size(); ++i) went_back |= rec.wires[i].sim_time_s < rec.wires[i - 1].sim_time_s;
+  EXPECT_TRUE(went_back) << "simulated time starts again after a reset";
+}
+
+TEST(SessionCommands, BadSceneIsRefusedGoodSceneEndsTheRunForARestart) {
+  lcm::LCM lcm("memq://");
+  Instrument instrument(lcm);
+  {
+    Server server(minimal(), lcm);
+    std::thread console([&] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(300));
+      send(lcm, C::CMD_LOAD_SCENE, "/nonexistent/scene.json");
+    });
+    std::atomic<bool> stop{false};
+    const StatsReport r = server.run(1.0, stop);
+    console.join();
+    EXPECT_GT(r.elapsed_s, 0.95) << "a refused scene does not interrupt the session";
+    EXPECT_FALSE(server.take_requested_scene().has_value());
+  }
+  {
+    Server server(minimal(), lcm);
+    std::thread console([&] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(300));
+      send(lcm, C::CMD_LOAD_SCENE, PCISIM_SOURCE_DIR "/scenes/default.json");
+    });
+    std::atomic<bool> stop{false};
+    const StatsReport r = server.run(5.0, stop);
+    console.join();
+    EXPECT_LT(r.elapsed_s, 2.0) << "the run ends so the pipeline restarts with the new scene";
+    const auto next = server.take_requested_scene();
+    ASSERT_TRUE(next.has_value());
+    EXPECT_EQ(next->name, "default");
+  }
+}
+
+}  // namespace
+}  // namespace pcisim::server

@@ -25,11 +25,13 @@ void reject_unknown_keys(const json& object, std::initializer_list<const char*> 
   }
 }
 
-const json& member(const json& object, const char* key, const std::string& file,
+// a pointer, not a reference: gcc 13 takes a reference returned next to temporary arguments
+// for a dangling one
+const json* member(const json& object, const char* key, const std::string& file,
                    const std::string& path) {
   const auto it = object.find(key);
   if (it == object.end()) fail(file, path + "." + key, "missing");
-  return *it;
+  return &*it;
 }
 
 double finite_number(const json& v, const std::string& file, const std::string& path) {
@@ -88,10 +90,10 @@ VesselTree read_vessel_tree_json(const std::string& file) {
   }
   if (!doc.is_object()) fail(file, "(root)", "expected an object");
   reject_unknown_keys(doc, {"format", "version", "branches"}, file, "(root)");
-  const json& format = member(doc, "format", file, "(root)");
+  const json& format = *member(doc, "format", file, "(root)");
   if (format != "pcisim-vessel-tree") fail(file, "format", "expected \"pcisim-vessel-tree\"");
-  integer_in(member(doc, "version", file, "(root)"), 1, 1, file, "version");
-  const json& branches = member(doc, "branches", file, "(root)");
+  integer_in(*member(doc, "version", file, "(root)"), 1, 1, file, "version");
+  const json& branches = *member(doc, "branches", file, "(root)");
   if (!branches.is_array() || branches.empty()) fail(file, "branches", "expected a non-empty array");
 
   VesselTree tree;
@@ -102,24 +104,24 @@ VesselTree read_vessel_tree_json(const std::string& file) {
     if (!jb.is_object()) fail(file, bp, "expected an object");
     reject_unknown_keys(jb, {"name", "parent", "parent_point", "points"}, file, bp);
     VesselBranch b;
-    const json& name = member(jb, "name", file, bp);
+    const json& name = *member(jb, "name", file, bp);
     if (!name.is_string() || name.get<std::string>().empty()) {
       fail(file, bp + ".name", "expected a non-empty string");
     }
     b.name = name.get<std::string>();
     if (tree.find(b.name) >= 0) fail(file, bp + ".name", "duplicate branch name \"" + b.name + "\"");
     // parents come first in the list, which also rules out cycles
-    b.parent = integer_in(member(jb, "parent", file, bp), -1, static_cast<int>(i) - 1, file, bp + ".parent");
+    b.parent = integer_in(*member(jb, "parent", file, bp), -1, static_cast<int>(i) - 1, file, bp + ".parent");
     const int parent_points =
         b.parent >= 0 ? static_cast<int>(tree.branches[b.parent].points.size()) : 0;
     if (b.parent >= 0) {
-      b.parent_point = integer_in(member(jb, "parent_point", file, bp), 0, parent_points - 1, file,
+      b.parent_point = integer_in(*member(jb, "parent_point", file, bp), 0, parent_points - 1, file,
                                   bp + ".parent_point");
     } else {
       b.parent_point = -1;
       if (jb.contains("parent_point")) integer_in(jb["parent_point"], -1, -1, file, bp + ".parent_point");
     }
-    const json& points = member(jb, "points", file, bp);
+    const json& points = *member(jb, "points", file, bp);
     if (!points.is_array() || points.size() < 2) fail(file, bp + ".points", "expected an array of at least 2 points");
     b.points.reserve(points.size());
     for (size_t k = 0; k < points.size(); ++k) {
@@ -127,13 +129,13 @@ VesselTree read_vessel_tree_json(const std::string& file) {
       const json& jp = points[k];
       if (!jp.is_object()) fail(file, pp, "expected an object");
       reject_unknown_keys(jp, {"position_m", "radius_m"}, file, pp);
-      const json& pos = member(jp, "position_m", file, pp);
+      const json& pos = *member(jp, "position_m", file, pp);
       if (!pos.is_array() || pos.size() != 3) fail(file, pp + ".position_m", "expected an array of 3 numbers");
       CenterlinePoint c;
       for (int d = 0; d < 3; ++d) {
         c.position_m[d] = finite_number(pos[d], file, pp + ".position_m[" + std::to_string(d) + "]");
       }
-      const json& r = member(jp, "radius_m", file, pp);
+      const json& r = *member(jp, "radius_m", file, pp);
       if (!r.is_number() || !std::isfinite(r.get<double>()) || r.get<double>() <= 0.0) {
         fail(file, pp + ".radius_m", "expected a number > 0");
       }

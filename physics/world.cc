@@ -132,11 +132,11 @@ void World::step(const InstrumentInput& input) {
       c_blood = Impl::ms(t1, t2);
       t1 = t2;
     }
-    // each pass: optimisation, contact, friction, then the chain-mail limits hold again
+    // each pass: optimisation, contact, friction; then the chain-mail limits hold again
     const int passes = w.spec.guidewire->optimisation_passes;
-    for (int k = 0; k < std::max(passes, 1); ++k) {
+    for (int k = 0; k < passes; ++k) {
       auto a = Clock::now();
-      if (k < passes) wire.optimise_pass(k);
+      wire.optimise_pass(k);
       auto b = Clock::now();
       c_wire += Impl::ms(a, b);
       if (w.contact) {
@@ -151,8 +151,16 @@ void World::step(const InstrumentInput& input) {
         b = Clock::now();
         c_friction += Impl::ms(a, b);
       }
-      wire.restore_limits();
-      c_wire += Impl::ms(b, Clock::now());
+    }
+    {
+      // the last sweep keeps nodes inside the wall margin where the limits allow (eq 15)
+      const auto a = Clock::now();
+      if (w.contact) {
+        wire.restore_limits(w.lumen.get(), w.spec.vessel_contact->wall_margin_m);
+      } else {
+        wire.restore_limits();
+      }
+      c_wire += Impl::ms(a, Clock::now());
     }
     const auto t3 = Clock::now();
     wire.end_step();

@@ -36,13 +36,17 @@ ChainMailWire::ChainMailWire(const GuidewireParams& params, CatheterPath path)
   links_ = make_link_specs(params_);
   n_ = params_.segment_count;
   rest_m_ = params_.length_m / n_;
-  ref_b_ = path_.exit_direction().unitOrthogonal();
+  // a pre-bent tip resting in a curved catheter lies in the catheter's bend plane, bending the
+  // way the catheter curves: that is the tip's orientation at rotation 0
+  const Eigen::Vector3d t = path_.exit_direction();
+  const Eigen::Vector3d back = path_.point_behind_exit(std::min(0.02, 0.5 * path_.length_m()));
+  const Eigen::Vector3d chord = direction(back, path_.exit_m(), t);
+  const Eigen::Vector3d curl = (t - chord) - (t - chord).dot(t) * t;
+  ref_b_ = curl.norm() > 1e-6 ? Eigen::Vector3d(curl.normalized()) : t.unitOrthogonal();
   nodes_.assign(n_ + 1, Eigen::Vector3d::Zero());
   start_ = nodes_;
-  twist_.assign(n_, 0.0);
-  hold_.assign(n_, 0);
-  frame_t_.assign(n_, Eigen::Vector3d::UnitZ());
-  frame_m_.assign(n_, Eigen::Vector3d::UnitX());
+  frame_t_.assign(n_, t);
+  frame_m_.assign(n_, ref_b_);
   first_free_ = n_ + 1;
   place_kinematic();
   start_ = nodes_;
@@ -69,20 +73,27 @@ ChainMailWire::Frame ChainMailWire::exit_frame() const {
   return f;
 }
 
-void ChainMailWire::advance(Frame& f, const Eigen::Vector3d& t_new, double twist) const {
+void ChainMailWire::advance(Frame& f, const Eigen::Vector3d& t_new) const {
+  // a torsionally stiff wire: the material frame is the transported one turned by the
+  // proximal rotation everywhere (twist is carried to the tip without lag)
   f.b = transport(f.b, f.t, t_new);
   f.b = (f.b - f.b.dot(t_new) * t_new).normalized();  // keep it orthonormal over long chains
   f.t = t_new;
-  f.m = std::cos(twist) * f.b + std::sin(twist) * t_new.cross(f.b);
+  f.m = std::cos(rotation_) * f.b + std::sin(rotation_) * t_new.cross(f.b);
 }
 
 void ChainMailWire::begin_step(double insertion_m, double rotation_rad) {
   start_ = nodes_;  // same size: copies, no allocation
-  commanded_feed_ = std::clamp(insertion_m, 0.0, params_.length_m);
+  const double commanded = std::clamp(insertion_m, 0.0, params_.length_m);
+  const double push = commanded - commanded_feed_;
+  commanded_feed_ = commanded;
   rotation_ = rotation_rad;
+  // pulling is always accepted; a push is offered in full, plus up to one link of feed the
+  // wire refused before (so a wire blocked for a while does not leap forward at once)
+  double feed = commanded;
+  if (feed > fed_) feed = std::min(feed, fed_ + std::max(push, 0.0) + rest_m_);
+  fed_ = feed;
   const int old_first = first_free_;
-  // try to feed all that is asked; what the vessel refuses comes back in restore_limits()
-  fed_ = commanded_feed_;
   first_free_ = first_free_for(fed_);
   place_kinematic();
   // nodes that just left the catheter start on the straight line out of the exit
@@ -90,41 +101,22 @@ void ChainMailWire::begin_step(double insertion_m, double rotation_rad) {
     const double out = fed_ - (n_ - i) * rest_m_;
     nodes_[i] = path_.exit_m() + out * path_.exit_direction();
   }
-  sweep_twist();
-  forward_sweep();
+  forward_sweep(nullptr, 0.0);
 }
 
-void ChainMailWire::sweep_twist() {
-  // chain-mail on angles: the catheter turns rigidly; a free link follows its proximal
-  // neighbour only when their difference passes the twist limit (torque transmission)
-  const int j0 = std::max(first_free_ - 1, 0);
-  for (int j = 0; j < j0; ++j) twist_[j] = rotation_;
-  double prev = rotation_;
-  for (int j = j0; j < n_; ++j) {
-    const double lim = links_[j].twist_limit_rad;
-    twist_[j] = std::clamp(twist_[j], prev - lim, prev + lim);
-    prev = twist_[j];
+void ChainMailWire::compute_frames() {
+  if (first_free_ > n_) return;
+  Frame f = exit_frame();
+  for (int j = first_free_ - 1; j < n_; ++j) {
+    advance(f, direction(nodes_[j], nodes_[j + 1], f.t));
+    frame_t_[j] = f.t;
+    frame_m_[j] = f.m;
   }
 }
 
-void ChainMailWire::relax_twist() {
-  // physical optimisation of the angles (eqs 7-10 read for twist): between held links the twist
-  // spreads evenly; past the last held link the free end carries no torque and turns with it
-  const int j0 = std::max(first_free_ - 1, 0);
-  int prev_j = j0 - 1;
-  double prev = rotation_;
-  for (int j = j0; j < n_; ++j) {
-    if (!hold_[j]) continue;
-    const int gap = j - prev_j;
-    for (int k = prev_j + 1; k < j; ++k) twist_[k] = prev + (twist_[j] - prev) * (k - prev_j) / gap;
-    prev_j = j;
-    prev = twist_[j];
-  }
-  for (int k = prev_j + 1; k < n_; ++k) twist_[k] = prev;
-}
-
-void ChainMailWire::forward_sweep() {
+void ChainMailWire::forward_sweep(const LumenQuery* lumen, double eps) {
   // eqs 1-4: the last kinematic node sponsors the first free one, which sponsors the next, ...
+  // eqs 2-4 bound each world axis separately; valid_region.cc reads them in the link's frame
   if (first_free_ > n_) return;
   Frame f = exit_frame();
   for (int j = first_free_ - 1; j < n_; ++j) {
@@ -135,9 +127,77 @@ void ChainMailWire::forward_sweep() {
     r.length_max_m = l.length_max_m;
     r.beta_rad = l.beta_rad;
     r.cos_beta = l.cos_beta;
-    clamp_to_valid_region(nodes_[j], r, nodes_[j + 1]);
-    advance(f, direction(nodes_[j], nodes_[j + 1], r.axis), twist_[j]);
+    Eigen::Vector3d& q = nodes_[j + 1];
+    clamp_to_valid_region(nodes_[j], r, q);
+    if (lumen) {
+      // eq 15 inside the sweep: the wall wins where the region allows, the region always wins
+      for (int it = 0; it < 3; ++it) {
+        const WallSample s = lumen->sample(q);
+        if (s.distance_m <= -eps) break;
+        q -= (s.distance_m + eps) * s.normal;
+        if (!clamp_to_valid_region(nodes_[j], r, q)) break;
+      }
+    }
+    advance(f, direction(nodes_[j], q, r.axis));
+    frame_t_[j] = f.t;
+    frame_m_[j] = f.m;
   }
+}
+
+void ChainMailWire::bend_pass(bool forward) {
+  // eqs 5-10: P* = (Q1 + Q2) / 2 with Q_k = P_k* + delta_k. Read literally, delta is the old
+  // relative vector, which keeps any bend forever (a plastic wire). We take delta from the rest
+  // shape of the triple (P1, P, P2) fitted rigidly onto the current chord P1-P2 and the
+  // material bend plane, so the wire springs back to its rest shape (straight body, pre-bent
+  // tip). The centroid is then the chord midpoint moved out of the bend by h sin(theta/2).
+  const int ff = first_free_;
+  const Frame ex = exit_frame();
+  const double h = rest_m_;
+  auto target = [&](int i) -> Eigen::Vector3d {
+    const Eigen::Vector3d& a = nodes_[i - 1];
+    // rest direction of link i-1 seen from link i-2 (the catheter exit when i-2 is held)
+    auto from_proximal = [&]() -> Eigen::Vector3d {
+      const LinkSpec& l = links_[i - 1];
+      const bool held = i - 2 < ff - 1;
+      const Eigen::Vector3d& t = held ? ex.t : frame_t_[i - 2];
+      const Eigen::Vector3d& m = held ? ex.m : frame_m_[i - 2];
+      return a + h * (l.cos_bend * t + l.sin_bend * m);
+    };
+    if (i == n_) return from_proximal();  // the free tip has one neighbour
+    const Eigen::Vector3d& b = nodes_[i + 1];
+    const Eigen::Vector3d c = direction(a, b, frame_t_[i - 1]);
+    Eigen::Vector3d p = 0.5 * (a + b);
+    const LinkSpec& l = links_[i];
+    if (l.bend_rad > 0.0) {
+      const Eigen::Vector3d& m = frame_m_[i - 1];
+      const Eigen::Vector3d m_perp = m - m.dot(c) * c;
+      const double len = m_perp.norm();
+      if (len > 1e-9) p -= h * std::sin(0.5 * l.bend_rad) * (m_perp / len);
+    }
+    // the catheter clamps the wire's direction, not only its position
+    if (i == ff) p = 0.5 * (p + from_proximal());
+    return p;
+  };
+  if (forward) {
+    for (int i = ff; i <= n_; ++i) nodes_[i] = target(i);
+  } else {
+    for (int i = n_; i >= ff; --i) nodes_[i] = target(i);
+  }
+}
+
+void ChainMailWire::length_pass() {
+  // rest lengths, sponsored from the exit: the push of the hand reaches the tip in one sweep
+  for (int j = first_free_ - 1; j < n_; ++j) {
+    const Eigen::Vector3d d = direction(nodes_[j], nodes_[j + 1], frame_t_[j]);
+    nodes_[j + 1] = nodes_[j] + links_[j].rest_m * d;
+  }
+}
+
+void ChainMailWire::optimise_pass(int pass_index) {
+  if (first_free_ > n_) return;
+  compute_frames();
+  bend_pass(pass_index % 2 == 0);
+  length_pass();
 }
 
 void ChainMailWire::backward_sweep_compression() {
@@ -153,7 +213,7 @@ void ChainMailWire::backward_sweep_compression() {
   }
 }
 
-void ChainMailWire::restore_limits() {
+void ChainMailWire::restore_limits(const LumenQuery* lumen, double wall_margin_m) {
   if (first_free_ <= n_) {
     backward_sweep_compression();
     // the catheter node behind the first free one may only slide back along the exit line:
@@ -172,58 +232,12 @@ void ChainMailWire::restore_limits() {
       }
     }
   }
-  forward_sweep();
-}
-
-void ChainMailWire::compute_frames() {
-  if (first_free_ > n_) return;
-  Frame f = exit_frame();
-  for (int j = first_free_ - 1; j < n_; ++j) {
-    advance(f, direction(nodes_[j], nodes_[j + 1], f.t), twist_[j]);
-    frame_t_[j] = f.t;
-    frame_m_[j] = f.m;
-  }
-}
-
-void ChainMailWire::optimise_pass(int pass_index) {
-  relax_twist();
-  if (first_free_ > n_) return;
-  compute_frames();
-  const Frame ex = exit_frame();
-  const int j0 = first_free_ - 1;  // first link with a free end
-  // eqs 5-10: P* = (Q1 + Q2) / 2 with Q_k = P_k* + delta_k. Read literally, delta is the old
-  // relative vector, which keeps any bend forever (a plastic wire); we carry the rest relative
-  // vector in the neighbour's current material frame, so the wire springs back to its rest
-  // shape (straight body, pre-bent tip).
-  auto target = [&](int i) -> Eigen::Vector3d {
-    const int jp = i - 1;  // link from the proximal neighbour
-    const Eigen::Vector3d& tp = jp - 1 >= j0 ? frame_t_[jp - 1] : ex.t;
-    const Eigen::Vector3d& mp = jp - 1 >= j0 ? frame_m_[jp - 1] : ex.m;
-    const LinkSpec& lp = links_[jp];
-    const Eigen::Vector3d q1 = nodes_[i - 1] + lp.rest_m * (lp.cos_bend * tp + lp.sin_bend * mp);
-    if (i == n_) return q1;  // the free tip has one neighbour
-    Eigen::Vector3d back;
-    if (i + 1 < n_) {
-      // rest direction of link i predicted from link i+1 (inverse of the pre-bend rotation)
-      const LinkSpec& ln = links_[i + 1];
-      back = ln.cos_bend * frame_t_[i + 1] - ln.sin_bend * frame_m_[i + 1];
-    } else {
-      back = frame_t_[i];  // the last link: only its length is restored
-    }
-    const Eigen::Vector3d q2 = nodes_[i + 1] - links_[i].rest_m * back;
-    return 0.5 * (q1 + q2);
-  };
-  if (pass_index % 2 == 0) {
-    for (int i = first_free_; i <= n_; ++i) nodes_[i] = target(i);
-  } else {
-    for (int i = n_; i >= first_free_; --i) nodes_[i] = target(i);
-  }
+  forward_sweep(lumen, wall_margin_m);
 }
 
 void ChainMailWire::end_step() {
   bool finite = std::isfinite(fed_) && std::isfinite(rotation_);
   for (const auto& p : nodes_) finite = finite && p.allFinite();
-  for (double t : twist_) finite = finite && std::isfinite(t);
   if (finite) return;
   // should never happen; if it does, start again from a straight wire rather than spread NaN
   ++recoveries_;
@@ -234,15 +248,27 @@ void ChainMailWire::end_step() {
   for (int i = first_free_; i <= n_; ++i) {
     nodes_[i] = path_.exit_m() + (fed_ - (n_ - i) * rest_m_) * path_.exit_direction();
   }
-  std::fill(twist_.begin(), twist_.end(), rotation_);
-  std::fill(hold_.begin(), hold_.end(), 0);
   start_ = nodes_;
 }
 
-Eigen::Vector3d ChainMailWire::tip_bend_direction() const {
+Eigen::Vector3d ChainMailWire::rest_axis(int j) const {
   Frame f = exit_frame();
-  const int j0 = std::max(first_free_ - 1, 0);
-  for (int j = j0; j < n_; ++j) advance(f, direction(nodes_[j], nodes_[j + 1], f.t), twist_[j]);
+  for (int k = first_free_ - 1; k < j - 1 && k < n_; ++k) {
+    if (k < 0) continue;
+    advance(f, direction(nodes_[k], nodes_[k + 1], f.t));
+  }
+  const LinkSpec& l = links_[std::clamp(j, 0, n_ - 1)];
+  return l.cos_bend * f.t + l.sin_bend * f.m;
+}
+
+Eigen::Vector3d ChainMailWire::tip_bend_direction() const {
+  // the frame of the last body link: the tip's pre-bend turns towards its director
+  int last_body = n_ - 1;
+  while (last_body >= 0 && links_[last_body].tip) --last_body;
+  Frame f = exit_frame();
+  for (int k = std::max(first_free_ - 1, 0); k <= last_body; ++k) {
+    advance(f, direction(nodes_[k], nodes_[k + 1], f.t));
+  }
   return f.m;
 }
 

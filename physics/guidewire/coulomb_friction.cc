@@ -10,6 +10,7 @@ CoulombFriction::CoulombFriction(const FrictionParams& params, int node_count) :
   pass_correction_.assign(node_count, Eigen::Vector3d::Zero());
   step_correction_.assign(node_count, Eigen::Vector3d::Zero());
   pass_static_limit_.assign(node_count, 0.0);
+  stuck_.assign(node_count, 0);
 }
 
 void CoulombFriction::begin_step(const ChainMailWire& wire) {
@@ -20,11 +21,10 @@ void CoulombFriction::begin_step(const ChainMailWire& wire) {
 
 void CoulombFriction::apply(ChainMailWire& wire, const WallContact& contact) {
   auto nodes = wire.mutable_nodes_m();
-  auto hold = wire.twist_hold();
-  std::fill(hold.begin(), hold.end(), 0);
   std::fill(pass_tangential_.begin(), pass_tangential_.end(), Eigen::Vector3d::Zero());
   std::fill(pass_correction_.begin(), pass_correction_.end(), Eigen::Vector3d::Zero());
   std::fill(pass_static_limit_.begin(), pass_static_limit_.end(), 0.0);
+  std::fill(stuck_.begin(), stuck_.end(), 0);
   const auto dn_len = contact.pass_normal_m();
   const auto normal = contact.normal();
   for (int i = wire.first_free_node(); i < wire.node_count(); ++i) {
@@ -42,7 +42,7 @@ void CoulombFriction::apply(ChainMailWire& wire, const WallContact& contact) {
     Eigen::Vector3d c;
     if (dt_len <= mu_s * dn) {
       c = -dt;  // static: the node sticks
-      if (i > 0) hold[i - 1] = 1;
+      stuck_[i] = 1;
     } else {
       // eqs 17-18: beta is the fraction of tangential motion left, in [0, 1]. The printed
       // beta = -max(...) has a stray sign (it would make beta <= 0 and friction push forward)

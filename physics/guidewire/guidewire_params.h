@@ -14,11 +14,8 @@ struct GuidewireParams {
   // alpha_min in [0.5, 1], alpha_max in [1, 2]. beta: largest bend of a link away from its rest
   // direction, in degrees per millimetre of wire (scaled by the link length, so a segment
   // sweep keeps the same wire), [0, 90].
-  double body_alpha_min = 0.98, body_alpha_max = 1.02, body_beta_deg = 6.0;
-  double tip_alpha_min = 0.95, tip_alpha_max = 1.05, tip_beta_deg = 25.0;
-  // twist a held (statically stuck) stretch of wire stores before it turns, degrees per
-  // millimetre of wire between the catheter exit and the held link, [0, 90]
-  double twist_limit_deg_per_mm = 0.5;
+  double body_alpha_min = 0.98, body_alpha_max = 1.02, body_beta_deg = 15.0;
+  double tip_alpha_min = 0.95, tip_alpha_max = 1.05, tip_beta_deg = 40.0;
   // haptic force (eqs 19-20): axial stiffness of the wire's refused feed and first link, N/m,
   // [0, 1e5]; damping along insertion, N s/m, [0, 100]
   double axial_stiffness_n_per_m = 200.0;

@@ -30,8 +30,6 @@ void validate(const GuidewireParams& p) {
   check(p.tip_alpha_max >= 1.0 && p.tip_alpha_max <= 2.0, "tip_alpha_max", "[1, 2]");
   check(p.body_beta_deg >= 0.0 && p.body_beta_deg <= 90.0, "body_beta_deg", "[0, 90]");
   check(p.tip_beta_deg >= 0.0 && p.tip_beta_deg <= 90.0, "tip_beta_deg", "[0, 90]");
-  check(p.twist_limit_deg_per_mm >= 0.0 && p.twist_limit_deg_per_mm <= 90.0,
-        "twist_limit_deg_per_mm", "[0, 90]");
   check(p.axial_stiffness_n_per_m >= 0.0 && p.axial_stiffness_n_per_m <= 1e5,
         "axial_stiffness_n_per_m", "[0, 1e5]");
   check(p.axial_damping_n_s_per_m >= 0.0 && p.axial_damping_n_s_per_m <= 100.0,
@@ -67,7 +65,6 @@ std::vector<LinkSpec> make_link_specs(const GuidewireParams& p) {
     l.bend_rad = l.tip ? bend_per_link : 0.0;
     l.cos_bend = std::cos(l.bend_rad);
     l.sin_bend = std::sin(l.bend_rad);
-    l.twist_limit_rad = p.twist_limit_deg_per_mm * kDeg * h_mm;
   }
   return links;
 }

@@ -11,7 +11,6 @@ struct LinkSpec {
   double length_min_m = 0.0, length_max_m = 0.0;  // alpha_min, alpha_max times rest (eqs 2-4)
   double beta_rad = 0.0, cos_beta = 1.0;      // largest bend away from the rest direction
   double bend_rad = 0.0, cos_bend = 1.0, sin_bend = 0.0;  // rest angle to the previous link
-  double twist_limit_rad = 0.0;               // twist this link may hold against its neighbour
   bool tip = false;                           // in the soft shaped tip
 };
 

@@ -15,6 +15,9 @@ Eigen::Vector3d tangent(std::span<const Eigen::Vector3d> x, int i) {
   return n > 1e-12 ? Eigen::Vector3d(d / n) : Eigen::Vector3d::Zero();
 }
 
+// a 0.014-inch coronary wire
+constexpr double kWireRadiusM = 0.178e-3;
+
 }  // namespace
 
 WireFeedback compute_feedback(const ChainMailWire& wire, const GuidewireParams& params,
@@ -46,18 +49,22 @@ WireFeedback compute_feedback(const ChainMailWire& wire, const GuidewireParams& 
     }
     f.stiffness_n_per_m = std::min(k, params.axial_stiffness_n_per_m);
   }
-  // torque: twist stored between the catheter exit and the first link held by static friction
-  const auto twist = wire.twist_rad();
-  const auto links = wire.links();
-  double length = 0.0;
-  for (int j = std::max(wire.first_free_node() - 1, 0); j < wire.segment_count(); ++j) {
-    length += links[j].rest_m;
-    if (wire.twist_held()[j]) {
-      const double kt = params.torsional_rigidity_nm2 / length;
-      f.torsion_stiffness_nm_per_rad = kt;
-      f.torque_nm = kt * (wire.rotation_rad() - twist[j]);
-      break;
+  // torque: wall friction on the wire's surface resists turning (mu_k N r per touching node).
+  // The wire is torsionally stiff, so a tip stuck by static friction makes the free length
+  // a torsion spring GJ / L against further turning.
+  if (contact && friction) {
+    const auto dn = contact->step_normal_m();
+    const auto stuck = friction->stuck();
+    const FrictionParams& fp = friction->params();
+    double friction_torque = 0.0;
+    for (int i = wire.first_free_node(); i < wire.node_count(); ++i) {
+      const double mu = wire.node_in_tip(i) ? fp.tip_kinetic : fp.body_kinetic;
+      friction_torque += mu * k_wall * dn[i].norm() * kWireRadiusM;
     }
+    f.torque_nm = friction_torque;
+    const int tip = wire.node_count() - 1;
+    const double free_m = wire.fed_length_m();
+    if (stuck[tip] && free_m > 1e-6) f.torsion_stiffness_nm_per_rad = params.torsional_rigidity_nm2 / free_m;
   }
   return f;
 }
@@ -72,7 +79,9 @@ LocalForceModel to_local_force_model(const WireFeedback& f, const InstrumentInpu
   m.k_n_per_m = std::max(f.stiffness_n_per_m, 0.0);
   m.b_n_s_per_m = params.axial_damping_n_s_per_m;
   m.q0_rad = at.rotation_rad;
-  m.t0_nm = f.torque_nm;
+  // friction resists the way the hand turns; at rest it holds nothing
+  const double w = at.rotation_rate_rad_per_s;
+  m.t0_nm = w > 0.0 ? f.torque_nm : (w < 0.0 ? -f.torque_nm : 0.0);
   m.kt_nm_per_rad = std::max(f.torsion_stiffness_nm_per_rad, 0.0);
   m.bt_nm_s_per_rad = params.torsion_damping_nm_s_per_rad;
   if (!std::isfinite(m.f0_n) || !std::isfinite(m.k_n_per_m) || !std::isfinite(m.t0_nm) ||

@@ -13,7 +13,7 @@ struct WireFeedback {
   double friction_n = 0.0;   // F_friction along insertion (positive resists insertion)
   double internal_n = 0.0;   // F_internal, eq 20
   double stiffness_n_per_m = 0.0;
-  double torque_nm = 0.0;    // twist stored between the catheter and the first held link
+  double torque_nm = 0.0;    // magnitude of the wall friction torque against turning
   double torsion_stiffness_nm_per_rad = 0.0;
 };
 

@@ -24,8 +24,13 @@ bool finite(const physics::LocalForceModel& m) {
 
 }  // namespace
 
+ForceEvaluator::ForceEvaluator(const HapticParams& params)
+    : params_(params),
+      axial_pc_(params.passivity_max_damping_n_s_per_m),
+      torque_pc_(params.passivity_max_damping_nm_s_per_rad) {}
+
 void ForceEvaluator::set_model(const physics::LocalForceModel& model, int64_t now_us) {
-  // a broken model is never blended from
+  // a broken model is never blended or extrapolated from
   previous_model_ = model_;
   has_previous_ = has_model_ && finite(model_);
   model_ = model;
@@ -33,12 +38,37 @@ void ForceEvaluator::set_model(const physics::LocalForceModel& model, int64_t no
   model_arrived_us_ = now_us;
 }
 
-// f = f0 + K (x - x0) - B v, and the torque likewise (DESIGN.md, local force model)
-ForceEvaluator::Raw ForceEvaluator::evaluate(const physics::LocalForceModel& m,
-                                              const InstrumentSample& s) {
-  return {m.f0_n + m.k_n_per_m * (s.insertion_m - m.x0_m) - m.b_n_s_per_m * s.insertion_rate_m_per_s,
-          m.t0_nm + m.kt_nm_per_rad * (s.rotation_rad - m.q0_rad) -
-              m.bt_nm_s_per_rad * s.rotation_rate_rad_per_s};
+// f = f0 + K (x - x0) + B v, and the torque likewise: both terms resist (local_force_model.h)
+ForceEvaluator::Raw ForceEvaluator::evaluate(const physics::LocalForceModel& m, const InstrumentSample& s) {
+  return {m.f0_n + m.k_n_per_m * (s.insertion_m - m.x0_m) + m.b_n_s_per_m * s.insertion_rate_m_per_s,
+          m.t0_nm + m.kt_nm_per_rad * (s.rotation_rad - m.q0_rad) + m.bt_nm_s_per_rad * s.rotation_rate_rad_per_s};
+}
+
+ForceEvaluator::Raw ForceEvaluator::interpolate(const InstrumentSample& s, int64_t now_us) const {
+  if (!has_model_) return {0.0, 0.0};
+  switch (params_.interpolation) {
+    case Interpolation::kZeroOrderHold:
+      return {model_.f0_n, model_.t0_nm};
+    case Interpolation::kLinearExtrapolation: {
+      const double span_s = (model_.made_utime - previous_model_.made_utime) * 1e-6;
+      if (!has_previous_ || span_s <= 0) return {model_.f0_n, model_.t0_nm};
+      const double u = (now_us - model_.made_utime) * 1e-6 / span_s;
+      return {model_.f0_n + u * (model_.f0_n - previous_model_.f0_n),
+              model_.t0_nm + u * (model_.t0_nm - previous_model_.t0_nm)};
+    }
+    case Interpolation::kLocalModel:
+      break;
+  }
+  // blend from the previous model to the new one so a model change is never a force step
+  Raw raw = evaluate(model_, s);
+  const double blend_s = params_.blend_ms * 1e-3;
+  const double w = blend_s > 0 ? std::clamp((now_us - model_arrived_us_) * 1e-6 / blend_s, 0.0, 1.0) : 1.0;
+  if (has_previous_ && w < 1.0) {
+    const Raw old = evaluate(previous_model_, s);
+    raw.force_n = old.force_n + w * (raw.force_n - old.force_n);
+    raw.torque_nm = old.torque_nm + w * (raw.torque_nm - old.torque_nm);
+  }
+  return raw;
 }
 
 bool ForceEvaluator::model_stale(int64_t now_us) const {
@@ -49,26 +79,17 @@ ForceOutput ForceEvaluator::tick(const InstrumentSample& sample, int64_t now_us)
   ForceOutput out;
   const double dt_s = last_tick_us_ > 0 ? std::clamp((now_us - last_tick_us_) * 1e-6, 0.0, 0.1) : 1e-3;
   last_tick_us_ = now_us;
-
-  // blend from the previous model to the new one so a model change is never a force step
-  Raw raw{0.0, 0.0};
-  if (has_model_) {
-    raw = evaluate(model_, sample);
-    const double blend_s = params_.blend_ms * 1e-3;
-    const double w = blend_s > 0 ? std::clamp((now_us - model_arrived_us_) * 1e-6 / blend_s, 0.0, 1.0) : 1.0;
-    if (has_previous_ && w < 1.0) {
-      const Raw old = evaluate(previous_model_, sample);
-      raw.force_n = old.force_n + w * (raw.force_n - old.force_n);
-      raw.torque_nm = old.torque_nm + w * (raw.torque_nm - old.torque_nm);
-    }
-  }
+  const Raw raw = interpolate(sample, now_us);
 
   // nan guard: a non-finite anything means zero force this tick and a ramp-in afterwards
-  if (!std::isfinite(raw.force_n) || !std::isfinite(raw.torque_nm) || !std::isfinite(dt_s)) {
+  if (!std::isfinite(raw.force_n) || !std::isfinite(raw.torque_nm) || !std::isfinite(sample.insertion_rate_m_per_s) ||
+      !std::isfinite(sample.rotation_rate_rad_per_s)) {
     ++faults_;
     gain_ = 0.0;
     ramping_in_ = true;
     last_force_n_ = last_torque_nm_ = 0.0;
+    axial_pc_.reset();
+    torque_pc_.reset();
     out.flags |= kFlagFault;
     return out;
   }
@@ -76,8 +97,7 @@ ForceOutput ForceEvaluator::tick(const InstrumentSample& sample, int64_t now_us)
   // fade on a stale model or a silent instrument, starting from what the trainee last felt
   // (never from a possibly-garbage model); ramp back in once both are fine again
   const bool stale = model_stale(now_us);
-  const bool silent = sample.received_us == 0 ||
-                      now_us - sample.received_us > params_.instrument_timeout_ms * 1e3;
+  const bool silent = sample.received_us == 0 || now_us - sample.received_us > params_.instrument_timeout_ms * 1e3;
   if (stale) out.flags |= kFlagStale;
   double force_n = 0.0, torque_nm = 0.0;
   if (stale || silent) {
@@ -98,11 +118,16 @@ ForceOutput ForceEvaluator::tick(const InstrumentSample& sample, int64_t now_us)
     torque_nm = raw.torque_nm * gain_;
   }
 
-  // clamp, then limit the slew so nothing the trainee feels jumps
-  force_n = clamp_abs(force_n, params_.peak_force_n, out.flags);
-  torque_nm = clamp_abs(torque_nm, params_.peak_torque_nm, out.flags);
+  // slew limit, then passivity (it may add damping), then the hard clamp has the last word
   force_n = slew(force_n, last_force_n_, params_.slew_n_per_s * dt_s);
   torque_nm = slew(torque_nm, last_torque_nm_, params_.slew_nm_per_s * dt_s);
+  if (params_.passivity && !(stale || silent)) {
+    force_n = axial_pc_.filter(force_n, sample.insertion_rate_m_per_s, dt_s);
+    torque_nm = torque_pc_.filter(torque_nm, sample.rotation_rate_rad_per_s, dt_s);
+    if (axial_pc_.last_damping() > 0 || torque_pc_.last_damping() > 0) out.flags |= kFlagDamped;
+  }
+  force_n = clamp_abs(force_n, params_.peak_force_n, out.flags);
+  torque_nm = clamp_abs(torque_nm, params_.peak_torque_nm, out.flags);
 
   last_force_n_ = out.axial_force_n = force_n;
   last_torque_nm_ = out.torque_nm = torque_nm;

@@ -1,11 +1,12 @@
 #pragma once
-// One 1 kHz tick of force: evaluate the newest local force model at the newest instrument
-// sample, blend across model changes, then apply the safety layers in a fixed order:
-// NaN guard -> fade (stale model / silent instrument / fault) -> ramp-in -> clamp -> slew.
+// One 1 kHz tick of force: fill the time between physics results (local model with blending,
+// zero-order hold or linear extrapolation), then apply the safety layers in a fixed order:
+// NaN guard -> fade (stale model / silent instrument) or ramp-in -> slew -> passivity -> clamp.
 // Plain arithmetic on preallocated state: no allocation, lock, log or syscall.
 #include <cstdint>
 
 #include "haptics/haptic_params.h"
+#include "haptics/passivity_controller.h"
 #include "physics/local_force_model.h"
 
 namespace pcisim::haptics {
@@ -24,6 +25,7 @@ enum ForceFlags : int32_t {
   kFlagStale = 4,
   kFlagFault = 8,
   kFlagRamping = 16,
+  kFlagDamped = 32,  // the passivity controller added damping this tick
 };
 
 struct ForceOutput {
@@ -34,7 +36,7 @@ struct ForceOutput {
 
 class ForceEvaluator {
  public:
-  explicit ForceEvaluator(const HapticParams& params) : params_(params) {}
+  explicit ForceEvaluator(const HapticParams& params);
 
   // a new model arrived (models carry made_utime on the same monotonic clock as now_us)
   void set_model(const physics::LocalForceModel& model, int64_t now_us);
@@ -42,18 +44,21 @@ class ForceEvaluator {
 
   int64_t faults() const { return faults_; }
   const HapticParams& params() const { return params_; }
+  const PassivityController& axial_passivity() const { return axial_pc_; }
 
  private:
   struct Raw {
     double force_n, torque_nm;
   };
   static Raw evaluate(const physics::LocalForceModel& m, const InstrumentSample& s);
+  Raw interpolate(const InstrumentSample& s, int64_t now_us) const;
   bool model_stale(int64_t now_us) const;
 
   HapticParams params_;
   physics::LocalForceModel model_{}, previous_model_{};
   int64_t model_arrived_us_ = 0;
   bool has_model_ = false, has_previous_ = false;
+  PassivityController axial_pc_, torque_pc_;
 
   double gain_ = 0.0;  // fade/ramp gain in [0, 1]
   bool ramping_in_ = true;

@@ -3,7 +3,18 @@
 
 namespace pcisim::haptics {
 
+// how the 1 kHz loop fills the time between 30 Hz physics results
+enum class Interpolation {
+  kLocalModel,           // f0 + K (x - x0) + B v at the newest instrument sample, blended over blend_ms
+  kZeroOrderHold,        // the newest physics force, held until the next one
+  kLinearExtrapolation,  // the last two physics forces extended in time
+};
+
 struct HapticParams {
+  Interpolation interpolation = Interpolation::kLocalModel;
+  bool passivity = true;                       // time-domain passivity observer/controller
+  double passivity_max_damping_n_s_per_m = 200.0;
+  double passivity_max_damping_nm_s_per_rad = 0.05;
   double peak_force_n = 4.0;         // |axial force| never exceeds this
   double peak_torque_nm = 0.02;      // |torque| never exceeds this
   double slew_n_per_s = 200.0;       // force may change at most this fast

@@ -70,6 +70,14 @@ haptics::HapticParams read_haptics(JsonReader r) {
   p.fade_ms = r.number("fade_ms", p.fade_ms, 1, 2000);
   p.ramp_in_ms = r.number("ramp_in_ms", p.ramp_in_ms, 1, 5000);
   p.instrument_timeout_ms = r.number("instrument_timeout_ms", p.instrument_timeout_ms, 5, 1000);
+  const std::string mode = r.text("interpolation", "local_model", {"local_model", "zero_order_hold", "linear_extrapolation"});
+  p.interpolation = mode == "zero_order_hold"        ? haptics::Interpolation::kZeroOrderHold
+                    : mode == "linear_extrapolation" ? haptics::Interpolation::kLinearExtrapolation
+                                                     : haptics::Interpolation::kLocalModel;
+  p.passivity = r.boolean("passivity", p.passivity);
+  p.passivity_max_damping_n_s_per_m = r.number("passivity_max_damping_n_s_per_m", p.passivity_max_damping_n_s_per_m, 0, 1e5);
+  p.passivity_max_damping_nm_s_per_rad =
+      r.number("passivity_max_damping_nm_s_per_rad", p.passivity_max_damping_nm_s_per_rad, 0, 100);
   r.finish();
   return p;
 }

@@ -200,6 +200,58 @@ TEST(ForceEvaluator, NonFiniteModelGivesZeroForceACountedFaultAndARampIn) {
   EXPECT_TRUE(std::isfinite(out.axial_force_n));
 }
 
+TEST(ForceEvaluator, ZeroOrderHoldHoldsAndExtrapolationExtendsThePhysicsForce) {
+  HapticParams p = fast_params();
+  p.passivity = false;
+  p.slew_n_per_s = 1e6;
+  HapticParams zoh = p, lin = p;
+  zoh.interpolation = Interpolation::kZeroOrderHold;
+  lin.interpolation = Interpolation::kLinearExtrapolation;
+  ForceEvaluator e_zoh(zoh), e_lin(lin);
+  int64_t t = 1'000'000;
+  // physics forces 1 N then 2 N, 33 ms apart, rising at 30 N/s
+  for (ForceEvaluator* e : {&e_zoh, &e_lin}) {
+    int64_t ti = t;
+    for (int i = 0; i < 50; ++i) {
+      e->set_model(model_at(ti, 1.0, 500.0), ti);
+      run(*e, ti, 1);
+    }
+  }
+  t += 50 * kTickUs;
+  auto m1 = model_at(t - 33'000, 1.0, 500.0), m2 = model_at(t, 2.0, 500.0);
+  for (ForceEvaluator* e : {&e_zoh, &e_lin}) {
+    e->set_model(m1, t);
+    e->set_model(m2, t);
+  }
+  int64_t t_zoh = t, t_lin = t;
+  const double f_zoh = run(e_zoh, t_zoh, 10, 0.05).axial_force_n;
+  const double f_lin = run(e_lin, t_lin, 10, 0.05).axial_force_n;
+  EXPECT_NEAR(f_zoh, 2.0, 1e-9) << "held, K ignored";
+  EXPECT_NEAR(f_lin, 2.0 + 10.0 / 33.0, 1e-9) << "10 ms along the 30 N/s trend";
+}
+
+TEST(ForceEvaluator, PassivityAddsDampingWhenTheModelWouldPushTheTrainee) {
+  HapticParams p = fast_params();
+  p.slew_n_per_s = 1e6;
+  ForceEvaluator e(p);
+  int64_t t = 1'000'000;
+  physics::LocalForceModel active = model_at(t, 0.0);
+  active.b_n_s_per_m = -20.0;  // negative damping pushes along the motion: generates energy
+  ForceOutput out;
+  bool damped = false;
+  for (int i = 0; i < 300; ++i) {
+    active.made_utime = t;
+    e.set_model(active, t);
+    t += kTickUs;
+    InstrumentSample s = fresh_sample(t, 0.0);
+    s.insertion_rate_m_per_s = 0.01;
+    out = e.tick(s, t);
+    damped |= (out.flags & kFlagDamped) != 0;
+    EXPECT_GE(e.axial_passivity().energy(), -1e-9) << "tick " << i;
+  }
+  EXPECT_TRUE(damped);
+}
+
 TEST(ForceEvaluator, NoModelMeansNoForce) {
   ForceEvaluator e(fast_params());
   int64_t t = 1'000'000;

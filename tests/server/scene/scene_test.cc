@@ -83,6 +83,9 @@ TEST(Scene, EachBadInputNamesItsJsonPathAndWhatWasExpected) {
   EXPECT_EQ(error_of(R"({"effects": [1, 2]})"), "test.json: effects: expected an object");
   EXPECT_EQ(error_of(R"({"effects": {}, "colour": "red"})"),
             "test.json: colour: unknown key (this object accepts: anatomy, effects, haptics, name, physics_rate_hz)");
+  EXPECT_EQ(error_of(R"({"haptics": {"interpolation": "cubic"}, "effects": {}})"),
+            "test.json: haptics.interpolation: expected one of \"local_model\", \"zero_order_hold\", "
+            "\"linear_extrapolation\", got \"cubic\"");
   EXPECT_EQ(error_of(R"({"haptics": {"peak_force_n": 1e9}, "effects": {}})"),
             "test.json: haptics.peak_force_n: expected a number in [0, 20], got 1000000000.0");
   EXPECT_NE(error_of(R"({"effects": {)").find("test.json: not valid JSON"), std::string::npos);

@@ -106,6 +106,32 @@ TEST(PhantomTest, DimensionsAreAdult) {
   }
 }
 
+TEST(PhantomTest, BranchesTouchOnlyWhereTheyJoin) {
+  for (uint32_t seed : {1u, 2u, 3u, 4u, 5u}) {
+    const VesselTree t = make_coronary_phantom({.seed = seed});
+    for (size_t i = 0; i < t.branches.size(); ++i) {
+      for (size_t j = i + 1; j < t.branches.size(); ++j) {
+        const auto& a = t.branches[i];
+        const auto& b = t.branches[j];
+        double gap_m = 1.0;
+        for (size_t ka = 0; ka < a.points.size(); ++ka) {
+          for (size_t kb = 0; kb < b.points.size(); ++kb) {
+            // leave out 8 mm about a junction (parent and child, or two daughters of one parent)
+            if (b.parent == static_cast<int>(i) && std::abs(static_cast<int>(ka) - b.parent_point) < 16 && kb < 16) continue;
+            if (a.parent == b.parent && ka < 16 && kb < 16) continue;
+            // the LM and RCA start on the aortic centerline: their first ~16 mm run inside it
+            if (a.name == "aorta" && b.parent == static_cast<int>(i) && kb < 36) continue;
+            const double gap = (a.points[ka].position_m - b.points[kb].position_m).norm() -
+                               a.points[ka].radius_m - b.points[kb].radius_m;
+            gap_m = std::min(gap_m, gap);
+          }
+        }
+        EXPECT_GT(gap_m, 0.5e-3) << a.name << " and " << b.name << ", seed " << seed;
+      }
+    }
+  }
+}
+
 TEST(PhantomTest, LeftMainForksIntoClearlyDifferentDirections) {
   for (uint32_t seed : {1u, 2u, 3u, 4u, 5u}) {
     const VesselTree t = make_coronary_phantom({.seed = seed});

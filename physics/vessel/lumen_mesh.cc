@@ -32,6 +32,18 @@ int segments_for(double radius_m, const LumenMeshSpec& spec) {
   return n;
 }
 
+// latitude rings per hemispherical cap. A cap facet sags along both its sides, so the latitude
+// step gets half the bound: the facet's sag stays within ~1.5x the bound, the tube's within 1x
+int cap_rings_for(double radius_m, const LumenMeshSpec& spec) {
+  int n = std::max(1, spec.cap_rings);
+  const double bound_m = 0.5 * spec.max_chord_error_m;
+  if (bound_m > 0.0 && radius_m > bound_m) {
+    const double step = 2.0 * std::acos(1.0 - bound_m / radius_m);
+    n = std::max(n, static_cast<int>(std::ceil(std::numbers::pi / 2 / step)));
+  }
+  return n;
+}
+
 TriangleMesh loft_branch(const VesselTree& tree, const VesselBranch& branch, const LumenMeshSpec& spec) {
   TriangleMesh mesh;
   std::vector<Vector3d> pts;
@@ -91,7 +103,7 @@ TriangleMesh loft_branch(const VesselTree& tree, const VesselBranch& branch, con
   const int segs = segments_for(r_max_m, spec);
 
   // hemispherical caps: latitude rings from the start pole to the equator, and back at the end
-  const int k_cap = std::max(1, spec.cap_rings);
+  const int k_cap = cap_rings_for(r_max_m, spec);
   const double quarter = std::numbers::pi / 2;
   std::vector<Ring> rings;
   rings.reserve(n + 2 * k_cap);

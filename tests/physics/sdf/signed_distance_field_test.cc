@@ -8,6 +8,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "physics/sdf/lumen_sdf.h"
 #include "physics/vessel/coronary_phantom.h"
 #include "physics/vessel/lumen_mesh.h"
 
@@ -186,7 +187,7 @@ class SdfPhantomTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     tree_ = new VesselTree(make_coronary_phantom({}));
-    sdf_ = new SignedDistanceField(SignedDistanceField::build(loft_lumen(*tree_, {}), 0.2e-3, 1e-3));
+    sdf_ = new SignedDistanceField(build_lumen_sdf(*tree_, 0.2e-3));
   }
   static void TearDownTestSuite() {
     delete sdf_;

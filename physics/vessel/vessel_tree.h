@@ -29,7 +29,8 @@ struct VesselTree {
 
 // the branch whose centerline (as a polyline) is closest to p_m, or -1 for an empty tree.
 // Brute force over segments, allocates nothing; meant for a few queries per step (the wire tip).
-// Ties go to the lower index, so inside the aortic root the aorta wins over the LM's first stretch.
+// Exact ties go to the lower index (a child's first point lies on its parent's centerline, so
+// that point reports the parent). A NaN point returns -1 and an infinite distance.
 int nearest_branch(const VesselTree& tree, const Eigen::Vector3d& p_m,
                    double* distance_to_centerline_m = nullptr);
 

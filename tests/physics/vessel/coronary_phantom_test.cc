@@ -208,6 +208,10 @@ TEST(PhantomTest, NearestBranchFindsTheBranchUnderAPoint) {
     EXPECT_EQ(nearest_branch(t, p, &d_m), t.find(name));
     EXPECT_NEAR(d_m, 0.0, 1e-12);
   }
+  // a child's first point lies on its parent's centerline: the tie goes to the parent
+  const auto& lm = branch(t, "LM");
+  EXPECT_EQ(nearest_branch(t, lm.points.front().position_m), t.find("aorta"));
+  EXPECT_EQ(nearest_branch(t, lm.points[10].position_m), t.find("LM"));
   double d_m = 0;
   EXPECT_EQ(nearest_branch(VesselTree{}, Eigen::Vector3d::Zero(), &d_m), -1);
   EXPECT_TRUE(std::isinf(d_m));

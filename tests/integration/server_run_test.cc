@@ -150,6 +150,37 @@ TEST(ServerRun, OverrunningPhysicsIsCountedAndNeverCatchesUpInABurst) {
   EXPECT_EQ(trainee.forces[trainee.forces.size() - 100].flags & pcisim_lcm::force_command_t::FLAG_STALE, 0);
 }
 
+TEST(ServerRun, PhysicsStallOfHalfASecondFadesTheForceAndRecovers) {
+  lcm::LCM lcm("memq://");
+  FakeTrainee trainee(lcm);
+  Server server(default_scene(), lcm);
+  std::thread fault([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(700));
+    server.inject_physics_stall(0.5);
+  });
+  std::atomic<bool> stop{false};
+  server.run(2.5, stop);
+  fault.join();
+  trainee.done = true;
+  std::lock_guard lock(trainee.mutex);
+  using F = pcisim_lcm::force_command_t;
+  // find the stretch of faded commands after start-up: it must reach zero force and end
+  size_t first = 0, last = 0;
+  for (size_t i = 500; i < trainee.forces.size(); ++i)
+    if ((trainee.forces[i].flags & F::FLAG_FADED) && trainee.forces[i].seq >= 0) {
+      if (!first) first = i;
+      last = i;
+    }
+  ASSERT_GT(first, 0u) << "the stall made the model stale";
+  EXPECT_GT(last - first, 350u) << "faded for most of the 500 ms stall";
+  EXPECT_LT(last - first, 600u);
+  EXPECT_EQ(trainee.forces[last].axial_force_n, 0.0) << "faded all the way to zero";
+  EXPECT_TRUE(trainee.forces[last].flags & F::FLAG_STALE);
+  ASSERT_GT(trainee.forces.size(), last + 500);
+  const auto& after = trainee.forces[last + 400];
+  EXPECT_EQ(after.flags & (F::FLAG_FADED | F::FLAG_STALE | F::FLAG_RAMPING), 0) << "recovered after physics resumed";
+}
+
 TEST(ServerRun, SilentInstrumentFadesTheForce) {
   lcm::LCM lcm("memq://");
   FakeTrainee trainee(lcm);

@@ -79,4 +79,17 @@ TEST(ServerCli, RunsForItsDurationAndWritesStats) {
   EXPECT_EQ(j["physics"]["effects"].size(), 4u);
 }
 
+TEST(ServerCli, SigtermStopsCleanlyAndStillWritesStats) {
+  std::filesystem::create_directories(kDir);
+  const auto stats = kDir / "stats_sigterm.json";
+  std::filesystem::remove(stats);
+  const std::string cmd = std::string(PCISIM_BINARY_DIR) + "/server/pcisim-server --lcm-url memq:// --log-level warn --stats-json " +
+                          stats.string() + " > /dev/null 2>&1 & pid=$!; sleep 1.5; kill -TERM $pid; wait $pid";
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "SIGTERM is a normal way to stop";
+  ASSERT_TRUE(std::filesystem::exists(stats));
+  EXPECT_GT(nlohmann::json::parse(slurp(stats))["haptic"]["ticks"].get<int64_t>(), 500);
+}
+
 }  // namespace

@@ -132,13 +132,13 @@ VesselTree make_coronary_phantom(const CoronaryPhantomSpec& spec) {
   const Vector3d aorta_bend =
       perpendicular_part(patient_to_heart * Vector3d(0.3, 0.6, 0.2), aorta_dir);
 
-  // the LM bifurcation sits on the epicardial shell, left and anterior of the aortic root
+  // the LM aims at a point on the epicardial shell, left and anterior of the aortic root; the
+  // aorta is placed so the LM leaves its centerline
   const double shell_mm = kHeartRadiusMm + 2.0;
   const Vector3d fork_mm = on_shell(draw.around(38, 3), draw.around(55, 5), shell_mm);
   const Vector3d lm_dir = perpendicular_part(
       Vector3d(draw.around(0.2, 0.1), 1.0, draw.around(-0.25, 0.1)), aorta_dir);
   const double lm_outside_mm = draw.around(10.0, 1.0);
-  // a whole number of steps, so the last point lands on the fork
   const double lm_length_mm = std::round((kAortaRadiusMm + lm_outside_mm) / kStepMm) * kStepMm;
   // the LM leaves the aorta's centerline 10 mm above the root; the aorta is placed to match
   const int lm_parent_point = 20;
@@ -162,28 +162,38 @@ VesselTree make_coronary_phantom(const CoronaryPhantomSpec& spec) {
   }
   const int aorta_id = add("aorta", -1, -1, aorta);
 
-  // LM: straight from the aortic centerline through the left sinus ostium to the fork
+  // LM: straight from the aortic centerline through the left sinus ostium, then bending onto the
+  // heart's surface (as the real LM lies on it), so the wire meets the fork nearly tangentially
   Walk lm;
   lm.start_mm = lm_start_mm;
   lm.start_dir = lm_dir;
-  lm.straight_mm = lm_length_mm;
+  lm.straight_mm = kAortaRadiusMm + 1.0;
   lm.length_mm = lm_length_mm;
+  lm.shell_mm = shell_mm;
+  lm.waypoints_mm = {(fork_mm + 20.0 * perpendicular_part(lm_dir, fork_mm.normalized())).normalized() * shell_mm};
   lm.radius0_mm = lm.radius1_mm = draw.around(2.0, 0.1);
   const auto lm_points = walk(lm);
   const int lm_id = add("LM", aorta_id, lm_parent_point, lm_points);
   const int lm_end = static_cast<int>(lm_points.size()) - 1;
 
-  // the fork: LAD and LCx leave the LM end tangent to the heart, split ~66 deg about the LM heading
-  const Vector3d fork_n = fork_mm.normalized();
-  const Vector3d lm_heading = perpendicular_part(lm_dir, fork_n);
+  // the fork: LAD and LCx leave the LM's end, split ~66 deg about the LM's heading along the heart
+  // and keeping the LM's slope off the surface (no kink), then settle onto the epicardium
+  const Vector3d fork = lm_points[lm_end].position_m;
+  const Vector3d lm_end_dir = (fork - lm_points[lm_end - 1].position_m).normalized();
+  const Vector3d fork_n = fork.normalized();
+  const Vector3d lm_heading = perpendicular_part(lm_end_dir, fork_n);
+  const Vector3d lm_rise = fork_n * fork_n.dot(lm_end_dir);
   double sign = 1.0;  // LAD turns toward anterior (+e1)
   if (rotate(lm_heading, fork_n, 0.5).x() < rotate(lm_heading, fork_n, -0.5).x()) sign = -1.0;
   const double lad_turn = draw.around(33, 3) * kDeg, lcx_turn = draw.around(33, 3) * kDeg;
+  auto daughter_dir = [&](double turn) {
+    return (rotate(lm_heading, fork_n, turn) * std::sqrt(1.0 - lm_rise.squaredNorm()) + lm_rise).normalized();
+  };
 
   const double shell = kHeartRadiusMm + 1.5;
   Walk lad;
-  lad.start_mm = fork_mm;
-  lad.start_dir = rotate(lm_heading, fork_n, sign * lad_turn);
+  lad.start_mm = fork;
+  lad.start_dir = daughter_dir(sign * lad_turn);
   lad.waypoints_mm = {on_shell(draw.around(70, 4), draw.around(22, 4), shell),
                       on_shell(draw.around(120, 4), draw.around(25, 5), shell),
                       on_shell(draw.around(165, 4), draw.around(60, 8), shell),
@@ -197,8 +207,8 @@ VesselTree make_coronary_phantom(const CoronaryPhantomSpec& spec) {
   const int lad_id = add("LAD", lm_id, lm_end, lad_points);
 
   Walk lcx;
-  lcx.start_mm = fork_mm;
-  lcx.start_dir = rotate(lm_heading, fork_n, -sign * lcx_turn);
+  lcx.start_mm = fork;
+  lcx.start_dir = daughter_dir(-sign * lcx_turn);
   // the AV groove is nearly a circle; the groove's undulation makes the LCx non-planar
   lcx.waypoints_mm = {on_shell(draw.around(50, 2), draw.around(95, 5), shell),
                       on_shell(draw.around(60, 2), draw.around(130, 5), shell),

@@ -135,14 +135,14 @@ VesselTree make_coronary_phantom(const CoronaryPhantomSpec& spec) {
   // the LM aims at a point on the epicardial shell, left and anterior of the aortic root; the
   // aorta is placed so the LM leaves its centerline
   const double shell_mm = kHeartRadiusMm + 2.0;
-  const Vector3d fork_mm = on_shell(draw.around(38, 3), draw.around(55, 5), shell_mm);
+  const Vector3d lm_aim_mm = on_shell(draw.around(38, 3), draw.around(55, 5), shell_mm);
   const Vector3d lm_dir = perpendicular_part(
       Vector3d(draw.around(0.2, 0.1), 1.0, draw.around(-0.25, 0.1)), aorta_dir);
   const double lm_outside_mm = draw.around(10.0, 1.0);
   const double lm_length_mm = std::round((kAortaRadiusMm + lm_outside_mm) / kStepMm) * kStepMm;
   // the LM leaves the aorta's centerline 10 mm above the root; the aorta is placed to match
   const int lm_parent_point = 20;
-  const Vector3d lm_start_mm = fork_mm - lm_length_mm * lm_dir;
+  const Vector3d lm_start_mm = lm_aim_mm - lm_length_mm * lm_dir;
 
   VesselTree tree;
   auto add = [&tree](std::string name, int parent, int parent_point,
@@ -170,7 +170,7 @@ VesselTree make_coronary_phantom(const CoronaryPhantomSpec& spec) {
   lm.straight_mm = kAortaRadiusMm + 1.0;
   lm.length_mm = lm_length_mm;
   lm.shell_mm = shell_mm;
-  lm.waypoints_mm = {(fork_mm + 20.0 * perpendicular_part(lm_dir, fork_mm.normalized())).normalized() * shell_mm};
+  lm.waypoints_mm = {(lm_aim_mm + 20.0 * perpendicular_part(lm_dir, lm_aim_mm.normalized())).normalized() * shell_mm};
   lm.radius0_mm = lm.radius1_mm = draw.around(2.0, 0.1);
   const auto lm_points = walk(lm);
   const int lm_id = add("LM", aorta_id, lm_parent_point, lm_points);

@@ -1,0 +1,100 @@
+#include "clients/bridge/bridge.h"
+
+#include <spdlog/spdlog.h>
+#include <thread>
+
+#include "pcisim_lcm/instrument_state_t.hpp"
+#include "protocol/channels.h"
+#include "protocol/message_checks.h"
+#include "server/realtime/clock.h"
+#include "server/realtime/deadline_schedule.h"
+
+namespace pcisim::clients {
+
+using server::monotonic_ns;
+
+Bridge::Bridge(lcm::LCM& lcm, InstrumentDevice& device, const BridgeOptions& options)
+    : lcm_(lcm), device_(device), options_(options) {
+  lcm_.subscribe(protocol::kForceChannel, &Bridge::on_force, this);
+}
+
+void Bridge::on_force(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+  if (!protocol::decode_checked(*rbuf, force_)) {
+    ++forces_bad_;
+    return;
+  }
+  ++forces_received_;
+  last_force_n_ = force_.axial_force_n;
+  last_torque_nmm_ = force_.torque_nmm;
+}
+
+BridgeStats Bridge::run(const std::atomic<bool>& stop) {
+  std::atomic<bool> done{false};
+  std::thread rx([&] {
+    while (!done) lcm_.handleTimeout(20);
+  });
+
+  pcisim_lcm::instrument_state_t m{};
+  m.device_id = options_.device_id;
+  InstrumentReading reading, last_good;
+  BridgeStats stats;
+  const auto period_ns = static_cast<int64_t>(1e9 / options_.rate_hz);
+  int64_t start_ns = monotonic_ns();
+  bool waiting = options_.wait_for_server_s > 0;
+  bool was_fault = false;
+  server::DeadlineSchedule schedule(start_ns, period_ns);
+  int64_t next_log_ns = start_ns + 1'000'000'000, last_publish_ns = start_ns;
+  for (int64_t seq = 0; !stop; ++seq) {
+    const int64_t now_ns = monotonic_ns();
+    if (waiting && (forces_received_ > 0 || (now_ns - start_ns) * 1e-9 > options_.wait_for_server_s)) {
+      waiting = false;
+      if (forces_received_ == 0) spdlog::warn("bridge: no answer from the server after {} s, starting anyway", options_.wait_for_server_s);
+      start_ns = now_ns;  // the device's clock starts now
+      next_log_ns = now_ns + 1'000'000'000;
+    }
+    const double t_s = waiting ? 0.0 : (now_ns - start_ns) * 1e-9;
+    if ((options_.duration_s > 0 && t_s >= options_.duration_s) || device_.finished(t_s)) break;
+
+    // a device in fault reports no motion: the last good position, rates zero, status fault
+    const bool ok = device_.read(t_s, reading);
+    if (ok) last_good = reading;
+    if (!ok) {
+      ++stats.fault_samples;
+      last_good.insertion_rate_mm_s = last_good.rotation_rate_rad_s = 0;
+    }
+    if (ok != !was_fault) spdlog::warn(ok ? "bridge: device back" : "bridge: device fault, publishing STATUS_FAULT");
+    was_fault = !ok;
+    const InstrumentReading& r = ok ? reading : last_good;
+    m.utime = now_ns / 1000;
+    m.seq = seq;
+    m.status = ok ? pcisim_lcm::instrument_state_t::STATUS_OK : pcisim_lcm::instrument_state_t::STATUS_FAULT;
+    m.buttons = r.buttons;
+    m.insertion_mm = r.insertion_mm;
+    m.rotation_rad = r.rotation_rad;
+    m.insertion_rate_mm_s = r.insertion_rate_mm_s;
+    m.rotation_rate_rad_s = r.rotation_rate_rad_s;
+    lcm_.publish(protocol::kInstrumentChannel, &m);
+    ++stats.published;
+    last_publish_ns = now_ns;
+
+    if (options_.log_each_second && !waiting && now_ns >= next_log_ns) {
+      next_log_ns += 1'000'000'000;
+      spdlog::info("bridge: t={:5.1f}s insertion {:6.1f} mm rotation {:6.2f} rad buttons {:#x}{} | renders {:+.3f} N "
+                   "{:+.3f} N·mm ({} commands)",
+                   t_s, r.insertion_mm, r.rotation_rad, r.buttons, ok ? "" : " FAULT", last_force_n_.load(),
+                   last_torque_nmm_.load(), forces_received_.load());
+    }
+    server::sleep_until_ns(schedule.deadline_ns());
+    schedule.complete(monotonic_ns());
+  }
+  done = true;
+  rx.join();
+  stats.elapsed_s = (last_publish_ns - start_ns) * 1e-9;
+  stats.forces_received = forces_received_;
+  stats.forces_bad = forces_bad_;
+  stats.last_force_n = last_force_n_;
+  stats.last_torque_nmm = last_torque_nmm_;
+  return stats;
+}
+
+}  // namespace pcisim::clients

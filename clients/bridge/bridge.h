@@ -1,0 +1,46 @@
+#pragma once
+// The instrument bridge loop: polls a device at 1 kHz on absolute deadlines, publishes
+// instrument_state_t, and keeps what the server sends back (the force it would render).
+// A device in fault is published as STATUS_FAULT with its last good position: no motion.
+#include <atomic>
+#include <cstdint>
+#include <lcm/lcm-cpp.hpp>
+
+#include "clients/bridge/instrument_device.h"
+#include "pcisim_lcm/force_command_t.hpp"
+
+namespace pcisim::clients {
+
+struct BridgeOptions {
+  double rate_hz = 1000.0;
+  double duration_s = 0.0;         // 0 = until stop (or a replay's end)
+  double wait_for_server_s = 0.0;  // hold the device at t = 0 until the first force command
+  int device_id = 1;
+  bool log_each_second = true;
+};
+
+struct BridgeStats {
+  int64_t published = 0, fault_samples = 0;
+  int64_t forces_received = 0, forces_bad = 0;
+  double elapsed_s = 0.0;  // from the device clock's start to the last publish
+  double last_force_n = 0.0, last_torque_nmm = 0.0;
+};
+
+class Bridge {
+ public:
+  // `lcm` must outlive the bridge; the bridge runs its receive loop on its own thread
+  Bridge(lcm::LCM& lcm, InstrumentDevice& device, const BridgeOptions& options);
+  BridgeStats run(const std::atomic<bool>& stop);
+
+ private:
+  void on_force(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+
+  lcm::LCM& lcm_;
+  InstrumentDevice& device_;
+  BridgeOptions options_;
+  pcisim_lcm::force_command_t force_{};
+  std::atomic<int64_t> forces_received_{0}, forces_bad_{0};
+  std::atomic<double> last_force_n_{0}, last_torque_nmm_{0};
+};
+
+}  // namespace pcisim::clients

@@ -1,0 +1,126 @@
+#include "clients/bridge/serial_device.h"
+
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cstring>
+#include <stdexcept>
+
+namespace pcisim::clients {
+namespace {
+
+speed_t baud_constant(int baud) {
+  switch (baud) {
+    case 9600: return B9600;
+    case 19200: return B19200;
+    case 38400: return B38400;
+    case 57600: return B57600;
+    case 115200: return B115200;
+    case 230400: return B230400;
+    case 460800: return B460800;
+    case 921600: return B921600;
+    default: throw std::runtime_error(fmt::format("baud {} is not supported (9600 ... 921600)", baud));
+  }
+}
+
+// reads one signed decimal field starting at p, skipping spaces; false when there is none
+bool field(const char*& p, const char* end, int64_t& out) {
+  while (p < end && *p == ' ') ++p;
+  const auto [next, ec] = std::from_chars(p, end, out);
+  if (ec != std::errc() || next == p) return false;
+  p = next;
+  return true;
+}
+
+}  // namespace
+
+// "E <insertion counts> <rotation counts> <buttons>" (docs/serial-protocol.md)
+bool parse_encoder_line(const std::string& line, EncoderLine& out) {
+  const char* p = line.data();
+  const char* end = p + line.size();
+  if (end > p && end[-1] == '\r') --end;
+  if (end - p < 2 || p[0] != 'E' || p[1] != ' ') return false;
+  p += 1;
+  int64_t buttons = 0;
+  if (!field(p, end, out.insertion_counts) || !field(p, end, out.rotation_counts) || !field(p, end, buttons)) return false;
+  while (p < end && *p == ' ') ++p;
+  if (p != end || buttons < 0 || buttons > 0xffff) return false;
+  out.buttons = static_cast<int32_t>(buttons);
+  return true;
+}
+
+SerialDevice::SerialDevice(const std::string& port, int baud, const SerialCalibration& calibration)
+    : port_(port), cal_(calibration) {
+  const speed_t speed = baud_constant(baud);
+  fd_ = ::open(port.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK);
+  if (fd_ < 0) throw std::runtime_error(fmt::format("{}: cannot open the serial port: {}", port, std::strerror(errno)));
+  termios tio{};
+  if (tcgetattr(fd_, &tio) == 0) {
+    cfmakeraw(&tio);
+    cfsetispeed(&tio, speed);
+    cfsetospeed(&tio, speed);
+    tcsetattr(fd_, TCSANOW, &tio);
+  }
+  pending_.reserve(4096);
+}
+
+SerialDevice::~SerialDevice() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void SerialDevice::take(const EncoderLine& e, double t_s) {
+  const double insertion_mm = std::clamp((e.insertion_counts - cal_.insertion_zero_counts) * cal_.mm_per_count,
+                                         cal_.min_insertion_mm, cal_.max_insertion_mm);
+  const double rotation_rad = e.rotation_counts * cal_.rad_per_count;
+  // rates from successive samples; the first sample has none
+  const double dt = last_sample_t_s_ >= 0 ? t_s - last_sample_t_s_ : 0.0;
+  reading_.insertion_rate_mm_s = dt > 1e-4 ? (insertion_mm - last_insertion_mm_) / dt : reading_.insertion_rate_mm_s;
+  reading_.rotation_rate_rad_s = dt > 1e-4 ? (rotation_rad - last_rotation_rad_) / dt : reading_.rotation_rate_rad_s;
+  reading_.insertion_mm = last_insertion_mm_ = insertion_mm;
+  reading_.rotation_rad = last_rotation_rad_ = rotation_rad;
+  reading_.buttons = e.buttons;
+  last_sample_t_s_ = last_valid_t_s_ = t_s;
+}
+
+bool SerialDevice::read(double t_s, InstrumentReading& out) {
+  char buf[1024];
+  while (!unplugged_) {
+    const ssize_t n = ::read(fd_, buf, sizeof buf);
+    if (n > 0) {
+      for (ssize_t i = 0; i < n; ++i) {
+        if (buf[i] != '\n') {
+          if (pending_.size() < 4000) pending_.push_back(buf[i]);
+          continue;
+        }
+        EncoderLine e;
+        if (pending_.empty() || pending_[0] == '#') {
+          // blank lines and comments are not samples
+        } else if (parse_encoder_line(pending_, e)) {
+          ++lines_;
+          take(e, t_s);
+        } else {
+          ++malformed_;
+        }
+        pending_.clear();
+      }
+    } else if (n == 0 || (errno != EAGAIN && errno != EINTR)) {
+      unplugged_ = true;  // hang-up or a read error: the box is gone
+    } else {
+      break;
+    }
+  }
+  if (unplugged_ || last_valid_t_s_ < 0 || t_s - last_valid_t_s_ > cal_.silent_timeout_s) return false;
+  out = reading_;
+  return true;
+}
+
+std::string SerialDevice::describe() const {
+  return fmt::format("serial encoder on {} ({} mm/count, {} rad/count)", port_, cal_.mm_per_count, cal_.rad_per_count);
+}
+
+}  // namespace pcisim::clients

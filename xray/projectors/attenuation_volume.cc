@@ -1,0 +1,46 @@
+#include "xray/projectors/attenuation_volume.h"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <stdexcept>
+
+namespace pcisim::xray {
+
+AttenuationVolume::AttenuationVolume(const Volume& v, const AttenuationParams& params) : params_(params) {
+  if (const std::string bad = validate(v); !bad.empty()) throw std::invalid_argument("AttenuationVolume: " + bad);
+  if (params.brick_voxels < 1) throw std::invalid_argument("AttenuationVolume: brick_voxels must be >= 1");
+  for (int a = 0; a < 3; ++a) {
+    dims_[a] = static_cast<int>(v.dims[a]);
+    padded_[a] = dims_[a] + 2;
+  }
+  mu_.assign(int64_t(padded_[0]) * padded_[1] * padded_[2], 0.0f);
+  for (int k = 0; k < dims_[2]; ++k) {
+    for (int j = 0; j < dims_[1]; ++j) {
+      float* row = mu_.data() + 1 + padded_[0] * ((j + 1) + int64_t(padded_[1]) * (k + 1));
+      for (int i = 0; i < dims_[0]; ++i) row[i] = static_cast<float>(mu_of_hu(v.hu(i, j, k)));
+    }
+  }
+  // physical -> index: p = origin + D diag(s) idx  =>  idx = diag(1/s) D^-1 (p - origin)
+  index_from_physical_ = v.spacing_mm.cwiseInverse().asDiagonal() * v.direction.inverse();
+  index_offset_ = -index_from_physical_ * v.origin_mm;
+
+  const int b = params.brick_voxels;
+  for (int a = 0; a < 3; ++a) brick_dims_[a] = (padded_[a] - 1) / b + 1;
+  brick_max_.assign(int64_t(brick_dims_[0]) * brick_dims_[1] * brick_dims_[2], 0.0f);
+  for (int bk = 0; bk < brick_dims_[2]; ++bk) {
+    for (int bj = 0; bj < brick_dims_[1]; ++bj) {
+      for (int bi = 0; bi < brick_dims_[0]; ++bi) {
+        float m = 0.0f;
+        for (int k = bk * b; k <= std::min((bk + 1) * b, padded_[2] - 1); ++k) {
+          for (int j = bj * b; j <= std::min((bj + 1) * b, padded_[1] - 1); ++j) {
+            const float* row = mu_.data() + padded_[0] * (j + int64_t(padded_[1]) * k);
+            for (int i = bi * b; i <= std::min((bi + 1) * b, padded_[0] - 1); ++i) m = std::max(m, row[i]);
+          }
+        }
+        brick_max_[bi + brick_dims_[0] * (bj + int64_t(brick_dims_[1]) * bk)] = m;
+      }
+    }
+  }
+}
+
+}  // namespace pcisim::xray

@@ -1,0 +1,57 @@
+#pragma once
+// A CT volume turned into linear attenuation for projection: mu = mu_water (1 + HU/1000) per mm,
+// HU below air_below_hu counted as air (mu = 0). Stored as float with a one-voxel zero border
+// (so trilinear reads need no bounds checks) plus a coarse grid of per-brick maxima that lets a
+// ray skip empty space. Built once per volume; projectors only read it.
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "xray/volume/volume.h"
+
+namespace pcisim::xray {
+
+struct AttenuationParams {
+  double mu_water_per_mm = 0.02;  // water near the effective energy of a fluoroscopy beam
+  double air_below_hu = -800;     // lower HU: mu = 0
+  int brick_voxels = 8;           // empty-space skipping granularity
+};
+
+class AttenuationVolume {
+ public:
+  AttenuationVolume(const Volume& volume, const AttenuationParams& params = {});
+
+  double mu_of_hu(double hu) const {
+    return hu < params_.air_below_hu ? 0.0 : params_.mu_water_per_mm * (1.0 + hu / 1000.0);
+  }
+  const AttenuationParams& params() const { return params_; }
+
+  // volume voxels (without the border)
+  const std::array<int, 3>& dims() const { return dims_; }
+  // padded voxels: dims + 2, voxel (i, j, k) of the volume at padded (i+1, j+1, k+1)
+  const std::array<int, 3>& padded_dims() const { return padded_; }
+  const std::vector<float>& padded_mu() const { return mu_; }
+  float mu(int i, int j, int k) const {  // volume index, no bounds check
+    return mu_[(i + 1) + padded_[0] * ((j + 1) + int64_t(padded_[1]) * (k + 1))];
+  }
+
+  // volume index (voxel centres at integers) = index_from_physical * p_mm + index_offset
+  const Eigen::Matrix3d& index_from_physical() const { return index_from_physical_; }
+  const Eigen::Vector3d& index_offset() const { return index_offset_; }
+
+  // brick (I, J, K) covers padded coordinates [I B, (I+1) B) per axis; its value is the largest
+  // mu of padded voxels [I B, (I+1) B] (inclusive: a trilinear read there touches them)
+  int brick_voxels() const { return params_.brick_voxels; }
+  const std::array<int, 3>& brick_dims() const { return brick_dims_; }
+  const std::vector<float>& brick_max() const { return brick_max_; }
+
+ private:
+  AttenuationParams params_;
+  std::array<int, 3> dims_{}, padded_{}, brick_dims_{};
+  std::vector<float> mu_, brick_max_;
+  Eigen::Matrix3d index_from_physical_;
+  Eigen::Vector3d index_offset_;
+};
+
+}  // namespace pcisim::xray

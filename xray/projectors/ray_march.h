@@ -1,0 +1,183 @@
+#pragma once
+// Ray code shared by the CPU projectors and the CUDA kernel (so the CPU trilinear marcher is the
+// GPU's twin by construction): plain structs, no Eigen, no allocation, __host__ __device__.
+#include <cmath>
+#include <cstdint>
+
+#if defined(__CUDACC__)
+#define PCISIM_XRAY_HD __host__ __device__ __forceinline__
+#else
+#define PCISIM_XRAY_HD inline
+#endif
+
+namespace pcisim::xray::ray {
+
+// a padded attenuation grid (see AttenuationVolume) and the affine from physical mm to padded
+// voxel coordinates: x = m[0..2].p + m[3], y = m[4..6].p + m[7], z = m[8..10].p + m[11]
+struct GridView {
+  const float* mu = nullptr;
+  int nx = 0, ny = 0, nz = 0;  // padded dims
+  float m[12] = {};
+  const float* brick_max = nullptr;
+  int bnx = 0, bny = 0, bnz = 0;
+  int brick = 8;
+};
+
+// a detector as plain floats (DetectorGeometry converted once per frame)
+struct DetectorView {
+  float src[3], center[3], u[3], v[3];
+  float pixel_mm;
+  int width, height;
+};
+
+// [ta, tb] of q0 + t dq inside the box [0, n] per axis, intersected with the input [ta, tb];
+// false when empty
+template <class T>
+PCISIM_XRAY_HD bool clip_to_box(const T q0[3], const T dq[3], const T n[3], T* ta, T* tb) {
+  for (int a = 0; a < 3; ++a) {
+    if (dq[a] == T(0)) {
+      if (q0[a] < T(0) || q0[a] > n[a]) return false;
+      continue;
+    }
+    const T inv = T(1) / dq[a];
+    T t0 = (T(0) - q0[a]) * inv, t1 = (n[a] - q0[a]) * inv;
+    if (t0 > t1) {
+      const T s = t0;
+      t0 = t1;
+      t1 = s;
+    }
+    if (t0 > *ta) *ta = t0;
+    if (t1 < *tb) *tb = t1;
+  }
+  return *ta < *tb;
+}
+
+// visits the unit cells of a grid of n cells per axis that q0 + t dq crosses for t in [ta, tb]
+// (already clipped to the grid box), in order: visit(i, j, k, t_enter, t_exit). A visit that
+// returns false stops the walk. (Amanatides & Woo 1987; Siddon 1985, Jacobs et al. 1998.)
+template <class T, class Visit>
+PCISIM_XRAY_HD void traverse_cells(const T q0[3], const T dq[3], T ta, T tb, const int n[3], Visit& visit) {
+  int cell[3], step[3];
+  T t_next[3], t_delta[3];
+  for (int a = 0; a < 3; ++a) {
+    const T p = q0[a] + ta * dq[a];
+    int c = static_cast<int>(std::floor(p));
+    if (dq[a] < T(0) && T(c) == p) --c;  // leaving a boundary downward enters the lower cell
+    c = c < 0 ? 0 : (c > n[a] - 1 ? n[a] - 1 : c);
+    cell[a] = c;
+    if (dq[a] > T(0)) {
+      step[a] = 1;
+      t_delta[a] = T(1) / dq[a];
+      t_next[a] = (T(c + 1) - q0[a]) / dq[a];
+    } else if (dq[a] < T(0)) {
+      step[a] = -1;
+      t_delta[a] = T(-1) / dq[a];
+      t_next[a] = (T(c) - q0[a]) / dq[a];
+    } else {
+      step[a] = 0;
+      t_delta[a] = T(0);
+      t_next[a] = T(1e30);
+    }
+  }
+  T t = ta;
+  while (t < tb) {
+    const int a = t_next[0] < t_next[1] ? (t_next[0] < t_next[2] ? 0 : 2) : (t_next[1] < t_next[2] ? 1 : 2);
+    const T tn = t_next[a] < tb ? t_next[a] : tb;
+    if (tn > t && !visit(cell[0], cell[1], cell[2], t, tn)) return;
+    t = tn;
+    cell[a] += step[a];
+    t_next[a] += t_delta[a];
+    if (cell[a] < 0 || cell[a] >= n[a]) return;
+  }
+}
+
+// trilinear mu at padded coordinates (x, y, z); zero outside (the border is zero, indices clamp)
+PCISIM_XRAY_HD float trilinear(const GridView& g, float x, float y, float z) {
+  int ix = static_cast<int>(std::floor(x)), iy = static_cast<int>(std::floor(y)), iz = static_cast<int>(std::floor(z));
+  ix = ix < 0 ? 0 : (ix > g.nx - 2 ? g.nx - 2 : ix);
+  iy = iy < 0 ? 0 : (iy > g.ny - 2 ? g.ny - 2 : iy);
+  iz = iz < 0 ? 0 : (iz > g.nz - 2 ? g.nz - 2 : iz);
+  float fx = x - ix, fy = y - iy, fz = z - iz;
+  fx = fx < 0.f ? 0.f : (fx > 1.f ? 1.f : fx);
+  fy = fy < 0.f ? 0.f : (fy > 1.f ? 1.f : fy);
+  fz = fz < 0.f ? 0.f : (fz > 1.f ? 1.f : fz);
+  const int64_t sy = g.nx, sz = int64_t(g.nx) * g.ny;
+  const float* p = g.mu + ix + sy * iy + sz * iz;
+  const float c00 = p[0] + fx * (p[1] - p[0]);
+  const float c10 = p[sy] + fx * (p[sy + 1] - p[sy]);
+  const float c01 = p[sz] + fx * (p[sz + 1] - p[sz]);
+  const float c11 = p[sz + sy] + fx * (p[sz + sy + 1] - p[sz + sy]);
+  const float c0 = c00 + fy * (c10 - c00), c1 = c01 + fy * (c11 - c01);
+  return c0 + fz * (c1 - c0);
+}
+
+// sums trilinear mu at samples t_k = t0 + (k + 1/2) dt, k in [k_lo, k_hi); a branch-free loop
+PCISIM_XRAY_HD float sum_samples(const GridView& g, const float x0[3], const float dx[3], float t0, float dt,
+                                 int k_lo, int k_hi) {
+  float acc = 0.f;
+  for (int k = k_lo; k < k_hi; ++k) {
+    const float t = t0 + (k + 0.5f) * dt;
+    acc += trilinear(g, x0[0] + t * dx[0], x0[1] + t * dx[1], x0[2] + t * dx[2]);
+  }
+  return acc;
+}
+
+// the line integral (mu in 1/mm times mm) from the source to pixel (c, r) by trilinear ray
+// marching every step_voxels (in voxel units along the ray); skip_empty walks the brick grid
+// and samples only inside bricks holding some mu, which gives the same samples' sum
+PCISIM_XRAY_HD float trilinear_ray(const GridView& g, const DetectorView& d, int c, int r, float step_voxels,
+                                   bool skip_empty) {
+  const float oc = (c - 0.5f * (d.width - 1)) * d.pixel_mm, orow = (r - 0.5f * (d.height - 1)) * d.pixel_mm;
+  float pix[3], x0[3], x1[3], dx[3];
+  for (int a = 0; a < 3; ++a) pix[a] = d.center[a] + oc * d.u[a] + orow * d.v[a];
+  const float len_mm = sqrtf((pix[0] - d.src[0]) * (pix[0] - d.src[0]) + (pix[1] - d.src[1]) * (pix[1] - d.src[1]) +
+                             (pix[2] - d.src[2]) * (pix[2] - d.src[2]));
+  for (int a = 0; a < 3; ++a) {
+    x0[a] = g.m[4 * a] * d.src[0] + g.m[4 * a + 1] * d.src[1] + g.m[4 * a + 2] * d.src[2] + g.m[4 * a + 3];
+    x1[a] = g.m[4 * a] * pix[0] + g.m[4 * a + 1] * pix[1] + g.m[4 * a + 2] * pix[2] + g.m[4 * a + 3];
+    dx[a] = x1[a] - x0[a];
+  }
+  const float len_vox = sqrtf(dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2]);
+  if (!(len_vox > 0.f)) return 0.f;
+  // mu is non-zero only strictly inside padded [0, n-1]
+  const float box[3] = {float(g.nx - 1), float(g.ny - 1), float(g.nz - 1)};
+  float t0 = 0.f, t1 = 1.f;
+  if (!clip_to_box(x0, dx, box, &t0, &t1)) return 0.f;
+  const float dt = step_voxels / len_vox;
+  // samples t_k = t0 + (k + 1/2) dt < t1
+  auto first_at_or_after = [&](float t) { return static_cast<int>(ceilf((t - t0) / dt - 0.5f)); };
+  const int k_end = first_at_or_after(t1);
+  float acc = 0.f;
+  if (!skip_empty) {
+    acc = sum_samples(g, x0, dx, t0, dt, 0, k_end);
+  } else {
+    // walk the bricks; merge runs of non-empty ones and sum their samples
+    const float inv_b = 1.0f / g.brick;
+    const float q0[3] = {x0[0] * inv_b, x0[1] * inv_b, x0[2] * inv_b};
+    const float dq[3] = {dx[0] * inv_b, dx[1] * inv_b, dx[2] * inv_b};
+    const int nb[3] = {g.bnx, g.bny, g.bnz};
+    float run_start = -1.f, run_end = -1.f;
+    auto flush = [&]() {
+      if (run_start >= 0.f) {
+        const int lo = first_at_or_after(run_start);
+        const int hi = first_at_or_after(run_end);
+        acc += sum_samples(g, x0, dx, t0, dt, lo > 0 ? lo : 0, hi < k_end ? hi : k_end);
+        run_start = -1.f;
+      }
+    };
+    auto visit = [&](int i, int j, int k, float ta, float tb) {
+      if (g.brick_max[i + g.bnx * (j + int64_t(g.bny) * k)] > 0.f) {
+        if (run_start < 0.f) run_start = ta;
+        run_end = tb;
+      } else {
+        flush();
+      }
+      return true;
+    };
+    traverse_cells(q0, dq, t0, t1, nb, visit);
+    flush();
+  }
+  return acc * dt * len_mm;
+}
+
+}  // namespace pcisim::xray::ray

@@ -1,0 +1,34 @@
+#include "xray/projectors/trilinear_projector.h"
+
+#include <stdexcept>
+
+#include "xray/projectors/views.h"
+
+namespace pcisim::xray {
+
+TrilinearProjector::TrilinearProjector(const AttenuationVolume& volume, const TrilinearOptions& options)
+    : volume_(volume), options_(options), pool_(options.threads) {
+  set_options(options);
+}
+
+void TrilinearProjector::set_options(const TrilinearOptions& options) {
+  if (!(options.step_voxels > 0)) throw std::invalid_argument("TrilinearProjector: step_voxels must be > 0");
+  options_ = options;
+}
+
+void TrilinearProjector::project(const DetectorGeometry& g, Image* image) {
+  if (image->width != g.width || image->height != g.height) {
+    throw std::invalid_argument("TrilinearProjector: image size differs from the detector's");
+  }
+  const ray::GridView grid = grid_view(volume_);
+  const ray::DetectorView det = detector_view(g);
+  const float step = static_cast<float>(options_.step_voxels);
+  const bool skip = options_.skip_empty;
+  auto row = [&](int r) {
+    float* out = image->pixels.data() + static_cast<size_t>(r) * g.width;
+    for (int c = 0; c < g.width; ++c) out[c] = ray::trilinear_ray(grid, det, c, r, step, skip);
+  };
+  pool_.for_each_row(g.height, row);
+}
+
+}  // namespace pcisim::xray

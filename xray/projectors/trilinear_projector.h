@@ -1,0 +1,35 @@
+#pragma once
+// The fast CPU projector: trilinear interpolation of mu sampled every step_voxels along each
+// ray (midpoint rule), empty bricks skipped, rows spread over a thread pool. The CUDA projector
+// runs the same ray code (ray_march.h) and is compared with this one.
+#include "xray/geometry/detector_geometry.h"
+#include "xray/projectors/attenuation_volume.h"
+#include "xray/projectors/image.h"
+#include "xray/projectors/row_pool.h"
+
+namespace pcisim::xray {
+
+struct TrilinearOptions {
+  double step_voxels = 0.5;  // sample spacing along the ray, in voxels
+  bool skip_empty = true;    // walk the brick grid and skip bricks without mu
+  int threads = 0;           // CPU only; <= 0: all cores
+};
+
+class TrilinearProjector {
+ public:
+  // keeps a reference to volume
+  TrilinearProjector(const AttenuationVolume& volume, const TrilinearOptions& options = {});
+
+  void set_options(const TrilinearOptions& options);  // threads are fixed at construction
+  const TrilinearOptions& options() const { return options_; }
+
+  // line integrals from the source to each pixel centre into image (already sized to g)
+  void project(const DetectorGeometry& g, Image* image);
+
+ private:
+  const AttenuationVolume& volume_;
+  TrilinearOptions options_;
+  RowPool pool_;
+};
+
+}  // namespace pcisim::xray

@@ -1,0 +1,67 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "tests/xray/projectors/projector_test_util.h"
+#include "xray/geometry/c_arm.h"
+#include "xray/phantom/thorax_phantom.h"
+#include "xray/projectors/trilinear_projector.h"
+#ifdef PCISIM_HAVE_CUDA
+#include "xray/projectors/cuda_projector.h"
+#endif
+
+namespace pcisim::xray {
+namespace {
+
+#ifdef PCISIM_HAVE_CUDA
+// the GPU runs the CPU marcher's code; only float rounding (FMA contraction) may differ:
+// every pixel within 1e-4 of the image's largest line integral
+void expect_twins(const AttenuationVolume& a, const DetectorGeometry& g, double step, bool skip) {
+  Image cpu, gpu;
+  cpu.resize(g.width, g.height);
+  gpu.resize(g.width, g.height);
+  TrilinearOptions o{.step_voxels = step, .skip_empty = skip, .threads = 2};
+  TrilinearProjector(a, o).project(g, &cpu);
+  CudaTrilinearProjector cuda(a, o);
+  cuda.project(g, &gpu);
+  double peak = 0, worst = 0;
+  for (size_t n = 0; n < cpu.pixels.size(); ++n) {
+    peak = std::max(peak, double(cpu.pixels[n]));
+    worst = std::max(worst, double(std::abs(gpu.pixels[n] - cpu.pixels[n])));
+  }
+  EXPECT_GT(peak, 0.0) << "the comparison needs a non-empty projection";
+  EXPECT_LE(worst, 1e-4 * peak) << "step " << step << " skip " << skip;
+}
+#endif
+
+TEST(CudaProjector, MatchesCpuTrilinearTwin) {
+#ifndef PCISIM_HAVE_CUDA
+  GTEST_SKIP() << "built without CUDA (nvcc not found at configure time): no GPU projector to compare";
+#else
+  std::string why;
+  if (!CudaTrilinearProjector::available(&why)) GTEST_SKIP() << "CUDA projector not compared: " << why;
+  std::mt19937 rng(31);
+  for (int trial = 0; trial < 3; ++trial) {
+    const Volume v = testing::random_volume(rng, /*smooth=*/true);
+    const AttenuationVolume a(v);
+    const DetectorGeometry g = testing::random_geometry(rng, v, 40, 33);
+    expect_twins(a, g, 0.5, true);
+    expect_twins(a, g, 1.0, false);
+  }
+  // a coarse thorax phantom through a C-arm at LAO 30 / CRA 20
+  ThoraxPhantomSpec s;
+  s.dims = {128, 128, 64};
+  s.spacing_mm = 2.8;
+  const Volume v = make_thorax_phantom(s);
+  const AttenuationVolume a(v);
+  CArmSpec c;
+  c.width = 96;
+  c.height = 80;
+  c.pixel_mm = 2.0;
+  expect_twins(a, c_arm_geometry(c, CArmPose{30, 20, Eigen::Vector3d::Zero()}), 0.5, true);
+#endif
+}
+
+}  // namespace
+}  // namespace pcisim::xray

@@ -213,4 +213,12 @@ double World::refused_feed_m() const {
   return impl_->wire ? impl_->wire->commanded_feed_m() - impl_->wire->fed_length_m() : 0.0;
 }
 
+const ChainMailWire* World::guidewire_state() const { return impl_->wire ? &*impl_->wire : nullptr; }
+const WallContact* World::contact_state() const { return impl_->contact ? &*impl_->contact : nullptr; }
+const CoulombFriction* World::friction_state() const {
+  return impl_->friction ? &*impl_->friction : nullptr;
+}
+const LumenQuery* World::lumen() const { return impl_->lumen.get(); }
+const VesselTree& World::vessel_tree() const { return impl_->tree; }
+
 }  // namespace pcisim::physics

@@ -14,6 +14,12 @@
 
 namespace pcisim::physics {
 
+class ChainMailWire;
+class CoulombFriction;
+class LumenQuery;
+class WallContact;
+struct VesselTree;
+
 struct EffectCost {
   std::string name;           // the scene's effect name
   double last_step_ms = 0.0;  // wall time of that effect in the last step
@@ -42,6 +48,13 @@ class World {
   int64_t rejected_inputs() const;
   // feed the wire refused at the catheter exit in the last step (0 without guidewire)
   double refused_feed_m() const;
+
+  // read-only views for tests and benchmarks; null when the effect is not listed
+  const ChainMailWire* guidewire_state() const;
+  const WallContact* contact_state() const;
+  const CoulombFriction* friction_state() const;
+  const LumenQuery* lumen() const;  // the contact geometry (null without vessel_contact)
+  const VesselTree& vessel_tree() const;  // empty without guidewire
 
  private:
   struct Impl;

@@ -67,8 +67,11 @@ class ChainMailWire {
   void advance(Frame& f, const Eigen::Vector3d& t_new) const;
   int first_free_for(double fed_m) const;
   void place_kinematic();
+  void advance_along_track(double delta_m);
   void compute_frames();
-  void forward_sweep(const LumenQuery* lumen, double wall_margin_m);
+  // returns the largest wall distance left at a swept node (-1 without a lumen)
+  double forward_sweep(const LumenQuery* lumen, double wall_margin_m);
+  void backward_contact_sweep(const LumenQuery& lumen, double wall_margin_m);
   void bend_pass(bool forward);
   void length_pass();
   void backward_sweep_compression();
@@ -80,8 +83,12 @@ class ChainMailWire {
   Eigen::Vector3d ref_b_;  // reference director at the exit, fixed in the world
   std::vector<LinkSpec> links_;
   std::vector<Eigen::Vector3d> nodes_, start_;
+  std::vector<Eigen::Vector3d> track_;  // scratch: the exit then the free nodes of the step start
+  std::vector<double> cum_;             // scratch: arc length along track_
   std::vector<Eigen::Vector3d> frame_t_, frame_m_;  // per link, refreshed by compute_frames()
   int first_free_ = 0;
+  int tip_links_ = 0;
+  bool tip_touching_ = false;  // a tip node lay at the wall after the last contact-aware sweep
   double commanded_feed_ = 0.0, fed_ = 0.0, rotation_ = 0.0;
   int64_t recoveries_ = 0;
 };

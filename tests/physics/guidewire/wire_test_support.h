@@ -1,0 +1,93 @@
+#pragma once
+// Shared pieces of the guidewire tests: the default scene's world, scripted trainee motions,
+// and independent checks of the chain-mail limits and of the wall margin.
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "physics/guidewire/chain_mail_wire.h"
+#include "physics/guidewire/lumen_query.h"
+#include "physics/world.h"
+
+namespace pcisim::physics::test {
+
+inline constexpr double kDeg = std::numbers::pi / 180.0;
+
+// scenes/default.json: 30 Hz, 200 segments, 300 mm wire, 12 mm tip at 45 deg, all effects
+inline WorldSpec default_scene() {
+  WorldSpec s;
+  s.step_s = 1.0 / 30.0;
+  s.anatomy.seed = 1;
+  s.guidewire = GuidewireParams{};
+  s.vessel_contact = VesselContactParams{};
+  s.friction = FrictionParams{};
+  s.blood_flow = BloodFlowParams{};
+  return s;
+}
+
+// a ramp of `amount` that starts at `at_s` and lasts `over_s`
+inline double ramp(double t, double at_s, double over_s, double amount) {
+  if (t <= at_s) return 0.0;
+  return amount * std::min((t - at_s) / over_s, 1.0);
+}
+
+// the built-in trainee's shape (clients/bridge/trainee_script.cc): insert 8 mm over 3 s, turn
+// `turn_deg` over 2 s, insert `advance_mm` over 10 s, pull 5 mm over 1 s
+struct BranchScript {
+  double turn_deg = 90.0;
+  double advance_mm = 50.0;
+  double pull_mm = 5.0;
+  double end_s() const { return 19.5; }
+  InstrumentInput at(double t) const {
+    InstrumentInput in;
+    in.insertion_m = 1e-3 * (ramp(t, 0.5, 3.0, 8.0) + ramp(t, 7.0, 10.0, advance_mm) - ramp(t, 17.5, 1.0, pull_mm));
+    in.rotation_rad = ramp(t, 4.0, 2.0, turn_deg * kDeg);
+    in.insertion_rate_m_per_s = 0.0;
+    in.rotation_rate_rad_per_s = 0.0;
+    return in;
+  }
+};
+
+struct LimitReport {
+  double worst_length_ratio_excess = 0.0;  // how far a link length left [alpha_min, alpha_max] h, m
+  double worst_shear_excess_rad = 0.0;     // how far a link left its shear cone, rad
+  int bad_links = 0;
+};
+
+// every free link (and the one leaving the catheter) against eqs 2-4 as valid_region.h reads
+// them: length within [alpha_min, alpha_max] times rest, direction within beta of its rest axis
+inline LimitReport check_limits(const ChainMailWire& w, double tol_m = 1e-9, double tol_rad = 1e-6) {
+  LimitReport r;
+  const auto x = w.nodes_m();
+  const auto links = w.links();
+  for (int j = std::max(w.first_free_node() - 1, 0); j < w.segment_count(); ++j) {
+    const Eigen::Vector3d d = x[j + 1] - x[j];
+    const double len = d.norm();
+    const double over = std::max(links[j].length_min_m - len, len - links[j].length_max_m);
+    const Eigen::Vector3d axis = w.rest_axis(j);
+    const double angle = len > 0.0 ? std::acos(std::clamp(d.dot(axis) / len, -1.0, 1.0)) : std::numbers::pi;
+    const double shear = angle - links[j].beta_rad;
+    r.worst_length_ratio_excess = std::max(r.worst_length_ratio_excess, over);
+    r.worst_shear_excess_rad = std::max(r.worst_shear_excess_rad, shear);
+    if (over > tol_m || shear > tol_rad) ++r.bad_links;
+  }
+  return r;
+}
+
+// largest signed wall distance over the free nodes (> 0: outside the lumen)
+inline double worst_wall_distance_m(const ChainMailWire& w, const LumenQuery& lumen) {
+  double worst = -1.0;
+  const auto x = w.nodes_m();
+  for (int i = w.first_free_node(); i < w.node_count(); ++i) worst = std::max(worst, lumen.sample(x[i]).distance_m);
+  return worst;
+}
+
+inline bool all_finite_and_bounded(const ChainMailWire& w, double bound_m = 0.5) {
+  for (const auto& p : w.nodes_m()) {
+    if (!p.allFinite() || p.norm() > bound_m) return false;
+  }
+  return true;
+}
+
+}  // namespace pcisim::physics::test

@@ -13,7 +13,7 @@
 #include "physics/guidewire/coulomb_friction.h"
 #include "physics/guidewire/input_guard.h"
 #include "physics/guidewire/link_spec.h"
-#include "physics/guidewire/tube_lumen.h"
+#include "physics/guidewire/sdf_lumen.h"
 #include "physics/guidewire/wall_contact.h"
 #include "physics/guidewire/wire_feedback.h"
 #include "physics/vessel/coronary_phantom.h"
@@ -105,8 +105,8 @@ World::World(const WorldSpec& spec) : impl_(std::make_unique<Impl>()) {
   require(path.size() >= 2, "anatomy: the phantom has no guide catheter path (aorta and LM needed)");
   w.wire.emplace(*spec.guidewire, CatheterPath(std::move(path)));
   if (spec.vessel_contact) {
-    // the analytic tube lumen stands in until the SDF of the lofted lumen is available
-    w.lumen = std::make_unique<TubeLumen>(w.tree);
+    // eq 15 against the SDF of the lofted lumen at the scene's spacing
+    w.lumen = std::make_unique<SdfLumen>(w.tree, spec.vessel_contact->sdf_spacing_m);
     w.contact.emplace(*spec.vessel_contact, *w.lumen, w.wire->node_count());
   }
   if (spec.friction) w.friction.emplace(*spec.friction, w.wire->node_count());

@@ -1,0 +1,22 @@
+#include "physics/guidewire/sdf_lumen.h"
+
+#include "physics/sdf/lumen_sdf.h"
+
+namespace pcisim::physics {
+
+SdfLumen::SdfLumen(const VesselTree& tree, double spacing_m)
+    : sdf_(build_lumen_sdf(tree, spacing_m)), far_(tree) {
+  // the last cell before the band's clamp still has a true gradient
+  trust_m_ = sdf_.band_m() - sdf_.spacing_m();
+}
+
+WallSample SdfLumen::sample(const Eigen::Vector3d& p_m) const {
+  const SdfSample s = sdf_.sample(p_m);
+  if (!s.inside_grid || s.distance_m > trust_m_) return far_.sample(p_m);
+  WallSample w;
+  w.distance_m = s.distance_m;
+  w.normal = s.gradient;
+  return w;
+}
+
+}  // namespace pcisim::physics

@@ -2,9 +2,14 @@
 
 #include <Eigen/LU>
 #include <algorithm>
+#include <cstdlib>
+#include <new>
+#include <sys/mman.h>
 #include <stdexcept>
 
 namespace pcisim::xray {
+
+void AttenuationVolume::FreeMu::operator()(float* p) const { std::free(p); }
 
 AttenuationVolume::AttenuationVolume(const Volume& v, const AttenuationParams& params) : params_(params) {
   if (const std::string bad = validate(v); !bad.empty()) throw std::invalid_argument("AttenuationVolume: " + bad);
@@ -13,10 +18,21 @@ AttenuationVolume::AttenuationVolume(const Volume& v, const AttenuationParams& p
     dims_[a] = static_cast<int>(v.dims[a]);
     padded_[a] = dims_[a] + 2;
   }
-  mu_.assign(int64_t(padded_[0]) * padded_[1] * padded_[2], 0.0f);
+  mu_count_ = size_t(padded_[0]) * padded_[1] * padded_[2];
+  {
+    constexpr size_t kHuge = size_t(2) << 20;
+    const size_t bytes = (mu_count_ * sizeof(float) + kHuge - 1) / kHuge * kHuge;
+    void* p = std::aligned_alloc(kHuge, bytes);
+    if (!p) throw std::bad_alloc();
+#ifdef MADV_HUGEPAGE
+    madvise(p, bytes, MADV_HUGEPAGE);  // a hint; without THP the buffer works the same
+#endif
+    mu_.reset(static_cast<float*>(p));
+    std::fill(mu_.get(), mu_.get() + mu_count_, 0.0f);
+  }
   for (int k = 0; k < dims_[2]; ++k) {
     for (int j = 0; j < dims_[1]; ++j) {
-      float* row = mu_.data() + 1 + padded_[0] * ((j + 1) + int64_t(padded_[1]) * (k + 1));
+      float* row = mu_.get() + 1 + padded_[0] * ((j + 1) + int64_t(padded_[1]) * (k + 1));
       for (int i = 0; i < dims_[0]; ++i) row[i] = static_cast<float>(mu_of_hu(v.hu(i, j, k)));
     }
   }
@@ -33,7 +49,7 @@ AttenuationVolume::AttenuationVolume(const Volume& v, const AttenuationParams& p
         float m = 0.0f;
         for (int k = bk * b; k <= std::min((bk + 1) * b, padded_[2] - 1); ++k) {
           for (int j = bj * b; j <= std::min((bj + 1) * b, padded_[1] - 1); ++j) {
-            const float* row = mu_.data() + padded_[0] * (j + int64_t(padded_[1]) * k);
+            const float* row = mu_.get() + padded_[0] * (j + int64_t(padded_[1]) * k);
             for (int i = bi * b; i <= std::min((bi + 1) * b, padded_[0] - 1); ++i) m = std::max(m, row[i]);
           }
         }

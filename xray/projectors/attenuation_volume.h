@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "xray/volume/volume.h"
@@ -31,7 +32,8 @@ class AttenuationVolume {
   const std::array<int, 3>& dims() const { return dims_; }
   // padded voxels: dims + 2, voxel (i, j, k) of the volume at padded (i+1, j+1, k+1)
   const std::array<int, 3>& padded_dims() const { return padded_; }
-  const std::vector<float>& padded_mu() const { return mu_; }
+  const float* padded_mu() const { return mu_.get(); }
+  size_t padded_count() const { return mu_count_; }
   float mu(int i, int j, int k) const {  // volume index, no bounds check
     return mu_[(i + 1) + padded_[0] * ((j + 1) + int64_t(padded_[1]) * (k + 1))];
   }
@@ -49,7 +51,14 @@ class AttenuationVolume {
  private:
   AttenuationParams params_;
   std::array<int, 3> dims_{}, padded_{}, brick_dims_{};
-  std::vector<float> mu_, brick_max_;
+  // 2 MiB aligned and marked for transparent huge pages: a ray crosses hundreds of 4 KiB pages
+  // (one per z slice), and TLB misses otherwise dominate the exact traversal
+  struct FreeMu {
+    void operator()(float* p) const;
+  };
+  std::unique_ptr<float[], FreeMu> mu_;
+  size_t mu_count_ = 0;
+  std::vector<float> brick_max_;
   Eigen::Matrix3d index_from_physical_;
   Eigen::Vector3d index_offset_;
 };

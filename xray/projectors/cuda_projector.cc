@@ -17,7 +17,7 @@ CudaTrilinearProjector::CudaTrilinearProjector(const AttenuationVolume& volume, 
   std::string why;
   if (!available(&why)) throw std::runtime_error("CudaTrilinearProjector: " + why);
   set_options(options);
-  grid_ = cuda::upload(grid_view(volume), volume.padded_mu().size(), volume.brick_max().size());
+  grid_ = cuda::upload(grid_view(volume), volume.padded_count(), volume.brick_max().size());
   device_name_ = cuda::device_name();
 }
 

@@ -1,5 +1,7 @@
 #include "xray/projectors/siddon_projector.h"
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "xray/projectors/ray_march.h"
@@ -16,7 +18,7 @@ double exact_line_integral(const AttenuationVolume& volume, const Eigen::Vector3
   const double box[3] = {double(n[0]), double(n[1]), double(n[2])};
   double ta = 0.0, tb = 1.0;
   if (!ray::clip_to_box(q0, dq, box, &ta, &tb)) return 0.0;
-  const float* mu = volume.padded_mu().data();
+  const float* mu = volume.padded_mu();
   const int64_t px = volume.padded_dims()[0], pxy = px * volume.padded_dims()[1];
   double sum = 0.0;
   auto visit = [&](int i, int j, int k, double t_in, double t_out) {
@@ -27,16 +29,163 @@ double exact_line_integral(const AttenuationVolume& volume, const Eigen::Vector3
   return sum * (b_mm - a_mm).norm();
 }
 
+namespace {
+
+// one ray's walk through the voxels of one stretch [t, tb] (cell coordinates q = index + 1/2):
+// a linear index stepped by strides, a branch-free choice of the next plane, no bounds checks
+// (the zero border absorbs a rounding step past the box edge). Tight form of traverse_cells.
+struct VoxelWalk {
+  int64_t idx = 0, step[3] = {0, 0, 0};
+  double t_next[3] = {0, 0, 0}, t_delta[3] = {0, 0, 0};
+  double t = 0, tb = 0, sum = 0;
+
+  void start(const int64_t stride[3], const int n[3], const double q0[3], const double dq[3], double ta, double t_end) {
+    idx = 0;
+    for (int a = 0; a < 3; ++a) {
+      const double p = q0[a] + ta * dq[a];
+      int c = static_cast<int>(std::floor(p));
+      if (dq[a] < 0 && double(c) == p) --c;
+      c = std::clamp(c, 0, n[a] - 1);
+      idx += (c + 1) * stride[a];  // padded index
+      if (dq[a] > 0) {
+        step[a] = stride[a];
+        t_delta[a] = 1.0 / dq[a];
+        t_next[a] = (c + 1 - q0[a]) / dq[a];
+      } else if (dq[a] < 0) {
+        step[a] = -stride[a];
+        t_delta[a] = -1.0 / dq[a];
+        t_next[a] = (c - q0[a]) / dq[a];
+      } else {
+        step[a] = 0;
+        t_delta[a] = 0;
+        t_next[a] = 1e300;
+      }
+    }
+    t = ta;
+    tb = t_end;
+    sum = 0;
+  }
+
+  // one voxel; false once the stretch is done
+  bool advance(const float* mu) {
+    if (!(t < tb)) return false;
+    const bool x_first = t_next[0] < t_next[1];
+    const double m01 = x_first ? t_next[0] : t_next[1];
+    const int a = t_next[2] < m01 ? 2 : (x_first ? 0 : 1);
+    const double tn = std::min(t_next[a], tb);
+    sum += double(mu[idx]) * (tn - t);
+    t = tn;
+    idx += step[a];
+    t_next[a] += t_delta[a];
+    return true;
+  }
+};
+
+// a ray split into stretches through non-empty bricks (empty ones add exactly 0)
+struct RayJob {
+  static constexpr int kMaxRuns = 24;
+  double q0[3], dq[3];
+  double len_mm = 0, sum = 0;
+  double runs[2 * kMaxRuns];
+  int n_runs = 0, run = 0;
+  int pixel = -1;
+};
+
+}  // namespace
+
 SiddonProjector::SiddonProjector(const AttenuationVolume& volume, int threads) : volume_(volume), pool_(threads) {}
 
 void SiddonProjector::project(const DetectorGeometry& g, Image* image) {
   if (image->width != g.width || image->height != g.height) {
     throw std::invalid_argument("SiddonProjector: image size differs from the detector's");
   }
+  const AttenuationVolume& v = volume_;
+  const float* mu = v.padded_mu();
+  const int64_t stride[3] = {1, v.padded_dims()[0], int64_t(v.padded_dims()[0]) * v.padded_dims()[1]};
+  const int* n = v.dims().data();
+  const double box[3] = {double(n[0]), double(n[1]), double(n[2])};
+  const double inv_b = 1.0 / v.brick_voxels();
+  const int* nb = v.brick_dims().data();
+  const float* brick_max = v.brick_max().data();
+  const Eigen::Matrix3d& m = v.index_from_physical();
+  const Eigen::Vector3d off = v.index_offset() + Eigen::Vector3d::Constant(0.5);
+  const Eigen::Vector3d qa = m * g.source_mm + off;
+
+  // fills job for pixel c of row r: clip, then walk the bricks and keep the non-empty stretches
+  auto plan = [&](int c, int r, RayJob* job) {
+    const Eigen::Vector3d p = g.pixel_center_mm(c, r);
+    const Eigen::Vector3d qb = m * p + off;
+    job->pixel = c;
+    job->len_mm = (p - g.source_mm).norm();
+    job->sum = 0;
+    job->n_runs = job->run = 0;
+    for (int a = 0; a < 3; ++a) {
+      job->q0[a] = qa[a];
+      job->dq[a] = qb[a] - qa[a];
+    }
+    double ta = 0.0, tb = 1.0;
+    if (!ray::clip_to_box(job->q0, job->dq, box, &ta, &tb)) return;
+    // bricks live in padded coordinates x = q + 1/2; a brick whose maximum is 0 holds only zero
+    // voxels for every point inside it, so its stretch of the ray adds exactly 0
+    const double b0[3] = {(job->q0[0] + 0.5) * inv_b, (job->q0[1] + 0.5) * inv_b, (job->q0[2] + 0.5) * inv_b};
+    const double db[3] = {job->dq[0] * inv_b, job->dq[1] * inv_b, job->dq[2] * inv_b};
+    bool open = false;
+    auto visit = [&](int i, int j, int k, double t_in, double t_out) {
+      if (brick_max[i + nb[0] * (j + int64_t(nb[1]) * k)] > 0.f) {
+        if (!open) {
+          if (job->n_runs == RayJob::kMaxRuns) {  // out of room: extend the last stretch (still exact)
+            --job->n_runs;
+          } else {
+            job->runs[2 * job->n_runs] = t_in;
+          }
+          open = true;
+        }
+        job->runs[2 * job->n_runs + 1] = t_out;
+      } else if (open) {
+        ++job->n_runs;
+        open = false;
+      }
+      return true;
+    };
+    ray::traverse_cells(b0, db, ta, tb, nb, visit);
+    if (open) ++job->n_runs;
+  };
+
+  // four rays walk side by side so their dependency chains overlap in the CPU
+  constexpr int kLanes = 4;
   auto row = [&](int r) {
     float* out = image->pixels.data() + static_cast<size_t>(r) * g.width;
-    for (int c = 0; c < g.width; ++c) {
-      out[c] = static_cast<float>(exact_line_integral(volume_, g.source_mm, g.pixel_center_mm(c, r)));
+    RayJob jobs[kLanes];
+    VoxelWalk walks[kLanes];
+    bool active[kLanes] = {};
+    int next = 0;
+    // gives lane l the next pixel that has something to walk; false when the row is done
+    auto feed = [&](int l) {
+      while (next < g.width) {
+        RayJob& job = jobs[l];
+        plan(next++, r, &job);
+        if (job.n_runs > 0) {
+          walks[l].start(stride, n, job.q0, job.dq, job.runs[0], job.runs[1]);
+          return true;
+        }
+        out[job.pixel] = 0.f;
+      }
+      return false;
+    };
+    int live = 0;
+    for (int l = 0; l < kLanes; ++l) live += (active[l] = feed(l));
+    while (live > 0) {
+      for (int l = 0; l < kLanes; ++l) {
+        if (!active[l] || walks[l].advance(mu)) continue;
+        RayJob& job = jobs[l];
+        job.sum += walks[l].sum;
+        if (++job.run < job.n_runs) {
+          walks[l].start(stride, n, job.q0, job.dq, job.runs[2 * job.run], job.runs[2 * job.run + 1]);
+          continue;
+        }
+        out[job.pixel] = static_cast<float>(job.sum * job.len_mm);
+        if (!(active[l] = feed(l))) --live;
+      }
     }
   };
   pool_.for_each_row(g.height, row);

@@ -4,7 +4,7 @@ namespace pcisim::xray {
 
 ray::GridView grid_view(const AttenuationVolume& volume) {
   ray::GridView g;
-  g.mu = volume.padded_mu().data();
+  g.mu = volume.padded_mu();
   g.nx = volume.padded_dims()[0];
   g.ny = volume.padded_dims()[1];
   g.nz = volume.padded_dims()[2];

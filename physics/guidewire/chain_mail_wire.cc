@@ -36,7 +36,7 @@ Eigen::Vector3d direction(const Eigen::Vector3d& a, const Eigen::Vector3d& b, co
 // joint already at its shear limit against a wall), the region's boundary is searched for the
 // point deepest inside the lumen. Returns the wall distance at the final q.
 double place_inside(const Eigen::Vector3d& sponsor, const ValidRegion& r, const LumenQuery& lumen, double eps,
-                    Eigen::Vector3d& q) {
+                    bool may_swing, Eigen::Vector3d& q) {
   const Eigen::Vector3d q0 = q;
   WallSample s = lumen.sample(q);
   for (int it = 0; it < 3 && s.distance_m > -eps; ++it) {
@@ -64,16 +64,22 @@ double place_inside(const Eigen::Vector3d& sponsor, const ValidRegion& r, const 
   const Eigen::Vector3d u = r.axis.unitOrthogonal(), v = r.axis.cross(u);
   Eigen::Vector3d best = q;
   double best_d = s.distance_m, best_gap = std::numeric_limits<double>::infinity();
+  const double max_gap_sq =
+      may_swing ? std::numeric_limits<double>::infinity() : 0.25 * r.length_min_m * r.length_min_m;
   bool found_inside = false;
-  for (int ring = 1; ring <= 4; ++ring) {
-    const double cone = r.beta_rad * ring / 4.0;
-    for (int k = 0; k < 16; ++k) {
+  const int rings = may_swing ? 8 : 4, lengths = may_swing ? 3 : 1;
+  for (int li = 0; li < lengths; ++li)
+  for (int ring = 0; ring <= rings; ++ring) {
+    const double cone = r.beta_rad * ring / rings;
+    const double reach = len + (r.length_max_m - len) * li / std::max(lengths - 1, 1);
+    for (int k = 0; k < (ring == 0 ? 1 : 16); ++k) {
       const double phi = k * (std::numbers::pi / 8.0);
       const Eigen::Vector3d dir = std::cos(cone) * r.axis + std::sin(cone) * (std::cos(phi) * u + std::sin(phi) * v);
-      const Eigen::Vector3d c = sponsor + len * dir;
+      const Eigen::Vector3d c = sponsor + reach * dir;
       const double d = lumen.sample(c).distance_m;
-      if (lumen.sample(0.5 * (sponsor + c)).distance_m > 0.0) continue;
       const double gap = (c - q0).squaredNorm();
+      if (gap > max_gap_sq) continue;  // a swing across the cone flings everything distal
+      if (lumen.sample(0.5 * (sponsor + c)).distance_m > 0.0) continue;
       if (d <= eps) {
         if (!found_inside || gap < best_gap) {
           found_inside = true;
@@ -164,7 +170,7 @@ void ChainMailWire::begin_step(double insertion_m, double rotation_rad) {
   const double fed_before = fed_;
   fed_ = feed;
   advance_along_track(fed_ - fed_before);
-  forward_sweep(nullptr, 0.0);
+  forward_sweep(nullptr, 0.0, false);
 }
 
 void ChainMailWire::advance_along_track(double delta_m) {
@@ -224,7 +230,7 @@ void ChainMailWire::compute_frames() {
   }
 }
 
-double ChainMailWire::forward_sweep(const LumenQuery* lumen, double eps) {
+double ChainMailWire::forward_sweep(const LumenQuery* lumen, double eps, bool may_swing) {
   // eqs 1-4: the last kinematic node sponsors the first free one, which sponsors the next, ...
   // eqs 2-4 bound each world axis separately; valid_region.cc reads them in the link's frame
   double worst = -1.0;
@@ -242,7 +248,7 @@ double ChainMailWire::forward_sweep(const LumenQuery* lumen, double eps) {
     Eigen::Vector3d& q = nodes_[j + 1];
     clamp_to_valid_region(nodes_[j], r, q);
     if (lumen) {
-      const double d = place_inside(nodes_[j], r, *lumen, eps, q);
+      const double d = place_inside(nodes_[j], r, *lumen, eps, may_swing, q);
       worst = std::max(worst, d);
       // within a margin's width of the wall counts as touching
       if (l.tip && d > -2.0 * eps - 1e-6) tip_touching_ = true;
@@ -279,8 +285,11 @@ void ChainMailWire::backward_contact_sweep(const LumenQuery& lumen, double eps) 
     }
     r.length_min_m = l.length_min_m;
     r.length_max_m = l.length_max_m;
-    clamp_to_valid_region(nodes_[j + 1], r, nodes_[j]);
-    place_inside(nodes_[j + 1], r, lumen, eps, nodes_[j]);
+    // a neighbour already valid and inside stops the propagation (chain-mail, fig. 3)
+    const bool moved = clamp_to_valid_region(nodes_[j + 1], r, nodes_[j]);
+    const double d = lumen.sample(nodes_[j]).distance_m;
+    if (!moved && d <= eps) break;
+    place_inside(nodes_[j + 1], r, lumen, eps, false, nodes_[j]);
   }
 }
 
@@ -380,10 +389,11 @@ void ChainMailWire::restore_limits(const LumenQuery* lumen, double wall_margin_m
       }
     }
   }
-  const double worst = forward_sweep(lumen, wall_margin_m);
+  // what a forward sweep leaves outside is worked back from the tip, then swept forward again
+  const double worst = forward_sweep(lumen, wall_margin_m, true);
   if (lumen && worst > wall_margin_m) {
     backward_contact_sweep(*lumen, wall_margin_m);
-    forward_sweep(lumen, wall_margin_m);
+    forward_sweep(lumen, wall_margin_m, true);
   }
 }
 

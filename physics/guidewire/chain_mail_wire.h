@@ -70,7 +70,7 @@ class ChainMailWire {
   void advance_along_track(double delta_m);
   void compute_frames();
   // returns the largest wall distance left at a swept node (-1 without a lumen)
-  double forward_sweep(const LumenQuery* lumen, double wall_margin_m);
+  double forward_sweep(const LumenQuery* lumen, double wall_margin_m, bool may_swing);
   void backward_contact_sweep(const LumenQuery& lumen, double wall_margin_m);
   void bend_pass(bool forward);
   void length_pass();

@@ -151,8 +151,8 @@ void SiddonProjector::project(const DetectorGeometry& g, Image* image) {
     if (open) ++job->n_runs;
   };
 
-  // four rays walk side by side so their dependency chains overlap in the CPU
-  constexpr int kLanes = 4;
+  // eight rays walk side by side so their dependency chains and cache misses overlap
+  constexpr int kLanes = 8;
   auto row = [&](int r) {
     float* out = image->pixels.data() + static_cast<size_t>(r) * g.width;
     RayJob jobs[kLanes];

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -44,6 +45,7 @@ struct Row {
   int detector = 0;
   double step = 0;        // 0 for exact
   double median_ms = 0, p99_ms = 0;
+  double cpu_ms = 0;  // process CPU time per frame (all threads); wall ~ cpu / threads when no one else runs
   int frames = 0;
   double rmse_rel = 0, max_rel = 0;  // vs exact, relative to the largest exact line integral
 };
@@ -56,15 +58,24 @@ double percentile(std::vector<double> v, double q) {
   return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v.back();
 }
 
+double process_cpu_ms() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+// wall ms of each frame; *cpu_ms: mean process CPU ms per frame
 template <class Fn>
-std::vector<double> time_frames(int warmup, int frames, Fn&& fn) {
+std::vector<double> time_frames(int warmup, int frames, double* cpu_ms, Fn&& fn) {
   for (int i = 0; i < warmup; ++i) fn();
   std::vector<double> ms;
+  const double c0 = process_cpu_ms();
   for (int i = 0; i < frames; ++i) {
     const auto t0 = std::chrono::steady_clock::now();
     fn();
     ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   }
+  *cpu_ms = (process_cpu_ms() - c0) / frames;
   return ms;
 }
 
@@ -143,26 +154,26 @@ int run(const std::vector<std::string>& args) {
     img.resize(n, n);
     {
       Row r{"exact", n, 0};
-      const auto ms = time_frames(1, cpu_frames, [&] { exact.project(g, &ref); });
+      const auto ms = time_frames(1, cpu_frames, &r.cpu_ms, [&] { exact.project(g, &ref); });
       r.median_ms = percentile(ms, 0.5);
       r.p99_ms = percentile(ms, 0.99);
       r.frames = cpu_frames;
       rows.push_back(r);
-      std::printf("xray: %4d^2 exact          %9.1f ms (p99 %.1f)\n", n, r.median_ms, r.p99_ms);
+      std::printf("xray: %4d^2 exact          %9.1f ms (p99 %.1f, cpu %.1f)\n", n, r.median_ms, r.p99_ms, r.cpu_ms);
     }
     const bool cpu_here = !o.quick || n == 512;
     for (const double step : cpu_steps) {
       if (!cpu_here) break;
       cpu.set_options({.step_voxels = step, .skip_empty = true});
       Row r{"cpu", n, step};
-      const auto ms = time_frames(1, cpu_frames, [&] { cpu.project(g, &img); });
+      const auto ms = time_frames(1, cpu_frames, &r.cpu_ms, [&] { cpu.project(g, &img); });
       r.median_ms = percentile(ms, 0.5);
       r.p99_ms = percentile(ms, 0.99);
       r.frames = cpu_frames;
       errors(img, ref, &r);
       rows.push_back(r);
-      std::printf("xray: %4d^2 cpu  step %.2f %9.1f ms (p99 %.1f)  rmse %.4f %%  max %.4f %%\n", n, step, r.median_ms,
-                  r.p99_ms, 100 * r.rmse_rel, 100 * r.max_rel);
+      std::printf("xray: %4d^2 cpu  step %.2f %9.1f ms (p99 %.1f, cpu %.1f)  rmse %.4f %%  max %.4f %%\n", n, step,
+                  r.median_ms, r.p99_ms, r.cpu_ms, 100 * r.rmse_rel, 100 * r.max_rel);
     }
 #ifdef PCISIM_HAVE_CUDA
     if (gpu) {
@@ -198,8 +209,8 @@ int run(const std::vector<std::string>& args) {
     for (size_t i = 0; i < rows.size(); ++i) {
       const Row& r = rows[i];
       f << fmt::format("    {{\"projector\": \"{}\", \"detector\": {}, \"step_voxels\": {}, \"median_ms\": {:.4f}, "
-                       "\"p99_ms\": {:.4f}, \"frames\": {}, \"rmse_rel\": {:.6g}, \"max_rel\": {:.6g}}}{}\n",
-                       r.projector, r.detector, r.step, r.median_ms, r.p99_ms, r.frames, r.rmse_rel, r.max_rel,
+                       "\"p99_ms\": {:.4f}, \"cpu_ms\": {:.2f}, \"frames\": {}, \"rmse_rel\": {:.6g}, \"max_rel\": {:.6g}}}{}\n",
+                       r.projector, r.detector, r.step, r.median_ms, r.p99_ms, r.cpu_ms, r.frames, r.rmse_rel, r.max_rel,
                        i + 1 < rows.size() ? "," : "");
     }
     f << "  ]\n}\n";
@@ -216,13 +227,16 @@ int run(const std::vector<std::string>& args) {
          "1024^2 at 0.2 mm (same field). mu_water 0.02 /mm, HU < -800 is air.\n\n";
     f << "Errors are against the exact (Siddon) projection of the same geometry: RMSE and worst pixel, relative to the "
          "largest exact line integral. CPU times: wall clock per frame, median and p99 of "
-      << cpu_frames << " frames after one warm-up (p99 of so few frames is their maximum). GPU times: kernel only, "
+      << cpu_frames << " frames after one warm-up (p99 of so few frames is their maximum), and the process CPU time "
+         "per frame (wall x threads when nothing else runs; more wall than that means the cores were shared). "
+         "GPU times: kernel only, "
          "CUDA events, median and p99 of 100-200 launches after 10 warm-up launches.\n\n";
-    f << "| projector | detector | step (voxel) | median ms | p99 ms | RMSE % of max | max % of max |\n";
-    f << "|---|---|---|---|---|---|---|\n";
+    f << "| projector | detector | step (voxel) | median ms | p99 ms | CPU ms (all threads) | RMSE % of max | max % of max |\n";
+    f << "|---|---|---|---|---|---|---|---|\n";
     for (const Row& r : rows) {
-      f << fmt::format("| {} | {}^2 | {} | {:.3f} | {:.3f} | {} | {} |\n", r.projector, r.detector,
+      f << fmt::format("| {} | {}^2 | {} | {:.3f} | {:.3f} | {} | {} | {} |\n", r.projector, r.detector,
                        r.projector == "exact" ? std::string("-") : fmt::format("{}", r.step), r.median_ms, r.p99_ms,
+                       r.projector == "cuda" ? std::string("-") : fmt::format("{:.0f}", r.cpu_ms),
                        r.projector == "exact" ? std::string("(reference)") : fmt::format("{:.4f}", 100 * r.rmse_rel),
                        r.projector == "exact" ? std::string("-") : fmt::format("{:.4f}", 100 * r.max_rel));
     }

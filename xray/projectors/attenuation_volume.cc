@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cstdlib>
 #include <new>
-#include <sys/mman.h>
 #include <stdexcept>
 
 namespace pcisim::xray {
@@ -24,9 +23,6 @@ AttenuationVolume::AttenuationVolume(const Volume& v, const AttenuationParams& p
     const size_t bytes = (mu_count_ * sizeof(float) + kHuge - 1) / kHuge * kHuge;
     void* p = std::aligned_alloc(kHuge, bytes);
     if (!p) throw std::bad_alloc();
-#ifdef MADV_HUGEPAGE
-    madvise(p, bytes, MADV_HUGEPAGE);  // a hint; without THP the buffer works the same
-#endif
     mu_.reset(static_cast<float*>(p));
     std::fill(mu_.get(), mu_.get() + mu_count_, 0.0f);
   }

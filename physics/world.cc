@@ -58,7 +58,7 @@ void validate(const WorldSpec& s) {
 struct World::Impl {
   WorldSpec spec;
   VesselTree tree;
-  std::unique_ptr<LumenQuery> lumen;
+  std::shared_ptr<const LumenQuery> lumen;
   std::optional<ChainMailWire> wire;
   std::optional<WallContact> contact;
   std::optional<CoulombFriction> friction;
@@ -77,7 +77,10 @@ struct World::Impl {
   }
 };
 
-World::World(const WorldSpec& spec) : impl_(std::make_unique<Impl>()) {
+World::World(const WorldSpec& spec) : World(spec, nullptr) {}
+
+World::World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_geometry)
+    : impl_(std::make_unique<Impl>()) {
   validate(spec);
   Impl& w = *impl_;
   w.spec = spec;
@@ -106,7 +109,8 @@ World::World(const WorldSpec& spec) : impl_(std::make_unique<Impl>()) {
   w.wire.emplace(*spec.guidewire, CatheterPath(std::move(path)));
   if (spec.vessel_contact) {
     // eq 15 against the SDF of the lofted lumen at the scene's spacing
-    w.lumen = std::make_unique<SdfLumen>(w.tree, spec.vessel_contact->sdf_spacing_m);
+    w.lumen = contact_geometry ? std::move(contact_geometry)
+                               : std::make_shared<SdfLumen>(w.tree, spec.vessel_contact->sdf_spacing_m);
     w.contact.emplace(*spec.vessel_contact, *w.lumen, w.wire->node_count());
   }
   if (spec.friction) w.friction.emplace(*spec.friction, w.wire->node_count());

@@ -29,6 +29,10 @@ class World {
  public:
   // throws std::invalid_argument naming the bad field when the spec cannot be built
   explicit World(const WorldSpec& spec);
+  // the same, with wall contact against `contact_geometry` instead of the SDF the spec would
+  // build (benchmarks and tests share one field across worlds); it must describe the same
+  // anatomy. Null builds it as above.
+  World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_geometry);
   ~World();
   World(const World&) = delete;
   World& operator=(const World&) = delete;

@@ -141,7 +141,7 @@ void SiddonProjector::project(const DetectorGeometry& g, Image* image) {
   auto plan = [&](int c, int r, RayJob* job) {
     const Eigen::Vector3d p = g.pixel_center_mm(c, r);
     const Eigen::Vector3d qb = m * p + off;
-    job->pixel = c;
+    job->pixel = r * g.width + c;
     job->len_mm = (p - g.source_mm).norm();
     job->sum = 0;
     job->n_runs = job->run = 0;
@@ -179,17 +179,24 @@ void SiddonProjector::project(const DetectorGeometry& g, Image* image) {
 
   // eight rays walk side by side so their cache misses overlap
   constexpr int kLanes = 8;
-  auto row = [&](int r) {
-    float* out = image->pixels.data() + static_cast<size_t>(r) * g.width;
+  // jobs are 16 x 16 pixel tiles: neighbouring rays in both image directions cross the same
+  // voxels, and a tile's rays follow each other closely enough to find them still in cache
+  constexpr int kTile = 16;
+  const int tiles_x = (g.width + kTile - 1) / kTile, tiles_y = (g.height + kTile - 1) / kTile;
+  float* out = image->pixels.data();
+  auto tile = [&](int t) {
+    const int c0 = (t % tiles_x) * kTile, r0 = (t / tiles_x) * kTile;
+    const int tw = std::min(g.width, c0 + kTile) - c0, count = tw * (std::min(g.height, r0 + kTile) - r0);
     RayJob jobs[kLanes];
     VoxelWalk walks[kLanes];
     bool active[kLanes] = {};
     int next = 0;
-    // gives lane l the next pixel that has something to walk; false when the row is done
+    // gives lane l the tile's next pixel that has something to walk; false when the tile is done
     auto feed = [&](int l) {
-      while (next < g.width) {
+      while (next < count) {
         RayJob& job = jobs[l];
-        plan(next++, r, &job);
+        plan(c0 + next % tw, r0 + next / tw, &job);
+        ++next;
         if (job.n_runs > 0) {
           walks[l].start(stride, n, job.q0, job.dq, job.runs[0], job.runs[1]);
           return true;
@@ -214,7 +221,7 @@ void SiddonProjector::project(const DetectorGeometry& g, Image* image) {
       }
     }
   };
-  pool_.for_each_row(g.height, row);
+  pool_.for_each_row(tiles_x * tiles_y, tile);
 }
 
 }  // namespace pcisim::xray

@@ -43,7 +43,7 @@ BridgeStats Bridge::run(const std::atomic<bool>& stop) {
   bool waiting = options_.wait_for_server_s > 0;
   bool was_fault = false;
   server::DeadlineSchedule schedule(start_ns, period_ns);
-  int64_t next_log_ns = start_ns + 1'000'000'000, last_publish_ns = start_ns;
+  int64_t next_log_ns = start_ns + 1'000'000'000, first_publish_ns = 0, last_publish_ns = start_ns;
   for (int64_t seq = 0; !stop; ++seq) {
     const int64_t now_ns = monotonic_ns();
     if (waiting && (forces_received_ > 0 || (now_ns - start_ns) * 1e-9 > options_.wait_for_server_s)) {
@@ -75,6 +75,7 @@ BridgeStats Bridge::run(const std::atomic<bool>& stop) {
     m.rotation_rate_rad_s = r.rotation_rate_rad_s;
     lcm_.publish(protocol::kInstrumentChannel, &m);
     ++stats.published;
+    if (!first_publish_ns) first_publish_ns = now_ns;
     last_publish_ns = now_ns;
 
     if (options_.log_each_second && !waiting && now_ns >= next_log_ns) {
@@ -89,7 +90,7 @@ BridgeStats Bridge::run(const std::atomic<bool>& stop) {
   }
   done = true;
   rx.join();
-  stats.elapsed_s = (last_publish_ns - start_ns) * 1e-9;
+  stats.elapsed_s = first_publish_ns ? (last_publish_ns - first_publish_ns) * 1e-9 : 0.0;
   stats.forces_received = forces_received_;
   stats.forces_bad = forces_bad_;
   stats.last_force_n = last_force_n_;

@@ -22,7 +22,7 @@ struct BridgeOptions {
 struct BridgeStats {
   int64_t published = 0, fault_samples = 0;
   int64_t forces_received = 0, forces_bad = 0;
-  double elapsed_s = 0.0;  // from the device clock's start to the last publish
+  double elapsed_s = 0.0;  // from the first publish to the last (waiting for the server included)
   double last_force_n = 0.0, last_torque_nmm = 0.0;
 };
 

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "physics/vessel/coronary_phantom.h"
+#include "physics/vessel/vessel_tree.h"
 
 // a counting global operator new: step() must not reach it
 #pragma GCC diagnostic ignored "-Wmismatched-new-delete"
@@ -75,6 +76,23 @@ TEST(World, BuildsOnlyListedEffectsInStepOrder) {
   EXPECT_EQ(cost_names(World(s)), (std::vector<std::string>{"guidewire", "blood_flow", "vessel_contact"}));
   EXPECT_EQ(cost_names(World(full_spec())),
             (std::vector<std::string>{"guidewire", "blood_flow", "vessel_contact", "friction"}));
+}
+
+TEST(World, UnlistedEffectsAreNeverConstructed) {
+  WorldSpec s;
+  s.guidewire = GuidewireParams{};
+  World wire_only(s);
+  EXPECT_NE(wire_only.guidewire_state(), nullptr);
+  EXPECT_EQ(wire_only.contact_state(), nullptr);
+  EXPECT_EQ(wire_only.lumen(), nullptr);  // no SDF built either
+  EXPECT_EQ(wire_only.friction_state(), nullptr);
+  World empty(WorldSpec{});
+  EXPECT_EQ(empty.guidewire_state(), nullptr);
+  EXPECT_TRUE(empty.vessel_tree().branches.empty());  // not even the anatomy
+  World full(full_spec());
+  EXPECT_NE(full.contact_state(), nullptr);
+  EXPECT_NE(full.lumen(), nullptr);
+  EXPECT_NE(full.friction_state(), nullptr);
 }
 
 TEST(World, DependencyViolationsNameTheEffect) {

@@ -37,7 +37,8 @@ void validate(const WorldSpec& s) {
   require(!s.blood_flow || s.guidewire, "blood_flow: needs guidewire");
   if (s.guidewire) validate(*s.guidewire);
   if (const auto& c = s.vessel_contact) {
-    require(in(c->sdf_spacing_m, 1e-5, 5e-3), "vessel_contact.sdf_spacing_m: expected [1e-5, 5e-3] m");
+    // finer than 0.05 mm the field of the whole tree outgrows memory (0.1 mm: ~140 MB)
+    require(in(c->sdf_spacing_m, 5e-5, 2e-3), "vessel_contact.sdf_spacing_m: expected [5e-5, 2e-3] m");
     require(in(c->wall_margin_m, 0.0, 1e-3), "vessel_contact.wall_margin_m: expected [0, 1e-3] m");
     require(in(c->wall_stiffness_n_per_m, 0.0, 1e5), "vessel_contact.wall_stiffness_n_per_m: expected [0, 1e5]");
   }
@@ -109,8 +110,16 @@ World::World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_ge
   w.wire.emplace(*spec.guidewire, CatheterPath(std::move(path)));
   if (spec.vessel_contact) {
     // eq 15 against the SDF of the lofted lumen at the scene's spacing
-    w.lumen = contact_geometry ? std::move(contact_geometry)
-                               : std::make_shared<SdfLumen>(w.tree, spec.vessel_contact->sdf_spacing_m);
+    if (contact_geometry) {
+      w.lumen = std::move(contact_geometry);
+    } else {
+      try {
+        w.lumen = std::make_shared<SdfLumen>(w.tree, spec.vessel_contact->sdf_spacing_m);
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(std::string("vessel_contact.sdf_spacing_m: the lumen's field cannot be built (") +
+                                    e.what() + ")");
+      }
+    }
     w.contact.emplace(*spec.vessel_contact, *w.lumen, w.wire->node_count());
   }
   if (spec.friction) w.friction.emplace(*spec.friction, w.wire->node_count());

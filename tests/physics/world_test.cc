@@ -118,6 +118,9 @@ TEST(World, BadFieldsAreNamed) {
   s = full_spec();
   s.step_s = std::nan("");
   EXPECT_NE(error_of(s).find("step_s"), std::string::npos);
+  s = full_spec();
+  s.vessel_contact->sdf_spacing_m = 1e-6;  // a grid no machine holds
+  EXPECT_NE(error_of(s).find("vessel_contact.sdf_spacing_m"), std::string::npos);
 }
 
 TEST(World, StepAllocatesNothing) {

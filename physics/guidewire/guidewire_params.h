@@ -28,7 +28,9 @@ struct GuidewireParams {
 struct VesselContactParams {
   double sdf_spacing_m = 0.2e-3;     // SDF grid spacing
   double wall_margin_m = 0.05e-3;    // epsilon of eq 15
-  double wall_stiffness_n_per_m = 40.0;  // penalty stiffness for the haptic force (eqs 19-20)
+  // penalty stiffness turning the wall and friction corrections (metres) into the haptic force
+  // (eqs 19-20), N/m, [0, 1e5]: 1000 N/m gives tenths of a newton of friction down a coronary
+  double wall_stiffness_n_per_m = 1000.0;
 };
 
 struct FrictionParams {

@@ -50,7 +50,7 @@ class World {
 
   // instrument samples refused (NaN, Inf, absurd) since construction; the previous one was kept
   int64_t rejected_inputs() const;
-  // feed the wire refused at the catheter exit in the last step (0 without guidewire)
+  // insertion the wire is refusing now: commanded minus accepted feed, m (0 without guidewire)
   double refused_feed_m() const;
 
   // read-only views for tests and benchmarks; null when the effect is not listed

@@ -1,6 +1,7 @@
 #pragma once
 // A detector image of float line integrals, row-major, row 0 first. Sized once by the caller;
 // projectors write into it and never allocate.
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 

@@ -1,0 +1,115 @@
+// pcisim-capture: headless fluoroscopy capture. Writes every frame the server streams as a
+// 16-bit PNG with a JSON sidecar (geometry, time, ground-truth labels); see docs/capture.md.
+#include <CLI/CLI.hpp>
+#include <csignal>
+#include <iostream>
+#include <lcm/lcm-cpp.hpp>
+#include <spdlog/spdlog.h>
+#include <thread>
+
+#include "clients/capture/frame_writer.h"
+#include "pcisim_lcm/instrument_state_t.hpp"
+#include "protocol/channels.h"
+#include "protocol/message_checks.h"
+#include "server/realtime/clock.h"
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+extern "C" void on_signal(int) { g_stop = true; }
+
+struct Capture {
+  Capture(pcisim::clients::FrameWriter& w, int64_t max, bool pedal_only) : writer(w), max_frames(max), only_while_pedal(pedal_only) {}
+  pcisim::clients::FrameWriter& writer;
+  int64_t max_frames;
+  bool only_while_pedal;
+  std::atomic<bool> pedal{false};
+  int64_t bad = 0, skipped = 0;
+  std::string error;
+  pcisim_lcm::xray_frame_t frame;
+  pcisim_lcm::instrument_state_t instrument;
+
+  void on_frame(const lcm::ReceiveBuffer* r, const std::string&) {
+    if (!error.empty() || (max_frames > 0 && writer.written() >= max_frames)) return;
+    if (!pcisim::protocol::decode_checked(*r, frame)) {
+      ++bad;
+      return;
+    }
+    if (only_while_pedal && !pedal) {
+      ++skipped;
+      return;
+    }
+    try {
+      const std::string path = writer.write(frame);
+      if (writer.written() % 30 == 1) spdlog::info("capture: {} frames, latest {}", writer.written(), path);
+    } catch (const std::exception& e) {
+      error = e.what();  // stop: what is written stays intact
+    }
+  }
+  void on_instrument(const lcm::ReceiveBuffer* r, const std::string&) {
+    if (pcisim::protocol::decode_checked(*r, instrument))
+      pedal = (instrument.buttons & (pcisim_lcm::instrument_state_t::BUTTON_FLUORO_PEDAL |
+                                     pcisim_lcm::instrument_state_t::BUTTON_CINE_PEDAL)) != 0;
+  }
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"pcisim-capture: records the fluoroscopy pcisim-server streams, one 16-bit PNG and one JSON sidecar "
+               "per frame (geometry, time, the wire's 3D nodes and 2D polyline, branches holding contrast). "
+               "Fluoroscopy goes to OUT/fluoro/, each cine run to OUT/cine_NNN/."};
+  std::string out_dir, image_url = "udpm://239.255.76.67:7668?ttl=0", lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  int64_t max_frames = 0;
+  double duration_s = 0;
+  bool only_while_pedal = false;
+  app.add_option("--out", out_dir, "output folder (created)")->required();
+  app.add_option("--lcm-image-url", image_url, "LCM URL of the frames")->capture_default_str();
+  app.add_option("--lcm-url", lcm_url, "LCM URL of the control traffic (for --only-while-pedal)")->capture_default_str();
+  app.add_option("--frames", max_frames, "stop after this many frames; 0 = no limit")->check(CLI::NonNegativeNumber);
+  app.add_option("--duration", duration_s, "seconds to run; 0 = until SIGINT/SIGTERM")->check(CLI::Range(0.0, 1e7));
+  app.add_flag("--only-while-pedal", only_while_pedal,
+               "keep frames only while the instrument's fluoroscopy or cine pedal is down (not console-triggered ones)");
+  CLI11_PARSE(app, argc, argv);
+
+  std::unique_ptr<pcisim::clients::FrameWriter> writer;
+  try {
+    writer = std::make_unique<pcisim::clients::FrameWriter>(out_dir);
+  } catch (const std::exception& e) {
+    std::cerr << "pcisim-capture: " << e.what() << "\n";
+    return 2;
+  }
+  lcm::LCM images(image_url);
+  if (!images.good()) {
+    std::cerr << "pcisim-capture: cannot open LCM at " << image_url << "\n";
+    return 3;
+  }
+  Capture capture(*writer, max_frames, only_while_pedal);
+  images.subscribe(pcisim::protocol::kXrayChannel, &Capture::on_frame, &capture);
+  std::unique_ptr<lcm::LCM> control;
+  std::thread control_rx;
+  if (only_while_pedal) {
+    control = std::make_unique<lcm::LCM>(lcm_url);
+    control->subscribe(pcisim::protocol::kInstrumentChannel, &Capture::on_instrument, &capture);
+    control_rx = std::thread([&] {
+      while (!g_stop) control->handleTimeout(20);
+    });
+  }
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  spdlog::info("capture: frames from {} into {}", image_url, out_dir);
+  const int64_t end_ns = duration_s > 0 ? pcisim::server::monotonic_ns() + static_cast<int64_t>(duration_s * 1e9) : INT64_MAX;
+  while (!g_stop && pcisim::server::monotonic_ns() < end_ns && capture.error.empty() &&
+         (max_frames == 0 || writer->written() < max_frames))
+    images.handleTimeout(50);
+  g_stop = true;
+  if (control_rx.joinable()) control_rx.join();
+  spdlog::info("capture: {} frames written to {}, {} undecodable, {} skipped (pedal up)", writer->written(), out_dir,
+               capture.bad, capture.skipped);
+  if (!capture.error.empty()) {
+    std::cerr << "pcisim-capture: stopped: " << capture.error << " (the " << writer->written()
+              << " frames written before are intact)\n";
+    return 1;
+  }
+  return 0;
+}

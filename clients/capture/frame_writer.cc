@@ -1,0 +1,84 @@
+#include "clients/capture/frame_writer.h"
+
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <unistd.h>
+
+#include "clients/capture/png16.h"
+
+namespace pcisim::clients {
+namespace fs = std::filesystem;
+
+FrameWriter::FrameWriter(const std::string& out_dir) : out_dir_(out_dir) {
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  if (ec) throw std::runtime_error(fmt::format("{}: cannot create the output folder: {}", out_dir, ec.message()));
+  if (access(out_dir.c_str(), W_OK) != 0)
+    throw std::runtime_error(fmt::format("{}: cannot write into the output folder: {}", out_dir, std::strerror(errno)));
+}
+
+nlohmann::json FrameWriter::sidecar(const pcisim_lcm::xray_frame_t& f) {
+  auto v3 = [](const double* p) { return nlohmann::json::array({p[0], p[1], p[2]}); };
+  nlohmann::json wire_mm = nlohmann::json::array(), wire_px = nlohmann::json::array();
+  for (int i = 0; i < f.num_wire_points; ++i) {
+    wire_mm.push_back({f.wire_mm[i][0], f.wire_mm[i][1], f.wire_mm[i][2]});
+    wire_px.push_back({f.wire_px[i][0], f.wire_px[i][1]});
+  }
+  return {
+      {"frame", f.seq},
+      {"sim_time_s", f.sim_time_s},
+      {"utime", f.utime},
+      {"cine", f.cine != 0},
+      {"cine_run", f.cine_run},
+      {"c_arm", {{"primary_deg", f.primary_angle_deg}, {"secondary_deg", f.secondary_angle_deg},
+                 {"source_to_image_mm", f.source_to_image_mm}, {"source_to_axis_mm", f.source_to_axis_mm}}},
+      {"detector",
+       {{"width", f.width}, {"height", f.height}, {"pixel_mm", f.pixel_mm}, {"source_mm", v3(f.source_mm)},
+        {"center_mm", v3(f.detector_center_mm)}, {"u", v3(f.detector_u)}, {"v", v3(f.detector_v)},
+        {"pixel_center",
+         "center_mm + (c - (width-1)/2) pixel_mm u + (r - (height-1)/2) pixel_mm v; rays from source_mm"}}},
+      {"labels",
+       {{"wire_mm", wire_mm},
+        {"wire_px", wire_px},
+        {"tip_px", f.num_wire_points > 0 ? wire_px.back() : nlohmann::json(nullptr)},
+        {"contrast_branches", f.contrast_branches}}},
+  };
+}
+
+std::string FrameWriter::write(const pcisim_lcm::xray_frame_t& f) {
+  if (f.pixel_format != pcisim_lcm::xray_frame_t::FORMAT_GRAY16 ||
+      static_cast<int64_t>(f.data.size()) != int64_t{f.width} * f.height * 2)
+    throw std::runtime_error(fmt::format("frame {}: not a 16-bit frame of {}x{} pixels", f.seq, f.width, f.height));
+  const fs::path dir = fs::path(out_dir_) / (f.cine ? fmt::format("cine_{:03d}", f.cine_run) : std::string("fluoro"));
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw std::runtime_error(fmt::format("{}: cannot create: {}", dir.string(), ec.message()));
+  const fs::path png = dir / fmt::format("frame_{:06d}.png", f.seq);
+  const fs::path json = dir / fmt::format("frame_{:06d}.json", f.seq);
+  const fs::path png_tmp = dir / fmt::format(".frame_{:06d}.png.tmp", f.seq);
+  const fs::path json_tmp = dir / fmt::format(".frame_{:06d}.json.tmp", f.seq);
+  try {
+    write_png16(png_tmp.string(), f.width, f.height, reinterpret_cast<const uint16_t*>(f.data.data()));
+    std::ofstream out(json_tmp);
+    out << sidecar(f).dump(1) << "\n";
+    out.flush();
+    if (!out) throw std::runtime_error(fmt::format("{}: writing the sidecar failed: {}", json_tmp.string(), std::strerror(errno)));
+    out.close();
+    // the sidecar lands first: a PNG in place always has its labels
+    fs::rename(json_tmp, json);
+    fs::rename(png_tmp, png);
+  } catch (...) {
+    fs::remove(png_tmp, ec);
+    fs::remove(json_tmp, ec);
+    throw;
+  }
+  ++written_;
+  return png.string();
+}
+
+}  // namespace pcisim::clients

@@ -5,6 +5,7 @@
 // Beer-Lambert with a photon count per pixel, Poisson quantum noise, detector blur, log and a
 // display window so radiopaque structures are dark. The x-ray thread owns one renderer.
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -12,6 +13,8 @@
 #include <vector>
 
 #include "physics/vessel/vessel_tree.h"
+#include "xray/fluoro/contrast_bolus.h"
+#include "xray/fluoro/detector_chain.h"
 #include "xray/geometry/c_arm.h"
 #include "xray/geometry/detector_geometry.h"
 #include "xray/render/drr_renderer.h"
@@ -29,13 +32,7 @@ struct FluoroSpec {
   double wire_radius_mm = 0.1778;        // 0.014"
   double wire_mu_per_mm = 0.95;          // stainless steel near 60 keV
   uint32_t seed = 1;                     // phantom and noise
-};
-
-// contrast in the tree: the bolus enters at the ostia and travels downstream, then washes out
-struct ContrastInjection {
-  double start_s = 0;        // when the injection began (simulation time)
-  double duration_s = 2.0;   // how long it is pushed
-  double volume_ml = 8.0;
+  ContrastBolusSpec contrast;            // bolus velocity, washout, taper, flows
 };
 
 struct FluoroInput {
@@ -67,6 +64,18 @@ class FluoroscopyRenderer {
   // how many background projections were made (a pose change makes one; a frame with the same
   // pose reuses it)
   int64_t background_renders() const;
+  // the next frame re-projects the background (heart motion, a changed volume)
+  void invalidate_background();
+  // a new detector or SID/SAD; the next frame re-projects the background if the geometry changed
+  void set_c_arm(const CArmSpec& c_arm);
+
+  // the last frame's pieces, for tests and ground truth: noiseless line integrals (background +
+  // contrast + wire), detector counts after noise and blur, and the contrast model's state
+  const Image& line_integrals() const;
+  const Image& detector_counts() const;
+  const ContrastBolus& contrast() const;
+  double window_lo() const;  // display window (line-integral units): lo white, hi black
+  double window_hi() const;
 
  private:
   struct Impl;

@@ -1,0 +1,122 @@
+#include "xray/fluoro/fluoroscopy.h"
+
+#include <algorithm>
+
+#include "xray/overlay/tube_overlay.h"
+#include "xray/overlay/wire_overlay.h"
+#include "xray/phantom/thorax_phantom.h"
+
+namespace pcisim::xray {
+namespace {
+
+bool same_geometry(const DetectorGeometry& a, const DetectorGeometry& b) {
+  return a.source_mm == b.source_mm && a.center_mm == b.center_mm && a.u == b.u && a.v == b.v &&
+         a.pixel_mm == b.pixel_mm && a.width == b.width && a.height == b.height;
+}
+
+Volume make_background_volume(const physics::VesselTree& tree, const FluoroSpec& spec) {
+  ThoraxPhantomSpec p;
+  p.seed = spec.seed;
+  p.dims = spec.volume_dims;
+  p.spacing_mm = spec.volume_spacing_mm;
+  p.contrast = false;  // blood-filled lumens: the iodine comes per frame, analytically
+  return make_thorax_phantom(p, tree);
+}
+
+}  // namespace
+
+struct FluoroscopyRenderer::Impl {
+  FluoroSpec spec;
+  ContrastBolus bolus;
+  DrrRenderer drr;
+  DetectorChain chain;
+  Image background, line, counts;
+  DetectorGeometry background_geometry;
+  bool background_valid = false;
+  int64_t background_renders = 0;
+  uint64_t frames = 0;
+  std::vector<float> window_scratch;
+  std::vector<Eigen::Vector3d> wire_mm;
+  WireSpec wire;
+
+  Impl(const physics::VesselTree& tree, const FluoroSpec& s)
+      : spec(s),
+        bolus(tree, s.contrast),
+        drr(make_background_volume(tree, s), s.projector),
+        chain({.photons_per_pixel = s.photons_per_pixel, .blur_sigma_px = s.blur_sigma_px}),
+        wire{.radius_mm = s.wire_radius_mm, .mu_per_mm = s.wire_mu_per_mm} {}
+};
+
+FluoroscopyRenderer::FluoroscopyRenderer(const physics::VesselTree& tree, const FluoroSpec& spec)
+    : impl_(std::make_unique<Impl>(tree, spec)) {}
+
+FluoroscopyRenderer::~FluoroscopyRenderer() = default;
+
+void FluoroscopyRenderer::render(const FluoroInput& in, FluoroFrame& out) {
+  Impl& m = *impl_;
+  const DetectorGeometry g = c_arm_geometry(m.spec.c_arm, in.pose);
+  // 1. the static anatomy, re-projected only for a new geometry (or when invalidated)
+  if (!m.background_valid || !same_geometry(g, m.background_geometry)) {
+    m.drr.render(g, &m.background);
+    m.background_geometry = g;
+    m.background_valid = true;
+    ++m.background_renders;
+    double lo = 0, hi = 1;
+    display_window_for(m.background, &m.window_scratch, &lo, &hi);
+    m.chain.set_window(lo, hi);  // fixed per pose, so contrast never shifts the brightness
+  }
+  if (m.line.width != g.width || m.line.height != g.height) m.line.resize(g.width, g.height);
+  std::copy(m.background.pixels.begin(), m.background.pixels.end(), m.line.pixels.begin());
+
+  // 2. iodine: mu x opacity x chord through each lumen segment holding contrast
+  m.bolus.update(in.time_s, in.injections);
+  const auto& segs = m.bolus.segments();
+  const auto& op = m.bolus.segment_opacity();
+  for (size_t i = 0; i < segs.size(); ++i) {
+    if (op[i] < 1e-3) continue;
+    add_cone_segment(g, segs[i].a_mm, segs[i].b_mm, segs[i].ra_mm, segs[i].rb_mm, m.spec.iodine_mu_per_mm * op[i],
+                     &m.line);
+  }
+
+  // 3. the wire: physics metres -> phantom millimetres (same LPS frame, same origin)
+  m.wire_mm.resize(in.wire_m.size());
+  for (size_t i = 0; i < in.wire_m.size(); ++i) m.wire_mm[i] = 1000.0 * in.wire_m[i];
+  add_wire(g, m.wire_mm, m.wire, &m.line);
+  project_polyline(g, m.wire_mm, &out.wire_px);
+
+  // 4. quanta, noise, blur, log, window; the noise differs per frame, same for a seed
+  const uint64_t key = (static_cast<uint64_t>(m.spec.seed) << 32) ^ m.frames++;
+  m.chain.apply(m.line, key, &m.counts, &out.pixels);
+
+  out.width = g.width;
+  out.height = g.height;
+  out.geometry = g;
+  out.pose = in.pose;
+  out.time_s = in.time_s;
+  // branch names: short strings (no heap), written into the slots already there
+  const auto& bo = m.bolus.branch_opacity();
+  const auto& names = m.bolus.branch_names();
+  if (out.contrast_branches.capacity() < names.size()) out.contrast_branches.reserve(names.size());
+  size_t k = 0;
+  for (size_t b = 0; b < bo.size(); ++b) {
+    if (bo[b] <= m.spec.contrast.visible_opacity) continue;
+    if (k < out.contrast_branches.size()) {
+      out.contrast_branches[k] = names[b];
+    } else {
+      out.contrast_branches.push_back(names[b]);
+    }
+    ++k;
+  }
+  out.contrast_branches.resize(k);
+}
+
+int64_t FluoroscopyRenderer::background_renders() const { return impl_->background_renders; }
+void FluoroscopyRenderer::invalidate_background() { impl_->background_valid = false; }
+void FluoroscopyRenderer::set_c_arm(const CArmSpec& c_arm) { impl_->spec.c_arm = c_arm; }
+const Image& FluoroscopyRenderer::line_integrals() const { return impl_->line; }
+const Image& FluoroscopyRenderer::detector_counts() const { return impl_->counts; }
+const ContrastBolus& FluoroscopyRenderer::contrast() const { return impl_->bolus; }
+double FluoroscopyRenderer::window_lo() const { return impl_->chain.window_lo(); }
+double FluoroscopyRenderer::window_hi() const { return impl_->chain.window_hi(); }
+
+}  // namespace pcisim::xray

@@ -1,0 +1,41 @@
+#include "xray/overlay/tube_overlay.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "xray/overlay/cone_chord.h"
+
+namespace pcisim::xray {
+
+void add_cone_segment(const DetectorGeometry& g, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double ra_mm,
+                      double rb_mm, double mu_per_mm, Image* image) {
+  ConeChord cone;
+  if (!cone.set(g.source_mm, a, b, ra_mm, rb_mm)) return;
+  Eigen::Vector2d pa, pb;
+  if (!g.project(a, &pa) || !g.project(b, &pb)) return;
+  const Eigen::Vector3d n = g.normal();
+  const double sid = n.dot(g.center_mm - g.source_mm);
+  // the shadow's half-width in pixels: the larger radius magnified at the nearer end, plus a pixel
+  const double depth = std::min(n.dot(a - g.source_mm), n.dot(b - g.source_mm));
+  const double margin = std::max(ra_mm, rb_mm) * sid / depth / g.pixel_mm + 1.0;
+  const double cl = std::min(pa.x(), pb.x()) - margin, ch = std::max(pa.x(), pb.x()) + margin;
+  const double rl = std::min(pa.y(), pb.y()) - margin, rh = std::max(pa.y(), pb.y()) + margin;
+  if (ch < 0 || rh < 0 || cl > g.width - 1 || rl > g.height - 1) return;
+  const int c0 = std::max(0, static_cast<int>(std::floor(cl)));
+  const int c1 = std::min(g.width - 1, static_cast<int>(std::ceil(ch)));
+  const int r0 = std::max(0, static_cast<int>(std::floor(rl)));
+  const int r1 = std::min(g.height - 1, static_cast<int>(std::ceil(rh)));
+  const Eigen::Vector3d du = g.pixel_mm * g.u;
+  const float mu = static_cast<float>(mu_per_mm);
+  for (int r = r0; r <= r1; ++r) {
+    // ray direction to the row's first pixel, then one pixel step along u at a time
+    Eigen::Vector3d d = g.pixel_center_mm(c0, r) - g.source_mm;
+    float* row = image->pixels.data() + static_cast<size_t>(r) * image->width;
+    for (int c = c0; c <= c1; ++c, d += du) {
+      const double l = cone.chord_mm(d);
+      if (l > 0) row[c] += mu * static_cast<float>(l);
+    }
+  }
+}
+
+}  // namespace pcisim::xray

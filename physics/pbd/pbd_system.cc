@@ -1,0 +1,304 @@
+#include "physics/pbd/pbd_system.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace pcisim::physics::pbd {
+
+namespace {
+void require_building(bool finalized) {
+  if (finalized) throw std::logic_error("pbd: the system is finalized; build everything before finalize()");
+}
+}  // namespace
+
+int PbdSystem::add_particle(const Eigen::Vector3d& position_m, double mass_kg) {
+  require_building(finalized_);
+  if (!position_m.allFinite() || !(mass_kg > 0.0) || !std::isfinite(mass_kg))
+    throw std::invalid_argument("pbd: a particle needs a finite position and a positive mass");
+  build_position_m_.push_back(position_m);
+  build_mass_kg_.push_back(mass_kg);
+  build_state_.push_back(ParticleState::kFree);
+  return static_cast<int>(build_position_m_.size()) - 1;
+}
+
+void PbdSystem::pin(int i) {
+  require_building(finalized_);
+  build_state_.at(i) = ParticleState::kPinned;
+}
+
+void PbdSystem::drive(int i) {
+  require_building(finalized_);
+  build_state_.at(i) = ParticleState::kDriven;
+}
+
+void PbdSystem::add_distance(int i, int j, double compliance_m_per_n) {
+  require_building(finalized_);
+  if (i == j || !(compliance_m_per_n >= 0.0)) throw std::invalid_argument("pbd: bad distance constraint");
+  distance_.push_back({i, j, (build_position_m_.at(i) - build_position_m_.at(j)).norm(), compliance_m_per_n});
+}
+
+void PbdSystem::add_bending(int a, int b, int c, int d, double compliance_per_n_m) {
+  require_building(finalized_);
+  double theta = 0.0;
+  Eigen::Vector3d g[4];
+  if (!(compliance_per_n_m >= 0.0) ||
+      !dihedral_angle(build_position_m_.at(a), build_position_m_.at(b), build_position_m_.at(c),
+                      build_position_m_.at(d), &theta, g))
+    throw std::invalid_argument("pbd: bending needs two non-degenerate triangles at rest");
+  bending_.push_back({a, b, c, d, theta, compliance_per_n_m});
+}
+
+void PbdSystem::add_cluster(std::span<const int> members, double compliance_s2) {
+  require_building(finalized_);
+  clusters_.add(members, compliance_s2);
+}
+
+void PbdSystem::finalize() {
+  require_building(finalized_);
+  const int n = static_cast<int>(build_position_m_.size());
+  particles_.resize(n);
+  for (int i = 0; i < n; ++i) {
+    particles_.position_m.col(i) = build_position_m_[i];
+    particles_.mass_kg[i] = build_mass_kg_[i];
+    particles_.state[i] = build_state_[i];
+    particles_.inv_mass_per_kg[i] = build_state_[i] == ParticleState::kFree ? 1.0 / build_mass_kg_[i] : 0.0;
+  }
+  particles_.predicted_m = particles_.position_m;
+  particles_.last_finite_m = particles_.position_m;
+  drive_start_m_ = particles_.position_m;
+  drive_target_m_ = particles_.position_m;
+  clusters_.finalize(particles_.position_m, particles_.mass_kg);
+  for (const auto& c : distance_)
+    if (c.i < 0 || c.j < 0 || c.i >= n || c.j >= n) throw std::out_of_range("pbd: distance index");
+
+  distance_lambda_.setZero(static_cast<Eigen::Index>(distance_.size()));
+  bending_lambda_.setZero(static_cast<Eigen::Index>(bending_.size()));
+  cluster_lambda_.setZero(3, clusters_.slot_count());
+  goal_scratch_m_.assign(std::max(clusters_.max_size(), 1), Eigen::Vector3d::Zero());
+
+  std::vector<int> slots;
+  for (const auto& c : distance_) slots.insert(slots.end(), {c.i, c.j});
+  distance_group_.build(n, slots);
+  slots.clear();
+  for (const auto& c : bending_) slots.insert(slots.end(), {c.a, c.b, c.c, c.d});
+  bending_group_.build(n, slots);
+  slots.clear();
+  for (int s = 0; s < clusters_.slot_count(); ++s) slots.push_back(clusters_.member(s));
+  cluster_group_.build(n, slots);
+
+  distance_mean_inv_count_.setZero(static_cast<Eigen::Index>(distance_.size()));
+  for (size_t k = 0; k < distance_.size(); ++k)
+    distance_mean_inv_count_[k] =
+        0.5 * (distance_group_.inverse_count(distance_[k].i) + distance_group_.inverse_count(distance_[k].j));
+  bending_mean_inv_count_.setZero(static_cast<Eigen::Index>(bending_.size()));
+  for (size_t k = 0; k < bending_.size(); ++k) {
+    const auto& c = bending_[k];
+    bending_mean_inv_count_[k] = 0.25 * (bending_group_.inverse_count(c.a) + bending_group_.inverse_count(c.b) +
+                                         bending_group_.inverse_count(c.c) + bending_group_.inverse_count(c.d));
+  }
+  build_position_m_ = {};
+  build_mass_kg_ = {};
+  build_state_ = {};
+  finalized_ = true;
+}
+
+void PbdSystem::set_driven_target(int i, const Eigen::Vector3d& position_m) { drive_target_m_.col(i) = position_m; }
+
+int PbdSystem::quarantined_now() const {
+  return static_cast<int>(std::count(particles_.state.begin(), particles_.state.end(), ParticleState::kQuarantined));
+}
+
+void PbdSystem::quarantine(int i, const Eigen::Vector3d& freeze_at_m) {
+  // frozen with inverse mass 0: neighbours see a pinned particle, never its NaN
+  particles_.position_m.col(i) = freeze_at_m;
+  particles_.predicted_m.col(i) = freeze_at_m;
+  particles_.velocity_m_per_s.col(i).setZero();
+  particles_.inv_mass_per_kg[i] = 0.0;
+  particles_.state[i] = ParticleState::kQuarantined;
+  ++quarantined_total_;
+}
+
+void PbdSystem::release_quarantine() {
+  for (int i = 0; i < particle_count(); ++i) {
+    if (particles_.state[i] != ParticleState::kQuarantined) continue;
+    particles_.state[i] = ParticleState::kFree;
+    particles_.inv_mass_per_kg[i] = 1.0 / particles_.mass_kg[i];
+  }
+}
+
+void PbdSystem::quarantine_non_finite_inputs() {
+  // whatever the caller wrote between steps (positions, velocities, driven targets)
+  for (int i = 0; i < particle_count(); ++i) {
+    if (particles_.state[i] == ParticleState::kQuarantined) continue;
+    const bool bad_target = particles_.state[i] == ParticleState::kDriven && !drive_target_m_.col(i).allFinite();
+    if (!particles_.position_m.col(i).allFinite() || !particles_.velocity_m_per_s.col(i).allFinite() || bad_target)
+      quarantine(i, particles_.last_finite_m.col(i));
+  }
+}
+
+void PbdSystem::step(double dt_s, const PbdParams& params) {
+  if (!finalized_) throw std::logic_error("pbd: finalize() before step()");
+  if (!(dt_s > 0.0) || !std::isfinite(dt_s)) return;
+  quarantine_non_finite_inputs();
+  const int substeps = std::max(params.substeps, 1);
+  const double h = dt_s / substeps;
+  drive_start_m_ = particles_.position_m;  // same size: a copy, no allocation
+  for (int s = 0; s < substeps; ++s) {
+    predict(h, static_cast<double>(s + 1) / substeps, s + 1 == substeps, params);
+    distance_lambda_.setZero();
+    bending_lambda_.setZero();
+    cluster_lambda_.setZero();
+    for (int it = 0; it < params.iterations; ++it) {
+      if (params.solver == SolverKind::kJacobi)
+        solve_jacobi(h, params.sor_w);
+      else
+        solve_gauss_seidel(h);
+    }
+    update(h);
+  }
+  for (int i = 0; i < particle_count(); ++i)
+    if (particles_.state[i] != ParticleState::kQuarantined) particles_.last_finite_m.col(i) = particles_.position_m.col(i);
+}
+
+// Algorithm 1 lines 1-5: external forces, then x* = x + dt v
+void PbdSystem::predict(double h_s, double fraction_of_step, bool last_substep, const PbdParams& params) {
+  const double drag = 1.0 / (1.0 + std::max(params.damping_per_s, 0.0) * h_s);
+  for (int i = 0; i < particle_count(); ++i) {
+    switch (particles_.state[i]) {
+      case ParticleState::kFree:
+        particles_.velocity_m_per_s.col(i) = drag * (particles_.velocity_m_per_s.col(i) + h_s * params.gravity_m_per_s2);
+        particles_.predicted_m.col(i) = particles_.position_m.col(i) + h_s * particles_.velocity_m_per_s.col(i);
+        break;
+      case ParticleState::kDriven:
+        // exactly on the target at the step's end, on the straight line before it
+        particles_.predicted_m.col(i) =
+            last_substep ? Eigen::Vector3d(drive_target_m_.col(i))
+                         : Eigen::Vector3d(drive_start_m_.col(i) +
+                                           fraction_of_step * (drive_target_m_.col(i) - drive_start_m_.col(i)));
+        break;
+      case ParticleState::kPinned:
+      case ParticleState::kQuarantined:
+        particles_.predicted_m.col(i) = particles_.position_m.col(i);
+        break;
+    }
+  }
+}
+
+// Algorithm 1 lines 16-22 with each constraint applied as soon as it is solved
+void PbdSystem::solve_gauss_seidel(double h_s) {
+  Eigen::Matrix3Xd& x = particles_.predicted_m;
+  const Eigen::VectorXd& w = particles_.inv_mass_per_kg;
+  const double inv_h2 = 1.0 / (h_s * h_s);
+  for (size_t k = 0; k < distance_.size(); ++k) {
+    const DistanceConstraint& c = distance_[k];
+    double dl;
+    Eigen::Vector3d dxi, dxj;
+    if (!project_distance(x.col(c.i), x.col(c.j), w[c.i], w[c.j], c.rest_m, c.compliance_m_per_n * inv_h2,
+                          distance_lambda_[k], &dl, &dxi, &dxj))
+      continue;
+    distance_lambda_[k] += dl;
+    x.col(c.i) += dxi;
+    x.col(c.j) += dxj;
+  }
+  for (size_t k = 0; k < bending_.size(); ++k) {
+    const DihedralBendingConstraint& c = bending_[k];
+    const int idx[4] = {c.a, c.b, c.c, c.d};
+    Eigen::Vector3d xs[4], dx[4];
+    double ws[4], dl;
+    for (int m = 0; m < 4; ++m) xs[m] = x.col(idx[m]), ws[m] = w[idx[m]];
+    if (!project_dihedral_bending(xs, ws, c.rest_angle_rad, c.compliance_per_n_m * inv_h2, bending_lambda_[k], &dl, dx))
+      continue;
+    bending_lambda_[k] += dl;
+    for (int m = 0; m < 4; ++m) x.col(idx[m]) += dx[m];
+  }
+  for (int cl = 0; cl < clusters_.count(); ++cl) {
+    clusters_.goals(cl, x, particles_.mass_kg, goal_scratch_m_.data());
+    for (int s = clusters_.begin(cl); s < clusters_.end(cl); ++s) {
+      const int i = clusters_.member(s);
+      Eigen::Vector3d dl, dx;
+      if (!project_to_goal(x.col(i), goal_scratch_m_[s - clusters_.begin(cl)], w[i], particles_.mass_kg[i],
+                           clusters_.compliance_s2(cl), h_s, cluster_lambda_.col(s), &dl, &dx))
+        continue;
+      cluster_lambda_.col(s) += dl;
+      x.col(i) += dx;
+    }
+  }
+}
+
+// Algorithm 1 lines 17-21: per group, every constraint reads the same x*, corrections are
+// averaged per particle and over-relaxed by w (eq 7). lambda accumulates the share of dlambda
+// that the averaging actually delivered (w/n), so the compliance term sees the applied force.
+void PbdSystem::solve_jacobi(double h_s, double sor_w) {
+  Eigen::Matrix3Xd& x = particles_.predicted_m;
+  const Eigen::VectorXd& w = particles_.inv_mass_per_kg;
+  const double inv_h2 = 1.0 / (h_s * h_s);
+  if (!distance_.empty()) {
+    Eigen::Matrix3Xd& slot = distance_group_.slots();
+    for (size_t k = 0; k < distance_.size(); ++k) {
+      const DistanceConstraint& c = distance_[k];
+      double dl;
+      Eigen::Vector3d dxi, dxj;
+      if (project_distance(x.col(c.i), x.col(c.j), w[c.i], w[c.j], c.rest_m, c.compliance_m_per_n * inv_h2,
+                           distance_lambda_[k], &dl, &dxi, &dxj)) {
+        distance_lambda_[k] += sor_w * distance_mean_inv_count_[k] * dl;
+        slot.col(2 * k) = dxi;
+        slot.col(2 * k + 1) = dxj;
+      } else {
+        slot.col(2 * k).setZero();
+        slot.col(2 * k + 1).setZero();
+      }
+    }
+    distance_group_.apply(x, sor_w);
+  }
+  if (!bending_.empty()) {
+    Eigen::Matrix3Xd& slot = bending_group_.slots();
+    for (size_t k = 0; k < bending_.size(); ++k) {
+      const DihedralBendingConstraint& c = bending_[k];
+      const int idx[4] = {c.a, c.b, c.c, c.d};
+      Eigen::Vector3d xs[4], dx[4];
+      double ws[4], dl;
+      for (int m = 0; m < 4; ++m) xs[m] = x.col(idx[m]), ws[m] = w[idx[m]];
+      const bool ok =
+          project_dihedral_bending(xs, ws, c.rest_angle_rad, c.compliance_per_n_m * inv_h2, bending_lambda_[k], &dl, dx);
+      if (ok) bending_lambda_[k] += sor_w * bending_mean_inv_count_[k] * dl;
+      for (int m = 0; m < 4; ++m) slot.col(4 * k + m) = ok ? dx[m] : Eigen::Vector3d::Zero();
+    }
+    bending_group_.apply(x, sor_w);
+  }
+  if (clusters_.count() > 0) {
+    Eigen::Matrix3Xd& slot = cluster_group_.slots();
+    for (int cl = 0; cl < clusters_.count(); ++cl) {
+      // a parallel version gives each worker its own goal scratch
+      clusters_.goals(cl, x, particles_.mass_kg, goal_scratch_m_.data());
+      for (int s = clusters_.begin(cl); s < clusters_.end(cl); ++s) {
+        const int i = clusters_.member(s);
+        Eigen::Vector3d dl, dx;
+        if (project_to_goal(x.col(i), goal_scratch_m_[s - clusters_.begin(cl)], w[i], particles_.mass_kg[i],
+                            clusters_.compliance_s2(cl), h_s, cluster_lambda_.col(s), &dl, &dx)) {
+          cluster_lambda_.col(s) += (sor_w * cluster_group_.inverse_count(i)) * dl;
+          slot.col(s) = dx;
+        } else {
+          slot.col(s).setZero();
+        }
+      }
+    }
+    cluster_group_.apply(x, sor_w);
+  }
+}
+
+// Algorithm 1 lines 23-26, with the NaN guard: a particle whose x* went non-finite is frozen
+// where this substep began instead of handing its NaN to the velocity and the next substep
+void PbdSystem::update(double h_s) {
+  const double inv_h = 1.0 / h_s;
+  for (int i = 0; i < particle_count(); ++i) {
+    if (!particles_.predicted_m.col(i).allFinite()) {
+      quarantine(i, particles_.position_m.col(i));
+      continue;
+    }
+    particles_.velocity_m_per_s.col(i) = inv_h * (particles_.predicted_m.col(i) - particles_.position_m.col(i));
+    particles_.position_m.col(i) = particles_.predicted_m.col(i);
+  }
+}
+
+}  // namespace pcisim::physics::pbd

@@ -102,11 +102,51 @@ void DetectorChain::apply(const Image& line, uint64_t noise_key, Image* counts, 
   const float scale = static_cast<float>(65535.0 / std::max(hi_ - lo_, 1e-9));
   const float floor_q = spec_.photons_per_pixel > 0 ? 0.5f : 1e-30f;
   uint16_t* out = display->data();
+  const bool offset = offset_ && offset_->width == w && offset_->height == h;
+  const float* off = offset ? offset_->pixels.data() : nullptr;
   for (size_t i = 0; i < n; ++i) {
-    const float lm = -std::log(std::max(q[i], floor_q) * inv_n0);
+    float lm = -std::log(std::max(q[i], floor_q) * inv_n0);
+    if (off) lm -= off[i];
     const float v = 65535.0f - (lm - lo) * scale;
     out[i] = static_cast<uint16_t>(std::clamp(v, 0.0f, 65535.0f) + 0.5f);
   }
+}
+
+namespace {
+// running-sum box filter of radius r along rows (stride 1) or columns (stride w), edges clamped
+void box_pass(const float* src, float* dst, int n_lines, int len, int line_stride, int step, int r) {
+  const float inv = 1.0f / (2 * r + 1);
+  for (int l = 0; l < n_lines; ++l) {
+    const float* s = src + static_cast<size_t>(l) * line_stride;
+    float* d = dst + static_cast<size_t>(l) * line_stride;
+    auto at = [&](int i) { return s[static_cast<size_t>(std::clamp(i, 0, len - 1)) * step]; };
+    double acc = 0;
+    for (int i = -r; i <= r; ++i) acc += at(i);
+    for (int i = 0; i < len; ++i) {
+      d[static_cast<size_t>(i) * step] = static_cast<float>(acc * inv);
+      acc += at(i + r + 1) - at(i - r);
+    }
+  }
+}
+}  // namespace
+
+void range_compression_offset(const Image& line, int radius_px, double strength, Image* tmp, Image* offset) {
+  const int w = line.width, h = line.height;
+  if (tmp->width != w || tmp->height != h) tmp->resize(w, h);
+  if (offset->width != w || offset->height != h) offset->resize(w, h);
+  if (!(strength > 0) || radius_px < 1 || w == 0 || h == 0) {
+    std::fill(offset->pixels.begin(), offset->pixels.end(), 0.0f);
+    return;
+  }
+  // two box passes each way ~ a Gaussian of sigma ~ 0.8 radius
+  box_pass(line.pixels.data(), tmp->pixels.data(), h, w, w, 1, radius_px);
+  box_pass(tmp->pixels.data(), offset->pixels.data(), w, h, 1, w, radius_px);
+  box_pass(offset->pixels.data(), tmp->pixels.data(), h, w, w, 1, radius_px);
+  box_pass(tmp->pixels.data(), offset->pixels.data(), w, h, 1, w, radius_px);
+  double mean = 0;
+  for (float v : offset->pixels) mean += v;
+  mean /= offset->pixels.size();
+  for (float& v : offset->pixels) v = static_cast<float>(strength * (v - mean));
 }
 
 void display_window_for(const Image& background, std::vector<float>* scratch, double* lo, double* hi) {

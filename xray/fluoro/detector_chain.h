@@ -27,6 +27,10 @@ class DetectorChain {
   double window_lo() const { return lo_; }
   double window_hi() const { return hi_; }
 
+  // subtracted from the log image before the window (dynamic range compression); nullptr: none.
+  // The image must outlive the chain's use and have the frame's size.
+  void set_offset(const Image* offset) { offset_ = offset; }
+
   // line integrals -> counts (noise from noise_key, blur) -> display; counts is kept for tests
   void apply(const Image& line, uint64_t noise_key, Image* counts, std::vector<uint16_t>* display);
 
@@ -35,7 +39,14 @@ class DetectorChain {
   std::vector<float> kernel_;  // half of the symmetric Gaussian, [0] the centre
   Image tmp_;
   double lo_ = 0, hi_ = 1;
+  const Image* offset_ = nullptr;
 };
+
+// the display's dynamic range compression (as cath-lab image processors do, a.k.a. harmonisation):
+// offset = strength x (the image box-filtered twice over radius_px, minus its mean), so large
+// slow variations (heart over spine vs lung) shrink and small dense detail keeps its contrast.
+// tmp and offset are resized to the image when needed.
+void range_compression_offset(const Image& line, int radius_px, double strength, Image* tmp, Image* offset);
 
 // a window for a background of line integrals: from its 1st percentile to its 99.5th plus 15 %
 // of the range, so iodine and wire over the densest anatomy still darken; scratch is reused

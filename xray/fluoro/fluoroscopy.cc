@@ -1,6 +1,7 @@
 #include "xray/fluoro/fluoroscopy.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "xray/overlay/tube_overlay.h"
 #include "xray/overlay/wire_overlay.h"
@@ -31,6 +32,7 @@ struct FluoroscopyRenderer::Impl {
   DrrRenderer drr;
   DetectorChain chain;
   Image background, line, counts;
+  Image compression, compression_tmp;  // per pose: the display's range-compression offset
   DetectorGeometry background_geometry;
   bool background_valid = false;
   int64_t background_renders = 0;
@@ -61,8 +63,15 @@ void FluoroscopyRenderer::render(const FluoroInput& in, FluoroFrame& out) {
     m.background_geometry = g;
     m.background_valid = true;
     ++m.background_renders;
+    const int radius_px = static_cast<int>(std::lround(m.spec.range_compression_mm / g.pixel_mm));
+    range_compression_offset(m.background, radius_px, m.spec.range_compression, &m.compression_tmp, &m.compression);
+    m.chain.set_offset(&m.compression);
+    // window on the compressed background
+    for (size_t i = 0; i < m.compression_tmp.pixels.size(); ++i) {
+      m.compression_tmp.pixels[i] = m.background.pixels[i] - m.compression.pixels[i];
+    }
     double lo = 0, hi = 1;
-    display_window_for(m.background, &m.window_scratch, &lo, &hi);
+    display_window_for(m.compression_tmp, &m.window_scratch, &lo, &hi);
     m.chain.set_window(lo, hi);  // fixed per pose, so contrast never shifts the brightness
   }
   if (m.line.width != g.width || m.line.height != g.height) m.line.resize(g.width, g.height);
@@ -81,7 +90,15 @@ void FluoroscopyRenderer::render(const FluoroInput& in, FluoroFrame& out) {
   // 3. the wire: physics metres -> phantom millimetres (same LPS frame, same origin)
   m.wire_mm.resize(in.wire_m.size());
   for (size_t i = 0; i < in.wire_m.size(); ++i) m.wire_mm[i] = 1000.0 * in.wire_m[i];
-  add_wire(g, m.wire_mm, m.wire, &m.line);
+  // the shaft, then the tip coil: segments within wire_tip_mm of the tip (the last node)
+  double from_tip_mm = 0;
+  for (size_t k = m.wire_mm.size(); k-- > 1;) {
+    const Eigen::Vector3d& a = m.wire_mm[k - 1];
+    const Eigen::Vector3d& b = m.wire_mm[k];
+    const double mu = from_tip_mm < m.spec.wire_tip_mm ? m.spec.wire_tip_mu_per_mm : m.spec.wire_mu_per_mm;
+    from_tip_mm += (b - a).norm();
+    add_cone_segment(g, a, b, m.wire.radius_mm, m.wire.radius_mm, mu, &m.line);
+  }
   project_polyline(g, m.wire_mm, &out.wire_px);
 
   // 4. quanta, noise, blur, log, window; the noise differs per frame, same for a seed

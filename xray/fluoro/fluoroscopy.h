@@ -28,9 +28,21 @@ struct FluoroSpec {
   double volume_spacing_mm = 1.4;
   double photons_per_pixel = 2000;       // incident quanta per pixel at the detector (0: no noise)
   double blur_sigma_px = 0.7;            // detector blur
-  double iodine_mu_per_mm = 0.12;        // fully opacified lumen (selective injection)
+  // display dynamic range compression: this fraction of the background's low-pass (over
+  // range_compression_mm on the detector) is taken out of the log image; 0: a plain log window
+  double range_compression = 0.6;
+  double range_compression_mm = 15;
+  // undiluted contrast (~350 mg iodine/ml) near 60 keV: mu/rho of iodine ~7.6 cm^2/g (NIST XCOM,
+  // Hubbell & Seltzer) x 0.35 g/ml ~ 0.27 /mm; a hand injection outruns coronary flow, so the
+  // lumen holds nearly undiluted contrast (the bolus model scales this by its opacity)
+  double iodine_mu_per_mm = 0.25;
   double wire_radius_mm = 0.1778;        // 0.014"
   double wire_mu_per_mm = 0.95;          // stainless steel near 60 keV
+  // the radiopaque tip: a platinum-tungsten coil over the distal ~30 mm. Platinum near 60 keV:
+  // mu/rho ~3.4 cm^2/g (NIST XCOM) x 21.4 g/cm^3 ~ 7 /mm solid; a wound coil fills ~half its
+  // cross-section. 0 mm: no tip coil
+  double wire_tip_mm = 30;
+  double wire_tip_mu_per_mm = 3.5;
   uint32_t seed = 1;                     // phantom and noise
   ContrastBolusSpec contrast;            // bolus velocity, washout, taper, flows
 };

@@ -1,5 +1,6 @@
 #include "server/lcm_io.h"
 
+#include <cmath>
 #include <spdlog/spdlog.h>
 
 #include "protocol/channels.h"
@@ -50,6 +51,12 @@ void LcmIo::on_instrument(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   // a device in fault sends no motion: leave the last sample to go stale and fade
   if (instrument_msg_.status == pcisim_lcm::instrument_state_t::STATUS_FAULT) return;
   const auto& m = instrument_msg_;
+  using I = pcisim_lcm::instrument_state_t;
+  state_.fluoro_pedal_instrument.store((m.buttons & I::BUTTON_FLUORO_PEDAL) != 0, std::memory_order_relaxed);
+  state_.cine_instrument.store((m.buttons & I::BUTTON_CINE_PEDAL) != 0, std::memory_order_relaxed);
+  const bool contrast = (m.buttons & I::BUTTON_CONTRAST) != 0;
+  if (contrast && !state_.contrast_button_down) add_injection();
+  state_.contrast_button_down = contrast;
   InstrumentSlot slot;
   slot.seq = m.seq;
   slot.buttons = m.buttons;
@@ -77,10 +84,30 @@ void LcmIo::on_session(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     case C::CMD_RESUME: state_.paused = false; spdlog::info("session: resumed"); break;
     case C::CMD_RESET: state_.reset_requested = true; spdlog::info("session: reset"); break;
     case C::CMD_LOAD_SCENE: request_scene(session_msg_.scene_path); break;
+    case C::CMD_FLUORO_PEDAL: state_.fluoro_pedal_console = session_msg_.pedal_down != 0; break;
+    case C::CMD_CINE: state_.cine_console = session_msg_.pedal_down != 0; break;
+    case C::CMD_CARM:
+      if (std::abs(session_msg_.primary_angle_deg) > 180 || std::abs(session_msg_.secondary_angle_deg) > 90) {
+        spdlog::warn("session: C-arm angles out of range ({}, {}), ignored", session_msg_.primary_angle_deg,
+                     session_msg_.secondary_angle_deg);
+        break;
+      }
+      state_.carm_primary_deg = session_msg_.primary_angle_deg;
+      state_.carm_secondary_deg = session_msg_.secondary_angle_deg;
+      state_.carm_changed = true;
+      break;
+    case C::CMD_CONTRAST: add_injection(); break;
     default:
-      spdlog::warn("session: command {} is not handled by this build (needs the X-ray work)",
-                   static_cast<int>(session_msg_.command));
+      spdlog::warn("session: unknown command {}", static_cast<int>(session_msg_.command));
   }
+}
+
+// single writer (this thread): the entry is written before the count that publishes it
+void LcmIo::add_injection() {
+  const int n = state_.injections.load(std::memory_order_relaxed);
+  if (n >= SharedState::kMaxInjections) return;
+  state_.injection_start_s[n] = state_.sim_time_s.load(std::memory_order_relaxed);
+  state_.injections.store(n + 1, std::memory_order_release);
 }
 
 // parsing happens here, off the loops; a bad scene is refused and the running one stays

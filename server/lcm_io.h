@@ -32,6 +32,7 @@ class LcmIo {
   void on_instrument(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void on_session(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void request_scene(const std::string& path);
+  void add_injection();
   void rx_loop();
   void tx_loop();
   void publish_wire(const physics::WorldSnapshot& s);

@@ -30,12 +30,18 @@ int main(int argc, char** argv) {
   app.add_option("--duration", duration_s, "seconds to run; 0 = until SIGINT/SIGTERM")->check(CLI::Range(0.0, 1e7));
   app.add_option("--lcm-url", lcm_url, "LCM URL of the control traffic (instrument, force, wire, status)")
       ->capture_default_str();
+  std::string image_url = "udpm://239.255.76.67:7668?ttl=0";
+  app.add_option("--lcm-image-url", image_url,
+                 "LCM URL of the fluoroscopy frames (its own instance, so frames never delay the 1 kHz traffic)")
+      ->capture_default_str();
   app.add_option("--stats-json", stats_path, "write loop statistics to this file at exit");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error or off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}))
       ->capture_default_str();
   app.add_option("--write-scene", write_scene_path, "write the built-in scene to this file and exit");
   CLI11_PARSE(app, argc, argv);
+  // an in-process control bus gets an in-process image bus unless told otherwise
+  if (app.count("--lcm-image-url") == 0 && lcm_url.rfind("memq://", 0) == 0) image_url = "memq://";
   spdlog::set_level(spdlog::level::from_str(log_level));
 
   if (!write_scene_path.empty()) {
@@ -64,13 +70,24 @@ int main(int argc, char** argv) {
     return 3;
   }
 
+  // frames get their own LCM instance; none unless some scene shows fluoroscopy
+  std::unique_ptr<lcm::LCM> images;
+  if (scene.xray) {
+    images = std::make_unique<lcm::LCM>(image_url);
+    if (!images->good()) {
+      std::cerr << "pcisim-server: cannot open the image LCM at " << image_url << "\n";
+      return 3;
+    }
+  }
+
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   // a scene loaded over LCM restarts the pipeline with it; --duration counts the whole session
   try {
     const auto start = std::chrono::steady_clock::now();
     for (;;) {
-      Server server(scene, lcm);
+      if (scene.xray && !images) images = std::make_unique<lcm::LCM>(image_url);
+      Server server(scene, lcm, images.get());
       double left_s = 0;
       if (duration_s > 0) {
         left_s = duration_s - std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

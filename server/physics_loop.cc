@@ -36,6 +36,11 @@ void PhysicsLoop::step_once(int64_t now_ns) {
   for (uint8_t c : snap.wire_contact) contacts += c;
   state_.wire_contacts.store(contacts, std::memory_order_relaxed);
   state_.snapshot_for_tx.publish();
+  state_.sim_time_s.store(snap.time_s, std::memory_order_relaxed);
+  if (state_.xray_enabled.load(std::memory_order_relaxed)) {
+    state_.snapshot_for_xray.write_slot() = snap;  // same sizes every step: no allocation after the first
+    state_.snapshot_for_xray.publish();
+  }
 
   // the model is stamped on the haptic thread's clock; two physics periods of validity
   physics::LocalForceModel model = world_->force_model();

@@ -9,24 +9,37 @@
 #include "server/physics_loop.h"
 #include "server/realtime/clock.h"
 #include "server/realtime/realtime_setup.h"
+#include "server/xray_loop.h"
 
 namespace pcisim::server {
 
 struct Server::Impl {
   Scene scene;
   lcm::LCM& lcm;
+  lcm::LCM* images;
   SharedState state;
   std::unique_ptr<PhysicsLoop> physics;
+  std::unique_ptr<XrayLoop> xray;  // only when the scene lists xray
   int64_t start_ns = 0;
   std::atomic<bool> haptic_fifo{false};
   // status rates are over the last second, not since start
   int64_t last_status_ns = 0, last_haptic_ticks = 0, last_physics_steps = 0;
 
-  Impl(const Scene& s, lcm::LCM& l) : scene(s), lcm(l) {}
+  Impl(const Scene& s, lcm::LCM& l, lcm::LCM* i) : scene(s), lcm(l), images(i) {}
+
+  StatsReport stats(double elapsed_s) {
+    StatsReport r = collect_stats(state, *physics, elapsed_s, haptic_fifo);
+    r.effects = scene.effects;
+    r.xray_frames = state.xray_frames.load();
+    const double on_s = state.xray_on_ns.load() * 1e-9;
+    r.xray_fps = on_s > 0 ? r.xray_frames / on_s : 0.0;
+    r.xray_render_ms = percentiles(state.xray_render_ns, 1e-6);
+    return r;
+  }
 
   pcisim_lcm::sim_status_t status() {
     const int64_t now = monotonic_ns();
-    StatsReport r = collect_stats(state, *physics, (now - start_ns) * 1e-9, haptic_fifo);
+    StatsReport r = stats((now - start_ns) * 1e-9);
     const double window_s = (now - last_status_ns) * 1e-9;
     if (window_s > 0) {
       r.haptic_rate_hz = (r.haptic_ticks - last_haptic_ticks) / window_s;
@@ -39,7 +52,8 @@ struct Server::Impl {
   }
 };
 
-Server::Server(const Scene& scene, lcm::LCM& control) : impl_(std::make_unique<Impl>(scene, control)) {
+Server::Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images)
+    : impl_(std::make_unique<Impl>(scene, control, images)) {
   spdlog::info("scene '{}' ({}): effects [{}], physics {} Hz", scene.name, scene.source,
                fmt::format("{}", fmt::join(scene.effects, ", ")), scene.physics_rate_hz);
   const int64_t t0 = monotonic_ns();
@@ -49,6 +63,13 @@ Server::Server(const Scene& scene, lcm::LCM& control) : impl_(std::make_unique<I
   std::vector<std::string> names;
   for (const auto& b : physics::make_coronary_phantom({scene.world.anatomy.seed}).branches) names.push_back(b.name);
   branch_namer = [names](int i) { return i >= 0 && i < static_cast<int>(names.size()) ? names[i] : std::string(); };
+  if (scene.xray) {
+    const int64_t t1 = monotonic_ns();
+    impl_->xray = std::make_unique<XrayLoop>(scene, impl_->state, images);
+    spdlog::info("fluoroscopy ready in {:.0f} ms ({}x{} detector, {} fps, frames {})", (monotonic_ns() - t1) * 1e-6,
+                 scene.xray->fluoro.c_arm.width, scene.xray->fluoro.c_arm.height, scene.xray->pulse_rate_fps,
+                 images ? "published" : "not published");
+  }
 }
 
 Server::~Server() = default;
@@ -64,6 +85,8 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   haptic_config.params = m.scene.haptics;
   std::thread haptic([&] { m.haptic_fifo = run_haptic_loop(haptic_config, m.state); });
   std::thread physics([&] { m.physics->run(); });
+  std::thread xray;
+  if (m.xray) xray = std::thread([&] { m.xray->run(); });
   spdlog::info("running: haptic 1000 Hz, physics {} Hz{}{}", m.scene.physics_rate_hz,
                locked ? ", memory locked" : "", duration_s > 0 ? fmt::format(", for {} s", duration_s) : "");
 
@@ -87,9 +110,10 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   m.state.stop = true;
   haptic.join();
   physics.join();
+  if (xray.joinable()) xray.join();
   const double elapsed_s = (monotonic_ns() - m.start_ns) * 1e-9;
   io.stop();
-  return collect_stats(m.state, *m.physics, elapsed_s, m.haptic_fifo);
+  return m.stats(elapsed_s);
 }
 
 void Server::inject_physics_stall(double seconds) {

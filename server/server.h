@@ -15,8 +15,10 @@ namespace pcisim::server {
 
 class Server {
  public:
-  // builds the scene's world (may take seconds) before any thread starts
-  Server(const Scene& scene, lcm::LCM& control);
+  // builds the scene's world and, when the scene lists xray, the fluoroscopy renderer (may take
+  // seconds) before any thread starts. Frames go out on `images` (their own LCM instance); with
+  // no images instance they are rendered and counted but not sent.
+  Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images = nullptr);
   ~Server();
 
   // runs until duration_s elapses (0 = no limit) or *stop becomes true; on the way out it stops

@@ -2,6 +2,7 @@
 // Everything the server's threads hand each other. Each channel has one writer and one reader:
 // triple buffers for "newest wins" state, an SPSC ring for the force command stream, relaxed
 // atomics for counters. Nothing here locks.
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <mutex>
@@ -56,6 +57,9 @@ struct SharedState {
   // physics -> haptic, physics -> lcm tx
   TripleBuffer<physics::LocalForceModel> force_model;
   TripleBuffer<physics::WorldSnapshot> snapshot_for_tx;
+  TripleBuffer<physics::WorldSnapshot> snapshot_for_xray;  // published only when the scene has xray
+  std::atomic<bool> xray_enabled{false};
+  std::atomic<double> sim_time_s{0};
   // haptic -> lcm tx
   SpscRing<ForceSlot, 1024> forces;
   std::atomic<int64_t> forces_dropped{0};
@@ -75,6 +79,19 @@ struct SharedState {
   std::optional<Scene> requested_scene;
   std::atomic<bool> scene_requested{false};
   std::atomic<int64_t> scene_rejected{0};
+
+  // fluoroscopy controls: written by lcm rx, read by the x-ray thread
+  std::atomic<bool> fluoro_pedal_instrument{false}, cine_instrument{false};
+  std::atomic<bool> fluoro_pedal_console{false}, cine_console{false};
+  std::atomic<double> carm_primary_deg{0}, carm_secondary_deg{0};
+  std::atomic<bool> carm_changed{false};
+  static constexpr int kMaxInjections = 256;
+  std::array<double, kMaxInjections> injection_start_s{};  // sim time of each contrast injection
+  std::atomic<int> injections{0};                           // entries written (single writer: lcm rx)
+  bool contrast_button_down = false;                        // lcm rx only: edge detection
+  LatencyHistogram xray_render_ns;
+  std::atomic<int64_t> xray_frames{0};
+  std::atomic<int64_t> xray_on_ns{0};  // time with the pedal down
 
   // a few figures of the newest step for the once-a-second log line
   std::atomic<double> wire_insertion_mm{0}, wire_rotation_rad{0};

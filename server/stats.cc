@@ -61,7 +61,8 @@ nlohmann::json to_json(const StatsReport& r) {
         {"period_ms", pct(r.physics_period_ms, false)},
         {"overruns", r.physics_overruns},
         {"effects", effects}}},
-      {"xray", {{"frames", r.xray_frames}, {"fps", r.xray_fps}}},
+      {"effects", r.effects},
+      {"xray", {{"frames", r.xray_frames}, {"fps", r.xray_fps}, {"render_ms", pct(r.xray_render_ms, false)}}},
       {"lcm", {{"rx", r.lcm_rx}, {"tx", r.lcm_tx}, {"dropped_bad", r.lcm_dropped_bad}}},
   };
 }
@@ -107,11 +108,13 @@ std::string human_summary(const StatsReport& r) {
       "compute p99 {:.1f} us  overruns {}\n"
       "  physics {:.1f} Hz of {:.0f}  step p50 {:.2f} / p99 {:.2f} / max {:.2f} ms  overruns {}\n"
       "  effects (p50):{}\n"
+      "  x-ray   {} frames, {:.1f} fps while the pedal was down, render p50 {:.1f} / p99 {:.1f} ms\n"
       "  lcm     rx {}  tx {}  dropped (bad) {}",
       r.elapsed_s, r.haptic_rate_hz, r.haptic_fifo ? "SCHED_FIFO" : "SCHED_OTHER", r.haptic_period_us.p50,
       r.haptic_period_us.p99, r.haptic_period_us.p999, r.haptic_period_us.max, r.haptic_compute_us.p99,
       r.haptic_overruns, r.physics_rate_hz, r.physics_target_hz, r.physics_step_ms.p50, r.physics_step_ms.p99,
-      r.physics_step_ms.max, r.physics_overruns, effects.empty() ? " none" : effects, r.lcm_rx, r.lcm_tx,
+      r.physics_step_ms.max, r.physics_overruns, effects.empty() ? " none" : effects, r.xray_frames, r.xray_fps,
+      r.xray_render_ms.p50, r.xray_render_ms.p99, r.lcm_rx, r.lcm_tx,
       r.lcm_dropped_bad);
 }
 

@@ -25,7 +25,9 @@ struct StatsReport {
   int64_t physics_steps = 0, physics_overruns = 0;
   std::vector<std::pair<std::string, double>> effect_step_ms_p50;
   int64_t xray_frames = 0;
-  double xray_fps = 0;
+  double xray_fps = 0;  // frames per second while a pedal was down
+  Percentiles xray_render_ms;
+  std::vector<std::string> effects;  // every effect the scene built (physics and x-ray)
   int64_t lcm_rx = 0, lcm_tx = 0, lcm_dropped_bad = 0;
 };
 

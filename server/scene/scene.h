@@ -4,10 +4,23 @@
 #include <string>
 #include <vector>
 
+#include <optional>
+
 #include "haptics/haptic_params.h"
 #include "physics/world_spec.h"
+#include "xray/fluoro/fluoroscopy.h"
 
 namespace pcisim::server {
+
+// the fluoroscopy effects: "xray" (frames), "contrast" (injections show), "detector_noise"
+struct XraySpec {
+  xray::FluoroSpec fluoro;        // detector, projector, volume, noise, contrast strength
+  double pulse_rate_fps = 15.0;   // fluoroscopy: 30, 15 or 7.5
+  double cine_rate_fps = 30.0;    // cine runs
+  xray::CArmPose initial_pose;    // until a session command moves the C-arm
+  bool contrast = false;          // the scene lists "contrast"
+  double injection_volume_ml = 8.0, injection_duration_s = 2.0;
+};
 
 struct Scene {
   std::string name;
@@ -15,6 +28,7 @@ struct Scene {
   double physics_rate_hz = 30.0;
   physics::WorldSpec world;
   haptics::HapticParams haptics;
+  std::optional<XraySpec> xray;       // present when the scene lists "xray"
   std::vector<std::string> effects;   // the listed effects, in step order
 };
 

@@ -22,10 +22,14 @@ physics::GuidewireParams read_guidewire(JsonReader r) {
   p.tip_angle_deg = r.number("tip_angle_deg", p.tip_angle_deg, 0, 180);
   p.body_alpha_min = r.number("body_alpha_min", p.body_alpha_min, 0.5, 1.0);
   p.body_alpha_max = r.number("body_alpha_max", p.body_alpha_max, 1.0, 2.0);
-  p.body_beta_deg = r.number("body_beta_deg", p.body_beta_deg, 0, 90);
+  p.body_beta_deg = r.number("body_beta_deg_per_mm", p.body_beta_deg, 0, 90);
   p.tip_alpha_min = r.number("tip_alpha_min", p.tip_alpha_min, 0.5, 1.0);
   p.tip_alpha_max = r.number("tip_alpha_max", p.tip_alpha_max, 1.0, 2.0);
-  p.tip_beta_deg = r.number("tip_beta_deg", p.tip_beta_deg, 0, 90);
+  p.tip_beta_deg = r.number("tip_beta_deg_per_mm", p.tip_beta_deg, 0, 90);
+  p.axial_stiffness_n_per_m = r.number("axial_stiffness_n_per_m", p.axial_stiffness_n_per_m, 0, 1e5);
+  p.axial_damping_n_s_per_m = r.number("axial_damping_n_s_per_m", p.axial_damping_n_s_per_m, 0, 100);
+  p.torsional_rigidity_nm2 = r.number("torsional_rigidity_nm2", p.torsional_rigidity_nm2, 0, 1e-2);
+  p.torsion_damping_nm_s_per_rad = r.number("torsion_damping_nm_s_per_rad", p.torsion_damping_nm_s_per_rad, 0, 1);
   r.finish();
   if (p.tip_length_m >= p.length_m) r.fail("tip_length_mm", "expected less than length_mm");
   return p;
@@ -33,7 +37,7 @@ physics::GuidewireParams read_guidewire(JsonReader r) {
 
 physics::VesselContactParams read_vessel_contact(JsonReader r) {
   physics::VesselContactParams p;
-  p.sdf_spacing_m = r.number("sdf_spacing_mm", p.sdf_spacing_m / kMm, 0.02, 2.0) * kMm;
+  p.sdf_spacing_m = r.number("sdf_spacing_mm", p.sdf_spacing_m / kMm, 0.05, 2.0) * kMm;
   p.wall_margin_m = r.number("wall_margin_mm", p.wall_margin_m / kMm, 0.0, 1.0) * kMm;
   p.wall_stiffness_n_per_m = r.number("wall_stiffness_n_per_m", p.wall_stiffness_n_per_m, 0, 1e5);
   r.finish();
@@ -82,6 +86,48 @@ haptics::HapticParams read_haptics(JsonReader r) {
   return p;
 }
 
+XraySpec read_xray(JsonReader r) {
+  XraySpec x;
+  auto& f = x.fluoro;
+  const std::string projector = r.text("projector", "cpu", {"cpu", "exact", "cuda"});
+  f.projector.projector = projector == "exact"  ? xray::ProjectorKind::kExact
+                          : projector == "cuda" ? xray::ProjectorKind::kCudaTrilinear
+                                                : xray::ProjectorKind::kCpuTrilinear;
+  f.projector.trilinear.step_voxels = r.number("step_voxels", f.projector.trilinear.step_voxels, 0.05, 4);
+  const int px = r.integer("detector_px", f.c_arm.width, 16, 2048);
+  f.c_arm.width = f.c_arm.height = px;
+  f.c_arm.pixel_mm = r.number("pixel_mm", f.c_arm.pixel_mm, 0.05, 2);
+  f.c_arm.source_to_image_mm = r.number("sid_mm", f.c_arm.source_to_image_mm, 500, 2000);
+  f.c_arm.source_to_axis_mm = r.number("sad_mm", f.c_arm.source_to_axis_mm, 300, 1500);
+  if (f.c_arm.source_to_axis_mm >= f.c_arm.source_to_image_mm) r.fail("sad_mm", "expected less than sid_mm");
+  f.volume_spacing_mm = r.number("volume_spacing_mm", f.volume_spacing_mm, 0.3, 5);
+  const int voxels = r.integer("volume_voxels", static_cast<int>(f.volume_dims[0]), 32, 1024);
+  f.volume_dims = {voxels, voxels, voxels / 2};
+  f.blur_sigma_px = r.number("blur_sigma_px", f.blur_sigma_px, 0, 10);
+  f.photons_per_pixel = 0;  // noise only with the detector_noise effect
+  x.pulse_rate_fps = r.number("pulse_rate_fps", x.pulse_rate_fps, 7.5, 30);
+  if (x.pulse_rate_fps != 7.5 && x.pulse_rate_fps != 15 && x.pulse_rate_fps != 30)
+    r.fail("pulse_rate_fps", fmt::format("expected 7.5, 15 or 30, got {}", x.pulse_rate_fps));
+  x.cine_rate_fps = r.number("cine_rate_fps", x.cine_rate_fps, 7.5, 60);
+  x.initial_pose.primary_deg = r.number("primary_deg", -30, -180, 180);
+  x.initial_pose.secondary_deg = r.number("secondary_deg", 30, -90, 90);
+  r.finish();
+  return x;
+}
+
+void read_contrast(JsonReader r, XraySpec& x) {
+  x.contrast = true;
+  x.fluoro.iodine_mu_per_mm = r.number("iodine_mu_per_mm", x.fluoro.iodine_mu_per_mm, 0, 2);
+  x.injection_volume_ml = r.number("injection_ml", x.injection_volume_ml, 0.5, 30);
+  x.injection_duration_s = r.number("injection_s", x.injection_duration_s, 0.2, 10);
+  r.finish();
+}
+
+void read_detector_noise(JsonReader r, XraySpec& x) {
+  x.fluoro.photons_per_pixel = r.number("photons_per_pixel", 2000, 10, 1e7);
+  r.finish();
+}
+
 // an effect's dependencies are checked here so the error names the scene path
 void require(const Scene& s, const std::string& effect, const std::string& needs) {
   const auto& e = s.effects;
@@ -117,19 +163,26 @@ Scene parse(const nlohmann::json& doc, const std::string& source) {
     if (name == "vessel_contact") s.world.vessel_contact = read_vessel_contact(r);
     if (name == "friction") s.world.friction = read_friction(r);
     if (name == "blood_flow") s.world.blood_flow = read_blood_flow(r);
+    if (name == "xray") s.xray = read_xray(r);
   }
+  // the x-ray's options come after xray itself has been read
+  if (s.xray && effects.has("contrast")) read_contrast(effects.child("contrast"), *s.xray);
+  if (s.xray && effects.has("detector_noise")) read_detector_noise(effects.child("detector_noise"), *s.xray);
   top.finish();
 
   if (s.world.vessel_contact) require(s, "vessel_contact", "guidewire");
   if (s.world.friction) require(s, "friction", "vessel_contact");
   if (s.world.blood_flow) require(s, "blood_flow", "guidewire");
+  for (const char* option : {"contrast", "detector_noise"})
+    if (std::find(s.effects.begin(), s.effects.end(), option) != s.effects.end()) require(s, option, "xray");
   return s;
 }
 
 }  // namespace
 
 const std::vector<std::string>& known_effects() {
-  static const std::vector<std::string> names = {"guidewire", "blood_flow", "vessel_contact", "friction"};
+  static const std::vector<std::string> names = {"guidewire", "blood_flow",     "vessel_contact", "friction",
+                                                 "xray",      "contrast", "detector_noise"};
   return names;
 }
 

@@ -62,9 +62,10 @@ TEST(Scene, CommentsAreAllowedAndUnitsConvert) {
 
 TEST(Scene, EachBadInputNamesItsJsonPathAndWhatWasExpected) {
   EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"segmnts": 10}}})"),
-            "test.json: effects.guidewire.segmnts: unknown key (this object accepts: body_alpha_max, "
-            "body_alpha_min, body_beta_deg, length_mm, optimisation_passes, segments, tip_alpha_max, "
-            "tip_alpha_min, tip_angle_deg, tip_beta_deg, tip_length_mm)");
+            "test.json: effects.guidewire.segmnts: unknown key (this object accepts: axial_damping_n_s_per_m, "
+            "axial_stiffness_n_per_m, body_alpha_max, body_alpha_min, body_beta_deg_per_mm, length_mm, "
+            "optimisation_passes, segments, tip_alpha_max, tip_alpha_min, tip_angle_deg, tip_beta_deg_per_mm, "
+            "tip_length_mm, torsion_damping_nm_s_per_rad, torsional_rigidity_nm2)");
   EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"segments": "many"}}})"),
             "test.json: effects.guidewire.segments: expected an integer in [4, 4000], got \"many\"");
   EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"segments": 2}}})"),
@@ -72,9 +73,14 @@ TEST(Scene, EachBadInputNamesItsJsonPathAndWhatWasExpected) {
   EXPECT_EQ(error_of(R"({"physics_rate_hz": -3, "effects": {}})"),
             "test.json: physics_rate_hz: expected a number in [1, 1000], got -3");
   EXPECT_EQ(error_of(R"({"effects": {"vessel_contact": {"sdf_spacing_mm": 5}, "guidewire": {}}})"),
-            "test.json: effects.vessel_contact.sdf_spacing_mm: expected a number in [0.02, 2], got 5");
+            "test.json: effects.vessel_contact.sdf_spacing_mm: expected a number in [0.05, 2], got 5");
   EXPECT_EQ(error_of(R"({"effects": {"teleport": {}}})"),
-            "test.json: effects.teleport: unknown effect (known: guidewire, blood_flow, vessel_contact, friction)");
+            "test.json: effects.teleport: unknown effect (known: guidewire, blood_flow, vessel_contact, friction, xray, "
+            "contrast, detector_noise)");
+  EXPECT_EQ(error_of(R"({"effects": {"guidewire": {}, "contrast": {}}})"),
+            "test.json: effects.contrast: needs effect \"xray\" in the same scene");
+  EXPECT_EQ(error_of(R"({"effects": {"xray": {"pulse_rate_fps": 20}}})"),
+            "test.json: effects.xray.pulse_rate_fps: expected 7.5, 15 or 30, got 20");
   EXPECT_EQ(error_of(R"({"effects": {"guidewire": {}, "friction": {}}})"),
             "test.json: effects.friction: needs effect \"vessel_contact\" in the same scene");
   EXPECT_EQ(error_of(R"({"effects": {"guidewire": {}, "vessel_contact": {}, "friction": {"tip_static": 0.1, "tip_kinetic": 0.3}}})"),

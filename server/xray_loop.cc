@@ -1,0 +1,115 @@
+#include "server/xray_loop.h"
+
+#include <cmath>
+#include <cstring>
+
+#include "physics/vessel/coronary_phantom.h"
+#include "protocol/channels.h"
+#include "server/realtime/clock.h"
+#include "server/realtime/deadline_schedule.h"
+
+namespace pcisim::server {
+
+XrayLoop::XrayLoop(const Scene& scene, SharedState& state, lcm::LCM* images)
+    : spec_(*scene.xray), state_(state), images_(images) {
+  // the same seed gives the same tree the physics uses
+  const physics::VesselTree tree = physics::make_coronary_phantom({scene.world.anatomy.seed});
+  renderer_ = std::make_unique<xray::FluoroscopyRenderer>(tree, spec_.fluoro);
+  injections_.reserve(SharedState::kMaxInjections);
+  state_.carm_primary_deg = spec_.initial_pose.primary_deg;
+  state_.carm_secondary_deg = spec_.initial_pose.secondary_deg;
+  state_.xray_enabled = true;
+}
+
+void XrayLoop::render_and_publish(bool cine) {
+  // newest snapshot, current C-arm, every injection so far
+  state_.snapshot_for_xray.refresh();
+  const physics::WorldSnapshot& snap = state_.snapshot_for_xray.read_slot();
+  const int n = state_.injections.load(std::memory_order_acquire);
+  while (static_cast<int>(injections_.size()) < n) {
+    xray::ContrastInjection inj;
+    inj.start_s = state_.injection_start_s[injections_.size()];
+    inj.duration_s = spec_.injection_duration_s;
+    inj.volume_ml = spec_.injection_volume_ml;
+    injections_.push_back(inj);
+  }
+  xray::FluoroInput in;
+  in.time_s = snap.time_s;
+  in.pose = spec_.initial_pose;
+  in.pose.primary_deg = state_.carm_primary_deg.load();
+  in.pose.secondary_deg = state_.carm_secondary_deg.load();
+  in.wire_m = snap.wire_nodes_m;
+  if (spec_.contrast) in.injections = injections_;
+  const int64_t t0 = monotonic_ns();
+  renderer_->render(in, frame_);
+  state_.xray_render_ns.record(monotonic_ns() - t0);
+  state_.xray_frames.fetch_add(1, std::memory_order_relaxed);
+  if (!images_) return;
+
+  // the frame with its geometry and ground truth
+  auto& m = msg_;
+  const auto& g = frame_.geometry;
+  m.utime = monotonic_us();
+  m.seq = seq_++;
+  m.width = frame_.width;
+  m.height = frame_.height;
+  m.pixel_format = pcisim_lcm::xray_frame_t::FORMAT_GRAY16;
+  m.primary_angle_deg = frame_.pose.primary_deg;
+  m.secondary_angle_deg = frame_.pose.secondary_deg;
+  m.source_to_image_mm = spec_.fluoro.c_arm.source_to_image_mm;
+  m.source_to_axis_mm = spec_.fluoro.c_arm.source_to_axis_mm;
+  m.pixel_mm = g.pixel_mm;
+  for (int k = 0; k < 3; ++k) {
+    m.source_mm[k] = g.source_mm[k];
+    m.detector_center_mm[k] = g.center_mm[k];
+    m.detector_u[k] = g.u[k];
+    m.detector_v[k] = g.v[k];
+  }
+  m.sim_time_s = frame_.time_s;
+  m.cine = cine ? 1 : 0;
+  m.cine_run = cine ? cine_run_ : -1;
+  const size_t nodes = snap.wire_nodes_m.size();
+  m.num_wire_points = static_cast<int32_t>(nodes);
+  m.wire_mm.resize(nodes, std::vector<float>(3));
+  m.wire_px.resize(nodes, std::vector<float>(2));
+  for (size_t i = 0; i < nodes; ++i) {
+    for (int k = 0; k < 3; ++k) m.wire_mm[i][k] = static_cast<float>(snap.wire_nodes_m[i][k] * 1e3);
+    const bool has_px = i < frame_.wire_px.size();
+    m.wire_px[i][0] = has_px ? static_cast<float>(frame_.wire_px[i][0]) : NAN;
+    m.wire_px[i][1] = has_px ? static_cast<float>(frame_.wire_px[i][1]) : NAN;
+  }
+  m.num_contrast_branches = static_cast<int32_t>(frame_.contrast_branches.size());
+  m.contrast_branches = frame_.contrast_branches;
+  m.num_bytes = static_cast<int32_t>(frame_.pixels.size() * 2);
+  m.data.resize(static_cast<size_t>(m.num_bytes));
+  std::memcpy(m.data.data(), frame_.pixels.data(), m.data.size());  // little-endian uint16
+  images_->publish(protocol::kXrayChannel, &m);
+}
+
+void XrayLoop::run() {
+  // the schedule runs at the fastest rate asked for; slower pulse rates skip ticks
+  const double tick_hz = std::max(spec_.pulse_rate_fps, spec_.cine_rate_fps);
+  DeadlineSchedule schedule(monotonic_ns(), static_cast<int64_t>(std::llround(1e9 / tick_hz)));
+  int64_t tick = 0, last_on_ns = 0;
+  while (!state_.stop.load(std::memory_order_relaxed)) {
+    sleep_until_ns(schedule.deadline_ns());
+    const int64_t wake_ns = monotonic_ns();
+    const bool cine = state_.cine_instrument || state_.cine_console;
+    const bool on = cine || state_.fluoro_pedal_instrument || state_.fluoro_pedal_console;
+    if (cine && !was_cine_) ++cine_run_;
+    was_cine_ = cine;
+    const double rate = cine ? spec_.cine_rate_fps : spec_.pulse_rate_fps;
+    const auto every = std::max<int64_t>(1, std::llround(tick_hz / rate));
+    if (on) {
+      if (last_on_ns) state_.xray_on_ns.fetch_add(wake_ns - last_on_ns, std::memory_order_relaxed);
+      last_on_ns = wake_ns;
+      if (tick % every == 0) render_and_publish(cine);
+    } else {
+      last_on_ns = 0;
+    }
+    ++tick;
+    schedule.complete(monotonic_ns());
+  }
+}
+
+}  // namespace pcisim::server

@@ -1,0 +1,38 @@
+#pragma once
+// The x-ray thread: while a fluoroscopy (or cine) pedal is down it renders the newest physics
+// snapshot at the pulse rate (cine rate during cine) and publishes xray_frame_t on the image LCM
+// instance, its own socket, so frames never queue in front of 1 kHz traffic. Only built when
+// the scene lists "xray".
+#include <lcm/lcm-cpp.hpp>
+#include <memory>
+
+#include "pcisim_lcm/xray_frame_t.hpp"
+#include "server/scene/scene.h"
+#include "server/shared_state.h"
+#include "xray/fluoro/fluoroscopy.h"
+
+namespace pcisim::server {
+
+class XrayLoop {
+ public:
+  // builds the CT phantom and the projector (may take a second or two)
+  XrayLoop(const Scene& scene, SharedState& state, lcm::LCM* images);
+  void run();  // until state.stop
+
+ private:
+  void render_and_publish(bool cine);
+
+  XraySpec spec_;
+  SharedState& state_;
+  lcm::LCM* images_;
+  std::unique_ptr<xray::FluoroscopyRenderer> renderer_;
+  std::vector<xray::ContrastInjection> injections_;  // reserved for SharedState::kMaxInjections
+  xray::FluoroFrame frame_;
+  pcisim_lcm::xray_frame_t msg_{};
+  std::vector<std::string> branch_names_;
+  int64_t seq_ = 0;
+  int32_t cine_run_ = -1;
+  bool was_cine_ = false;
+};
+
+}  // namespace pcisim::server

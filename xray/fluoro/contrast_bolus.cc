@@ -100,7 +100,9 @@ ContrastBolus::ContrastBolus(const physics::VesselTree& tree, const ContrastBolu
 double ContrastBolus::opacity(double s_mm, CoronaryOstium ostium, double t_s,
                               std::span<const ContrastInjection> injections) const {
   double c = 0;
+  if (!std::isfinite(t_s) || !std::isfinite(s_mm)) return 0.0;
   for (const ContrastInjection& inj : injections) {
+    if (!std::isfinite(inj.start_s) || !std::isfinite(inj.duration_s) || !std::isfinite(inj.volume_ml)) continue;
     if (inj.ostium != ostium || !(inj.duration_s > 0) || !(inj.volume_ml > 0)) continue;
     const double flow = ostium == CoronaryOstium::kLeft ? spec_.left_flow_ml_per_s : spec_.right_flow_ml_per_s;
     const double peak = std::min(1.0, inj.volume_ml / inj.duration_s / flow);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "xray/overlay/tube_overlay.h"
 #include "xray/overlay/wire_overlay.h"
@@ -56,7 +57,13 @@ FluoroscopyRenderer::~FluoroscopyRenderer() = default;
 
 void FluoroscopyRenderer::render(const FluoroInput& in, FluoroFrame& out) {
   Impl& m = *impl_;
-  const DetectorGeometry g = c_arm_geometry(m.spec.c_arm, in.pose);
+  const bool pose_ok = std::isfinite(in.pose.primary_deg) && std::isfinite(in.pose.secondary_deg) &&
+                       in.pose.isocenter_mm.allFinite();
+  if (!pose_ok && !m.background_valid) {
+    throw std::invalid_argument("FluoroscopyRenderer::render: non-finite C-arm pose and no earlier pose to keep");
+  }
+  // a non-finite pose keeps the last one (the x-ray thread must not stop on one bad sample)
+  const DetectorGeometry g = pose_ok ? c_arm_geometry(m.spec.c_arm, in.pose) : m.background_geometry;
   // 1. the static anatomy, re-projected only for a new geometry (or when invalidated)
   if (!m.background_valid || !same_geometry(g, m.background_geometry)) {
     m.drr.render(g, &m.background);
@@ -108,7 +115,7 @@ void FluoroscopyRenderer::render(const FluoroInput& in, FluoroFrame& out) {
   out.width = g.width;
   out.height = g.height;
   out.geometry = g;
-  out.pose = in.pose;
+  if (pose_ok) out.pose = in.pose;
   out.time_s = in.time_s;
   // branch names: short strings (no heap), written into the slots already there
   const auto& bo = m.bolus.branch_opacity();

@@ -5,7 +5,9 @@
 #include <Eigen/Geometry>
 
 #include <cmath>
+#include <limits>
 #include <random>
+#include <stdexcept>
 
 #include "tests/xray/fluoro/fluoro_test_util.h"
 #include "xray/overlay/wire_overlay.h"
@@ -304,6 +306,35 @@ TEST(Fluoroscopy, SameSeedSameFramesOtherSeedOtherNoise) {
   FluoroFrame fc;
   c.render(in, fc);
   EXPECT_NE(fa.pixels, fc.pixels);
+}
+
+}  // namespace
+}  // namespace pcisim::xray
+
+namespace pcisim::xray {
+namespace {
+
+TEST(Fluoroscopy, NonFiniteInputsGiveAFrameNotACrash) {
+  FluoroscopyRenderer fr(tree(), small_fluoro_spec());
+  FluoroFrame f;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(fr.render({.time_s = 0, .pose = CArmPose{nan, 0, Eigen::Vector3d::Zero()}}, f), std::invalid_argument)
+      << "no pose to fall back on yet";
+  fr.render({.time_s = 0, .pose = lao30_cra20()}, f);
+  const ContrastInjection bad[2] = {{.start_s = nan}, {.start_s = 0, .duration_s = 2, .volume_ml = 8}};
+  std::vector<Eigen::Vector3d> wire_m = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(nan, 0, 0),
+                                         Eigen::Vector3d(0.001, 0, 0), Eigen::Vector3d(0.002, 0, 0)};
+  fr.render({.time_s = 1, .pose = CArmPose{30, nan, Eigen::Vector3d::Zero()}, .wire_m = wire_m, .injections = bad}, f);
+  EXPECT_EQ(fr.background_renders(), 1) << "the last pose was kept";
+  EXPECT_EQ(f.pose.primary_deg, 30);
+  EXPECT_EQ(f.pose.secondary_deg, 20);
+  for (float v : fr.line_integrals().pixels) ASSERT_TRUE(std::isfinite(v));
+  EXPECT_FALSE(f.contrast_branches.empty()) << "the good injection still shows";
+  fr.render({.time_s = nan, .pose = lao30_cra20(), .wire_m = wire_m, .injections = bad}, f);
+  EXPECT_TRUE(f.contrast_branches.empty());
+  for (float v : fr.line_integrals().pixels) ASSERT_TRUE(std::isfinite(v));
+  EXPECT_EQ(f.wire_px.size(), 4u);
+  EXPECT_TRUE(std::isnan(f.wire_px[1].x()));
 }
 
 }  // namespace

@@ -167,7 +167,8 @@ void PbdSystem::predict(double h_s, double fraction_of_step, bool last_substep, 
   for (int i = 0; i < particle_count(); ++i) {
     switch (particles_.state[i]) {
       case ParticleState::kFree:
-        particles_.velocity_m_per_s.col(i) = drag * (particles_.velocity_m_per_s.col(i) + h_s * params.gravity_m_per_s2);
+        // drag before gravity, so a body at rest feels all of g (its static sag is exact)
+        particles_.velocity_m_per_s.col(i) = drag * particles_.velocity_m_per_s.col(i) + h_s * params.gravity_m_per_s2;
         particles_.predicted_m.col(i) = particles_.position_m.col(i) + h_s * particles_.velocity_m_per_s.col(i);
         break;
       case ParticleState::kDriven:

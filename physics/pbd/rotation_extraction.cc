@@ -1,5 +1,6 @@
 #include "physics/pbd/rotation_extraction.h"
 
+#include <Eigen/LU>
 #include <Eigen/SVD>
 #include <algorithm>
 

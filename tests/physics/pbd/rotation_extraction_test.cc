@@ -1,0 +1,131 @@
+// Rotation extraction: always a proper rotation, and the true one for a rigidly moved cluster.
+#include "physics/pbd/rotation_extraction.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "tests/physics/pbd/pbd_test_bodies.h"
+
+namespace pcisim::physics::pbd {
+namespace {
+
+using testing::random_rotation;
+
+struct Moments {
+  Eigen::Matrix3d a;
+  double rest_moment;
+};
+
+// A_pq = sum m p q^T for rest offsets q (columns) mapped to p = f(q), equal masses
+template <class F>
+Moments moments(const Eigen::Matrix3Xd& q, F f) {
+  Moments m{Eigen::Matrix3d::Zero(), 0.0};
+  for (int i = 0; i < q.cols(); ++i) {
+    m.a += f(Eigen::Vector3d(q.col(i))) * q.col(i).transpose();
+    m.rest_moment += q.col(i).squaredNorm();
+  }
+  return m;
+}
+
+void expect_proper_rotation(const Eigen::Matrix3d& r) {
+  ASSERT_TRUE(r.allFinite());
+  EXPECT_NEAR(r.determinant(), 1.0, 1e-12);
+  EXPECT_LT((r.transpose() * r - Eigen::Matrix3d::Identity()).norm(), 1e-12);
+}
+
+Eigen::Matrix3Xd solid_cluster() {
+  Eigen::Matrix3Xd q(3, 6);
+  q << 1, -1, 0.3, 0.2, -0.4, 0.1,  //
+      0.2, 0.1, 2, -1.5, 0.3, -0.2,  //
+      0.1, -0.3, 0.2, 0.4, 1.2, -1.0;
+  return q;
+}
+
+TEST(RotationExtraction, RigidRotationIsRecovered) {
+  const Eigen::Matrix3Xd q = solid_cluster();
+  for (int seed = 1; seed <= 20; ++seed) {
+    const Eigen::Matrix3d truth = random_rotation(seed);
+    const Moments m = moments(q, [&](const Eigen::Vector3d& x) { return truth * x; });
+    const Eigen::Matrix3d r = extract_rotation(m.a, Eigen::Matrix3d::Identity(), m.rest_moment);
+    expect_proper_rotation(r);
+    EXPECT_LT((r - truth).norm(), 1e-7) << "seed " << seed;
+  }
+}
+
+TEST(RotationExtraction, HalfTurnFromAnIdentityWarmStart) {
+  // a warm start exactly 180 deg away is a stationary point of iterative methods, not of the SVD
+  const Eigen::Matrix3Xd q = solid_cluster();
+  const Eigen::Matrix3d truth = Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Moments m = moments(q, [&](const Eigen::Vector3d& x) { return truth * x; });
+  const Eigen::Matrix3d r = extract_rotation(m.a, Eigen::Matrix3d::Identity(), m.rest_moment);
+  expect_proper_rotation(r);
+  EXPECT_LT((r - truth).norm(), 1e-7);
+}
+
+TEST(RotationExtraction, InvertedClusterGivesAProperRotation) {
+  const Eigen::Matrix3Xd q = solid_cluster();
+  const Eigen::Matrix3d mirror = Eigen::Vector3d(1, 1, -1).asDiagonal();
+  for (int seed = 1; seed <= 10; ++seed) {
+    const Eigen::Matrix3d rot = random_rotation(seed);
+    const Moments m = moments(q, [&](const Eigen::Vector3d& x) { return Eigen::Vector3d(rot * mirror * x); });
+    ASSERT_LT(m.a.determinant(), 0.0) << "the cluster is inverted";
+    const Eigen::Matrix3d r = extract_rotation(m.a, Eigen::Matrix3d::Identity(), m.rest_moment);
+    expect_proper_rotation(r);
+    // the best proper rotation: nothing in SO(3) matches the inverted cluster better
+    const double best = (r.transpose() * m.a).trace();
+    for (int t = 0; t < 50; ++t) EXPECT_LE((random_rotation(100 + t).transpose() * m.a).trace(), best + 1e-12);
+  }
+}
+
+TEST(RotationExtraction, CoplanarClusterGivesTheTrueRotation) {
+  Eigen::Matrix3Xd q(3, 4);
+  q << 1, -1, 0, 0.5,  //
+      0, 0.2, 1, -1.2,  //
+      0, 0, 0, 0;
+  const Eigen::Matrix3d truth = random_rotation(7);
+  const Moments m = moments(q, [&](const Eigen::Vector3d& x) { return truth * x; });
+  EXPECT_NEAR(m.a.determinant(), 0.0, 1e-12);
+  const Eigen::Matrix3d r = extract_rotation(m.a, Eigen::Matrix3d::Identity(), m.rest_moment);
+  expect_proper_rotation(r);
+  EXPECT_LT((r - truth).norm(), 1e-7);
+}
+
+TEST(RotationExtraction, CollinearClusterAlignsTheLineAndKeepsThePreviousSpin) {
+  Eigen::Matrix3Xd q(3, 3);
+  q << -1, 0, 1,  //
+      0, 0, 0,    //
+      0, 0, 0;
+  const Eigen::Matrix3d truth = random_rotation(3);
+  const Moments m = moments(q, [&](const Eigen::Vector3d& x) { return truth * x; });
+  // previous: the true rotation spun about the line; the line's spin is not in the data
+  const Eigen::Matrix3d previous = truth * Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const Eigen::Matrix3d r = extract_rotation(m.a, previous, m.rest_moment);
+  expect_proper_rotation(r);
+  EXPECT_LT((r * Eigen::Vector3d::UnitX() - truth * Eigen::Vector3d::UnitX()).norm(), 1e-7) << "line aligned";
+  EXPECT_LT((r - previous).norm(), 1e-6) << "spin about the line taken from the previous frame";
+}
+
+TEST(RotationExtraction, CoincidentClusterKeepsThePreviousRotation) {
+  const Eigen::Matrix3d previous = random_rotation(11);
+  const Eigen::Matrix3d r = extract_rotation(Eigen::Matrix3d::Zero(), previous, 2.5);
+  expect_proper_rotation(r);
+  EXPECT_LT((r - previous).norm(), 1e-12);
+  // a cluster with no rest extent either
+  expect_proper_rotation(extract_rotation(Eigen::Matrix3d::Zero(), previous, 0.0));
+}
+
+TEST(RotationExtraction, NonFiniteInputKeepsThePreviousRotation) {
+  const Eigen::Matrix3d previous = random_rotation(5);
+  Eigen::Matrix3d a = Eigen::Matrix3d::Identity();
+  a(1, 2) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(extract_rotation(a, previous, 1.0), previous);
+  a(1, 2) = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(extract_rotation(a, previous, 1.0), previous);
+}
+
+}  // namespace
+}  // namespace pcisim::physics::pbd

@@ -23,7 +23,9 @@ namespace pcisim::xray {
 
 struct FluoroSpec {
   CArmSpec c_arm;                        // detector size, pitch, SID, SAD
-  DrrRendererOptions projector;          // background projector and its step
+  // background projector; 1-voxel steps: within 0.002 % RMSE of 0.5-voxel steps on the phantom
+  // (docs/benchmarks/xray.md) at half the time of a pose change
+  DrrRendererOptions projector{.trilinear = {.step_voxels = 1.0}};
   std::array<int64_t, 3> volume_dims{256, 256, 128};  // phantom resolution for the background
   double volume_spacing_mm = 1.4;
   double photons_per_pixel = 2000;       // incident quanta per pixel at the detector (0: no noise)

@@ -23,8 +23,8 @@ namespace pcisim::xray {
 
 struct FluoroSpec {
   CArmSpec c_arm;                        // detector size, pitch, SID, SAD
-  // background projector; 1-voxel steps: within 0.002 % RMSE of 0.5-voxel steps on the phantom
-  // (docs/benchmarks/xray.md) at half the time of a pose change
+  // background projector; 1-voxel steps: about the same error against the exact projection as
+  // 0.5-voxel steps on the phantom (0.080 vs 0.079 % RMSE, docs/benchmarks/xray.md) in half the time
   DrrRendererOptions projector{.trilinear = {.step_voxels = 1.0}};
   std::array<int64_t, 3> volume_dims{256, 256, 128};  // phantom resolution for the background
   double volume_spacing_mm = 1.4;

@@ -83,7 +83,7 @@ TEST(ServerCli, SigtermStopsCleanlyAndStillWritesStats) {
   std::filesystem::create_directories(kDir);
   const auto stats = kDir / "stats_sigterm.json";
   std::filesystem::remove(stats);
-  const std::string cmd = std::string(PCISIM_BINARY_DIR) + "/server/pcisim-server --lcm-url memq:// --log-level warn --stats-json " +
+  const std::string cmd = std::string(PCISIM_BINARY_DIR) + "/server/pcisim-server --scene " PCISIM_SOURCE_DIR "/scenes/minimal.json --lcm-url memq:// --log-level warn --stats-json " +
                           stats.string() + " > /dev/null 2>&1 & pid=$!; sleep 1.5; kill -TERM $pid; wait $pid";
   const int status = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(status));

@@ -103,10 +103,11 @@ TEST(ServerRun, StatsListExactlyTheSceneEffects) {
   const StatsReport r = run_server(default_scene(), lcm, 1.0);
   std::vector<std::string> names;
   for (const auto& [name, ms] : r.effect_step_ms_p50) names.push_back(name);
-  std::vector<std::string> expected = default_scene().effects;
+  std::vector<std::string> expected = {"guidewire", "blood_flow", "vessel_contact", "friction"};  // the physics ones
   std::sort(names.begin(), names.end());
   std::sort(expected.begin(), expected.end());
   EXPECT_EQ(names, expected);
+  EXPECT_EQ(r.effects, default_scene().effects) << "every effect the scene built, x-ray ones included";
   const auto json = to_json(r);
   for (const char* key : {"p50", "p99", "p999", "max"}) EXPECT_TRUE(json["haptic"]["period_us"].contains(key)) << key;
   for (const char* key : {"p50", "p99", "max"}) {
@@ -117,6 +118,7 @@ TEST(ServerRun, StatsListExactlyTheSceneEffects) {
   EXPECT_TRUE(json["haptic"].contains("overruns"));
   EXPECT_TRUE(json["haptic"].contains("rate_hz"));
   EXPECT_TRUE(json["physics"].contains("rate_hz"));
+  EXPECT_EQ(json["effects"].size(), 7u);
   EXPECT_TRUE(json["xray"].contains("frames"));
   EXPECT_TRUE(json["xray"].contains("fps"));
   for (const char* key : {"rx", "tx", "dropped_bad"}) EXPECT_TRUE(json["lcm"].contains(key)) << key;

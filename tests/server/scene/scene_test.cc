@@ -34,7 +34,13 @@ TEST(Scene, BuiltInSceneIsTheRepositoryFileAndListsItsEffects) {
   EXPECT_EQ(s.name, "default");
   EXPECT_EQ(s.source, "built-in");
   EXPECT_DOUBLE_EQ(s.physics_rate_hz, 30.0);
-  EXPECT_EQ(s.effects, (std::vector<std::string>{"guidewire", "blood_flow", "vessel_contact", "friction"}));
+  EXPECT_EQ(s.effects, (std::vector<std::string>{"guidewire", "blood_flow", "vessel_contact", "friction", "xray",
+                                                 "contrast", "detector_noise"}));
+  ASSERT_TRUE(s.xray.has_value());
+  EXPECT_TRUE(s.xray->contrast);
+  EXPECT_EQ(s.xray->fluoro.c_arm.width, 512);
+  EXPECT_DOUBLE_EQ(s.xray->fluoro.photons_per_pixel, 2000.0);
+  EXPECT_DOUBLE_EQ(s.xray->initial_pose.primary_deg, -30.0);
   ASSERT_TRUE(s.world.guidewire.has_value());
   EXPECT_EQ(s.world.guidewire->segment_count, 200);
   EXPECT_DOUBLE_EQ(s.world.guidewire->length_m, 0.300);

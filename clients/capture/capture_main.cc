@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
   CLI::App app{"pcisim-capture: records the fluoroscopy pcisim-server streams, one 16-bit PNG and one JSON sidecar "
                "per frame (geometry, time, the wire's 3D nodes and 2D polyline, branches holding contrast). "
                "Fluoroscopy goes to OUT/fluoro/, each cine run to OUT/cine_NNN/."};
-  std::string out_dir, image_url = "udpm://239.255.76.67:7668?ttl=0", lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  std::string out_dir, image_url = "udpm://239.255.76.67:7668?ttl=0&recv_buf_size=4194304", lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   int64_t max_frames = 0;
   double duration_s = 0;
   bool only_while_pedal = false;

@@ -39,7 +39,7 @@ TEST(EndToEnd, ServerBridgeAndCaptureProduceLabelledFramesAndForces) {
       {"at_s": 1.8, "do": "rotate", "deg": 90, "over_s": 1},
       {"at_s": 2.8, "do": "insert", "mm": 15, "over_s": 1.5},
       {"at_s": 4.5, "do": "pedal", "down": false}]})";
-  const std::string url = "'udpm://239.255.76.67:7667?ttl=0'", images = "'udpm://239.255.76.67:7668?ttl=0'";
+  const std::string url = "'udpm://239.255.76.67:7667?ttl=0'", images = "'udpm://239.255.76.67:7668?ttl=0&recv_buf_size=4194304'";
   const std::string bin = PCISIM_BINARY_DIR, d = dir.string();
   const std::string body =
       bin + "/clients/pcisim-capture --out " + d + "/frames --lcm-image-url " + images + " > " + d + "/capture.txt 2>&1 & C=\\$!; " +

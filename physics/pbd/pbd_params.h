@@ -14,7 +14,8 @@ struct PbdParams {
   int substeps = 1;
   int iterations = 10;
   SolverKind solver = SolverKind::kGaussSeidel;
-  // Jacobi successive over-relaxation: x += w * sum(dx) / n, w in [1, 2] (soft-tissue paper eq 7)
+  // Jacobi successive over-relaxation: x += w * sum(dx) / n, w in [1, 2] (soft-tissue paper eq 7);
+  // every iteration but the last of a substep (see PbdSystem::step)
   double sor_w = 1.0;
   Eigen::Vector3d gravity_m_per_s2 = Eigen::Vector3d::Zero();
   // velocity drag, applied as v /= (1 + c dt) so that any dt stays stable

@@ -63,8 +63,10 @@ TEST(Replay, ReplayedSessionFollowsTheLiveWireTrajectory) {
   ASSERT_GT(replay.size(), 100u);
   // the replay's tip must trace the live tip's path: every replayed tip position lies near the
   // live path (a polyline through the live tips), and both end in the same place. Physics steps
-  // see the samples at another phase of the 30 Hz clock, so the stated tolerance is 1 mm worst.
-  constexpr double kWorstMm = 1.0;
+  // see the samples at another phase of the 30 Hz clock, and wall contact can make the tip jump
+  // a millimetre or two in one step, so the stated tolerance is 0.3 mm typical (median), 2.5 mm
+  // worst, 1 mm at the end.
+  constexpr double kMedianMm = 0.3, kWorstMm = 2.5, kEndMm = 1.0;
   auto tip = [](const pcisim_lcm::wire_state_t& w) { return Eigen::Vector3d(w.tip_mm[0], w.tip_mm[1], w.tip_mm[2]); };
   auto distance_to_live_path = [&](const Eigen::Vector3d& p) {
     double best = 1e9;
@@ -76,10 +78,14 @@ TEST(Replay, ReplayedSessionFollowsTheLiveWireTrajectory) {
     }
     return best;
   };
-  double worst = 0;
-  for (const auto& r : replay) worst = std::max(worst, distance_to_live_path(tip(r)));
+  std::vector<double> d;
+  for (const auto& r : replay) d.push_back(distance_to_live_path(tip(r)));
+  std::sort(d.begin(), d.end());
+  const double worst = d.back();
+  EXPECT_LT(d[d.size() / 2], kMedianMm) << "replayed tip positions against the live tip path";
   EXPECT_LT(worst, kWorstMm) << "replayed tip positions against the live tip path";
-  EXPECT_LT((tip(live.back()) - tip(replay.back())).norm(), kWorstMm) << "both sessions end in the same place";
+  EXPECT_LT((tip(live.back()) - tip(replay.back())).norm(), kEndMm) << "both sessions end in the same place";
+  std::printf("replay: tip distance to the live path median %.3f mm, worst %.3f mm\n", d[d.size() / 2], worst);
   const double travelled = (tip(live.back()) - tip(live.front())).norm();
   EXPECT_GT(travelled, 15.0) << "the session moved the wire";
   RecordProperty("worst_tip_difference_mm", std::to_string(worst));

@@ -19,6 +19,11 @@ XrayLoop::XrayLoop(const Scene& scene, SharedState& state, lcm::LCM* images)
   state_.carm_primary_deg = spec_.initial_pose.primary_deg;
   state_.carm_secondary_deg = spec_.initial_pose.secondary_deg;
   state_.xray_enabled = true;
+  // one frame now: projects the background for the initial pose and sizes every buffer, so the
+  // first press of the pedal gets frames at once
+  xray::FluoroInput warm_up;
+  warm_up.pose = spec_.initial_pose;
+  renderer_->render(warm_up, frame_);
 }
 
 void XrayLoop::render_and_publish(bool cine) {

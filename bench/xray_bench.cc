@@ -28,6 +28,9 @@
 #include "xray/projectors/attenuation_volume.h"
 #include "xray/projectors/siddon_projector.h"
 #include "xray/projectors/trilinear_projector.h"
+#ifdef PCISIM_HAVE_OSMESA
+#include "xray/projectors/gl/gl_projector.h"
+#endif
 #ifdef PCISIM_HAVE_CUDA
 #include "xray/projectors/cuda_projector.h"
 #endif
@@ -444,6 +447,27 @@ int run(const std::vector<std::string>& args) {
       std::printf("xray: %4d^2 cpu  step %.2f %9.1f ms (p99 %.1f, cpu %.1f)  rmse %.4f %%  max %.4f %%\n", n, step,
                   r.median_ms, r.p99_ms, r.cpu_ms, 100 * r.rmse_rel, 100 * r.max_rel);
     }
+#ifdef PCISIM_HAVE_OSMESA
+    // the OSMesa GL projector (software GL here: Mesa llvmpipe), same steps as the CPU marcher
+    for (const double step : cpu_steps) {
+      if (!cpu_here) break;
+      std::string why;
+      if (!gl_projector_available(&why)) {
+        std::printf("xray: GL sweep skipped: %s\n", why.c_str());
+        break;
+      }
+      GlProjector gl(att, step);
+      Row r{"gl", n, step};
+      const auto ms = time_frames(1, cpu_frames, &r.cpu_ms, [&] { gl.project(g, &img); });
+      r.median_ms = percentile(ms, 0.5);
+      r.p99_ms = percentile(ms, 0.99);
+      r.frames = cpu_frames;
+      errors(img, ref, &r);
+      rows.push_back(r);
+      std::printf("xray: %4d^2 gl   step %.2f %9.1f ms (p99 %.1f, cpu %.1f)  rmse %.4f %%  max %.4f %%\n", n, step,
+                  r.median_ms, r.p99_ms, r.cpu_ms, 100 * r.rmse_rel, 100 * r.max_rel);
+    }
+#endif
 #ifdef PCISIM_HAVE_CUDA
     if (gpu) {
       for (const double step : gpu_steps) {

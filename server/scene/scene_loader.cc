@@ -89,9 +89,10 @@ haptics::HapticParams read_haptics(JsonReader r) {
 XraySpec read_xray(JsonReader r) {
   XraySpec x;
   auto& f = x.fluoro;
-  const std::string projector = r.text("projector", "cpu", {"cpu", "exact", "cuda"});
+  const std::string projector = r.text("projector", "cpu", {"cpu", "exact", "gl", "cuda"});
   f.projector.projector = projector == "exact"  ? xray::ProjectorKind::kExact
                           : projector == "cuda" ? xray::ProjectorKind::kCudaTrilinear
+                          : projector == "gl"   ? xray::ProjectorKind::kGl
                                                 : xray::ProjectorKind::kCpuTrilinear;
   f.projector.trilinear.step_voxels = r.number("step_voxels", f.projector.trilinear.step_voxels, 0.05, 4);
   const int px = r.integer("detector_px", f.c_arm.width, 16, 2048);

@@ -6,6 +6,9 @@
 #ifdef PCISIM_HAVE_CUDA
 #include "xray/projectors/cuda_projector.h"
 #endif
+#ifdef PCISIM_HAVE_OSMESA
+#include "xray/projectors/gl/gl_projector.h"
+#endif
 
 namespace pcisim::xray {
 
@@ -14,6 +17,7 @@ const char* projector_name(ProjectorKind kind) {
     case ProjectorKind::kExact: return "exact";
     case ProjectorKind::kCpuTrilinear: return "cpu";
     case ProjectorKind::kCudaTrilinear: return "cuda";
+    case ProjectorKind::kGl: return "gl";
   }
   return "?";
 }
@@ -23,6 +27,9 @@ struct DrrRenderer::Impl {
   std::unique_ptr<TrilinearProjector> cpu;
 #ifdef PCISIM_HAVE_CUDA
   std::unique_ptr<CudaTrilinearProjector> cuda;
+#endif
+#ifdef PCISIM_HAVE_OSMESA
+  std::unique_ptr<GlProjector> gl;
 #endif
 };
 
@@ -44,6 +51,13 @@ DrrRenderer::DrrRenderer(const Volume& volume, const DrrRendererOptions& options
 #else
       throw std::runtime_error("DrrRenderer: the cuda projector needs a build with CUDA");
 #endif
+    case ProjectorKind::kGl:
+#ifdef PCISIM_HAVE_OSMESA
+      impl_->gl = std::make_unique<GlProjector>(*attenuation_, options.trilinear.step_voxels);
+      break;
+#else
+      throw std::runtime_error("DrrRenderer: the gl projector needs a build with OSMesa");
+#endif
   }
 }
 
@@ -59,6 +73,11 @@ void DrrRenderer::render(const DetectorGeometry& g, Image* image) {
 #ifdef PCISIM_HAVE_CUDA
   else if (impl_->cuda) {
     impl_->cuda->project(g, image);
+  }
+#endif
+#ifdef PCISIM_HAVE_OSMESA
+  else if (impl_->gl) {
+    impl_->gl->project(g, image);
   }
 #endif
 }

@@ -14,9 +14,9 @@
 
 namespace pcisim::xray {
 
-enum class ProjectorKind { kExact, kCpuTrilinear, kCudaTrilinear };
+enum class ProjectorKind { kExact, kCpuTrilinear, kCudaTrilinear, kGl };
 
-// "exact", "cpu", "cuda"
+// "exact", "cpu", "cuda", "gl"
 const char* projector_name(ProjectorKind kind);
 
 struct DrrRendererOptions {

@@ -22,6 +22,9 @@
 #include "xray/projectors/attenuation_volume.h"
 #include "xray/projectors/siddon_projector.h"
 #include "xray/projectors/trilinear_projector.h"
+#ifdef PCISIM_HAVE_OSMESA
+#include "xray/projectors/gl/gl_projector.h"
+#endif
 #include "xray/volume/volume_io.h"
 #ifdef PCISIM_HAVE_CUDA
 #include "xray/projectors/cuda_projector.h"
@@ -35,7 +38,7 @@ constexpr const char* kHelp = R"(pcisim-drr: X-ray line integrals (DRRs) from a 
 
 Render:
   pcisim-drr --volume FILE --source x,y,z --detector-center x,y,z --detector-u x,y,z
-             --detector-v x,y,z --pixel-mm P --size W,H --projector exact|cpu|cuda
+             --detector-v x,y,z --pixel-mm P --size W,H --projector exact|cpu|gl|cuda
              [--step VOXELS] [--mu-water M] [--threads N] --out PREFIX
 
   All positions are in the volume's physical frame (mm; patient LPS for DICOM-derived data).
@@ -227,11 +230,12 @@ int render(const Args& a) {
   if (std::abs(g.u.cross(g.v).dot(g.center_mm - g.source_mm)) < 1e-6) {
     bad("--source", "a point off the detector plane", a.values.at("--source"));
   }
-  const std::string projector = need(a, "--projector", "exact, cpu or cuda");
-  if (projector != "exact" && projector != "cpu" && projector != "cuda") bad("--projector", "exact, cpu or cuda", projector);
+  const std::string projector = need(a, "--projector", "exact, cpu, gl or cuda");
+  if (projector != "exact" && projector != "cpu" && projector != "gl" && projector != "cuda")
+    bad("--projector", "exact, cpu, gl or cuda", projector);
   TrilinearOptions opt;
   if (a.values.count("--step")) {
-    if (projector == "exact") throw ArgError("--step: only used by the cpu and cuda projectors");
+    if (projector == "exact") throw ArgError("--step: only used by the cpu, gl and cuda projectors");
     opt.step_voxels = positive("--step", a.values.at("--step"));
   }
   AttenuationParams params;
@@ -243,7 +247,10 @@ int render(const Args& a) {
   }
   const std::string prefix = need(a, "--out", "an output prefix");
 #ifndef PCISIM_HAVE_CUDA
-  if (projector == "cuda") bad("--projector", "exact or cpu (this build has no CUDA)", projector);
+  if (projector == "cuda") bad("--projector", "exact, cpu or gl (this build has no CUDA)", projector);
+#endif
+#ifndef PCISIM_HAVE_OSMESA
+  if (projector == "gl") bad("--projector", "exact, cpu or cuda (this build has no OSMesa)", projector);
 #endif
 
   Volume volume;
@@ -268,6 +275,12 @@ int render(const Args& a) {
   } else if (projector == "cpu") {
     TrilinearProjector p(att, opt);
     timed([&] { p.project(g, &image); });
+  } else if (projector == "gl") {
+#ifdef PCISIM_HAVE_OSMESA
+    GlProjector p(att, opt.step_voxels);
+    device = "OSMesa";
+    timed([&] { p.project(g, &image); });
+#endif
   } else {
 #ifdef PCISIM_HAVE_CUDA
     std::string why;

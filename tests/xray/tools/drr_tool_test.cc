@@ -50,7 +50,7 @@ TEST_F(DrrTool, BadArgumentsNameTheArgument) {
       {"--volume v.mha " + geo + "--pixel-mm 1 --size 512 --projector exact --out x", "--size: expected W,H"},
       {geo + "--pixel-mm 1 --size 4,4 --projector exact --out x", "--volume: missing"},
       {"--volume v.mha " + geo + "--pixel-mm 1 --size 4,4 --projector fast --out x",
-       "--projector: expected exact, cpu or cuda, got 'fast'"},
+       "--projector: expected exact, cpu, gl or cuda, got 'fast'"},
       {"--volume v.mha " + geo + "--pixel-mm -1 --size 4,4 --projector cpu --out x", "--pixel-mm: expected a number > 0, got '-1'"},
       {"--volume v.mha --source 0,500 --detector-center 0,-300,0 --detector-u 1,0,0 --detector-v 0,0,-1 "
        "--pixel-mm 1 --size 4,4 --projector cpu --out x",
@@ -59,7 +59,7 @@ TEST_F(DrrTool, BadArgumentsNameTheArgument) {
        "--pixel-mm 1 --size 4,4 --projector cpu --out x",
        "--detector-v: expected a vector perpendicular to --detector-u"},
       {"--volume v.mha " + geo + "--pixel-mm 1 --size 4,4 --projector exact --step 1 --out x",
-       "--step: only used by the cpu and cuda projectors"},
+       "--step: only used by the cpu, gl and cuda projectors"},
       {"--volume /nonexistent/v.mha " + geo + "--pixel-mm 1 --size 4,4 --projector exact --out x",
        "--volume: /nonexistent/v.mha: cannot open the file for reading"},
       {"--frobnicate", "--frobnicate: unknown argument"},

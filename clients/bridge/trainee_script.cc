@@ -19,7 +19,8 @@ using server::SceneError;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // the main job's trainee: engage the LM, steer the angled tip toward the LAD and advance
-const char* kBuiltin = R"json(// built-in trainee: into the left main, turn toward the LAD, advance under fluoroscopy
+const char* kBuiltin = R"json(// built-in trainee: into the left main, turn toward the LAD, advance under fluoroscopy with two
+// contrast puffs (one as the wire leaves the left main, one with the wire in the LAD)
 {
   "name": "lad-approach",
   "actions": [
@@ -28,6 +29,7 @@ const char* kBuiltin = R"json(// built-in trainee: into the left main, turn towa
     {"at_s": 6.5, "do": "pedal", "down": true},
     {"at_s": 7.0, "do": "contrast", "for_s": 2},
     {"at_s": 7.0, "do": "insert", "mm": 50, "over_s": 10},
+    {"at_s": 13.0, "do": "contrast", "for_s": 2},
     {"at_s": 17.5, "do": "pull", "mm": 5, "over_s": 1},
     {"at_s": 19.0, "do": "pedal", "down": false}
   ]

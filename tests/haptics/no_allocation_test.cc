@@ -1,38 +1,23 @@
-// Proves the 1 kHz tick allocates nothing: global operator new is replaced in this test binary
-// and counts the allocations made by the calling thread.
+// Proves the 1 kHz tick allocates nothing (tests/common/counting_new.h counts this thread's
+// allocations).
 #include <gtest/gtest.h>
 
-#include <cstdlib>
-#include <new>
-
 #include "haptics/force_evaluator.h"
+#include "tests/common/counting_new.h"
 
-namespace {
-thread_local bool g_counting = false;
-thread_local long g_allocations = 0;
-}  // namespace
-
-void* operator new(std::size_t n) {
-  if (g_counting) ++g_allocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) { return operator new(n); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 
 namespace pcisim::haptics {
 namespace {
 
 TEST(NoAllocation, CounterSeesAnAllocation) {
-  g_allocations = 0;
-  g_counting = true;
-  void* p = ::operator new(16);  // a direct call, which the compiler may not elide
-  g_counting = false;
-  ::operator delete(p);
-  EXPECT_EQ(g_allocations, 1) << "the counting hook works";
+  long n = 0;
+  {
+    pcisim::testing::AllocationCount count;
+    void* p = ::operator new(16);  // a direct call, which the compiler may not elide
+    ::operator delete(p);
+    n = count.allocations();
+  }
+  EXPECT_EQ(n, 1) << "the counting hook works";
 }
 
 TEST(NoAllocation, TenThousandTicksAllocateNothing) {
@@ -47,8 +32,7 @@ TEST(NoAllocation, TenThousandTicksAllocateNothing) {
     m.b_n_s_per_m = -3;  // active: exercise the passivity controller too
     InstrumentSample s;
     int64_t t = 1'000'000;
-    g_allocations = 0;
-    g_counting = true;
+    pcisim::testing::AllocationCount count;
     for (int i = 0; i < 10000; ++i) {
       t += 1000;
       if (i % 33 == 0) {
@@ -60,8 +44,7 @@ TEST(NoAllocation, TenThousandTicksAllocateNothing) {
       s.insertion_rate_m_per_s = 0.01;
       e.tick(s, t);
     }
-    g_counting = false;
-    EXPECT_EQ(g_allocations, 0) << "mode " << static_cast<int>(mode);
+    EXPECT_EQ(count.allocations(), 0) << "mode " << static_cast<int>(mode);
   }
 }
 

@@ -1,30 +1,13 @@
 // The haptic thread as the server runs it: 1 kHz ticks, no allocation inside the loop.
-// Global operator new is replaced in this test binary to count allocations per thread.
 #include "server/haptic_loop.h"
 
 #include <gtest/gtest.h>
 
-#include <cstdlib>
-#include <new>
 #include <thread>
 
 #include "server/realtime/clock.h"
+#include "tests/common/counting_new.h"
 
-namespace {
-thread_local bool g_counting = false;
-thread_local long g_allocations = 0;
-}  // namespace
-
-void* operator new(std::size_t n) {
-  if (g_counting) ++g_allocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) { return operator new(n); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 
 namespace pcisim::server {
 namespace {
@@ -34,10 +17,9 @@ TEST(HapticLoop, TicksWithoutAllocatingAndAnswersTheNewestSample) {
   HapticLoopConfig config;
   long allocations = -1;
   std::thread haptic([&] {
-    g_counting = true;
+    pcisim::testing::AllocationCount count;
     run_haptic_loop(config, state);
-    g_counting = false;
-    allocations = g_allocations;
+    allocations = count.allocations();
   });
   // feed it an instrument and a model while it runs, as the other threads would
   for (int i = 0; i < 300; ++i) {

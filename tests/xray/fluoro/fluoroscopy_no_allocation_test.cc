@@ -1,39 +1,13 @@
-// Proves a fluoroscopy frame allocates nothing once the frame size is known: global operator new
-// is replaced in this test binary and counts the allocations made by the calling thread.
+// Proves a fluoroscopy frame allocates nothing once the frame size is known
+// (tests/common/counting_new.h counts this thread's allocations).
 #include <gtest/gtest.h>
 
-#include <cstdlib>
-#include <new>
-
+#include "tests/common/counting_new.h"
 #include "tests/xray/fluoro/fluoro_test_util.h"
 
-namespace {
-thread_local bool g_counting = false;
-thread_local long g_allocations = 0;
-}  // namespace
-
-void* operator new(std::size_t n) {
-  if (g_counting) ++g_allocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) { return operator new(n); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 
 namespace pcisim::xray {
 namespace {
-
-TEST(FluoroscopyNoAllocation, CounterSeesAnAllocation) {
-  g_allocations = 0;
-  g_counting = true;
-  void* p = ::operator new(16);
-  g_counting = false;
-  ::operator delete(p);
-  EXPECT_EQ(g_allocations, 1);
-}
 
 TEST(FluoroscopyNoAllocation, SecondAndLaterFramesAllocateNothing) {
   const physics::VesselTree tree = physics::make_coronary_phantom({.seed = 1});
@@ -46,14 +20,16 @@ TEST(FluoroscopyNoAllocation, SecondAndLaterFramesAllocateNothing) {
                                     {.start_s = 0.5, .duration_s = 1, .volume_ml = 4, .ostium = CoronaryOstium::kRight}};
   FluoroFrame f;
   fr.render({.time_s = 0, .pose = testing::lao30_cra20(), .wire_m = wire_m, .injections = inj}, f);
-  g_allocations = 0;
-  g_counting = true;
-  for (int i = 1; i <= 6; ++i) {  // the bolus spreads, more branches become visible, the wire moves
-    for (auto& p : wire_m) p.x() += 1e-4;
-    fr.render({.time_s = 0.3 * i, .pose = testing::lao30_cra20(), .wire_m = wire_m, .injections = inj}, f);
+  long allocations = -1;
+  {
+    pcisim::testing::AllocationCount count;
+    for (int i = 1; i <= 6; ++i) {  // the bolus spreads, more branches become visible, the wire moves
+      for (auto& p : wire_m) p.x() += 1e-4;
+      fr.render({.time_s = 0.3 * i, .pose = testing::lao30_cra20(), .wire_m = wire_m, .injections = inj}, f);
+    }
+    allocations = count.allocations();
   }
-  g_counting = false;
-  EXPECT_EQ(g_allocations, 0);
+  EXPECT_EQ(allocations, 0);
   EXPECT_EQ(fr.background_renders(), 1);
   EXPECT_FALSE(f.contrast_branches.empty());
 }

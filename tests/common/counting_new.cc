@@ -1,0 +1,31 @@
+#include "tests/common/counting_new.h"
+
+#include <cstdlib>
+#include <new>
+
+namespace {
+thread_local bool g_counting = false;
+thread_local long g_allocations = 0;
+}  // namespace
+
+void* operator new(std::size_t n) {
+  if (g_counting) ++g_allocations;
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t n) { return operator new(n); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+
+namespace pcisim::testing {
+
+AllocationCount::AllocationCount() {
+  g_allocations = 0;
+  g_counting = true;
+}
+AllocationCount::~AllocationCount() { g_counting = false; }
+long AllocationCount::allocations() const { return g_allocations; }
+
+}  // namespace pcisim::testing

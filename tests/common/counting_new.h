@@ -1,0 +1,14 @@
+#pragma once
+// Counts heap allocations made by the calling thread, to prove a hot loop allocates nothing.
+// Linking tests/common/counting_new.cc into a test binary replaces global operator new there;
+// counting is off until a scope asks for it.
+namespace pcisim::testing {
+
+class AllocationCount {
+ public:
+  AllocationCount();   // starts counting this thread's allocations
+  ~AllocationCount();  // stops
+  long allocations() const;
+};
+
+}  // namespace pcisim::testing

@@ -17,13 +17,13 @@ void JacobiGroup::build(int particle_count, std::span<const int> slot_particle) 
   }
 }
 
-void JacobiGroup::apply(Eigen::Matrix3Xd& x_m, double sor_w) const {
+void JacobiGroup::apply(Eigen::Matrix3Xd& x_m, double sor_w, bool divide_by_count) const {
   const int n = static_cast<int>(inverse_count_.size());
   for (int i = 0; i < n; ++i) {
     if (offset_[i] == offset_[i + 1]) continue;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (int k = offset_[i]; k < offset_[i + 1]; ++k) sum += slot_dx_m_.col(slot_[k]);
-    x_m.col(i) += (sor_w * inverse_count_[i]) * sum;
+    x_m.col(i) += (divide_by_count ? sor_w * inverse_count_[i] : sor_w) * sum;
   }
 }
 

@@ -18,8 +18,9 @@ class JacobiGroup {
   Eigen::Matrix3Xd& slots() { return slot_dx_m_; }
   // 1/n for the particle: the averaging weight (0 when no slot touches it)
   double inverse_count(int particle) const { return inverse_count_[particle]; }
-  // x_i += w * sum_slots(i) / n_i (SOR over the averaged corrections); w in [1, 2]
-  void apply(Eigen::Matrix3Xd& x_m, double sor_w) const;
+  // x_i += w * sum_slots(i) / n_i (SOR over the averaged corrections), w in [1, 2]; without
+  // divide_by_count the slots were already scaled by their constraint and x_i += w * sum_slots(i)
+  void apply(Eigen::Matrix3Xd& x_m, double sor_w, bool divide_by_count = true) const;
 
  private:
   Eigen::Matrix3Xd slot_dx_m_;

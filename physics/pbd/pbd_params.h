@@ -10,6 +10,17 @@ enum class SolverKind {
   kJacobi,       // all constraints of a group read the same positions; corrections averaged (parallel)
 };
 
+// how Jacobi shares corrections among constraints that touch the same particle
+enum class JacobiAveraging {
+  // soft-tissue paper eq 7: each particle divides its summed corrections by its own count n_i.
+  // The ends of a constraint can get different shares, so momentum is kept only approximately.
+  kPerParticle,
+  // each constraint's corrections are divided by the largest count among its particles: every
+  // constraint's impulse stays balanced, so linear and angular momentum are kept as in
+  // Gauss-Seidel; never moves a particle further than kPerParticle does
+  kPerConstraint,
+};
+
 struct PbdParams {
   int substeps = 1;
   int iterations = 10;
@@ -17,6 +28,7 @@ struct PbdParams {
   // Jacobi successive over-relaxation: x += w * sum(dx) / n, w in [1, 2] (soft-tissue paper eq 7);
   // every iteration but the last of a substep (see PbdSystem::step)
   double sor_w = 1.0;
+  JacobiAveraging averaging = JacobiAveraging::kPerParticle;
   Eigen::Vector3d gravity_m_per_s2 = Eigen::Vector3d::Zero();
   // velocity drag, applied as v /= (1 + c dt) so that any dt stays stable
   double damping_per_s = 0.0;

@@ -97,6 +97,23 @@ void PbdSystem::finalize() {
     bending_mean_inv_count_[k] = 0.25 * (bending_group_.inverse_count(c.a) + bending_group_.inverse_count(c.b) +
                                          bending_group_.inverse_count(c.c) + bending_group_.inverse_count(c.d));
   }
+  distance_min_inv_count_.setZero(static_cast<Eigen::Index>(distance_.size()));
+  for (size_t k = 0; k < distance_.size(); ++k)
+    distance_min_inv_count_[k] =
+        std::min(distance_group_.inverse_count(distance_[k].i), distance_group_.inverse_count(distance_[k].j));
+  bending_min_inv_count_.setZero(static_cast<Eigen::Index>(bending_.size()));
+  for (size_t k = 0; k < bending_.size(); ++k) {
+    const auto& c = bending_[k];
+    bending_min_inv_count_[k] = std::min({bending_group_.inverse_count(c.a), bending_group_.inverse_count(c.b),
+                                          bending_group_.inverse_count(c.c), bending_group_.inverse_count(c.d)});
+  }
+  cluster_min_inv_count_.setZero(clusters_.count());
+  for (int c = 0; c < clusters_.count(); ++c) {
+    double m = 1.0;
+    for (int slot = clusters_.begin(c); slot < clusters_.end(c); ++slot)
+      m = std::min(m, cluster_group_.inverse_count(clusters_.member(slot)));
+    cluster_min_inv_count_[c] = m;
+  }
   build_position_m_ = {};
   build_mass_kg_ = {};
   build_state_ = {};
@@ -155,7 +172,7 @@ void PbdSystem::step(double dt_s, const PbdParams& params) {
         // velocity, and for one stiff constraint that step map has an eigenvalue of modulus
         // |r| + sqrt(r^2 + |r|), r = (1 - w)^k, above 1 once r < -1/3 (w = 1.5 with one
         // iteration, w = 1.9 with one or three): the body would gain energy every substep
-        solve_jacobi(h, it + 1 == params.iterations ? 1.0 : params.sor_w);
+        solve_jacobi(h, it + 1 == params.iterations ? 1.0 : params.sor_w, params.averaging);
       } else {
         solve_gauss_seidel(h);
       }
@@ -235,7 +252,9 @@ void PbdSystem::solve_gauss_seidel(double h_s) {
 // Algorithm 1 lines 17-21: per group, every constraint reads the same x*, corrections are
 // averaged per particle and over-relaxed by w (eq 7). lambda accumulates the share of dlambda
 // that the averaging actually delivered (w/n), so the compliance term sees the applied force.
-void PbdSystem::solve_jacobi(double h_s, double sor_w) {
+// Per-constraint averaging scales a constraint's slots by 1/max n of its particles instead.
+void PbdSystem::solve_jacobi(double h_s, double sor_w, JacobiAveraging averaging) {
+  const bool per_particle = averaging == JacobiAveraging::kPerParticle;
   Eigen::Matrix3Xd& x = particles_.predicted_m;
   const Eigen::VectorXd& w = particles_.inv_mass_per_kg;
   const double inv_h2 = 1.0 / (h_s * h_s);
@@ -247,15 +266,16 @@ void PbdSystem::solve_jacobi(double h_s, double sor_w) {
       Eigen::Vector3d dxi, dxj;
       if (project_distance(x.col(c.i), x.col(c.j), w[c.i], w[c.j], c.rest_m, c.compliance_m_per_n * inv_h2,
                            distance_lambda_[k], &dl, &dxi, &dxj)) {
-        distance_lambda_[k] += sor_w * distance_mean_inv_count_[k] * dl;
-        slot.col(2 * k) = dxi;
-        slot.col(2 * k + 1) = dxj;
+        const double share = per_particle ? 1.0 : distance_min_inv_count_[k];
+        distance_lambda_[k] += sor_w * (per_particle ? distance_mean_inv_count_[k] : share) * dl;
+        slot.col(2 * k) = share * dxi;
+        slot.col(2 * k + 1) = share * dxj;
       } else {
         slot.col(2 * k).setZero();
         slot.col(2 * k + 1).setZero();
       }
     }
-    distance_group_.apply(x, sor_w);
+    distance_group_.apply(x, sor_w, per_particle);
   }
   if (!bending_.empty()) {
     Eigen::Matrix3Xd& slot = bending_group_.slots();
@@ -267,29 +287,31 @@ void PbdSystem::solve_jacobi(double h_s, double sor_w) {
       for (int m = 0; m < 4; ++m) xs[m] = x.col(idx[m]), ws[m] = w[idx[m]];
       const bool ok =
           project_dihedral_bending(xs, ws, c.rest_angle_rad, c.compliance_per_n_m * inv_h2, bending_lambda_[k], &dl, dx);
-      if (ok) bending_lambda_[k] += sor_w * bending_mean_inv_count_[k] * dl;
-      for (int m = 0; m < 4; ++m) slot.col(4 * k + m) = ok ? dx[m] : Eigen::Vector3d::Zero();
+      const double share = per_particle ? 1.0 : bending_min_inv_count_[k];
+      if (ok) bending_lambda_[k] += sor_w * (per_particle ? bending_mean_inv_count_[k] : share) * dl;
+      for (int m = 0; m < 4; ++m) slot.col(4 * k + m) = ok ? Eigen::Vector3d(share * dx[m]) : Eigen::Vector3d::Zero();
     }
-    bending_group_.apply(x, sor_w);
+    bending_group_.apply(x, sor_w, per_particle);
   }
   if (clusters_.count() > 0) {
     Eigen::Matrix3Xd& slot = cluster_group_.slots();
     for (int cl = 0; cl < clusters_.count(); ++cl) {
       // a parallel version gives each worker its own goal scratch
       clusters_.goals(cl, x, particles_.mass_kg, goal_scratch_m_.data());
+      const double share = per_particle ? 1.0 : cluster_min_inv_count_[cl];
       for (int s = clusters_.begin(cl); s < clusters_.end(cl); ++s) {
         const int i = clusters_.member(s);
         Eigen::Vector3d dl, dx;
         if (project_to_goal(x.col(i), goal_scratch_m_[s - clusters_.begin(cl)], w[i], particles_.mass_kg[i],
                             clusters_.compliance_s2(cl), h_s, cluster_lambda_.col(s), &dl, &dx)) {
-          cluster_lambda_.col(s) += (sor_w * cluster_group_.inverse_count(i)) * dl;
-          slot.col(s) = dx;
+          cluster_lambda_.col(s) += (sor_w * (per_particle ? cluster_group_.inverse_count(i) : share)) * dl;
+          slot.col(s) = share * dx;
         } else {
           slot.col(s).setZero();
         }
       }
     }
-    cluster_group_.apply(x, sor_w);
+    cluster_group_.apply(x, sor_w, per_particle);
   }
 }
 

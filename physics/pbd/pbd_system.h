@@ -51,7 +51,7 @@ class PbdSystem {
   void quarantine_non_finite_inputs();
   void predict(double h_s, double fraction_of_step, bool last_substep, const PbdParams& params);
   void solve_gauss_seidel(double h_s);
-  void solve_jacobi(double h_s, double sor_w);
+  void solve_jacobi(double h_s, double sor_w, JacobiAveraging averaging);
   void update(double h_s);
 
   bool finalized_ = false;
@@ -71,6 +71,8 @@ class PbdSystem {
   // Jacobi: one group per constraint type, and how much of each dlambda the averaging delivers
   JacobiGroup distance_group_, bending_group_, cluster_group_;
   Eigen::VectorXd distance_mean_inv_count_, bending_mean_inv_count_;
+  // 1 / (largest count among the constraint's particles), for JacobiAveraging::kPerConstraint
+  Eigen::VectorXd distance_min_inv_count_, bending_min_inv_count_, cluster_min_inv_count_;
 
   std::vector<Eigen::Vector3d> goal_scratch_m_;  // one cluster's goals
   Eigen::Matrix3Xd drive_start_m_, drive_target_m_;

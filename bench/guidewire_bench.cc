@@ -293,11 +293,18 @@ int run_bench(const std::vector<std::string>& args) {
                        r.max_penetration_mm);
     }
     f << (outside ? "." : "none.") << " (segments/passes/SDF mm)\n\n";
-    f << "The chain-mail wire is not converged in the segment count: the bending passes are Gauss-Seidel "
-         "projections, so the body's effective stiffness falls as links get shorter, and the shear limit (degrees "
-         "per millimetre, so a few degrees per link at 800 segments) fights the wall projection's position corrections (tenths of a millimetre) "
-         "corrections. The finest setting is therefore not a converged reference; tip errors above measure "
-         "difference from it, not accuracy. Where the tip ends is the more telling column.\n";
+    f << "Convergence in the segment count. The shear limit beta is a curvature (degrees per millimetre), so a "
+         "joint's cone is beta times the link length; but a wall or friction correction of depth d at one node "
+         "kinks its joint by about d / h. With a cone of beta h the admissible kink shrinks as h^2 while the kinks "
+         "grow as 1/h, and the final limit sweep (forward from the catheter, at most beta h per joint) straightens "
+         "each kink by swinging the wire beyond it back into the wall by roughly (d/h)^2 / (2 beta): tenths of a "
+         "millimetre at 800 segments, where 200 segments (1.5 mm links) never reach their limits. beta is now "
+         "resolved over at least 1.5 mm of wire (link_spec.cc, kShearLengthM): the default 200-segment wire and "
+         "coarser ones are unchanged; finer wires keep 1.5 mm joint cones. Trade-off: below 1.5 mm the hard limit "
+         "no longer bounds the curvature over every stretch (four 0.375 mm links may each turn the 1.5 mm cone); "
+         "the bending passes, not the limit, keep a fine wire smooth, and a limit over a window of links would be "
+         "the stricter fix. 50 segments (6 mm links in a 2 mm LM) are too coarse to enter the coronaries at all; "
+         "1 pass at 200 segments leaves nodes up to 0.7 mm outside (the passes, not the limits, bring it back).\n";
     f << "\nPlot: `guidewire.png` (tip error vs median ms per step), drawn by `scripts/plot_bench.py`.\n";
   }
   if (o.plot) {

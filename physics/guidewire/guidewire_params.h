@@ -12,8 +12,8 @@ struct GuidewireParams {
   double tip_angle_deg = 45.0;       // pre-bend of the tip, spread evenly over the tip, [0, 180]
   // body / tip chain-mail limits (eqs 1-4). alpha: link length ratios (compress, stretch),
   // alpha_min in [0.5, 1], alpha_max in [1, 2]. beta: largest bend of a link away from its rest
-  // direction, in degrees per millimetre of wire (scaled by the link length, so a segment
-  // sweep keeps the same wire), [0, 90].
+  // direction, in degrees per millimetre of wire (scaled by the link length, but never below
+  // 1.5 mm of wire, so a segment sweep keeps the same wire: see link_spec.cc), [0, 90].
   double body_alpha_min = 0.98, body_alpha_max = 1.02, body_beta_deg = 15.0;
   double tip_alpha_min = 0.95, tip_alpha_max = 1.05, tip_beta_deg = 40.0;
   // haptic force (eqs 19-20): axial stiffness of the wire's refused feed and first link, N/m,

@@ -11,6 +11,14 @@ namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
+// the length of wire over which the shear limit beta (degrees per millimetre) is resolved. A
+// joint's cone is beta times its link length, but never narrower than what this much wire may
+// turn: a wall or friction correction of depth d at one node kinks its joint by about d / h,
+// so a cone of beta h shrinks faster (h^2) than the kinks it must admit as links get shorter,
+// and the limit sweep then straightens the kink by swinging the wire beyond it back into the
+// wall. 1.5 mm is the link of the default 200-segment wire, which is unchanged by this.
+constexpr double kShearLengthM = 1.5e-3;
+
 void check(bool ok, const char* field, const char* expected) {
   if (!ok) throw std::invalid_argument(std::string("guidewire.") + field + ": expected " + expected);
 }
@@ -44,7 +52,7 @@ std::vector<LinkSpec> make_link_specs(const GuidewireParams& p) {
   validate(p);
   const int n = p.segment_count;
   const double h = p.length_m / n;
-  const double h_mm = h * 1e3;
+  const double shear_mm = std::max(h, kShearLengthM) * 1e3;
   // links touching the last tip_length_m are tip links; a non-zero tip gets at least one
   int tip_links = static_cast<int>(std::ceil(p.tip_length_m / h - 1e-9));
   if (p.tip_length_m > 0.0) tip_links = std::max(tip_links, 1);
@@ -59,8 +67,9 @@ std::vector<LinkSpec> make_link_specs(const GuidewireParams& p) {
     l.rest_m = h;
     l.length_min_m = (l.tip ? p.tip_alpha_min : p.body_alpha_min) * h;
     l.length_max_m = (l.tip ? p.tip_alpha_max : p.body_alpha_max) * h;
-    // beta is given per millimetre of wire; a link never bends more than a right angle
-    l.beta_rad = std::min((l.tip ? p.tip_beta_deg : p.body_beta_deg) * kDeg * h_mm, std::numbers::pi / 2);
+    // beta is given per millimetre of wire, resolved over at least kShearLengthM; a link never
+    // bends more than a right angle
+    l.beta_rad = std::min((l.tip ? p.tip_beta_deg : p.body_beta_deg) * kDeg * shear_mm, std::numbers::pi / 2);
     l.cos_beta = std::cos(l.beta_rad);
     l.bend_rad = l.tip ? bend_per_link : 0.0;
     l.cos_bend = std::cos(l.bend_rad);

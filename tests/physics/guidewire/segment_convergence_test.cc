@@ -1,0 +1,66 @@
+// Convergence in the segment count: the built-in trainee's session into the LAD gives the same
+// answer with 200, 400 and 800 links. Finer wires stay inside the lumen after every step, end
+// in the same branch at the same place, so a fine wire can serve as the benchmark's reference.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "physics/vessel/vessel_tree.h"
+#include "tests/physics/guidewire/wire_test_support.h"
+
+namespace pcisim::physics {
+namespace {
+
+struct Session {
+  std::vector<Eigen::Vector3d> tips;  // tip after every step
+  double worst_wall_m = -1.0;         // deepest any free node ended a step outside the lumen
+  std::string final_branch;
+  int bad_links_at_end = 0;
+};
+
+Session run_session(int segments) {
+  WorldSpec spec = test::default_scene();
+  spec.guidewire->segment_count = segments;
+  World world(spec);
+  const test::BranchScript script;  // +90 degrees: toward the LAD
+  Session s;
+  for (double t = 0.0; t <= script.end_s(); t += spec.step_s) {
+    world.step(script.at(t));
+    const ChainMailWire& w = *world.guidewire_state();
+    s.worst_wall_m = std::max(s.worst_wall_m, test::worst_wall_distance_m(w, *world.lumen()));
+    s.tips.push_back(w.nodes_m().back());
+  }
+  WorldSnapshot snap;
+  world.write_snapshot(snap);
+  s.final_branch = snap.tip_branch >= 0 ? world.vessel_tree().branches[snap.tip_branch].name : "-";
+  s.bad_links_at_end = test::check_limits(*world.guidewire_state()).bad_links;
+  return s;
+}
+
+TEST(SegmentConvergence, FinerWiresStayInsideAndFollowTheSamePath) {
+  const Session coarse = run_session(200);
+  const Session mid = run_session(400);
+  const Session fine = run_session(800);
+  ASSERT_EQ(coarse.final_branch, "LAD");
+  for (const Session* s : {&mid, &fine}) {
+    // within 0.1 mm of the lumen after every step (the wall margin is 0.05 mm inside)
+    EXPECT_LE(s->worst_wall_m, 0.1e-3);
+    EXPECT_EQ(s->final_branch, coarse.final_branch);
+    EXPECT_EQ(s->bad_links_at_end, 0);
+  }
+  // 400 and 800 links end at the same place, and follow the same path on the whole (the finer
+  // tip is held up longer at the LAD ostium, so single steps can differ by a centimetre)
+  ASSERT_EQ(mid.tips.size(), fine.tips.size());
+  double sum_sq = 0.0;
+  for (size_t k = 0; k < mid.tips.size(); ++k) sum_sq += (mid.tips[k] - fine.tips[k]).squaredNorm();
+  const double rms_m = std::sqrt(sum_sq / static_cast<double>(mid.tips.size()));
+  EXPECT_LE(rms_m, 8e-3) << "tip RMS gap " << rms_m * 1e3 << " mm";
+  EXPECT_LE((mid.tips.back() - fine.tips.back()).norm(), 2e-3);
+  EXPECT_LE((coarse.tips.back() - fine.tips.back()).norm(), 3e-3);
+}
+
+}  // namespace
+}  // namespace pcisim::physics

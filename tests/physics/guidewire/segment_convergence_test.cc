@@ -1,5 +1,5 @@
-// Convergence in the segment count: the built-in trainee's session into the LAD gives the same
-// answer with 200, 400 and 800 links. Finer wires stay inside the lumen after every step, end
+// Convergence in the segment count: the built-in trainee's session (turned toward the LAD or
+// the LCx) gives the same answer with 200, 400 and 800 links. Finer wires stay inside the lumen after every step, end
 // in the same branch at the same place, so a fine wire can serve as the benchmark's reference.
 #include <gtest/gtest.h>
 
@@ -21,11 +21,12 @@ struct Session {
   int bad_links_at_end = 0;
 };
 
-Session run_session(int segments) {
+Session run_session(int segments, double turn_deg) {
   WorldSpec spec = test::default_scene();
   spec.guidewire->segment_count = segments;
   World world(spec);
-  const test::BranchScript script;  // +90 degrees: toward the LAD
+  test::BranchScript script;
+  script.turn_deg = turn_deg;
   Session s;
   for (double t = 0.0; t <= script.end_s(); t += spec.step_s) {
     world.step(script.at(t));
@@ -40,27 +41,31 @@ Session run_session(int segments) {
   return s;
 }
 
-TEST(SegmentConvergence, FinerWiresStayInsideAndFollowTheSamePath) {
-  const Session coarse = run_session(200);
-  const Session mid = run_session(400);
-  const Session fine = run_session(800);
-  ASSERT_EQ(coarse.final_branch, "LAD");
+void expect_converged(double turn_deg, const char* branch) {
+  const Session coarse = run_session(200, turn_deg);
+  const Session mid = run_session(400, turn_deg);
+  const Session fine = run_session(800, turn_deg);
+  ASSERT_EQ(coarse.final_branch, branch);
   for (const Session* s : {&mid, &fine}) {
     // within 0.1 mm of the lumen after every step (the wall margin is 0.05 mm inside)
-    EXPECT_LE(s->worst_wall_m, 0.1e-3);
-    EXPECT_EQ(s->final_branch, coarse.final_branch);
-    EXPECT_EQ(s->bad_links_at_end, 0);
+    EXPECT_LE(s->worst_wall_m, 0.1e-3) << "turn " << turn_deg;
+    EXPECT_EQ(s->final_branch, coarse.final_branch) << "turn " << turn_deg;
+    EXPECT_EQ(s->bad_links_at_end, 0) << "turn " << turn_deg;
   }
   // 400 and 800 links end at the same place, and follow the same path on the whole (the finer
-  // tip is held up longer at the LAD ostium, so single steps can differ by a centimetre)
+  // tip can be held up longer at an ostium, so single steps may differ by a centimetre)
   ASSERT_EQ(mid.tips.size(), fine.tips.size());
   double sum_sq = 0.0;
   for (size_t k = 0; k < mid.tips.size(); ++k) sum_sq += (mid.tips[k] - fine.tips[k]).squaredNorm();
   const double rms_m = std::sqrt(sum_sq / static_cast<double>(mid.tips.size()));
-  EXPECT_LE(rms_m, 8e-3) << "tip RMS gap " << rms_m * 1e3 << " mm";
-  EXPECT_LE((mid.tips.back() - fine.tips.back()).norm(), 2e-3);
-  EXPECT_LE((coarse.tips.back() - fine.tips.back()).norm(), 3e-3);
+  EXPECT_LE(rms_m, 8e-3) << "turn " << turn_deg << ": tip RMS gap " << rms_m * 1e3 << " mm";
+  EXPECT_LE((mid.tips.back() - fine.tips.back()).norm(), 2e-3) << "turn " << turn_deg;
+  EXPECT_LE((coarse.tips.back() - fine.tips.back()).norm(), 3e-3) << "turn " << turn_deg;
 }
+
+TEST(SegmentConvergence, FinerWiresReachTheLadLikeTheDefaultWire) { expect_converged(90.0, "LAD"); }
+
+TEST(SegmentConvergence, FinerWiresReachTheLcxLikeTheDefaultWire) { expect_converged(-90.0, "LCx"); }
 
 }  // namespace
 }  // namespace pcisim::physics

@@ -6,6 +6,7 @@
 #include "protocol/channels.h"
 #include "protocol/message_checks.h"
 #include "server/realtime/clock.h"
+#include "server/realtime/realtime_setup.h"
 #include "server/scene/json_reader.h"
 
 namespace pcisim::server {
@@ -20,8 +21,15 @@ LcmIo::~LcmIo() { stop(); }
 
 void LcmIo::start() {
   running_ = true;
-  rx_ = std::thread([this] { rx_loop(); });
-  tx_ = std::thread([this] { tx_loop(); });
+  // below the haptic loop (80), above everything else: a CPU hog must not delay force commands
+  rx_ = std::thread([this] {
+    try_sched_fifo(70);
+    rx_loop();
+  });
+  tx_ = std::thread([this] {
+    try_sched_fifo(70);
+    tx_loop();
+  });
 }
 
 void LcmIo::stop() {

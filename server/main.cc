@@ -38,6 +38,12 @@ int main(int argc, char** argv) {
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error or off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}))
       ->capture_default_str();
+  int cpu_latency_us = 0;
+  app.add_option("--cpu-latency-us", cpu_latency_us,
+                 "while running, ask the kernel (PM QoS) to keep CPU wake-ups within this many us, so idle cores "
+                 "poll instead of halting and the 1 kHz loop wakes on time; -1 = leave the CPUs alone (saves power)")
+      ->check(CLI::Range(-1, 100000))
+      ->capture_default_str();
   app.add_option("--write-scene", write_scene_path, "write the built-in scene to this file and exit");
   CLI11_PARSE(app, argc, argv);
   // an in-process control bus gets an in-process image bus unless told otherwise
@@ -88,6 +94,7 @@ int main(int argc, char** argv) {
     for (;;) {
       if (scene.xray && !images) images = std::make_unique<lcm::LCM>(image_url);
       Server server(scene, lcm, images.get());
+      server.cpu_latency_us = cpu_latency_us;
       double left_s = 0;
       if (duration_s > 0) {
         left_s = duration_s - std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

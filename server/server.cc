@@ -77,6 +77,7 @@ Server::~Server() = default;
 StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   Impl& m = *impl_;
   const bool locked = try_mlockall();
+  const CpuLatencyRequest latency(cpu_latency_us);
   LcmIo io(m.lcm, m.state, [&m] { return m.status(); }, branch_namer);
 
   m.start_ns = m.last_status_ns = monotonic_ns();
@@ -87,8 +88,9 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   std::thread physics([&] { m.physics->run(); });
   std::thread xray;
   if (m.xray) xray = std::thread([&] { m.xray->run(); });
-  spdlog::info("running: haptic 1000 Hz, physics {} Hz{}{}", m.scene.physics_rate_hz,
-               locked ? ", memory locked" : "", duration_s > 0 ? fmt::format(", for {} s", duration_s) : "");
+  spdlog::info("running: haptic 1000 Hz, physics {} Hz{}{}{}", m.scene.physics_rate_hz, locked ? ", memory locked" : "",
+               latency.granted() ? fmt::format(", CPU wake-up latency held at {} us", cpu_latency_us) : "",
+               duration_s > 0 ? fmt::format(", for {} s", duration_s) : "");
 
   // the main thread only watches the clock and logs once a second
   int64_t next_log_ns = m.start_ns + 1'000'000'000;
@@ -113,7 +115,9 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   if (xray.joinable()) xray.join();
   const double elapsed_s = (monotonic_ns() - m.start_ns) * 1e-9;
   io.stop();
-  return m.stats(elapsed_s);
+  StatsReport r = m.stats(elapsed_s);
+  r.cpu_latency_held = latency.granted();
+  return r;
 }
 
 void Server::inject_physics_stall(double seconds) {

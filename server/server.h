@@ -25,6 +25,9 @@ class Server {
   // the loops and publishes a zero force command. Returns the final figures.
   StatsReport run(double duration_s, const std::atomic<bool>& stop);
 
+  // CPU wake-up latency to ask for while running (PM QoS); < 0 leaves the CPUs alone
+  int cpu_latency_us = 0;
+
   // fault injection for tests and benchmarks: the next physics step takes seconds longer
   void inject_physics_stall(double seconds);
 

@@ -20,6 +20,7 @@ struct StatsReport {
   Percentiles haptic_period_us, haptic_compute_us, haptic_late_us;
   int64_t haptic_ticks = 0, haptic_overruns = 0, forces_dropped = 0;
   bool haptic_fifo = false;
+  bool cpu_latency_held = false;  // PM QoS request granted
   double physics_rate_hz = 0, physics_target_hz = 0;
   Percentiles physics_step_ms, physics_period_ms;
   int64_t physics_steps = 0, physics_overruns = 0;

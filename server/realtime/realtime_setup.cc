@@ -2,7 +2,11 @@
 
 #include <pthread.h>
 #include <sched.h>
+#include <fcntl.h>
 #include <sys/mman.h>
+#include <unistd.h>
+
+#include <cstdint>
 
 namespace pcisim::server {
 
@@ -13,6 +17,20 @@ bool try_sched_fifo(int priority) {
 }
 
 bool try_mlockall() { return mlockall(MCL_CURRENT | MCL_FUTURE) == 0; }
+
+CpuLatencyRequest::CpuLatencyRequest(int latency_us) {
+  if (latency_us < 0) return;
+  fd_ = ::open("/dev/cpu_dma_latency", O_WRONLY | O_CLOEXEC);
+  const int32_t value = latency_us;
+  if (fd_ >= 0 && ::write(fd_, &value, sizeof value) != static_cast<ssize_t>(sizeof value)) {
+    ::close(fd_);
+    fd_ = -1;
+  }
+}
+
+CpuLatencyRequest::~CpuLatencyRequest() {
+  if (fd_ >= 0) ::close(fd_);  // closing withdraws the request
+}
 
 std::string describe(const RealtimeResult& r) {
   return std::string(r.fifo ? "SCHED_FIFO" : "SCHED_OTHER (FIFO not permitted)") +

@@ -1,6 +1,6 @@
 // pcisim-server: the real-time PCI training server (see docs/ and DESIGN.md).
 #include <CLI/CLI.hpp>
-#include <chrono>
+#include <algorithm>
 #include <csignal>
 #include <fstream>
 #include <iostream>
@@ -88,19 +88,17 @@ int main(int argc, char** argv) {
 
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
-  // a scene loaded over LCM restarts the pipeline with it; --duration counts the whole session
+  // a scene loaded over LCM restarts the pipeline with it; --duration counts the running time of
+  // the whole session, not the time spent building scenes
   try {
-    const auto start = std::chrono::steady_clock::now();
+    double ran_s = 0;  // running time of the pipelines so far (scene builds do not count)
     for (;;) {
       if (scene.xray && !images) images = std::make_unique<lcm::LCM>(image_url);
       Server server(scene, lcm, images.get());
       server.cpu_latency_us = cpu_latency_us;
-      double left_s = 0;
-      if (duration_s > 0) {
-        left_s = duration_s - std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        if (left_s <= 0) left_s = 1e-3;
-      }
+      const double left_s = duration_s > 0 ? std::max(duration_s - ran_s, 1e-3) : 0.0;
       const StatsReport stats = server.run(left_s, g_stop);
+      ran_s += stats.elapsed_s;
       if (auto next = server.take_requested_scene(); next && !g_stop) {
         scene = std::move(*next);
         continue;

@@ -3,30 +3,15 @@
 
 #include <gtest/gtest.h>
 
-#include <atomic>
 #include <cmath>
-#include <cstdlib>
-#include <new>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "physics/vessel/coronary_phantom.h"
 #include "physics/vessel/vessel_tree.h"
+#include "tests/common/counting_new.h"
 
-// a counting global operator new: step() must not reach it
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-namespace {
-std::atomic<long> g_allocations{0};
-}  // namespace
-
-void* operator new(std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace pcisim::physics {
 namespace {
@@ -129,7 +114,7 @@ TEST(World, StepAllocatesNothing) {
   InstrumentInput in;
   w.step(in);
   w.write_snapshot(snap);  // sizes the snapshot once
-  const long before = g_allocations.load();
+  pcisim::testing::AllocationCount count;
   for (int k = 0; k < 60; ++k) {
     in.insertion_m = 0.002 * k;
     in.rotation_rad = 0.1 * k;
@@ -137,7 +122,7 @@ TEST(World, StepAllocatesNothing) {
     w.write_snapshot(snap);
     (void)w.force_model();
   }
-  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_EQ(count.allocations(), 0);
 }
 
 TEST(World, WireComesOutOfTheCatheterAndIsTimed) {

@@ -28,7 +28,7 @@ const char* kBuiltin = R"json(// built-in trainee: into the left main, turn towa
     {"at_s": 4.0, "do": "rotate", "deg": 90, "over_s": 2},
     {"at_s": 6.5, "do": "pedal", "down": true},
     {"at_s": 7.0, "do": "contrast", "for_s": 2},
-    {"at_s": 7.0, "do": "insert", "mm": 50, "over_s": 10},
+    {"at_s": 7.0, "do": "insert", "mm": 44, "over_s": 10},
     {"at_s": 13.0, "do": "contrast", "for_s": 2},
     {"at_s": 17.5, "do": "pull", "mm": 5, "over_s": 1},
     {"at_s": 19.0, "do": "pedal", "down": false}

@@ -1,5 +1,7 @@
 #include "clients/bridge/bridge.h"
 
+#include <pthread.h>
+#include <sched.h>
 #include <spdlog/spdlog.h>
 #include <thread>
 
@@ -8,6 +10,7 @@
 #include "protocol/message_checks.h"
 #include "server/realtime/clock.h"
 #include "server/realtime/deadline_schedule.h"
+#include "server/realtime/realtime_setup.h"
 
 namespace pcisim::clients {
 
@@ -29,6 +32,12 @@ void Bridge::on_force(const lcm::ReceiveBuffer* rbuf, const std::string&) {
 }
 
 BridgeStats Bridge::run(const std::atomic<bool>& stop) {
+  // real-time while publishing; the calling thread gets its old scheduling back at the end
+  int old_policy = SCHED_OTHER;
+  sched_param old_param{};
+  pthread_getschedparam(pthread_self(), &old_policy, &old_param);
+  if (options_.fifo_priority > 0) server::try_sched_fifo(options_.fifo_priority);
+  const server::CpuLatencyRequest latency(options_.cpu_latency_us);
   std::atomic<bool> done{false};
   std::thread rx([&] {
     while (!done) lcm_.handleTimeout(20);
@@ -90,6 +99,7 @@ BridgeStats Bridge::run(const std::atomic<bool>& stop) {
   }
   done = true;
   rx.join();
+  pthread_setschedparam(pthread_self(), old_policy, &old_param);
   stats.elapsed_s = first_publish_ns ? (last_publish_ns - first_publish_ns) * 1e-9 : 0.0;
   stats.forces_received = forces_received_;
   stats.forces_bad = forces_bad_;

@@ -17,6 +17,10 @@ struct BridgeOptions {
   double wait_for_server_s = 0.0;  // hold the device at t = 0 until the first force command
   int device_id = 1;
   bool log_each_second = true;
+  // like the server's haptic loop: real-time priority for the publishing thread while it runs and
+  // CPU wake-ups held at this latency (PM QoS; -1 = leave the CPUs alone); quiet when not permitted
+  int fifo_priority = 60;
+  int cpu_latency_us = 0;
 };
 
 struct BridgeStats {

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "bench/bench_registry.h"
+#include "bench/bench_stats.h"
 #include "bench/machine_info.h"
 #include "physics/guidewire/chain_mail_wire.h"
 #include "physics/guidewire/sdf_lumen.h"
@@ -55,12 +56,6 @@ struct Row {
   int steps = 0;
 };
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const size_t i = static_cast<size_t>(std::ceil(q * static_cast<double>(v.size()))) - 1;
-  return v[std::min(i, v.size() - 1)];
-}
 
 double ramp(double t, double at_s, double over_s, double amount) {
   return t <= at_s ? 0.0 : amount * std::min((t - at_s) / over_s, 1.0);

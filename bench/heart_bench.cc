@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "bench/bench_registry.h"
+#include "bench/bench_stats.h"
 #include "bench/machine_info.h"
 #include "physics/pbd/procedural_ventricle.h"
 
@@ -60,12 +61,6 @@ struct Row {
   bool finite = true;
 };
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const size_t i = static_cast<size_t>(std::ceil(q * static_cast<double>(v.size()))) - 1;
-  return v[std::min(i, v.size() - 1)];
-}
 
 double thread_cpu_ms() {
   timespec ts{};

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "bench/bench_registry.h"
+#include "bench/bench_stats.h"
 #include "bench/machine_info.h"
 #include "physics/vessel/coronary_phantom.h"
 #include "xray/fluoro/fluoroscopy.h"
@@ -57,13 +58,6 @@ struct Row {
   double rmse_rel = 0, max_rel = 0;  // vs exact, relative to the largest exact line integral
 };
 
-double percentile(std::vector<double> v, double q) {
-  std::sort(v.begin(), v.end());
-  const double pos = q * (v.size() - 1);
-  const size_t i = static_cast<size_t>(pos);
-  const double f = pos - i;
-  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v.back();
-}
 
 double process_cpu_ms() {
   timespec ts{};

@@ -24,6 +24,7 @@
 #include <thread>
 
 #include "bench/bench_registry.h"
+#include "bench/bench_stats.h"
 #include "bench/machine_info.h"
 #include "clients/bridge/trainee_script.h"
 #include "haptics/force_evaluator.h"
@@ -50,11 +51,6 @@ struct Options {
   std::string out_dir = PCISIM_SOURCE_DIR "/docs/benchmarks";
 };
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())))];
-}
 
 pid_t spawn(const std::vector<std::string>& args) {
   std::vector<char*> argv;

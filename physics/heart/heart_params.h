@@ -1,0 +1,25 @@
+#pragma once
+// What a scene sets for the beating heart (effect `heart_beat`). Units are in the names.
+#include <string>
+
+#include "physics/pbd/pbd_params.h"
+
+namespace pcisim::physics {
+
+struct HeartBeatParams {
+  double rate_bpm = 72.0;  // heart rate; the motion sequence's cycle is stretched to it
+  // motion sequence file (docs/heart.md); empty: the built-in synthetic sequence
+  std::string motion_file;
+  // PBD accuracy knobs (soft-tissue paper): per physics step
+  int substeps = 2;
+  int iterations = 6;
+  pbd::SolverKind solver = pbd::SolverKind::kJacobi;
+  double sor_w = 1.5;
+  // XPBD compliances (so stiffness does not depend on substeps and iterations)
+  double stretch_compliance_m_per_n = 1e-4;  // tet-edge springs
+  double bend_compliance_per_n_m = 1e-2;     // surface dihedral springs
+  double shape_compliance_s2 = 1e-5;         // global shape matching (heart paper eqs 7-10)
+  double damping_per_s = 5.0;
+};
+
+}  // namespace pcisim::physics

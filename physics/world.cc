@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "physics/guidewire/blood_drift.h"
+#include "physics/blood/blood_chain_mail.h"
 #include "physics/guidewire/catheter_path.h"
 #include "physics/guidewire/chain_mail_wire.h"
 #include "physics/guidewire/coulomb_friction.h"
@@ -51,6 +51,9 @@ void validate(const WorldSpec& s) {
   if (const auto& b = s.blood_flow) {
     require(in(b->mean_velocity_m_per_s, 0.0, 2.0), "blood_flow.mean_velocity_m_per_s: expected [0, 2]");
     require(in(b->drift_gain, 0.0, 1.0), "blood_flow.drift_gain: expected [0, 1]");
+    require(in(b->pulsatility, 0.0, 1.0), "blood_flow.pulsatility: expected [0, 1]");
+    require(in(b->cell_spacing_m, 2e-4, 5e-3), "blood_flow.cell_spacing_m: expected [2e-4, 5e-3] m");
+    require(in(b->link_radius_m, 2e-4, 5e-3), "blood_flow.link_radius_m: expected [2e-4, 5e-3] m");
   }
 }
 
@@ -63,7 +66,7 @@ struct World::Impl {
   std::optional<ChainMailWire> wire;
   std::optional<WallContact> contact;
   std::optional<CoulombFriction> friction;
-  std::optional<BloodDrift> drift;
+  std::optional<BloodChainMail> blood;
   InputGuard guard;
   InstrumentInput used;
   std::vector<EffectCost> costs;
@@ -123,7 +126,11 @@ World::World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_ge
     w.contact.emplace(*spec.vessel_contact, *w.lumen, w.wire->node_count());
   }
   if (spec.friction) w.friction.emplace(*spec.friction, w.wire->node_count());
-  if (spec.blood_flow) w.drift.emplace(*spec.blood_flow, w.tree);
+  if (spec.blood_flow) {
+    BloodFlowParams blood = *spec.blood_flow;
+    if (!spec.heart_beat) blood.pulsatility = 0.0;  // no cycle to follow: steady flow
+    w.blood.emplace(blood, w.tree);
+  }
 }
 
 World::~World() = default;
@@ -139,8 +146,9 @@ void World::step(const InstrumentInput& input) {
     if (w.friction) w.friction->begin_step(wire);
     auto t1 = Clock::now();
     double c_wire = Impl::ms(t0, t1), c_blood = 0.0, c_contact = 0.0, c_friction = 0.0;
-    if (w.drift) {
-      w.drift->apply(wire, w.spec.step_s);
+    if (w.blood) {
+      w.blood->step(w.spec.step_s, 0.0);
+      w.blood->apply(wire, w.spec.step_s);
       const auto t2 = Clock::now();
       c_blood = Impl::ms(t1, t2);
       t1 = t2;

@@ -5,6 +5,8 @@
 #include <optional>
 
 #include "physics/guidewire/guidewire_params.h"
+#include "physics/heart/heart_params.h"
+#include "physics/motion/vessel_motion_params.h"
 
 namespace pcisim::physics {
 
@@ -18,7 +20,9 @@ struct WorldSpec {
   std::optional<GuidewireParams> guidewire;
   std::optional<VesselContactParams> vessel_contact;  // needs guidewire
   std::optional<FrictionParams> friction;             // needs vessel_contact
-  std::optional<BloodFlowParams> blood_flow;          // needs guidewire
+  std::optional<BloodFlowParams> blood_flow;          // needs guidewire; pulsatile with heart_beat
+  std::optional<HeartBeatParams> heart_beat;          // the beating heart (stands alone)
+  std::optional<VesselMotionParams> vessel_motion;    // the tree rides the heart: needs heart_beat
 };
 
 }  // namespace pcisim::physics

@@ -39,8 +39,13 @@ struct FrictionParams {
 };
 
 struct BloodFlowParams {
-  double mean_velocity_m_per_s = 0.15;  // steady flow along the centerlines
-  double drift_gain = 0.02;             // fraction of the flow velocity a free node drifts (eq 12)
+  double mean_velocity_m_per_s = 0.15;  // cross-section and cycle mean flow along the centerlines
+  double drift_gain = 0.02;             // fraction of the linked blood's velocity a free node takes (eq 12)
+  // how much the flow swings with the cardiac cycle (needs heart_beat, else the flow is steady):
+  // systole carries 1 - pulsatility of the mean, diastole the rest (coronary flow is diastolic)
+  double pulsatility = 0.4;
+  double cell_spacing_m = 1e-3;   // blood chain-mails along each centerline
+  double link_radius_m = 1.5e-3;  // blood chain-mails this close to a wire node link to it (eq 12)
 };
 
 }  // namespace pcisim::physics

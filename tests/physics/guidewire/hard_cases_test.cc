@@ -7,7 +7,6 @@
 #include <limits>
 #include <numbers>
 
-#include "physics/guidewire/blood_drift.h"
 #include "physics/guidewire/coulomb_friction.h"
 #include "physics/guidewire/sdf_lumen.h"
 #include "physics/guidewire/tube_lumen.h"

@@ -1,0 +1,119 @@
+#include "clients/remote/http_session.h"
+
+#include <algorithm>
+#include <boost/beast/websocket.hpp>
+#include <spdlog/spdlog.h>
+
+#include "clients/remote/access_tokens.h"
+#include "clients/remote/hub.h"
+#include "clients/remote/request_target.h"
+#include "clients/remote/web_assets.h"
+#include "clients/remote/ws_session.h"
+
+namespace pcisim::remote {
+
+namespace beast = boost::beast;
+namespace http = beast::http;
+
+HttpSession::HttpSession(boost::asio::ip::tcp::socket&& socket, Hub& hub, const AccessTokens& tokens)
+    : stream_(std::move(socket)), hub_(hub), tokens_(tokens) {}
+
+void HttpSession::run() { read(); }
+
+void HttpSession::read() {
+  parser_.emplace();
+  parser_->header_limit(8192);
+  parser_->body_limit(4096);
+  stream_.expires_after(std::chrono::seconds(30));
+  http::async_read(stream_, buffer_, *parser_, beast::bind_front_handler(&HttpSession::on_read, shared_from_this()));
+}
+
+namespace {
+std::string_view sv(beast::string_view s) { return {s.data(), s.size()}; }
+
+http::response<http::string_body> plain(unsigned version, http::status status, std::string text) {
+  http::response<http::string_body> res{status, version};
+  res.set(http::field::server, "pcisim-remote");
+  res.set(http::field::content_type, "text/plain; charset=utf-8");
+  res.set(http::field::cache_control, "no-store");
+  res.body() = std::move(text);
+  res.prepare_payload();
+  return res;
+}
+}  // namespace
+
+void HttpSession::on_read(beast::error_code ec, size_t) {
+  if (ec) return;  // end of stream, timeout or a malformed request: drop the connection
+  auto req = parser_->release();
+  if (beast::websocket::is_upgrade(req)) return upgrade(std::move(req));
+  const unsigned version = req.version();
+  const bool keep_alive = req.keep_alive();
+  if (req.method() != http::verb::get && req.method() != http::verb::head) {
+    auto res = plain(version, http::status::method_not_allowed, "GET only\n");
+    res.keep_alive(keep_alive);
+    return respond(std::move(res));
+  }
+  const WebAsset* asset = find_web_asset(target_path(sv(req.target())));
+  if (!asset) {
+    auto res = plain(version, http::status::not_found, "not found\n");
+    res.keep_alive(keep_alive);
+    return respond(std::move(res));
+  }
+  http::response<http::string_body> res{http::status::ok, version};
+  res.set(http::field::server, "pcisim-remote");
+  res.set(http::field::content_type, beast::string_view(asset->content_type.data(), asset->content_type.size()));
+  res.set(http::field::cache_control, "no-store");
+  // everything the page needs comes from here: no CDN, no inline script, no framing by others
+  res.set("Content-Security-Policy",
+          "default-src 'self'; img-src 'self' blob: data:; connect-src 'self' ws: wss:; frame-ancestors 'none'");
+  res.set("X-Content-Type-Options", "nosniff");
+  res.set("Referrer-Policy", "no-referrer");
+  if (req.method() == http::verb::get) res.body() = std::string(asset->body);
+  res.prepare_payload();
+  if (req.method() == http::verb::head) res.content_length(asset->body.size());
+  res.keep_alive(keep_alive);
+  respond(std::move(res));
+}
+
+void HttpSession::upgrade(http::request<http::string_body>&& req) {
+  const unsigned version = req.version();
+  if (target_path(sv(req.target())) != "/ws") return respond(plain(version, http::status::not_found, "not found\n"));
+  std::string token = query_param(sv(req.target()), "token").value_or("");
+  if (token.empty()) token = bearer_token(sv(req[http::field::authorization]));
+  if (token.empty()) {
+    spdlog::warn("remote: refused a connection without a token");
+    return respond(plain(version, http::status::unauthorized, "token required\n"));
+  }
+  const auto role = tokens_.role_of(token);
+  if (!role) {
+    spdlog::warn("remote: refused a connection with a wrong token");
+    return respond(plain(version, http::status::forbidden, "wrong token\n"));
+  }
+  if (hub_.full()) return respond(plain(version, http::status::service_unavailable, "too many connections\n"));
+  double fps = hub_.limits().max_fps;
+  if (const auto asked = query_param(sv(req.target()), "fps")) {
+    try {
+      fps = std::clamp(std::stod(*asked), 0.5, hub_.limits().max_fps);
+    } catch (const std::exception&) {
+    }
+  }
+  stream_.expires_never();  // the WebSocket keeps its own timeouts
+  std::make_shared<WsSession>(stream_.release_socket(), hub_, *role, fps)->start(std::move(req));
+}
+
+void HttpSession::respond(http::response<http::string_body>&& res) {
+  response_ = std::make_shared<http::response<http::string_body>>(std::move(res));
+  const bool close = !response_->keep_alive() || response_->result() == http::status::unauthorized ||
+                     response_->result() == http::status::forbidden;
+  if (close) response_->keep_alive(false);
+  http::async_write(stream_, *response_, [self = shared_from_this(), close](beast::error_code ec, size_t) {
+    if (ec || close) {
+      beast::error_code ignored;
+      self->stream_.socket().shutdown(boost::asio::ip::tcp::socket::shutdown_send, ignored);
+      return;
+    }
+    self->read();
+  });
+}
+
+}  // namespace pcisim::remote

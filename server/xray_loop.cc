@@ -44,6 +44,7 @@ void XrayLoop::render_and_publish(bool cine) {
   in.pose.primary_deg = state_.carm_primary_deg.load();
   in.pose.secondary_deg = state_.carm_secondary_deg.load();
   in.wire_m = snap.wire_nodes_m;
+  in.vessel_points_m = snap.vessel_points_m;
   if (spec_.contrast) in.injections = injections_;
   const int64_t t0 = monotonic_ns();
   renderer_->render(in, frame_);

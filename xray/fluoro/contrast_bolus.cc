@@ -73,6 +73,11 @@ ContrastBolus::ContrastBolus(const physics::VesselTree& tree, const ContrastBolu
   for (int b = 0; b < n; ++b) {
     if (b != aorta) solve(solve, b);
   }
+  std::vector<int> first_point(n, 0);
+  for (int b = 0; b < n; ++b) {
+    first_point[b] = tree_point_count_;
+    tree_point_count_ += static_cast<int>(tree.branches[b].points.size());
+  }
   for (int b = 0; b < n; ++b) {
     if (b == aorta) continue;
     const auto& pts = tree.branches[b].points;
@@ -88,6 +93,8 @@ ContrastBolus::ContrastBolus(const physics::VesselTree& tree, const ContrastBolu
       seg.rb_mm = 1000.0 * pts[j].radius_m;
       seg.s_mm = 0.5 * (s_mm[b][i] + s_mm[b][j]);
       seg.branch = b;
+      seg.point_a = first_point[b] + i;
+      seg.point_b = first_point[b] + j;
       seg.ostium = ostium[b];
       segments_.push_back(seg);
       i = j;
@@ -114,6 +121,14 @@ double ContrastBolus::opacity(double s_mm, CoronaryOstium ostium, double t_s,
     c += peak * filled * washed;
   }
   return std::min(1.0, c) * std::exp(-s_mm / spec_.taper_mm);
+}
+
+void ContrastBolus::move(std::span<const Eigen::Vector3d> points_m) {
+  if (static_cast<int>(points_m.size()) != tree_point_count_) return;
+  for (LumenSegment& seg : segments_) {
+    seg.a_mm = 1000.0 * points_m[seg.point_a];
+    seg.b_mm = 1000.0 * points_m[seg.point_b];
+  }
 }
 
 void ContrastBolus::update(double t_s, std::span<const ContrastInjection> injections) {

@@ -47,6 +47,7 @@ struct LumenSegment {
   double ra_mm = 0, rb_mm = 0;
   double s_mm = 0;             // mid-point distance downstream of the ostium
   int branch = -1;             // index into the tree's branches
+  int point_a = -1, point_b = -1;  // the centerline points the ends sit on, tree order (flattened)
   CoronaryOstium ostium = CoronaryOstium::kLeft;
 };
 
@@ -59,6 +60,12 @@ class ContrastBolus {
 
   // concentration (0..1) at s mm below `ostium` at time t_s, summed over the injections
   double opacity(double s_mm, CoronaryOstium ostium, double t_s, std::span<const ContrastInjection> injections) const;
+  // the tree has moved (the beating heart): every centerline point's position now, in tree
+  // order (branch 0's points, then branch 1's, ...); a span of any other length is ignored.
+  // Allocates nothing.
+  void move(std::span<const Eigen::Vector3d> points_m);
+  int tree_point_count() const { return tree_point_count_; }
+
   // every segment's and branch's (max over its segments) opacity at t_s; allocates nothing
   void update(double t_s, std::span<const ContrastInjection> injections);
 
@@ -73,6 +80,7 @@ class ContrastBolus {
   std::vector<LumenSegment> segments_;
   std::vector<double> segment_opacity_, branch_opacity_;
   std::vector<std::string> branch_names_;
+  int tree_point_count_ = 0;
 };
 
 }  // namespace pcisim::xray

@@ -85,6 +85,7 @@ void FluoroscopyRenderer::render(const FluoroInput& in, FluoroFrame& out) {
   std::copy(m.background.pixels.begin(), m.background.pixels.end(), m.line.pixels.begin());
 
   // 2. iodine: mu x opacity x chord through each lumen segment holding contrast
+  if (!in.vessel_points_m.empty()) m.bolus.move(in.vessel_points_m);
   m.bolus.update(in.time_s, in.injections);
   const auto& segs = m.bolus.segments();
   const auto& op = m.bolus.segment_opacity();

@@ -54,6 +54,9 @@ struct FluoroInput {
   CArmPose pose;
   std::span<const Eigen::Vector3d> wire_m;    // wire nodes, physics frame (metres, LPS); may be empty
   std::span<const ContrastInjection> injections;  // every injection so far (the renderer fades old ones)
+  // the coronary centerline points where the beating heart has carried them (metres, tree order,
+  // as physics' VesselSkin gives them); empty: the tree at rest
+  std::span<const Eigen::Vector3d> vessel_points_m;
 };
 
 struct FluoroFrame {

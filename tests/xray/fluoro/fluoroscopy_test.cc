@@ -84,6 +84,36 @@ TEST(Fluoroscopy, ContrastLandsOnTheProjectedLadAndNotBeside) {
   EXPECT_TRUE(before.contrast_branches.empty());
 }
 
+TEST(Fluoroscopy, ContrastFollowsTheMovedTree) {
+  // the beating heart hands the renderer the tree's points where they are now: here the whole
+  // tree shifted 6 mm sideways of the beam, so the iodine lands on the shifted LAD, not the old
+  FluoroscopyRenderer fr(tree(), noiseless());
+  const ContrastInjection inj{.start_s = 0, .duration_s = 2, .volume_ml = 8};
+  FluoroFrame plain_frame, frame;
+  fr.render({.time_s = -1, .pose = lao30_cra20(), .wire_m = {}, .injections = {&inj, 1}}, plain_frame);
+  const Image plain = fr.line_integrals();
+  std::vector<Eigen::Vector3d> p, side;
+  lad_points(plain_frame.geometry, &p, &side);
+  const Eigen::Vector3d shift_mm = 6.0 * side[p.size() / 2];
+  std::vector<Eigen::Vector3d> moved;
+  for (const auto& b : tree().branches)
+    for (const auto& q : b.points) moved.push_back(q.position_m + shift_mm / 1000.0);
+  ASSERT_EQ(static_cast<int>(moved.size()), fr.contrast().tree_point_count());
+  fr.render({.time_s = 1.9, .pose = lao30_cra20(), .wire_m = {}, .injections = {&inj, 1}, .vessel_points_m = moved},
+            frame);
+  const Image& filled = fr.line_integrals();
+  int on_moved = 0, on_old = 0;
+  for (size_t i = p.size() / 3; i < 2 * p.size() / 3; ++i) {
+    Eigen::Vector2d at_old, at_new;
+    ASSERT_TRUE(frame.geometry.project(p[i], &at_old));
+    ASSERT_TRUE(frame.geometry.project(p[i] + shift_mm, &at_new));
+    if (bilinear(filled, at_new) - bilinear(plain, at_new) > 0.05) ++on_moved;
+    if (bilinear(filled, at_old) - bilinear(plain, at_old) > 0.05) ++on_old;
+  }
+  EXPECT_GE(on_moved, static_cast<int>(p.size() / 3) - 1);
+  EXPECT_LE(on_old, 2);  // another branch may cross here and there
+}
+
 TEST(Fluoroscopy, ContrastReachesTheDistalLadLaterThanTheLm) {
   const ContrastBolus bolus(tree(), ContrastBolusSpec{});
   const ContrastInjection inj{.start_s = 0.5, .duration_s = 2, .volume_ml = 8};

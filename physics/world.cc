@@ -16,6 +16,8 @@
 #include "physics/guidewire/sdf_lumen.h"
 #include "physics/guidewire/wall_contact.h"
 #include "physics/guidewire/wire_feedback.h"
+#include "physics/heart/beating_heart.h"
+#include "physics/motion/vessel_skin.h"
 #include "physics/vessel/coronary_phantom.h"
 #include "physics/vessel/vessel_tree.h"
 
@@ -35,6 +37,7 @@ void validate(const WorldSpec& s) {
   require(!s.vessel_contact || s.guidewire, "vessel_contact: needs guidewire");
   require(!s.friction || s.vessel_contact, "friction: needs vessel_contact");
   require(!s.blood_flow || s.guidewire, "blood_flow: needs guidewire");
+  require(!s.vessel_motion || s.heart_beat, "vessel_motion: needs heart_beat");
   if (s.guidewire) validate(*s.guidewire);
   if (const auto& c = s.vessel_contact) {
     // finer than 0.05 mm the field of the whole tree outgrows memory (0.1 mm: ~140 MB)
@@ -55,6 +58,11 @@ void validate(const WorldSpec& s) {
     require(in(b->cell_spacing_m, 2e-4, 5e-3), "blood_flow.cell_spacing_m: expected [2e-4, 5e-3] m");
     require(in(b->link_radius_m, 2e-4, 5e-3), "blood_flow.link_radius_m: expected [2e-4, 5e-3] m");
   }
+  if (const auto& m = s.vessel_motion) {
+    require(in(m->attach_distance_m, 0.0, 0.05), "vessel_motion.attach_distance_m: expected [0, 0.05] m");
+    require(in(m->fade_distance_m, 0.0, 0.1), "vessel_motion.fade_distance_m: expected [0, 0.1] m");
+    require(in(m->blend_radius_m, 1e-3, 0.02), "vessel_motion.blend_radius_m: expected [1e-3, 0.02] m");
+  }
 }
 
 }  // namespace
@@ -67,10 +75,12 @@ struct World::Impl {
   std::optional<WallContact> contact;
   std::optional<CoulombFriction> friction;
   std::optional<BloodChainMail> blood;
+  std::optional<BeatingHeart> heart;
+  std::optional<VesselSkin> skin;
   InputGuard guard;
   InstrumentInput used;
   std::vector<EffectCost> costs;
-  int cost_wire = -1, cost_blood = -1, cost_contact = -1, cost_friction = -1;
+  int cost_wire = -1, cost_blood = -1, cost_contact = -1, cost_friction = -1, cost_heart = -1, cost_motion = -1;
   LocalForceModel model;
   double time_s = 0.0;
   int64_t step = 0;
@@ -89,6 +99,14 @@ World::World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_ge
   Impl& w = *impl_;
   w.spec = spec;
   // effects in step order; only the listed ones exist
+  if (spec.heart_beat) {
+    w.cost_heart = static_cast<int>(w.costs.size());
+    w.costs.push_back({"heart_beat", 0.0});
+  }
+  if (spec.vessel_motion) {
+    w.cost_motion = static_cast<int>(w.costs.size());
+    w.costs.push_back({"vessel_motion", 0.0});
+  }
   if (spec.guidewire) {
     w.cost_wire = static_cast<int>(w.costs.size());
     w.costs.push_back({"guidewire", 0.0});
@@ -105,9 +123,16 @@ World::World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_ge
     w.cost_friction = static_cast<int>(w.costs.size());
     w.costs.push_back({"friction", 0.0});
   }
-  if (!spec.guidewire) return;  // nothing else needs the anatomy
+  if (spec.heart_beat) w.heart.emplace(*spec.heart_beat);
+  if (!spec.guidewire && !spec.vessel_motion) return;  // nothing else needs the anatomy
 
   w.tree = make_coronary_phantom(CoronaryPhantomSpec{spec.anatomy.seed});
+  if (spec.vessel_motion) {
+    // the tree rides the epicardium; the wire, its contact and the blood are simulated in the
+    // vessels' rest frame and carried into the world by the same skin (docs/heart.md)
+    w.skin.emplace(w.tree, w.heart->rest_positions_m(), w.heart->epicardium(), *spec.vessel_motion);
+  }
+  if (!spec.guidewire) return;
   auto path = guide_catheter_path(w.tree);
   require(path.size() >= 2, "anatomy: the phantom has no guide catheter path (aorta and LM needed)");
   w.wire.emplace(*spec.guidewire, CatheterPath(std::move(path)));
@@ -138,6 +163,16 @@ World::~World() = default;
 void World::step(const InstrumentInput& input) {
   Impl& w = *impl_;
   w.used = w.guard.accept(input);
+  if (w.heart) {
+    const auto a = Clock::now();
+    w.heart->step(w.spec.step_s);
+    const auto b = Clock::now();
+    w.costs[w.cost_heart].last_step_ms = Impl::ms(a, b);
+    if (w.skin) {
+      w.skin->update(w.heart->positions_m());
+      w.costs[w.cost_motion].last_step_ms = Impl::ms(b, Clock::now());
+    }
+  }
   if (w.wire) {
     ChainMailWire& wire = *w.wire;
     auto t0 = Clock::now();
@@ -147,7 +182,7 @@ void World::step(const InstrumentInput& input) {
     auto t1 = Clock::now();
     double c_wire = Impl::ms(t0, t1), c_blood = 0.0, c_contact = 0.0, c_friction = 0.0;
     if (w.blood) {
-      w.blood->step(w.spec.step_s, 0.0);
+      w.blood->step(w.spec.step_s, w.heart ? w.heart->phase() : 0.0);
       w.blood->apply(wire, w.spec.step_s);
       const auto t2 = Clock::now();
       c_blood = Impl::ms(t1, t2);
@@ -206,8 +241,14 @@ void World::write_snapshot(WorldSnapshot& out) const {
   out.step = w.step;
   out.insertion_m = w.used.insertion_m;
   out.rotation_rad = w.used.rotation_rad;
-  out.heart_phase = 0.0;
+  out.heart_phase = w.heart ? w.heart->phase() : 0.0;
   out.tip_branch = w.tip_branch;
+  if (w.skin) {
+    const auto pts = w.skin->points_m();
+    out.vessel_points_m.assign(pts.begin(), pts.end());
+  } else {
+    out.vessel_points_m.clear();
+  }
   if (!w.wire) {
     out.wire_nodes_m.clear();
     out.wire_contact.clear();
@@ -216,6 +257,9 @@ void World::write_snapshot(WorldSnapshot& out) const {
   }
   const auto nodes = w.wire->nodes_m();
   out.wire_nodes_m.assign(nodes.begin(), nodes.end());
+  // the wire rides its vessels: rest frame to world
+  if (w.skin)
+    for (auto& p : out.wire_nodes_m) p = w.skin->to_world(p);
   out.wire_contact.resize(nodes.size());
   if (w.contact) {
     const auto t = w.contact->touched();
@@ -223,7 +267,7 @@ void World::write_snapshot(WorldSnapshot& out) const {
   } else {
     std::fill(out.wire_contact.begin(), out.wire_contact.end(), 0);
   }
-  out.tip_m = nodes.back();
+  out.tip_m = out.wire_nodes_m.back();
 }
 
 LocalForceModel World::force_model() const { return impl_->model; }
@@ -241,5 +285,8 @@ const CoulombFriction* World::friction_state() const {
 }
 const LumenQuery* World::lumen() const { return impl_->lumen.get(); }
 const VesselTree& World::vessel_tree() const { return impl_->tree; }
+const BeatingHeart* World::heart_state() const { return impl_->heart ? &*impl_->heart : nullptr; }
+const VesselSkin* World::vessel_skin() const { return impl_->skin ? &*impl_->skin : nullptr; }
+const BloodChainMail* World::blood_state() const { return impl_->blood ? &*impl_->blood : nullptr; }
 
 }  // namespace pcisim::physics

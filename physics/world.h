@@ -14,7 +14,10 @@
 
 namespace pcisim::physics {
 
+class BeatingHeart;
+class BloodChainMail;
 class ChainMailWire;
+class VesselSkin;
 class CoulombFriction;
 class LumenQuery;
 class WallContact;
@@ -53,12 +56,17 @@ class World {
   // insertion the wire is refusing now: commanded minus accepted feed, m (0 without guidewire)
   double refused_feed_m() const;
 
-  // read-only views for tests and benchmarks; null when the effect is not listed
+  // read-only views for tests and benchmarks; null when the effect is not listed. With
+  // vessel_motion the wire, contact and blood live in the vessels' rest frame; the snapshot
+  // carries them into the world
   const ChainMailWire* guidewire_state() const;
   const WallContact* contact_state() const;
   const CoulombFriction* friction_state() const;
   const LumenQuery* lumen() const;  // the contact geometry (null without vessel_contact)
-  const VesselTree& vessel_tree() const;  // empty without guidewire
+  const VesselTree& vessel_tree() const;  // at rest; empty without guidewire and vessel_motion
+  const BeatingHeart* heart_state() const;
+  const VesselSkin* vessel_skin() const;   // the tree now (vessel_motion)
+  const BloodChainMail* blood_state() const;
 
  private:
   struct Impl;

@@ -16,6 +16,9 @@ struct WorldSnapshot {
   double insertion_m = 0.0;  // insertion the step used
   double rotation_rad = 0.0;
   double heart_phase = 0.0;  // [0, 1) of the cardiac cycle; 0 without heart_beat
+  // the coronary centerline points where the heart has carried them, in tree order (branch 0's
+  // points, then branch 1's, ...); empty without vessel_motion (the tree is at rest)
+  std::vector<Eigen::Vector3d> vessel_points_m;
 };
 
 }  // namespace pcisim::physics

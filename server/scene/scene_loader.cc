@@ -60,6 +60,41 @@ physics::BloodFlowParams read_blood_flow(JsonReader r) {
   physics::BloodFlowParams p;
   p.mean_velocity_m_per_s = r.number("mean_velocity_mm_s", p.mean_velocity_m_per_s / kMm, 0, 2000) * kMm;
   p.drift_gain = r.number("drift_gain", p.drift_gain, 0, 1);
+  p.pulsatility = r.number("pulsatility", p.pulsatility, 0, 1);
+  p.cell_spacing_m = r.number("cell_spacing_mm", p.cell_spacing_m / kMm, 0.2, 5) * kMm;
+  p.link_radius_m = r.number("link_radius_mm", p.link_radius_m / kMm, 0.2, 5) * kMm;
+  r.finish();
+  return p;
+}
+
+physics::HeartBeatParams read_heart_beat(JsonReader r, const std::string& scene_dir) {
+  physics::HeartBeatParams p;
+  p.rate_bpm = r.number("rate_bpm", p.rate_bpm, 20, 250);
+  p.motion_file = r.text("motion_file", "");
+  // a relative motion file is found beside the scene file
+  if (!p.motion_file.empty() && !scene_dir.empty() && std::filesystem::path(p.motion_file).is_relative())
+    p.motion_file = (std::filesystem::path(scene_dir) / p.motion_file).string();
+  if (!p.motion_file.empty() && !std::filesystem::is_regular_file(p.motion_file))
+    r.fail("motion_file", fmt::format("expected a heart motion file (docs/heart.md), cannot read \"{}\"", p.motion_file));
+  p.substeps = r.integer("substeps", p.substeps, 1, 64);
+  p.iterations = r.integer("iterations", p.iterations, 1, 200);
+  const std::string solver = r.text("solver", p.solver == physics::pbd::SolverKind::kJacobi ? "jacobi" : "gauss_seidel",
+                                    {"jacobi", "gauss_seidel"});
+  p.solver = solver == "jacobi" ? physics::pbd::SolverKind::kJacobi : physics::pbd::SolverKind::kGaussSeidel;
+  p.sor_w = r.number("sor_w", p.sor_w, 1, 2);
+  p.stretch_compliance_m_per_n = r.number("stretch_compliance_m_per_n", p.stretch_compliance_m_per_n, 0, 1);
+  p.bend_compliance_per_n_m = r.number("bend_compliance_per_n_m", p.bend_compliance_per_n_m, 0, 100);
+  p.shape_compliance_s2 = r.number("shape_compliance_s2", p.shape_compliance_s2, 0, 1);
+  p.damping_per_s = r.number("damping_per_s", p.damping_per_s, 0, 1000);
+  r.finish();
+  return p;
+}
+
+physics::VesselMotionParams read_vessel_motion(JsonReader r) {
+  physics::VesselMotionParams p;
+  p.attach_distance_m = r.number("attach_mm", p.attach_distance_m / kMm, 0, 50) * kMm;
+  p.fade_distance_m = r.number("fade_mm", p.fade_distance_m / kMm, 0, 100) * kMm;
+  p.blend_radius_m = r.number("blend_radius_mm", p.blend_radius_m / kMm, 1, 20) * kMm;
   r.finish();
   return p;
 }
@@ -138,6 +173,7 @@ void require(const Scene& s, const std::string& effect, const std::string& needs
 
 Scene parse(const nlohmann::json& doc, const std::string& source) {
   Scene s;
+  const std::string scene_dir = source == "built-in" ? "" : std::filesystem::path(source).parent_path().string();
   s.source = source;
   JsonReader top(doc, "");
   s.name = top.text("name", "unnamed");
@@ -164,6 +200,8 @@ Scene parse(const nlohmann::json& doc, const std::string& source) {
     if (name == "vessel_contact") s.world.vessel_contact = read_vessel_contact(r);
     if (name == "friction") s.world.friction = read_friction(r);
     if (name == "blood_flow") s.world.blood_flow = read_blood_flow(r);
+    if (name == "heart_beat") s.world.heart_beat = read_heart_beat(r, scene_dir);
+    if (name == "vessel_motion") s.world.vessel_motion = read_vessel_motion(r);
     if (name == "xray") s.xray = read_xray(r);
   }
   // the x-ray's options come after xray itself has been read
@@ -174,6 +212,7 @@ Scene parse(const nlohmann::json& doc, const std::string& source) {
   if (s.world.vessel_contact) require(s, "vessel_contact", "guidewire");
   if (s.world.friction) require(s, "friction", "vessel_contact");
   if (s.world.blood_flow) require(s, "blood_flow", "guidewire");
+  if (s.world.vessel_motion) require(s, "vessel_motion", "heart_beat");
   for (const char* option : {"contrast", "detector_noise"})
     if (std::find(s.effects.begin(), s.effects.end(), option) != s.effects.end()) require(s, option, "xray");
   return s;
@@ -182,8 +221,8 @@ Scene parse(const nlohmann::json& doc, const std::string& source) {
 }  // namespace
 
 const std::vector<std::string>& known_effects() {
-  static const std::vector<std::string> names = {"guidewire", "blood_flow",     "vessel_contact", "friction",
-                                                 "xray",      "contrast", "detector_noise"};
+  static const std::vector<std::string> names = {"heart_beat", "vessel_motion", "guidewire", "blood_flow",
+                                                 "vessel_contact", "friction", "xray", "contrast", "detector_noise"};
   return names;
 }
 

@@ -81,8 +81,19 @@ TEST(Scene, EachBadInputNamesItsJsonPathAndWhatWasExpected) {
   EXPECT_EQ(error_of(R"({"effects": {"vessel_contact": {"sdf_spacing_mm": 5}, "guidewire": {}}})"),
             "test.json: effects.vessel_contact.sdf_spacing_mm: expected a number in [0.05, 2], got 5");
   EXPECT_EQ(error_of(R"({"effects": {"teleport": {}}})"),
-            "test.json: effects.teleport: unknown effect (known: guidewire, blood_flow, vessel_contact, friction, xray, "
-            "contrast, detector_noise)");
+            "test.json: effects.teleport: unknown effect (known: heart_beat, vessel_motion, guidewire, blood_flow, "
+            "vessel_contact, friction, xray, contrast, detector_noise)");
+  EXPECT_EQ(error_of(R"({"effects": {"vessel_motion": {}}})"),
+            "test.json: effects.vessel_motion: needs effect \"heart_beat\" in the same scene");
+  EXPECT_EQ(error_of(R"({"effects": {"heart_beat": {"rate_bpm": 400}}})"),
+            "test.json: effects.heart_beat.rate_bpm: expected a number in [20, 250], got 400");
+  EXPECT_EQ(error_of(R"({"effects": {"heart_beat": {"solver": "magic"}}})").substr(0, 42),
+            "test.json: effects.heart_beat.solver: expe");
+  EXPECT_EQ(error_of(R"({"effects": {"heart_beat": {"motion_file": "no/such.motion"}}})"),
+            "test.json: effects.heart_beat.motion_file: expected a heart motion file (docs/heart.md), cannot read "
+            "\"no/such.motion\"");
+  EXPECT_EQ(error_of(R"({"effects": {"guidewire": {}, "blood_flow": {"pulsatility": 2}}})"),
+            "test.json: effects.blood_flow.pulsatility: expected a number in [0, 1], got 2");
   EXPECT_EQ(error_of(R"({"effects": {"guidewire": {}, "contrast": {}}})"),
             "test.json: effects.contrast: needs effect \"xray\" in the same scene");
   EXPECT_EQ(error_of(R"({"effects": {"xray": {"pulse_rate_fps": 20}}})"),

@@ -1,0 +1,242 @@
+#include "physics/heart/beating_heart.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+#include "physics/heart/heart_frame.h"
+#include "physics/heart/heart_mesh.h"
+#include "physics/heart/heart_motion.h"
+#include "physics/heart/synthetic_heart_motion.h"
+#include "physics/heart/template_heart_surface.h"
+
+namespace pcisim::physics {
+namespace {
+
+constexpr double kDensityKgPerM3 = 1050.0;  // myocardium
+// heart frame height (m) of the atrioventricular plane: the coronary phantom's AV groove runs at
+// polar angles 50-60 deg on the 50 mm sphere; tissue above it (atria, aortic root) is not driven
+constexpr double kAvPlaneZM = 0.030;
+
+// no strings unless it fails: set_rate_bpm runs between steps and must not allocate
+void check(bool ok, const char* field, const char* rule, double value) {
+  if (!ok)
+    throw std::invalid_argument(std::string("heart_beat.") + field + " must be " + rule + ", got " + std::to_string(value));
+}
+
+void validate_rate(double rate_bpm) { check(rate_bpm > 0.0 && rate_bpm <= 400.0, "rate_bpm", "in (0, 400]", rate_bpm); }
+
+void validate(const HeartBeatParams& p) {
+  validate_rate(p.rate_bpm);
+  check(p.substeps >= 1 && p.substeps <= 100, "substeps", "in [1, 100]", p.substeps);
+  check(p.iterations >= 1 && p.iterations <= 1000, "iterations", "in [1, 1000]", p.iterations);
+  check(p.sor_w >= 1.0 && p.sor_w <= 2.0, "sor_w", "in [1, 2]", p.sor_w);
+  check(p.stretch_compliance_m_per_n >= 0.0 && std::isfinite(p.stretch_compliance_m_per_n),
+        "stretch_compliance_m_per_n", "finite and >= 0", p.stretch_compliance_m_per_n);
+  check(p.bend_compliance_per_n_m >= 0.0 && std::isfinite(p.bend_compliance_per_n_m), "bend_compliance_per_n_m",
+        "finite and >= 0", p.bend_compliance_per_n_m);
+  check(p.shape_compliance_s2 >= 0.0 && std::isfinite(p.shape_compliance_s2), "shape_compliance_s2",
+        "finite and >= 0", p.shape_compliance_s2);
+  check(p.damping_per_s >= 0.0 && std::isfinite(p.damping_per_s), "damping_per_s", "finite and >= 0",
+        p.damping_per_s);
+}
+
+HeartMotion load_motion(const HeartBeatParams& p) {
+  if (p.motion_file.empty()) return make_synthetic_heart_motion();
+  try {
+    return HeartMotion::read(p.motion_file);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("heart_beat.motion_file: ") + e.what());
+  }
+}
+
+}  // namespace
+
+struct BeatingHeart::Impl {
+  HeartBeatParams params;
+  HeartMotion motion;
+  pbd::PbdParams pbd;
+  pbd::PbdSystem system;
+  Eigen::Matrix3Xd rest_m;
+  std::vector<std::array<int, 4>> tets;
+  std::vector<std::array<int, 3>> epicardium, lv_endocardium;
+  std::vector<int> driven, free;
+  double time_s = 0.0;
+  double phase = 0.0;
+
+  Impl(const HeartBeatParams& p, const HeartTissueScaling& scaling) : params(p), motion(load_motion(p)) {
+    const HeartMesh& mesh = template_heart_mesh();
+    // particles: the vertices some tet uses, in file order
+    std::vector<int> to_particle(mesh.vertices_m.cols(), -1);
+    for (const auto& t : mesh.tets)
+      for (int v : t) to_particle[v] = 0;
+    int n = 0;
+    for (int& id : to_particle)
+      if (id == 0) id = n++;
+    rest_m.resize(3, n);
+    for (int v = 0; v < mesh.vertices_m.cols(); ++v)
+      if (to_particle[v] >= 0) rest_m.col(to_particle[v]) = mesh.vertices_m.col(v);
+
+    // mass: a quarter of each tet's volume to each of its vertices
+    std::vector<double> mass_kg(n, 0.0);
+    for (const auto& t : mesh.tets) {
+      std::array<int, 4> q;
+      for (int k = 0; k < 4; ++k) q[k] = to_particle[t[k]];
+      const Eigen::Vector3d a = rest_m.col(q[0]);
+      const double volume_m3 =
+          std::abs((rest_m.col(q[1]) - a).cross(rest_m.col(q[2]) - a).dot(rest_m.col(q[3]) - a)) / 6.0;
+      for (int k = 0; k < 4; ++k) mass_kg[q[k]] += 0.25 * kDensityKgPerM3 * volume_m3;
+      tets.push_back(q);
+    }
+    std::vector<double> compliance_scale(n, 1.0);
+    for (int i = 0; i < n; ++i) {
+      if (scaling.mass_scale) mass_kg[i] *= scaling.mass_scale(rest_m.col(i));
+      if (scaling.compliance_scale) compliance_scale[i] = scaling.compliance_scale(rest_m.col(i));
+    }
+    for (int i = 0; i < n; ++i) system.add_particle(rest_m.col(i), mass_kg[i]);
+
+    // the ventricles' myocardium is driven (heart paper section 4, fig 6); the rest is free
+    const Eigen::Matrix3d to_heart = heart_to_patient().transpose();
+    std::vector<bool> is_driven(n, false);
+    for (int i = 0; i < n; ++i) {
+      is_driven[i] = (to_heart * rest_m.col(i)).z() < kAvPlaneZM;
+      if (is_driven[i]) {
+        system.drive(i);
+        driven.push_back(i);
+      } else {
+        free.push_back(i);
+      }
+    }
+    // a constraint among driven particles only would never move anything: left out
+    auto any_free = [&](std::initializer_list<int> ids) {
+      return std::any_of(ids.begin(), ids.end(), [&](int i) { return !is_driven[i]; });
+    };
+    auto scale = [&](std::initializer_list<int> ids) {
+      double s = 0.0;
+      for (int i : ids) s = std::max(s, compliance_scale[i]);
+      return s;
+    };
+
+    // stretch: one spring per tet edge
+    std::set<std::pair<int, int>> edges;
+    for (const auto& t : tets)
+      for (int a = 0; a < 4; ++a)
+        for (int b = a + 1; b < 4; ++b) edges.insert(std::minmax(t[a], t[b]));
+    for (const auto& [i, j] : edges)
+      if (any_free({i, j})) system.add_distance(i, j, p.stretch_compliance_m_per_n * scale({i, j}));
+
+    // twist: for two tets sharing a face, a spring between their far vertices; it spans the
+    // shared face, so shearing or twisting the pair about that face stretches it
+    std::map<std::array<int, 3>, int> face_far;
+    std::set<std::pair<int, int>> twist;
+    for (const auto& t : tets)
+      for (int k = 0; k < 4; ++k) {
+        std::array<int, 3> f = {t[(k + 1) % 4], t[(k + 2) % 4], t[(k + 3) % 4]};
+        std::sort(f.begin(), f.end());
+        auto [it, inserted] = face_far.emplace(f, t[k]);
+        if (!inserted && it->second != t[k]) {
+          const auto pair = std::minmax(it->second, t[k]);
+          if (!edges.count(pair)) twist.insert(pair);
+        }
+      }
+    for (const auto& [i, j] : twist)
+      if (any_free({i, j})) system.add_distance(i, j, p.stretch_compliance_m_per_n * scale({i, j}));
+
+    // surfaces, in particle indices
+    for (size_t f = 0; f < mesh.faces.size(); ++f) {
+      const std::array<int, 3> tri = {to_particle[mesh.faces[f][0]], to_particle[mesh.faces[f][1]],
+                                      to_particle[mesh.faces[f][2]]};
+      if (mesh.face_markers[f] == kEpicardium) epicardium.push_back(tri);
+      if (mesh.face_markers[f] == kLvEndocardium) lv_endocardium.push_back(tri);
+    }
+    if (epicardium.empty() || lv_endocardium.empty())
+      throw std::invalid_argument("heart mesh: no epicardium (marker 1) or LV endocardium (marker 2) faces");
+
+    // bend: a dihedral spring on every pair of epicardial triangles that share an edge
+    std::map<std::pair<int, int>, std::pair<int, int>> wing;  // edge -> (first wing, second wing)
+    for (const auto& t : epicardium)
+      for (int k = 0; k < 3; ++k) {
+        const auto e = std::minmax(t[k], t[(k + 1) % 3]);
+        auto [it, inserted] = wing.emplace(e, std::pair{t[(k + 2) % 3], -1});
+        if (!inserted) it->second.second = t[(k + 2) % 3];
+      }
+    for (const auto& [e, w] : wing)
+      if (w.second >= 0 && any_free({e.first, e.second, w.first, w.second}))
+        system.add_bending(e.first, e.second, w.first, w.second,
+                           p.bend_compliance_per_n_m * scale({e.first, e.second, w.first, w.second}));
+
+    // one global shape-matching cluster over every particle (heart paper eqs 7-10)
+    std::vector<int> all(n);
+    for (int i = 0; i < n; ++i) all[i] = i;
+    system.add_cluster(all, p.shape_compliance_s2);
+    system.finalize();
+
+    pbd.substeps = p.substeps;
+    pbd.iterations = p.iterations;
+    pbd.solver = p.solver;
+    pbd.sor_w = p.sor_w;
+    // each constraint's impulse stays balanced: momentum kept as in Gauss-Seidel (docs/pbd.md)
+    pbd.averaging = pbd::JacobiAveraging::kPerConstraint;
+    pbd.damping_per_s = p.damping_per_s;
+
+    // start at phase 0 exactly on the sequence
+    for (int i : driven) {
+      const Eigen::Vector3d x = driven_position(i, 0.0);
+      system.particles().position_m.col(i) = x;
+      system.particles().predicted_m.col(i) = x;
+      system.particles().last_finite_m.col(i) = x;
+      system.set_driven_target(i, x);
+    }
+  }
+
+  Eigen::Vector3d driven_position(int i, double at_phase) const {
+    return rest_m.col(i) + motion.displacement_m(rest_m.col(i), at_phase);
+  }
+};
+
+BeatingHeart::BeatingHeart(const HeartBeatParams& params) : BeatingHeart(params, HeartTissueScaling{}) {}
+
+BeatingHeart::BeatingHeart(const HeartBeatParams& params, const HeartTissueScaling& scaling) {
+  validate(params);
+  impl_ = std::make_unique<Impl>(params, scaling);
+}
+
+BeatingHeart::~BeatingHeart() = default;
+
+void BeatingHeart::step(double dt_s) {
+  if (!(dt_s > 0.0) || !std::isfinite(dt_s)) return;
+  Impl& m = *impl_;
+  m.time_s += dt_s;
+  // accumulate the phase itself (not time * rate) so it stays exact over days of beating
+  m.phase += dt_s * m.params.rate_bpm / 60.0;
+  m.phase -= std::floor(m.phase);
+  if (m.phase >= 1.0) m.phase = 0.0;
+  for (int i : m.driven) m.system.set_driven_target(i, m.driven_position(i, m.phase));
+  m.system.step(dt_s, m.pbd);
+}
+
+void BeatingHeart::set_rate_bpm(double rate_bpm) {
+  validate_rate(rate_bpm);
+  impl_->params.rate_bpm = rate_bpm;
+}
+
+double BeatingHeart::phase() const { return impl_->phase; }
+double BeatingHeart::time_s() const { return impl_->time_s; }
+const Eigen::Matrix3Xd& BeatingHeart::positions_m() const { return impl_->system.particles().position_m; }
+const Eigen::Matrix3Xd& BeatingHeart::rest_positions_m() const { return impl_->rest_m; }
+std::span<const std::array<int, 3>> BeatingHeart::epicardium() const { return impl_->epicardium; }
+std::span<const int> BeatingHeart::driven() const { return impl_->driven; }
+std::span<const int> BeatingHeart::free_particles() const { return impl_->free; }
+std::span<const std::array<int, 4>> BeatingHeart::tets() const { return impl_->tets; }
+std::span<const std::array<int, 3>> BeatingHeart::lv_endocardium() const { return impl_->lv_endocardium; }
+const HeartMotion& BeatingHeart::motion() const { return impl_->motion; }
+Eigen::Vector3d BeatingHeart::driven_position_m(int i, double phase) const { return impl_->driven_position(i, phase); }
+const pbd::PbdSystem& BeatingHeart::system() const { return impl_->system; }
+pbd::PbdSystem& BeatingHeart::system() { return impl_->system; }
+const HeartBeatParams& BeatingHeart::params() const { return impl_->params; }
+
+}  // namespace pcisim::physics

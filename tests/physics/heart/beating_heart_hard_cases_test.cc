@@ -1,0 +1,167 @@
+// BeatingHeart under provocation (DESIGN.md "Hard cases stay stable"): each case checks that
+// nothing goes NaN, positions stay within bounds, spring strain stays bounded, and that the heart
+// is back on its normal beat once the provocation stops.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include "physics/heart/beating_heart.h"
+#include "physics/heart/heart_frame.h"
+#include "tests/physics/heart/heart_health.h"
+
+namespace pcisim::physics {
+namespace {
+
+using Eigen::Vector3d;
+using testing::health;
+using testing::HeartHealth;
+
+constexpr double kDt = 1.0 / 30;  // the physics thread's default step
+constexpr double kBoundM = 0.025; // no particle ever this far from rest (the beat moves < 15 mm)
+
+HeartHealth run(BeatingHeart& h, double dt, int steps) {
+  HeartHealth worst;
+  for (int k = 0; k < steps; ++k) {
+    h.step(dt);
+    worst.merge(health(h));
+  }
+  return worst;
+}
+
+// normal beating until end-diastole after a few cycles; then the free particles should be where
+// an undisturbed heart has them (at rest), within tolerance_m
+void expect_recovers(BeatingHeart& h, double tolerance_m, const char* what) {
+  h.set_rate_bpm(72);
+  const double cycle_s = 60.0 / 72.0;
+  // finish the current cycle, then three whole ones, in steps of 1/25 cycle
+  const double to_end = (1.0 - h.phase()) * cycle_s;
+  if (to_end > 1e-9) h.step(to_end);
+  const HeartHealth after = run(h, cycle_s / 25, 75);
+  EXPECT_TRUE(after.finite) << what;
+  double worst = 0;
+  for (int i = 0; i < h.positions_m().cols(); ++i)
+    worst = std::max(worst, (h.positions_m().col(i) - h.rest_positions_m().col(i)).norm());
+  std::printf("%s: recovered to %.3f mm from rest at end-diastole\n", what, worst * 1e3);
+  EXPECT_LT(worst, tolerance_m) << what;
+}
+
+void expect_healthy(const HeartHealth& w, double max_strain, const char* what) {
+  std::printf("%s: max from rest %.2f mm (free %.2f mm), strain %.3f, free kinetic %.3g J\n", what,
+              w.max_from_rest_m * 1e3, w.max_free_from_rest_m * 1e3, w.max_strain, w.free_kinetic_j);
+  EXPECT_TRUE(w.finite) << what;
+  EXPECT_LT(w.max_from_rest_m, kBoundM) << what;
+  EXPECT_LT(w.max_strain, max_strain) << what;
+}
+
+// each step jumps 40 % of a cycle: the driven base lands up to 9 mm away and 2 x 6 Jacobi
+// iterations cannot carry that through the free atria at once, so the AV-plane springs strain
+// (~0.85) until normal steps resume
+TEST(HeartHardCases, TimeStepTimesTen) {
+  BeatingHeart h(HeartBeatParams{});
+  expect_healthy(run(h, 10 * kDt, 30), 1.0, "dt x10");
+  expect_recovers(h, 0.5e-3, "dt x10");
+}
+
+TEST(HeartHardCases, HeartRate200Bpm) {
+  HeartBeatParams p;
+  p.rate_bpm = 200;
+  BeatingHeart h(p);
+  expect_healthy(run(h, kDt, 150), 0.5, "200 bpm");
+  expect_recovers(h, 0.5e-3, "200 bpm");
+}
+
+// half the heart (patient left of the centre) 1000 times softer, or 1000 times heavier
+TEST(HeartHardCases, StiffnessRatio1To1000) {
+  HeartTissueScaling scaling;
+  scaling.compliance_scale = [](const Vector3d& r) { return r.x() > 0 ? 1000.0 : 1.0; };
+  HeartBeatParams p;
+  p.stretch_compliance_m_per_n = 1e-3;  // so that the soft half is really soft (1 m/N)
+  BeatingHeart h(p, scaling);
+  expect_healthy(run(h, kDt, 100), 0.6, "stiffness 1:1000");
+  expect_recovers(h, 1e-3, "stiffness 1:1000");
+}
+
+TEST(HeartHardCases, MassRatio1To1000) {
+  HeartTissueScaling scaling;
+  scaling.mass_scale = [](const Vector3d& r) { return r.x() > 0 ? 1000.0 : 1.0; };
+  BeatingHeart h(HeartBeatParams{}, scaling);
+  expect_healthy(run(h, kDt, 100), 0.6, "mass 1:1000");
+  expect_recovers(h, 1e-3, "mass 1:1000");
+}
+
+TEST(HeartHardCases, NanInOneFreeParticleIsQuarantined) {
+  BeatingHeart h(HeartBeatParams{});
+  run(h, kDt, 10);
+  const int victim = h.free_particles()[h.free_particles().size() / 2];
+  h.system().particles().position_m.col(victim).setConstant(NAN);
+  HeartHealth during;
+  for (int k = 0; k < 30; ++k) {
+    h.step(kDt);
+    HeartHealth now = health(h);
+    during.merge(now);
+    EXPECT_EQ(h.system().quarantined_now(), 1);
+  }
+  expect_healthy(during, 0.6, "NaN quarantined");
+  // its neighbours saw a pinned particle, never its NaN
+  for (const auto& c : h.system().distance_constraints())
+    if (c.i == victim || c.j == victim) {
+      EXPECT_TRUE(h.positions_m().col(c.i == victim ? c.j : c.i).allFinite());
+    }
+  h.system().release_quarantine();
+  EXPECT_EQ(h.system().quarantined_now(), 0);
+  expect_recovers(h, 0.5e-3, "NaN released");
+  EXPECT_EQ(h.system().quarantined_now(), 0);
+}
+
+// 24 hours of beating in fast-forward: big steps, each advancing 20.76 cycles, so the phase
+// samples the whole cycle; positions and the free particles' kinetic energy stay bounded. As with
+// dt x10, each step lands the base anywhere in its cycle, so the AV-plane springs strain (~1.0).
+TEST(HeartHardCases, TwentyFourHoursOfBeating) {
+  BeatingHeart h(HeartBeatParams{});
+  const double dt = 17.3;
+  const int steps = static_cast<int>(24 * 3600 / dt);
+  const auto start = std::chrono::steady_clock::now();
+  HeartHealth worst;
+  double max_kinetic = 0;
+  for (int k = 0; k < steps; ++k) {
+    h.step(dt);
+    const HeartHealth now = health(h);
+    worst.merge(now);
+    max_kinetic = std::max(max_kinetic, now.free_kinetic_j);
+    if (!now.finite) break;
+  }
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("24 h in %d steps, %.1f s wall; time %.0f s\n", steps, wall_s, h.time_s());
+  EXPECT_NEAR(h.time_s(), steps * dt, 1e-6);
+  expect_healthy(worst, 1.25, "24 h");
+  EXPECT_LT(max_kinetic, 1e-6);  // steps of 17 s: the velocities are displacements / 17 s
+  // the phase is accumulated, not recomputed from a large time: still exact after a day
+  const double cycles = h.time_s() * 72.0 / 60.0;
+  EXPECT_NEAR(h.phase(), cycles - std::floor(cycles), 1e-6);
+  expect_recovers(h, 0.5e-3, "24 h");
+}
+
+// the whole heart mirrored: shape matching must find a proper rotation (det +1), not the
+// reflection, and the beat must come back
+TEST(HeartHardCases, InvertedGlobalCluster) {
+  BeatingHeart h(HeartBeatParams{});
+  run(h, kDt, 8);
+  Eigen::Matrix3Xd& x = h.system().particles().position_m;
+  const Vector3d centre = x.rowwise().mean();
+  const Vector3d n = heart_to_patient().col(1);  // mirror left-right through the heart's centre
+  for (int i = 0; i < x.cols(); ++i) x.col(i) -= 2 * n.dot(x.col(i) - centre) * n;
+  h.system().particles().velocity_m_per_s.setZero();
+  const HeartHealth during = run(h, kDt, 30);
+  EXPECT_NEAR(h.system().clusters().rotation(0).determinant(), 1.0, 1e-9);
+  EXPECT_TRUE(during.finite);
+  EXPECT_LT(during.max_from_rest_m, 0.2);  // it was thrown up to ~0.1 m; it must not fly off
+  expect_recovers(h, 1e-3, "inverted");
+  EXPECT_NEAR(h.system().clusters().rotation(0).determinant(), 1.0, 1e-9);
+  EXPECT_LT((h.system().clusters().rotation(0) - Eigen::Matrix3d::Identity()).norm(), 0.05);
+}
+
+}  // namespace
+}  // namespace pcisim::physics

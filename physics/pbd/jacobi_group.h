@@ -22,6 +22,11 @@ class JacobiGroup {
   // divide_by_count the slots were already scaled by their constraint and x_i += w * sum_slots(i)
   void apply(Eigen::Matrix3Xd& x_m, double sor_w, bool divide_by_count = true) const;
 
+  // the CSR layout, for twins that gather in the same order (PbdCudaSolver)
+  std::span<const int> offsets() const { return offset_; }
+  std::span<const int> slot_order() const { return slot_; }
+  std::span<const double> inverse_counts() const { return inverse_count_; }
+
  private:
   Eigen::Matrix3Xd slot_dx_m_;
   std::vector<int> offset_;  // CSR: particle -> its slots

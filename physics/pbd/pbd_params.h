@@ -8,6 +8,10 @@ namespace pcisim::physics::pbd {
 enum class SolverKind {
   kGaussSeidel,  // each constraint moves its particles at once (sequential)
   kJacobi,       // all constraints of a group read the same positions; corrections averaged (parallel)
+  // kJacobi on a CUDA device (PbdCudaSolver, built on first use); the same answer to summation
+  // order. PbdSystem::step throws std::invalid_argument naming it when built without CUDA or
+  // when no device can be used. See docs/pbd.md "CUDA Jacobi".
+  kJacobiCuda,
 };
 
 // how Jacobi shares corrections among constraints that touch the same particle

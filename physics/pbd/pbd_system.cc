@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "physics/pbd/pbd_cuda_solver.h"
+
 namespace pcisim::physics::pbd {
 
 namespace {
@@ -157,7 +159,20 @@ void PbdSystem::quarantine_non_finite_inputs() {
 void PbdSystem::step(double dt_s, const PbdParams& params) {
   if (!finalized_) throw std::logic_error("pbd: finalize() before step()");
   if (!(dt_s > 0.0) || !std::isfinite(dt_s)) return;
+  if (params.solver == SolverKind::kJacobiCuda && !cuda_.solver)
+    cuda_.solver = std::make_shared<PbdCudaSolver>(*this);  // throws std::invalid_argument without CUDA
   quarantine_non_finite_inputs();
+  if (params.solver == SolverKind::kJacobiCuda) {
+    // the same substeps as below, on the device (pbd_cuda_solver.h)
+    cuda_.solver->run_step(*this, dt_s, params);
+  } else {
+    step_on_cpu(dt_s, params);
+  }
+  for (int i = 0; i < particle_count(); ++i)
+    if (particles_.state[i] != ParticleState::kQuarantined) particles_.last_finite_m.col(i) = particles_.position_m.col(i);
+}
+
+void PbdSystem::step_on_cpu(double dt_s, const PbdParams& params) {
   const int substeps = std::max(params.substeps, 1);
   const double h = dt_s / substeps;
   drive_start_m_ = particles_.position_m;  // same size: a copy, no allocation
@@ -179,8 +194,6 @@ void PbdSystem::step(double dt_s, const PbdParams& params) {
     }
     update(h);
   }
-  for (int i = 0; i < particle_count(); ++i)
-    if (particles_.state[i] != ParticleState::kQuarantined) particles_.last_finite_m.col(i) = particles_.position_m.col(i);
 }
 
 // Algorithm 1 lines 1-5: external forces, then x* = x + dt v

@@ -3,6 +3,7 @@
 // (soft-tissue paper Algorithm 1), Gauss-Seidel or parallel Jacobi with SOR, XPBD compliance.
 // Build with add_*, then finalize() sizes every buffer; step() allocates nothing.
 #include <Eigen/Core>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -14,6 +15,8 @@
 #include "physics/pbd/shape_matching_clusters.h"
 
 namespace pcisim::physics::pbd {
+
+class PbdCudaSolver;
 
 class PbdSystem {
  public:
@@ -45,10 +48,25 @@ class PbdSystem {
   ShapeMatchingClusters& clusters() { return clusters_; }
   long quarantined_total() const { return quarantined_total_; }  // since build
   int quarantined_now() const;
+  // the device twin that SolverKind::kJacobiCuda built on its first step (null before; a copy
+  // of the system starts without one and builds its own)
+  const PbdCudaSolver* cuda_solver() const { return cuda_.solver.get(); }
 
  private:
+  friend class PbdCudaSolver;
+  // owns the lazily built CUDA solver; copies start empty so PbdSystem stays copyable
+  struct CudaSlot {
+    std::shared_ptr<PbdCudaSolver> solver;
+    CudaSlot() = default;
+    CudaSlot(const CudaSlot&) {}
+    CudaSlot& operator=(const CudaSlot&) { solver.reset(); return *this; }
+    CudaSlot(CudaSlot&&) = default;
+    CudaSlot& operator=(CudaSlot&&) = default;
+  };
+
   void quarantine(int i, const Eigen::Vector3d& freeze_at_m);
   void quarantine_non_finite_inputs();
+  void step_on_cpu(double dt_s, const PbdParams& params);
   void predict(double h_s, double fraction_of_step, bool last_substep, const PbdParams& params);
   void solve_gauss_seidel(double h_s);
   void solve_jacobi(double h_s, double sor_w, JacobiAveraging averaging);
@@ -77,6 +95,7 @@ class PbdSystem {
   std::vector<Eigen::Vector3d> goal_scratch_m_;  // one cluster's goals
   Eigen::Matrix3Xd drive_start_m_, drive_target_m_;
   long quarantined_total_ = 0;
+  CudaSlot cuda_;
 };
 
 }  // namespace pcisim::physics::pbd

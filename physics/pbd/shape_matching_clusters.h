@@ -23,6 +23,10 @@ class ShapeMatchingClusters {
   double compliance_s2(int c) const { return compliance_s2_[c]; }
   void set_compliance_s2(int c, double value) { compliance_s2_[c] = value; }
   const Eigen::Matrix3d& rotation(int c) const { return rotation_[c]; }
+  // the warm start kept by another solver (PbdCudaSolver) between steps
+  void set_rotation(int c, const Eigen::Matrix3d& r) const { rotation_[c] = r; }
+  const Eigen::Matrix3Xd& rest_offsets_m() const { return rest_offset_m_; }
+  double rest_moment_kg_m2(int c) const { return rest_moment_kg_m2_[c]; }
 
   // eqs 8-10: centre of mass t, A_pq = sum m p q^T, its rotation R, goals g = R q + t for the
   // members of c, written to goals_m[0 .. size). Updates the cluster's remembered rotation.

@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -109,6 +110,7 @@ TEST(HeartTemplateMesh, CoronaryTreeRidesTheEpicardium) {
       hi = std::max(hi, gap_mm);
       ++checked;
     }
+    std::printf("%-4s gap to epicardium %+.2f .. %+.2f mm\n", branch.name.c_str(), lo, hi);
     EXPECT_GE(lo, -0.5) << branch.name;
     EXPECT_LE(hi, 3.0) << branch.name;
   }

@@ -155,9 +155,11 @@ TEST(HeartHardCases, InvertedGlobalCluster) {
   for (int i = 0; i < x.cols(); ++i) x.col(i) -= 2 * n.dot(x.col(i) - centre) * n;
   h.system().particles().velocity_m_per_s.setZero();
   const HeartHealth during = run(h, kDt, 30);
+  std::printf("mirrored: max from rest %.1f mm during, strain %.3f\n", during.max_from_rest_m * 1e3, during.max_strain);
   EXPECT_NEAR(h.system().clusters().rotation(0).determinant(), 1.0, 1e-9);
   EXPECT_TRUE(during.finite);
-  EXPECT_LT(during.max_from_rest_m, 0.2);  // it was thrown up to ~0.1 m; it must not fly off
+  EXPECT_LT(during.max_from_rest_m, 0.05);  // the mirror itself moved the atria ~28 mm; nothing flies off
+  EXPECT_LT(during.max_strain, 1.5);
   expect_recovers(h, 1e-3, "inverted");
   EXPECT_NEAR(h.system().clusters().rotation(0).determinant(), 1.0, 1e-9);
   EXPECT_LT((h.system().clusters().rotation(0) - Eigen::Matrix3d::Identity()).norm(), 0.05);

@@ -55,7 +55,7 @@ Eigen::Vector3d HeartMotion::node_displacement_m(int frame, int i, int j, int k)
 }
 
 // trilinear, the point clamped into the grid's box (outside, the nearest boundary value holds)
-Eigen::Vector3d HeartMotion::spatial(int frame, const Eigen::Vector3d& rest_m) const {
+Eigen::Vector3d HeartMotion::frame_displacement_m(int frame, const Eigen::Vector3d& rest_m) const {
   int i0[3];
   double f[3];
   for (int a = 0; a < 3; ++a) {
@@ -72,17 +72,22 @@ Eigen::Vector3d HeartMotion::spatial(int frame, const Eigen::Vector3d& rest_m) c
   return out;
 }
 
-Eigen::Vector3d HeartMotion::displacement_m(const Eigen::Vector3d& rest_m, double phase) const {
-  if (!std::isfinite(phase) || !rest_m.allFinite()) return Eigen::Vector3d::Zero();
+HeartMotion::FrameWeights HeartMotion::frame_weights(double phase) const {
   const double t = (phase - std::floor(phase)) * frames_;
   const int f1 = std::min(static_cast<int>(t), frames_ - 1);
   const double u = t - f1;
-  const int f0 = (f1 + frames_ - 1) % frames_, f2 = (f1 + 1) % frames_, f3 = (f1 + 2) % frames_;
   // uniform Catmull-Rom: passes through every frame, C1 across frames and across the cycle's end
   const double u2 = u * u, u3 = u2 * u;
-  const double w0 = 0.5 * (-u3 + 2 * u2 - u), w1 = 0.5 * (3 * u3 - 5 * u2 + 2);
-  const double w2 = 0.5 * (-3 * u3 + 4 * u2 + u), w3 = 0.5 * (u3 - u2);
-  return w0 * spatial(f0, rest_m) + w1 * spatial(f1, rest_m) + w2 * spatial(f2, rest_m) + w3 * spatial(f3, rest_m);
+  return {{(f1 + frames_ - 1) % frames_, f1, (f1 + 1) % frames_, (f1 + 2) % frames_},
+          {0.5 * (-u3 + 2 * u2 - u), 0.5 * (3 * u3 - 5 * u2 + 2), 0.5 * (-3 * u3 + 4 * u2 + u), 0.5 * (u3 - u2)}};
+}
+
+Eigen::Vector3d HeartMotion::displacement_m(const Eigen::Vector3d& rest_m, double phase) const {
+  if (!std::isfinite(phase) || !rest_m.allFinite()) return Eigen::Vector3d::Zero();
+  const FrameWeights w = frame_weights(phase);
+  Eigen::Vector3d out = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 4; ++k) out += w.weight[k] * frame_displacement_m(w.frame[k], rest_m);
+  return out;
 }
 
 std::string HeartMotion::serialize() const {

@@ -25,6 +25,14 @@ class HeartMotion {
 
   // where the tissue that rests at rest_m has moved at phase (any real; taken modulo 1)
   Eigen::Vector3d displacement_m(const Eigen::Vector3d& rest_m, double phase) const;
+  // the time interpolation alone: displacement_m = sum_k weight[k] * frame_displacement_m(frame[k])
+  struct FrameWeights {
+    int frame[4];
+    double weight[4];
+  };
+  FrameWeights frame_weights(double phase) const;  // phase finite
+  // one frame's field at a point (trilinear, clamped to the grid's box)
+  Eigen::Vector3d frame_displacement_m(int frame, const Eigen::Vector3d& rest_m) const;
   // the stored sample at one node of one frame
   Eigen::Vector3d node_displacement_m(int frame, int i, int j, int k) const;
 
@@ -39,8 +47,6 @@ class HeartMotion {
   void write(const std::string& path) const;
 
  private:
-  Eigen::Vector3d spatial(int frame, const Eigen::Vector3d& rest_m) const;
-
   MotionGrid grid_;
   int frames_;
   double cycle_s_;

@@ -94,6 +94,8 @@ void Gateway::accept() {
     if (ec == net::error::operation_aborted || !acceptor_.is_open()) return;
     if (!ec) {
       socket.set_option(tcp::no_delay(true), ec);
+      if (options_.hub.socket_send_buffer > 0)
+        socket.set_option(net::socket_base::send_buffer_size(options_.hub.socket_send_buffer), ec);
       std::make_shared<HttpSession>(std::move(socket), *hub_, tokens_)->run();
     }
     accept();

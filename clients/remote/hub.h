@@ -28,6 +28,8 @@ struct HubLimits {
   size_t max_clients = 64;
   size_t max_replies = 16;                        // queued answers per connection, oldest dropped
   size_t max_message_bytes = 4096;                // a page's message; bigger closes the connection
+  int socket_send_buffer = 256 * 1024;            // kernel send buffer per connection (0: the OS's):
+                                                  // frames queued there are stale frames too
 };
 
 struct HubStats {

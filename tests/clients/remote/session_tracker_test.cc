@@ -1,0 +1,90 @@
+// The cath-lab metrics the gateway keeps because the server does not report them: fluoroscopy
+// time (pedal-down time, console or instrument) and contrast used (injections x volume).
+#include <gtest/gtest.h>
+
+#include "clients/remote/session_tracker.h"
+
+namespace pcisim::remote {
+namespace {
+
+using C = pcisim_lcm::session_command_t;
+using I = pcisim_lcm::instrument_state_t;
+constexpr int64_t kS = 1'000'000'000;
+
+C pedal(int8_t cmd, bool down) {
+  C c{};
+  c.command = cmd;
+  c.pedal_down = down;
+  return c;
+}
+
+I instrument(int32_t buttons, int32_t device = 1) {
+  I m{};
+  m.device_id = device;
+  m.buttons = buttons;
+  return m;
+}
+
+TEST(RemoteTracker, FluoroTimeIsPedalDownTimeFromConsoleOrInstrument) {
+  SessionTracker t;
+  t.on_session(pedal(C::CMD_FLUORO_PEDAL, true), 10 * kS);
+  EXPECT_NEAR(t.fluoro_time_s(12 * kS), 2.0, 1e-9);
+  t.on_session(pedal(C::CMD_FLUORO_PEDAL, false), 13 * kS);
+  EXPECT_NEAR(t.fluoro_time_s(20 * kS), 3.0, 1e-9);
+  // the instrument's pedal and a console cine overlapping count once
+  t.on_instrument(instrument(I::BUTTON_FLUORO_PEDAL), 20 * kS);
+  t.on_session(pedal(C::CMD_CINE, true), 21 * kS);
+  t.on_instrument(instrument(0), 22 * kS);
+  t.on_session(pedal(C::CMD_CINE, false), 23 * kS);
+  EXPECT_NEAR(t.fluoro_time_s(30 * kS), 6.0, 1e-9);
+  const auto j = t.state_json(30 * kS);
+  EXPECT_FALSE(j["fluoro"]["on"].get<bool>());
+  EXPECT_NEAR(j["fluoro"]["time_s"].get<double>(), 6.0, 1e-9);
+}
+
+TEST(RemoteTracker, ContrastCountsCommandsAndButtonPresses) {
+  TrackerOptions o;
+  o.injection_ml = 8;
+  SessionTracker t(o);
+  C c{};
+  c.command = C::CMD_CONTRAST;
+  t.on_session(c, kS);
+  t.on_instrument(instrument(I::BUTTON_CONTRAST), 2 * kS);
+  t.on_instrument(instrument(I::BUTTON_CONTRAST), 2 * kS + 1000);  // still held: one injection
+  t.on_instrument(instrument(0), 3 * kS);
+  t.on_instrument(instrument(I::BUTTON_CONTRAST), 4 * kS);
+  EXPECT_EQ(t.injections(), 3);
+  EXPECT_DOUBLE_EQ(t.state_json(5 * kS)["contrast"]["used_ml"].get<double>(), 24.0);
+}
+
+TEST(RemoteTracker, CarmFollowsAcceptedCommandsAndFrames) {
+  SessionTracker t;
+  EXPECT_TRUE(t.state_json(kS)["carm"]["primary_deg"].is_null()) << "unknown until told";
+  C c{};
+  c.command = C::CMD_CARM;
+  c.primary_angle_deg = 30;
+  c.secondary_angle_deg = -20;
+  t.on_session(c, kS);
+  c.primary_angle_deg = 500;  // the server ignores this one, so do we
+  t.on_session(c, kS);
+  EXPECT_DOUBLE_EQ(t.state_json(kS)["carm"]["primary_deg"].get<double>(), 30);
+  pcisim_lcm::xray_frame_t f{};
+  f.primary_angle_deg = -10;
+  f.secondary_angle_deg = 5;
+  t.on_frame(f, 2 * kS);
+  EXPECT_DOUBLE_EQ(t.state_json(2 * kS)["carm"]["secondary_deg"].get<double>(), 5);
+}
+
+TEST(RemoteTracker, OtherInstrumentIsActiveWhileHeard) {
+  TrackerOptions o;
+  o.own_device_id = 90;
+  SessionTracker t(o);
+  t.on_instrument(instrument(0, 90), kS);
+  EXPECT_FALSE(t.other_instrument_active(kS)) << "our own keyboard samples do not count";
+  t.on_instrument(instrument(0, 3), kS);
+  EXPECT_TRUE(t.other_instrument_active(kS + 100'000'000));
+  EXPECT_FALSE(t.other_instrument_active(kS + 300'000'000));
+}
+
+}  // namespace
+}  // namespace pcisim::remote

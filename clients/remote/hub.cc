@@ -55,11 +55,11 @@ void Hub::send_pedal(bool cine, bool down) {
 void Hub::leave(WsSession& s) {
   if (sessions_.erase(s.id()) == 0) return;
   --clients_;
-  // a page that goes away must not leave the beam on or the wire moving
+  // a page that goes away must not leave the wire moving or the beam on
+  if (keyboard_) keyboard_->disable(s.id());
   if (s.holds_fluoro) send_pedal(false, false);
   if (s.holds_cine) send_pedal(true, false);
   s.holds_fluoro = s.holds_cine = false;
-  if (keyboard_) keyboard_->disable(s.id());
   spdlog::info("remote: connection {} left ({} open)", s.id(), sessions_.size());
 }
 

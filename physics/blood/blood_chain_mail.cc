@@ -136,28 +136,43 @@ Eigen::Vector3d BloodChainMail::linked_velocity(const Eigen::Vector3d& p) const 
   if (cells_.empty() || !p.allFinite()) return Eigen::Vector3d::Zero();
   const double h = params_.link_radius_m;
   const Eigen::Vector3i g = cell_of(p, h);
-  uint32_t seen[27];
-  int seen_n = 0;
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  double wsum = 0.0;
+  uint32_t buckets[27];
+  int bucket_n = 0;
   for (int dz = -1; dz <= 1; ++dz)
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx) {
         const uint32_t b = hash_cell(g.x() + dx, g.y() + dy, g.z() + dz);
-        if (std::find(seen, seen + seen_n, b) != seen + seen_n) continue;  // two cells, one bucket
-        seen[seen_n++] = b;
-        for (int k = bucket_start_[b]; k < bucket_start_[b + 1]; ++k) {
-          const int c = bucket_cells_[k];
-          const double d = (pos_[c] - p).norm();
-          if (d > h) continue;
-          // eq 12's text: weights inversely proportional to distance (its printed w_i = d_i / sum d
-          // would grow with distance, the opposite); softened by a quarter spacing so a chain-mail
-          // passing right by a node does not jerk it
-          const double w = 1.0 / (d + 0.25 * params_.cell_spacing_m);
-          sum += w * vel_[c];
-          wsum += w;
-        }
+        if (std::find(buckets, buckets + bucket_n, b) == buckets + bucket_n) buckets[bucket_n++] = b;  // two cells, one bucket
       }
+  // the node links to the blood of one vessel, the one whose chain-mail is nearest: at a fork
+  // the flows of parent and daughters would otherwise average into a direction none of them has
+  int branch = -1;
+  double nearest = h;
+  for (int k = 0; k < bucket_n; ++k)
+    for (int j = bucket_start_[buckets[k]]; j < bucket_start_[buckets[k] + 1]; ++j) {
+      const int c = bucket_cells_[j];
+      const double d = (pos_[c] - p).norm();
+      if (d <= nearest) {
+        nearest = d;
+        branch = cells_[c].branch;
+      }
+    }
+  if (branch < 0) return Eigen::Vector3d::Zero();
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  double wsum = 0.0;
+  for (int k = 0; k < bucket_n; ++k)
+    for (int j = bucket_start_[buckets[k]]; j < bucket_start_[buckets[k] + 1]; ++j) {
+      const int c = bucket_cells_[j];
+      if (cells_[c].branch != branch) continue;
+      const double d = (pos_[c] - p).norm();
+      if (d > h) continue;
+      // eq 12's text: weights inversely proportional to distance (its printed w_i = d_i / sum d
+      // would grow with distance, the opposite); softened by a quarter spacing so a chain-mail
+      // passing right by a node does not jerk it
+      const double w = 1.0 / (d + 0.25 * params_.cell_spacing_m);
+      sum += w * vel_[c];
+      wsum += w;
+    }
   return wsum > 0.0 ? Eigen::Vector3d(sum / wsum) : Eigen::Vector3d::Zero();
 }
 

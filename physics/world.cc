@@ -18,6 +18,7 @@
 #include "physics/guidewire/wire_feedback.h"
 #include "physics/heart/beating_heart.h"
 #include "physics/motion/vessel_skin.h"
+#include "physics/pbd/pbd_cuda_solver.h"
 #include "physics/vessel/coronary_phantom.h"
 #include "physics/vessel/vessel_tree.h"
 
@@ -57,6 +58,11 @@ void validate(const WorldSpec& s) {
     require(in(b->pulsatility, 0.0, 1.0), "blood_flow.pulsatility: expected [0, 1]");
     require(in(b->cell_spacing_m, 2e-4, 5e-3), "blood_flow.cell_spacing_m: expected [2e-4, 5e-3] m");
     require(in(b->link_radius_m, 2e-4, 5e-3), "blood_flow.link_radius_m: expected [2e-4, 5e-3] m");
+  }
+  if (const auto& h = s.heart_beat) {
+    std::string why;
+    require(h->solver != pbd::SolverKind::kJacobiCuda || pbd::pbd_cuda_available(&why),
+            "heart_beat.solver: jacobi_cuda needs a CUDA build and a GPU (" + why + ")");
   }
   if (const auto& m = s.vessel_motion) {
     require(in(m->attach_distance_m, 0.0, 0.05), "vessel_motion.attach_distance_m: expected [0, 0.05] m");

@@ -13,6 +13,7 @@
 #include "physics/heart/heart_motion.h"
 #include "physics/heart/synthetic_heart_motion.h"
 #include "physics/heart/template_heart_surface.h"
+#include "physics/pbd/grid_clusters.h"
 
 namespace pcisim::physics {
 namespace {
@@ -176,6 +177,12 @@ struct BeatingHeart::Impl {
     std::vector<int> all(n);
     for (int i = 0; i < n; ++i) all[i] = i;
     system.add_cluster(all, p.shape_compliance_s2);
+    // local clusters where they can act: those holding at least one free particle
+    if (p.cluster_size_m > 0.0) {
+      for (const auto& members : pbd::grid_clusters(rest_m, p.cluster_size_m, 0.25))
+        if (std::any_of(members.begin(), members.end(), [&](int i) { return !is_driven[i]; }))
+          system.add_cluster(members, p.shape_compliance_s2);
+    }
     system.finalize();
 
     pbd.substeps = p.substeps;

@@ -23,6 +23,9 @@ struct HeartBeatParams {
   // 90 % (docs/heart.md, "Global shape matching")
   double shape_compliance_s2 = 1e-3;
   double damping_per_s = 5.0;
+  // overlapping local shape-matching clusters (soft-tissue paper) of this cube edge over the
+  // free tissue, besides the global one; 0: the global cluster only (heart paper)
+  double cluster_size_m = 0.0;
 };
 
 }  // namespace pcisim::physics

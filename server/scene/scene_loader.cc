@@ -78,14 +78,16 @@ physics::HeartBeatParams read_heart_beat(JsonReader r, const std::string& scene_
     r.fail("motion_file", fmt::format("expected a heart motion file (docs/heart.md), cannot read \"{}\"", p.motion_file));
   p.substeps = r.integer("substeps", p.substeps, 1, 64);
   p.iterations = r.integer("iterations", p.iterations, 1, 200);
-  const std::string solver = r.text("solver", p.solver == physics::pbd::SolverKind::kJacobi ? "jacobi" : "gauss_seidel",
-                                    {"jacobi", "gauss_seidel"});
-  p.solver = solver == "jacobi" ? physics::pbd::SolverKind::kJacobi : physics::pbd::SolverKind::kGaussSeidel;
+  const std::string solver = r.text("solver", "jacobi", {"jacobi", "gauss_seidel", "jacobi_cuda"});
+  p.solver = solver == "jacobi"        ? physics::pbd::SolverKind::kJacobi
+             : solver == "jacobi_cuda" ? physics::pbd::SolverKind::kJacobiCuda
+                                       : physics::pbd::SolverKind::kGaussSeidel;
   p.sor_w = r.number("sor_w", p.sor_w, 1, 2);
   p.stretch_compliance_m_per_n = r.number("stretch_compliance_m_per_n", p.stretch_compliance_m_per_n, 0, 1);
   p.bend_compliance_per_n_m = r.number("bend_compliance_per_n_m", p.bend_compliance_per_n_m, 0, 100);
   p.shape_compliance_s2 = r.number("shape_compliance_s2", p.shape_compliance_s2, 0, 1);
   p.damping_per_s = r.number("damping_per_s", p.damping_per_s, 0, 1000);
+  p.cluster_size_m = r.number("cluster_size_mm", p.cluster_size_m / kMm, 0, 200) * kMm;
   r.finish();
   return p;
 }

@@ -25,6 +25,7 @@
 #include "bench/bench_registry.h"
 #include "bench/bench_stats.h"
 #include "bench/machine_info.h"
+#include "bench/trainee_session.h"
 #include "physics/guidewire/chain_mail_wire.h"
 #include "physics/guidewire/sdf_lumen.h"
 #include "physics/vessel/coronary_phantom.h"
@@ -57,22 +58,6 @@ struct Row {
 };
 
 
-double ramp(double t, double at_s, double over_s, double amount) {
-  return t <= at_s ? 0.0 : amount * std::min((t - at_s) / over_s, 1.0);
-}
-
-// the built-in trainee (clients/bridge/trainee_script.cc) with the turn toward the LAD
-InstrumentInput session_at(double t) {
-  InstrumentInput in;
-  in.insertion_m = 1e-3 * (ramp(t, 0.5, 3.0, 8.0) + ramp(t, 7.0, 10.0, 50.0) - ramp(t, 17.5, 1.0, 5.0));
-  in.rotation_rad = ramp(t, 4.0, 2.0, 90.0 * std::numbers::pi / 180.0);
-  in.insertion_rate_m_per_s = (t > 0.5 && t < 3.5 ? 8e-3 / 3.0 : 0.0) + (t > 7.0 && t < 17.0 ? 5e-3 : 0.0) -
-                              (t > 17.5 && t < 18.5 ? 5e-3 : 0.0);
-  in.rotation_rate_rad_per_s = t > 4.0 && t < 6.0 ? 0.25 * std::numbers::pi : 0.0;
-  return in;
-}
-
-constexpr double kSessionS = 19.5;
 
 double thread_cpu_ms() {
   timespec ts{};

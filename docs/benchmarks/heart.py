@@ -24,7 +24,7 @@ for ax, by in zip(axes, ("substeps", "iterations")):
             line = sorted((r for r in rows if r[other] == value), key=lambda r: r[by])
             ax.plot([r["median_ms"] for r in line], [max(r["mean_err_mm"], 1e-6) for r in line], "-",
                     color=color, alpha=0.5, marker=markers.get(value, "x"), markersize=4,
-                    label=f"{solver}, {cm:g} mm" if value == min(r[other] for r in rows) else None)
+                    label=f"{solver}, " + (f"{cm:g} mm clusters" if cm else "global cluster") if value == min(r[other] for r in rows) else None)
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("median ms per step")
@@ -32,6 +32,6 @@ for ax, by in zip(axes, ("substeps", "iterations")):
     ax.grid(True, which="both", alpha=0.3)
 axes[0].set_ylabel("mean particle error vs reference, mm")
 axes[1].legend(fontsize=7)
-fig.suptitle(f"PBD ventricle stand-in, {report['body']['particles']} particles, 30 Hz - {report['machine']}", fontsize=9)
+fig.suptitle(f"beating template heart, {report['body']['particles']} particles ({report['body']['free']} free), 72 bpm, 30 Hz - {report['machine']}", fontsize=9)
 fig.tight_layout()
 fig.savefig(f"{out}/heart.png", dpi=110)

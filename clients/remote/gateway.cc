@@ -35,14 +35,19 @@ Gateway::Gateway(const GatewayOptions& options, lcm::LCM& control, lcm::LCM& ima
                                                      [this] { return tracker_.other_instrument_active(monotonic_ns()); });
   auto sink = [this](const pcisim_lcm::session_command_t& c) { control_.publish(protocol::kSessionChannel, &c); };
   hub_ = std::make_unique<Hub>(options_.hub, options_.commands, sink, tracker_, keyboard_.get());
-  control_.subscribe(protocol::kWireChannel, &Gateway::on_wire, this);
-  control_.subscribe(protocol::kStatusChannel, &Gateway::on_status, this);
-  control_.subscribe(protocol::kSessionChannel, &Gateway::on_session, this);
-  control_.subscribe(protocol::kInstrumentChannel, &Gateway::on_instrument, this);
-  images_.subscribe(protocol::kXrayChannel, &Gateway::on_xray, this);
+  control_subs_ = {control_.subscribe(protocol::kWireChannel, &Gateway::on_wire, this),
+                   control_.subscribe(protocol::kStatusChannel, &Gateway::on_status, this),
+                   control_.subscribe(protocol::kSessionChannel, &Gateway::on_session, this),
+                   control_.subscribe(protocol::kInstrumentChannel, &Gateway::on_instrument, this)};
+  image_sub_ = images_.subscribe(protocol::kXrayChannel, &Gateway::on_xray, this);
 }
 
-Gateway::~Gateway() { stop(); }
+Gateway::~Gateway() {
+  stop();
+  // the LCM instances outlive us: no handler may point here afterwards
+  for (auto* sub : control_subs_) control_.unsubscribe(sub);
+  images_.unsubscribe(image_sub_);
+}
 
 void Gateway::start() {
   boost::system::error_code ec;

@@ -11,6 +11,7 @@
 #include <memory>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "clients/remote/access_tokens.h"
 #include "clients/remote/frame_encoder.h"
@@ -80,6 +81,8 @@ class Gateway {
   std::atomic<bool> running_{false}, stopped_{false};
   std::thread io_thread_, control_thread_, image_thread_, encoder_thread_;
   LatestFrameSlot slot_;
+  std::vector<lcm::Subscription*> control_subs_;
+  lcm::Subscription* image_sub_ = nullptr;
   int64_t last_status_seq_ = -2, ticks_ = 0;
   // lcm receive buffers, one per thread's messages
   pcisim_lcm::xray_frame_t frame_in_;

@@ -16,7 +16,7 @@ function tokenFromUrl() {
 }
 
 let token = tokenFromUrl();
-let ws = null, everOpened = false, retryMs = 1000, nextId = 1;
+let ws = null, everOpened = false, retryMs = 1000, nextId = 1, failures = 0;
 
 function log(text, isError) {
   const line = document.createElement("div");
@@ -50,6 +50,7 @@ function connect() {
   ws.onopen = () => {
     opened = everOpened = true;
     retryMs = 1000;
+    failures = 0;
     $("token-required").hidden = true;
     setConn(true, "live");
   };
@@ -62,6 +63,9 @@ function connect() {
       return showTokenRequired("The gateway refused this token (or is not running).");
     }
     setConn(false, "reconnecting…");
+    // a restarted gateway has new tokens: after a few refusals, ask for one (and keep trying)
+    failures = opened ? 0 : failures + 1;
+    if (failures >= 3) showTokenRequired("Lost the gateway: it is down, or it restarted with new tokens. Retrying…");
     setTimeout(connect, retryMs);
     retryMs = Math.min(retryMs * 2, 10000);
   };

@@ -33,7 +33,7 @@ void validate_rate(double rate_bpm) { check(rate_bpm > 0.0 && rate_bpm <= 400.0,
 
 void validate(const HeartBeatParams& p) {
   validate_rate(p.rate_bpm);
-  check(p.substeps >= 1 && p.substeps <= 100, "substeps", "in [1, 100]", p.substeps);
+  check(p.substeps >= 1 && p.substeps <= 1000, "substeps", "in [1, 1000]", p.substeps);
   check(p.iterations >= 1 && p.iterations <= 1000, "iterations", "in [1, 1000]", p.iterations);
   check(p.sor_w >= 1.0 && p.sor_w <= 2.0, "sor_w", "in [1, 2]", p.sor_w);
   check(p.stretch_compliance_m_per_n >= 0.0 && std::isfinite(p.stretch_compliance_m_per_n),

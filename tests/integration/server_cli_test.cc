@@ -76,7 +76,7 @@ TEST(ServerCli, RunsForItsDurationAndWritesStats) {
   const auto j = nlohmann::json::parse(slurp(stats));
   EXPECT_GT(j["haptic"]["rate_hz"].get<double>(), 900.0);
   EXPECT_GT(j["physics"]["rate_hz"].get<double>(), 25.0);
-  EXPECT_EQ(j["physics"]["effects"].size(), 4u);
+  EXPECT_EQ(j["physics"]["effects"].size(), 6u);  // heart_beat, vessel_motion, guidewire, blood, contact, friction
 }
 
 TEST(ServerCli, SigtermStopsCleanlyAndStillWritesStats) {

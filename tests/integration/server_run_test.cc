@@ -103,7 +103,8 @@ TEST(ServerRun, StatsListExactlyTheSceneEffects) {
   const StatsReport r = run_server(default_scene(), lcm, 1.0);
   std::vector<std::string> names;
   for (const auto& [name, ms] : r.effect_step_ms_p50) names.push_back(name);
-  std::vector<std::string> expected = {"guidewire", "blood_flow", "vessel_contact", "friction"};  // the physics ones
+  std::vector<std::string> expected = {"heart_beat", "vessel_motion", "guidewire",
+                                       "blood_flow", "vessel_contact", "friction"};  // the physics ones
   std::sort(names.begin(), names.end());
   std::sort(expected.begin(), expected.end());
   EXPECT_EQ(names, expected);
@@ -118,7 +119,7 @@ TEST(ServerRun, StatsListExactlyTheSceneEffects) {
   EXPECT_TRUE(json["haptic"].contains("overruns"));
   EXPECT_TRUE(json["haptic"].contains("rate_hz"));
   EXPECT_TRUE(json["physics"].contains("rate_hz"));
-  EXPECT_EQ(json["effects"].size(), 7u);
+  EXPECT_EQ(json["effects"].size(), 9u);
   EXPECT_TRUE(json["xray"].contains("frames"));
   EXPECT_TRUE(json["xray"].contains("fps"));
   for (const char* key : {"rx", "tx", "dropped_bad"}) EXPECT_TRUE(json["lcm"].contains(key)) << key;

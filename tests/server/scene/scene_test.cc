@@ -34,8 +34,8 @@ TEST(Scene, BuiltInSceneIsTheRepositoryFileAndListsItsEffects) {
   EXPECT_EQ(s.name, "default");
   EXPECT_EQ(s.source, "built-in");
   EXPECT_DOUBLE_EQ(s.physics_rate_hz, 30.0);
-  EXPECT_EQ(s.effects, (std::vector<std::string>{"guidewire", "blood_flow", "vessel_contact", "friction", "xray",
-                                                 "contrast", "detector_noise"}));
+  EXPECT_EQ(s.effects, (std::vector<std::string>{"heart_beat", "vessel_motion", "guidewire", "blood_flow",
+                                                 "vessel_contact", "friction", "xray", "contrast", "detector_noise"}));
   ASSERT_TRUE(s.xray.has_value());
   EXPECT_TRUE(s.xray->contrast);
   EXPECT_EQ(s.xray->fluoro.c_arm.width, 512);

@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_options.h"
 #include "bench/bench_registry.h"
 #include "bench/bench_stats.h"
 #include "bench/machine_info.h"
@@ -35,12 +36,6 @@ namespace pcisim::bench {
 namespace {
 
 using namespace pcisim::physics;
-
-struct Options {
-  bool quick = false;
-  bool plot = true;
-  std::string out_dir = "docs/benchmarks";
-};
 
 struct Setting {
   int segments = 200;
@@ -115,32 +110,15 @@ Row run(const Setting& s, std::shared_ptr<const LumenQuery> lumen, const LumenQu
   return r;
 }
 
-int usage() {
-  std::printf(
-      "usage: pcisim-bench guidewire [--quick] [--out DIR] [--no-plot]\n"
-      "  sweeps segments {50,100,200,400,800} x passes {1,2,4,8} x SDF spacing {0.1,0.2,0.4} mm\n"
-      "  (--quick: segments {50,200,800} x passes {1,2,8} x spacing {0.2,0.4}) over the built-in\n"
-      "  trainee's LAD session; writes guidewire.md/.json/.png into DIR (docs/benchmarks)\n");
-  return 0;
-}
+constexpr const char* kUsage =
+    "usage: pcisim-bench guidewire [--quick] [--out DIR] [--no-plot]\n"
+    "  sweeps segments {50,100,200,400,800} x passes {1,2,4,8} x SDF spacing {0.1,0.2,0.4} mm\n"
+    "  (--quick: segments {50,200,800} x passes {1,2,8} x spacing {0.2,0.4}) over the built-in\n"
+    "  trainee's LAD session; writes guidewire.md/.json/.png into DIR (docs/benchmarks)\n";
 
 int run_bench(const std::vector<std::string>& args) {
-  Options o;
-  for (size_t i = 0; i < args.size(); ++i) {
-    if (args[i] == "--quick") {
-      o.quick = true;
-    } else if (args[i] == "--no-plot") {
-      o.plot = false;
-    } else if (args[i] == "--out" && i + 1 < args.size()) {
-      o.out_dir = args[++i];
-    } else if (args[i] == "--help" || args[i] == "-h") {
-      return usage();
-    } else {
-      std::fprintf(stderr, "pcisim-bench guidewire: unknown option '%s'\n", args[i].c_str());
-      usage();
-      return 2;
-    }
-  }
+  BenchOptions o;
+  if (const int rc = parse_bench_options(args, "guidewire", kUsage, &o); rc >= 0) return rc;
   std::filesystem::create_directories(o.out_dir);
   const std::string machine = machine_info();
   std::printf("guidewire: %s\n", machine.c_str());

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_options.h"
 #include "bench/bench_registry.h"
 #include "bench/bench_stats.h"
 #include "bench/machine_info.h"
@@ -41,12 +42,6 @@ using pcisim::physics::VesselSkin;
 
 constexpr double kDtS = 1.0 / 30.0;
 constexpr double kRateBpm = 72.0;
-
-struct Options {
-  bool quick = false;
-  bool plot = true;
-  std::string out_dir = "docs/benchmarks";
-};
 
 struct Solver {
   SolverKind kind;
@@ -141,29 +136,17 @@ Row run(double cluster_mm, const Solver& solver, int substeps, int iterations, i
   return r;
 }
 
+constexpr const char* kUsage =
+    "usage: pcisim-bench heart [--quick] [--out DIR] [--no-plot]\n"
+    "  iterations {1,2,4,8,16} x substeps {1,2,4,8} x (GS, Jacobi w 1/1.5/1.9) x clusters (global only,\n"
+    "  global + 20 mm local), settings of at most 32 sweeps per step (--quick: iterations {1,4,16} x\n"
+    "  substeps {1,4} x (GS, Jacobi w 1.5), global only) on the beating template heart at 72 bpm, 30 Hz,\n"
+    "  against a Gauss-Seidel reference with many substeps and iterations; reports particle error,\n"
+    "  epicardial tree drift and ms per step\n";
+
 int run_bench(const std::vector<std::string>& args) {
-  Options o;
-  for (size_t i = 0; i < args.size(); ++i) {
-    if (args[i] == "--quick") {
-      o.quick = true;
-    } else if (args[i] == "--no-plot") {
-      o.plot = false;
-    } else if (args[i] == "--out" && i + 1 < args.size()) {
-      o.out_dir = args[++i];
-    } else if (args[i] == "--help" || args[i] == "-h") {
-      std::printf(
-          "usage: pcisim-bench heart [--quick] [--out DIR] [--no-plot]\n"
-          "  iterations {1,2,4,8,16} x substeps {1,2,4,8} x (GS, Jacobi w 1/1.5/1.9) x clusters (global only,\n"
-          "  global + 20 mm local), settings of at most 32 sweeps per step (--quick: iterations {1,4,16} x\n"
-          "  substeps {1,4} x (GS, Jacobi w 1.5), global only) on the beating template heart at 72 bpm, 30 Hz,\n"
-          "  against a Gauss-Seidel reference with many substeps and iterations; reports particle error,\n"
-          "  epicardial tree drift and ms per step\n");
-      return 0;
-    } else {
-      std::fprintf(stderr, "pcisim-bench heart: unknown option '%s'\n", args[i].c_str());
-      return 2;
-    }
-  }
+  BenchOptions o;
+  if (const int rc = parse_bench_options(args, "heart", kUsage, &o); rc >= 0) return rc;
   std::filesystem::create_directories(o.out_dir);
   const std::vector<int> iterations = o.quick ? std::vector<int>{1, 4, 16} : std::vector<int>{1, 2, 4, 8, 16};
   const std::vector<int> substeps = o.quick ? std::vector<int>{1, 4} : std::vector<int>{1, 2, 4, 8};
@@ -263,9 +246,9 @@ int run_bench(const std::vector<std::string>& args) {
     for (size_t i = 0; i < rows.size(); ++i) {
       const Row& r = rows[i];
       f << fmt::format(
-          "    {{\"cluster_mm\": {}, \"clusters\": {}, \"solver\": \"{}\", \"sor_w\": {}, \"substeps\": {}, \"iterations\": {}, "
-          "\"mean_err_mm\": {:.5f}, \"max_err_mm\": {:.5f}, \"final_mean_err_mm\": {:.5f}, \"median_ms\": {:.4f}, "
-          "\"p99_ms\": {:.4f}, \"cpu_median_ms\": {:.4f}, \"cpu_p99_ms\": {:.4f}, \"tree_drift_mm\": {:.5f}, \"finite\": {}}}{}\n",
+    "    {{\"cluster_mm\": {}, \"clusters\": {}, \"solver\": \"{}\", \"sor_w\": {}, \"substeps\": {}, \"iterations\": {}, "
+    "\"mean_err_mm\": {:.5f}, \"max_err_mm\": {:.5f}, \"final_mean_err_mm\": {:.5f}, \"median_ms\": {:.4f}, "
+    "\"p99_ms\": {:.4f}, \"cpu_median_ms\": {:.4f}, \"cpu_p99_ms\": {:.4f}, \"tree_drift_mm\": {:.5f}, \"finite\": {}}}{}\n",
           r.cluster_mm, r.clusters, r.solver.name(), r.solver.w, r.substeps, r.iterations, r.mean_err_mm, r.max_err_mm,
           r.final_mean_err_mm, r.median_ms, r.p99_ms, r.cpu_median_ms, r.cpu_p99_ms, r.tree_drift_mm, r.finite,
           i + 1 < rows.size() ? "," : "");

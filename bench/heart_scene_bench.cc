@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_options.h"
 #include "bench/bench_registry.h"
 #include "bench/bench_stats.h"
 #include "bench/machine_info.h"
@@ -90,26 +91,17 @@ struct LumenRow {
   int nodes = 0;
 };
 
+constexpr const char* kUsage =
+    "usage: pcisim-bench heart-scene [--quick] [--out DIR]\n"
+    "  one cardiac cycle of the heart alone; the full default scene (trainee session, 19.5 s at 30 Hz)\n"
+    "  with and without the beating heart; the moving lumen, deform vs rebuild (SDF 0.5 mm and, without\n"
+    "  --quick, 0.2 mm). Writes heart-scene.md and .json.\n";
+
 int run_bench(const std::vector<std::string>& args) {
-  bool quick = false;
-  std::string out_dir = "docs/benchmarks";
-  for (size_t i = 0; i < args.size(); ++i) {
-    if (args[i] == "--quick") {
-      quick = true;
-    } else if (args[i] == "--out" && i + 1 < args.size()) {
-      out_dir = args[++i];
-    } else if (args[i] == "--help" || args[i] == "-h") {
-      std::printf(
-          "usage: pcisim-bench heart-scene [--quick] [--out DIR]\n"
-          "  one cardiac cycle of the heart alone; the full default scene (trainee session, 19.5 s at 30 Hz)\n"
-          "  with and without the beating heart; the moving lumen, deform vs rebuild (SDF 0.5 mm and, without\n"
-          "  --quick, 0.2 mm). Writes heart-scene.md and .json.\n");
-      return 0;
-    } else {
-      std::fprintf(stderr, "pcisim-bench heart-scene: unknown option '%s'\n", args[i].c_str());
-      return 2;
-    }
-  }
+  BenchOptions o;
+  if (const int rc = parse_bench_options(args, "heart-scene", kUsage, &o); rc >= 0) return rc;
+  const bool quick = o.quick;
+  const std::string out_dir = o.out_dir;
   std::filesystem::create_directories(out_dir);
   const std::string machine = machine_info();
 

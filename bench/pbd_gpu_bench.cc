@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_options.h"
 #include "bench/bench_registry.h"
 #include "bench/bench_stats.h"
 #include "bench/machine_info.h"
@@ -121,22 +122,16 @@ std::string opt(const std::optional<double>& v, const char* format = "{:.3f}") {
   return v ? fmt::format(fmt::runtime(format), *v) : std::string("—");
 }
 
+constexpr const char* kUsage =
+    "usage: pcisim-bench pbd-gpu [--quick] [--out DIR]\n"
+    "  CPU Jacobi vs CUDA Jacobi ms per PBD step on the procedural ventricle (~1k, ~10k, ~50k particles);\n"
+    "  --quick: 5 warm-up + 20 timed steps per body instead of 10 + 100\n";
+
 int run_bench(const std::vector<std::string>& args) {
-  bool quick = false;
-  std::string out_dir = "docs/benchmarks";
-  for (size_t i = 0; i < args.size(); ++i) {
-    if (args[i] == "--quick") {
-      quick = true;
-    } else if (args[i] == "--out" && i + 1 < args.size()) {
-      out_dir = args[++i];
-    } else {
-      std::printf(
-          "usage: pcisim-bench pbd-gpu [--quick] [--out DIR]\n"
-          "  CPU Jacobi vs CUDA Jacobi ms per PBD step on the procedural ventricle (~1k, ~10k, ~50k particles);\n"
-          "  --quick: 5 warm-up + 20 timed steps per body instead of 10 + 100\n");
-      return args[i] == "--help" || args[i] == "-h" ? 0 : 2;
-    }
-  }
+  BenchOptions o;
+  if (const int rc = parse_bench_options(args, "pbd-gpu", kUsage, &o); rc >= 0) return rc;
+  const bool quick = o.quick;
+  const std::string out_dir = o.out_dir;
   const int warmup = quick ? 5 : 10, steps = quick ? 20 : 100;
   std::string why;
   const bool gpu = pbd_cuda_available(&why);

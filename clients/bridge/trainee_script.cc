@@ -75,8 +75,8 @@ TraineeScript TraineeScript::parse(const std::string& text, const std::string& s
         end_s = at_s + over_s;
       } else if (what == "pedal" || what == "cine") {
         const bool down = a.boolean("down", true);
-        const int32_t bit = what == "pedal" ? pcisim_lcm::instrument_state_t::BUTTON_FLUORO_PEDAL
-                                            : pcisim_lcm::instrument_state_t::BUTTON_CINE_PEDAL;
+        const int32_t bit = what == "pedal" ? int32_t{pcisim_lcm::instrument_state_t::BUTTON_FLUORO_PEDAL}
+                                            : int32_t{pcisim_lcm::instrument_state_t::BUTTON_CINE_PEDAL};
         // a press opens a hold that the next release of the same pedal closes
         if (down) {
           s.buttons_.push_back({at_s, kInf, bit});

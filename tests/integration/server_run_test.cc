@@ -181,7 +181,7 @@ TEST(ServerRun, PhysicsStallOfHalfASecondFadesTheForceAndRecovers) {
   EXPECT_TRUE(trainee.forces[last].flags & F::FLAG_STALE);
   ASSERT_GT(trainee.forces.size(), last + 500);
   const auto& after = trainee.forces[last + 400];
-  EXPECT_EQ(after.flags & (F::FLAG_FADED | F::FLAG_STALE | F::FLAG_RAMPING), 0) << "recovered after physics resumed";
+  EXPECT_EQ(after.flags & (int{F::FLAG_FADED} | int{F::FLAG_STALE} | int{F::FLAG_RAMPING}), 0) << "recovered after physics resumed";
 }
 
 TEST(ServerRun, SilentInstrumentFadesTheForce) {

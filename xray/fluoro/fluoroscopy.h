@@ -21,11 +21,18 @@
 
 namespace pcisim::xray {
 
+// the background projector's default below: trilinear at 1-voxel steps
+inline DrrRendererOptions one_voxel_steps() {
+  DrrRendererOptions o;
+  o.trilinear.step_voxels = 1.0;
+  return o;
+}
+
 struct FluoroSpec {
   CArmSpec c_arm;                        // detector size, pitch, SID, SAD
   // background projector; 1-voxel steps: about the same error against the exact projection as
   // 0.5-voxel steps on the phantom (0.080 vs 0.079 % RMSE, docs/benchmarks/xray.md) in half the time
-  DrrRendererOptions projector{.trilinear = {.step_voxels = 1.0}};
+  DrrRendererOptions projector = one_voxel_steps();
   std::array<int64_t, 3> volume_dims{256, 256, 128};  // phantom resolution for the background
   double volume_spacing_mm = 1.4;
   double photons_per_pixel = 2000;       // incident quanta per pixel at the detector (0: no noise)
@@ -52,11 +59,11 @@ struct FluoroSpec {
 struct FluoroInput {
   double time_s = 0;                          // simulation time of the frame
   CArmPose pose;
-  std::span<const Eigen::Vector3d> wire_m;    // wire nodes, physics frame (metres, LPS); may be empty
-  std::span<const ContrastInjection> injections;  // every injection so far (the renderer fades old ones)
+  std::span<const Eigen::Vector3d> wire_m = {};  // wire nodes, physics frame (metres, LPS); may be empty
+  std::span<const ContrastInjection> injections = {};  // every injection so far (the renderer fades old ones)
   // the coronary centerline points where the beating heart has carried them (metres, tree order,
   // as physics' VesselSkin gives them); empty: the tree at rest
-  std::span<const Eigen::Vector3d> vessel_points_m;
+  std::span<const Eigen::Vector3d> vessel_points_m = {};
 };
 
 struct FluoroFrame {

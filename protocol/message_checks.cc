@@ -33,9 +33,10 @@ bool is_well_formed(const pcisim_lcm::wire_state_t& m) {
 }
 
 bool is_well_formed(const pcisim_lcm::sim_status_t& m) {
-  if (m.num_effects < 0) return false;
+  if (m.num_effects < 0 || m.contrast_injections < 0) return false;
   for (double v : m.effect_step_ms_p50)
     if (!finite(v)) return false;
+  if (!finite(m.fluoro_time_s, m.carm_primary_deg, m.carm_secondary_deg, m.contrast_ml)) return false;
   return finite(m.haptic_rate_hz, m.haptic_period_us_p50, m.haptic_period_us_p99,
                 m.haptic_period_us_p999, m.haptic_period_us_max, m.haptic_compute_us_p50,
                 m.haptic_compute_us_p99, m.haptic_compute_us_max, m.physics_rate_hz,

@@ -48,7 +48,16 @@ struct Server::Impl {
     last_status_ns = now;
     last_haptic_ticks = r.haptic_ticks;
     last_physics_steps = r.physics_steps;
-    return to_message(r, now / 1000, 0, state.paused);
+    pcisim_lcm::sim_status_t m = to_message(r, now / 1000, 0, state.paused);
+    // the session's cath-lab figures, so a client that joins late reports them whole
+    m.fluoro_on = state.fluoro_pedal_console || state.fluoro_pedal_instrument ? 1 : 0;
+    m.cine_on = state.cine_console || state.cine_instrument ? 1 : 0;
+    m.fluoro_time_s = state.xray_on_ns.load() * 1e-9;
+    m.carm_primary_deg = state.carm_primary_deg.load();
+    m.carm_secondary_deg = state.carm_secondary_deg.load();
+    m.contrast_injections = state.injections.load();
+    m.contrast_ml = m.contrast_injections * (scene.xray ? scene.xray->injection_volume_ml : 0.0);
+    return m;
   }
 };
 

@@ -48,8 +48,8 @@ struct Capture {
   }
   void on_instrument(const lcm::ReceiveBuffer* r, const std::string&) {
     if (pcisim::protocol::decode_checked(*r, instrument))
-      pedal = (instrument.buttons & (pcisim_lcm::instrument_state_t::BUTTON_FLUORO_PEDAL |
-                                     pcisim_lcm::instrument_state_t::BUTTON_CINE_PEDAL)) != 0;
+      pedal = (instrument.buttons & (int{pcisim_lcm::instrument_state_t::BUTTON_FLUORO_PEDAL} |
+                                     int{pcisim_lcm::instrument_state_t::BUTTON_CINE_PEDAL})) != 0;
   }
 };
 

@@ -62,8 +62,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1.0, 1000.0))
       ->capture_default_str();
   app.add_option("--injection-ml", o.tracker.injection_ml,
-                 "contrast volume of one injection, for 'contrast used' (the scene's contrast.injection_ml; the server "
-                 "does not report it)")
+                 "contrast volume of one injection seen on the bus before the server's next status reports it (the "
+                 "scene's contrast.injection_ml)")
       ->check(CLI::Range(0.5, 30.0))
       ->capture_default_str();
   app.add_flag("--no-keyboard-instrument", no_keyboard, "do not offer the keyboard instrument");

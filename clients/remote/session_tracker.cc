@@ -29,6 +29,12 @@ void SessionTracker::on_status(const pcisim_lcm::sim_status_t& m, int64_t now_ns
   std::lock_guard lock(mutex_);
   status_ = m;
   status_ns_ = now_ns;
+  beam_s_at_status_ = local_beam_s(now_ns);
+  injections_at_status_ = injections_;
+}
+
+double SessionTracker::local_beam_s(int64_t now_ns) const {
+  return (beam_total_ns_ + (beam_on_ ? now_ns - beam_since_ns_ : 0)) * 1e-9;
 }
 
 void SessionTracker::on_session(const pcisim_lcm::session_command_t& m, int64_t now_ns) {
@@ -77,12 +83,13 @@ void SessionTracker::on_frame(const pcisim_lcm::xray_frame_t& m, int64_t now_ns)
 
 double SessionTracker::fluoro_time_s(int64_t now_ns) const {
   std::lock_guard lock(mutex_);
-  return (beam_total_ns_ + (beam_on_ ? now_ns - beam_since_ns_ : 0)) * 1e-9;
+  const double local = local_beam_s(now_ns);
+  return status_ ? status_->fluoro_time_s + (local - beam_s_at_status_) : local;
 }
 
 int SessionTracker::injections() const {
   std::lock_guard lock(mutex_);
-  return injections_;
+  return status_ ? status_->contrast_injections + (injections_ - injections_at_status_) : injections_;
 }
 
 bool SessionTracker::other_instrument_active(int64_t now_ns) const {
@@ -103,6 +110,7 @@ int64_t SessionTracker::status_seq() const {
 
 nlohmann::json SessionTracker::state_json(int64_t now_ns) const {
   const double fluoro_s = fluoro_time_s(now_ns);
+  const int injections_now = injections();
   std::lock_guard lock(mutex_);
   nlohmann::json j = {{"type", "state"}};
   if (wire_) {
@@ -133,7 +141,10 @@ nlohmann::json SessionTracker::state_json(int64_t now_ns) const {
                  {"last_frame_age_s", frame_ns_ ? (now_ns - frame_ns_) * 1e-9 : -1.0}};
   j["carm"] = {{"primary_deg", primary_deg_ ? nlohmann::json(*primary_deg_) : nlohmann::json()},
                {"secondary_deg", secondary_deg_ ? nlohmann::json(*secondary_deg_) : nlohmann::json()}};
-  j["contrast"] = {{"injections", injections_}, {"used_ml", injections_ * options_.injection_ml}};
+  // the server's volume where it reported one; the option's for what the bus added since
+  const double used_ml = status_ ? status_->contrast_ml + (injections_ - injections_at_status_) * options_.injection_ml
+                                 : injections_ * options_.injection_ml;
+  j["contrast"] = {{"injections", injections_now}, {"used_ml", used_ml}};
   const bool other = other_instrument_ns_ > 0 && now_ns - other_instrument_ns_ < options_.instrument_active_ns;
   j["other_instrument"] = other ? nlohmann::json{{"device_id", other_device_id_}} : nlohmann::json();
   j["server_alive"] = status_ns_ > 0 && now_ns - status_ns_ < options_.server_alive_ns;

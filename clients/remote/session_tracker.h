@@ -1,10 +1,12 @@
 #pragma once
 // What a trainer's screen reports, gathered from the server's traffic: the wire, the C-arm, the
-// pedals, and the cath-lab metrics (fluoroscopy time, contrast used). sim_status_t carries
-// neither of those two metrics, so they are accumulated here from what crosses the bus: pedal
-// time from session commands and the instrument's pedal bits (as the server counts its own
-// x-ray-on time), contrast from injections (commands and the instrument's contrast button) times
-// the scene's volume per injection. Fed by the LCM threads, read by the web thread.
+// pedals, and the cath-lab metrics (fluoroscopy time, contrast used). The server reports those
+// two metrics once a second in sim_status_t (since it started, so a gateway that joins late shows
+// them whole); between reports, and before the first, they are also accumulated here from what
+// crosses the bus: pedal time from session commands and the instrument's pedal bits, contrast
+// from injections (commands and the instrument's contrast button) times the scene's volume per
+// injection. Shown: the server's figure plus what the bus added since it. Fed by the LCM threads,
+// read by the web thread.
 #include <cstdint>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -19,7 +21,7 @@
 namespace pcisim::remote {
 
 struct TrackerOptions {
-  double injection_ml = 8;          // the scene's contrast.injection_ml (the server does not report it)
+  double injection_ml = 8;          // per injection seen on the bus before a status reports it
   int max_injections = 256;         // the server keeps this many
   int32_t own_device_id = 90;       // the keyboard instrument's samples are ours, not "another instrument"
   int64_t instrument_active_ns = 200'000'000;  // an instrument heard within this is active
@@ -48,6 +50,7 @@ class SessionTracker {
 
  private:
   void update_beam(int64_t now_ns);  // call with the lock held after any pedal change
+  double local_beam_s(int64_t now_ns) const;  // lock held
   void add_injection();
 
   TrackerOptions options_;
@@ -61,6 +64,9 @@ class SessionTracker {
   bool beam_on_ = false;
   int64_t beam_since_ns_ = 0, beam_total_ns_ = 0;
   int injections_ = 0;
+  // the local counts when the last sim_status_t arrived: what the bus added since is on top
+  double beam_s_at_status_ = 0;
+  int injections_at_status_ = 0;
   int64_t other_instrument_ns_ = 0;
   int32_t other_device_id_ = -1;
   double frame_sim_time_s_ = 0;

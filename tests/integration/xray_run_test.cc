@@ -10,6 +10,7 @@
 #include "pcisim_lcm/instrument_state_t.hpp"
 #include "pcisim_lcm/session_command_t.hpp"
 #include "pcisim_lcm/xray_frame_t.hpp"
+#include "pcisim_lcm/sim_status_t.hpp"
 #include "protocol/channels.h"
 #include "protocol/message_checks.h"
 #include "server/server.h"
@@ -62,10 +63,23 @@ double mean_abs_difference(const pcisim_lcm::xray_frame_t& a, const pcisim_lcm::
   return sum / (a.width * a.height);
 }
 
+struct Statuses {
+  std::mutex mutex;
+  std::vector<pcisim_lcm::sim_status_t> all;
+  void on(const lcm::ReceiveBuffer* r, const std::string&) {
+    pcisim_lcm::sim_status_t m;
+    ASSERT_TRUE(protocol::decode_checked(*r, m));
+    std::lock_guard lock(mutex);
+    all.push_back(std::move(m));
+  }
+};
+
 TEST(XrayRun, PedalCarmAndContrastDriveTheFrames) {
   lcm::LCM lcm("memq://");
   Frames rec;
   lcm.subscribe(protocol::kXrayChannel, &Frames::on, &rec);
+  Statuses statuses;
+  lcm.subscribe(protocol::kStatusChannel, &Statuses::on, &statuses);
   // a steady instrument with the wire pushed in 20 mm
   std::atomic<bool> done{false};
   std::thread instrument([&] {
@@ -94,6 +108,21 @@ TEST(XrayRun, PedalCarmAndContrastDriveTheFrames) {
   done = true;
   instrument.join();
 
+  {
+    // the once-a-second status reports the session's cath-lab figures: the last one (after the
+    // pedal came up at 4.5 s) has 3 s of beam, the C-arm where it was moved, one injection of
+    // the scene's volume
+    std::lock_guard lock(statuses.mutex);
+    ASSERT_GE(statuses.all.size(), 4u);
+    const auto& last = statuses.all.back();
+    EXPECT_NEAR(last.fluoro_time_s, 3.0, 0.2);
+    EXPECT_EQ(last.fluoro_on, 0);
+    EXPECT_DOUBLE_EQ(last.carm_primary_deg, 40.0);
+    EXPECT_DOUBLE_EQ(last.carm_secondary_deg, 25.0);
+    EXPECT_EQ(last.contrast_injections, 1);
+    EXPECT_DOUBLE_EQ(last.contrast_ml, 8.0);
+    EXPECT_EQ(statuses.all.front().contrast_injections, 0);
+  }
   std::lock_guard lock(rec.mutex);
   ASSERT_GT(rec.frames.size(), 30u);
   // simulation time runs with the server's clock from the start of run()

@@ -42,7 +42,7 @@ TEST(TraineeScript, PedalHoldsUntilReleasedAndContrastForItsDuration) {
       {"at_s": 4, "do": "pedal", "down": false}]})", "s");
   EXPECT_EQ(s.sample(0.5).buttons, 0);
   EXPECT_EQ(s.sample(1.5).buttons, I::BUTTON_FLUORO_PEDAL);
-  EXPECT_EQ(s.sample(2.5).buttons, I::BUTTON_FLUORO_PEDAL | I::BUTTON_CONTRAST);
+  EXPECT_EQ(s.sample(2.5).buttons, int{I::BUTTON_FLUORO_PEDAL} | int{I::BUTTON_CONTRAST});
   EXPECT_EQ(s.sample(3.5).buttons, I::BUTTON_FLUORO_PEDAL);
   EXPECT_EQ(s.sample(4.5).buttons, 0);
 }

@@ -57,6 +57,36 @@ TEST(RemoteTracker, ContrastCountsCommandsAndButtonPresses) {
   EXPECT_DOUBLE_EQ(t.state_json(5 * kS)["contrast"]["used_ml"].get<double>(), 24.0);
 }
 
+TEST(RemoteTracker, ServerFiguresWinAndTheBusAddsWhatCameSince) {
+  // a gateway that joins late: the server has counted 100 s of beam and 3 injections (30 ml)
+  TrackerOptions o;
+  o.injection_ml = 8;
+  SessionTracker t(o);
+  pcisim_lcm::sim_status_t s{};
+  s.fluoro_time_s = 100.0;
+  s.contrast_injections = 3;
+  s.contrast_ml = 30.0;
+  t.on_status(s, kS);
+  EXPECT_NEAR(t.fluoro_time_s(2 * kS), 100.0, 1e-9);
+  // until the next report, pedal time and injections seen on the bus add to it
+  t.on_session(pedal(C::CMD_FLUORO_PEDAL, true), 2 * kS);
+  C c{};
+  c.command = C::CMD_CONTRAST;
+  t.on_session(c, 3 * kS);
+  const auto j = t.state_json(4 * kS);
+  EXPECT_NEAR(j["fluoro"]["time_s"].get<double>(), 102.0, 1e-9);
+  EXPECT_EQ(j["contrast"]["injections"].get<int>(), 4);
+  EXPECT_DOUBLE_EQ(j["contrast"]["used_ml"].get<double>(), 38.0);
+  // the next report includes them: nothing is counted twice
+  s.fluoro_time_s = 103.0;
+  s.contrast_injections = 4;
+  s.contrast_ml = 40.0;
+  t.on_status(s, 5 * kS);
+  EXPECT_NEAR(t.fluoro_time_s(6 * kS), 104.0, 1e-9);  // the pedal is still down
+  EXPECT_EQ(t.injections(), 4);
+  EXPECT_DOUBLE_EQ(t.state_json(6 * kS)["contrast"]["used_ml"].get<double>(), 40.0);
+}
+
 TEST(RemoteTracker, CarmFollowsAcceptedCommandsAndFrames) {
   SessionTracker t;
   EXPECT_TRUE(t.state_json(kS)["carm"]["primary_deg"].is_null()) << "unknown until told";

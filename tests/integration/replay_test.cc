@@ -38,8 +38,8 @@ std::vector<pcisim_lcm::wire_state_t> wire_states(const std::string& path) {
 // runs the server, a bridge and a logger in a private namespace; returns the shell's status.
 // The body is double-quoted for the outer shell, so the inner shell's $ are escaped.
 int session(const fs::path& dir, const std::string& bridge_args, const std::string& log_name) {
-  // the still scene: with the heart beating, the world path also depends on which phase the
-  // recording met, which the replay (starting on its own clock) cannot reproduce
+  // a scene without the time-driven effects: with the heart beating, the world path also depends
+  // on which phase the recording met, which the replay (starting on its own clock) cannot reproduce
   const std::string scene = " --scene " + (dir / "still.json").string();
   const std::string url = "'udpm://239.255.76.67:7667?ttl=0'";
   const std::string bin = PCISIM_BINARY_DIR;
@@ -57,10 +57,13 @@ TEST(Replay, ReplayedSessionFollowsTheLiveWireTrajectory) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   {
-    // the built-in scene without heart_beat and vessel_motion
+    // the built-in scene without heart_beat, vessel_motion and blood_flow: the blood chain-mails
+    // flow past the wire, so the drift they give depends on when a step samples them, which a
+    // replay on its own clock cannot reproduce either
     auto scene = nlohmann::json::parse(pcisim::server::default_scene_text(), nullptr, true, /*ignore_comments=*/true);
     scene["effects"].erase("heart_beat");
     scene["effects"].erase("vessel_motion");
+    scene["effects"].erase("blood_flow");
     std::ofstream(dir / "still.json") << scene.dump(2);
   }
   std::ofstream(dir / "script.json") << R"({"name": "short", "actions": [
@@ -77,9 +80,9 @@ TEST(Replay, ReplayedSessionFollowsTheLiveWireTrajectory) {
   // the replay's tip must trace the live tip's path: every replayed tip position lies near the
   // live path (a polyline through the live tips), and both end in the same place. Physics steps
   // see the samples at another phase of the 30 Hz clock, and wall contact can make the tip jump
-  // a millimetre or two in one step, so the stated tolerance is 0.3 mm typical (median), 2.5 mm
-  // worst, 1 mm at the end.
-  constexpr double kMedianMm = 0.3, kWorstMm = 2.5, kEndMm = 1.0;
+  // a millimetre or two in one step, so the stated tolerance is 0.3 mm typical (median), 1 mm
+  // for 95 % of the states, 2.5 mm worst, 1 mm at the end (seen: worst 0.15-1.24 mm)
+  constexpr double kMedianMm = 0.3, kP95Mm = 1.0, kWorstMm = 2.5, kEndMm = 1.0;
   auto tip = [](const pcisim_lcm::wire_state_t& w) { return Eigen::Vector3d(w.tip_mm[0], w.tip_mm[1], w.tip_mm[2]); };
   auto distance_to_live_path = [&](const Eigen::Vector3d& p) {
     double best = 1e9;
@@ -96,9 +99,11 @@ TEST(Replay, ReplayedSessionFollowsTheLiveWireTrajectory) {
   std::sort(d.begin(), d.end());
   const double worst = d.back();
   EXPECT_LT(d[d.size() / 2], kMedianMm) << "replayed tip positions against the live tip path";
+  EXPECT_LT(d[d.size() * 95 / 100], kP95Mm) << "replayed tip positions against the live tip path";
   EXPECT_LT(worst, kWorstMm) << "replayed tip positions against the live tip path";
   EXPECT_LT((tip(live.back()) - tip(replay.back())).norm(), kEndMm) << "both sessions end in the same place";
-  std::printf("replay: tip distance to the live path median %.3f mm, worst %.3f mm\n", d[d.size() / 2], worst);
+  std::printf("replay: tip distance to the live path median %.3f mm, p95 %.3f mm, worst %.3f mm\n", d[d.size() / 2],
+              d[d.size() * 95 / 100], worst);
   const double travelled = (tip(live.back()) - tip(live.front())).norm();
   EXPECT_GT(travelled, 15.0) << "the session moved the wire";
   RecordProperty("worst_tip_difference_mm", std::to_string(worst));

@@ -67,10 +67,12 @@ void expect_converged(double turn_deg, const char* branch) {
   const double rms_m = std::sqrt(sum_sq / static_cast<double>(mid.tips.size()));
   EXPECT_LE(rms_m, 8e-3) << "turn " << turn_deg << ": tip RMS gap " << rms_m * 1e3 << " mm";
   // where both end in the same branch they end at the same place
-  if (mid.final_branch == fine.final_branch)
+  if (mid.final_branch == fine.final_branch) {
     EXPECT_LE((mid.tips.back() - fine.tips.back()).norm(), 2.5e-3) << "turn " << turn_deg;
-  if (coarse.final_branch == fine.final_branch)
+  }
+  if (coarse.final_branch == fine.final_branch) {
     EXPECT_LE((coarse.tips.back() - fine.tips.back()).norm(), 3e-3) << "turn " << turn_deg;
+  }
 }
 
 TEST(SegmentConvergence, FinerWiresReachTheLadLikeTheDefaultWire) { expect_converged(90.0, "LAD"); }

@@ -191,14 +191,18 @@ TEST(DihedralBending, FreeCurvedStripKeepsMomentumAndItsRestAngles) {
       params.substeps = 4;
       for (int step = 0; step < 240; ++step) sys.step(1.0 / 60.0, params);
       ASSERT_TRUE(all_finite(sys));
-      if (conserving) EXPECT_LT((linear_momentum(sys) - l0).norm(), 1e-10 * l0.norm()) << "variant " << variant;
+      if (conserving) {
+        EXPECT_LT((linear_momentum(sys) - l0).norm(), 1e-10 * l0.norm()) << "variant " << variant;
+      }
       // velocity-level angular momentum: projecting a rotation back onto its circle loses about
       // (omega h)^2 / 2 per substep (0.8 % over these 960 substeps at 1 rad/s); a kick's large
       // first corrections (v x dp) and the tumbling after it move it further, so only the steady
       // spin is checked
       // (Jacobi's per-particle averaging is not torque-free: a hard, rigid strip loses about half
       // its spin in these 4 s, so it is not held to this; per-constraint averaging is)
-      if (!kick && conserving) EXPECT_LT((angular_momentum(sys) - h0).norm(), 0.02 * h0.norm()) << "variant " << variant;
+      if (!kick && conserving) {
+        EXPECT_LT((angular_momentum(sys) - h0).norm(), 0.02 * h0.norm()) << "variant " << variant;
+      }
       // hard hinges: the arch keeps its rest angles while it tumbles
       for (size_t k = 0; k < rest_angles.size(); ++k) {
         const auto& b = sys.bending_constraints()[k];

@@ -36,7 +36,7 @@ TEST(DeviceTwins, ProjectionsMatchTheEigenOriginals) {
   for (int trial = 0; trial < 500; ++trial) {
     const Eigen::Vector3d xi = rv(), xj = rv();
     double dl = 0, ddl = 0;
-    Eigen::Vector3d dxi, dxj;
+    Eigen::Vector3d dxi = Eigen::Vector3d::Zero(), dxj = Eigen::Vector3d::Zero();
     device::Vec3 gxi, gxj;
     const bool a = project_distance(xi, xj, 1000.0, 500.0, 0.004, 2e-3 * 900.0, 1e-4, &dl, &dxi, &dxj);
     const bool b = device::project_distance(to_dev(xi), to_dev(xj), 1000.0, 500.0, 0.004, 2e-3 * 900.0, 1e-4, &ddl, &gxi, &gxj);

@@ -32,7 +32,8 @@ class LcmIo {
   void on_instrument(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void on_session(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void request_scene(const std::string& path);
-  void add_injection();
+  // volume and rate 0: the scene's; a console command may name its own
+  void add_injection(double volume_ml = 0.0, double rate_ml_per_s = 0.0);
   void rx_loop();
   void tx_loop();
   void publish_wire(const physics::WorldSnapshot& s);

@@ -55,8 +55,12 @@ struct Server::Impl {
     m.fluoro_time_s = state.xray_on_ns.load() * 1e-9;
     m.carm_primary_deg = state.carm_primary_deg.load();
     m.carm_secondary_deg = state.carm_secondary_deg.load();
-    m.contrast_injections = state.injections.load();
-    m.contrast_ml = m.contrast_injections * (scene.xray ? scene.xray->injection_volume_ml : 0.0);
+    m.contrast_injections = state.injections.load(std::memory_order_acquire);
+    m.contrast_ml = 0.0;
+    for (int k = 0; k < m.contrast_injections && scene.xray; ++k) {
+      const double v = state.injection_volume_ml[k];
+      m.contrast_ml += v > 0 ? v : scene.xray->injection_volume_ml;
+    }
     return m;
   }
 };

@@ -87,6 +87,8 @@ struct SharedState {
   std::atomic<bool> carm_changed{false};
   static constexpr int kMaxInjections = 256;
   std::array<double, kMaxInjections> injection_start_s{};  // sim time of each contrast injection
+  // each injection's volume and duration; 0: the scene's contrast.injection_ml / injection_s
+  std::array<double, kMaxInjections> injection_volume_ml{}, injection_duration_s{};
   std::atomic<int> injections{0};                           // entries written (single writer: lcm rx)
   bool contrast_button_down = false;                        // lcm rx only: edge detection
   LatencyHistogram xray_render_ns;

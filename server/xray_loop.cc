@@ -34,8 +34,9 @@ void XrayLoop::render_and_publish(bool cine) {
   while (static_cast<int>(injections_.size()) < n) {
     xray::ContrastInjection inj;
     inj.start_s = state_.injection_start_s[injections_.size()];
-    inj.duration_s = spec_.injection_duration_s;
-    inj.volume_ml = spec_.injection_volume_ml;
+    const size_t k = injections_.size();
+    inj.duration_s = state_.injection_duration_s[k] > 0 ? state_.injection_duration_s[k] : spec_.injection_duration_s;
+    inj.volume_ml = state_.injection_volume_ml[k] > 0 ? state_.injection_volume_ml[k] : spec_.injection_volume_ml;
     injections_.push_back(inj);
   }
   xray::FluoroInput in;

@@ -15,8 +15,10 @@ void SessionTracker::update_beam(int64_t now_ns) {
   beam_on_ = on;
 }
 
-void SessionTracker::add_injection() {
-  if (injections_ < options_.max_injections) ++injections_;
+void SessionTracker::add_injection(double volume_ml) {
+  if (injections_ >= options_.max_injections) return;
+  ++injections_;
+  injected_ml_ += volume_ml;
 }
 
 void SessionTracker::on_wire(const pcisim_lcm::wire_state_t& m, int64_t now_ns) {
@@ -31,6 +33,7 @@ void SessionTracker::on_status(const pcisim_lcm::sim_status_t& m, int64_t now_ns
   status_ns_ = now_ns;
   beam_s_at_status_ = local_beam_s(now_ns);
   injections_at_status_ = injections_;
+  injected_ml_at_status_ = injected_ml_;
 }
 
 double SessionTracker::local_beam_s(int64_t now_ns) const {
@@ -49,7 +52,11 @@ void SessionTracker::on_session(const pcisim_lcm::session_command_t& m, int64_t 
         secondary_deg_ = m.secondary_angle_deg;
       }
       break;
-    case C::CMD_CONTRAST: add_injection(); break;
+    case C::CMD_CONTRAST:
+      // the server's rule: a command may name 0.5-30 ml, else the scene's volume
+      add_injection(std::isfinite(m.contrast_ml) && m.contrast_ml >= 0.5 && m.contrast_ml <= 30 ? m.contrast_ml
+                                                                                                  : options_.injection_ml);
+      break;
     default: break;
   }
   update_beam(now_ns);
@@ -65,7 +72,7 @@ void SessionTracker::on_instrument(const pcisim_lcm::instrument_state_t& m, int6
   instrument_fluoro_ = (m.buttons & I::BUTTON_FLUORO_PEDAL) != 0;
   instrument_cine_ = (m.buttons & I::BUTTON_CINE_PEDAL) != 0;
   const bool contrast = (m.buttons & I::BUTTON_CONTRAST) != 0;
-  if (contrast && !contrast_button_) add_injection();
+  if (contrast && !contrast_button_) add_injection(options_.injection_ml);
   contrast_button_ = contrast;
   update_beam(now_ns);
 }
@@ -142,8 +149,7 @@ nlohmann::json SessionTracker::state_json(int64_t now_ns) const {
   j["carm"] = {{"primary_deg", primary_deg_ ? nlohmann::json(*primary_deg_) : nlohmann::json()},
                {"secondary_deg", secondary_deg_ ? nlohmann::json(*secondary_deg_) : nlohmann::json()}};
   // the server's volume where it reported one; the option's for what the bus added since
-  const double used_ml = status_ ? status_->contrast_ml + (injections_ - injections_at_status_) * options_.injection_ml
-                                 : injections_ * options_.injection_ml;
+  const double used_ml = status_ ? status_->contrast_ml + (injected_ml_ - injected_ml_at_status_) : injected_ml_;
   j["contrast"] = {{"injections", injections_now}, {"used_ml", used_ml}};
   const bool other = other_instrument_ns_ > 0 && now_ns - other_instrument_ns_ < options_.instrument_active_ns;
   j["other_instrument"] = other ? nlohmann::json{{"device_id", other_device_id_}} : nlohmann::json();

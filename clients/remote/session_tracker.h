@@ -51,7 +51,7 @@ class SessionTracker {
  private:
   void update_beam(int64_t now_ns);  // call with the lock held after any pedal change
   double local_beam_s(int64_t now_ns) const;  // lock held
-  void add_injection();
+  void add_injection(double volume_ml);
 
   TrackerOptions options_;
   mutable std::mutex mutex_;
@@ -64,9 +64,11 @@ class SessionTracker {
   bool beam_on_ = false;
   int64_t beam_since_ns_ = 0, beam_total_ns_ = 0;
   int injections_ = 0;
+  double injected_ml_ = 0;  // the volumes of the injections counted here
   // the local counts when the last sim_status_t arrived: what the bus added since is on top
   double beam_s_at_status_ = 0;
   int injections_at_status_ = 0;
+  double injected_ml_at_status_ = 0;
   int64_t other_instrument_ns_ = 0;
   int32_t other_device_id_ = -1;
   double frame_sim_time_s_ = 0;

@@ -46,12 +46,15 @@ struct Frames {
   }
 };
 
-void send(lcm::LCM& lcm, int8_t command, int8_t pedal = 0, double primary = 0, double secondary = 0) {
+void send(lcm::LCM& lcm, int8_t command, int8_t pedal = 0, double primary = 0, double secondary = 0,
+          double contrast_ml = 0, double contrast_ml_s = 0) {
   C c{};
   c.command = command;
   c.pedal_down = pedal;
   c.primary_angle_deg = primary;
   c.secondary_angle_deg = secondary;
+  c.contrast_ml = contrast_ml;
+  c.contrast_ml_s = contrast_ml_s;
   lcm.publish(protocol::kSessionChannel, &c);
 }
 
@@ -98,7 +101,7 @@ TEST(XrayRun, PedalCarmAndContrastDriveTheFrames) {
     std::this_thread::sleep_for(1000ms);
     send(lcm, C::CMD_CARM, 0, 40, 25);  // LAO 40 CRA 25 from 2.5 s
     std::this_thread::sleep_for(500ms);
-    send(lcm, C::CMD_CONTRAST);  // inject at 3 s
+    send(lcm, C::CMD_CONTRAST, 0, 0, 0, 5.0, 5.0);  // inject 5 ml over 1 s at 3 s
     std::this_thread::sleep_for(1500ms);
     send(lcm, C::CMD_FLUORO_PEDAL, 0);  // no frames after 4.5 s
   });
@@ -110,8 +113,8 @@ TEST(XrayRun, PedalCarmAndContrastDriveTheFrames) {
 
   {
     // the once-a-second status reports the session's cath-lab figures: the last one (after the
-    // pedal came up at 4.5 s) has 3 s of beam, the C-arm where it was moved, one injection of
-    // the scene's volume
+    // pedal came up at 4.5 s) has 3 s of beam, the C-arm where it was moved, the one injection
+    // with the volume its command named
     std::lock_guard lock(statuses.mutex);
     ASSERT_GE(statuses.all.size(), 4u);
     const auto& last = statuses.all.back();
@@ -120,7 +123,7 @@ TEST(XrayRun, PedalCarmAndContrastDriveTheFrames) {
     EXPECT_DOUBLE_EQ(last.carm_primary_deg, 40.0);
     EXPECT_DOUBLE_EQ(last.carm_secondary_deg, 25.0);
     EXPECT_EQ(last.contrast_injections, 1);
-    EXPECT_DOUBLE_EQ(last.contrast_ml, 8.0);
+    EXPECT_DOUBLE_EQ(last.contrast_ml, 5.0);
     EXPECT_EQ(statuses.all.front().contrast_injections, 0);
   }
   std::lock_guard lock(rec.mutex);

@@ -55,6 +55,12 @@ TEST(RemoteTracker, ContrastCountsCommandsAndButtonPresses) {
   t.on_instrument(instrument(I::BUTTON_CONTRAST), 4 * kS);
   EXPECT_EQ(t.injections(), 3);
   EXPECT_DOUBLE_EQ(t.state_json(5 * kS)["contrast"]["used_ml"].get<double>(), 24.0);
+  // a command that names its volume counts that, as the server does; an absurd one the scene's
+  c.contrast_ml = 5;
+  t.on_session(c, 6 * kS);
+  c.contrast_ml = 500;
+  t.on_session(c, 7 * kS);
+  EXPECT_DOUBLE_EQ(t.state_json(8 * kS)["contrast"]["used_ml"].get<double>(), 37.0);
 }
 
 TEST(RemoteTracker, ServerFiguresWinAndTheBusAddsWhatCameSince) {

@@ -12,8 +12,9 @@ struct HeartBeatParams {
   std::string motion_file;
   // PBD accuracy knobs (soft-tissue paper): per physics step. `pcisim-bench heart`: substeps beat
   // iterations in 22 of 24 equal-cost pairs, so the 12 sweeps go 4 x 3 (~0.45 mm mean error
-  // against the reference, 2 x 6 ~0.57 mm). Parallel Jacobi (the GPU's solver) stays the default: Gauss-Seidel is closer to the
-  // reference at equal cost on one core but strains the AV-plane springs more (docs/heart.md)
+  // against the reference, 2 x 6 ~0.57 mm). Parallel Jacobi (the GPU's solver) stays the
+  // default: Gauss-Seidel is closer to the reference at equal cost on one core but strains the
+  // AV-plane springs more (docs/heart.md)
   int substeps = 4;
   int iterations = 3;
   pbd::SolverKind solver = pbd::SolverKind::kJacobi;

@@ -104,31 +104,18 @@ World::World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_ge
   validate(spec);
   Impl& w = *impl_;
   w.spec = spec;
-  // effects in step order; only the listed ones exist
-  if (spec.heart_beat) {
-    w.cost_heart = static_cast<int>(w.costs.size());
-    w.costs.push_back({"heart_beat", 0.0});
-  }
-  if (spec.vessel_motion) {
-    w.cost_motion = static_cast<int>(w.costs.size());
-    w.costs.push_back({"vessel_motion", 0.0});
-  }
-  if (spec.guidewire) {
-    w.cost_wire = static_cast<int>(w.costs.size());
-    w.costs.push_back({"guidewire", 0.0});
-  }
-  if (spec.blood_flow) {
-    w.cost_blood = static_cast<int>(w.costs.size());
-    w.costs.push_back({"blood_flow", 0.0});
-  }
-  if (spec.vessel_contact) {
-    w.cost_contact = static_cast<int>(w.costs.size());
-    w.costs.push_back({"vessel_contact", 0.0});
-  }
-  if (spec.friction) {
-    w.cost_friction = static_cast<int>(w.costs.size());
-    w.costs.push_back({"friction", 0.0});
-  }
+  // effects in step order; only the listed ones exist (and get a cost slot, -1 otherwise)
+  auto cost_slot = [&w](bool listed, const char* name) {
+    if (!listed) return -1;
+    w.costs.push_back({name, 0.0});
+    return static_cast<int>(w.costs.size()) - 1;
+  };
+  w.cost_heart = cost_slot(spec.heart_beat.has_value(), "heart_beat");
+  w.cost_motion = cost_slot(spec.vessel_motion.has_value(), "vessel_motion");
+  w.cost_wire = cost_slot(spec.guidewire.has_value(), "guidewire");
+  w.cost_blood = cost_slot(spec.blood_flow.has_value(), "blood_flow");
+  w.cost_contact = cost_slot(spec.vessel_contact.has_value(), "vessel_contact");
+  w.cost_friction = cost_slot(spec.friction.has_value(), "friction");
   if (spec.heart_beat) w.heart.emplace(*spec.heart_beat);
   if (!spec.guidewire && !spec.vessel_motion) return;  // nothing else needs the anatomy
 

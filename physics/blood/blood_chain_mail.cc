@@ -99,8 +99,13 @@ void BloodChainMail::place(int c) {
   const double r = (1.0 - u) * radius_m_[i] + u * radius_m_[i + 1];
   const double rf = cell.radial_fraction;
   pos_[c] = axis + rf * r * (std::cos(cell.ring_angle) * n + std::sin(cell.ring_angle) * b);
+  vel_[c] = speed_m_per_s(cell) * t;
+}
+
+double BloodChainMail::speed_m_per_s(const Cell& cell) const {
   // Poiseuille: 2 x the mean on the axis, 0 at the wall
-  vel_[c] = params_.mean_velocity_m_per_s * flow_fraction_ * 2.0 * (1.0 - rf * rf) * t;
+  const double rf = cell.radial_fraction;
+  return params_.mean_velocity_m_per_s * flow_fraction_ * 2.0 * (1.0 - rf * rf);
 }
 
 void BloodChainMail::step(double dt_s, double phase) {
@@ -108,10 +113,9 @@ void BloodChainMail::step(double dt_s, double phase) {
   for (int c = 0; c < cell_count(); ++c) {
     Cell& cell = cells_[c];
     const double length = branches_[cell.branch].length_m;
-    // the speed the cell had at its place, then wrap round to the branch's start (the same
-    // blood keeps circulating, so nothing is allocated)
-    const double speed = params_.mean_velocity_m_per_s * flow_fraction_ * 2.0 * (1.0 - cell.radial_fraction * cell.radial_fraction);
-    cell.s_m += speed * dt_s;
+    // on along the branch, then round to its start (the same blood keeps circulating, so
+    // nothing is allocated)
+    cell.s_m += speed_m_per_s(cell) * dt_s;
     if (length > 0.0 && cell.s_m >= length) cell.s_m = std::fmod(cell.s_m, length);
     place(c);
   }

@@ -40,7 +40,6 @@ class BloodChainMail {
   int cell_count() const { return static_cast<int>(pos_.size()); }
   std::span<const Eigen::Vector3d> cell_positions_m() const { return pos_; }
   std::span<const Eigen::Vector3d> cell_velocities_m_per_s() const { return vel_; }
-  double flow_fraction() const { return flow_fraction_; }  // of the mean, at the last step
   const BloodFlowParams& params() const { return params_; }
 
  private:
@@ -55,6 +54,7 @@ class BloodChainMail {
     double radial_fraction = 0.0; // of the local radius: 0 on the axis
   };
   void place(int c);              // position and velocity of cell c from its s
+  double speed_m_per_s(const Cell& cell) const;  // at the current flow rate
   void rebuild_hash();
 
   BloodFlowParams params_;

@@ -46,7 +46,6 @@ VesselSkin::VesselSkin(const VesselTree& rest_tree, const Eigen::Matrix3Xd& rest
   const int n = point_count();
   binding_.resize(n);
   weight_.assign(n, 0.0);
-  rest_distance_.assign(n, std::numeric_limits<double>::infinity());
 
   // bind each point to its nearest triangle (brute force: built once, ~1e3 points x ~1e3 triangles)
   for (int i = 0; i < n; ++i) {
@@ -64,11 +63,10 @@ VesselSkin::VesselSkin(const VesselTree& rest_tree, const Eigen::Matrix3Xd& rest
       }
     }
     if (binding_[i].tri < 0) continue;  // no surface: the tree stands still
-    rest_distance_[i] = std::sqrt(best);
     const auto& tri = triangles_[binding_[i].tri];
     const Eigen::Matrix3d f = frame(rest_surface_m.col(tri[0]), rest_surface_m.col(tri[1]), rest_surface_m.col(tri[2]));
     binding_[i].coords = f.colPivHouseholderQr().solve(rest_[i] - rest_surface_m.col(tri[0]));
-    const double beyond = rest_distance_[i] - params_.attach_distance_m;
+    const double beyond = std::sqrt(best) - params_.attach_distance_m;
     weight_[i] = beyond <= 0.0 ? 1.0 : std::max(0.0, 1.0 - beyond / std::max(params_.fade_distance_m, 1e-9));
   }
 

@@ -41,8 +41,6 @@ class VesselSkin {
 
   // how fully point i rides the heart, 1 on the epicardium, 0 far from it
   double ride_weight(int i) const { return weight_[i]; }
-  // distance of point i from the epicardium at rest
-  double rest_distance_m(int i) const { return rest_distance_[i]; }
 
  private:
   struct Binding {
@@ -56,7 +54,7 @@ class VesselSkin {
   std::vector<Eigen::Vector3d> rest_, now_;
   std::vector<int> offsets_;
   std::vector<Binding> binding_;
-  std::vector<double> weight_, rest_distance_;
+  std::vector<double> weight_;
 
   // rest-frame grid of centerline points: cell -> [cell_start_[c], cell_start_[c + 1]) in cell_points_
   Eigen::Vector3d grid_origin_m_ = Eigen::Vector3d::Zero();

@@ -95,7 +95,7 @@ BridgeStats Bridge::run(const std::atomic<bool>& stop) {
                    last_torque_nmm_.load(), forces_received_.load());
     }
     server::sleep_until_ns(schedule.deadline_ns());
-    schedule.complete(monotonic_ns());
+    stats.missed_periods += schedule.complete(monotonic_ns());
   }
   done = true;
   rx.join();

@@ -25,6 +25,7 @@ struct BridgeOptions {
 
 struct BridgeStats {
   int64_t published = 0, fault_samples = 0;
+  int64_t missed_periods = 0;  // deadlines skipped because a sample came more than a period late
   int64_t forces_received = 0, forces_bad = 0;
   double elapsed_s = 0.0;  // from the first publish to the last (waiting for the server included)
   double last_force_n = 0.0, last_torque_nmm = 0.0;

@@ -94,8 +94,9 @@ int main(int argc, char** argv) {
   if (auto* serial = dynamic_cast<SerialDevice*>(dev.get()))
     extra = fmt::format(", serial lines {} ok / {} malformed{}", serial->lines(), serial->malformed(),
                         serial->unplugged() ? ", unplugged" : "");
-  spdlog::info("bridge: done, {} samples published ({:.0f} Hz, {} in fault), {} force commands received, {} bad{}",
-               s.published, s.elapsed_s > 0 ? (s.published - 1) / s.elapsed_s : 0.0, s.fault_samples, s.forces_received,
-               s.forces_bad, extra);
+  spdlog::info("bridge: done, {} samples published ({:.0f} Hz, {} in fault, {} periods missed), {} force commands "
+               "received, {} bad{}",
+               s.published, s.elapsed_s > 0 ? (s.published - 1) / s.elapsed_s : 0.0, s.fault_samples, s.missed_periods,
+               s.forces_received, s.forces_bad, extra);
   return 0;
 }

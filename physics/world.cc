@@ -17,6 +17,8 @@
 #include "physics/guidewire/wall_contact.h"
 #include "physics/guidewire/wire_feedback.h"
 #include "physics/heart/beating_heart.h"
+#include "physics/heart/heart_fit.h"
+#include "physics/heart/heart_mesh.h"
 #include "physics/motion/vessel_skin.h"
 #include "physics/pbd/pbd_cuda_solver.h"
 #include "physics/vessel/coronary_phantom.h"
@@ -82,6 +84,7 @@ struct World::Impl {
   std::optional<CoulombFriction> friction;
   std::optional<BloodChainMail> blood;
   std::optional<BeatingHeart> heart;
+  HeartFitReport heart_fit;
   std::optional<VesselSkin> skin;
   InputGuard guard;
   InstrumentInput used;
@@ -116,11 +119,15 @@ World::World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_ge
   w.cost_blood = cost_slot(spec.blood_flow.has_value(), "blood_flow");
   w.cost_contact = cost_slot(spec.vessel_contact.has_value(), "vessel_contact");
   w.cost_friction = cost_slot(spec.friction.has_value(), "friction");
-  if (spec.heart_beat) w.heart.emplace(*spec.heart_beat);
+  if (spec.heart_beat && !spec.vessel_motion) w.heart.emplace(*spec.heart_beat);
   if (!spec.guidewire && !spec.vessel_motion) return;  // nothing else needs the anatomy
 
   w.tree = make_coronary_phantom(CoronaryPhantomSpec{spec.anatomy.seed});
   if (spec.vessel_motion) {
+    // a heart the tree rides must not swallow it: the template is fitted under this tree
+    HeartMesh mesh = template_heart_mesh();
+    w.heart_fit = fit_heart_under_tree(w.tree, HeartFitParams{}, &mesh);
+    w.heart.emplace(*spec.heart_beat, mesh);
     // the tree rides the epicardium; the wire, its contact and the blood are simulated in the
     // vessels' rest frame and carried into the world by the same skin (docs/heart.md)
     w.skin.emplace(w.tree, w.heart->rest_positions_m(), w.heart->epicardium(), *spec.vessel_motion);
@@ -278,6 +285,8 @@ const CoulombFriction* World::friction_state() const {
 }
 const LumenQuery* World::lumen() const { return impl_->lumen.get(); }
 const VesselTree& World::vessel_tree() const { return impl_->tree; }
+const HeartFitReport& World::heart_fit() const { return impl_->heart_fit; }
+
 const BeatingHeart* World::heart_state() const { return impl_->heart ? &*impl_->heart : nullptr; }
 const VesselSkin* World::vessel_skin() const { return impl_->skin ? &*impl_->skin : nullptr; }
 const BloodChainMail* World::blood_state() const { return impl_->blood ? &*impl_->blood : nullptr; }

@@ -15,6 +15,7 @@
 namespace pcisim::physics {
 
 class BeatingHeart;
+struct HeartFitReport;
 class BloodChainMail;
 class ChainMailWire;
 class VesselSkin;
@@ -65,6 +66,8 @@ class World {
   const LumenQuery* lumen() const;  // the contact geometry (null without vessel_contact)
   const VesselTree& vessel_tree() const;  // at rest; empty without guidewire and vessel_motion
   const BeatingHeart* heart_state() const;
+  // how the template heart was fitted under this scene's tree (vessel_motion; all zero otherwise)
+  const HeartFitReport& heart_fit() const;
   const VesselSkin* vessel_skin() const;   // the tree now (vessel_motion)
   const BloodChainMail* blood_state() const;
 

@@ -25,6 +25,7 @@ class PhysicsLoop {
 
   const std::vector<std::unique_ptr<EffectStats>>& effects() const { return effects_; }
   double rate_hz() const { return rate_hz_; }
+  const physics::World& world() const { return *world_; }  // read before run() starts
 
  private:
   void step_once(int64_t now_ns);

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 #include <thread>
 
+#include "physics/heart/heart_fit.h"
 #include "physics/vessel/coronary_phantom.h"
 #include "server/haptic_loop.h"
 #include "server/lcm_io.h"
@@ -72,6 +73,9 @@ Server::Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images)
   const int64_t t0 = monotonic_ns();
   impl_->physics = std::make_unique<PhysicsLoop>(scene, impl_->state);
   spdlog::info("world built in {:.0f} ms", (monotonic_ns() - t0) * 1e-6);
+  if (const auto& fit = impl_->physics->world().heart_fit(); fit.branches_lifted > 0)
+    spdlog::info("heart fitted under anatomy seed {}: {} branch(es) lifted clear, epicardium dented up to {:.1f} mm",
+                 scene.world.anatomy.seed, fit.branches_lifted, fit.max_dent_m * 1e3);
   // branch names for wire_state_t and the log: the scene's phantom, same seed, same tree
   std::vector<std::string> names;
   for (const auto& b : physics::make_coronary_phantom({scene.world.anatomy.seed}).branches) names.push_back(b.name);

@@ -72,8 +72,8 @@ struct BeatingHeart::Impl {
   double time_s = 0.0;
   double phase = 0.0;
 
-  Impl(const HeartBeatParams& p, const HeartTissueScaling& scaling) : params(p), motion(load_motion(p)) {
-    const HeartMesh& mesh = template_heart_mesh();
+  Impl(const HeartBeatParams& p, const HeartMesh& mesh, const HeartTissueScaling& scaling)
+      : params(p), motion(load_motion(p)) {
     // particles: the vertices some tet uses, in file order
     std::vector<int> to_particle(mesh.vertices_m.cols(), -1);
     for (const auto& t : mesh.tets)
@@ -216,9 +216,12 @@ struct BeatingHeart::Impl {
 
 BeatingHeart::BeatingHeart(const HeartBeatParams& params) : BeatingHeart(params, HeartTissueScaling{}) {}
 
-BeatingHeart::BeatingHeart(const HeartBeatParams& params, const HeartTissueScaling& scaling) {
+BeatingHeart::BeatingHeart(const HeartBeatParams& params, const HeartTissueScaling& scaling)
+    : BeatingHeart(params, template_heart_mesh(), scaling) {}
+
+BeatingHeart::BeatingHeart(const HeartBeatParams& params, const HeartMesh& mesh, const HeartTissueScaling& scaling) {
   validate(params);
-  impl_ = std::make_unique<Impl>(params, scaling);
+  impl_ = std::make_unique<Impl>(params, mesh, scaling);
 }
 
 BeatingHeart::~BeatingHeart() = default;

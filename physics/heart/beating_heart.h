@@ -31,6 +31,9 @@ class BeatingHeart {
   // Throws std::invalid_argument naming the field when params or the motion file are bad.
   explicit BeatingHeart(const HeartBeatParams& params);
   BeatingHeart(const HeartBeatParams& params, const HeartTissueScaling& scaling);
+  // another tetrahedral heart in the template's frame and markers (e.g. the template fitted under
+  // a tree, heart_fit.h)
+  BeatingHeart(const HeartBeatParams& params, const HeartMesh& mesh, const HeartTissueScaling& scaling = {});
   ~BeatingHeart();
   BeatingHeart(const BeatingHeart&) = delete;
   BeatingHeart& operator=(const BeatingHeart&) = delete;

@@ -164,8 +164,11 @@ TEST_P(WorldHeartSeeds, HeartDoesNotSwallowTheTree) {
     }
   }
   EXPECT_GE(worst, -0.5e-3) << "seed " << GetParam();
-  if (GetParam() == 1) EXPECT_EQ(w.heart_fit().branches_lifted, 0) << "the template as designed";
-  if (GetParam() == 3) EXPECT_EQ(w.heart_fit().branches_lifted, 2) << "LM and RCA lifted";
+  if (GetParam() == 1) {
+    EXPECT_EQ(w.heart_fit().branches_lifted, 0) << "the template as designed";
+  } else if (GetParam() == 3) {
+    EXPECT_EQ(w.heart_fit().branches_lifted, 2) << "LM and RCA lifted";
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Seeds, WorldHeartSeeds, ::testing::Values(1u, 3u));

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "physics/pbd/pbd_cuda_solver.h"
 
@@ -116,13 +117,19 @@ void PbdSystem::finalize() {
       m = std::min(m, cluster_group_.inverse_count(clusters_.member(slot)));
     cluster_min_inv_count_[c] = m;
   }
+  home_state_ = std::move(build_state_);
   build_position_m_ = {};
   build_mass_kg_ = {};
   build_state_ = {};
   finalized_ = true;
 }
 
-void PbdSystem::set_driven_target(int i, const Eigen::Vector3d& position_m) { drive_target_m_.col(i) = position_m; }
+void PbdSystem::set_driven_target(int i, const Eigen::Vector3d& position_m) {
+  if (!finalized_) throw std::logic_error("pbd: set_driven_target before finalize()");
+  if (i < 0 || i >= particle_count() || home_state_[i] != ParticleState::kDriven)
+    throw std::invalid_argument("pbd: set_driven_target: particle " + std::to_string(i) + " is not a driven particle");
+  drive_target_m_.col(i) = position_m;  // a non-finite target is caught (quarantined) by the next step
+}
 
 int PbdSystem::quarantined_now() const {
   return static_cast<int>(std::count(particles_.state.begin(), particles_.state.end(), ParticleState::kQuarantined));
@@ -139,10 +146,11 @@ void PbdSystem::quarantine(int i, const Eigen::Vector3d& freeze_at_m) {
 }
 
 void PbdSystem::release_quarantine() {
+  // each particle goes back to what it was built as: free, pinned or driven
   for (int i = 0; i < particle_count(); ++i) {
     if (particles_.state[i] != ParticleState::kQuarantined) continue;
-    particles_.state[i] = ParticleState::kFree;
-    particles_.inv_mass_per_kg[i] = 1.0 / particles_.mass_kg[i];
+    particles_.state[i] = home_state_[i];
+    particles_.inv_mass_per_kg[i] = home_state_[i] == ParticleState::kFree ? 1.0 / particles_.mass_kg[i] : 0.0;
   }
 }
 

@@ -36,7 +36,8 @@ class PbdSystem {
   // line from where it is, so it arrives there exactly
   void set_driven_target(int i, const Eigen::Vector3d& position_m);
   void step(double dt_s, const PbdParams& params);
-  // quarantined particles become free again where they froze (the provocation is over)
+  // quarantined particles return to what they were built as (free, pinned or driven), from where
+  // they froze (the provocation is over); a driven one heads for its target again
   void release_quarantine();
 
   int particle_count() const { return particles_.size(); }
@@ -77,6 +78,7 @@ class PbdSystem {
   std::vector<Eigen::Vector3d> build_position_m_;
   std::vector<double> build_mass_kg_;
   std::vector<ParticleState> build_state_;
+  std::vector<ParticleState> home_state_;  // the built state of each particle, for release_quarantine
 
   std::vector<DistanceConstraint> distance_;
   std::vector<DihedralBendingConstraint> bending_;

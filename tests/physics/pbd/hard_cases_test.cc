@@ -230,6 +230,52 @@ TEST(HardCases, NonFiniteDrivenTargetFreezesThatParticleOnly) {
   EXPECT_TRUE(all_finite(sys));
   EXPECT_EQ(sys.quarantined_total(), 1);
   EXPECT_EQ(sys.particles().position_m.col(0), Eigen::Vector3d(0, 0, 0));
+
+  // a finite target again and the quarantine released: the particle is driven, not free, and
+  // arrives exactly where it is told; a pinned particle stays pinned through the same cycle
+  sys.set_driven_target(0, Eigen::Vector3d(-0.005, 0.002, 0));
+  sys.release_quarantine();
+  EXPECT_EQ(sys.particles().state[0], ParticleState::kDriven);
+  EXPECT_EQ(sys.particles().inv_mass_per_kg[0], 0.0);
+  sys.step(kDt, PbdParams{});
+  EXPECT_EQ(sys.particles().position_m.col(0), Eigen::Vector3d(-0.005, 0.002, 0));
+  EXPECT_EQ(sys.quarantined_now(), 0);
+}
+
+TEST(HardCases, ReleasedPinnedParticleIsPinnedAgain) {
+  PbdSystem sys;
+  for (int i = 0; i < 3; ++i) sys.add_particle(Eigen::Vector3d(0.01 * i, 0, 0), 0.01);
+  sys.add_distance(0, 1, 0.0);
+  sys.add_distance(1, 2, 0.0);
+  sys.pin(0);
+  sys.finalize();
+  sys.particles().position_m(0, 0) = std::numeric_limits<double>::quiet_NaN();  // the caller broke it
+  PbdParams p;
+  p.gravity_m_per_s2 = Eigen::Vector3d(0, 0, -9.81);
+  sys.step(kDt, p);
+  EXPECT_EQ(sys.particles().state[0], ParticleState::kQuarantined);
+  sys.release_quarantine();
+  EXPECT_EQ(sys.particles().state[0], ParticleState::kPinned);
+  for (int step = 0; step < 60; ++step) sys.step(kDt, p);
+  EXPECT_EQ(sys.particles().position_m.col(0), Eigen::Vector3d(0, 0, 0)) << "held against gravity";
+  EXPECT_LT(sys.particles().position_m(2, 2), -0.005) << "the rest hangs from it";
+}
+
+TEST(HardCases, DrivenTargetForAParticleThatIsNotDrivenIsRefusedByIndex) {
+  PbdSystem sys;
+  sys.add_particle(Eigen::Vector3d::Zero(), 0.01);
+  sys.add_particle(Eigen::Vector3d::UnitX(), 0.01);
+  sys.drive(1);
+  EXPECT_THROW(sys.set_driven_target(1, Eigen::Vector3d::Zero()), std::logic_error) << "before finalize";
+  sys.finalize();
+  try {
+    sys.set_driven_target(0, Eigen::Vector3d::Zero());
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("particle 0"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(sys.set_driven_target(7, Eigen::Vector3d::Zero()), std::invalid_argument);
+  EXPECT_NO_THROW(sys.set_driven_target(1, Eigen::Vector3d::Zero()));
 }
 
 TEST(HardCases, LongRunOfADampedOscillatingBody) {

@@ -1,6 +1,7 @@
 #include "clients/remote/http_session.h"
 
 #include <algorithm>
+#include <cmath>
 #include <boost/beast/websocket.hpp>
 #include <spdlog/spdlog.h>
 
@@ -90,10 +91,12 @@ void HttpSession::upgrade(http::request<http::string_body>&& req) {
     return respond(plain(version, http::status::forbidden, "wrong token\n"));
   }
   if (hub_.full()) return respond(plain(version, http::status::service_unavailable, "too many connections\n"));
+  // a page may ask for fewer frames; anything unreadable or non-finite ("nan", "inf") gets the cap
   double fps = hub_.limits().max_fps;
   if (const auto asked = query_param(sv(req.target()), "fps")) {
     try {
-      fps = std::clamp(std::stod(*asked), 0.5, hub_.limits().max_fps);
+      const double want = std::stod(*asked);
+      if (std::isfinite(want)) fps = std::clamp(want, 0.5, hub_.limits().max_fps);
     } catch (const std::exception&) {
     }
   }

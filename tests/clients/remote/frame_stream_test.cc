@@ -174,6 +174,30 @@ TEST(RemoteFrames, PageMayAskForFewerFrames) {
   EXPECT_EQ((*err)["code"], "out_of_range");
 }
 
+TEST(RemoteFrames, UnreadableFrameRateRequestGetsTheCap) {
+  GatewayOptions o;
+  o.hub.max_fps = 5;
+  TestGateway g(o);
+  for (const char* asked : {"nan", "inf", "-inf", "fast"}) {
+    WsClient c;
+    ASSERT_EQ(c.connect(g.port(), ws_target(kObserverToken) + "&fps=" + asked), 101) << asked;
+    ASSERT_TRUE(eventually([&] { return g.gateway->hub_stats().clients == 1; })) << asked;
+    const auto t0 = std::chrono::steady_clock::now();
+    for (int i = 0; i < 20; ++i) {  // 1 s at 20 fps
+      auto f = make_frame(i, 64);
+      g.images.publish(protocol::kXrayChannel, &f);
+      std::this_thread::sleep_for(50ms);
+    }
+    int n = 0;
+    while (c.next_frame(300ms)) ++n;
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_GE(n, 3) << asked;
+    EXPECT_LE(n, static_cast<int>(5 * s) + 2) << asked << ": " << n << " frames in " << s << " s, over the 5 fps cap";
+    c.close_hard();
+    ASSERT_TRUE(eventually([&] { return g.gateway->hub_stats().clients == 0; })) << asked;
+  }
+}
+
 TEST(RemoteFrames, BadFramesAreCountedAndDropped) {
   TestGateway g;
   auto f = make_frame(1, 64);

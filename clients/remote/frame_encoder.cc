@@ -54,28 +54,33 @@ void png_append(png_structp png, png_bytep data, png_size_t n) {
   static_cast<std::string*>(png_get_io_ptr(png))->append(reinterpret_cast<const char*>(data), n);
 }
 void png_no_flush(png_structp) {}
-[[noreturn]] void png_fail(png_structp, png_const_charp msg) { throw std::runtime_error(std::string("libpng: ") + msg); }
+// libpng's errors return by longjmp to encode_png's setjmp (an exception must not unwind through
+// libpng's C frames); the message is kept for the exception thrown there
+[[noreturn]] void png_fail(png_structp png, png_const_charp msg) {
+  *static_cast<std::string*>(png_get_error_ptr(png)) = msg;
+  png_longjmp(png, 1);
+}
 }  // namespace
 
 void FrameEncoder::encode_png(int width, int height, std::string& out) {
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, png_fail, nullptr);
+  std::string error;
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &error, png_fail, nullptr);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   if (!info) {
     png_destroy_write_struct(&png, nullptr);
     throw std::runtime_error("libpng: out of memory");
   }
-  try {
-    png_set_write_fn(png, &out, png_append, png_no_flush);
-    png_set_IHDR(png, info, width, height, 8, PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
-                 PNG_FILTER_TYPE_DEFAULT);
-    png_set_compression_level(png, 1);  // speed over size: a frame must leave within its pulse
-    png_write_info(png, info);
-    for (int r = 0; r < height; ++r) png_write_row(png, gray_.data() + static_cast<size_t>(r) * width);
-    png_write_end(png, nullptr);
-  } catch (...) {
+  if (setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
-    throw;
+    throw std::runtime_error("libpng: " + error);
   }
+  png_set_write_fn(png, &out, png_append, png_no_flush);
+  png_set_IHDR(png, info, width, height, 8, PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+               PNG_FILTER_TYPE_DEFAULT);
+  png_set_compression_level(png, 1);  // speed over size: a frame must leave within its pulse
+  png_write_info(png, info);
+  for (int r = 0; r < height; ++r) png_write_row(png, gray_.data() + static_cast<size_t>(r) * width);
+  png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
 }
 

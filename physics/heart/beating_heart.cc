@@ -44,6 +44,10 @@ void validate(const HeartBeatParams& p) {
         "finite and >= 0", p.shape_compliance_s2);
   check(p.damping_per_s >= 0.0 && std::isfinite(p.damping_per_s), "damping_per_s", "finite and >= 0",
         p.damping_per_s);
+  // local clusters smaller than a few tet edges hold too few particles to match a shape (and a
+  // grid of sub-millimetre cubes over the heart would take for ever to fill)
+  check(p.cluster_size_m == 0.0 || (p.cluster_size_m >= kMinClusterSizeM && p.cluster_size_m <= 0.2),
+        "cluster_size_m", "0 (the global cluster only) or in [0.005, 0.2] m", p.cluster_size_m);
 }
 
 HeartMotion load_motion(const HeartBeatParams& p) {

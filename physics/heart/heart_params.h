@@ -28,8 +28,11 @@ struct HeartBeatParams {
   double shape_compliance_s2 = 1e-3;
   double damping_per_s = 5.0;
   // overlapping local shape-matching clusters (soft-tissue paper) of this cube edge over the
-  // free tissue, besides the global one; 0: the global cluster only (heart paper)
+  // free tissue, besides the global one; 0: the global cluster only (heart paper); else at least
+  // kMinClusterSizeM
   double cluster_size_m = 0.0;
 };
+
+inline constexpr double kMinClusterSizeM = 0.005;
 
 }  // namespace pcisim::physics

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 namespace pcisim::physics::pbd {
 
@@ -13,7 +14,11 @@ std::vector<std::vector<int>> grid_clusters(const Eigen::Matrix3Xd& x_m, double 
   const int n = static_cast<int>(x_m.cols());
   if (n == 0) return clusters;
   const Eigen::Vector3d lo = x_m.rowwise().minCoeff(), hi = x_m.rowwise().maxCoeff();
-  const Eigen::Vector3i cells = ((hi - lo) / cube_m).array().floor().cast<int>() + 1;
+  const Eigen::Vector3d span_cells = ((hi - lo) / cube_m).array().floor() + 1.0;
+  if (!span_cells.allFinite() || span_cells.prod() > 1e6)
+    throw std::invalid_argument("grid_clusters: a " + std::to_string(cube_m) +
+                                " m cube makes more than a million cells over these particles");
+  const Eigen::Vector3i cells = span_cells.cast<int>();
   const double half = 0.5 * cube_m + overlap * cube_m;
   std::vector<Eigen::Vector3d> centres;
   for (int a = 0; a < cells.x(); ++a)

@@ -88,6 +88,9 @@ physics::HeartBeatParams read_heart_beat(JsonReader r, const std::string& scene_
   p.shape_compliance_s2 = r.number("shape_compliance_s2", p.shape_compliance_s2, 0, 1);
   p.damping_per_s = r.number("damping_per_s", p.damping_per_s, 0, 1000);
   p.cluster_size_m = r.number("cluster_size_mm", p.cluster_size_m / kMm, 0, 200) * kMm;
+  if (p.cluster_size_m > 0.0 && p.cluster_size_m < physics::kMinClusterSizeM)
+    r.fail("cluster_size_mm",
+           fmt::format("expected 0 (the global cluster only) or a number in [5, 200], got {}", p.cluster_size_m / kMm));
   r.finish();
   return p;
 }

@@ -69,6 +69,11 @@ TEST(HeartBeating, ParamsAreCheckedByName) {
   p.stretch_compliance_m_per_n = NAN;
   EXPECT_EQ(construct_error(p).rfind("heart_beat.stretch_compliance_m_per_n", 0), 0u);
   p = {};
+  p.cluster_size_m = 1e-5;  // a hundred million cubes over the heart: refused, not attempted
+  EXPECT_EQ(construct_error(p).rfind("heart_beat.cluster_size_m", 0), 0u) << construct_error(p);
+  p.cluster_size_m = NAN;
+  EXPECT_EQ(construct_error(p).rfind("heart_beat.cluster_size_m", 0), 0u);
+  p = {};
   p.motion_file = "/nonexistent.motion";
   EXPECT_EQ(construct_error(p), "heart_beat.motion_file: /nonexistent.motion: cannot open");
   BeatingHeart h(HeartBeatParams{});

@@ -54,23 +54,13 @@ void validate(const WorldSpec& s) {
     require(in(f->tip_static, 0.0, 2.0), "friction.tip_static: expected [0, 2]");
     require(in(f->tip_kinetic, 0.0, f->tip_static), "friction.tip_kinetic: expected [0, tip_static]");
   }
-  if (const auto& b = s.blood_flow) {
-    require(in(b->mean_velocity_m_per_s, 0.0, 2.0), "blood_flow.mean_velocity_m_per_s: expected [0, 2]");
-    require(in(b->drift_gain, 0.0, 1.0), "blood_flow.drift_gain: expected [0, 1]");
-    require(in(b->pulsatility, 0.0, 1.0), "blood_flow.pulsatility: expected [0, 1]");
-    require(in(b->cell_spacing_m, 2e-4, 5e-3), "blood_flow.cell_spacing_m: expected [2e-4, 5e-3] m");
-    require(in(b->link_radius_m, 2e-4, 5e-3), "blood_flow.link_radius_m: expected [2e-4, 5e-3] m");
-  }
+  if (s.blood_flow) validate(*s.blood_flow);
   if (const auto& h = s.heart_beat) {
     std::string why;
     require(h->solver != pbd::SolverKind::kJacobiCuda || pbd::pbd_cuda_available(&why),
             "heart_beat.solver: jacobi_cuda needs a CUDA build and a GPU (" + why + ")");
   }
-  if (const auto& m = s.vessel_motion) {
-    require(in(m->attach_distance_m, 0.0, 0.05), "vessel_motion.attach_distance_m: expected [0, 0.05] m");
-    require(in(m->fade_distance_m, 0.0, 0.1), "vessel_motion.fade_distance_m: expected [0, 0.1] m");
-    require(in(m->blend_radius_m, 1e-3, 0.02), "vessel_motion.blend_radius_m: expected [1e-3, 0.02] m");
-  }
+  if (s.vessel_motion) validate(*s.vessel_motion);
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 
 namespace pcisim::physics {
 namespace {
@@ -22,6 +23,11 @@ Eigen::Vector3i cell_of(const Eigen::Vector3d& p, double h) {
   return (p / h).array().floor().cast<int>();
 }
 
+void require(bool ok, const char* what) {
+  if (!ok) throw std::invalid_argument(what);
+}
+bool in(double x, double lo, double hi) { return std::isfinite(x) && x >= lo && x <= hi; }
+
 }  // namespace
 
 double coronary_flow_fraction(double phase, double pulsatility) {
@@ -36,7 +42,16 @@ double coronary_flow_fraction(double phase, double pulsatility) {
   return 1.0 - p + p * (2.0 / d) * hump * hump;
 }
 
+void validate(const BloodFlowParams& b) {
+  require(in(b.mean_velocity_m_per_s, 0.0, 2.0), "blood_flow.mean_velocity_m_per_s: expected [0, 2]");
+  require(in(b.drift_gain, 0.0, 1.0), "blood_flow.drift_gain: expected [0, 1]");
+  require(in(b.pulsatility, 0.0, 1.0), "blood_flow.pulsatility: expected [0, 1]");
+  require(in(b.cell_spacing_m, 2e-4, 5e-3), "blood_flow.cell_spacing_m: expected [2e-4, 5e-3] m");
+  require(in(b.link_radius_m, 2e-4, 5e-3), "blood_flow.link_radius_m: expected [2e-4, 5e-3] m");
+}
+
 BloodChainMail::BloodChainMail(const BloodFlowParams& params, const VesselTree& tree) : params_(params) {
+  validate(params);
   const int aorta = tree.find("aorta");
   for (int b = 0; b < static_cast<int>(tree.branches.size()); ++b) {
     const auto& pts = tree.branches[b].points;

@@ -24,8 +24,12 @@ namespace pcisim::physics {
 double coronary_flow_fraction(double phase, double pulsatility);
 inline constexpr double kSystoleFraction = 0.35;
 
+// throws std::invalid_argument naming the field ("blood_flow.cell_spacing_m: ...") when out of range
+void validate(const BloodFlowParams& params);
+
 class BloodChainMail {
  public:
+  // throws like validate()
   BloodChainMail(const BloodFlowParams& params, const VesselTree& rest_tree);
 
   // advances every blood chain-mail downstream by its velocity at this cardiac phase; cells that

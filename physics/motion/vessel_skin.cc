@@ -25,7 +25,18 @@ Eigen::Matrix3d frame(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const 
   return f;
 }
 
+void require(bool ok, const char* what) {
+  if (!ok) throw std::invalid_argument(what);
+}
+bool in(double x, double lo, double hi) { return std::isfinite(x) && x >= lo && x <= hi; }
+
 }  // namespace
+
+void validate(const VesselMotionParams& m) {
+  require(in(m.attach_distance_m, 0.0, 0.05), "vessel_motion.attach_distance_m: expected [0, 0.05] m");
+  require(in(m.fade_distance_m, 0.0, 0.1), "vessel_motion.fade_distance_m: expected [0, 0.1] m");
+  require(in(m.blend_radius_m, 1e-3, 0.02), "vessel_motion.blend_radius_m: expected [1e-3, 0.02] m");
+}
 
 VesselSkin::VesselSkin(const VesselTree& rest_tree, const Eigen::Matrix3Xd& rest_surface_m,
                        std::span<const std::array<int, 3>> triangles, const VesselMotionParams& params)
@@ -34,7 +45,7 @@ VesselSkin::VesselSkin(const VesselTree& rest_tree, const Eigen::Matrix3Xd& rest
   for (const auto& t : triangles_)
     for (int v : t)
       if (v < 0 || v >= surface_n) throw std::invalid_argument("vessel_motion: an epicardial triangle indexes past the surface");
-  if (!(params.blend_radius_m > 0.0)) throw std::invalid_argument("vessel_motion.blend_radius_m: expected > 0");
+  validate(params);
 
   // flatten the tree
   offsets_.push_back(0);

@@ -15,9 +15,13 @@
 
 namespace pcisim::physics {
 
+// throws std::invalid_argument naming the field ("vessel_motion.attach_distance_m: ...") when out of range
+void validate(const VesselMotionParams& params);
+
 class VesselSkin {
  public:
-  // surface_m: the epicardial particles at rest (columns); triangles index them
+  // surface_m: the epicardial particles at rest (columns); triangles index them. Throws like
+  // validate(), or when a triangle indexes past the surface
   VesselSkin(const VesselTree& rest_tree, const Eigen::Matrix3Xd& rest_surface_m,
              std::span<const std::array<int, 3>> triangles, const VesselMotionParams& params);
 

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
+#include <tuple>
 
 #include "physics/guidewire/catheter_path.h"
 #include "physics/vessel/coronary_phantom.h"
@@ -119,6 +121,76 @@ TEST_F(BloodChainMailTest, WireFreeNodesTakeTheWeightedBloodVelocity) {
     EXPECT_LT((after[i] - before[i] - expected).norm(), 1e-12) << i;
   }
   EXPECT_GT((after.back() - before.back()).norm(), 0.0);  // the tip is in the LM's flow
+}
+
+// two straight vessels 3 mm apart, flowing opposite ways: eq 12 by hand (inverse-distance weights
+// over the chain-mails within the link radius, of the nearest vessel only) against linked_velocity
+TEST(BloodChainMailLinks, NearestVesselsChainMailsBlendedByInverseDistance) {
+  VesselTree t;
+  for (const auto& [name, y, dir] : {std::tuple{"A", 0.0, 1.0}, std::tuple{"B", 3e-3, -1.0}}) {
+    VesselBranch b;
+    b.name = name;
+    for (int k = 0; k <= 40; ++k) b.points.push_back({Eigen::Vector3d(dir * 0.5e-3 * k + (dir < 0 ? 20e-3 : 0.0), y, 0), 1e-3});
+    t.branches.push_back(b);
+  }
+  BloodFlowParams p;
+  p.link_radius_m = 2.5e-3;
+  BloodChainMail blood(p, t);
+  blood.step(1.0 / 30, 0.6);
+  const auto pos = blood.cell_positions_m();
+  const auto vel = blood.cell_velocities_m_per_s();
+  // by hand: which vessel a chain-mail is in from its y; the nearest chain-mail picks the vessel
+  auto by_hand = [&](const Eigen::Vector3d& q) {
+    int vessel = -1;
+    double nearest = p.link_radius_m;
+    for (int c = 0; c < blood.cell_count(); ++c)
+      if ((pos[c] - q).norm() <= nearest) {
+        nearest = (pos[c] - q).norm();
+        vessel = pos[c].y() < 1.5e-3 ? 0 : 1;
+      }
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    double wsum = 0;
+    for (int c = 0; c < blood.cell_count(); ++c) {
+      const double d = (pos[c] - q).norm();
+      if (d > p.link_radius_m || (pos[c].y() < 1.5e-3 ? 0 : 1) != vessel) continue;
+      const double w = 1.0 / (d + 0.25 * p.cell_spacing_m);
+      sum += w * vel[c];
+      wsum += w;
+    }
+    return wsum > 0 ? Eigen::Vector3d(sum / wsum) : Eigen::Vector3d::Zero();
+  };
+  const Eigen::Vector3d near_a(10.2e-3, 1.2e-3, 0.1e-3), near_b(10.2e-3, 1.8e-3, 0.1e-3), away(10e-3, 1.5e-3, 6e-3);
+  EXPECT_LT((blood.linked_velocity(near_a) - by_hand(near_a)).norm(), 1e-12);
+  EXPECT_LT((blood.linked_velocity(near_b) - by_hand(near_b)).norm(), 1e-12);
+  EXPECT_GT(blood.linked_velocity(near_a).x(), 0.1) << "A's flow alone, not averaged with B's opposite one";
+  EXPECT_LT(blood.linked_velocity(near_b).x(), -0.1) << "B's flow alone";
+  EXPECT_EQ(blood.linked_velocity(away), Eigen::Vector3d::Zero()) << "no blood within reach";
+  // nearer chain-mails weigh more: on A's axis the blend is faster than the plain mean of the same
+  // chain-mails (the near ones are the fast axis ones, the ring ones are slower and farther)
+  const Eigen::Vector3d axis_point(10.0e-3, 0, 0);
+  double plain = 0;
+  int linked = 0;
+  for (int c = 0; c < blood.cell_count(); ++c)
+    if ((pos[c] - axis_point).norm() <= p.link_radius_m && pos[c].y() < 1.5e-3) {
+      plain += vel[c].x();
+      ++linked;
+    }
+  ASSERT_GT(linked, 10);
+  EXPECT_GT(blood.linked_velocity(axis_point).x(), plain / linked + 1e-3);
+}
+
+TEST(BloodChainMailLinks, BadParametersAreRefusedByName) {
+  const VesselTree t = make_coronary_phantom({1});
+  for (auto [field, bad] : {std::pair{"blood_flow.cell_spacing_m", 0.0}, std::pair{"blood_flow.link_radius_m", 0.0}}) {
+    BloodFlowParams p;
+    (std::string(field).find("cell") != std::string::npos ? p.cell_spacing_m : p.link_radius_m) = bad;
+    try {
+      BloodChainMail b(p, t);
+      FAIL() << field;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(field, 0), 0u) << e.what();
+    }
+  }
 }
 
 TEST_F(BloodChainMailTest, StepAndApplyAllocateNothing) {

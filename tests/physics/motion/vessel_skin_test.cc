@@ -132,5 +132,20 @@ TEST_F(VesselSkinTest, BadTrianglesAreRefusedByName) {
   }
 }
 
+TEST_F(VesselSkinTest, BadDistancesAreRefusedByName) {
+  for (const char* field : {"attach_distance_m", "fade_distance_m", "blend_radius_m"}) {
+    VesselMotionParams p;
+    const std::string f = field;
+    (f == "attach_distance_m" ? p.attach_distance_m : f == "fade_distance_m" ? p.fade_distance_m : p.blend_radius_m) =
+        std::nan("");
+    try {
+      VesselSkin s(tree, heart.points_m, heart.triangles, p);
+      FAIL() << field;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("vessel_motion." + f, 0), 0u) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace pcisim::physics

@@ -271,7 +271,8 @@ int run_bench(const std::vector<std::string>& args) {
         "particle from the reference at every step, mean and max over particles and steps (driven particles are "
         "exact in every run); tree drift: the largest distance of any coronary centerline point from where the "
         "reference's heart carries it, over all steps. Times: wall clock of "
-        "`PbdSystem::step` (median, p99) and the thread's CPU time (median, p99). Cost of a setting ~ substeps x "
+        "`BeatingHeart::step` (the PBD step and setting the driven particles' targets; median, p99) and the "
+        "thread's CPU time (median, p99). Cost of a setting ~ substeps x "
         "iterations constraint sweeps.\n\n",
         ref_substeps, ref_iterations);
     f << "Reference convergence (the reference run with half its substeps and half its iterations, against it):";
@@ -312,12 +313,33 @@ int run_bench(const std::vector<std::string>& args) {
                            best->max_err_mm, best->tree_drift_mm, best->median_ms, best->p99_ms);
       }
     }
-    f << "- Errors close to the reference's own convergence figure above are not resolved: below it the "
-         "ranking of settings is noise.\n"
-         "- With one iteration per substep the Jacobi rows are the same for every w: the last iteration of a "
-         "substep is never over-relaxed (docs/pbd.md explains why: w > 1 there grows without bound).\n"
-         "- Ties where iterations win come from pairs where the substep side runs one iteration per substep, "
-         "which for Jacobi means no over-relaxation at all.\n";
+    // where iterations beat substeps at equal cost, named
+    std::string iteration_wins;
+    for (const Pair& p : pairs)
+      if (p.by_iterations->mean_err_mm <= p.by_substeps->mean_err_mm)
+        iteration_wins += fmt::format("{}{} {}x{} over {}x{} ({} mm clusters)", iteration_wins.empty() ? "" : "; ",
+                                      p.solver, p.by_iterations->substeps, p.by_iterations->iterations,
+                                      p.by_substeps->substeps, p.by_substeps->iterations, p.cm);
+    f << fmt::format("- Iterations beat substeps at equal cost in {} pair(s){}{}.\n", pairs.size() - substeps_win,
+                     iteration_wins.empty() ? "" : ": ", iteration_wins);
+    // Jacobi rows with one iteration per substep: does w change anything?
+    int one_iteration_groups = 0, w_blind = 0;
+    for (const Row& a : rows) {
+      if (a.solver.kind != SolverKind::kJacobi || a.iterations != 1 || a.solver.w != 1.0) continue;
+      ++one_iteration_groups;
+      bool same = true;
+      for (const Row& b : rows)
+        if (b.solver.kind == SolverKind::kJacobi && b.iterations == 1 && b.substeps == a.substeps &&
+            b.cluster_mm == a.cluster_mm)
+          same = same && b.mean_err_mm == a.mean_err_mm && b.max_err_mm == a.max_err_mm;
+      w_blind += same;
+    }
+    if (one_iteration_groups > 0)
+      f << fmt::format("- Jacobi with one iteration per substep: the rows for every w are identical in {} of {} "
+                       "settings (the last iteration of a substep is never over-relaxed; docs/pbd.md).\n",
+                       w_blind, one_iteration_groups);
+    f << "\nNote: errors close to the reference's own convergence figure above are not resolved; below it the "
+         "ranking of settings is noise.\n";
     f << "\nPlot: `heart.png` (mean error vs median ms per step), drawn by `docs/benchmarks/heart.py`.\n";
   }
   if (o.plot) {

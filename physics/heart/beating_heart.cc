@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -102,8 +103,25 @@ struct BeatingHeart::Impl {
     }
     std::vector<double> compliance_scale(n, 1.0);
     for (int i = 0; i < n; ++i) {
-      if (scaling.mass_scale) mass_kg[i] *= scaling.mass_scale(rest_m.col(i));
-      if (scaling.compliance_scale) compliance_scale[i] = scaling.compliance_scale(rest_m.col(i));
+      // errors name the particle and where it is, so a bad mesh or scaling can be found
+      auto where = [&] {
+        const Eigen::Vector3d x_mm = 1e3 * rest_m.col(i);
+        char text[96];
+        std::snprintf(text, sizeof text, "heart particle %d at (%.1f, %.1f, %.1f) mm", i, x_mm.x(), x_mm.y(), x_mm.z());
+        return std::string(text);
+      };
+      if (!(mass_kg[i] > 0.0)) throw std::invalid_argument(where() + ": its tetrahedra have no volume");
+      if (scaling.mass_scale) {
+        const double m = scaling.mass_scale(rest_m.col(i));
+        if (!(m > 0.0) || !std::isfinite(m)) throw std::invalid_argument(where() + ": mass scale must be finite and > 0, got " + std::to_string(m));
+        mass_kg[i] *= m;
+      }
+      if (scaling.compliance_scale) {
+        compliance_scale[i] = scaling.compliance_scale(rest_m.col(i));
+        if (!(compliance_scale[i] >= 0.0) || !std::isfinite(compliance_scale[i]))
+          throw std::invalid_argument(where() + ": compliance scale must be finite and >= 0, got " +
+                                      std::to_string(compliance_scale[i]));
+      }
     }
     for (int i = 0; i < n; ++i) system.add_particle(rest_m.col(i), mass_kg[i]);
 

@@ -76,6 +76,17 @@ TEST(HeartBeating, ParamsAreCheckedByName) {
   p = {};
   p.motion_file = "/nonexistent.motion";
   EXPECT_EQ(construct_error(p), "heart_beat.motion_file: /nonexistent.motion: cannot open");
+  // a tissue scaling that returns nonsense is refused naming the particle and where it is
+  for (const auto& scaling : {HeartTissueScaling{[](const Vector3d&) { return 0.0; }, {}},
+                              HeartTissueScaling{{}, [](const Vector3d&) { return NAN; }}}) {
+    try {
+      BeatingHeart bad(HeartBeatParams{}, scaling);
+      ADD_FAILURE() << "no error";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("heart particle 0 at (", 0), 0u) << e.what();
+      EXPECT_NE(std::string(e.what()).find("scale must be finite"), std::string::npos) << e.what();
+    }
+  }
   BeatingHeart h(HeartBeatParams{});
   EXPECT_THROW(h.set_rate_bpm(-1), std::invalid_argument);
   EXPECT_DOUBLE_EQ(h.params().rate_bpm, 72.0);

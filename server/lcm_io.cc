@@ -131,7 +131,7 @@ void LcmIo::request_scene(const std::string& path) {
     state_.requested_scene = std::move(scene);
     state_.scene_requested = true;
     spdlog::info("session: scene {} accepted, restarting the pipeline", path);
-  } catch (const SceneError& e) {
+  } catch (const std::exception& e) {  // SceneError, or anything else a path can provoke
     state_.scene_rejected.fetch_add(1);
     spdlog::error("session: refused scene: {}", e.what());
   }

@@ -64,7 +64,7 @@ int main(int argc, char** argv) {
   Scene scene;
   try {
     scene = scene_path.empty() ? default_scene() : load_scene_file(scene_path);
-  } catch (const SceneError& e) {
+  } catch (const std::exception& e) {
     std::cerr << "pcisim-server: bad scene: " << e.what() << "\n";
     return 2;
   }

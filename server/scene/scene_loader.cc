@@ -74,7 +74,8 @@ physics::HeartBeatParams read_heart_beat(JsonReader r, const std::string& scene_
   // a relative motion file is found beside the scene file
   if (!p.motion_file.empty() && !scene_dir.empty() && std::filesystem::path(p.motion_file).is_relative())
     p.motion_file = (std::filesystem::path(scene_dir) / p.motion_file).string();
-  if (!p.motion_file.empty() && !std::filesystem::is_regular_file(p.motion_file))
+  std::error_code ec;
+  if (!p.motion_file.empty() && (!std::filesystem::is_regular_file(p.motion_file, ec) || ec))
     r.fail("motion_file", fmt::format("expected a heart motion file (docs/heart.md), cannot read \"{}\"", p.motion_file));
   p.substeps = r.integer("substeps", p.substeps, 1, 64);
   p.iterations = r.integer("iterations", p.iterations, 1, 200);
@@ -246,9 +247,13 @@ Scene parse_scene(const std::string& text, const std::string& source) {
 }
 
 Scene load_scene_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!std::filesystem::is_regular_file(path) || !in)
+  // a regular file, checked before opening (a FIFO would block the reader); the error_code form,
+  // so an over-long or unreadable path is a SceneError rather than a filesystem_error
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec) || ec)
     throw SceneError(fmt::format("{}: cannot read the scene file (missing or not a file)", path));
+  std::ifstream in(path);
+  if (!in) throw SceneError(fmt::format("{}: cannot read the scene file (missing or not a file)", path));
   std::stringstream text;
   text << in.rdbuf();
   return parse_scene(text.str(), path);

@@ -1,5 +1,7 @@
 // Session commands over a real in-process LCM: pause/resume, reset and scene loading.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <mutex>
@@ -136,15 +138,24 @@ TEST(SessionCommands, BadSceneIsRefusedGoodSceneEndsTheRunForARestart) {
   lcm::LCM lcm("memq://");
   Instrument instrument(lcm);
   {
+    // missing, a name longer than the file system allows, and a FIFO (opening it would block the
+    // receive thread): each refused, the session carries on
+    const std::string fifo = ::testing::TempDir() + "/pcisim-scene-fifo";
+    ::unlink(fifo.c_str());
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
     Server server(minimal(), lcm);
     std::thread console([&] {
       std::this_thread::sleep_for(std::chrono::milliseconds(300));
       send(lcm, C::CMD_LOAD_SCENE, "/nonexistent/scene.json");
+      send(lcm, C::CMD_LOAD_SCENE, "/tmp/" + std::string(5000, 'x') + ".json");
+      send(lcm, C::CMD_LOAD_SCENE, fifo);
     });
     std::atomic<bool> stop{false};
     const StatsReport r = server.run(1.0, stop);
     console.join();
+    ::unlink(fifo.c_str());
     EXPECT_GT(r.elapsed_s, 0.95) << "a refused scene does not interrupt the session";
+    EXPECT_LT(r.elapsed_s, 1.5) << "and the server still stops on time";
     EXPECT_FALSE(server.take_requested_scene().has_value());
   }
   {

@@ -25,7 +25,7 @@ bool finite(const physics::LocalForceModel& m) {
 }  // namespace
 
 ForceEvaluator::ForceEvaluator(const HapticParams& params)
-    : params_(params),
+    : params_((validate(params), params)),
       axial_pc_(params.passivity_max_damping_n_s_per_m),
       torque_pc_(params.passivity_max_damping_nm_s_per_rad) {}
 

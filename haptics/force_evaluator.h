@@ -36,6 +36,7 @@ struct ForceOutput {
 
 class ForceEvaluator {
  public:
+  // throws std::invalid_argument naming the field when params are non-finite or out of range
   explicit ForceEvaluator(const HapticParams& params);
 
   // a new model arrived (models carry made_utime on the same monotonic clock as now_us)

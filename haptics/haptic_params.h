@@ -25,4 +25,8 @@ struct HapticParams {
   double instrument_timeout_ms = 50.0;  // no instrument sample for this long: fade
 };
 
+// throws std::invalid_argument naming the field ("haptics.peak_force_n must be ...") when a value
+// is non-finite or out of range; ForceEvaluator checks its params with it
+void validate(const HapticParams& params);
+
 }  // namespace pcisim::haptics

@@ -260,5 +260,26 @@ TEST(ForceEvaluator, NoModelMeansNoForce) {
   EXPECT_TRUE(out.flags & kFlagStale);
 }
 
+TEST(ForceEvaluator, NonFiniteOrNegativeLimitsAreRefusedByName) {
+  // a NaN peak would pass a NaN force to the motors; a negative slew is an inverted clamp
+  const std::pair<const char*, void (*)(HapticParams&)> cases[] = {
+      {"haptics.peak_force_n", [](HapticParams& p) { p.peak_force_n = std::nan(""); }},
+      {"haptics.slew_n_per_s", [](HapticParams& p) { p.slew_n_per_s = -1.0; }},
+      {"haptics.instrument_timeout_ms", [](HapticParams& p) { p.instrument_timeout_ms = std::nan(""); }},
+      {"haptics.passivity_max_damping_n_s_per_m", [](HapticParams& p) { p.passivity_max_damping_n_s_per_m = INFINITY; }},
+  };
+  for (const auto& [field, spoil] : cases) {
+    HapticParams p;
+    spoil(p);
+    try {
+      ForceEvaluator e(p);
+      ADD_FAILURE() << field << " accepted";
+    } catch (const std::invalid_argument& err) {
+      EXPECT_EQ(std::string(err.what()).rfind(field, 0), 0u) << err.what();
+    }
+  }
+  EXPECT_NO_THROW(ForceEvaluator{HapticParams{}});
+}
+
 }  // namespace
 }  // namespace pcisim::haptics

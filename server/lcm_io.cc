@@ -56,12 +56,18 @@ void LcmIo::on_instrument(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     state_.instrument_rejected.fetch_add(1, std::memory_order_relaxed);
     return;
   }
-  // a device in fault sends no motion: leave the last sample to go stale and fade
-  if (instrument_msg_.status == pcisim_lcm::instrument_state_t::STATUS_FAULT) return;
+  // a device in fault sends no motion: leave the last sample to go stale and fade; its pedals
+  // cannot be trusted either, so the beam goes off
+  if (instrument_msg_.status == pcisim_lcm::instrument_state_t::STATUS_FAULT) {
+    state_.fluoro_pedal_instrument.store(false, std::memory_order_relaxed);
+    state_.cine_instrument.store(false, std::memory_order_relaxed);
+    return;
+  }
   const auto& m = instrument_msg_;
   using I = pcisim_lcm::instrument_state_t;
   state_.fluoro_pedal_instrument.store((m.buttons & I::BUTTON_FLUORO_PEDAL) != 0, std::memory_order_relaxed);
   state_.cine_instrument.store((m.buttons & I::BUTTON_CINE_PEDAL) != 0, std::memory_order_relaxed);
+  state_.instrument_heard_ns.store(monotonic_ns(), std::memory_order_relaxed);
   const bool contrast = (m.buttons & I::BUTTON_CONTRAST) != 0;
   if (contrast && !state_.contrast_button_down) add_injection();
   state_.contrast_button_down = contrast;

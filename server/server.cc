@@ -51,8 +51,8 @@ struct Server::Impl {
     last_physics_steps = r.physics_steps;
     pcisim_lcm::sim_status_t m = to_message(r, now / 1000, 0, state.paused);
     // the session's cath-lab figures, so a client that joins late reports them whole
-    m.fluoro_on = state.fluoro_pedal_console || state.fluoro_pedal_instrument ? 1 : 0;
-    m.cine_on = state.cine_console || state.cine_instrument ? 1 : 0;
+    m.fluoro_on = state.fluoro_pedal_console || state.instrument_pedal_down(state.fluoro_pedal_instrument, now) ? 1 : 0;
+    m.cine_on = state.cine_console || state.instrument_pedal_down(state.cine_instrument, now) ? 1 : 0;
     m.fluoro_time_s = state.xray_on_ns.load() * 1e-9;
     m.carm_primary_deg = state.carm_primary_deg.load();
     m.carm_secondary_deg = state.carm_secondary_deg.load();

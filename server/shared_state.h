@@ -80,8 +80,15 @@ struct SharedState {
   std::atomic<bool> scene_requested{false};
   std::atomic<int64_t> scene_rejected{0};
 
-  // fluoroscopy controls: written by lcm rx, read by the x-ray thread
+  // fluoroscopy controls: written by lcm rx, read by the x-ray thread. The instrument's pedals
+  // count only while its samples arrive: a crashed bridge or unplugged box lifts them
+  static constexpr int64_t kInstrumentPedalTimeoutNs = 250'000'000;
   std::atomic<bool> fluoro_pedal_instrument{false}, cine_instrument{false};
+  std::atomic<int64_t> instrument_heard_ns{0};  // monotonic time of the last good instrument sample
+  bool instrument_pedal_down(const std::atomic<bool>& pedal, int64_t now_ns) const {
+    return pedal.load(std::memory_order_relaxed) &&
+           now_ns - instrument_heard_ns.load(std::memory_order_relaxed) <= kInstrumentPedalTimeoutNs;
+  }
   std::atomic<bool> fluoro_pedal_console{false}, cine_console{false};
   std::atomic<double> carm_primary_deg{0}, carm_secondary_deg{0};
   std::atomic<bool> carm_changed{false};

@@ -101,8 +101,9 @@ void XrayLoop::run() {
   while (!state_.stop.load(std::memory_order_relaxed)) {
     sleep_until_ns(schedule.deadline_ns());
     const int64_t wake_ns = monotonic_ns();
-    const bool cine = state_.cine_instrument || state_.cine_console;
-    const bool on = cine || state_.fluoro_pedal_instrument || state_.fluoro_pedal_console;
+    const bool cine = state_.instrument_pedal_down(state_.cine_instrument, wake_ns) || state_.cine_console;
+    const bool on = cine || state_.instrument_pedal_down(state_.fluoro_pedal_instrument, wake_ns) ||
+                    state_.fluoro_pedal_console;
     if (cine && !was_cine_) ++cine_run_;
     was_cine_ = cine;
     const double rate = cine ? spec_.cine_rate_fps : spec_.pulse_rate_fps;

@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 
@@ -50,12 +52,30 @@ bool parse_encoder_line(const std::string& line, EncoderLine& out) {
   if (!field(p, end, out.insertion_counts) || !field(p, end, out.rotation_counts) || !field(p, end, buttons)) return false;
   while (p < end && *p == ' ') ++p;
   if (p != end || buttons < 0 || buttons > 0xffff) return false;
+  // counts beyond 2^40 come from no encoder (and would overflow the zero offset): malformed
+  constexpr int64_t kMaxCounts = int64_t{1} << 40;
+  auto counts_ok = [](int64_t c) { return c >= -kMaxCounts && c <= kMaxCounts; };  // no std::abs(INT64_MIN)
+  if (!counts_ok(out.insertion_counts) || !counts_ok(out.rotation_counts)) return false;
   out.buttons = static_cast<int32_t>(buttons);
   return true;
 }
 
+void validate(const SerialCalibration& c) {
+  auto require = [](bool ok, const std::string& what) {
+    if (!ok) throw std::invalid_argument("serial calibration: " + what);
+  };
+  require(std::isfinite(c.mm_per_count) && c.mm_per_count != 0.0, "mm_per_count must be finite and non-zero");
+  require(std::isfinite(c.rad_per_count) && c.rad_per_count != 0.0, "rad_per_count must be finite and non-zero");
+  require(c.insertion_zero_counts >= -(int64_t{1} << 40) && c.insertion_zero_counts <= (int64_t{1} << 40),
+          "insertion_zero_counts must be within +-2^40");
+  require(std::isfinite(c.min_insertion_mm) && std::isfinite(c.max_insertion_mm) && c.min_insertion_mm <= c.max_insertion_mm,
+          fmt::format("insertion range [{}, {}] mm must be finite with min <= max", c.min_insertion_mm, c.max_insertion_mm));
+  require(std::isfinite(c.silent_timeout_s) && c.silent_timeout_s > 0.0, "silent_timeout_s must be finite and > 0");
+}
+
 SerialDevice::SerialDevice(const std::string& port, int baud, const SerialCalibration& calibration)
     : port_(port), cal_(calibration) {
+  validate(calibration);
   const speed_t speed = baud_constant(baud);
   fd_ = ::open(port.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK);
   if (fd_ < 0) throw std::runtime_error(fmt::format("{}: cannot open the serial port: {}", port, std::strerror(errno)));
@@ -74,8 +94,8 @@ SerialDevice::~SerialDevice() {
 }
 
 void SerialDevice::take(const EncoderLine& e, double t_s) {
-  const double insertion_mm = std::clamp((e.insertion_counts - cal_.insertion_zero_counts) * cal_.mm_per_count,
-                                         cal_.min_insertion_mm, cal_.max_insertion_mm);
+  const double counts = static_cast<double>(e.insertion_counts) - static_cast<double>(cal_.insertion_zero_counts);
+  const double insertion_mm = std::clamp(counts * cal_.mm_per_count, cal_.min_insertion_mm, cal_.max_insertion_mm);
   const double rotation_rad = e.rotation_counts * cal_.rad_per_count;
   // rates from successive samples; the first sample has none
   const double dt = last_sample_t_s_ >= 0 ? t_s - last_sample_t_s_ : 0.0;
@@ -94,11 +114,15 @@ bool SerialDevice::read(double t_s, InstrumentReading& out) {
     if (n > 0) {
       for (ssize_t i = 0; i < n; ++i) {
         if (buf[i] != '\n') {
-          if (pending_.size() < 4000) pending_.push_back(buf[i]);
+          if (pending_.size() < kMaxLine) pending_.push_back(buf[i]);
+          else overlong_ = true;
           continue;
         }
         EncoderLine e;
-        if (pending_.empty() || pending_[0] == '#') {
+        if (overlong_) {
+          ++malformed_;  // a cut line might still parse: never trust it
+          overlong_ = false;
+        } else if (pending_.empty() || pending_[0] == '#') {
           // blank lines and comments are not samples
         } else if (parse_encoder_line(pending_, e)) {
           ++lines_;

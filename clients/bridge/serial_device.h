@@ -18,6 +18,10 @@ struct SerialCalibration {
   double silent_timeout_s = 0.05;   // no valid line for this long: fault
 };
 
+// throws std::invalid_argument ("serial calibration: ...") for zero or non-finite scales, an
+// inverted insertion range or a non-positive timeout; SerialDevice checks its calibration with it
+void validate(const SerialCalibration& calibration);
+
 // one parsed line: true when it is a valid sample line
 struct EncoderLine {
   int64_t insertion_counts = 0, rotation_counts = 0;
@@ -51,6 +55,8 @@ class SerialDevice : public InstrumentDevice {
   double last_insertion_mm_ = 0, last_rotation_rad_ = 0, last_sample_t_s_ = -1;
   int64_t lines_ = 0, malformed_ = 0;
   bool unplugged_ = false;
+  bool overlong_ = false;  // the line being read outgrew kMaxLine: counted malformed at its end
+  static constexpr size_t kMaxLine = 4000;
 };
 
 }  // namespace pcisim::clients

@@ -1,6 +1,10 @@
 #include "clients/bridge/serial_device.h"
 
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <utility>
 #include <pty.h>
 #include <unistd.h>
 
@@ -18,7 +22,8 @@ TEST(EncoderLine, ParsesTheDocumentedFormatAndRejectsEverythingElse) {
   EXPECT_EQ(e.buttons, 5);
   EXPECT_TRUE(parse_encoder_line("E 1 2 0\r", e)) << "CRLF line ends are fine";
   for (const char* bad : {"", "E", "E 1 2", "E 1 2 3 4", "X 1 2 3", "E1 2 3", "E 1.5 2 3", "E a b c", "E 1 2 -1",
-                          "E 99999999999999999999 2 3", "garbage \x01\x02"})
+                          "E 99999999999999999999 2 3", "E -9223372036854775808 0 0", "E 0 2000000000000 0",
+                          "garbage \x01\x02"})
     EXPECT_FALSE(parse_encoder_line(bad, e)) << "'" << bad << "'";
 }
 
@@ -61,6 +66,31 @@ TEST_F(SerialOverPty, CalibratesCountsSkipsGarbageAndDerivesRates) {
   settle();
   ASSERT_TRUE(dev.read(0.030, r));
   EXPECT_DOUBLE_EQ(r.insertion_mm, cal.max_insertion_mm);
+  // a line longer than any sample, whose first bytes would parse, is malformed as a whole
+  box_says("E 1300 500 0" + std::string(5000, ' ') + "junk\n");
+  settle();
+  ASSERT_TRUE(dev.read(0.035, r));
+  EXPECT_EQ(dev.malformed(), 3);
+  EXPECT_DOUBLE_EQ(r.insertion_mm, cal.max_insertion_mm) << "the cut line was not taken";
+}
+
+TEST(SerialDevice, BadCalibrationIsRefusedByName) {
+  const std::pair<const char*, void (*)(SerialCalibration&)> cases[] = {
+      {"mm_per_count", [](SerialCalibration& c) { c.mm_per_count = 0.0; }},
+      {"rad_per_count", [](SerialCalibration& c) { c.rad_per_count = std::nan(""); }},
+      {"insertion range", [](SerialCalibration& c) { c.max_insertion_mm = -5.0; }},
+      {"silent_timeout_s", [](SerialCalibration& c) { c.silent_timeout_s = 0.0; }},
+  };
+  for (const auto& [what, spoil] : cases) {
+    SerialCalibration c;
+    spoil(c);
+    try {
+      SerialDevice dev("/dev/null", 115200, c);
+      ADD_FAILURE() << what << " accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST_F(SerialOverPty, SilenceAndUnpluggingAreFaults) {

@@ -108,7 +108,8 @@ void DetectorChain::apply(const Image& line, uint64_t noise_key, Image* counts, 
     float lm = -std::log(std::max(q[i], floor_q) * inv_n0);
     if (off) lm -= off[i];
     const float v = 65535.0f - (lm - lo) * scale;
-    out[i] = static_cast<uint16_t>(std::clamp(v, 0.0f, 65535.0f) + 0.5f);
+    // a non-finite line integral shows black (v NaN would pass std::clamp and break the cast)
+    out[i] = std::isfinite(v) ? static_cast<uint16_t>(std::clamp(v, 0.0f, 65535.0f) + 0.5f) : uint16_t{0};
   }
 }
 

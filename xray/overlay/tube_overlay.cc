@@ -20,11 +20,13 @@ void add_cone_segment(const DetectorGeometry& g, const Eigen::Vector3d& a, const
   const double margin = std::max(ra_mm, rb_mm) * sid / depth / g.pixel_mm + 1.0;
   const double cl = std::min(pa.x(), pb.x()) - margin, ch = std::max(pa.x(), pb.x()) + margin;
   const double rl = std::min(pa.y(), pb.y()) - margin, rh = std::max(pa.y(), pb.y()) + margin;
-  if (ch < 0 || rh < 0 || cl > g.width - 1 || rl > g.height - 1) return;
-  const int c0 = std::max(0, static_cast<int>(std::floor(cl)));
-  const int c1 = std::min(g.width - 1, static_cast<int>(std::ceil(ch)));
-  const int r0 = std::max(0, static_cast<int>(std::floor(rl)));
-  const int r1 = std::min(g.height - 1, static_cast<int>(std::ceil(rh)));
+  // !(x >= lo) also catches NaN; bounds are clamped in double before the cast to int, so a point
+  // near the source plane (a huge shadow) or far out cannot overflow it
+  if (!(ch >= 0) || !(rh >= 0) || !(cl <= g.width - 1) || !(rl <= g.height - 1)) return;
+  const int c0 = static_cast<int>(std::max(0.0, std::floor(cl)));
+  const int c1 = static_cast<int>(std::min(g.width - 1.0, std::ceil(ch)));
+  const int r0 = static_cast<int>(std::max(0.0, std::floor(rl)));
+  const int r1 = static_cast<int>(std::min(g.height - 1.0, std::ceil(rh)));
   const Eigen::Vector3d du = g.pixel_mm * g.u;
   const float mu = static_cast<float>(mu_per_mm);
   for (int r = r0; r <= r1; ++r) {

@@ -365,6 +365,14 @@ TEST(Fluoroscopy, NonFiniteInputsGiveAFrameNotACrash) {
   for (float v : fr.line_integrals().pixels) ASSERT_TRUE(std::isfinite(v));
   EXPECT_EQ(f.wire_px.size(), 4u);
   EXPECT_TRUE(std::isnan(f.wire_px[1].x()));
+  // a node blown kilometres away (a physics blow-up) and one just beside the source: their
+  // shadows would span billions of pixels; the frame is still made and finite
+  const std::vector<Eigen::Vector3d> wild_m = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(3e3, -2e3, 1e3),
+                                               1e-3 * (f.geometry.source_mm + Eigen::Vector3d(1e-6, 1e-6, 1e-6)),
+                                               Eigen::Vector3d(0.002, 0, 0)};
+  fr.render({.time_s = 2, .pose = lao30_cra20(), .wire_m = wild_m}, f);
+  for (float v : fr.line_integrals().pixels) ASSERT_TRUE(std::isfinite(v));
+  EXPECT_EQ(f.wire_px.size(), 4u);
 }
 
 }  // namespace

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -151,6 +152,12 @@ XraySpec read_xray(JsonReader r) {
   if (x.pulse_rate_fps != 7.5 && x.pulse_rate_fps != 15 && x.pulse_rate_fps != 30)
     r.fail("pulse_rate_fps", fmt::format("expected 7.5, 15 or 30, got {}", x.pulse_rate_fps));
   x.cine_rate_fps = r.number("cine_rate_fps", x.cine_rate_fps, 7.5, 60);
+  // the x-ray thread ticks at the faster rate and renders every n-th tick at the slower one, so
+  // the faster must be a whole multiple of the slower (15 and 30 fps cine, say, not 25)
+  const double ratio = std::max(x.pulse_rate_fps, x.cine_rate_fps) / std::min(x.pulse_rate_fps, x.cine_rate_fps);
+  if (std::abs(ratio - std::round(ratio)) > 1e-9)
+    r.fail("cine_rate_fps", fmt::format("expected a whole multiple or divisor of pulse_rate_fps ({}), got {}",
+                                        x.pulse_rate_fps, x.cine_rate_fps));
   x.initial_pose.primary_deg = r.number("primary_deg", -30, -180, 180);
   x.initial_pose.secondary_deg = r.number("secondary_deg", 30, -90, 90);
   r.finish();

@@ -87,6 +87,8 @@ TEST(Scene, EachBadInputNamesItsJsonPathAndWhatWasExpected) {
             "test.json: effects.vessel_motion: needs effect \"heart_beat\" in the same scene");
   EXPECT_EQ(error_of(R"({"effects": {"heart_beat": {"rate_bpm": 400}}})"),
             "test.json: effects.heart_beat.rate_bpm: expected a number in [20, 250], got 400");
+  EXPECT_EQ(error_of(R"({"effects": {"guidewire": {}, "xray": {"pulse_rate_fps": 15, "cine_rate_fps": 25}}})"),
+            "test.json: effects.xray.cine_rate_fps: expected a whole multiple or divisor of pulse_rate_fps (15), got 25");
   EXPECT_EQ(error_of(R"({"effects": {"heart_beat": {"cluster_size_mm": 0.01}}})"),
             "test.json: effects.heart_beat.cluster_size_mm: expected 0 (the global cluster only) or a number in [5, "
             "200], got 0.01");

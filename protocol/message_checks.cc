@@ -45,9 +45,11 @@ bool is_well_formed(const pcisim_lcm::sim_status_t& m) {
 
 bool is_well_formed(const pcisim_lcm::xray_frame_t& m) {
   if (m.width < 0 || m.height < 0 || m.num_bytes < 0 || m.num_wire_points < 0) return false;
-  const int64_t bytes_per_pixel = m.pixel_format == pcisim_lcm::xray_frame_t::FORMAT_GRAY16 ? 2
-                                  : m.pixel_format == pcisim_lcm::xray_frame_t::FORMAT_GRAY8 ? 1
-                                                                                            : 0;
+  using F = pcisim_lcm::xray_frame_t;
+  // raw grey frames must hold exactly width x height pixels; PNG is compressed; nothing else exists
+  if (m.pixel_format != F::FORMAT_GRAY8 && m.pixel_format != F::FORMAT_GRAY16 && m.pixel_format != F::FORMAT_PNG)
+    return false;
+  const int64_t bytes_per_pixel = m.pixel_format == F::FORMAT_GRAY16 ? 2 : m.pixel_format == F::FORMAT_GRAY8 ? 1 : 0;
   if (bytes_per_pixel && int64_t{m.width} * m.height * bytes_per_pixel != m.num_bytes) return false;
   for (int k = 0; k < 3; ++k)
     if (!finite(m.source_mm[k], m.detector_center_mm[k], m.detector_u[k], m.detector_v[k])) return false;

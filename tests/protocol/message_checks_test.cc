@@ -5,6 +5,7 @@
 #include <limits>
 #include <vector>
 
+#include "pcisim_lcm/xray_frame_t.hpp"
 #include "protocol/channels.h"
 
 namespace pcisim::protocol {
@@ -78,6 +79,25 @@ TEST(MessageChecks, WireStateWithNonFiniteNodeIsRejected) {
   m.node_mm[1][1] = std::numeric_limits<float>::infinity();
   auto bad = encode(m);
   EXPECT_FALSE(decode_checked(as_rbuf(bad), out));
+}
+
+TEST(MessageChecks, XrayFrameSizeAndPixelFormatAreChecked) {
+  using F = pcisim_lcm::xray_frame_t;
+  F m{};
+  m.width = 4;
+  m.height = 2;
+  m.pixel_format = F::FORMAT_GRAY16;
+  m.num_bytes = 16;
+  m.data.assign(16, 0);
+  m.pixel_mm = 0.4;
+  EXPECT_TRUE(is_well_formed(m));
+  m.num_bytes = 15;
+  m.data.resize(15);
+  EXPECT_FALSE(is_well_formed(m)) << "too few bytes for 4 x 2 x 16 bits";
+  m.pixel_format = F::FORMAT_PNG;
+  EXPECT_TRUE(is_well_formed(m)) << "compressed: any size";
+  m.pixel_format = 7;
+  EXPECT_FALSE(is_well_formed(m)) << "no such format: its size cannot be checked, so it is refused";
 }
 
 // every type survives an encode/decode over a real in-process LCM (memq)

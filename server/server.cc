@@ -1,6 +1,9 @@
 #include "server/server.h"
 
 #include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <stdexcept>
 #include <thread>
 
 #include "physics/heart/heart_fit.h"
@@ -111,7 +114,9 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
 
   // the main thread only watches the clock and logs once a second
   int64_t next_log_ns = m.start_ns + 1'000'000'000;
-  const int64_t end_ns = duration_s > 0 ? m.start_ns + static_cast<int64_t>(duration_s * 1e9) : INT64_MAX;
+  // 0, or anything past ~290 years (inf included), runs until stopped
+  const int64_t end_ns =
+      duration_s > 0 && duration_s < 9e9 ? m.start_ns + static_cast<int64_t>(duration_s * 1e9) : INT64_MAX;
   while (!stop.load() && !m.state.scene_requested.load() && monotonic_ns() < end_ns) {
     sleep_until_ns(std::min(end_ns, monotonic_ns() + 20'000'000));
     if (monotonic_ns() >= next_log_ns) {
@@ -138,6 +143,8 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
 }
 
 void Server::inject_physics_stall(double seconds) {
+  if (!std::isfinite(seconds) || seconds < 0.0 || seconds > 3600.0)
+    throw std::invalid_argument("inject_physics_stall: seconds must be in [0, 3600]");
   impl_->state.inject_stall_us = static_cast<int64_t>(seconds * 1e6);
 }
 

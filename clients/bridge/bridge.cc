@@ -1,5 +1,8 @@
 #include "clients/bridge/bridge.h"
 
+#include <stdexcept>
+#include <string>
+
 #include <pthread.h>
 #include <sched.h>
 #include <spdlog/spdlog.h>
@@ -18,6 +21,8 @@ using server::monotonic_ns;
 
 Bridge::Bridge(lcm::LCM& lcm, InstrumentDevice& device, const BridgeOptions& options)
     : lcm_(lcm), device_(device), options_(options) {
+  if (!(options.rate_hz >= 1.0 && options.rate_hz <= 1e4))
+    throw std::invalid_argument("bridge: rate_hz must be in [1, 10000], got " + std::to_string(options.rate_hz));
   lcm_.subscribe(protocol::kForceChannel, &Bridge::on_force, this);
 }
 

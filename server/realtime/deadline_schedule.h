@@ -3,12 +3,16 @@
 // ends more than a period past its deadline, the missed deadlines are skipped and counted, so a
 // slow iteration never causes a burst of catch-up iterations.
 #include <cstdint>
+#include <stdexcept>
 
 namespace pcisim::server {
 
 class DeadlineSchedule {
  public:
-  DeadlineSchedule(int64_t start_ns, int64_t period_ns) : deadline_ns_(start_ns + period_ns), period_ns_(period_ns) {}
+  // period_ns must be > 0 (std::invalid_argument otherwise)
+  DeadlineSchedule(int64_t start_ns, int64_t period_ns) : deadline_ns_(start_ns + period_ns), period_ns_(period_ns) {
+    if (period_ns <= 0) throw std::invalid_argument("DeadlineSchedule: the period must be > 0 ns");
+  }
 
   int64_t deadline_ns() const { return deadline_ns_; }
   int64_t period_ns() const { return period_ns_; }

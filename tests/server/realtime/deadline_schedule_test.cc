@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <stdexcept>
+
+#include "server/realtime/clock.h"
+
 namespace pcisim::server {
 namespace {
 
@@ -27,4 +31,16 @@ TEST(DeadlineSchedule, OverrunIsCountedAndSkippedNotCaughtUpInABurst) {
 }
 
 }  // namespace
+TEST(DeadlineSchedule, ZeroOrNegativePeriodIsRefused) {
+  EXPECT_THROW(DeadlineSchedule(0, 0), std::invalid_argument);
+  EXPECT_THROW(DeadlineSchedule(0, -5), std::invalid_argument);
+}
+
+TEST(Clock, DeadlinesInThePastOrBeforeTheClockStartReturnAtOnce) {
+  const int64_t t0 = monotonic_ns();
+  sleep_until_ns(-1'000'000'000);  // EINVAL territory: must not spin
+  sleep_until_ns(t0 - 1'000'000);
+  EXPECT_LT(monotonic_ns() - t0, 50'000'000);
+}
+
 }  // namespace pcisim::server

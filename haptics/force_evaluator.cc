@@ -122,8 +122,8 @@ ForceOutput ForceEvaluator::tick(const InstrumentSample& sample, int64_t now_us)
   force_n = slew(force_n, last_force_n_, params_.slew_n_per_s * dt_s);
   torque_nm = slew(torque_nm, last_torque_nm_, params_.slew_nm_per_s * dt_s);
   if (params_.passivity && !(stale || silent)) {
-    force_n = axial_pc_.filter(force_n, sample.insertion_rate_m_per_s, dt_s);
-    torque_nm = torque_pc_.filter(torque_nm, sample.rotation_rate_rad_per_s, dt_s);
+    force_n = axial_pc_.filter(force_n, sample.insertion_rate_m_per_s, dt_s, params_.peak_force_n);
+    torque_nm = torque_pc_.filter(torque_nm, sample.rotation_rate_rad_per_s, dt_s, params_.peak_torque_nm);
     if (axial_pc_.last_damping() > 0 || torque_pc_.last_damping() > 0) out.flags |= kFlagDamped;
   }
   force_n = clamp_abs(force_n, params_.peak_force_n, out.flags);

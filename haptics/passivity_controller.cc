@@ -4,7 +4,7 @@
 
 namespace pcisim::haptics {
 
-double PassivityController::filter(double force, double velocity, double dt_s) {
+double PassivityController::filter(double force, double velocity, double dt_s, double peak) {
   // observer: energy after this tick if the force is displayed unchanged
   const double energy = energy_ + force * velocity * dt_s;
   last_damping_ = 0.0;
@@ -14,7 +14,8 @@ double PassivityController::filter(double force, double velocity, double dt_s) {
     last_damping_ = std::min(-energy / v2dt, max_damping_);
     force += last_damping_ * velocity;
   }
-  energy_ += force * velocity * dt_s;
+  const double displayed = std::clamp(force, -peak, peak);
+  energy_ += displayed * velocity * dt_s;
   return force;
 }
 

@@ -11,8 +11,10 @@ class PassivityController {
  public:
   explicit PassivityController(double max_damping = 1e9) : max_damping_(max_damping) {}
 
-  // returns the force to display (f plus the damping this tick needs)
-  double filter(double force, double velocity, double dt_s);
+  // returns the force to display (f plus the damping this tick needs). The observer books the
+  // energy of what the trainee will actually feel: the result clamped to +-peak, the limit the
+  // caller applies after this (Hannaford & Ryu: the displayed force)
+  double filter(double force, double velocity, double dt_s, double peak = 1e300);
 
   double energy() const { return energy_; }
   double last_damping() const { return last_damping_; }

@@ -13,7 +13,11 @@ bool finite(T... v) {
 }  // namespace
 
 bool is_well_formed(const pcisim_lcm::instrument_state_t& m) {
-  return finite(m.insertion_mm, m.rotation_rad, m.insertion_rate_mm_s, m.rotation_rate_rad_s);
+  // finite, and within what a hand on a guidewire can do (10 m of wire, 10 m/s, 1000 rad/s): a
+  // finite but absurd rate would overflow the passivity observer's energy
+  return finite(m.insertion_mm, m.rotation_rad, m.insertion_rate_mm_s, m.rotation_rate_rad_s) &&
+         std::abs(m.insertion_mm) <= 1e4 && std::abs(m.insertion_rate_mm_s) <= 1e4 &&
+         std::abs(m.rotation_rate_rad_s) <= 1e3 && std::abs(m.rotation_rad) <= 1e6;
 }
 
 bool is_well_formed(const pcisim_lcm::force_command_t& m) {

@@ -38,4 +38,15 @@ TEST(PassivityController, DampsAnActiveEnvironmentBackToZeroEnergy) {
 }
 
 }  // namespace
+TEST(PassivityController, BooksTheEnergyOfTheDisplayedForceNotTheClampedAway) {
+  // 10 N asked, 4 N the most the device shows: the trainee's 1 m/s over 1 ms put in 4 mJ, not 10
+  PassivityController pc;
+  EXPECT_DOUBLE_EQ(pc.filter(10.0, 1.0, 1e-3, 4.0), 10.0) << "the clamp itself is the caller's";
+  EXPECT_DOUBLE_EQ(pc.energy(), 4e-3);
+  // then a 10 N push along the motion: 6 mJ too much; damping 6 N s/m brings it to -4 N
+  EXPECT_DOUBLE_EQ(pc.filter(-10.0, 1.0, 1e-3, 4.0), -4.0);
+  EXPECT_DOUBLE_EQ(pc.last_damping(), 6.0);
+  EXPECT_NEAR(pc.energy(), 0.0, 1e-15) << "damped back to passive";
+}
+
 }  // namespace pcisim::haptics

@@ -81,6 +81,16 @@ TEST(MessageChecks, WireStateWithNonFiniteNodeIsRejected) {
   EXPECT_FALSE(decode_checked(as_rbuf(bad), out));
 }
 
+TEST(MessageChecks, InstrumentRatesBeyondAnyHandAreRefused) {
+  auto m = instrument();
+  EXPECT_TRUE(is_well_formed(m));
+  m.insertion_rate_mm_s = 1e308;  // finite, but it would overflow the passivity observer
+  EXPECT_FALSE(is_well_formed(m));
+  m = instrument();
+  m.rotation_rate_rad_s = -5e3;
+  EXPECT_FALSE(is_well_formed(m));
+}
+
 TEST(MessageChecks, XrayFrameSizeAndPixelFormatAreChecked) {
   using F = pcisim_lcm::xray_frame_t;
   F m{};

@@ -155,7 +155,7 @@ void LcmIo::publish_wire(const physics::WorldSnapshot& s) {
   m.insertion_mm = s.insertion_m * 1e3;
   m.rotation_rad = s.rotation_rad;
   m.num_nodes = static_cast<int32_t>(s.wire_nodes_m.size());
-  m.node_mm.resize(s.wire_nodes_m.size(), std::vector<float>(3));
+  if (m.node_mm.size() != s.wire_nodes_m.size()) m.node_mm.assign(s.wire_nodes_m.size(), std::vector<float>(3));
   m.contact.resize(s.wire_nodes_m.size());
   for (size_t i = 0; i < s.wire_nodes_m.size(); ++i) {
     for (int k = 0; k < 3; ++k) m.node_mm[i][k] = static_cast<float>(s.wire_nodes_m[i][k] * 1e3);

@@ -44,7 +44,8 @@ class LcmIo {
   BranchNamer branch_name_;
   std::thread rx_, tx_;
   std::atomic<bool> running_{false};
-  // preallocated messages, reused every time
+  // messages reused every time (lcm::LCM::publish still allocates its encode buffer per call; this
+  // is the LCM thread, never the 1 kHz haptic loop)
   pcisim_lcm::instrument_state_t instrument_msg_{};
   pcisim_lcm::session_command_t session_msg_{};
   pcisim_lcm::force_command_t force_msg_{};

@@ -77,8 +77,10 @@ void XrayLoop::render_and_publish(bool cine) {
   m.cine_run = cine ? cine_run_ : -1;
   const size_t nodes = snap.wire_nodes_m.size();
   m.num_wire_points = static_cast<int32_t>(nodes);
-  m.wire_mm.resize(nodes, std::vector<float>(3));
-  m.wire_px.resize(nodes, std::vector<float>(2));
+  // the message's nested vectors keep their size from frame to frame: only a change of the
+  // wire's node count builds new rows
+  if (m.wire_mm.size() != nodes) m.wire_mm.assign(nodes, std::vector<float>(3));
+  if (m.wire_px.size() != nodes) m.wire_px.assign(nodes, std::vector<float>(2));
   for (size_t i = 0; i < nodes; ++i) {
     for (int k = 0; k < 3; ++k) m.wire_mm[i][k] = static_cast<float>(snap.wire_nodes_m[i][k] * 1e3);
     const bool has_px = i < frame_.wire_px.size();

@@ -180,10 +180,20 @@ TEST(Fluoroscopy, WireIsDarkWhereItsPolylineProjects) {
   fr.render({.time_s = 0, .pose = lao30_cra20(), .wire_m = wire_m, .injections = {}}, with);
   ASSERT_EQ(with.wire_px.size(), wire_m.size());
   EXPECT_TRUE(without.wire_px.empty());
-  // the labels are the wire's points in mm projected with the frame's geometry
-  Eigen::Vector2d cr;
-  ASSERT_TRUE(with.geometry.project(1000.0 * wire_m[40], &cr));
-  EXPECT_LT((cr - with.wire_px[40]).norm(), 1e-9);
+  // the labels are the wire's points in mm projected with the frame's geometry: the ray from the
+  // source through the point meets the detector plane at the labelled pixel (pixel (c, r) is centred
+  // at centre + (c - (w-1)/2) pixel u + (r - (h-1)/2) pixel v), worked out here from those
+  // definitions rather than with DetectorGeometry::project
+  const auto& g = with.geometry;
+  for (size_t i : {size_t{0}, size_t{40}, wire_m.size() - 1}) {
+    const Eigen::Vector3d p = 1000.0 * wire_m[i], n = g.u.cross(g.v).normalized();
+    const double t = (g.center_mm - g.source_mm).dot(n) / (p - g.source_mm).dot(n);
+    const Eigen::Vector3d hit = g.source_mm + t * (p - g.source_mm);
+    const double col = (hit - g.center_mm).dot(g.u) / g.pixel_mm + 0.5 * (g.width - 1);
+    const double row = (hit - g.center_mm).dot(g.v) / g.pixel_mm + 0.5 * (g.height - 1);
+    EXPECT_NEAR(with.wire_px[i].x(), col, 1e-6) << i;
+    EXPECT_NEAR(with.wire_px[i].y(), row, 1e-6) << i;
+  }
   int dark = 0, off_line = 0;
   for (int r = 0; r < with.height; ++r) {
     for (int c = 0; c < with.width; ++c) {

@@ -20,6 +20,7 @@
 #include "physics/heart/heart_fit.h"
 #include "physics/heart/heart_mesh.h"
 #include "physics/motion/vessel_skin.h"
+#include "physics/param_checks.h"
 #include "physics/pbd/pbd_cuda_solver.h"
 #include "physics/vessel/coronary_phantom.h"
 #include "physics/vessel/vessel_tree.h"
@@ -28,12 +29,6 @@ namespace pcisim::physics {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-void require(bool ok, const std::string& what) {
-  if (!ok) throw std::invalid_argument(what);
-}
-
-bool in(double x, double lo, double hi) { return std::isfinite(x) && x >= lo && x <= hi; }
 
 void validate(const WorldSpec& s) {
   require(in(s.step_s, 1e-5, 1.0), "step_s: expected [1e-5, 1] s");

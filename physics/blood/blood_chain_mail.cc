@@ -6,6 +6,8 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "physics/param_checks.h"
+
 namespace pcisim::physics {
 namespace {
 
@@ -22,11 +24,6 @@ uint32_t hash_cell(int x, int y, int z) {
 Eigen::Vector3i cell_of(const Eigen::Vector3d& p, double h) {
   return (p / h).array().floor().cast<int>();
 }
-
-void require(bool ok, const char* what) {
-  if (!ok) throw std::invalid_argument(what);
-}
-bool in(double x, double lo, double hi) { return std::isfinite(x) && x >= lo && x <= hi; }
 
 }  // namespace
 

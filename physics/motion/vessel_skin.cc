@@ -6,6 +6,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "physics/param_checks.h"
 #include "physics/sdf/sdf_kernels.h"
 
 namespace pcisim::physics {
@@ -24,11 +25,6 @@ Eigen::Matrix3d frame(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const 
   f.col(2) = len > 0.0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::UnitZ();
   return f;
 }
-
-void require(bool ok, const char* what) {
-  if (!ok) throw std::invalid_argument(what);
-}
-bool in(double x, double lo, double hi) { return std::isfinite(x) && x >= lo && x <= hi; }
 
 }  // namespace
 

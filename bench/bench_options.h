@@ -1,6 +1,8 @@
 #pragma once
 // The options every sweep takes, parsed once: --quick, --no-plot, --out DIR, --help.
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -31,6 +33,16 @@ inline int parse_bench_options(const std::vector<std::string>& args, const char*
     }
   }
   return -1;
+}
+
+// runs a plot script with the system python (it has python3-matplotlib; a python3 earlier on PATH,
+// pyenv's say, may not): `python script args`. False, with a line saying so, when it fails.
+inline bool run_plot_script(const char* bench, const std::string& script_and_args) {
+  const std::string python = std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  const std::string cmd = python + " " + script_and_args;
+  if (std::system(cmd.c_str()) == 0) return true;
+  std::printf("%s: plot skipped (%s failed)\n", bench, cmd.c_str());
+  return false;
 }
 
 }  // namespace pcisim::bench

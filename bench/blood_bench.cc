@@ -256,15 +256,7 @@ int run_bench(const std::vector<std::string>& args) {
     }
     f << "  ]\n}\n";
   }
-  if (o.plot) {
-    // the system python has python3-matplotlib; a python3 earlier on PATH (pyenv) may not
-    const std::string python = std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
-    const std::string cmd = fmt::format("{} docs/benchmarks/blood.py {}", python, o.out_dir);
-    if (std::system(cmd.c_str()) != 0) {
-      std::printf("blood: plot skipped (%s failed)\n", cmd.c_str());
-      o.plot = false;
-    }
-  }
+  if (o.plot) o.plot = run_plot_script("blood", "docs/benchmarks/blood.py " + o.out_dir);
   {
     std::ofstream f(o.out_dir + "/blood.md");
     f << "# Blood chain-mails: spacing and link radius against a reference\n\n";

@@ -265,16 +265,9 @@ int run_bench(const std::vector<std::string>& args) {
          "1 pass at 200 segments leaves nodes up to 0.7 mm outside (the passes, not the limits, bring it back).\n";
     f << "\nPlot: `guidewire.png` (tip error vs median ms per step), drawn by `scripts/plot_bench.py`.\n";
   }
-  if (o.plot) {
-    // the system python has python3-matplotlib; a python3 earlier on PATH (pyenv) may not
-    const std::string python = std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
-    const std::string cmd =
-        fmt::format("{} scripts/plot_bench.py {}/guidewire.json {}/guidewire.png", python, o.out_dir, o.out_dir);
-    if (std::system(cmd.c_str()) != 0) {
-      std::printf("guidewire: plot skipped (%s failed)\n", cmd.c_str());
-      o.plot = false;
-    }
-  }
+  if (o.plot)
+    o.plot = run_plot_script("guidewire",
+                             fmt::format("scripts/plot_bench.py {}/guidewire.json {}/guidewire.png", o.out_dir, o.out_dir));
   std::printf("guidewire: wrote %s/guidewire.md, .json%s\n", o.out_dir.c_str(), o.plot ? ", .png" : "");
   return 0;
 }

@@ -342,15 +342,7 @@ int run_bench(const std::vector<std::string>& args) {
          "ranking of settings is noise.\n";
     f << "\nPlot: `heart.png` (mean error vs median ms per step), drawn by `docs/benchmarks/heart.py`.\n";
   }
-  if (o.plot) {
-    // the system python has python3-matplotlib; a python3 earlier on PATH (pyenv) may not
-    const std::string python = std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
-    const std::string cmd = fmt::format("{} docs/benchmarks/heart.py {}", python, o.out_dir);
-    if (std::system(cmd.c_str()) != 0) {
-      std::printf("heart: plot skipped (%s failed)\n", cmd.c_str());
-      o.plot = false;
-    }
-  }
+  if (o.plot) o.plot = run_plot_script("heart", "docs/benchmarks/heart.py " + o.out_dir);
   std::printf("heart: substeps won %d of %zu equal-cost pairs; wrote %s/heart.md, .json%s\n", substeps_win, pairs.size(),
               o.out_dir.c_str(), o.plot ? ", .png" : "");
   return 0;

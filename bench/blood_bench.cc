@@ -112,13 +112,7 @@ struct SceneRun {
 };
 
 SceneRun run_scene(const BloodFlowParams& blood, std::shared_ptr<const LumenQuery> lumen) {
-  WorldSpec s;
-  s.step_s = kDtS;
-  s.heart_beat = HeartBeatParams{};
-  s.vessel_motion = VesselMotionParams{};
-  s.guidewire = GuidewireParams{};
-  s.vessel_contact = VesselContactParams{};
-  s.friction = FrictionParams{};
+  WorldSpec s = default_scene_spec();
   s.blood_flow = blood;
   World w(s, std::move(lumen));
   SceneRun r;

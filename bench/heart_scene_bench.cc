@@ -48,20 +48,6 @@ Stats stats(const std::vector<double>& v) {
   return {percentile(v, 0.5), percentile(v, 0.99), v.empty() ? 0.0 : *std::max_element(v.begin(), v.end())};
 }
 
-WorldSpec default_scene(bool beating) {
-  WorldSpec s;
-  s.step_s = kDtS;
-  if (beating) {
-    s.heart_beat = HeartBeatParams{};
-    s.vessel_motion = VesselMotionParams{};
-  }
-  s.guidewire = GuidewireParams{};
-  s.vessel_contact = VesselContactParams{};
-  s.friction = FrictionParams{};
-  s.blood_flow = BloodFlowParams{};
-  return s;
-}
-
 struct SceneRun {
   Stats step_ms;
   std::map<std::string, std::vector<double>> effect_ms;
@@ -71,7 +57,7 @@ SceneRun run_scene(bool beating, std::shared_ptr<const LumenQuery> lumen, int re
   SceneRun r;
   std::vector<double> steps;
   for (int rep = 0; rep < repeats; ++rep) {
-    World w(default_scene(beating), lumen);
+    World w(default_scene_spec(beating), lumen);
     for (double t = 0.0; t <= kSessionS; t += kDtS) {
       const auto t0 = Clock::now();
       w.step(session_at(t));
@@ -138,7 +124,7 @@ int run_bench(const std::vector<std::string>& args) {
   const std::vector<double> spacings_mm = quick ? std::vector<double>{0.5} : std::vector<double>{0.5, 0.2};
   std::map<double, std::vector<LumenRow>> by_spacing;
   {
-    World w(default_scene(true), sdf);
+    World w(default_scene_spec(), sdf);
     double t = 0.0;
     for (; t <= kSessionS; t += kDtS) w.step(session_at(t));  // the wire is in the LAD now
     const VesselSkin& skin = *w.vessel_skin();

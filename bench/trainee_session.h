@@ -1,10 +1,12 @@
 #pragma once
 // The built-in trainee's session (clients/bridge/trainee_script.cc) with the turn toward the LAD,
-// as instrument input over time: what the benchmarks drive the wire with.
+// as instrument input over time: what the benchmarks drive the wire with; and the default scene's
+// physics they drive it in.
 #include <algorithm>
 #include <numbers>
 
 #include "physics/instrument_input.h"
+#include "physics/world_spec.h"
 
 namespace pcisim::bench {
 
@@ -23,5 +25,21 @@ inline physics::InstrumentInput session_at(double t) {
 }
 
 inline constexpr double kSessionS = 19.5;
+
+// the default scene's physics (scenes/default.json's effects at their defaults) at 30 Hz; without
+// `beating` the same scene with heart_beat and vessel_motion left out
+inline physics::WorldSpec default_scene_spec(bool beating = true) {
+  physics::WorldSpec s;
+  s.step_s = 1.0 / 30.0;
+  if (beating) {
+    s.heart_beat = physics::HeartBeatParams{};
+    s.vessel_motion = physics::VesselMotionParams{};
+  }
+  s.guidewire = physics::GuidewireParams{};
+  s.vessel_contact = physics::VesselContactParams{};
+  s.friction = physics::FrictionParams{};
+  s.blood_flow = physics::BloodFlowParams{};
+  return s;
+}
 
 }  // namespace pcisim::bench

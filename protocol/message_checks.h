@@ -20,6 +20,10 @@ bool is_well_formed(const pcisim_lcm::wire_state_t& m);
 bool is_well_formed(const pcisim_lcm::sim_status_t& m);
 bool is_well_formed(const pcisim_lcm::xray_frame_t& m);
 
+// CMD_CONTRAST: the volume a command may name (0.5-30 ml); outside it, or 0, the scene's volume is
+// injected. One rule for the server, which injects, and the clients that count what was used.
+inline bool is_commanded_contrast_volume(double ml) { return ml >= 0.5 && ml <= 30.0; }  // false for NaN
+
 // decodes rbuf into out; false on a wrong fingerprint, truncation, trailing bytes or a bad field
 template <class Message>
 bool decode_checked(const lcm::ReceiveBuffer& rbuf, Message& out) {

@@ -121,8 +121,8 @@ void LcmIo::add_injection(double volume_ml, double rate_ml_per_s) {
   const int n = state_.injections.load(std::memory_order_relaxed);
   if (n >= SharedState::kMaxInjections) return;
   state_.injection_start_s[n] = state_.sim_time_s.load(std::memory_order_relaxed);
-  // a hand injection is 2-30 ml over 1-5 s; anything else falls back to the scene's
-  const bool volume_ok = std::isfinite(volume_ml) && volume_ml >= 0.5 && volume_ml <= 30.0;
+  // a volume the command may name, over 0.2-10 s; anything else falls back to the scene's
+  const bool volume_ok = protocol::is_commanded_contrast_volume(volume_ml);
   state_.injection_volume_ml[n] = volume_ok ? volume_ml : 0.0;
   const double duration_s = volume_ok && std::isfinite(rate_ml_per_s) && rate_ml_per_s > 0 ? volume_ml / rate_ml_per_s : 0.0;
   state_.injection_duration_s[n] = duration_s >= 0.2 && duration_s <= 10.0 ? duration_s : 0.0;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "protocol/message_checks.h"
+
 namespace pcisim::remote {
 
 using I = pcisim_lcm::instrument_state_t;
@@ -53,9 +55,8 @@ void SessionTracker::on_session(const pcisim_lcm::session_command_t& m, int64_t 
       }
       break;
     case C::CMD_CONTRAST:
-      // the server's rule: a command may name 0.5-30 ml, else the scene's volume
-      add_injection(std::isfinite(m.contrast_ml) && m.contrast_ml >= 0.5 && m.contrast_ml <= 30 ? m.contrast_ml
-                                                                                                  : options_.injection_ml);
+      // the server's rule: the volume the command names, else the scene's
+      add_injection(protocol::is_commanded_contrast_volume(m.contrast_ml) ? m.contrast_ml : options_.injection_ml);
       break;
     default: break;
   }

@@ -39,6 +39,12 @@ bool field(const char*& p, const char* end, int64_t& out) {
   return true;
 }
 
+// what an encoder can count (written out, not std::abs: there is no +INT64_MIN)
+bool counts_in_range(int64_t c) {
+  constexpr int64_t kMaxCounts = int64_t{1} << 40;
+  return c >= -kMaxCounts && c <= kMaxCounts;
+}
+
 }  // namespace
 
 // "E <insertion counts> <rotation counts> <buttons>" (docs/serial-protocol.md)
@@ -53,9 +59,7 @@ bool parse_encoder_line(const std::string& line, EncoderLine& out) {
   while (p < end && *p == ' ') ++p;
   if (p != end || buttons < 0 || buttons > 0xffff) return false;
   // counts beyond 2^40 come from no encoder (and would overflow the zero offset): malformed
-  constexpr int64_t kMaxCounts = int64_t{1} << 40;
-  auto counts_ok = [](int64_t c) { return c >= -kMaxCounts && c <= kMaxCounts; };  // no std::abs(INT64_MIN)
-  if (!counts_ok(out.insertion_counts) || !counts_ok(out.rotation_counts)) return false;
+  if (!counts_in_range(out.insertion_counts) || !counts_in_range(out.rotation_counts)) return false;
   out.buttons = static_cast<int32_t>(buttons);
   return true;
 }
@@ -66,8 +70,7 @@ void validate(const SerialCalibration& c) {
   };
   require(std::isfinite(c.mm_per_count) && c.mm_per_count != 0.0, "mm_per_count must be finite and non-zero");
   require(std::isfinite(c.rad_per_count) && c.rad_per_count != 0.0, "rad_per_count must be finite and non-zero");
-  require(c.insertion_zero_counts >= -(int64_t{1} << 40) && c.insertion_zero_counts <= (int64_t{1} << 40),
-          "insertion_zero_counts must be within +-2^40");
+  require(counts_in_range(c.insertion_zero_counts), "insertion_zero_counts must be within +-2^40");
   require(std::isfinite(c.min_insertion_mm) && std::isfinite(c.max_insertion_mm) && c.min_insertion_mm <= c.max_insertion_mm,
           fmt::format("insertion range [{}, {}] mm must be finite with min <= max", c.min_insertion_mm, c.max_insertion_mm));
   require(std::isfinite(c.silent_timeout_s) && c.silent_timeout_s > 0.0, "silent_timeout_s must be finite and > 0");

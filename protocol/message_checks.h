@@ -1,6 +1,7 @@
 #pragma once
 // Decoding that never trusts the sender: wrong fingerprint, truncated data and non-finite
 // fields all count as a bad message.
+#include <cstdint>
 #include <lcm/lcm-cpp.hpp>
 
 #include "pcisim_lcm/force_command_t.hpp"
@@ -24,11 +25,24 @@ bool is_well_formed(const pcisim_lcm::xray_frame_t& m);
 // injected. One rule for the server, which injects, and the clients that count what was used.
 inline bool is_commanded_contrast_volume(double ml) { return ml >= 0.5 && ml <= 30.0; }  // false for NaN
 
-// decodes rbuf into out; false on a wrong fingerprint, truncation, trailing bytes or a bad field
+// decodes data into out; false on a wrong fingerprint, truncation, trailing bytes, a bad length or
+// count, or a bad field. The one path every handler in every program decodes through: whatever
+// the generated decoder does with hostile bytes (cmake/harden_decoders.cmake bounds it before it
+// allocates), nothing it throws leaves here.
 template <class Message>
-bool decode_checked(const lcm::ReceiveBuffer& rbuf, Message& out) {
-  const int used = out.decode(rbuf.data, 0, static_cast<int>(rbuf.data_size));
-  return used >= 0 && static_cast<uint32_t>(used) == rbuf.data_size && is_well_formed(out);
+bool decode_checked(const void* data, int64_t size, Message& out) noexcept {
+  if (data == nullptr || size < 0 || size > INT32_MAX) return false;
+  try {
+    const int used = out.decode(data, 0, static_cast<int>(size));
+    return used >= 0 && used == size && is_well_formed(out);
+  } catch (...) {  // std::length_error, std::bad_alloc: a message, not the process, is lost
+    return false;
+  }
+}
+
+template <class Message>
+bool decode_checked(const lcm::ReceiveBuffer& rbuf, Message& out) noexcept {
+  return decode_checked(rbuf.data, static_cast<int64_t>(rbuf.data_size), out);
 }
 
 }  // namespace pcisim::protocol

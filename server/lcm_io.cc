@@ -11,13 +11,24 @@
 
 namespace pcisim::server {
 
-LcmIo::LcmIo(lcm::LCM& lcm, SharedState& state, StatusSource status, BranchNamer branch_name)
-    : lcm_(lcm), state_(state), status_(std::move(status)), branch_name_(std::move(branch_name)) {
-  lcm_.subscribe(protocol::kInstrumentChannel, &LcmIo::on_instrument, this);
-  lcm_.subscribe(protocol::kSessionChannel, &LcmIo::on_session, this);
+LcmIo::LcmIo(lcm::LCM& lcm, SharedState& state, SessionLimits& limits, double scene_injection_ml, StatusSource status,
+             BranchNamer branch_name)
+    : lcm_(lcm),
+      state_(state),
+      limits_(limits),
+      scene_injection_ml_(scene_injection_ml),
+      status_(std::move(status)),
+      branch_name_(std::move(branch_name)) {
+  subscriptions_ = {lcm_.subscribe(protocol::kInstrumentChannel, &LcmIo::on_instrument, this),
+                    lcm_.subscribe(protocol::kSessionChannel, &LcmIo::on_session, this)};
 }
 
-LcmIo::~LcmIo() { stop(); }
+// the lcm::LCM outlives this object (a scene reload builds a new server on it): our handlers go
+// with us, or the next server's messages reach a dead `this` as well
+LcmIo::~LcmIo() {
+  stop();
+  for (lcm::Subscription* s : subscriptions_) lcm_.unsubscribe(s);
+}
 
 void LcmIo::start() {
   running_ = true;
@@ -96,33 +107,75 @@ void LcmIo::on_session(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   switch (session_msg_.command) {
     case C::CMD_PAUSE: state_.paused = true; spdlog::info("session: paused"); break;
     case C::CMD_RESUME: state_.paused = false; spdlog::info("session: resumed"); break;
-    case C::CMD_RESET: state_.reset_requested = true; spdlog::info("session: reset"); break;
-    case C::CMD_LOAD_SCENE: request_scene(session_msg_.scene_path); break;
+    case C::CMD_RESET:
+      if (!limits_.allow_reset(monotonic_ns())) {
+        refuse("reset", fmt::format("within {} s of the last one", limits_.params().min_reset_interval_s));
+        break;
+      }
+      state_.reset_requested = true;
+      spdlog::info("session: reset");
+      break;
+    case C::CMD_LOAD_SCENE:
+      if (!limits_.allow_scene_load(monotonic_ns())) {
+        refuse("scene load", fmt::format("within {} s of the last one", limits_.params().min_scene_load_interval_s));
+        break;
+      }
+      request_scene(session_msg_.scene_path);
+      break;
     case C::CMD_FLUORO_PEDAL: state_.fluoro_pedal_console = session_msg_.pedal_down != 0; break;
     case C::CMD_CINE: state_.cine_console = session_msg_.pedal_down != 0; break;
     case C::CMD_CARM:
       if (std::abs(session_msg_.primary_angle_deg) > 180 || std::abs(session_msg_.secondary_angle_deg) > 90) {
-        spdlog::warn("session: C-arm angles out of range ({}, {}), ignored", session_msg_.primary_angle_deg,
-                     session_msg_.secondary_angle_deg);
+        refuse("C-arm move", fmt::format("angles ({}, {}) out of range", session_msg_.primary_angle_deg,
+                                         session_msg_.secondary_angle_deg));
         break;
       }
-      state_.carm_primary_deg = session_msg_.primary_angle_deg;
-      state_.carm_secondary_deg = session_msg_.secondary_angle_deg;
-      state_.carm_changed = true;
+      // the newest target; the x-ray thread moves there when the last move's interval is over
+      state_.carm_target_seq.fetch_add(1, std::memory_order_acq_rel);  // odd: writing
+      state_.carm_target_primary_deg = session_msg_.primary_angle_deg;
+      state_.carm_target_secondary_deg = session_msg_.secondary_angle_deg;
+      state_.carm_target_seq.fetch_add(1, std::memory_order_acq_rel);  // even: whole
+      state_.carm_requests.fetch_add(1, std::memory_order_relaxed);
       break;
     case C::CMD_CONTRAST: add_injection(session_msg_.contrast_ml, session_msg_.contrast_ml_s); break;
     default:
-      spdlog::warn("session: unknown command {}", static_cast<int>(session_msg_.command));
+      refuse("command", fmt::format("unknown command {}", static_cast<int>(session_msg_.command)));
   }
+}
+
+void LcmIo::refuse(const char* what, const std::string& why) {
+  const int64_t now = monotonic_ns();
+  if (now - last_refusal_log_ns_ < 1'000'000'000) {
+    ++refusals_unlogged_;
+    return;
+  }
+  if (refusals_unlogged_ > 0)
+    spdlog::warn("session: {} refused: {} ({} more refusals in the last second, not logged)", what, why,
+                 refusals_unlogged_);
+  else
+    spdlog::warn("session: {} refused: {}", what, why);
+  last_refusal_log_ns_ = now;
+  refusals_unlogged_ = 0;
 }
 
 // single writer (this thread): the entry is written before the count that publishes it
 void LcmIo::add_injection(double volume_ml, double rate_ml_per_s) {
   const int n = state_.injections.load(std::memory_order_relaxed);
-  if (n >= SharedState::kMaxInjections) return;
-  state_.injection_start_s[n] = state_.sim_time_s.load(std::memory_order_relaxed);
   // a volume the command may name, over 0.2-10 s; anything else falls back to the scene's
   const bool volume_ok = protocol::is_commanded_contrast_volume(volume_ml);
+  const double injected_ml = volume_ok ? volume_ml : scene_injection_ml_;
+  if (n >= SharedState::kMaxInjections) {
+    limits_.count_injection_refused();
+    refuse("contrast", fmt::format("this pipeline's {} injections are used up", SharedState::kMaxInjections));
+    return;
+  }
+  if (!limits_.allow_injection(monotonic_ns(), injected_ml)) {
+    refuse("contrast", fmt::format("{} ml over the limits ({} per minute, {} ml per session; {:.1f} ml used)",
+                                   injected_ml, limits_.params().max_injections_per_min,
+                                   limits_.params().max_contrast_ml, limits_.contrast_ml()));
+    return;
+  }
+  state_.injection_start_s[n] = state_.sim_time_s.load(std::memory_order_relaxed);
   state_.injection_volume_ml[n] = volume_ok ? volume_ml : 0.0;
   const double duration_s = volume_ok && std::isfinite(rate_ml_per_s) && rate_ml_per_s > 0 ? volume_ml / rate_ml_per_s : 0.0;
   state_.injection_duration_s[n] = duration_s >= 0.2 && duration_s <= 10.0 ? duration_s : 0.0;
@@ -136,9 +189,11 @@ void LcmIo::request_scene(const std::string& path) {
     std::lock_guard lock(state_.scene_mutex);
     state_.requested_scene = std::move(scene);
     state_.scene_requested = true;
+    limits_.book_scene_load(monotonic_ns());
     spdlog::info("session: scene {} accepted, restarting the pipeline", path);
   } catch (const std::exception& e) {  // SceneError, or anything else a path can provoke
     state_.scene_rejected.fetch_add(1);
+    limits_.count_scene_rejected();
     spdlog::error("session: refused scene: {}", e.what());
   }
 }

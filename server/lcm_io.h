@@ -2,6 +2,7 @@
 // LCM I/O for the control instance: a receive thread (lcm handle is single-threaded) and a send
 // thread that drains the haptic ring and the physics snapshots. Bad messages are counted and
 // dropped; nothing here can stall the 1 kHz loop.
+#include <array>
 #include <functional>
 #include <lcm/lcm-cpp.hpp>
 #include <thread>
@@ -11,6 +12,7 @@
 #include "pcisim_lcm/session_command_t.hpp"
 #include "pcisim_lcm/sim_status_t.hpp"
 #include "pcisim_lcm/wire_state_t.hpp"
+#include "server/session_limits.h"
 #include "server/shared_state.h"
 
 namespace pcisim::server {
@@ -20,8 +22,10 @@ class LcmIo {
   using StatusSource = std::function<pcisim_lcm::sim_status_t()>;
   using BranchNamer = std::function<std::string(int)>;
 
-  // `lcm` must outlive this object; status() is called once a second from the send thread
-  LcmIo(lcm::LCM& lcm, SharedState& state, StatusSource status, BranchNamer branch_name);
+  // `lcm` and `limits` must outlive this object; status() is called once a second from the send
+  // thread. `scene_injection_ml` is what an injection that names no volume injects.
+  LcmIo(lcm::LCM& lcm, SharedState& state, SessionLimits& limits, double scene_injection_ml, StatusSource status,
+        BranchNamer branch_name);
   ~LcmIo();
 
   void start();
@@ -34,14 +38,18 @@ class LcmIo {
   void request_scene(const std::string& path);
   // volume and rate 0: the scene's; a console command may name its own
   void add_injection(double volume_ml = 0.0, double rate_ml_per_s = 0.0);
+  void refuse(const char* what, const std::string& why);
   void rx_loop();
   void tx_loop();
   void publish_wire(const physics::WorldSnapshot& s);
 
   lcm::LCM& lcm_;
   SharedState& state_;
+  SessionLimits& limits_;
+  double scene_injection_ml_;
   StatusSource status_;
   BranchNamer branch_name_;
+  std::array<lcm::Subscription*, 2> subscriptions_{};
   std::thread rx_, tx_;
   std::atomic<bool> running_{false};
   // messages reused every time (lcm::LCM::publish still allocates its encode buffer per call; this
@@ -52,6 +60,8 @@ class LcmIo {
   pcisim_lcm::wire_state_t wire_msg_{};
   int64_t last_instrument_seq_ = -1;
   int64_t status_seq_ = 0;
+  // refusals are logged at most once a second (a flood must not flood the log); the rest counted
+  int64_t last_refusal_log_ns_ = INT64_MIN / 2, refusals_unlogged_ = 0;
 };
 
 }  // namespace pcisim::server

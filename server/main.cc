@@ -4,6 +4,8 @@
 #include <csignal>
 #include <fstream>
 #include <iostream>
+#include <memory>
+#include <optional>
 #include <spdlog/spdlog.h>
 
 #include "server/scene/json_reader.h"
@@ -90,16 +92,31 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, on_signal);
   // a scene loaded over LCM restarts the pipeline with it; --duration counts the running time of
   // the whole session, not the time spent building scenes
+  // the session's command bounds outlive each pipeline; a requested scene that parses but cannot
+  // be built is refused and the scene that ran before runs again
+  SessionLimits limits;
+  std::optional<Scene> fallback;  // the last scene that was built
   try {
     double ran_s = 0;  // running time of the pipelines so far (scene builds do not count)
     for (;;) {
       if (scene.xray && !images) images = std::make_unique<lcm::LCM>(image_url);
-      Server server(scene, lcm, images.get());
-      server.cpu_latency_us = cpu_latency_us;
+      std::unique_ptr<Server> server;
+      try {
+        server = std::make_unique<Server>(scene, lcm, images.get(), &limits);
+      } catch (const std::exception& e) {
+        if (!fallback) throw;  // the scene given on the command line: nothing to go back to
+        limits.count_scene_rejected();
+        spdlog::error("session: refused scene {}: it cannot be built: {}; back to {}", scene.source, e.what(),
+                      fallback->source);
+        scene = *fallback;
+        continue;
+      }
+      fallback = scene;
+      server->cpu_latency_us = cpu_latency_us;
       const double left_s = duration_s > 0 ? std::max(duration_s - ran_s, 1e-3) : 0.0;
-      const StatsReport stats = server.run(left_s, g_stop);
+      const StatsReport stats = server->run(left_s, g_stop);
       ran_s += stats.elapsed_s;
-      if (auto next = server.take_requested_scene(); next && !g_stop) {
+      if (auto next = server->take_requested_scene(); next && !g_stop) {
         scene = std::move(*next);
         continue;
       }

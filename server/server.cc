@@ -21,6 +21,8 @@ struct Server::Impl {
   Scene scene;
   lcm::LCM& lcm;
   lcm::LCM* images;
+  SessionLimits own_limits;
+  SessionLimits* limits;
   SharedState state;
   std::unique_ptr<PhysicsLoop> physics;
   std::unique_ptr<XrayLoop> xray;  // only when the scene lists xray
@@ -29,7 +31,10 @@ struct Server::Impl {
   // status rates are over the last second, not since start
   int64_t last_status_ns = 0, last_haptic_ticks = 0, last_physics_steps = 0;
 
-  Impl(const Scene& s, lcm::LCM& l, lcm::LCM* i) : scene(s), lcm(l), images(i) {}
+  Impl(const Scene& s, lcm::LCM& l, lcm::LCM* i, SessionLimits* lim)
+      : scene(s), lcm(l), images(i), limits(lim ? lim : &own_limits) {
+    limits->configure(scene.session);
+  }
 
   StatsReport stats(double elapsed_s) {
     StatsReport r = collect_stats(state, *physics, elapsed_s, haptic_fifo);
@@ -57,20 +62,23 @@ struct Server::Impl {
     m.fluoro_on = state.fluoro_pedal_console || state.instrument_pedal_down(state.fluoro_pedal_instrument, now) ? 1 : 0;
     m.cine_on = state.cine_console || state.instrument_pedal_down(state.cine_instrument, now) ? 1 : 0;
     m.fluoro_time_s = state.xray_on_ns.load() * 1e-9;
-    m.carm_primary_deg = state.carm_primary_deg.load();
-    m.carm_secondary_deg = state.carm_secondary_deg.load();
-    m.contrast_injections = state.injections.load(std::memory_order_acquire);
-    m.contrast_ml = 0.0;
-    for (int k = 0; k < m.contrast_injections && scene.xray; ++k) {
-      const double v = state.injection_volume_ml[k];
-      m.contrast_ml += v > 0 ? v : scene.xray->injection_volume_ml;
-    }
+    // the pose the beam shows (with no x-ray, the last target)
+    m.carm_primary_deg = xray ? state.carm_primary_deg.load() : state.carm_target_primary_deg.load();
+    m.carm_secondary_deg = xray ? state.carm_secondary_deg.load() : state.carm_target_secondary_deg.load();
+    // the session's figures and refusals, across scene reloads
+    m.contrast_injections = static_cast<int32_t>(limits->injections());
+    m.contrast_ml = limits->contrast_ml();
+    m.resets_refused = limits->resets_refused();
+    m.scene_loads_refused = limits->scene_loads_refused();
+    m.scenes_rejected = limits->scenes_rejected();
+    m.injections_refused = limits->injections_refused();
+    m.carm_moves_coalesced = xray ? state.carm_requests.load() - state.carm_moves.load() : 0;
     return m;
   }
 };
 
-Server::Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images)
-    : impl_(std::make_unique<Impl>(scene, control, images)) {
+Server::Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images, SessionLimits* limits)
+    : impl_(std::make_unique<Impl>(scene, control, images, limits)) {
   spdlog::info("scene '{}' ({}): effects [{}], physics {} Hz", scene.name, scene.source,
                fmt::format("{}", fmt::join(scene.effects, ", ")), scene.physics_rate_hz);
   const int64_t t0 = monotonic_ns();
@@ -98,7 +106,8 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   Impl& m = *impl_;
   const bool locked = try_mlockall();
   const CpuLatencyRequest latency(cpu_latency_us);
-  LcmIo io(m.lcm, m.state, [&m] { return m.status(); }, branch_namer);
+  LcmIo io(m.lcm, m.state, *m.limits, m.scene.xray ? m.scene.xray->injection_volume_ml : 0.0, [&m] { return m.status(); },
+           branch_namer);
 
   m.start_ns = m.last_status_ns = monotonic_ns();
   io.start();

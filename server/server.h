@@ -9,6 +9,7 @@
 #include <string>
 
 #include "server/scene/scene.h"
+#include "server/session_limits.h"
 #include "server/stats.h"
 
 namespace pcisim::server {
@@ -18,7 +19,9 @@ class Server {
   // builds the scene's world and, when the scene lists xray, the fluoroscopy renderer (may take
   // seconds) before any thread starts. Frames go out on `images` (their own LCM instance); with
   // no images instance they are rendered and counted but not sent.
-  Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images = nullptr);
+  // `limits` carries the session's command bounds across scene reloads (owned by the caller, who
+  // runs one server after another); without it the server keeps its own.
+  Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images = nullptr, SessionLimits* limits = nullptr);
   ~Server();
 
   // runs until duration_s elapses (0 = no limit) or *stop becomes true; on the way out it stops

@@ -90,8 +90,13 @@ struct SharedState {
            now_ns - instrument_heard_ns.load(std::memory_order_relaxed) <= kInstrumentPedalTimeoutNs;
   }
   std::atomic<bool> fluoro_pedal_console{false}, cine_console{false};
-  std::atomic<double> carm_primary_deg{0}, carm_secondary_deg{0};
-  std::atomic<bool> carm_changed{false};
+  // the C-arm: lcm rx writes the newest target (a sequence count, odd while it writes, lets the
+  // x-ray thread see the two angles whole); the x-ray thread applies it at most once per
+  // min_carm_move_interval_s, newest target winning, and publishes the pose it applied
+  std::atomic<int64_t> carm_target_seq{0};
+  std::atomic<double> carm_target_primary_deg{0}, carm_target_secondary_deg{0};
+  std::atomic<double> carm_primary_deg{0}, carm_secondary_deg{0};  // applied
+  std::atomic<int64_t> carm_requests{0}, carm_moves{0};
   static constexpr int kMaxInjections = 256;
   std::array<double, kMaxInjections> injection_start_s{};  // sim time of each contrast injection
   // each injection's volume and duration; 0: the scene's contrast.injection_ml / injection_s

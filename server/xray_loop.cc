@@ -16,14 +16,30 @@ XrayLoop::XrayLoop(const Scene& scene, SharedState& state, lcm::LCM* images)
   const physics::VesselTree tree = physics::make_coronary_phantom({scene.world.anatomy.seed});
   renderer_ = std::make_unique<xray::FluoroscopyRenderer>(tree, spec_.fluoro);
   injections_.reserve(SharedState::kMaxInjections);
-  state_.carm_primary_deg = spec_.initial_pose.primary_deg;
-  state_.carm_secondary_deg = spec_.initial_pose.secondary_deg;
+  state_.carm_primary_deg = state_.carm_target_primary_deg = spec_.initial_pose.primary_deg;
+  state_.carm_secondary_deg = state_.carm_target_secondary_deg = spec_.initial_pose.secondary_deg;
+  min_move_interval_ns_ = static_cast<int64_t>(scene.session.min_carm_move_interval_s * 1e9);
   state_.xray_enabled = true;
   // one frame now: projects the background for the initial pose and sizes every buffer, so the
   // first press of the pedal gets frames at once
   xray::FluoroInput warm_up;
   warm_up.pose = spec_.initial_pose;
   renderer_->render(warm_up, frame_);
+}
+
+// a move re-projects the whole background (a fraction of a second of CPU): a flood of targets
+// moves the C-arm at most once per interval, to the newest target; the rest are coalesced
+void XrayLoop::apply_carm_target() {
+  const int64_t seq = state_.carm_target_seq.load(std::memory_order_acquire);
+  const int64_t now_ns = monotonic_ns();
+  if ((seq & 1) != 0 || seq == applied_target_seq_ || now_ns - last_move_ns_ < min_move_interval_ns_) return;
+  const double primary = state_.carm_target_primary_deg.load(), secondary = state_.carm_target_secondary_deg.load();
+  if (state_.carm_target_seq.load(std::memory_order_acquire) != seq) return;  // torn: the next frame retries
+  applied_target_seq_ = seq;
+  last_move_ns_ = now_ns;
+  state_.carm_primary_deg = primary;
+  state_.carm_secondary_deg = secondary;
+  state_.carm_moves.fetch_add(1, std::memory_order_relaxed);
 }
 
 void XrayLoop::render_and_publish(bool cine) {
@@ -39,6 +55,7 @@ void XrayLoop::render_and_publish(bool cine) {
     inj.volume_ml = state_.injection_volume_ml[k] > 0 ? state_.injection_volume_ml[k] : spec_.injection_volume_ml;
     injections_.push_back(inj);
   }
+  apply_carm_target();
   xray::FluoroInput in;
   in.time_s = snap.time_s;
   in.pose = spec_.initial_pose;

@@ -21,6 +21,7 @@ class XrayLoop {
 
  private:
   void render_and_publish(bool cine);
+  void apply_carm_target();
 
   XraySpec spec_;
   SharedState& state_;
@@ -31,6 +32,7 @@ class XrayLoop {
   pcisim_lcm::xray_frame_t msg_{};
   std::vector<std::string> branch_names_;
   int64_t seq_ = 0;
+  int64_t applied_target_seq_ = 0, last_move_ns_ = INT64_MIN / 2, min_move_interval_ns_ = 0;
   int32_t cine_run_ = -1;
   bool was_cine_ = false;
 };

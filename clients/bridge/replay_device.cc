@@ -18,7 +18,7 @@ ReplayDevice::ReplayDevice(const std::string& log_path, double speed, const std:
   pcisim_lcm::instrument_state_t m;
   while (const lcm::LogEvent* e = log.readNextEvent()) {
     if (e->channel != channel) continue;
-    if (m.decode(e->data, 0, e->datalen) != e->datalen || !protocol::is_well_formed(m)) {
+    if (!protocol::decode_checked(e->data, e->datalen, m)) {
       ++skipped_bad_;
       continue;
     }

@@ -1,12 +1,14 @@
 #pragma once
 // A scene: anatomy, instrument limits and the list of effects with their parameters.
 // The server builds exactly the listed effects.
+#include <cstdint>
 #include <string>
 #include <vector>
 
 #include <optional>
 
 #include "haptics/haptic_params.h"
+#include "server/session_limits.h"
 #include "physics/world_spec.h"
 #include "xray/fluoro/fluoroscopy.h"
 
@@ -29,6 +31,7 @@ struct Scene {
   physics::WorldSpec world;
   haptics::HapticParams haptics;
   std::optional<XraySpec> xray;       // present when the scene lists "xray"
+  SessionLimitParams session;         // bounds on console commands
   std::vector<std::string> effects;   // the listed effects, in step order
 };
 
@@ -37,6 +40,8 @@ const std::vector<std::string>& known_effects();
 
 // parse a scene; throws SceneError "<source>: <json path>: <what was expected>"
 Scene parse_scene(const std::string& text, const std::string& source);
+// refuses a file over kMaxSceneFileBytes before reading it
+inline constexpr std::uintmax_t kMaxSceneFileBytes = 1 << 20;
 Scene load_scene_file(const std::string& path);
 
 // the built-in scene (the text of scenes/default.json, embedded at build time)

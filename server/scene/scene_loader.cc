@@ -164,6 +164,18 @@ XraySpec read_xray(JsonReader r) {
   return x;
 }
 
+// the cath lab's bounds on console commands (server/session_limits.h)
+SessionLimitParams read_session(JsonReader r) {
+  SessionLimitParams p;
+  p.min_reset_interval_s = r.number("min_reset_interval_s", p.min_reset_interval_s, 0, 600);
+  p.min_scene_load_interval_s = r.number("min_scene_load_interval_s", p.min_scene_load_interval_s, 0, 600);
+  p.max_injections_per_min = static_cast<int>(r.integer("max_injections_per_min", p.max_injections_per_min, 1, 60));
+  p.max_contrast_ml = r.number("max_contrast_ml", p.max_contrast_ml, 1, 2000);
+  p.min_carm_move_interval_s = r.number("min_carm_move_interval_s", p.min_carm_move_interval_s, 0, 60);
+  r.finish();
+  return p;
+}
+
 void read_contrast(JsonReader r, XraySpec& x) {
   x.contrast = true;
   x.fluoro.iodine_mu_per_mm = r.number("iodine_mu_per_mm", x.fluoro.iodine_mu_per_mm, 0, 2);
@@ -198,6 +210,7 @@ Scene parse(const nlohmann::json& doc, const std::string& source) {
   anatomy.finish();
 
   s.haptics = read_haptics(top.child("haptics"));
+  s.session = read_session(top.child("session"));
 
   if (!doc.contains("effects")) top.fail("effects", "expected an object listing the effects to simulate");
   JsonReader effects = top.child("effects");
@@ -259,6 +272,11 @@ Scene load_scene_file(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec) || ec)
     throw SceneError(fmt::format("{}: cannot read the scene file (missing or not a file)", path));
+  // a scene is a page of JSON; a huge file would hold the LCM thread and its memory for seconds
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec || size > kMaxSceneFileBytes)
+    throw SceneError(fmt::format("{}: scene file of {} bytes is over the {} byte limit", path, ec ? 0 : size,
+                                 kMaxSceneFileBytes));
   std::ifstream in(path);
   if (!in) throw SceneError(fmt::format("{}: cannot read the scene file (missing or not a file)", path));
   std::stringstream text;

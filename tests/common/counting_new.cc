@@ -6,10 +6,15 @@
 namespace {
 thread_local bool g_counting = false;
 thread_local long g_allocations = 0;
+thread_local long long g_bytes = 0, g_largest = 0;
 }  // namespace
 
 void* operator new(std::size_t n) {
-  if (g_counting) ++g_allocations;
+  if (g_counting) {
+    ++g_allocations;
+    g_bytes += static_cast<long long>(n);
+    if (static_cast<long long>(n) > g_largest) g_largest = static_cast<long long>(n);
+  }
   if (void* p = std::malloc(n ? n : 1)) return p;
   throw std::bad_alloc();
 }
@@ -23,9 +28,12 @@ namespace pcisim::testing {
 
 AllocationCount::AllocationCount() {
   g_allocations = 0;
+  g_bytes = g_largest = 0;
   g_counting = true;
 }
 AllocationCount::~AllocationCount() { g_counting = false; }
 long AllocationCount::allocations() const { return g_allocations; }
+long long AllocationCount::bytes() const { return g_bytes; }
+long long AllocationCount::largest() const { return g_largest; }
 
 }  // namespace pcisim::testing

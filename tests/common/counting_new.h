@@ -1,5 +1,5 @@
 #pragma once
-// Counts heap allocations made by the calling thread, to prove a hot loop allocates nothing.
+// Counts heap allocations (and their bytes) made by the calling thread, to prove a hot loop allocates nothing.
 // Linking tests/common/counting_new.cc into a test binary replaces global operator new there;
 // counting is off until a scope asks for it.
 namespace pcisim::testing {
@@ -9,6 +9,8 @@ class AllocationCount {
   AllocationCount();   // starts counting this thread's allocations
   ~AllocationCount();  // stops
   long allocations() const;
+  long long bytes() const;    // asked for in all
+  long long largest() const;  // the biggest single request
 };
 
 }  // namespace pcisim::testing

@@ -54,6 +54,7 @@ class LcmIoTest : public ::testing::Test {
  protected:
   lcm::LCM lcm{"memq://"};
   SharedState state;
+  SessionLimits limits;
   Listener listener;
   std::unique_ptr<LcmIo> io;
 
@@ -63,7 +64,7 @@ class LcmIoTest : public ::testing::Test {
     lcm.subscribe(protocol::kWireChannel, &Listener::on_wire, &listener);
     lcm.subscribe(protocol::kStatusChannel, &Listener::on_status, &listener);
     io = std::make_unique<LcmIo>(
-        lcm, state, [] { return pcisim_lcm::sim_status_t{}; },
+        lcm, state, limits, 8.0, [] { return pcisim_lcm::sim_status_t{}; },
         [](int b) { return b == 2 ? std::string("LAD") : std::string(); });
     io->start();
   }

@@ -1,0 +1,52 @@
+// Hostile bytes against the one decode path: every malformed shape of every message type is
+// refused, nothing escapes as an exception, and no length or count makes the decoder allocate
+// what the sender claims (lcm-gen's decoders resized first; cmake/harden_decoders.cmake).
+#include <gtest/gtest.h>
+
+#include "protocol/message_checks.h"
+#include "tests/common/counting_new.h"
+#include "tests/common/malformed_lcm.h"
+
+namespace pcisim::protocol {
+namespace {
+
+using testing::MessageCase;
+
+template <class M>
+void expect_refused(const MessageCase& c) {
+  M out;
+  ASSERT_TRUE(decode_checked(c.good.data(), static_cast<int64_t>(c.good.size()), out)) << c.type << ": the good one";
+  ASSERT_GT(c.mutants.size(), c.good.size()) << c.type;
+  for (const auto& m : c.mutants) {
+    M fresh;
+    pcisim::testing::AllocationCount alloc;
+    bool ok = true;
+    EXPECT_NO_THROW(ok = decode_checked(m.bytes.data(), static_cast<int64_t>(m.bytes.size()), fresh)) << c.type << ": " << m.what;
+    EXPECT_FALSE(ok) << c.type << ": " << m.what;
+    // a count the buffer cannot hold is refused before anything is sized by it
+    EXPECT_LT(alloc.largest(), 64 * 1024) << c.type << ": " << m.what;
+  }
+}
+
+TEST(HostileDecode, InstrumentState) { expect_refused<pcisim_lcm::instrument_state_t>(testing::instrument_case()); }
+TEST(HostileDecode, ForceCommand) { expect_refused<pcisim_lcm::force_command_t>(testing::force_case()); }
+TEST(HostileDecode, SessionCommand) { expect_refused<pcisim_lcm::session_command_t>(testing::session_case()); }
+TEST(HostileDecode, SimStatus) { expect_refused<pcisim_lcm::sim_status_t>(testing::status_case()); }
+TEST(HostileDecode, WireState) { expect_refused<pcisim_lcm::wire_state_t>(testing::wire_case()); }
+TEST(HostileDecode, XrayFrame) { expect_refused<pcisim_lcm::xray_frame_t>(testing::xray_case()); }
+
+// the finding itself: a 66-byte session command whose scene_path length is 0 (it threw
+// std::length_error out of the handler and ended the server)
+TEST(HostileDecode, SessionCommandWithZeroLengthPathIsRefused) {
+  pcisim_lcm::session_command_t m{};
+  m.scene_path = "";
+  auto bytes = testing::encode(m);
+  const size_t len_at = 8 + 8 + 8 + 1;  // fingerprint, utime, seq, command
+  ASSERT_EQ(bytes[len_at + 3], 1);      // the encoder wrote 1 (just the NUL)
+  bytes[len_at + 3] = 0;
+  pcisim_lcm::session_command_t out;
+  EXPECT_FALSE(decode_checked(bytes.data(), static_cast<int64_t>(bytes.size()), out));
+}
+
+}  // namespace
+}  // namespace pcisim::protocol

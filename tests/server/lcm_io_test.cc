@@ -10,6 +10,7 @@
 #include "protocol/channels.h"
 #include "protocol/message_checks.h"
 #include "server/realtime/clock.h"
+#include "tests/common/malformed_lcm.h"
 
 namespace pcisim::server {
 namespace {
@@ -149,6 +150,132 @@ TEST_F(LcmIoTest, StopPublishesAZeroForceLast) {
   EXPECT_EQ(listener.forces.back().seq, -1);
   EXPECT_EQ(listener.forces.back().axial_force_n, 0.0);
   EXPECT_EQ(listener.forces.back().torque_nmm, 0.0);
+}
+
+}  // namespace
+}  // namespace pcisim::server
+
+namespace pcisim::server {
+namespace {
+
+template <class M>
+void publish_raw(lcm::LCM& lcm, const char* channel, const std::vector<uint8_t>& bytes) {
+  lcm.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+}
+
+// every malformed shape on both channels the server listens on: each counted as bad, none
+// delivered, nothing thrown out of the handler; a good command after the flood still works
+TEST_F(LcmIoTest, EveryMalformedShapeOnEveryChannelIsCountedAndTheServerGoesOn) {
+  const auto instrument = testing::instrument_case();
+  const auto session = testing::session_case();
+  int64_t sent = 0;
+  for (const auto& m : instrument.mutants) publish_raw<int>(lcm, protocol::kInstrumentChannel, m.bytes), ++sent;
+  for (const auto& m : session.mutants) publish_raw<int>(lcm, protocol::kSessionChannel, m.bytes), ++sent;
+  ASSERT_TRUE(wait_for([&] { return state.lcm_rx.load() >= sent; }, 10s));
+  EXPECT_EQ(state.lcm_dropped_bad.load(), sent);
+  EXPECT_FALSE(state.instrument_for_haptics.refresh()) << "a malformed sample reached the haptic loop";
+  EXPECT_FALSE(state.paused.load());
+
+  pcisim_lcm::session_command_t pause{};
+  pause.command = pcisim_lcm::session_command_t::CMD_PAUSE;
+  lcm.publish(protocol::kSessionChannel, &pause);
+  EXPECT_TRUE(wait_for([&] { return state.paused.load(); }));
+}
+
+// a scene reload builds a new server on the same lcm::LCM: the old handlers must go with the old
+// LcmIo, or every message is handled once per server that ever ran (and by a dead `this`)
+TEST_F(LcmIoTest, ASecondLcmIoOnTheSameLcmHandlesEachMessageOnce) {
+  io.reset();
+  SharedState second;
+  auto next = std::make_unique<LcmIo>(lcm, second, limits, 8.0, [] { return pcisim_lcm::sim_status_t{}; }, nullptr);
+  next->start();
+  pcisim_lcm::session_command_t contrast{};
+  contrast.command = pcisim_lcm::session_command_t::CMD_CONTRAST;
+  lcm.publish(protocol::kSessionChannel, &contrast);
+  ASSERT_TRUE(wait_for([&] { return second.lcm_rx.load() >= 1; }));
+  std::this_thread::sleep_for(50ms);  // time for a second delivery, if there were one
+  EXPECT_EQ(second.lcm_rx.load(), 1);
+  EXPECT_EQ(second.injections.load(), 1);
+  EXPECT_EQ(limits.injections(), 1);
+  EXPECT_EQ(state.lcm_rx.load(), 0) << "the first LcmIo still heard the bus";
+  next.reset();
+}
+
+pcisim_lcm::session_command_t command(int8_t c) {
+  pcisim_lcm::session_command_t m{};
+  m.command = c;
+  return m;
+}
+
+// resets: one per min_reset_interval_s; the rest refused and counted
+TEST_F(LcmIoTest, ResetsAreRateLimited) {
+  const auto reset = command(pcisim_lcm::session_command_t::CMD_RESET);
+  for (int i = 0; i < 5; ++i) lcm.publish(protocol::kSessionChannel, &reset);
+  ASSERT_TRUE(wait_for([&] { return state.lcm_rx.load() >= 5; }));
+  EXPECT_TRUE(state.reset_requested.load());
+  EXPECT_EQ(limits.resets_refused(), 4);
+}
+
+// contrast: at most max_injections_per_min in any minute, and max_contrast_ml in the session
+TEST_F(LcmIoTest, ContrastIsBoundedPerMinuteAndPerSession) {
+  const auto contrast = command(pcisim_lcm::session_command_t::CMD_CONTRAST);
+  for (int i = 0; i < 10; ++i) lcm.publish(protocol::kSessionChannel, &contrast);
+  ASSERT_TRUE(wait_for([&] { return state.lcm_rx.load() >= 10; }));
+  const int per_min = SessionLimitParams{}.max_injections_per_min;
+  EXPECT_EQ(state.injections.load(), per_min);
+  EXPECT_EQ(limits.injections_refused(), 10 - per_min);
+  EXPECT_DOUBLE_EQ(limits.contrast_ml(), per_min * 8.0);
+}
+
+TEST(SessionLimits, TheMinuteWindowAndTheSessionTotal) {
+  SessionLimits l;
+  SessionLimitParams p;
+  p.max_injections_per_min = 2;
+  p.max_contrast_ml = 25;
+  l.configure(p);
+  const int64_t s = 1'000'000'000;
+  EXPECT_TRUE(l.allow_injection(0, 8));
+  EXPECT_TRUE(l.allow_injection(10 * s, 8));
+  EXPECT_FALSE(l.allow_injection(59 * s, 8)) << "a third within the first's minute";
+  EXPECT_TRUE(l.allow_injection(60 * s, 8)) << "the first is a minute old";
+  EXPECT_FALSE(l.allow_injection(200 * s, 8)) << "32 ml would pass the session's 25";
+  EXPECT_TRUE(l.allow_injection(200 * s, 1));
+  EXPECT_FALSE(l.allow_injection(300 * s, std::numeric_limits<double>::quiet_NaN()));
+  EXPECT_EQ(l.injections(), 4);
+  EXPECT_EQ(l.injections_refused(), 3);
+  EXPECT_DOUBLE_EQ(l.contrast_ml(), 25.0);
+  // the limits of a new scene apply to the same history
+  p.max_contrast_ml = 100;
+  l.configure(p);
+  EXPECT_TRUE(l.allow_injection(400 * s, 8));
+  EXPECT_DOUBLE_EQ(l.contrast_ml(), 33.0);
+}
+
+TEST(SessionLimits, ScenesLoadOncePerIntervalCountingOnlyAcceptedOnes) {
+  SessionLimits l;
+  const int64_t s = 1'000'000'000;
+  EXPECT_TRUE(l.allow_scene_load(0));
+  EXPECT_TRUE(l.allow_scene_load(1 * s)) << "nothing was accepted yet";
+  l.book_scene_load(1 * s);
+  EXPECT_FALSE(l.allow_scene_load(5 * s));
+  EXPECT_TRUE(l.allow_scene_load(11 * s));
+  EXPECT_EQ(l.scene_loads_refused(), 1);
+}
+
+// a C-arm flood: the x-ray thread moves once per interval to the newest target (tested with the
+// loop in tests/integration); here the receive side writes whole targets and counts them
+TEST_F(LcmIoTest, CarmTargetsAreWrittenWholeNewestLast) {
+  for (int i = 1; i <= 20; ++i) {
+    auto c = command(pcisim_lcm::session_command_t::CMD_CARM);
+    c.primary_angle_deg = i;
+    c.secondary_angle_deg = -i;
+    lcm.publish(protocol::kSessionChannel, &c);
+  }
+  ASSERT_TRUE(wait_for([&] { return state.lcm_rx.load() >= 20; }));
+  EXPECT_EQ(state.carm_requests.load(), 20);
+  EXPECT_EQ(state.carm_target_seq.load(), 40) << "even: no write in progress";
+  EXPECT_DOUBLE_EQ(state.carm_target_primary_deg.load(), 20.0);
+  EXPECT_DOUBLE_EQ(state.carm_target_secondary_deg.load(), -20.0);
 }
 
 }  // namespace

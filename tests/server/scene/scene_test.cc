@@ -110,7 +110,7 @@ TEST(Scene, EachBadInputNamesItsJsonPathAndWhatWasExpected) {
   EXPECT_EQ(error_of(R"({"name": "x"})"), "test.json: effects: expected an object listing the effects to simulate");
   EXPECT_EQ(error_of(R"({"effects": [1, 2]})"), "test.json: effects: expected an object");
   EXPECT_EQ(error_of(R"({"effects": {}, "colour": "red"})"),
-            "test.json: colour: unknown key (this object accepts: anatomy, effects, haptics, name, physics_rate_hz)");
+            "test.json: colour: unknown key (this object accepts: anatomy, effects, haptics, name, physics_rate_hz, session)");
   EXPECT_EQ(error_of(R"({"haptics": {"interpolation": "cubic"}, "effects": {}})"),
             "test.json: haptics.interpolation: expected one of \"local_model\", \"zero_order_hold\", "
             "\"linear_extrapolation\", got \"cubic\"");
@@ -135,6 +135,41 @@ TEST(Scene, WrittenSceneLoadsBackIdentically) {
   EXPECT_EQ(a.effects, b.effects);
   EXPECT_EQ(a.world.guidewire->segment_count, b.world.guidewire->segment_count);
   std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace pcisim::server
+
+namespace pcisim::server {
+namespace {
+
+TEST(Scene, SessionBoundsAreReadAndChecked) {
+  const Scene s = parse_scene(R"({"effects": {}, "session": {"max_injections_per_min": 3, "max_contrast_ml": 90}})", "t.json");
+  EXPECT_EQ(s.session.max_injections_per_min, 3);
+  EXPECT_DOUBLE_EQ(s.session.max_contrast_ml, 90.0);
+  EXPECT_DOUBLE_EQ(s.session.min_reset_interval_s, SessionLimitParams{}.min_reset_interval_s);
+  try {
+    parse_scene(R"({"effects": {}, "session": {"max_injections_per_min": 0}})", "t.json");
+    FAIL() << "expected SceneError";
+  } catch (const SceneError& e) {
+    EXPECT_STREQ(e.what(), "t.json: session.max_injections_per_min: expected an integer in [1, 60], got 0");
+  }
+}
+
+// a 1 GB scene once held the LCM thread for 10 s and locked 2.3 GB: refused before it is read
+TEST(Scene, AnOversizedSceneFileIsRefusedUnread) {
+  const std::string path = ::testing::TempDir() + "/huge-scene.json";
+  {
+    std::ofstream out(path);
+    out << "{\"effects\": {}, \"name\": \"" << std::string(kMaxSceneFileBytes, 'x') << "\"}";
+  }
+  try {
+    load_scene_file(path);
+    FAIL() << "expected SceneError";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("over the 1048576 byte limit"), std::string::npos) << e.what();
+  }
+  std::remove(path.c_str());
 }
 
 }  // namespace

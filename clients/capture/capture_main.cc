@@ -7,51 +7,15 @@
 #include <spdlog/spdlog.h>
 #include <thread>
 
+#include "clients/capture/capture_sink.h"
 #include "clients/capture/frame_writer.h"
-#include "pcisim_lcm/instrument_state_t.hpp"
 #include "protocol/channels.h"
-#include "protocol/message_checks.h"
 #include "server/realtime/clock.h"
 
 namespace {
 
 std::atomic<bool> g_stop{false};
 extern "C" void on_signal(int) { g_stop = true; }
-
-struct Capture {
-  Capture(pcisim::clients::FrameWriter& w, int64_t max, bool pedal_only) : writer(w), max_frames(max), only_while_pedal(pedal_only) {}
-  pcisim::clients::FrameWriter& writer;
-  int64_t max_frames;
-  bool only_while_pedal;
-  std::atomic<bool> pedal{false};
-  int64_t bad = 0, skipped = 0;
-  std::string error;
-  pcisim_lcm::xray_frame_t frame;
-  pcisim_lcm::instrument_state_t instrument;
-
-  void on_frame(const lcm::ReceiveBuffer* r, const std::string&) {
-    if (!error.empty() || (max_frames > 0 && writer.written() >= max_frames)) return;
-    if (!pcisim::protocol::decode_checked(*r, frame)) {
-      ++bad;
-      return;
-    }
-    if (only_while_pedal && !pedal) {
-      ++skipped;
-      return;
-    }
-    try {
-      const std::string path = writer.write(frame);
-      if (writer.written() % 30 == 1) spdlog::info("capture: {} frames, latest {}", writer.written(), path);
-    } catch (const std::exception& e) {
-      error = e.what();  // stop: what is written stays intact
-    }
-  }
-  void on_instrument(const lcm::ReceiveBuffer* r, const std::string&) {
-    if (pcisim::protocol::decode_checked(*r, instrument))
-      pedal = (instrument.buttons & (int{pcisim_lcm::instrument_state_t::BUTTON_FLUORO_PEDAL} |
-                                     int{pcisim_lcm::instrument_state_t::BUTTON_CINE_PEDAL})) != 0;
-  }
-};
 
 }  // namespace
 
@@ -84,13 +48,13 @@ int main(int argc, char** argv) {
     std::cerr << "pcisim-capture: cannot open LCM at " << image_url << "\n";
     return 3;
   }
-  Capture capture(*writer, max_frames, only_while_pedal);
-  images.subscribe(pcisim::protocol::kXrayChannel, &Capture::on_frame, &capture);
+  pcisim::clients::CaptureSink capture(*writer, max_frames, only_while_pedal);
+  images.subscribe(pcisim::protocol::kXrayChannel, &pcisim::clients::CaptureSink::on_frame, &capture);
   std::unique_ptr<lcm::LCM> control;
   std::thread control_rx;
   if (only_while_pedal) {
     control = std::make_unique<lcm::LCM>(lcm_url);
-    control->subscribe(pcisim::protocol::kInstrumentChannel, &Capture::on_instrument, &capture);
+    control->subscribe(pcisim::protocol::kInstrumentChannel, &pcisim::clients::CaptureSink::on_instrument, &capture);
     control_rx = std::thread([&] {
       while (!g_stop) control->handleTimeout(20);
     });
@@ -99,15 +63,14 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, on_signal);
   spdlog::info("capture: frames from {} into {}", image_url, out_dir);
   const int64_t end_ns = duration_s > 0 ? pcisim::server::monotonic_ns() + static_cast<int64_t>(duration_s * 1e9) : INT64_MAX;
-  while (!g_stop && pcisim::server::monotonic_ns() < end_ns && capture.error.empty() &&
-         (max_frames == 0 || writer->written() < max_frames))
+  while (!g_stop && pcisim::server::monotonic_ns() < end_ns && !capture.done())
     images.handleTimeout(50);
   g_stop = true;
   if (control_rx.joinable()) control_rx.join();
-  spdlog::info("capture: {} frames written to {}, {} undecodable, {} skipped (pedal up)", writer->written(), out_dir,
-               capture.bad, capture.skipped);
-  if (!capture.error.empty()) {
-    std::cerr << "pcisim-capture: stopped: " << capture.error << " (the " << writer->written()
+  spdlog::info("capture: {} frames written to {}, {} undecodable, {} skipped (pedal up), {} bad instrument samples",
+               writer->written(), out_dir, capture.bad(), capture.skipped(), capture.bad_instrument());
+  if (!capture.error().empty()) {
+    std::cerr << "pcisim-capture: stopped: " << capture.error() << " (the " << writer->written()
               << " frames written before are intact)\n";
     return 1;
   }

@@ -140,8 +140,8 @@ int main(int argc, char** argv) {
   const auto s = gateway.hub_stats();
   const auto c = gateway.counters();
   spdlog::info("remote: done: {} connections, {} frames received, {} encoded, {} sent, {} dropped for slow pages, "
-               "{} commands forwarded, {} refused, {} rate-limited",
+               "{} commands forwarded, {} refused, {} rate-limited, {} bad frames, {} bad control messages",
                s.connections_total, c.frames_received, c.frames_encoded, s.frames_sent, s.frames_dropped,
-               s.commands_forwarded, s.commands_refused, s.rate_limited);
+               s.commands_forwarded, s.commands_refused, s.rate_limited, c.frames_bad, c.control_bad);
   return 0;
 }

@@ -4,13 +4,11 @@
 #include <csignal>
 #include <fstream>
 #include <iostream>
-#include <memory>
-#include <optional>
 #include <spdlog/spdlog.h>
 
 #include "server/scene/json_reader.h"
 #include "server/scene/scene.h"
-#include "server/server.h"
+#include "server/session_runner.h"
 
 namespace {
 
@@ -78,59 +76,26 @@ int main(int argc, char** argv) {
     return 3;
   }
 
-  // frames get their own LCM instance; none unless some scene shows fluoroscopy
-  std::unique_ptr<lcm::LCM> images;
-  if (scene.xray) {
-    images = std::make_unique<lcm::LCM>(image_url);
-    if (!images->good()) {
-      std::cerr << "pcisim-server: cannot open the image LCM at " << image_url << "\n";
-      return 3;
-    }
-  }
-
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   // a scene loaded over LCM restarts the pipeline with it; --duration counts the running time of
   // the whole session, not the time spent building scenes
-  // the session's command bounds outlive each pipeline; a requested scene that parses but cannot
-  // be built is refused and the scene that ran before runs again
   SessionLimits limits;
-  std::optional<Scene> fallback;  // the last scene that was built
+  SessionOptions options;
+  options.duration_s = duration_s;
+  options.cpu_latency_us = cpu_latency_us;
+  options.image_url = image_url;
   try {
-    double ran_s = 0;  // running time of the pipelines so far (scene builds do not count)
-    for (;;) {
-      if (scene.xray && !images) images = std::make_unique<lcm::LCM>(image_url);
-      std::unique_ptr<Server> server;
-      try {
-        server = std::make_unique<Server>(scene, lcm, images.get(), &limits);
-      } catch (const std::exception& e) {
-        if (!fallback) throw;  // the scene given on the command line: nothing to go back to
-        limits.count_scene_rejected();
-        spdlog::error("session: refused scene {}: it cannot be built: {}; back to {}", scene.source, e.what(),
-                      fallback->source);
-        scene = *fallback;
-        continue;
+    const StatsReport stats = run_session(std::move(scene), lcm, options, g_stop, limits);
+    std::cout << human_summary(stats) << "\n";
+    if (!stats_path.empty()) {
+      std::ofstream out(stats_path);
+      out << to_json(stats).dump(2) << "\n";
+      if (!out.flush()) {
+        std::cerr << "pcisim-server: cannot write stats to " << stats_path << "\n";
+        return 1;
       }
-      fallback = scene;
-      server->cpu_latency_us = cpu_latency_us;
-      const double left_s = duration_s > 0 ? std::max(duration_s - ran_s, 1e-3) : 0.0;
-      const StatsReport stats = server->run(left_s, g_stop);
-      ran_s += stats.elapsed_s;
-      if (auto next = server->take_requested_scene(); next && !g_stop) {
-        scene = std::move(*next);
-        continue;
-      }
-      std::cout << human_summary(stats) << "\n";
-      if (!stats_path.empty()) {
-        std::ofstream out(stats_path);
-        out << to_json(stats).dump(2) << "\n";
-        if (!out.flush()) {
-          std::cerr << "pcisim-server: cannot write stats to " << stats_path << "\n";
-          return 1;
-        }
-        std::cout << "  stats   " << stats_path << "\n";
-      }
-      break;
+      std::cout << "  stats   " << stats_path << "\n";
     }
   } catch (const std::exception& e) {
     std::cerr << "pcisim-server: " << e.what() << "\n";

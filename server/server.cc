@@ -43,6 +43,13 @@ struct Server::Impl {
     const double on_s = state.xray_on_ns.load() * 1e-9;
     r.xray_fps = on_s > 0 ? r.xray_frames / on_s : 0.0;
     r.xray_render_ms = percentiles(state.xray_render_ns, 1e-6);
+    r.contrast_injections = limits->injections();
+    r.contrast_ml = limits->contrast_ml();
+    r.resets_refused = limits->resets_refused();
+    r.scene_loads_refused = limits->scene_loads_refused();
+    r.scenes_rejected = limits->scenes_rejected();
+    r.injections_refused = limits->injections_refused();
+    r.carm_moves_coalesced = xray ? state.carm_requests.load() - state.carm_moves.load() : 0;
     return r;
   }
 
@@ -66,13 +73,13 @@ struct Server::Impl {
     m.carm_primary_deg = xray ? state.carm_primary_deg.load() : state.carm_target_primary_deg.load();
     m.carm_secondary_deg = xray ? state.carm_secondary_deg.load() : state.carm_target_secondary_deg.load();
     // the session's figures and refusals, across scene reloads
-    m.contrast_injections = static_cast<int32_t>(limits->injections());
-    m.contrast_ml = limits->contrast_ml();
-    m.resets_refused = limits->resets_refused();
-    m.scene_loads_refused = limits->scene_loads_refused();
-    m.scenes_rejected = limits->scenes_rejected();
-    m.injections_refused = limits->injections_refused();
-    m.carm_moves_coalesced = xray ? state.carm_requests.load() - state.carm_moves.load() : 0;
+    m.contrast_injections = static_cast<int32_t>(r.contrast_injections);
+    m.contrast_ml = r.contrast_ml;
+    m.resets_refused = r.resets_refused;
+    m.scene_loads_refused = r.scene_loads_refused;
+    m.scenes_rejected = r.scenes_rejected;
+    m.injections_refused = r.injections_refused;
+    m.carm_moves_coalesced = r.carm_moves_coalesced;
     return m;
   }
 };

@@ -65,6 +65,14 @@ nlohmann::json to_json(const StatsReport& r) {
       {"effects", r.effects},
       {"xray", {{"frames", r.xray_frames}, {"fps", r.xray_fps}, {"render_ms", pct(r.xray_render_ms, false)}}},
       {"lcm", {{"rx", r.lcm_rx}, {"tx", r.lcm_tx}, {"dropped_bad", r.lcm_dropped_bad}}},
+      {"session",
+       {{"contrast_injections", r.contrast_injections},
+        {"contrast_ml", r.contrast_ml},
+        {"resets_refused", r.resets_refused},
+        {"scene_loads_refused", r.scene_loads_refused},
+        {"scenes_rejected", r.scenes_rejected},
+        {"injections_refused", r.injections_refused},
+        {"carm_moves_coalesced", r.carm_moves_coalesced}}},
   };
 }
 
@@ -110,13 +118,16 @@ std::string human_summary(const StatsReport& r) {
       "  physics {:.1f} Hz of {:.0f}  step p50 {:.2f} / p99 {:.2f} / max {:.2f} ms  overruns {}\n"
       "  effects (p50):{}\n"
       "  x-ray   {} frames, {:.1f} fps while the pedal was down, render p50 {:.1f} / p99 {:.1f} ms\n"
-      "  lcm     rx {}  tx {}  dropped (bad) {}",
+      "  lcm     rx {}  tx {}  dropped (bad) {}\n"
+      "  session contrast {} injections, {:.1f} ml; refused: {} resets, {} scene loads, {} scenes, {} injections; "
+      "{} C-arm targets coalesced",
       r.elapsed_s, r.haptic_rate_hz, r.haptic_fifo ? "SCHED_FIFO" : "SCHED_OTHER", r.haptic_period_us.p50,
       r.haptic_period_us.p99, r.haptic_period_us.p999, r.haptic_period_us.max, r.haptic_compute_us.p99,
       r.haptic_overruns, r.physics_rate_hz, r.physics_target_hz, r.physics_step_ms.p50, r.physics_step_ms.p99,
       r.physics_step_ms.max, r.physics_overruns, effects.empty() ? " none" : effects, r.xray_frames, r.xray_fps,
-      r.xray_render_ms.p50, r.xray_render_ms.p99, r.lcm_rx, r.lcm_tx,
-      r.lcm_dropped_bad);
+      r.xray_render_ms.p50, r.xray_render_ms.p99, r.lcm_rx, r.lcm_tx, r.lcm_dropped_bad, r.contrast_injections,
+      r.contrast_ml, r.resets_refused, r.scene_loads_refused, r.scenes_rejected, r.injections_refused,
+      r.carm_moves_coalesced);
 }
 
 }  // namespace pcisim::server

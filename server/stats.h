@@ -30,6 +30,11 @@ struct StatsReport {
   Percentiles xray_render_ms;
   std::vector<std::string> effects;  // every effect the scene built (physics and x-ray)
   int64_t lcm_rx = 0, lcm_tx = 0, lcm_dropped_bad = 0;
+  // the session so far (across scene reloads): contrast and refused console commands
+  int64_t contrast_injections = 0;
+  double contrast_ml = 0;
+  int64_t resets_refused = 0, scene_loads_refused = 0, scenes_rejected = 0, injections_refused = 0;
+  int64_t carm_moves_coalesced = 0;
 };
 
 Percentiles percentiles(const LatencyHistogram& h, double scale);

@@ -1,0 +1,47 @@
+#include "server/session_runner.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <optional>
+#include <stdexcept>
+
+#include "server/server.h"
+
+namespace pcisim::server {
+
+StatsReport run_session(Scene scene, lcm::LCM& control, const SessionOptions& options, const std::atomic<bool>& stop,
+                        SessionLimits& limits) {
+  std::unique_ptr<lcm::LCM> images;  // frames get their own LCM instance, once a scene shows them
+  std::optional<Scene> fallback;     // the last scene that was built
+  double ran_s = 0;                  // running time so far (scene builds do not count)
+  for (;;) {
+    if (scene.xray && !images) {
+      images = std::make_unique<lcm::LCM>(options.image_url);
+      if (!images->good()) throw std::runtime_error("cannot open the image LCM at " + options.image_url);
+    }
+    std::unique_ptr<Server> server;
+    try {
+      server = std::make_unique<Server>(scene, control, images.get(), &limits);
+    } catch (const std::exception& e) {
+      if (!fallback) throw;
+      limits.count_scene_rejected();
+      spdlog::error("session: refused scene {}: it cannot be built: {}; back to {}", scene.source, e.what(),
+                    fallback->source);
+      scene = *fallback;
+      continue;
+    }
+    fallback = scene;
+    server->cpu_latency_us = options.cpu_latency_us;
+    const double left_s = options.duration_s > 0 ? std::max(options.duration_s - ran_s, 1e-3) : 0.0;
+    StatsReport stats = server->run(left_s, stop);
+    ran_s += stats.elapsed_s;
+    if (auto next = server->take_requested_scene(); next && !stop) {
+      scene = std::move(*next);
+      continue;
+    }
+    return stats;
+  }
+}
+
+}  // namespace pcisim::server

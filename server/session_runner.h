@@ -1,0 +1,28 @@
+#pragma once
+// A training session: one scene after another on the same LCM buses. A scene asked for over LCM
+// restarts the pipeline with it; one that parses but cannot be built is refused (counted in the
+// status) and the scene that ran before runs again. The session's command bounds (contrast used,
+// refusals) carry across every pipeline.
+#include <atomic>
+#include <lcm/lcm-cpp.hpp>
+#include <memory>
+#include <string>
+
+#include "server/scene/scene.h"
+#include "server/session_limits.h"
+#include "server/stats.h"
+
+namespace pcisim::server {
+
+struct SessionOptions {
+  double duration_s = 0;           // running time of all pipelines together; 0: until stopped
+  int cpu_latency_us = 0;          // PM QoS while running; < 0 leaves the CPUs alone
+  std::string image_url;           // the frames' LCM URL, opened when a scene has x-ray
+};
+
+// throws when the first scene cannot be built (there is nothing to fall back to); returns the
+// figures of the last pipeline
+StatsReport run_session(Scene scene, lcm::LCM& control, const SessionOptions& options, const std::atomic<bool>& stop,
+                        SessionLimits& limits);
+
+}  // namespace pcisim::server

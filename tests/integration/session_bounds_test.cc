@@ -1,0 +1,111 @@
+// The session's bounds with a whole server running: a scene that parses but cannot be built is
+// refused and the session goes on with the scene it had (it used to end the server); a flood of
+// C-arm targets moves the arm at most once per interval, to the newest target.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <thread>
+
+#include "pcisim_lcm/session_command_t.hpp"
+#include "pcisim_lcm/xray_frame_t.hpp"
+#include "protocol/channels.h"
+#include "protocol/message_checks.h"
+#include "server/server.h"
+#include "server/session_runner.h"
+
+namespace pcisim::server {
+namespace {
+
+using C = pcisim_lcm::session_command_t;
+using namespace std::chrono_literals;
+
+void send(lcm::LCM& lcm, int8_t command, const std::string& scene_path = "", double primary = 0, double secondary = 0) {
+  C m{};
+  m.command = command;
+  m.scene_path = scene_path;
+  m.primary_angle_deg = primary;
+  m.secondary_angle_deg = secondary;
+  lcm.publish(protocol::kSessionChannel, &m);
+}
+
+TEST(SessionBounds, ASceneThatCannotBeBuiltIsRefusedAndTheSessionGoesOn) {
+  const auto dir = std::filesystem::path(::testing::TempDir()) / "unbuildable-scene";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "garbage.motion") << "this is not a heart motion file\n";
+  std::ofstream(dir / "scene.json") << R"({"effects": {"heart_beat": {"motion_file": "garbage.motion"}}})";
+  ASSERT_NO_THROW(load_scene_file((dir / "scene.json").string())) << "the scene must parse: only its build fails";
+
+  lcm::LCM lcm("memq://");
+  SessionLimits limits;
+  SessionOptions options;
+  options.duration_s = 2.0;
+  options.image_url = "memq://";
+  std::atomic<bool> stop{false};
+  std::thread console([&] {
+    std::this_thread::sleep_for(400ms);
+    send(lcm, C::CMD_LOAD_SCENE, (dir / "scene.json").string());
+  });
+  StatsReport r;
+  ASSERT_NO_THROW(r = run_session(load_scene_file(PCISIM_SOURCE_DIR "/scenes/minimal.json"), lcm, options, stop, limits));
+  console.join();
+  EXPECT_EQ(limits.scenes_rejected(), 1);
+  EXPECT_GT(r.physics_steps, 0) << "the scene from before runs again";
+  EXPECT_EQ(r.scenes_rejected, 1) << "and its report says what was refused";
+  std::filesystem::remove_all(dir);
+}
+
+const char* kXrayScene = R"({
+  "name": "carm-flood",
+  "session": {"min_carm_move_interval_s": 0.5},
+  "effects": {
+    "guidewire": {"segments": 60},
+    "xray": {"detector_px": 96, "pixel_mm": 2.0, "volume_voxels": 96, "volume_spacing_mm": 3.7, "pulse_rate_fps": 15}
+  }
+})";
+
+struct Poses {
+  std::mutex mutex;
+  std::vector<std::pair<double, double>> seen;
+  void on_frame(const lcm::ReceiveBuffer* r, const std::string&) {
+    pcisim_lcm::xray_frame_t f;
+    if (!protocol::decode_checked(*r, f)) return;
+    std::lock_guard lock(mutex);
+    if (seen.empty() || seen.back() != std::make_pair(f.primary_angle_deg, f.secondary_angle_deg))
+      seen.emplace_back(f.primary_angle_deg, f.secondary_angle_deg);
+  }
+};
+
+TEST(SessionBounds, AFloodOfCarmTargetsMovesTheArmOncePerIntervalToTheNewest) {
+  lcm::LCM lcm("memq://");
+  Poses poses;
+  lcm.subscribe(protocol::kXrayChannel, &Poses::on_frame, &poses);
+  Server server(parse_scene(kXrayScene, "carm-flood"), lcm, &lcm);
+  std::atomic<bool> stop{false};
+  std::thread console([&] {
+    std::this_thread::sleep_for(300ms);
+    C pedal{};
+    pedal.command = C::CMD_FLUORO_PEDAL;
+    pedal.pedal_down = 1;
+    lcm.publish(protocol::kSessionChannel, &pedal);
+    // 100 targets over about one second, the last one (40, 20)
+    for (int i = 0; i < 100; ++i) {
+      send(lcm, C::CMD_CARM, "", i == 99 ? 40 : -60 + i, i == 99 ? 20 : -20);
+      std::this_thread::sleep_for(10ms);
+    }
+  });
+  const StatsReport r = server.run(3.0, stop);
+  console.join();
+  std::lock_guard lock(poses.mutex);
+  ASSERT_GE(poses.seen.size(), 2u);
+  EXPECT_EQ(poses.seen.back(), std::make_pair(40.0, 20.0)) << "the newest target wins";
+  // the arm moved at most once per 0.5 s while targets came for about a second (one for the
+  // first target at once, then a few more): never once per command
+  EXPECT_LE(poses.seen.size(), 1u + 6u);
+  EXPECT_GE(r.carm_moves_coalesced, 90);
+}
+
+}  // namespace
+}  // namespace pcisim::server

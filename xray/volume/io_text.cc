@@ -6,6 +6,14 @@
 #include <fstream>
 #include <sstream>
 
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include "xray/volume/volume_io.h"
 
 #ifdef PCISIM_XRAY_HAVE_ZLIB
@@ -15,11 +23,90 @@
 namespace pcisim::xray::io {
 
 std::string read_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw VolumeIoError(path + ": cannot open the file for reading");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return std::move(ss).str();
+  // opened without blocking, then checked: only a regular file of a bounded size is read
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) throw VolumeIoError(path + ": cannot open the file for reading");
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd);
+    throw VolumeIoError(path + ": not a regular file (a FIFO, device or folder is never read)");
+  }
+  if (st.st_size > kMaxFileBytes) {
+    ::close(fd);
+    throw VolumeIoError(fmt::format("{}: {} bytes, over the {} byte limit", path, st.st_size, kMaxFileBytes));
+  }
+  std::string out(static_cast<size_t>(st.st_size), '\0');
+  size_t got = 0;
+  while (got < out.size()) {
+    const ssize_t n = ::read(fd, out.data() + got, out.size() - got);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    got += static_cast<size_t>(n);
+  }
+  ::close(fd);
+  if (got != out.size()) throw VolumeIoError(path + ": the file shrank while it was read");
+  return out;
+}
+
+void load_voxels(const std::string& path, const VoxelData& d, Volume& vol) {
+  auto fail = [&](const char* field, const std::string& what) {
+    throw VolumeIoError(fmt::format("{}: {}: {}", base_name(path), field, what));
+  };
+  // the count, checked before any product can overflow
+  int64_t count = 1;
+  for (const int64_t n : vol.dims) {
+    if (n <= 0 || n > kMaxVoxels || count > kMaxVoxels / n)
+      fail(d.size_field, fmt::format("{} x {} x {} voxels: over the {} voxel limit", vol.dims[0], vol.dims[1],
+                                     vol.dims[2], kMaxVoxels));
+    count *= n;
+  }
+  const int64_t expected = count * voxel_type_bytes(vol.type);
+  const char* bytes = d.bytes;
+  int64_t available = d.available;
+  if (d.skip == -1) {
+    if (available < expected)
+      fail(d.skip_field, fmt::format("-1 but the data holds {} bytes, fewer than {}", available, expected));
+    bytes += available - expected;
+    available = expected;
+  } else if (d.skip > 0) {
+    if (d.skip > available) fail(d.skip_field, fmt::format("{} exceeds the data's {} bytes", d.skip, available));
+    bytes += d.skip;
+    available -= d.skip;
+  }
+  // sizes agree before anything is allocated: raw data exactly, compressed data within deflate's
+  // best ratio (about 1032:1, RFC 1951's longest match per bit pattern)
+  if (!d.compressed && available != expected)
+    fail(d.size_field, fmt::format("{}x{}x{} {} voxels need {} bytes but the data ({}) holds {}", vol.dims[0],
+                                   vol.dims[1], vol.dims[2], voxel_type_name(vol.type), expected,
+                                   base_name(d.data_name), available));
+  if (d.compressed && available * 1032 < expected)
+    fail(d.size_field, fmt::format("{} voxel bytes cannot come from {} compressed bytes", expected, available));
+  if (vol.type == VoxelType::kInt16) {
+    vol.hu_i16.assign(static_cast<size_t>(count), 0);
+  } else {
+    vol.hu_f32.assign(static_cast<size_t>(count), 0.0f);
+  }
+  if (d.compressed) {
+    std::string error;
+    if (!inflate_bytes(bytes, available, vol.data(), expected, &error)) fail(d.compression_field, "gzip: " + error);
+  } else {
+    std::memcpy(vol.data(), bytes, static_cast<size_t>(expected));
+  }
+  if (d.big_endian) {
+    auto* p = static_cast<char*>(vol.data());
+    const int b = voxel_type_bytes(vol.type);
+    for (int64_t n = 0; n < count; ++n, p += b) std::reverse(p, p + b);
+  }
+  // a NaN or infinite voxel would make every ray through it NaN
+  if (vol.type == VoxelType::kFloat32) {
+    for (int64_t n = 0; n < count; ++n) {
+      if (!std::isfinite(vol.hu_f32[static_cast<size_t>(n)])) {
+        const int64_t i = n % vol.dims[0], j = n / vol.dims[0] % vol.dims[1], k = n / (vol.dims[0] * vol.dims[1]);
+        fail("voxels", fmt::format("voxel ({}, {}, {}) is {}: every voxel must be a finite HU value", i, j, k,
+                                   vol.hu_f32[static_cast<size_t>(n)]));
+      }
+    }
+  }
 }
 
 void write_file(const std::string& path, const std::string& header, const void* data, int64_t bytes) {

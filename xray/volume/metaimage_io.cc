@@ -24,10 +24,6 @@ bool parse_bool(std::string_view v, bool* out) {
   return false;
 }
 
-void byteswap(void* data, int64_t count, int bytes) {
-  auto* p = static_cast<char*>(data);
-  for (int64_t n = 0; n < count; ++n, p += bytes) std::reverse(p, p + bytes);
-}
 
 }  // namespace
 
@@ -173,43 +169,24 @@ Volume read_metaimage(const std::string& path) {
     data_name = data_file.front() == '/' ? data_file : io::folder_of(path) + data_file;
     try {
       external = io::read_file(data_name);
-    } catch (const VolumeIoError&) {
-      fail(path, "ElementDataFile", fmt::format("cannot open '{}'", data_name));
+    } catch (const VolumeIoError& e) {
+      fail(path, "ElementDataFile", fmt::format("cannot open '{}' ({})", data_name, e.what()));
     }
     bytes = external.data();
     available = static_cast<int64_t>(external.size());
   }
-  const int64_t expected = vol.voxel_count() * voxel_type_bytes(vol.type);
-  if (header_size == -1 && !compressed) {
-    if (available < expected) {
-      fail(path, "HeaderSize", fmt::format("-1 but the data holds {} bytes, fewer than {}", available, expected));
-    }
-    bytes += available - expected;
-    available = expected;
-  } else if (header_size > 0) {
-    if (header_size > available) fail(path, "HeaderSize", fmt::format("{} exceeds the data's {} bytes", header_size, available));
-    bytes += header_size;
-    available -= header_size;
-  }
-  if (vol.type == VoxelType::kInt16) {
-    vol.hu_i16.resize(vol.voxel_count());
-  } else {
-    vol.hu_f32.resize(vol.voxel_count());
-  }
-  if (compressed) {
-    std::string error;
-    if (!io::inflate_bytes(bytes, available, vol.data(), expected, &error)) {
-      fail(path, "CompressedData", error);
-    }
-  } else {
-    if (available != expected) {
-      fail(path, "DimSize", fmt::format("{}x{}x{} {} voxels need {} bytes but the data ({}) holds {}",
-                                        vol.dims[0], vol.dims[1], vol.dims[2], voxel_type_name(vol.type),
-                                        expected, io::base_name(data_name), available));
-    }
-    std::memcpy(vol.data(), bytes, expected);
-  }
-  if (msb) byteswap(vol.data(), vol.voxel_count(), voxel_type_bytes(vol.type));
+  io::VoxelData data;
+  data.bytes = bytes;
+  data.available = available;
+  data.skip = header_size;
+  data.compressed = compressed;
+  data.big_endian = msb;
+  data.data_name = data_name;
+  data.size_field = "DimSize";
+  data.skip_field = "HeaderSize";
+  data.compression_field = "CompressedData";
+  if (header_size == -1 && compressed) data.skip = 0;
+  io::load_voxels(path, data, vol);
   return vol;
 }
 

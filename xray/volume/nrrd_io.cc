@@ -165,43 +165,23 @@ Volume read_nrrd(const std::string& path) {
     data_name = data_file->front() == '/' ? *data_file : io::folder_of(path) + *data_file;
     try {
       external = io::read_file(data_name);
-    } catch (const VolumeIoError&) {
-      fail(path, "data file", fmt::format("cannot open '{}'", data_name));
+    } catch (const VolumeIoError& e) {
+      fail(path, "data file", fmt::format("cannot open '{}' ({})", data_name, e.what()));
     }
     bytes = external.data();
     available = static_cast<int64_t>(external.size());
   }
-  const int64_t expected = vol.voxel_count() * voxel_type_bytes(vol.type);
-  if (byte_skip == -1) {
-    if (available < expected) fail(path, "byte skip", fmt::format("-1 but the data holds {} bytes, fewer than {}", available, expected));
-    bytes += available - expected;
-    available = expected;
-  } else if (byte_skip > 0) {
-    if (byte_skip > available) fail(path, "byte skip", fmt::format("{} exceeds the data's {} bytes", byte_skip, available));
-    bytes += byte_skip;
-    available -= byte_skip;
-  }
-  if (vol.type == VoxelType::kInt16) {
-    vol.hu_i16.resize(vol.voxel_count());
-  } else {
-    vol.hu_f32.resize(vol.voxel_count());
-  }
-  if (gzip) {
-    std::string error;
-    if (!io::inflate_bytes(bytes, available, vol.data(), expected, &error)) fail(path, "encoding", "gzip: " + error);
-  } else {
-    if (available != expected) {
-      fail(path, "sizes", fmt::format("{}x{}x{} {} voxels need {} bytes but the data ({}) holds {}",
-                                      vol.dims[0], vol.dims[1], vol.dims[2], voxel_type_name(vol.type),
-                                      expected, io::base_name(data_name), available));
-    }
-    std::memcpy(vol.data(), bytes, expected);
-  }
-  if (big_endian) {
-    auto* p = static_cast<char*>(vol.data());
-    const int b = voxel_type_bytes(vol.type);
-    for (int64_t n = 0; n < vol.voxel_count(); ++n, p += b) std::reverse(p, p + b);
-  }
+  io::VoxelData data;
+  data.bytes = bytes;
+  data.available = available;
+  data.skip = byte_skip;
+  data.compressed = gzip;
+  data.big_endian = big_endian;
+  data.data_name = data_name;
+  data.size_field = "sizes";
+  data.skip_field = "byte skip";
+  data.compression_field = "encoding";
+  io::load_voxels(path, data, vol);
   return vol;
 }
 

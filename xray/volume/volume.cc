@@ -51,8 +51,13 @@ Eigen::Vector3d Volume::center_mm() const {
 }
 
 std::string validate(const Volume& v) {
+  // the dims' product must fit before voxel_count() may be called (dims from a hostile header
+  // overflowed it)
+  int64_t count = 1;
   for (int a = 0; a < 3; ++a) {
     if (v.dims[a] <= 0) return fmt::format("dims[{}] = {} is not positive", a, v.dims[a]);
+    if (count > INT64_MAX / 4 / v.dims[a]) return fmt::format("dims {}x{}x{} overflow", v.dims[0], v.dims[1], v.dims[2]);
+    count *= v.dims[a];
     if (!(v.spacing_mm[a] > 0) || !std::isfinite(v.spacing_mm[a])) {
       return fmt::format("spacing_mm[{}] = {} is not a positive finite number", a, v.spacing_mm[a]);
     }

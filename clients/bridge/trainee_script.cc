@@ -47,9 +47,9 @@ TraineeScript TraineeScript::parse(const std::string& text, const std::string& s
   TraineeScript s;
   nlohmann::json doc;
   try {
-    doc = nlohmann::json::parse(text, nullptr, true, /*ignore_comments=*/true);
-  } catch (const nlohmann::json::exception& e) {
-    throw std::runtime_error(fmt::format("{}: not valid JSON: {}", source, e.what()));
+    doc = server::parse_json_checked(text, source);
+  } catch (const server::SceneError& e) {
+    throw std::runtime_error(e.what());
   }
   try {
     JsonReader top(doc, "");

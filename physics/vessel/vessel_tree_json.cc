@@ -85,7 +85,7 @@ VesselTree read_vessel_tree_json(const std::string& file) {
   json doc;
   try {
     doc = json::parse(text.str(), nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/true);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // syntax, or a number out of range (1e400)
     throw std::runtime_error(file + ": not valid JSON: " + e.what());
   }
   if (!doc.is_object()) fail(file, "(root)", "expected an object");

@@ -4,8 +4,71 @@
 #include <cmath>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <vector>
 
 namespace pcisim::server {
+
+std::string short_dump(const nlohmann::json& value) {
+  // dump() recurses, but values reach here only from parse_json_checked (depth <= 64)
+  std::string s = value.dump();
+  if (s.size() > 60) s = s.substr(0, 57) + "...";
+  return s;
+}
+
+nlohmann::json parse_json_checked(const std::string& text, const std::string& source) {
+  // the JSON path as the parser walks: one entry per open object or array, the key or "[]"
+  struct Level {
+    bool object = false;
+    std::string key;
+    std::vector<std::string> keys;  // seen in this object
+  };
+  std::vector<Level> levels;
+  auto path = [&] {
+    std::string p;
+    for (const auto& l : levels) {
+      if (!l.object) {
+        p += "[]";
+      } else if (!l.key.empty()) {
+        p += (p.empty() ? "" : ".") + l.key;
+      }
+    }
+    return p.empty() ? source : source + ": " + p;
+  };
+  using E = nlohmann::json::parse_event_t;
+  const nlohmann::json::parser_callback_t cb = [&](int depth, E event, nlohmann::json& parsed) {
+    switch (event) {
+      case E::object_start:
+      case E::array_start:
+        if (depth >= kMaxJsonDepth)
+          throw SceneError(fmt::format("{}: nested deeper than {} levels", path(), kMaxJsonDepth));
+        levels.push_back({event == E::object_start, {}, {}});
+        break;
+      case E::object_end:
+      case E::array_end:
+        if (!levels.empty()) levels.pop_back();
+        break;
+      case E::key: {
+        Level& l = levels.back();
+        const std::string key = parsed.get<std::string>();
+        if (std::find(l.keys.begin(), l.keys.end(), key) != l.keys.end()) {
+          l.key = key;
+          throw SceneError(fmt::format("{}: the key appears twice in one object", path()));
+        }
+        l.keys.push_back(key);
+        l.key = key;
+        break;
+      }
+      case E::value:
+        break;
+    }
+    return true;
+  };
+  try {
+    return nlohmann::json::parse(text, cb, /*allow_exceptions=*/true, /*ignore_comments=*/true);
+  } catch (const nlohmann::json::exception& e) {  // syntax, a number out of range (1e400), ...
+    throw SceneError(fmt::format("{}: not valid JSON: {}", path(), e.what()));
+  }
+}
 
 const nlohmann::json JsonReader::kEmpty = nlohmann::json::object();
 const nlohmann::json JsonReader::kEmptyList = nlohmann::json::array();
@@ -29,10 +92,10 @@ double JsonReader::number(const std::string& key, double fallback, double min, d
   read_.insert(key);
   if (!has(key)) return fallback;
   const auto& v = object_.at(key);
-  if (!v.is_number()) fail(key, fmt::format("expected a number in [{}, {}], got {}", min, max, v.dump()));
+  if (!v.is_number()) fail(key, fmt::format("expected a number in [{}, {}], got {}", min, max, short_dump(v)));
   const double x = v.get<double>();
   if (!std::isfinite(x) || x < min || x > max)
-    fail(key, fmt::format("expected a number in [{}, {}], got {}", min, max, v.dump()));
+    fail(key, fmt::format("expected a number in [{}, {}], got {}", min, max, short_dump(v)));
   return x;
 }
 
@@ -41,7 +104,7 @@ int JsonReader::integer(const std::string& key, int fallback, int min, int max) 
   if (!has(key)) return fallback;
   const auto& v = object_.at(key);
   if (!v.is_number_integer() || v.get<int64_t>() < min || v.get<int64_t>() > max)
-    fail(key, fmt::format("expected an integer in [{}, {}], got {}", min, max, v.dump()));
+    fail(key, fmt::format("expected an integer in [{}, {}], got {}", min, max, short_dump(v)));
   return static_cast<int>(v.get<int64_t>());
 }
 
@@ -49,7 +112,7 @@ bool JsonReader::boolean(const std::string& key, bool fallback) {
   read_.insert(key);
   if (!has(key)) return fallback;
   const auto& v = object_.at(key);
-  if (!v.is_boolean()) fail(key, fmt::format("expected true or false, got {}", v.dump()));
+  if (!v.is_boolean()) fail(key, fmt::format("expected true or false, got {}", short_dump(v)));
   return v.get<bool>();
 }
 
@@ -60,8 +123,8 @@ std::string JsonReader::text(const std::string& key, const std::string& fallback
   const auto& v = object_.at(key);
   const bool ok = v.is_string() && (allowed.empty() || std::find(allowed.begin(), allowed.end(), v.get<std::string>()) != allowed.end());
   if (!ok)
-    fail(key, allowed.empty() ? fmt::format("expected a string, got {}", v.dump())
-                              : fmt::format("expected one of \"{}\", got {}", fmt::join(allowed, "\", \""), v.dump()));
+    fail(key, allowed.empty() ? fmt::format("expected a string, got {}", short_dump(v))
+                              : fmt::format("expected one of \"{}\", got {}", fmt::join(allowed, "\", \""), short_dump(v)));
   return v.get<std::string>();
 }
 
@@ -74,7 +137,7 @@ JsonReader JsonReader::child(const std::string& key) {
 const nlohmann::json& JsonReader::list(const std::string& key) {
   read_.insert(key);
   if (!has(key)) return kEmptyList;
-  if (!object_.at(key).is_array()) fail(key, fmt::format("expected a list, got {}", object_.at(key).dump()));
+  if (!object_.at(key).is_array()) fail(key, fmt::format("expected a list, got {}", short_dump(object_.at(key))));
   return object_.at(key);
 }
 

@@ -14,6 +14,15 @@ class SceneError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// parses JSON with comments for the readers above: at most kMaxJsonDepth levels of nesting (a
+// 100 000-deep file overflowed the stack), no key twice in one object (the last silently won), and
+// every error names `source`, the byte and the JSON path reached. Throws SceneError.
+inline constexpr int kMaxJsonDepth = 64;
+nlohmann::json parse_json_checked(const std::string& text, const std::string& source);
+
+// a value for an error message: its JSON, cut to a line
+std::string short_dump(const nlohmann::json& value);
+
 class JsonReader {
  public:
   // `object` must outlive the reader; `path` is its JSON path, e.g. "effects.guidewire"

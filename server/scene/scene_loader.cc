@@ -8,6 +8,7 @@
 
 #include "server/scene/json_reader.h"
 #include "server/scene/scene.h"
+#include "xray/projectors/trilinear_projector.h"
 
 namespace pcisim::server {
 namespace {
@@ -136,7 +137,8 @@ XraySpec read_xray(JsonReader r) {
                           : projector == "cuda" ? xray::ProjectorKind::kCudaTrilinear
                           : projector == "gl"   ? xray::ProjectorKind::kGl
                                                 : xray::ProjectorKind::kCpuTrilinear;
-  f.projector.trilinear.step_voxels = r.number("step_voxels", f.projector.trilinear.step_voxels, 0.05, 4);
+  f.projector.trilinear.step_voxels = r.number("step_voxels", f.projector.trilinear.step_voxels,
+                                                 xray::kMinSceneStepVoxels, xray::kMaxSceneStepVoxels);
   const int px = r.integer("detector_px", f.c_arm.width, 16, 2048);
   f.c_arm.width = f.c_arm.height = px;
   f.c_arm.pixel_mm = r.number("pixel_mm", f.c_arm.pixel_mm, 0.05, 2);
@@ -253,12 +255,7 @@ const std::vector<std::string>& known_effects() {
 }
 
 Scene parse_scene(const std::string& text, const std::string& source) {
-  nlohmann::json doc;
-  try {
-    doc = nlohmann::json::parse(text, nullptr, true, /*ignore_comments=*/true);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw SceneError(fmt::format("{}: not valid JSON (byte {}): {}", source, e.byte, e.what()));
-  }
+  const nlohmann::json doc = parse_json_checked(text, source);
   try {
     return parse(doc, source);
   } catch (const SceneError& e) {

@@ -9,6 +9,10 @@
 
 namespace pcisim::xray {
 
+// the step a scene may ask for: time grows as 1/step, and below a quarter voxel the image no
+// longer changes visibly (docs/benchmarks/xray.md); 0.05 once turned a 0.5 s run into 22 s
+inline constexpr double kMinSceneStepVoxels = 0.25, kMaxSceneStepVoxels = 4.0;
+
 struct TrilinearOptions {
   double step_voxels = 0.5;  // sample spacing along the ray, in voxels
   bool skip_empty = true;    // walk the brick grid and skip bricks without mu

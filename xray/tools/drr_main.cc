@@ -237,6 +237,9 @@ int render(const Args& a) {
   if (a.values.count("--step")) {
     if (projector == "exact") throw ArgError("--step: only used by the cpu, gl and cuda projectors");
     opt.step_voxels = positive("--step", a.values.at("--step"));
+    if (opt.step_voxels < kMinSceneStepVoxels || opt.step_voxels > kMaxSceneStepVoxels)
+      bad("--step", fmt::format("a step in [{}, {}] voxels", kMinSceneStepVoxels, kMaxSceneStepVoxels),
+          a.values.at("--step"));
   }
   AttenuationParams params;
   if (a.values.count("--mu-water")) params.mu_water_per_mm = positive("--mu-water", a.values.at("--mu-water"));

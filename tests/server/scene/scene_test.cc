@@ -116,7 +116,7 @@ TEST(Scene, EachBadInputNamesItsJsonPathAndWhatWasExpected) {
             "\"linear_extrapolation\", got \"cubic\"");
   EXPECT_EQ(error_of(R"({"haptics": {"peak_force_n": 1e9}, "effects": {}})"),
             "test.json: haptics.peak_force_n: expected a number in [0, 20], got 1000000000.0");
-  EXPECT_NE(error_of(R"({"effects": {)").find("test.json: not valid JSON"), std::string::npos);
+  EXPECT_NE(error_of(R"({"effects": {)").find("test.json: effects: not valid JSON"), std::string::npos);
 }
 
 TEST(Scene, MissingFileIsAClearError) {
@@ -153,6 +153,28 @@ TEST(Scene, SessionBoundsAreReadAndChecked) {
     FAIL() << "expected SceneError";
   } catch (const SceneError& e) {
     EXPECT_STREQ(e.what(), "t.json: session.max_injections_per_min: expected an integer in [1, 60], got 0");
+  }
+}
+
+// nesting 100 000 deep overflowed the stack (in the error message's dump); a duplicate key hid a
+// bad value (the last one won); 1e400 named neither the file nor the path
+TEST(Scene, DeepNestingDuplicateKeysAndHugeNumbersAreRefusedNamingThePath) {
+  const std::string deep = "{\"effects\": {}, \"name\": " + std::string(100000, '[') + std::string(100000, ']') + "}";
+  EXPECT_EQ(error_of(deep), "test.json: name[][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][]"
+                            "[][][][][][][][][][][][][][][][][][][][]: nested deeper than 64 levels");
+  EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"segments": 80, "segments": 100000}}})"),
+            "test.json: effects.guidewire.segments: the key appears twice in one object");
+  const std::string huge = error_of(R"({"effects": {"guidewire": {"segments": 1e400}}})");
+  EXPECT_EQ(huge.rfind("test.json: effects.guidewire.segments: not valid JSON", 0), 0u) << huge;
+}
+
+// a step of 0.05 voxel turned a 0.5 s run into 22 s
+TEST(Scene, AFluoroscopyStepFinerThanAQuarterVoxelIsRefused) {
+  try {
+    parse_scene(R"({"effects": {"xray": {"step_voxels": 0.05}}})", "t.json");
+    FAIL() << "expected SceneError";
+  } catch (const SceneError& e) {
+    EXPECT_STREQ(e.what(), "t.json: effects.xray.step_voxels: expected a number in [0.25, 4], got 0.05");
   }
 }
 

@@ -159,11 +159,16 @@ HeartMotion HeartMotion::parse(std::string_view bytes, const std::string& name) 
   if (const std::string enc = line("data"); enc != "float32-le")
     fail(name, "field 'data' must say float32-le, got '" + enc + "'");
 
-  const size_t count = static_cast<size_t>(frames) * grid.node_count() * 3;
+  // checked by division first: frames * nodes * 12 bytes wrapped size_t for a hostile header and
+  // the wrapped size matched a short file
   const size_t have = bytes.size() - pos;
-  if (have != 4 * count)
-    fail(name, "data: expected " + std::to_string(4 * count) + " bytes (frames * dims * 3 float32), got " +
-                   std::to_string(have));
+  const auto nodes = static_cast<size_t>(grid.node_count());
+  if (nodes > have / 12 / static_cast<size_t>(frames) || 12 * nodes * static_cast<size_t>(frames) != have) {
+    const double want = 12.0 * static_cast<double>(nodes) * frames;
+    fail(name, "data: expected " + (want < 1e18 ? std::to_string(static_cast<size_t>(want)) : std::to_string(want)) +
+                   " bytes (frames * dims * 3 float32), got " + std::to_string(have));
+  }
+  const size_t count = nodes * static_cast<size_t>(frames) * 3;
   std::vector<float> data(count);
   for (size_t i = 0; i < count; ++i) {
     data[i] = load_le(bytes.data() + pos + 4 * i);

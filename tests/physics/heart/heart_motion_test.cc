@@ -100,6 +100,18 @@ TEST(HeartMotion, PeriodicAndContinuousAcrossTheCycle) {
   EXPECT_LT(max_jump, 1e-4);  // < 0.1 mm per 1/1000 cycle
 }
 
+// frames x dims x 12 bytes wrapped size_t to 764, so a 764-byte data part passed the size check
+// (SEGV); found by fuzzing the scene's motion_file
+TEST(HeartMotion, SizesThatOverflowAreRefused) {
+  std::string good = small_motion().serialize();
+  std::string header = good.substr(0, good.find("data float32-le\n") + 16);
+  header.replace(header.find("frames 4"), 8, "frames 59809");
+  header.replace(header.find("dims 3 3 2"), 10, "dims 24151 45005 23647");
+  const std::string m = parse_error(header + std::string(764, '\0'));
+  EXPECT_EQ(m.rfind("m.motion: data: expected ", 0), 0u) << m;
+  EXPECT_NE(m.find("got 764"), std::string::npos) << m;
+}
+
 TEST(HeartMotion, BadFilesNameWhatIsWrong) {
   const std::string good = small_motion().serialize();
   auto replace = [&](const std::string& from, const std::string& to) {

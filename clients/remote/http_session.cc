@@ -90,7 +90,7 @@ void HttpSession::upgrade(http::request<http::string_body>&& req) {
     spdlog::warn("remote: refused a connection with a wrong token");
     return respond(plain(version, http::status::forbidden, "wrong token\n"));
   }
-  if (hub_.full()) return respond(plain(version, http::status::service_unavailable, "too many connections\n"));
+  if (hub_.full(*role)) return respond(plain(version, http::status::service_unavailable, "too many connections\n"));
   // a page may ask for fewer frames; anything unreadable or non-finite ("nan", "inf") gets the cap
   double fps = hub_.limits().max_fps;
   if (const auto asked = query_param(sv(req.target()), "fps")) {

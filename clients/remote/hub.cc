@@ -17,7 +17,14 @@ Hub::Hub(const HubLimits& limits, const CommandLimits& command_limits, CommandSi
          KeyboardInstrument* keyboard)
     : limits_(limits), command_limits_(command_limits), sink_(std::move(sink)), tracker_(tracker), keyboard_(keyboard) {}
 
-bool Hub::full() const { return sessions_.size() >= limits_.max_clients; }
+bool Hub::full(Role role) const {
+  if (sessions_.size() >= limits_.max_clients) return true;
+  if (role == Role::kController) return false;
+  size_t observers = 0;
+  for (const auto& [id, weak] : sessions_)
+    if (const auto s = weak.lock(); s && s->role() == Role::kObserver) ++observers;
+  return observers + 1 >= limits_.max_clients;
+}
 
 uint64_t Hub::join(const std::shared_ptr<WsSession>& s) {
   const uint64_t id = next_id_++;

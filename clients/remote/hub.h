@@ -45,7 +45,9 @@ class Hub {
   Hub(const HubLimits& limits, const CommandLimits& command_limits, CommandSink sink, SessionTracker& tracker,
       KeyboardInstrument* keyboard);
 
-  bool full() const;
+  // no room for one more connection of this role: observers leave one slot free, so a crowd of
+  // observers never locks the controller out (64 observers once did)
+  bool full(Role role) const;
   uint64_t join(const std::shared_ptr<WsSession>& session);  // sends hello and the latest of everything
   void leave(WsSession& session);                            // releases what the connection held
   void on_text(WsSession& session, const std::string& text);

@@ -1,5 +1,7 @@
 #include "clients/remote/request_target.h"
 
+#include <cctype>
+
 namespace pcisim::remote {
 
 std::string_view target_path(std::string_view target) { return target.substr(0, target.find('?')); }
@@ -20,10 +22,15 @@ std::optional<std::string> query_param(std::string_view target, std::string_view
   return std::nullopt;
 }
 
+// the scheme is case-insensitive (RFC 7235 section 2.1): "bearer" and "BEARER" are "Bearer"
 std::string bearer_token(std::string_view authorization) {
-  constexpr std::string_view prefix = "Bearer ";
-  if (authorization.substr(0, prefix.size()) != prefix) return "";
-  return std::string(authorization.substr(prefix.size()));
+  constexpr std::string_view scheme = "bearer";
+  if (authorization.size() <= scheme.size() || authorization[scheme.size()] != ' ') return "";
+  for (size_t i = 0; i < scheme.size(); ++i)
+    if (std::tolower(static_cast<unsigned char>(authorization[i])) != scheme[i]) return "";
+  std::string_view token = authorization.substr(scheme.size() + 1);
+  while (!token.empty() && token.front() == ' ') token.remove_prefix(1);
+  return std::string(token);
 }
 
 }  // namespace pcisim::remote

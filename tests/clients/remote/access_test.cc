@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <set>
 
+#include "clients/remote/request_target.h"
 #include "remote_test_support.h"
 
 namespace pcisim::remote::test {
@@ -89,15 +90,32 @@ TEST(RemoteAccess, ObserverAndControllerTokensGiveTheirRoles) {
   EXPECT_TRUE(eventually([&] { return g.gateway->hub_stats().clients == 3; }));
 }
 
-TEST(RemoteAccess, ConnectionsBeyondTheLimitAreRefused) {
+// observers fill all but one slot: the controller always gets in (64 observers once locked it out)
+TEST(RemoteAccess, ConnectionsBeyondTheLimitAreRefusedButTheControllerAlwaysGetsIn) {
   GatewayOptions o;
-  o.hub.max_clients = 2;
+  o.hub.max_clients = 3;
   TestGateway g(o);
-  WsClient a, b, c;
+  WsClient a, b, c, controller, d;
   ASSERT_EQ(a.connect(g.port(), ws_target(kObserverToken)), 101);
   ASSERT_EQ(b.connect(g.port(), ws_target(kObserverToken)), 101);
   ASSERT_TRUE(eventually([&] { return g.gateway->hub_stats().clients == 2; }));
-  EXPECT_EQ(c.connect(g.port(), ws_target(kObserverToken)), 503);
+  EXPECT_EQ(c.connect(g.port(), ws_target(kObserverToken)), 503) << "the last slot is the controller's";
+  EXPECT_EQ(controller.connect(g.port(), ws_target(kControllerToken)), 101);
+  ASSERT_TRUE(eventually([&] { return g.gateway->hub_stats().clients == 3; }));
+  EXPECT_EQ(d.connect(g.port(), ws_target(kControllerToken)), 503) << "then nobody";
+}
+
+// the auth scheme is case-insensitive (RFC 7235); a lower-case "bearer" was refused
+TEST(RemoteAccess, TheBearerSchemeIsCaseInsensitive) {
+  EXPECT_EQ(bearer_token("Bearer abc"), "abc");
+  EXPECT_EQ(bearer_token("bearer abc"), "abc");
+  EXPECT_EQ(bearer_token("BEARER  abc"), "abc");
+  EXPECT_EQ(bearer_token("Bearerabc"), "");
+  EXPECT_EQ(bearer_token("Basic abc"), "");
+  EXPECT_EQ(bearer_token("bear"), "");
+  TestGateway g;
+  WsClient lower;
+  EXPECT_EQ(lower.connect(g.port(), "/ws", true, 0, std::string("bearer ") + kObserverToken), 101);
 }
 
 }  // namespace

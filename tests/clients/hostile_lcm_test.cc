@@ -11,14 +11,14 @@
 #include "clients/capture/capture_sink.h"
 #include "protocol/channels.h"
 #include "remote_test_support.h"
-#include "tests/common/malformed_lcm.h"
+#include "fuzz/lcm_mutants.h"
 
 namespace pcisim::clients {
 namespace {
 
 using namespace std::chrono_literals;
 
-int64_t publish_all(lcm::LCM& lcm, const char* channel, const pcisim::testing::MessageCase& c) {
+int64_t publish_all(lcm::LCM& lcm, const char* channel, const pcisim::fuzz::MessageCase& c) {
   for (const auto& m : c.mutants) lcm.publish(channel, m.bytes.data(), static_cast<unsigned>(m.bytes.size()));
   return static_cast<int64_t>(c.mutants.size());
 }
@@ -43,7 +43,7 @@ TEST(HostileLcm, BridgeCountsEveryMalformedForceCommand) {
   BridgeStats stats;
   std::thread run([&] { stats = bridge.run(stop); });
   std::this_thread::sleep_for(100ms);
-  const auto force = pcisim::testing::force_case();
+  const auto force = pcisim::fuzz::force_case();
   const int64_t sent = publish_all(lcm, protocol::kForceChannel, force);
   lcm.publish(protocol::kForceChannel, force.good.data(), static_cast<unsigned>(force.good.size()));
   run.join();
@@ -59,8 +59,8 @@ TEST(HostileLcm, CaptureCountsEveryMalformedFrameAndSampleAndWritesNone) {
   lcm::LCM images("memq://"), control("memq://");
   images.subscribe(protocol::kXrayChannel, &CaptureSink::on_frame, &sink);
   control.subscribe(protocol::kInstrumentChannel, &CaptureSink::on_instrument, &sink);
-  const auto frames = pcisim::testing::xray_case();
-  const auto instrument = pcisim::testing::instrument_case();
+  const auto frames = pcisim::fuzz::xray_case();
+  const auto instrument = pcisim::fuzz::instrument_case();
   const int64_t bad_frames = publish_all(images, protocol::kXrayChannel, frames);
   const int64_t bad_samples = publish_all(control, protocol::kInstrumentChannel, instrument);
   while (images.handleTimeout(10) > 0 || control.handleTimeout(10) > 0) {
@@ -83,11 +83,11 @@ TEST(HostileLcm, CaptureCountsEveryMalformedFrameAndSampleAndWritesNone) {
 TEST(HostileLcm, GatewayCountsEveryMalformedMessageOnEveryChannel) {
   remote::test::TestGateway g;
   int64_t control_sent = 0;
-  control_sent += publish_all(g.control, protocol::kWireChannel, pcisim::testing::wire_case());
-  control_sent += publish_all(g.control, protocol::kStatusChannel, pcisim::testing::status_case());
-  control_sent += publish_all(g.control, protocol::kSessionChannel, pcisim::testing::session_case());
-  control_sent += publish_all(g.control, protocol::kInstrumentChannel, pcisim::testing::instrument_case());
-  const auto frames = pcisim::testing::xray_case();
+  control_sent += publish_all(g.control, protocol::kWireChannel, pcisim::fuzz::wire_case());
+  control_sent += publish_all(g.control, protocol::kStatusChannel, pcisim::fuzz::status_case());
+  control_sent += publish_all(g.control, protocol::kSessionChannel, pcisim::fuzz::session_case());
+  control_sent += publish_all(g.control, protocol::kInstrumentChannel, pcisim::fuzz::instrument_case());
+  const auto frames = pcisim::fuzz::xray_case();
   const int64_t frames_sent = publish_all(g.images, protocol::kXrayChannel, frames);
   g.images.publish(protocol::kXrayChannel, frames.good.data(), static_cast<unsigned>(frames.good.size()));
   const auto end = std::chrono::steady_clock::now() + 10s;

@@ -5,12 +5,12 @@
 
 #include "protocol/message_checks.h"
 #include "tests/common/counting_new.h"
-#include "tests/common/malformed_lcm.h"
+#include "fuzz/lcm_mutants.h"
 
 namespace pcisim::protocol {
 namespace {
 
-using testing::MessageCase;
+using fuzz::MessageCase;
 
 template <class M>
 void expect_refused(const MessageCase& c) {
@@ -28,19 +28,19 @@ void expect_refused(const MessageCase& c) {
   }
 }
 
-TEST(HostileDecode, InstrumentState) { expect_refused<pcisim_lcm::instrument_state_t>(testing::instrument_case()); }
-TEST(HostileDecode, ForceCommand) { expect_refused<pcisim_lcm::force_command_t>(testing::force_case()); }
-TEST(HostileDecode, SessionCommand) { expect_refused<pcisim_lcm::session_command_t>(testing::session_case()); }
-TEST(HostileDecode, SimStatus) { expect_refused<pcisim_lcm::sim_status_t>(testing::status_case()); }
-TEST(HostileDecode, WireState) { expect_refused<pcisim_lcm::wire_state_t>(testing::wire_case()); }
-TEST(HostileDecode, XrayFrame) { expect_refused<pcisim_lcm::xray_frame_t>(testing::xray_case()); }
+TEST(HostileDecode, InstrumentState) { expect_refused<pcisim_lcm::instrument_state_t>(fuzz::instrument_case()); }
+TEST(HostileDecode, ForceCommand) { expect_refused<pcisim_lcm::force_command_t>(fuzz::force_case()); }
+TEST(HostileDecode, SessionCommand) { expect_refused<pcisim_lcm::session_command_t>(fuzz::session_case()); }
+TEST(HostileDecode, SimStatus) { expect_refused<pcisim_lcm::sim_status_t>(fuzz::status_case()); }
+TEST(HostileDecode, WireState) { expect_refused<pcisim_lcm::wire_state_t>(fuzz::wire_case()); }
+TEST(HostileDecode, XrayFrame) { expect_refused<pcisim_lcm::xray_frame_t>(fuzz::xray_case()); }
 
 // the finding itself: a 66-byte session command whose scene_path length is 0 (it threw
 // std::length_error out of the handler and ended the server)
 TEST(HostileDecode, SessionCommandWithZeroLengthPathIsRefused) {
   pcisim_lcm::session_command_t m{};
   m.scene_path = "";
-  auto bytes = testing::encode(m);
+  auto bytes = fuzz::encode(m);
   const size_t len_at = 8 + 8 + 8 + 1;  // fingerprint, utime, seq, command
   ASSERT_EQ(bytes[len_at + 3], 1);      // the encoder wrote 1 (just the NUL)
   bytes[len_at + 3] = 0;

@@ -10,7 +10,7 @@
 #include "protocol/channels.h"
 #include "protocol/message_checks.h"
 #include "server/realtime/clock.h"
-#include "tests/common/malformed_lcm.h"
+#include "fuzz/lcm_mutants.h"
 
 namespace pcisim::server {
 namespace {
@@ -166,8 +166,8 @@ void publish_raw(lcm::LCM& lcm, const char* channel, const std::vector<uint8_t>&
 // every malformed shape on both channels the server listens on: each counted as bad, none
 // delivered, nothing thrown out of the handler; a good command after the flood still works
 TEST_F(LcmIoTest, EveryMalformedShapeOnEveryChannelIsCountedAndTheServerGoesOn) {
-  const auto instrument = testing::instrument_case();
-  const auto session = testing::session_case();
+  const auto instrument = fuzz::instrument_case();
+  const auto session = fuzz::session_case();
   int64_t sent = 0;
   for (const auto& m : instrument.mutants) publish_raw<int>(lcm, protocol::kInstrumentChannel, m.bytes), ++sent;
   for (const auto& m : session.mutants) publish_raw<int>(lcm, protocol::kSessionChannel, m.bytes), ++sent;

@@ -1,7 +1,7 @@
 #pragma once
 // Every malformed shape of every pcisim LCM message, for the tests that show no handler in any
-// program lets one through or falls over: truncation at every byte, trailing bytes, a wrong
-// fingerprint, and for each string length and array count 0, -1, INT32_MIN, just past the end,
+// program lets one through or falls over, and for pcisim-lcm-flood (scripts/soak). The shapes:
+// truncation at every byte, trailing bytes, a wrong fingerprint, and for each string length and array count 0, -1, INT32_MIN, just past the end,
 // INT32_MAX and 1e8. Length fields are found in a valid encoding by their known neighbours.
 #include <cstdint>
 #include <cstring>
@@ -17,7 +17,7 @@
 #include "pcisim_lcm/wire_state_t.hpp"
 #include "pcisim_lcm/xray_frame_t.hpp"
 
-namespace pcisim::testing {
+namespace pcisim::fuzz {
 
 using Bytes = std::vector<uint8_t>;
 
@@ -166,4 +166,4 @@ inline MessageCase xray_case() {
                              {length_field(good, {0xde, 0xad, 0xbe, 0xef}), "num_bytes"}})};
 }
 
-}  // namespace pcisim::testing
+}  // namespace pcisim::fuzz

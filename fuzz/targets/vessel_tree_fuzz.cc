@@ -1,0 +1,17 @@
+// libFuzzer: a centerline file (vessels.json, physics/vessel/vessel_tree_json).
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+
+#include "fuzz/targets/fuzz_file.h"
+#include "physics/vessel/vessel_tree_json.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const pcisim::fuzz::MemoryFile file(data, size);
+  if (!file.ok()) return 0;
+  try {
+    (void)pcisim::physics::read_vessel_tree_json(file.path());
+  } catch (const std::exception&) {
+  }
+  return 0;
+}

@@ -1,0 +1,21 @@
+// libFuzzer: a MetaImage (PCISIM_FUZZ_NRRD undefined) or NRRD file, header and inline data,
+// through the volume reader. A refusal is a VolumeIoError; anything else is a finding.
+#include <cstddef>
+#include <cstdint>
+
+#include "fuzz/targets/fuzz_file.h"
+#include "xray/volume/volume_io.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const pcisim::fuzz::MemoryFile file(data, size);
+  if (!file.ok()) return 0;
+  try {
+#ifdef PCISIM_FUZZ_NRRD
+    (void)pcisim::xray::read_nrrd(file.path());
+#else
+    (void)pcisim::xray::read_metaimage(file.path());
+#endif
+  } catch (const pcisim::xray::VolumeIoError&) {
+  }
+  return 0;
+}

@@ -37,7 +37,21 @@ const std::map<std::string, std::vector<std::string>>& allowed() {
   return rules;
 }
 
+// wrong-way edges that exist today and are tracked by the "Anatomy as data" issue (the coronary
+// tree moves to anatomy/, the realtime primitives and the JSON reader out of server/). Each one
+// here is a debt; a new one fails the test. Remove entries as they are paid.
+const std::set<std::pair<std::string, std::string>>& known_debts() {
+  static const std::set<std::pair<std::string, std::string>> debts = {
+      {"xray", "physics/vessel/vessel_tree.h"},     {"xray", "physics/vessel/coronary_phantom.h"},
+      {"xray", "physics/"},                         {"clients", "server/realtime/clock.h"},
+      {"clients", "server/realtime/deadline_schedule.h"}, {"clients", "server/realtime/realtime_setup.h"},
+      {"clients", "server/scene/json_reader.h"},   {"clients", "server/"},
+  };
+  return debts;
+}
+
 bool edge_allowed(const std::string& layer, const std::string& include) {
+  if (known_debts().contains({layer, include})) return true;
   const auto slash = include.find('/');
   const std::string head = include.substr(0, slash);
   if (head == layer) return true;
@@ -138,7 +152,7 @@ TEST(Layers, CheckerFindsWrongWayIncludesInATree) {
   for (const char* d : {"physics", "haptics", "server", "clients", "anatomy"}) fs::create_directories(root / d);
   std::ofstream(root / "physics/a.cc") << "#include \"anatomy/x.h\"\n#include \"server/server.h\"\n";
   std::ofstream(root / "haptics/b.h") << "#include \"physics/local_force_model.h\"\n#include \"physics/world.h\"\n";
-  std::ofstream(root / "clients/c.cc") << "#include <vector>\n  #  include \"server/realtime/clock.h\"\n#include \"c.h\"\n";
+  std::ofstream(root / "clients/c.cc") << "#include <vector>\n  #  include \"server/server.h\"\n#include \"c.h\"\n";
   const auto v = check_includes(root);
   fs::remove_all(root);
   ASSERT_EQ(v.size(), 3u) << describe(v);

@@ -79,11 +79,30 @@ def main():
     cap = last_match(os.path.join(logs, "capture.log"), r"capture: (\d+) frames written.*?(\d+) undecodable")
     captured = int(cap.group(1)) if cap else None
     capture_bad = int(cap.group(2)) if cap else None
-    published = frames.get("published")
+    # frames the server published while the capture ran: each pipeline numbers its frames from 0,
+    # so the capture's sidecars, in the order written, give each pipeline's first and last frame
+    # number; a gap inside is a lost frame
+    published = 0
+    first = last = None
+    fluoro = os.path.join(out, "frames", "fluoro")
+    for name in sorted(os.listdir(fluoro)) if os.path.isdir(fluoro) else []:
+        if not name.endswith(".json"):
+            continue
+        seq = load(os.path.join(fluoro, name), {}).get("frame")
+        if seq is None:
+            continue
+        if last is not None and seq <= last:
+            published += last - first + 1
+            first = None
+        if first is None:
+            first = seq
+        last = seq
+    if first is not None:
+        published += last - first + 1
     if captured is None:
         failures.append("the capture did not report (crashed?)")
-    elif published is not None and captured < published:
-        failures.append(f"frames lost: {published} published, {captured} captured")
+    elif captured < published:
+        failures.append(f"frames lost: {published} published while the capture ran, {captured} captured")
     bridge = last_match(os.path.join(logs, "bridge.log"), r"(\d+) force commands received, (\d+) bad")
     remote = last_match(os.path.join(logs, "remote.log"), r"remote: done: (.*)")
     for name in ("server", "bridge", "capture", "remote", "console", "flood"):
@@ -94,11 +113,11 @@ def main():
                 if bad in text:
                     failures.append(f"{name}: '{bad}' in its log")
 
-    minutes = max((pts[-1][0] for pts in rss.values()), default=0) / 60
+    minutes = console.get("seconds", 0) / 60
     lines = [
         "# Soak and fault run",
         "",
-        f"`scripts/soak --minutes {minutes:.0f}` on {machine()}, {datetime.date.today()}. Server (built-in scene), "
+        f"`scripts/soak --minutes {minutes:.1f}` on {machine()}, {datetime.date.today()}. Server (built-in scene), "
         "instrument bridge (a scripted trainee going into the LAD and back every 40 s), fluoroscopy capture, remote "
         "gateway with one observer page, an instructor console (beam on, a C-arm move every 5 s, contrast every 20 s, "
         "a scene reload every 2 min) and `pcisim-lcm-flood` publishing malformed messages on every channel, all over "
@@ -122,9 +141,11 @@ def main():
         f"Messages on the force channel that were not the server's (the flood's): {forces.get('undecodable', '?')}.")
     lines += ["", "## Frames", ""]
     lines.append(
-        f"Published by the server (from frame sequence numbers, over {console.get('sent', {}).get('reloads', '?')} "
-        f"scene reloads): {published}; received by the console: {frames.get('received')}; written by the capture: "
-        f"{captured}; streamed to the observer page: {observer.get('frames', '?')} (the gateway paces pages).")
+        f"Published by the server while the capture ran (from the frame numbers in the capture's sidecars, each "
+        f"pipeline counting from 0, over {console.get('sent', {}).get('reloads', '?')} scene reloads): {published}; "
+        f"written by the capture: {captured}; received by the console (which starts once the server runs): "
+        f"{frames.get('received')}; streamed to the observer page: {observer.get('frames', '?')} (the gateway paces "
+        f"pages; it drops frames for a slow page by design).")
     lines += ["", "## Bad input counted", "", "| where | count |", "|---|---|"]
     lines.append(f"| server, LCM messages dropped as bad (last pipeline) | {stats.get('lcm', {}).get('dropped_bad', '?')} |")
     for k, v in sorted(stats.get("session", {}).items()) if isinstance(stats.get("session"), dict) else []:

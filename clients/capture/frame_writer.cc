@@ -54,8 +54,13 @@ std::string FrameWriter::write(const pcisim_lcm::xray_frame_t& f) {
   if (f.pixel_format != pcisim_lcm::xray_frame_t::FORMAT_GRAY16 ||
       static_cast<int64_t>(f.data.size()) != int64_t{f.width} * f.height * 2)
     throw std::runtime_error(fmt::format("frame {}: not a 16-bit frame of {}x{} pixels", f.seq, f.width, f.height));
-  const fs::path dir = fs::path(out_dir_) / (f.cine ? fmt::format("cine_{:03d}", f.cine_run) : std::string("fluoro"));
+  // a server that restarts its pipeline (a scene reload) numbers its frames from 0 again: a frame
+  // whose file exists starts a new restart_NN/ folder, so no frame is ever written over
+  const std::string leaf = f.cine ? fmt::format("cine_{:03d}", f.cine_run) : std::string("fluoro");
+  auto folder = [&] { return restart_ == 0 ? fs::path(out_dir_) / leaf : fs::path(out_dir_) / fmt::format("restart_{:02d}", restart_) / leaf; };
   std::error_code ec;
+  while (fs::exists(folder() / fmt::format("frame_{:06d}.png", f.seq), ec)) ++restart_;
+  const fs::path dir = folder();
   fs::create_directories(dir, ec);
   if (ec) throw std::runtime_error(fmt::format("{}: cannot create: {}", dir.string(), ec.message()));
   const fs::path png = dir / fmt::format("frame_{:06d}.png", f.seq);

@@ -124,6 +124,12 @@ def main():
     ]
     for name, first, peak, last, s in rows:
         lines.append(f"| {name} | {first:.1f} | {peak:.1f} | {last:.1f} | {s:+.3f} |")
+    if "server" in rss:
+        per_min = []
+        for minute in range(0, int(max(t for t, _ in rss["server"]) // 60) + 1):
+            near = min(rss["server"], key=lambda p: abs(p[0] - 60 * minute))
+            per_min.append(f"{near[1]:.1f}")
+        lines += ["", f"Server RSS at each minute (MiB; scene reloads every 2 min): {', '.join(per_min)}."]
     lines += ["", "![RSS over time](soak.png)", "", "## Forces (every command the server sent, checked by the console)", ""]
     lines.append(
         f"{forces.get('received', 0)} force commands: {forces.get('non_finite', '?')} non-finite, "

@@ -105,8 +105,13 @@ void LcmIo::on_session(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   }
   using C = pcisim_lcm::session_command_t;
   switch (session_msg_.command) {
-    case C::CMD_PAUSE: state_.paused = true; spdlog::info("session: paused"); break;
-    case C::CMD_RESUME: state_.paused = false; spdlog::info("session: resumed"); break;
+    // logged on a change only: a stream of the same command must not flood the log
+    case C::CMD_PAUSE:
+      if (!state_.paused.exchange(true)) spdlog::info("session: paused");
+      break;
+    case C::CMD_RESUME:
+      if (state_.paused.exchange(false)) spdlog::info("session: resumed");
+      break;
     case C::CMD_RESET:
       if (!limits_.allow_reset(monotonic_ns())) {
         refuse("reset", fmt::format("within {} s of the last one", limits_.params().min_reset_interval_s));
@@ -194,7 +199,7 @@ void LcmIo::request_scene(const std::string& path) {
   } catch (const std::exception& e) {  // SceneError, or anything else a path can provoke
     state_.scene_rejected.fetch_add(1);
     limits_.count_scene_rejected();
-    spdlog::error("session: refused scene: {}", e.what());
+    refuse("scene", e.what());
   }
 }
 

@@ -94,20 +94,25 @@ struct MessageCase {
   std::vector<Mutant> mutants;
 };
 
+// a type with no string or array: only the framing can be wrong
+template <class M>
+MessageCase fixed_size_case(const std::string& type, const M& m) {
+  const Bytes good = encode(m);
+  return {type, good, framing_mutants(good)};
+}
+
 inline MessageCase instrument_case() {
   pcisim_lcm::instrument_state_t m{};
   m.utime = 1;
   m.insertion_mm = 10;
-  const Bytes good = encode(m);
-  return {"instrument_state_t", good, framing_mutants(good)};
+  return fixed_size_case("instrument_state_t", m);
 }
 
 inline MessageCase force_case() {
   pcisim_lcm::force_command_t m{};
   m.utime = 1;
   m.axial_force_n = 0.5;
-  const Bytes good = encode(m);
-  return {"force_command_t", good, framing_mutants(good)};
+  return fixed_size_case("force_command_t", m);
 }
 
 inline MessageCase session_case() {

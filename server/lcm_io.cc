@@ -197,7 +197,6 @@ void LcmIo::request_scene(const std::string& path) {
     limits_.book_scene_load(monotonic_ns());
     spdlog::info("session: scene {} accepted, restarting the pipeline", path);
   } catch (const std::exception& e) {  // SceneError, or anything else a path can provoke
-    state_.scene_rejected.fetch_add(1);
     limits_.count_scene_rejected();
     refuse("scene", e.what());
   }

@@ -78,7 +78,6 @@ struct SharedState {
   std::mutex scene_mutex;
   std::optional<Scene> requested_scene;
   std::atomic<bool> scene_requested{false};
-  std::atomic<int64_t> scene_rejected{0};
 
   // fluoroscopy controls: written by lcm rx, read by the x-ray thread. The instrument's pedals
   // count only while its samples arrive: a crashed bridge or unplugged box lifts them

@@ -1,8 +1,7 @@
 // pcisim-soak-console: the console side of scripts/soak. It plays an instructor who keeps the beam
 // on, moves the C-arm, injects contrast and reloads the scene on a schedule, and it watches what a
 // trainee must never get: a non-finite force or one beyond the scene's peak. It also counts the
-// frames the server published (from their sequence numbers) against the frames it received, and
-// keeps the newest status. Writes one JSON summary at the end.
+// frames it receives and keeps the newest status. Writes one JSON summary at the end.
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <cmath>
@@ -31,9 +30,7 @@ struct Watch {
   double max_abs_force_n = 0, max_abs_torque_nmm = 0;
   int64_t statuses = 0, status_bad = 0;
   nlohmann::json last_status = nlohmann::json::object();
-  // frames: each server pipeline numbers its frames from 0; a drop in seq starts a new segment
-  int64_t frames_received = 0, frames_bad = 0, frames_published = 0;
-  int64_t segment_first = -1, segment_last = -1;
+  int64_t frames_received = 0, frames_bad = 0;
   pcisim_lcm::force_command_t force;
   pcisim_lcm::sim_status_t status;
   pcisim_lcm::xray_frame_t frame;
@@ -78,15 +75,6 @@ struct Watch {
       return;
     }
     ++frames_received;
-    if (segment_first < 0 || frame.seq < segment_last) {
-      close_segment();
-      segment_first = frame.seq;
-    }
-    segment_last = frame.seq;
-  }
-  void close_segment() {
-    if (segment_first >= 0) frames_published += segment_last - segment_first + 1;
-    segment_first = segment_last = -1;
   }
 };
 
@@ -103,8 +91,7 @@ pcisim_lcm::session_command_t command(int8_t cmd, int64_t seq) {
 int main(int argc, char** argv) {
   CLI::App app{"pcisim-soak-console: an instructor's console for scripts/soak. Keeps fluoroscopy on, moves the "
                "C-arm, injects contrast and reloads the scene on a schedule; checks every force command is finite "
-               "and within the peak; counts frames published (by sequence number) and received. Writes a JSON "
-               "summary."};
+               "and within the peak; counts the frames it receives. Writes a JSON summary."};
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0", image_url = "udpm://239.255.76.67:7668?ttl=0&recv_buf_size=4194304";
   std::string scene_path, out_path;
   double seconds = 60, carm_every_s = 5, contrast_every_s = 20, reload_every_s = 120;
@@ -183,7 +170,6 @@ int main(int argc, char** argv) {
   }
   g_stop = true;
   image_rx.join();
-  w.close_segment();
 
   nlohmann::json j = {
       {"seconds", (monotonic_ns() - t0) * 1e-9},
@@ -196,7 +182,7 @@ int main(int argc, char** argv) {
         {"max_abs_force_n", w.max_abs_force_n},
         {"max_abs_torque_nmm", w.max_abs_torque_nmm},
         {"peak_force_n", w.peak_force_n}}},
-      {"frames", {{"published", w.frames_published}, {"received", w.frames_received}, {"undecodable", w.frames_bad}}},
+      {"frames", {{"received", w.frames_received}, {"undecodable", w.frames_bad}}},
       {"status", {{"received", w.statuses}, {"undecodable", w.status_bad}, {"last", w.last_status}}}};
   std::ofstream out(out_path);
   out << j.dump(2) << "\n";

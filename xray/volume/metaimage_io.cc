@@ -175,18 +175,12 @@ Volume read_metaimage(const std::string& path) {
     bytes = external.data();
     available = static_cast<int64_t>(external.size());
   }
-  io::VoxelData data;
-  data.bytes = bytes;
-  data.available = available;
-  data.skip = header_size;
-  data.compressed = compressed;
-  data.big_endian = msb;
-  data.data_name = data_name;
-  data.size_field = "DimSize";
-  data.skip_field = "HeaderSize";
-  data.compression_field = "CompressedData";
-  if (header_size == -1 && compressed) data.skip = 0;
-  io::load_voxels(path, data, vol);
+  // a compressed file's HeaderSize -1 has no meaning (its size is not the voxels'): ignored
+  io::load_voxels(path,
+                  {.bytes = bytes, .available = available, .skip = header_size == -1 && compressed ? 0 : header_size,
+                   .compressed = compressed, .big_endian = msb, .data_name = data_name, .size_field = "DimSize",
+                   .skip_field = "HeaderSize", .compression_field = "CompressedData"},
+                  vol);
   return vol;
 }
 

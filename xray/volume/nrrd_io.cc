@@ -171,17 +171,11 @@ Volume read_nrrd(const std::string& path) {
     bytes = external.data();
     available = static_cast<int64_t>(external.size());
   }
-  io::VoxelData data;
-  data.bytes = bytes;
-  data.available = available;
-  data.skip = byte_skip;
-  data.compressed = gzip;
-  data.big_endian = big_endian;
-  data.data_name = data_name;
-  data.size_field = "sizes";
-  data.skip_field = "byte skip";
-  data.compression_field = "encoding";
-  io::load_voxels(path, data, vol);
+  io::load_voxels(path,
+                  {.bytes = bytes, .available = available, .skip = byte_skip, .compressed = gzip,
+                   .big_endian = big_endian, .data_name = data_name, .size_field = "sizes", .skip_field = "byte skip",
+                   .compression_field = "encoding"},
+                  vol);
   return vol;
 }
 

@@ -30,7 +30,7 @@
 #include "physics/blood/blood_chain_mail.h"
 #include "physics/guidewire/chain_mail_wire.h"
 #include "physics/guidewire/sdf_lumen.h"
-#include "physics/vessel/coronary_phantom.h"
+#include "anatomy/phantom/coronary_phantom.h"
 #include "physics/world.h"
 
 namespace pcisim::bench {
@@ -51,7 +51,7 @@ struct Probe {
   Vector3d poiseuille_m_per_s;  // 2 x mean x (1 - (r/R)^2) along the centerline, downstream
 };
 
-std::vector<Probe> make_probes(const VesselTree& tree, double mean_m_per_s) {
+std::vector<Probe> make_probes(const anatomy::VesselTree& tree, double mean_m_per_s) {
   std::vector<Probe> probes;
   for (const auto& b : tree.branches) {
     if (b.name != "LM" && b.name != "LAD" && b.name != "LCx" && b.name != "RCA") continue;
@@ -79,7 +79,7 @@ struct FieldRun {
   double step_ms = 0.0;  // median BloodChainMail::step over the cycle
 };
 
-FieldRun run_field(const BloodFlowParams& params, const VesselTree& tree, const std::vector<Probe>& probes) {
+FieldRun run_field(const BloodFlowParams& params, const anatomy::VesselTree& tree, const std::vector<Probe>& probes) {
   FieldRun run;
   BloodChainMail blood(params, tree);
   run.cells = blood.cell_count();
@@ -162,7 +162,7 @@ int run_bench(const std::vector<std::string>& args) {
   const std::vector<double> spacings_mm = {kReferenceSpacingMm, 0.5, 1.0, 2.0, 4.0};
   const std::vector<double> links_mm = o.quick ? std::vector<double>{1.5} : std::vector<double>{0.75, 1.5, 3.0};
 
-  const VesselTree tree = make_coronary_phantom({1});
+  const anatomy::VesselTree tree = anatomy::make_coronary_phantom({1});
   const BloodFlowParams defaults;
   const std::vector<Probe> probes = make_probes(tree, defaults.mean_velocity_m_per_s);
   auto sdf = std::make_shared<const SdfLumen>(tree, VesselContactParams{}.sdf_spacing_m);

@@ -29,7 +29,7 @@
 #include "bench/trainee_session.h"
 #include "physics/guidewire/chain_mail_wire.h"
 #include "physics/guidewire/sdf_lumen.h"
-#include "physics/vessel/coronary_phantom.h"
+#include "anatomy/phantom/coronary_phantom.h"
 #include "physics/world.h"
 
 namespace pcisim::bench {
@@ -128,7 +128,7 @@ int run_bench(const std::vector<std::string>& args) {
   const std::vector<double> spacings = o.quick ? std::vector<double>{0.2, 0.4} : std::vector<double>{0.1, 0.2, 0.4};
   const Setting finest{800, 8, 0.1};
 
-  const VesselTree tree = make_coronary_phantom({1});
+  const anatomy::VesselTree tree = anatomy::make_coronary_phantom({1});
   std::map<double, std::shared_ptr<const SdfLumen>> fields;
   std::map<double, double> build_ms;
   auto field = [&](double spacing_mm) {

@@ -30,7 +30,7 @@
 #include "physics/heart/beating_heart.h"
 #include "physics/motion/vessel_skin.h"
 #include "physics/pbd/pbd_cuda_solver.h"
-#include "physics/vessel/coronary_phantom.h"
+#include "anatomy/phantom/coronary_phantom.h"
 
 namespace pcisim::bench {
 namespace {
@@ -166,7 +166,7 @@ int run_bench(const std::vector<std::string>& args) {
   const int ref_substeps = o.quick ? 64 : 256, ref_iterations = 4;
   const std::string machine = machine_info();
   int particles = 0, driven = 0, springs = 0, bends = 0, free_n = 0;
-  const physics::VesselTree tree = physics::make_coronary_phantom({1});
+  const anatomy::VesselTree tree = anatomy::make_coronary_phantom({1});
   std::optional<VesselSkin> skin_slot;
   {
     const BeatingHeart h(params_for(0.0, solvers[0], 1, 1));

@@ -28,7 +28,7 @@
 #include "physics/guidewire/sdf_lumen.h"
 #include "physics/heart/beating_heart.h"
 #include "physics/motion/vessel_skin.h"
-#include "physics/vessel/coronary_phantom.h"
+#include "anatomy/phantom/coronary_phantom.h"
 #include "physics/world.h"
 
 namespace pcisim::bench {
@@ -110,7 +110,7 @@ int run_bench(const std::vector<std::string>& args) {
 
   // 2. the full default scene, beating and still, sharing one SDF (built once, 0.2 mm)
   const auto t_sdf = Clock::now();
-  const VesselTree rest_tree = make_coronary_phantom({1});
+  const anatomy::VesselTree rest_tree = anatomy::make_coronary_phantom({1});
   auto sdf = std::make_shared<const SdfLumen>(rest_tree, VesselContactParams{}.sdf_spacing_m);
   const double sdf_ms = ms_since(t_sdf);
   const int repeats = quick ? 1 : 3;
@@ -147,7 +147,7 @@ int run_bench(const std::vector<std::string>& args) {
       for (const auto& p : wire.nodes_m()) world_nodes.push_back(skin.to_world(p));
       deform_ms += ms_since(t0);
       // the moved tree, as a rebuild would see it
-      VesselTree moved = w.vessel_tree();
+      anatomy::VesselTree moved = w.vessel_tree();
       int i = 0;
       for (auto& b : moved.branches)
         for (auto& p : b.points) p.position_m = skin.points_m()[i++];

@@ -21,11 +21,11 @@
 #include "bench/bench_registry.h"
 #include "bench/bench_stats.h"
 #include "bench/machine_info.h"
-#include "physics/vessel/coronary_phantom.h"
+#include "anatomy/phantom/coronary_phantom.h"
 #include "xray/fluoro/fluoroscopy.h"
 #include "xray/frame/png_writer.h"
 #include "xray/geometry/c_arm.h"
-#include "xray/phantom/thorax_phantom.h"
+#include "anatomy/phantom/thorax_phantom.h"
 #include "xray/projectors/attenuation_volume.h"
 #include "xray/projectors/siddon_projector.h"
 #include "xray/projectors/trilinear_projector.h"
@@ -111,7 +111,7 @@ struct FluoroResult {
 
 // adds add_hu x (the fraction of each voxel inside the rounded cone a-b) into frac as a maximum
 // (joints between segments are not counted twice); sub^3 samples per partly covered voxel
-void voxelise_cone(const Volume& v, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double ra, double rb,
+void voxelise_cone(const anatomy::Volume& v, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double ra, double rb,
                    float value, int sub, std::vector<float>* frac) {
   const Eigen::Vector3d o = v.origin_mm, s = v.spacing_mm, ab = b - a;
   const double len2 = std::max(ab.squaredNorm(), 1e-12), rmax = std::max(ra, rb), rmin = std::min(ra, rb);
@@ -161,7 +161,7 @@ void voxelise_cone(const Volume& v, const Eigen::Vector3d& a, const Eigen::Vecto
 
 FluoroResult run_fluoro(const Options& o) {
   FluoroResult res;
-  const physics::VesselTree tree = physics::make_coronary_phantom({.seed = 1});
+  const anatomy::VesselTree tree = anatomy::make_coronary_phantom({.seed = 1});
   FluoroSpec spec;  // 512^2 at 0.4 mm, phantom 256 x 256 x 128 at 1.4 mm, CPU trilinear
   spec.projector.trilinear.threads = o.threads;
   res.detector = spec.c_arm.width;
@@ -197,13 +197,13 @@ FluoroResult run_fluoro(const Options& o) {
   const Image overlay_line = fr.line_integrals();
   const DetectorGeometry g = frame.geometry;
   // ... vs the iodine and the wire voxelised into the same volume and all of it re-projected
-  ThoraxPhantomSpec ps;
+  anatomy::ThoraxPhantomSpec ps;
   ps.seed = spec.seed;
   ps.dims = spec.volume_dims;
   ps.spacing_mm = spec.volume_spacing_mm;
   ps.contrast = false;
-  const Volume base = make_thorax_phantom(ps, tree);
-  Volume vol = Volume::make(base.dims, base.spacing_mm, base.origin_mm, VoxelType::kFloat32);
+  const anatomy::Volume base = anatomy::make_thorax_phantom(ps, tree);
+  anatomy::Volume vol = anatomy::Volume::make(base.dims, base.spacing_mm, base.origin_mm, anatomy::VoxelType::kFloat32);
   std::vector<float> frac(static_cast<size_t>(base.voxel_count()));
   const double hu_per_mu = 1000.0 / spec.projector.attenuation.mu_water_per_mm;
   const auto& segs = fr.contrast().segments();
@@ -379,8 +379,8 @@ int run(const std::vector<std::string>& args) {
     return 0;
   }
   const auto t0 = std::chrono::steady_clock::now();
-  ThoraxPhantomSpec spec;  // 512 x 512 x 256 at 0.7 mm, seed 1, iodine lumens
-  const Volume volume = make_thorax_phantom(spec);
+  anatomy::ThoraxPhantomSpec spec;  // 512 x 512 x 256 at 0.7 mm, seed 1, iodine lumens
+  const anatomy::Volume volume = anatomy::make_thorax_phantom(spec);
   const double phantom_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   const auto t1 = std::chrono::steady_clock::now();
   const AttenuationVolume att(volume);

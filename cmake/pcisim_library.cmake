@@ -1,3 +1,20 @@
+# pcisim_include_root(TARGET LAYER [SCOPE]): TARGET and whatever links it see LAYER's headers as
+# "LAYER/...", and nothing else of the tree. Each layer gets a folder of its own in the build
+# holding one link to its source folder, so a header of a layer the target does not link is not
+# found: a wrong-way include does not compile (DESIGN.md's layers; tests/architecture lists them).
+function(pcisim_include_root target layer)
+  set(scope PUBLIC)
+  if(ARGC GREATER 2)
+    set(scope ${ARGV2})
+  endif()
+  set(root ${CMAKE_BINARY_DIR}/include/${layer})
+  if(NOT EXISTS ${root}/${layer})
+    file(MAKE_DIRECTORY ${root})
+    file(CREATE_LINK ${CMAKE_SOURCE_DIR}/${layer} ${root}/${layer} SYMBOLIC)
+  endif()
+  target_include_directories(${target} ${scope} ${root})
+endfunction()
+
 # pcisim_library(NAME DIR [DEPS ...]): one static library from every .cc (and .cu when CUDA is on)
 # below DIR. Globbing keeps "one concept per file" cheap: add a file, re-run cmake.
 function(pcisim_library name dir)
@@ -17,12 +34,14 @@ function(pcisim_library name dir)
     # headers only so far
     add_library(${name} INTERFACE)
     target_link_libraries(${name} INTERFACE ${ARG_DEPS})
+    pcisim_include_root(${name} ${layer} INTERFACE)
     set_target_properties(${name} PROPERTIES PCISIM_LAYER ${layer})
     return()
   endif()
   add_library(${name} STATIC ${srcs})
   target_link_libraries(${name} PUBLIC ${ARG_DEPS})
   set_target_properties(${name} PROPERTIES PCISIM_LAYER ${layer})
+  pcisim_include_root(${name} ${layer})
   if(PCISIM_HAVE_CUDA)
     target_compile_definitions(${name} PUBLIC PCISIM_HAVE_CUDA=1)
     set_target_properties(${name} PROPERTIES CUDA_SEPARABLE_COMPILATION OFF POSITION_INDEPENDENT_CODE ON)
@@ -40,6 +59,7 @@ function(pcisim_test name dir)
   endif()
   add_executable(${name} ${srcs})
   target_link_libraries(${name} PRIVATE ${ARG_UNPARSED_ARGUMENTS} GTest::gtest GTest::gtest_main)
+  pcisim_include_root(${name} tests PRIVATE)  # helpers as "tests/common/..."
   target_compile_definitions(${name} PRIVATE PCISIM_SOURCE_DIR="${CMAKE_SOURCE_DIR}" PCISIM_BINARY_DIR="${CMAKE_BINARY_DIR}")
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 300 RUN_SERIAL ${ARG_SERIAL})
 endfunction()

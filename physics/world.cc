@@ -18,12 +18,12 @@
 #include "physics/guidewire/wire_feedback.h"
 #include "physics/heart/beating_heart.h"
 #include "physics/heart/heart_fit.h"
-#include "physics/heart/heart_mesh.h"
+#include "anatomy/heart/heart_mesh.h"
 #include "physics/motion/vessel_skin.h"
 #include "physics/param_checks.h"
 #include "physics/pbd/pbd_cuda_solver.h"
-#include "physics/vessel/coronary_phantom.h"
-#include "physics/vessel/vessel_tree.h"
+#include "anatomy/phantom/coronary_phantom.h"
+#include "anatomy/vessel/vessel_tree.h"
 
 namespace pcisim::physics {
 namespace {
@@ -62,7 +62,7 @@ void validate(const WorldSpec& s) {
 
 struct World::Impl {
   WorldSpec spec;
-  VesselTree tree;
+  anatomy::VesselTree tree;
   std::shared_ptr<const LumenQuery> lumen;
   std::optional<ChainMailWire> wire;
   std::optional<WallContact> contact;
@@ -107,10 +107,10 @@ World::World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_ge
   if (spec.heart_beat && !spec.vessel_motion) w.heart.emplace(*spec.heart_beat);
   if (!spec.guidewire && !spec.vessel_motion) return;  // nothing else needs the anatomy
 
-  w.tree = make_coronary_phantom(CoronaryPhantomSpec{spec.anatomy.seed});
+  w.tree = anatomy::make_coronary_phantom(anatomy::CoronaryPhantomSpec{spec.anatomy.seed});
   if (spec.vessel_motion) {
     // a heart the tree rides must not swallow it: the template is fitted under this tree
-    HeartMesh mesh = template_heart_mesh();
+    anatomy::HeartMesh mesh = anatomy::template_heart_mesh();
     w.heart_fit = fit_heart_under_tree(w.tree, HeartFitParams{}, &mesh);
     w.heart.emplace(*spec.heart_beat, mesh);
     // the tree rides the epicardium; the wire, its contact and the blood are simulated in the
@@ -118,7 +118,7 @@ World::World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_ge
     w.skin.emplace(w.tree, w.heart->rest_positions_m(), w.heart->epicardium(), *spec.vessel_motion);
   }
   if (!spec.guidewire) return;
-  auto path = guide_catheter_path(w.tree);
+  auto path = anatomy::guide_catheter_path(w.tree);
   require(path.size() >= 2, "anatomy: the phantom has no guide catheter path (aorta and LM needed)");
   w.wire.emplace(*spec.guidewire, CatheterPath(std::move(path)));
   if (spec.vessel_contact) {
@@ -206,7 +206,7 @@ void World::step(const InstrumentInput& input) {
     const auto t3 = Clock::now();
     wire.end_step();
     const auto nodes = wire.nodes_m();
-    w.tip_branch = nearest_branch(w.tree, nodes.back());
+    w.tip_branch = anatomy::nearest_branch(w.tree, nodes.back());
     const WireFeedback f = compute_feedback(wire, *w.spec.guidewire, w.contact ? &*w.contact : nullptr,
                                             w.friction ? &*w.friction : nullptr);
     w.model = to_local_force_model(f, w.used, *w.spec.guidewire, w.time_s + w.spec.step_s, w.spec.step_s);
@@ -269,7 +269,7 @@ const CoulombFriction* World::friction_state() const {
   return impl_->friction ? &*impl_->friction : nullptr;
 }
 const LumenQuery* World::lumen() const { return impl_->lumen.get(); }
-const VesselTree& World::vessel_tree() const { return impl_->tree; }
+const anatomy::VesselTree& World::vessel_tree() const { return impl_->tree; }
 const HeartFitReport& World::heart_fit() const { return impl_->heart_fit; }
 
 const BeatingHeart* World::heart_state() const { return impl_->heart ? &*impl_->heart : nullptr; }

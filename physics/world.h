@@ -12,6 +12,10 @@
 #include "physics/world_snapshot.h"
 #include "physics/world_spec.h"
 
+namespace pcisim::anatomy {
+struct VesselTree;
+}  // namespace pcisim::anatomy
+
 namespace pcisim::physics {
 
 class BeatingHeart;
@@ -22,7 +26,6 @@ class VesselSkin;
 class CoulombFriction;
 class LumenQuery;
 class WallContact;
-struct VesselTree;
 
 struct EffectCost {
   std::string name;           // the scene's effect name
@@ -64,7 +67,7 @@ class World {
   const WallContact* contact_state() const;
   const CoulombFriction* friction_state() const;
   const LumenQuery* lumen() const;  // the contact geometry (null without vessel_contact)
-  const VesselTree& vessel_tree() const;  // at rest; empty without guidewire and vessel_motion
+  const anatomy::VesselTree& vessel_tree() const;  // at rest; empty without guidewire and vessel_motion
   const BeatingHeart* heart_state() const;
   // how the template heart was fitted under this scene's tree (vessel_motion; all zero otherwise)
   const HeartFitReport& heart_fit() const;

@@ -1,24 +1,24 @@
 #include "server/haptic_loop.h"
 
 #include "haptics/force_evaluator.h"
-#include "server/realtime/clock.h"
-#include "server/realtime/deadline_schedule.h"
-#include "server/realtime/realtime_setup.h"
+#include "realtime/clock.h"
+#include "realtime/deadline_schedule.h"
+#include "realtime/realtime_setup.h"
 
 namespace pcisim::server {
 
 bool run_haptic_loop(const HapticLoopConfig& config, SharedState& state) {
-  const bool fifo = try_sched_fifo(config.fifo_priority);
+  const bool fifo = realtime::try_sched_fifo(config.fifo_priority);
   haptics::ForceEvaluator evaluator(config.params);
   InstrumentSlot instrument;
   ForceSlot out;
 
-  DeadlineSchedule schedule(monotonic_ns(), config.period_ns);
+  realtime::DeadlineSchedule schedule(realtime::monotonic_ns(), config.period_ns);
   int64_t last_wake_ns = 0;
   while (!state.stop.load(std::memory_order_relaxed)) {
     const int64_t deadline_ns = schedule.deadline_ns();
-    sleep_until_ns(deadline_ns);
-    const int64_t wake_ns = monotonic_ns();
+    realtime::sleep_until_ns(deadline_ns);
+    const int64_t wake_ns = realtime::monotonic_ns();
     const int64_t now_us = wake_ns / 1000;
     state.haptic.mark_wake(wake_ns);
 
@@ -31,7 +31,7 @@ bool run_haptic_loop(const HapticLoopConfig& config, SharedState& state) {
     if (!state.forces.push(out)) state.forces_dropped.fetch_add(1, std::memory_order_relaxed);
 
     // timing: lateness, period, compute; skip ahead rather than burst to catch up
-    const int64_t done_ns = monotonic_ns();
+    const int64_t done_ns = realtime::monotonic_ns();
     if (last_wake_ns > 0) state.haptic.period_ns.record(wake_ns - last_wake_ns);
     last_wake_ns = wake_ns;
     state.haptic.late_ns.record(wake_ns - deadline_ns);

@@ -5,9 +5,9 @@
 
 #include "protocol/channels.h"
 #include "protocol/message_checks.h"
-#include "server/realtime/clock.h"
-#include "server/realtime/realtime_setup.h"
-#include "server/scene/json_reader.h"
+#include "realtime/clock.h"
+#include "realtime/realtime_setup.h"
+#include "json/json_reader.h"
 
 namespace pcisim::server {
 
@@ -34,11 +34,11 @@ void LcmIo::start() {
   running_ = true;
   // below the haptic loop (80), above everything else: a CPU hog must not delay force commands
   rx_ = std::thread([this] {
-    try_sched_fifo(70);
+    realtime::try_sched_fifo(70);
     rx_loop();
   });
   tx_ = std::thread([this] {
-    try_sched_fifo(70);
+    realtime::try_sched_fifo(70);
     tx_loop();
   });
 }
@@ -52,7 +52,7 @@ void LcmIo::stop() {
 
 void LcmIo::publish_zero_force() {
   pcisim_lcm::force_command_t zero{};
-  zero.utime = monotonic_us();
+  zero.utime = realtime::monotonic_us();
   zero.seq = -1;  // not a haptic tick: the server's last word
   zero.instrument_seq = last_instrument_seq_;
   zero.flags = pcisim_lcm::force_command_t::FLAG_FADED;
@@ -78,14 +78,14 @@ void LcmIo::on_instrument(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   using I = pcisim_lcm::instrument_state_t;
   state_.fluoro_pedal_instrument.store((m.buttons & I::BUTTON_FLUORO_PEDAL) != 0, std::memory_order_relaxed);
   state_.cine_instrument.store((m.buttons & I::BUTTON_CINE_PEDAL) != 0, std::memory_order_relaxed);
-  state_.instrument_heard_ns.store(monotonic_ns(), std::memory_order_relaxed);
+  state_.instrument_heard_ns.store(realtime::monotonic_ns(), std::memory_order_relaxed);
   const bool contrast = (m.buttons & I::BUTTON_CONTRAST) != 0;
   if (contrast && !state_.contrast_button_down) add_injection();
   state_.contrast_button_down = contrast;
   InstrumentSlot slot;
   slot.seq = m.seq;
   slot.buttons = m.buttons;
-  slot.sample.received_us = monotonic_us();
+  slot.sample.received_us = realtime::monotonic_us();
   slot.sample.insertion_m = m.insertion_mm * 1e-3;
   slot.sample.rotation_rad = m.rotation_rad;
   slot.sample.insertion_rate_m_per_s = m.insertion_rate_mm_s * 1e-3;
@@ -113,7 +113,7 @@ void LcmIo::on_session(const lcm::ReceiveBuffer* rbuf, const std::string&) {
       if (state_.paused.exchange(false)) spdlog::info("session: resumed");
       break;
     case C::CMD_RESET:
-      if (!limits_.allow_reset(monotonic_ns())) {
+      if (!limits_.allow_reset(realtime::monotonic_ns())) {
         refuse("reset", fmt::format("within {} s of the last one", limits_.params().min_reset_interval_s));
         break;
       }
@@ -121,7 +121,7 @@ void LcmIo::on_session(const lcm::ReceiveBuffer* rbuf, const std::string&) {
       spdlog::info("session: reset");
       break;
     case C::CMD_LOAD_SCENE:
-      if (!limits_.allow_scene_load(monotonic_ns())) {
+      if (!limits_.allow_scene_load(realtime::monotonic_ns())) {
         refuse("scene load", fmt::format("within {} s of the last one", limits_.params().min_scene_load_interval_s));
         break;
       }
@@ -149,7 +149,7 @@ void LcmIo::on_session(const lcm::ReceiveBuffer* rbuf, const std::string&) {
 }
 
 void LcmIo::refuse(const char* what, const std::string& why) {
-  const int64_t now = monotonic_ns();
+  const int64_t now = realtime::monotonic_ns();
   if (now - last_refusal_log_ns_ < 1'000'000'000) {
     ++refusals_unlogged_;
     return;
@@ -174,7 +174,7 @@ void LcmIo::add_injection(double volume_ml, double rate_ml_per_s) {
     refuse("contrast", fmt::format("this pipeline's {} injections are used up", SharedState::kMaxInjections));
     return;
   }
-  if (!limits_.allow_injection(monotonic_ns(), injected_ml)) {
+  if (!limits_.allow_injection(realtime::monotonic_ns(), injected_ml)) {
     refuse("contrast", fmt::format("{} ml over the limits ({} per minute, {} ml per session; {:.1f} ml used)",
                                    injected_ml, limits_.params().max_injections_per_min,
                                    limits_.params().max_contrast_ml, limits_.contrast_ml()));
@@ -194,9 +194,9 @@ void LcmIo::request_scene(const std::string& path) {
     std::lock_guard lock(state_.scene_mutex);
     state_.requested_scene = std::move(scene);
     state_.scene_requested = true;
-    limits_.book_scene_load(monotonic_ns());
+    limits_.book_scene_load(realtime::monotonic_ns());
     spdlog::info("session: scene {} accepted, restarting the pipeline", path);
-  } catch (const std::exception& e) {  // SceneError, or anything else a path can provoke
+  } catch (const std::exception& e) {  // json::JsonError, or anything else a path can provoke
     limits_.count_scene_rejected();
     refuse("scene", e.what());
   }
@@ -208,7 +208,7 @@ void LcmIo::rx_loop() {
 
 void LcmIo::publish_wire(const physics::WorldSnapshot& s) {
   auto& m = wire_msg_;
-  m.utime = monotonic_us();
+  m.utime = realtime::monotonic_us();
   m.seq = s.step;
   m.sim_time_s = s.time_s;
   m.insertion_mm = s.insertion_m * 1e3;
@@ -229,7 +229,7 @@ void LcmIo::publish_wire(const physics::WorldSnapshot& s) {
 
 void LcmIo::tx_loop() {
   ForceSlot slot;
-  int64_t next_status_us = monotonic_us() + 1'000'000;
+  int64_t next_status_us = realtime::monotonic_us() + 1'000'000;
   while (running_.load(std::memory_order_relaxed)) {
     // force commands first: they are the latency-critical stream
     while (state_.forces.pop(slot)) {
@@ -243,7 +243,7 @@ void LcmIo::tx_loop() {
       state_.lcm_tx.fetch_add(1, std::memory_order_relaxed);
     }
     if (state_.snapshot_for_tx.refresh()) publish_wire(state_.snapshot_for_tx.read_slot());
-    const int64_t now_us = monotonic_us();
+    const int64_t now_us = realtime::monotonic_us();
     if (now_us >= next_status_us && status_) {
       auto status = status_();
       status.seq = status_seq_++;
@@ -251,7 +251,7 @@ void LcmIo::tx_loop() {
       state_.lcm_tx.fetch_add(1, std::memory_order_relaxed);
       next_status_us += 1'000'000;
     }
-    sleep_until_ns(monotonic_ns() + 200'000);
+    realtime::sleep_until_ns(realtime::monotonic_ns() + 200'000);
   }
 }
 

@@ -6,7 +6,7 @@
 #include <iostream>
 #include <spdlog/spdlog.h>
 
-#include "server/scene/json_reader.h"
+#include "json/json_reader.h"
 #include "server/scene/scene.h"
 #include "server/session_runner.h"
 

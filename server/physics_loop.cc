@@ -2,8 +2,8 @@
 
 #include <cmath>
 
-#include "server/realtime/clock.h"
-#include "server/realtime/deadline_schedule.h"
+#include "realtime/clock.h"
+#include "realtime/deadline_schedule.h"
 
 namespace pcisim::server {
 
@@ -25,7 +25,7 @@ void PhysicsLoop::step_once(int64_t now_ns) {
   input.rotation_rate_rad_per_s = instrument_.sample.rotation_rate_rad_per_s;
   input.buttons = static_cast<uint32_t>(instrument_.buttons);
   world_->step(input);
-  if (const int64_t stall_us = state_.inject_stall_us.exchange(0)) sleep_until_ns(now_ns + stall_us * 1000);
+  if (const int64_t stall_us = state_.inject_stall_us.exchange(0)) realtime::sleep_until_ns(now_ns + stall_us * 1000);
 
   physics::WorldSnapshot& snap = state_.snapshot_for_tx.write_slot();
   world_->write_snapshot(snap);
@@ -55,19 +55,19 @@ void PhysicsLoop::step_once(int64_t now_ns) {
 
 void PhysicsLoop::run() {
   const auto period_ns = static_cast<int64_t>(std::llround(1e9 / rate_hz_));
-  DeadlineSchedule schedule(monotonic_ns(), period_ns);
+  realtime::DeadlineSchedule schedule(realtime::monotonic_ns(), period_ns);
   int64_t last_wake_ns = 0;
   while (!state_.stop.load(std::memory_order_relaxed)) {
     const int64_t deadline_ns = schedule.deadline_ns();
-    sleep_until_ns(deadline_ns);
-    const int64_t wake_ns = monotonic_ns();
+    realtime::sleep_until_ns(deadline_ns);
+    const int64_t wake_ns = realtime::monotonic_ns();
     state_.physics.mark_wake(wake_ns);
 
     // a reset rebuilds the world between steps (allocation is fine here, not inside step)
     if (state_.reset_requested.exchange(false)) world_ = std::make_unique<physics::World>(spec_);
     if (!state_.paused.load(std::memory_order_relaxed)) step_once(wake_ns);
 
-    const int64_t done_ns = monotonic_ns();
+    const int64_t done_ns = realtime::monotonic_ns();
     if (last_wake_ns > 0) state_.physics.period_ns.record(wake_ns - last_wake_ns);
     last_wake_ns = wake_ns;
     state_.physics.late_ns.record(wake_ns - deadline_ns);

@@ -14,7 +14,7 @@ namespace pcisim::server {
 
 struct EffectStats {
   std::string name;
-  LatencyHistogram step_ns;
+  realtime::LatencyHistogram step_ns;
 };
 
 class PhysicsLoop {

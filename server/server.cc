@@ -7,12 +7,12 @@
 #include <thread>
 
 #include "physics/heart/heart_fit.h"
-#include "physics/vessel/coronary_phantom.h"
+#include "anatomy/phantom/coronary_phantom.h"
 #include "server/haptic_loop.h"
 #include "server/lcm_io.h"
 #include "server/physics_loop.h"
-#include "server/realtime/clock.h"
-#include "server/realtime/realtime_setup.h"
+#include "realtime/clock.h"
+#include "realtime/realtime_setup.h"
 #include "server/xray_loop.h"
 
 namespace pcisim::server {
@@ -54,7 +54,7 @@ struct Server::Impl {
   }
 
   pcisim_lcm::sim_status_t status() {
-    const int64_t now = monotonic_ns();
+    const int64_t now = realtime::monotonic_ns();
     StatsReport r = stats((now - start_ns) * 1e-9);
     const double window_s = (now - last_status_ns) * 1e-9;
     if (window_s > 0) {
@@ -88,20 +88,20 @@ Server::Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images, SessionL
     : impl_(std::make_unique<Impl>(scene, control, images, limits)) {
   spdlog::info("scene '{}' ({}): effects [{}], physics {} Hz", scene.name, scene.source,
                fmt::format("{}", fmt::join(scene.effects, ", ")), scene.physics_rate_hz);
-  const int64_t t0 = monotonic_ns();
+  const int64_t t0 = realtime::monotonic_ns();
   impl_->physics = std::make_unique<PhysicsLoop>(scene, impl_->state);
-  spdlog::info("world built in {:.0f} ms", (monotonic_ns() - t0) * 1e-6);
+  spdlog::info("world built in {:.0f} ms", (realtime::monotonic_ns() - t0) * 1e-6);
   if (const auto& fit = impl_->physics->world().heart_fit(); fit.branches_lifted > 0)
     spdlog::info("heart fitted under anatomy seed {}: {} branch(es) lifted clear, epicardium dented up to {:.1f} mm",
                  scene.world.anatomy.seed, fit.branches_lifted, fit.max_dent_m * 1e3);
   // branch names for wire_state_t and the log: the scene's phantom, same seed, same tree
   std::vector<std::string> names;
-  for (const auto& b : physics::make_coronary_phantom({scene.world.anatomy.seed}).branches) names.push_back(b.name);
+  for (const auto& b : anatomy::make_coronary_phantom({scene.world.anatomy.seed}).branches) names.push_back(b.name);
   branch_namer = [names](int i) { return i >= 0 && i < static_cast<int>(names.size()) ? names[i] : std::string(); };
   if (scene.xray) {
-    const int64_t t1 = monotonic_ns();
+    const int64_t t1 = realtime::monotonic_ns();
     impl_->xray = std::make_unique<XrayLoop>(scene, impl_->state, images);
-    spdlog::info("fluoroscopy ready in {:.0f} ms ({}x{} detector, {} fps, frames {})", (monotonic_ns() - t1) * 1e-6,
+    spdlog::info("fluoroscopy ready in {:.0f} ms ({}x{} detector, {} fps, frames {})", (realtime::monotonic_ns() - t1) * 1e-6,
                  scene.xray->fluoro.c_arm.width, scene.xray->fluoro.c_arm.height, scene.xray->pulse_rate_fps,
                  images ? "published" : "not published");
   }
@@ -111,12 +111,12 @@ Server::~Server() = default;
 
 StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   Impl& m = *impl_;
-  const bool locked = try_mlockall();
-  const CpuLatencyRequest latency(cpu_latency_us);
+  const bool locked = realtime::try_mlockall();
+  const realtime::CpuLatencyRequest latency(cpu_latency_us);
   LcmIo io(m.lcm, m.state, *m.limits, m.scene.xray ? m.scene.xray->injection_volume_ml : 0.0, [&m] { return m.status(); },
            branch_namer);
 
-  m.start_ns = m.last_status_ns = monotonic_ns();
+  m.start_ns = m.last_status_ns = realtime::monotonic_ns();
   io.start();
   HapticLoopConfig haptic_config;
   haptic_config.params = m.scene.haptics;
@@ -133,13 +133,13 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   // 0, or anything past ~290 years (inf included), runs until stopped
   const int64_t end_ns =
       duration_s > 0 && duration_s < 9e9 ? m.start_ns + static_cast<int64_t>(duration_s * 1e9) : INT64_MAX;
-  while (!stop.load() && !m.state.scene_requested.load() && monotonic_ns() < end_ns) {
-    sleep_until_ns(std::min(end_ns, monotonic_ns() + 20'000'000));
-    if (monotonic_ns() >= next_log_ns) {
+  while (!stop.load() && !m.state.scene_requested.load() && realtime::monotonic_ns() < end_ns) {
+    realtime::sleep_until_ns(std::min(end_ns, realtime::monotonic_ns() + 20'000'000));
+    if (realtime::monotonic_ns() >= next_log_ns) {
       next_log_ns += 1'000'000'000;
       const int branch = m.state.wire_tip_branch.load();
       spdlog::info("t={:5.1f}s  insertion {:6.1f} mm  rotation {:6.2f} rad  tip in {}  contacts {:3d}  haptic {} ticks",
-                   (monotonic_ns() - m.start_ns) * 1e-9, m.state.wire_insertion_mm.load(),
+                   (realtime::monotonic_ns() - m.start_ns) * 1e-9, m.state.wire_insertion_mm.load(),
                    m.state.wire_rotation_rad.load(),
                    branch_namer && branch >= 0 ? branch_namer(branch) : std::string("-"),
                    m.state.wire_contacts.load(), m.state.haptic.iterations.load());
@@ -151,7 +151,7 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   haptic.join();
   physics.join();
   if (xray.joinable()) xray.join();
-  const double elapsed_s = (monotonic_ns() - m.start_ns) * 1e-9;
+  const double elapsed_s = (realtime::monotonic_ns() - m.start_ns) * 1e-9;
   io.stop();
   StatsReport r = m.stats(elapsed_s);
   r.cpu_latency_held = latency.granted();

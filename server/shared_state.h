@@ -11,9 +11,9 @@
 #include "haptics/force_evaluator.h"
 #include "physics/local_force_model.h"
 #include "physics/world_snapshot.h"
-#include "server/realtime/latency_histogram.h"
-#include "server/realtime/spsc_ring.h"
-#include "server/realtime/triple_buffer.h"
+#include "realtime/latency_histogram.h"
+#include "realtime/spsc_ring.h"
+#include "realtime/triple_buffer.h"
 #include "server/scene/scene.h"
 
 namespace pcisim::server {
@@ -32,9 +32,9 @@ struct ForceSlot {
 };
 
 struct LoopStats {
-  LatencyHistogram period_ns;   // wake-to-wake
-  LatencyHistogram compute_ns;  // work per iteration
-  LatencyHistogram late_ns;     // wake time minus deadline
+  realtime::LatencyHistogram period_ns;   // wake-to-wake
+  realtime::LatencyHistogram compute_ns;  // work per iteration
+  realtime::LatencyHistogram late_ns;     // wake time minus deadline
   std::atomic<int64_t> iterations{0};
   std::atomic<int64_t> overruns{0};
   std::atomic<int64_t> first_wake_ns{0}, last_wake_ns{0};
@@ -52,16 +52,16 @@ struct LoopStats {
 
 struct SharedState {
   // lcm rx -> haptic, lcm rx -> physics (a triple buffer has one reader, so one each)
-  TripleBuffer<InstrumentSlot> instrument_for_haptics;
-  TripleBuffer<InstrumentSlot> instrument_for_physics;
+  realtime::TripleBuffer<InstrumentSlot> instrument_for_haptics;
+  realtime::TripleBuffer<InstrumentSlot> instrument_for_physics;
   // physics -> haptic, physics -> lcm tx
-  TripleBuffer<physics::LocalForceModel> force_model;
-  TripleBuffer<physics::WorldSnapshot> snapshot_for_tx;
-  TripleBuffer<physics::WorldSnapshot> snapshot_for_xray;  // published only when the scene has xray
+  realtime::TripleBuffer<physics::LocalForceModel> force_model;
+  realtime::TripleBuffer<physics::WorldSnapshot> snapshot_for_tx;
+  realtime::TripleBuffer<physics::WorldSnapshot> snapshot_for_xray;  // published only when the scene has xray
   std::atomic<bool> xray_enabled{false};
   std::atomic<double> sim_time_s{0};
   // haptic -> lcm tx
-  SpscRing<ForceSlot, 1024> forces;
+  realtime::SpscRing<ForceSlot, 1024> forces;
   std::atomic<int64_t> forces_dropped{0};
 
   LoopStats haptic, physics;
@@ -102,7 +102,7 @@ struct SharedState {
   std::array<double, kMaxInjections> injection_volume_ml{}, injection_duration_s{};
   std::atomic<int> injections{0};                           // entries written (single writer: lcm rx)
   bool contrast_button_down = false;                        // lcm rx only: edge detection
-  LatencyHistogram xray_render_ns;
+  realtime::LatencyHistogram xray_render_ns;
   std::atomic<int64_t> xray_frames{0};
   std::atomic<int64_t> xray_on_ns{0};  // time with the pedal down
 

@@ -4,7 +4,7 @@
 
 namespace pcisim::server {
 
-Percentiles percentiles(const LatencyHistogram& h, double scale) {
+Percentiles percentiles(const realtime::LatencyHistogram& h, double scale) {
   return {h.quantile_ns(0.5) * scale, h.quantile_ns(0.99) * scale, h.quantile_ns(0.999) * scale,
           h.max_ns() * scale};
 }

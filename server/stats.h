@@ -37,7 +37,7 @@ struct StatsReport {
   int64_t carm_moves_coalesced = 0;
 };
 
-Percentiles percentiles(const LatencyHistogram& h, double scale);
+Percentiles percentiles(const realtime::LatencyHistogram& h, double scale);
 
 // rates are those the loops achieved while running; elapsed_s is the whole run
 StatsReport collect_stats(const SharedState& state, const PhysicsLoop& physics, double elapsed_s,

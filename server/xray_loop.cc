@@ -3,17 +3,17 @@
 #include <cmath>
 #include <cstring>
 
-#include "physics/vessel/coronary_phantom.h"
+#include "anatomy/phantom/coronary_phantom.h"
 #include "protocol/channels.h"
-#include "server/realtime/clock.h"
-#include "server/realtime/deadline_schedule.h"
+#include "realtime/clock.h"
+#include "realtime/deadline_schedule.h"
 
 namespace pcisim::server {
 
 XrayLoop::XrayLoop(const Scene& scene, SharedState& state, lcm::LCM* images)
     : spec_(*scene.xray), state_(state), images_(images) {
   // the same seed gives the same tree the physics uses
-  const physics::VesselTree tree = physics::make_coronary_phantom({scene.world.anatomy.seed});
+  const anatomy::VesselTree tree = anatomy::make_coronary_phantom({scene.world.anatomy.seed});
   renderer_ = std::make_unique<xray::FluoroscopyRenderer>(tree, spec_.fluoro);
   injections_.reserve(SharedState::kMaxInjections);
   state_.carm_primary_deg = state_.carm_target_primary_deg = spec_.initial_pose.primary_deg;
@@ -31,7 +31,7 @@ XrayLoop::XrayLoop(const Scene& scene, SharedState& state, lcm::LCM* images)
 // moves the C-arm at most once per interval, to the newest target; the rest are coalesced
 void XrayLoop::apply_carm_target() {
   const int64_t seq = state_.carm_target_seq.load(std::memory_order_acquire);
-  const int64_t now_ns = monotonic_ns();
+  const int64_t now_ns = realtime::monotonic_ns();
   if ((seq & 1) != 0 || seq == applied_target_seq_ || now_ns - last_move_ns_ < min_move_interval_ns_) return;
   const double primary = state_.carm_target_primary_deg.load(), secondary = state_.carm_target_secondary_deg.load();
   if (state_.carm_target_seq.load(std::memory_order_acquire) != seq) return;  // torn: the next frame retries
@@ -64,16 +64,16 @@ void XrayLoop::render_and_publish(bool cine) {
   in.wire_m = snap.wire_nodes_m;
   in.vessel_points_m = snap.vessel_points_m;
   if (spec_.contrast) in.injections = injections_;
-  const int64_t t0 = monotonic_ns();
+  const int64_t t0 = realtime::monotonic_ns();
   renderer_->render(in, frame_);
-  state_.xray_render_ns.record(monotonic_ns() - t0);
+  state_.xray_render_ns.record(realtime::monotonic_ns() - t0);
   state_.xray_frames.fetch_add(1, std::memory_order_relaxed);
   if (!images_) return;
 
   // the frame with its geometry and ground truth
   auto& m = msg_;
   const auto& g = frame_.geometry;
-  m.utime = monotonic_us();
+  m.utime = realtime::monotonic_us();
   m.seq = seq_++;
   m.width = frame_.width;
   m.height = frame_.height;
@@ -115,11 +115,11 @@ void XrayLoop::render_and_publish(bool cine) {
 void XrayLoop::run() {
   // the schedule runs at the fastest rate asked for; slower pulse rates skip ticks
   const double tick_hz = std::max(spec_.pulse_rate_fps, spec_.cine_rate_fps);
-  DeadlineSchedule schedule(monotonic_ns(), static_cast<int64_t>(std::llround(1e9 / tick_hz)));
+  realtime::DeadlineSchedule schedule(realtime::monotonic_ns(), static_cast<int64_t>(std::llround(1e9 / tick_hz)));
   int64_t tick = 0, last_on_ns = 0;
   while (!state_.stop.load(std::memory_order_relaxed)) {
-    sleep_until_ns(schedule.deadline_ns());
-    const int64_t wake_ns = monotonic_ns();
+    realtime::sleep_until_ns(schedule.deadline_ns());
+    const int64_t wake_ns = realtime::monotonic_ns();
     const bool cine = state_.instrument_pedal_down(state_.cine_instrument, wake_ns) || state_.cine_console;
     const bool on = cine || state_.instrument_pedal_down(state_.fluoro_pedal_instrument, wake_ns) ||
                     state_.fluoro_pedal_console;
@@ -135,7 +135,7 @@ void XrayLoop::run() {
       last_on_ns = 0;
     }
     ++tick;
-    schedule.complete(monotonic_ns());
+    schedule.complete(realtime::monotonic_ns());
   }
 }
 

@@ -33,9 +33,9 @@
 #include "physics/world.h"
 #include "protocol/channels.h"
 #include "protocol/message_checks.h"
-#include "server/realtime/clock.h"
-#include "server/realtime/deadline_schedule.h"
-#include "server/realtime/realtime_setup.h"
+#include "realtime/clock.h"
+#include "realtime/deadline_schedule.h"
+#include "realtime/realtime_setup.h"
 #include "server/scene/scene.h"
 
 extern char** environ;
@@ -81,7 +81,7 @@ struct Probe {
   Probe(const std::string& url, size_t capacity) : lcm(url), publish_ns(capacity, 0) { round_trip_us.reserve(capacity); }
 
   void on_force(const lcm::ReceiveBuffer* r, const std::string&) {
-    const int64_t now = server::monotonic_ns();
+    const int64_t now = realtime::monotonic_ns();
     if (!protocol::decode_checked(*r, msg)) return;
     ++forces;
     // the first command that used sample N answers N; later ones used it again
@@ -114,12 +114,12 @@ json timing_run(const Options& o, bool loaded, bool no_qos) {
   });
   // wait for the server's first answer, then play the script at 1 kHz for the run
   pcisim_lcm::instrument_state_t m{};
-  const int64_t give_up = server::monotonic_ns() + 60'000'000'000;
-  while (probe.forces == 0 && server::monotonic_ns() < give_up) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  const int64_t start = server::monotonic_ns();
-  server::DeadlineSchedule schedule(start, 1'000'000);
+  const int64_t give_up = realtime::monotonic_ns() + 60'000'000'000;
+  while (probe.forces == 0 && realtime::monotonic_ns() < give_up) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  const int64_t start = realtime::monotonic_ns();
+  realtime::DeadlineSchedule schedule(start, 1'000'000);
   for (int64_t seq = 0; seq < static_cast<int64_t>(probe.publish_ns.size()); ++seq) {
-    const int64_t now = server::monotonic_ns();
+    const int64_t now = realtime::monotonic_ns();
     const double t_s = (now - start) * 1e-9;
     if (t_s >= o.seconds) break;
     const auto r = script.sample(std::fmod(t_s, script.duration_s()));
@@ -129,10 +129,10 @@ json timing_run(const Options& o, bool loaded, bool no_qos) {
     m.rotation_rad = r.rotation_rad;
     m.insertion_rate_mm_s = r.insertion_rate_mm_s;
     m.rotation_rate_rad_s = r.rotation_rate_rad_s;
-    probe.publish_ns[seq] = server::monotonic_ns();
+    probe.publish_ns[seq] = realtime::monotonic_ns();
     probe.lcm.publish(protocol::kInstrumentChannel, &m);
-    server::sleep_until_ns(schedule.deadline_ns());
-    schedule.complete(server::monotonic_ns());
+    realtime::sleep_until_ns(schedule.deadline_ns());
+    schedule.complete(realtime::monotonic_ns());
   }
   const int server_rc = wait_for(server_pid);
   done = true;
@@ -159,15 +159,15 @@ json timing_run(const Options& o, bool loaded, bool no_qos) {
 json host_probe(double seconds) {
   std::vector<double> late_us;
   std::thread probe([&] {
-    server::try_sched_fifo(80);
-    server::CpuLatencyRequest latency(0);
-    int64_t next = server::monotonic_ns();
+    realtime::try_sched_fifo(80);
+    realtime::CpuLatencyRequest latency(0);
+    int64_t next = realtime::monotonic_ns();
     const int n = static_cast<int>(seconds * 1000);
     late_us.reserve(n);
     for (int i = 0; i < n; ++i) {
       next += 1'000'000;
-      server::sleep_until_ns(next);
-      late_us.push_back((server::monotonic_ns() - next) * 1e-3);
+      realtime::sleep_until_ns(next);
+      late_us.push_back((realtime::monotonic_ns() - next) * 1e-3);
     }
   });
   probe.join();
@@ -219,9 +219,9 @@ json accuracy_run(double seconds, Trace& trace) {
     trace.t_s.push_back(t_s);
     trace.reference_n.push_back(f_ref);
     for (int i = 0; i < 3; ++i) {
-      const int64_t a = server::monotonic_ns();
+      const int64_t a = realtime::monotonic_ns();
       const double f = evaluators[i].tick(s, now_us).axial_force_n;
-      cost_ns[i].push_back(static_cast<double>(server::monotonic_ns() - a));
+      cost_ns[i].push_back(static_cast<double>(realtime::monotonic_ns() - a));
       trace.mode_n[i].push_back(f);
       if (t_s > 0.5) errors[i].push_back(std::abs(f - std::clamp(f_ref, -scene.haptics.peak_force_n, scene.haptics.peak_force_n)));
     }

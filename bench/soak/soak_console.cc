@@ -15,14 +15,14 @@
 
 #include "protocol/channels.h"
 #include "protocol/message_checks.h"
-#include "server/realtime/clock.h"
+#include "realtime/clock.h"
 
 namespace {
 
 std::atomic<bool> g_stop{false};
 extern "C" void on_signal(int) { g_stop = true; }
 
-using pcisim::server::monotonic_ns;
+using pcisim::realtime::monotonic_ns;
 
 struct Watch {
   double peak_force_n = 4.0, peak_torque_nmm = 20.0;

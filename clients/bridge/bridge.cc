@@ -11,13 +11,13 @@
 #include "pcisim_lcm/instrument_state_t.hpp"
 #include "protocol/channels.h"
 #include "protocol/message_checks.h"
-#include "server/realtime/clock.h"
-#include "server/realtime/deadline_schedule.h"
-#include "server/realtime/realtime_setup.h"
+#include "realtime/clock.h"
+#include "realtime/deadline_schedule.h"
+#include "realtime/realtime_setup.h"
 
 namespace pcisim::clients {
 
-using server::monotonic_ns;
+using realtime::monotonic_ns;
 
 Bridge::Bridge(lcm::LCM& lcm, InstrumentDevice& device, const BridgeOptions& options)
     : lcm_(lcm), device_(device), options_(options) {
@@ -41,8 +41,8 @@ BridgeStats Bridge::run(const std::atomic<bool>& stop) {
   int old_policy = SCHED_OTHER;
   sched_param old_param{};
   pthread_getschedparam(pthread_self(), &old_policy, &old_param);
-  if (options_.fifo_priority > 0) server::try_sched_fifo(options_.fifo_priority);
-  const server::CpuLatencyRequest latency(options_.cpu_latency_us);
+  if (options_.fifo_priority > 0) realtime::try_sched_fifo(options_.fifo_priority);
+  const realtime::CpuLatencyRequest latency(options_.cpu_latency_us);
   std::atomic<bool> done{false};
   std::thread rx([&] {
     while (!done) lcm_.handleTimeout(20);
@@ -56,7 +56,7 @@ BridgeStats Bridge::run(const std::atomic<bool>& stop) {
   int64_t start_ns = monotonic_ns();
   bool waiting = options_.wait_for_server_s > 0;
   bool was_fault = false;
-  server::DeadlineSchedule schedule(start_ns, period_ns);
+  realtime::DeadlineSchedule schedule(start_ns, period_ns);
   int64_t next_log_ns = start_ns + 1'000'000'000, first_publish_ns = 0, last_publish_ns = start_ns;
   for (int64_t seq = 0; !stop; ++seq) {
     const int64_t now_ns = monotonic_ns();
@@ -99,7 +99,7 @@ BridgeStats Bridge::run(const std::atomic<bool>& stop) {
                    t_s, r.insertion_mm, r.rotation_rad, r.buttons, ok ? "" : " FAULT", last_force_n_.load(),
                    last_torque_nmm_.load(), forces_received_.load());
     }
-    server::sleep_until_ns(schedule.deadline_ns());
+    realtime::sleep_until_ns(schedule.deadline_ns());
     stats.missed_periods += schedule.complete(monotonic_ns());
   }
   done = true;

@@ -9,13 +9,13 @@
 #include <stdexcept>
 
 #include "pcisim_lcm/instrument_state_t.hpp"
-#include "server/scene/json_reader.h"
+#include "json/json_reader.h"
 
 namespace pcisim::clients {
 namespace {
 
-using server::JsonReader;
-using server::SceneError;
+using json::JsonReader;
+using json::JsonError;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // the main job's trainee: engage the LM, steer the angled tip toward the LAD and advance
@@ -47,8 +47,8 @@ TraineeScript TraineeScript::parse(const std::string& text, const std::string& s
   TraineeScript s;
   nlohmann::json doc;
   try {
-    doc = server::parse_json_checked(text, source);
-  } catch (const server::SceneError& e) {
+    doc = json::parse_json_checked(text, source);
+  } catch (const json::JsonError& e) {
     throw std::runtime_error(e.what());
   }
   try {
@@ -92,7 +92,7 @@ TraineeScript TraineeScript::parse(const std::string& text, const std::string& s
       a.finish();
       s.duration_s_ = std::max(s.duration_s_, end_s);
     }
-  } catch (const SceneError& e) {
+  } catch (const json::JsonError& e) {
     throw std::runtime_error(fmt::format("{}: {}", source, e.what()));
   }
   return s;

@@ -10,7 +10,7 @@
 #include "clients/capture/capture_sink.h"
 #include "clients/capture/frame_writer.h"
 #include "protocol/channels.h"
-#include "server/realtime/clock.h"
+#include "realtime/clock.h"
 
 namespace {
 
@@ -62,8 +62,8 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   spdlog::info("capture: frames from {} into {}", image_url, out_dir);
-  const int64_t end_ns = duration_s > 0 ? pcisim::server::monotonic_ns() + static_cast<int64_t>(duration_s * 1e9) : INT64_MAX;
-  while (!g_stop && pcisim::server::monotonic_ns() < end_ns && !capture.done())
+  const int64_t end_ns = duration_s > 0 ? pcisim::realtime::monotonic_ns() + static_cast<int64_t>(duration_s * 1e9) : INT64_MAX;
+  while (!g_stop && pcisim::realtime::monotonic_ns() < end_ns && !capture.done())
     images.handleTimeout(50);
   g_stop = true;
   if (control_rx.joinable()) control_rx.join();

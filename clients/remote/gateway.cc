@@ -9,13 +9,13 @@
 #include "clients/remote/http_session.h"
 #include "protocol/channels.h"
 #include "protocol/message_checks.h"
-#include "server/realtime/clock.h"
+#include "realtime/clock.h"
 
 namespace pcisim::remote {
 
 namespace net = boost::asio;
 using net::ip::tcp;
-using server::monotonic_ns;
+using realtime::monotonic_ns;
 
 Gateway::Gateway(const GatewayOptions& options, lcm::LCM& control, lcm::LCM& images, AccessTokens tokens)
     : options_(options),

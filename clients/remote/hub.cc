@@ -6,7 +6,7 @@
 #include "clients/remote/keyboard_instrument.h"
 #include "clients/remote/session_tracker.h"
 #include "clients/remote/ws_session.h"
-#include "server/realtime/clock.h"
+#include "realtime/clock.h"
 
 namespace pcisim::remote {
 
@@ -53,7 +53,7 @@ uint64_t Hub::join(const std::shared_ptr<WsSession>& s) {
 
 void Hub::send_pedal(bool cine, bool down) {
   C c{};
-  c.utime = server::monotonic_us();
+  c.utime = realtime::monotonic_us();
   c.command = cine ? C::CMD_CINE : C::CMD_FLUORO_PEDAL;
   c.pedal_down = down ? 1 : 0;
   sink_(c);
@@ -88,7 +88,7 @@ void Hub::on_text(WsSession& s, const std::string& text) {
 void Hub::handle(WsSession& s, const json& msg) {
   const std::string type = msg["type"].get<std::string>();
   const json id = msg.contains("id") ? msg["id"] : json();
-  const int64_t now_ns = server::monotonic_ns();
+  const int64_t now_ns = realtime::monotonic_ns();
   auto error = [&](const std::string& code, const std::string& message) {
     s.reply(json{{"type", "error"}, {"id", id}, {"code", code}, {"message", message}}.dump());
   };
@@ -139,7 +139,7 @@ void Hub::handle(WsSession& s, const json& msg) {
     return error(err->code, err->message);
   }
   C c = std::get<C>(parsed);
-  c.utime = server::monotonic_us();
+  c.utime = realtime::monotonic_us();
   sink_(c);
   ++commands_forwarded_;
   if (c.command == C::CMD_FLUORO_PEDAL) s.holds_fluoro = c.pedal_down != 0;

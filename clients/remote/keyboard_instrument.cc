@@ -5,11 +5,11 @@
 
 #include "pcisim_lcm/instrument_state_t.hpp"
 #include "protocol/channels.h"
-#include "server/realtime/clock.h"
+#include "realtime/clock.h"
 
 namespace pcisim::remote {
 
-using server::monotonic_ns;
+using realtime::monotonic_ns;
 
 KeyboardInstrument::KeyboardInstrument(lcm::LCM& lcm, const KeyboardOptions& options, std::function<bool()> other_active)
     : lcm_(lcm), options_(options), other_active_(std::move(other_active)) {
@@ -79,7 +79,7 @@ void KeyboardInstrument::run() {
     const double dt_s = (now_ns - last_ns) * 1e-9;
     last_ns = now_ns;
     if (owner_.load() == 0) {
-      server::sleep_until_ns(now_ns + 20'000'000);  // idle: no 1 kHz wake-ups for nothing
+      realtime::sleep_until_ns(now_ns + 20'000'000);  // idle: no 1 kHz wake-ups for nothing
       next_ns = last_ns = monotonic_ns();
       continue;
     }
@@ -108,7 +108,7 @@ void KeyboardInstrument::run() {
         ++published_;
       }
     }
-    server::sleep_until_ns(next_ns);
+    realtime::sleep_until_ns(next_ns);
   }
 }
 

@@ -1,5 +1,5 @@
 // libFuzzer: a scene file's text through the scene parser (server/scene). A refusal is a
-// SceneError naming the path; anything else (a crash, a hang, UB, a leak) is a finding.
+// json::JsonError naming the path; anything else (a crash, a hang, UB, a leak) is a finding.
 #include <cstddef>
 #include <cstdint>
 #include <string>

@@ -1,16 +1,16 @@
-// libFuzzer: a centerline file (vessels.json, physics/vessel/vessel_tree_json).
+// libFuzzer: a centerline file (vessels.json, anatomy/vessel/vessel_tree_json).
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
 
 #include "fuzz/targets/fuzz_file.h"
-#include "physics/vessel/vessel_tree_json.h"
+#include "anatomy/vessel/vessel_tree_json.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const pcisim::fuzz::MemoryFile file(data, size);
   if (!file.ok()) return 0;
   try {
-    (void)pcisim::physics::read_vessel_tree_json(file.path());
+    (void)pcisim::anatomy::read_vessel_tree_json(file.path());
   } catch (const std::exception&) {
   }
   return 0;

@@ -4,18 +4,18 @@
 #include <cstdint>
 
 #include "fuzz/targets/fuzz_file.h"
-#include "xray/volume/volume_io.h"
+#include "anatomy/volume/volume_io.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const pcisim::fuzz::MemoryFile file(data, size);
   if (!file.ok()) return 0;
   try {
 #ifdef PCISIM_FUZZ_NRRD
-    (void)pcisim::xray::read_nrrd(file.path());
+    (void)pcisim::anatomy::read_nrrd(file.path());
 #else
-    (void)pcisim::xray::read_metaimage(file.path());
+    (void)pcisim::anatomy::read_metaimage(file.path());
 #endif
-  } catch (const pcisim::xray::VolumeIoError&) {
+  } catch (const pcisim::anatomy::VolumeIoError&) {
   }
   return 0;
 }

@@ -47,7 +47,7 @@ void validate(const BloodFlowParams& b) {
   require(in(b.link_radius_m, 2e-4, 5e-3), "blood_flow.link_radius_m: expected [2e-4, 5e-3] m");
 }
 
-BloodChainMail::BloodChainMail(const BloodFlowParams& params, const VesselTree& tree) : params_(params) {
+BloodChainMail::BloodChainMail(const BloodFlowParams& params, const anatomy::VesselTree& tree) : params_(params) {
   validate(params);
   const int aorta = tree.find("aorta");
   for (int b = 0; b < static_cast<int>(tree.branches.size()); ++b) {

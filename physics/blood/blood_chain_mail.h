@@ -15,7 +15,7 @@
 
 #include "physics/guidewire/chain_mail_wire.h"
 #include "physics/guidewire/guidewire_params.h"
-#include "physics/vessel/vessel_tree.h"
+#include "anatomy/vessel/vessel_tree.h"
 
 namespace pcisim::physics {
 
@@ -30,7 +30,7 @@ void validate(const BloodFlowParams& params);
 class BloodChainMail {
  public:
   // throws like validate()
-  BloodChainMail(const BloodFlowParams& params, const VesselTree& rest_tree);
+  BloodChainMail(const BloodFlowParams& params, const anatomy::VesselTree& rest_tree);
 
   // advances every blood chain-mail downstream by its velocity at this cardiac phase; cells that
   // leave a branch's distal end re-enter at its proximal end

@@ -4,7 +4,7 @@
 
 namespace pcisim::physics {
 
-SdfLumen::SdfLumen(const VesselTree& tree, double spacing_m)
+SdfLumen::SdfLumen(const anatomy::VesselTree& tree, double spacing_m)
     : sdf_(build_lumen_sdf(tree, spacing_m)), far_(tree) {
   // the last cell before the band's clamp still has a true gradient
   trust_m_ = sdf_.band_m() - sdf_.spacing_m();

@@ -9,7 +9,7 @@
 #include "physics/guidewire/lumen_query.h"
 #include "physics/guidewire/tube_lumen.h"
 #include "physics/sdf/signed_distance_field.h"
-#include "physics/vessel/vessel_tree.h"
+#include "anatomy/vessel/vessel_tree.h"
 
 namespace pcisim::physics {
 
@@ -17,7 +17,7 @@ class SdfLumen final : public LumenQuery {
  public:
   // builds the field at spacing_m (see build_lumen_sdf); throws std::invalid_argument on a
   // spacing the grid cannot hold
-  SdfLumen(const VesselTree& tree, double spacing_m);
+  SdfLumen(const anatomy::VesselTree& tree, double spacing_m);
   WallSample sample(const Eigen::Vector3d& p_m) const override;
 
   const SignedDistanceField& field() const { return sdf_; }

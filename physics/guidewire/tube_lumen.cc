@@ -7,7 +7,7 @@
 
 namespace pcisim::physics {
 
-TubeLumen::TubeLumen(const VesselTree& tree, double bin_m, double band_m) : bin_m_(bin_m) {
+TubeLumen::TubeLumen(const anatomy::VesselTree& tree, double bin_m, double band_m) : bin_m_(bin_m) {
   for (const auto& branch : tree.branches) {
     const auto& pts = branch.points;
     for (size_t k = 0; k + 1 < pts.size(); ++k) {

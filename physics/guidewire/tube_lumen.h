@@ -5,14 +5,14 @@
 #include <vector>
 
 #include "physics/guidewire/lumen_query.h"
-#include "physics/vessel/vessel_tree.h"
+#include "anatomy/vessel/vessel_tree.h"
 
 namespace pcisim::physics {
 
 class TubeLumen final : public LumenQuery {
  public:
   // bin_m: edge of the binning cells; band_m: how far outside the wall distances stay exact
-  explicit TubeLumen(const VesselTree& tree, double bin_m = 3e-3, double band_m = 1e-3);
+  explicit TubeLumen(const anatomy::VesselTree& tree, double bin_m = 3e-3, double band_m = 1e-3);
   WallSample sample(const Eigen::Vector3d& p_m) const override;
 
  private:

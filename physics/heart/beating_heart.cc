@@ -9,11 +9,11 @@
 #include <stdexcept>
 #include <string>
 
-#include "physics/heart/heart_frame.h"
-#include "physics/heart/heart_mesh.h"
+#include "anatomy/heart/heart_frame.h"
+#include "anatomy/heart/heart_mesh.h"
 #include "physics/heart/heart_motion.h"
 #include "physics/heart/synthetic_heart_motion.h"
-#include "physics/heart/template_heart_surface.h"
+#include "anatomy/heart/template_heart_surface.h"
 #include "physics/pbd/grid_clusters.h"
 
 namespace pcisim::physics {
@@ -77,7 +77,7 @@ struct BeatingHeart::Impl {
   double time_s = 0.0;
   double phase = 0.0;
 
-  Impl(const HeartBeatParams& p, const HeartMesh& mesh, const HeartTissueScaling& scaling)
+  Impl(const HeartBeatParams& p, const anatomy::HeartMesh& mesh, const HeartTissueScaling& scaling)
       : params(p), motion(load_motion(p)) {
     // particles: the vertices some tet uses, in file order
     std::vector<int> to_particle(mesh.vertices_m.cols(), -1);
@@ -126,7 +126,7 @@ struct BeatingHeart::Impl {
     for (int i = 0; i < n; ++i) system.add_particle(rest_m.col(i), mass_kg[i]);
 
     // the ventricles' myocardium is driven (heart paper section 4, fig 6); the rest is free
-    const Eigen::Matrix3d to_heart = heart_to_patient().transpose();
+    const Eigen::Matrix3d to_heart = anatomy::heart_to_patient().transpose();
     std::vector<bool> is_driven(n, false);
     for (int i = 0; i < n; ++i) {
       is_driven[i] = (to_heart * rest_m.col(i)).z() < kAvPlaneZM;
@@ -176,8 +176,8 @@ struct BeatingHeart::Impl {
     for (size_t f = 0; f < mesh.faces.size(); ++f) {
       const std::array<int, 3> tri = {to_particle[mesh.faces[f][0]], to_particle[mesh.faces[f][1]],
                                       to_particle[mesh.faces[f][2]]};
-      if (mesh.face_markers[f] == kEpicardium) epicardium.push_back(tri);
-      if (mesh.face_markers[f] == kLvEndocardium) lv_endocardium.push_back(tri);
+      if (mesh.face_markers[f] == anatomy::kEpicardium) epicardium.push_back(tri);
+      if (mesh.face_markers[f] == anatomy::kLvEndocardium) lv_endocardium.push_back(tri);
     }
     if (epicardium.empty() || lv_endocardium.empty())
       throw std::invalid_argument("heart mesh: no epicardium (marker 1) or LV endocardium (marker 2) faces");
@@ -239,9 +239,9 @@ struct BeatingHeart::Impl {
 BeatingHeart::BeatingHeart(const HeartBeatParams& params) : BeatingHeart(params, HeartTissueScaling{}) {}
 
 BeatingHeart::BeatingHeart(const HeartBeatParams& params, const HeartTissueScaling& scaling)
-    : BeatingHeart(params, template_heart_mesh(), scaling) {}
+    : BeatingHeart(params, anatomy::template_heart_mesh(), scaling) {}
 
-BeatingHeart::BeatingHeart(const HeartBeatParams& params, const HeartMesh& mesh, const HeartTissueScaling& scaling) {
+BeatingHeart::BeatingHeart(const HeartBeatParams& params, const anatomy::HeartMesh& mesh, const HeartTissueScaling& scaling) {
   validate(params);
   impl_ = std::make_unique<Impl>(params, mesh, scaling);
 }

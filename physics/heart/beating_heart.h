@@ -13,10 +13,13 @@
 #include "physics/heart/heart_params.h"
 #include "physics/pbd/pbd_system.h"
 
+namespace pcisim::anatomy {
+struct HeartMesh;
+}  // namespace pcisim::anatomy
+
 namespace pcisim::physics {
 
 class HeartMotion;
-struct HeartMesh;
 
 // build-time material variation by rest position (hard-case tests, studies): a particle's mass is
 // scaled by mass_scale, a spring's compliance by the larger compliance_scale of its particles
@@ -33,7 +36,7 @@ class BeatingHeart {
   BeatingHeart(const HeartBeatParams& params, const HeartTissueScaling& scaling);
   // another tetrahedral heart in the template's frame and markers (e.g. the template fitted under
   // a tree, heart_fit.h)
-  BeatingHeart(const HeartBeatParams& params, const HeartMesh& mesh, const HeartTissueScaling& scaling = {});
+  BeatingHeart(const HeartBeatParams& params, const anatomy::HeartMesh& mesh, const HeartTissueScaling& scaling = {});
   ~BeatingHeart();
   BeatingHeart(const BeatingHeart&) = delete;
   BeatingHeart& operator=(const BeatingHeart&) = delete;

@@ -5,8 +5,8 @@
 #include <limits>
 #include <vector>
 
-#include "physics/heart/heart_frame.h"
-#include "physics/heart/template_heart_surface.h"
+#include "anatomy/heart/heart_frame.h"
+#include "anatomy/heart/template_heart_surface.h"
 
 namespace pcisim::physics {
 namespace {
@@ -18,7 +18,7 @@ double smoothstep01(double x) {
 
 // the designed epicardium's radius along a patient-frame direction (metres)
 double surface_radius_m(const Eigen::Vector3d& patient_dir) {
-  return 1e-3 * epicardial_radius_mm(heart_to_patient().transpose() * patient_dir);
+  return 1e-3 * anatomy::epicardial_radius_mm(anatomy::heart_to_patient().transpose() * patient_dir);
 }
 
 // one sunken centerline point: its direction from the heart centre and how deep it sinks
@@ -29,13 +29,13 @@ struct Dent {
 
 }  // namespace
 
-double clearance_above_epicardium_m(const CenterlinePoint& point) {
+double clearance_above_epicardium_m(const anatomy::CenterlinePoint& point) {
   const double r = point.position_m.norm();
   if (!(r > 0.0)) return -std::numeric_limits<double>::infinity();
   return r - point.radius_m - surface_radius_m(point.position_m / r);
 }
 
-HeartFitReport fit_heart_under_tree(const VesselTree& tree, const HeartFitParams& params, HeartMesh* mesh) {
+HeartFitReport fit_heart_under_tree(const anatomy::VesselTree& tree, const HeartFitParams& params, anatomy::HeartMesh* mesh) {
   HeartFitReport report;
   // the branches that sink deeper than the tolerance, every point of them below the surface
   std::vector<Dent> dents;

@@ -6,8 +6,8 @@
 // the tolerance is lifted clear: the epicardium under it is dented radially until the vessel
 // touches it, the dent fading along the surface and into the wall. A tree the template already
 // fits leaves the mesh untouched.
-#include "physics/heart/heart_mesh.h"
-#include "physics/vessel/vessel_tree.h"
+#include "anatomy/heart/heart_mesh.h"
+#include "anatomy/vessel/vessel_tree.h"
 
 namespace pcisim::physics {
 
@@ -28,9 +28,9 @@ struct HeartFitReport {
 
 // how far the centerline point (patient frame, metres) lies above the designed epicardium, minus
 // its radius: negative when the vessel sinks into the heart (radial, from the heart centre)
-double clearance_above_epicardium_m(const CenterlinePoint& point);
+double clearance_above_epicardium_m(const anatomy::CenterlinePoint& point);
 
 // dents mesh->vertices_m where a non-aorta branch sinks deeper than params.tolerance_m
-HeartFitReport fit_heart_under_tree(const VesselTree& tree, const HeartFitParams& params, HeartMesh* mesh);
+HeartFitReport fit_heart_under_tree(const anatomy::VesselTree& tree, const HeartFitParams& params, anatomy::HeartMesh* mesh);
 
 }  // namespace pcisim::physics

@@ -4,9 +4,9 @@
 #include <cmath>
 #include <numbers>
 
-#include "physics/heart/heart_frame.h"
-#include "physics/heart/heart_mesh.h"
-#include "physics/heart/template_heart_surface.h"
+#include "anatomy/heart/heart_frame.h"
+#include "anatomy/heart/heart_mesh.h"
+#include "anatomy/heart/template_heart_surface.h"
 
 namespace pcisim::physics {
 namespace {
@@ -22,8 +22,8 @@ double contraction(double phase, const SyntheticMotionSpec& spec) {
 }
 
 Eigen::Vector3d synthetic_displacement_m(const Eigen::Vector3d& rest_m, double s, const SyntheticMotionSpec& spec) {
-  static const Eigen::Matrix3d to_patient = heart_to_patient();
-  static const CavityEllipsoid lv = lv_cavity();
+  static const Eigen::Matrix3d to_patient = anatomy::heart_to_patient();
+  static const anatomy::CavityEllipsoid lv = anatomy::lv_cavity();
   const Eigen::Vector3d x = to_patient.transpose() * rest_m * 1e3;  // heart frame, mm
   // about the LV long axis (through the cavity's centre along e3)
   const Eigen::Vector2d rel(x.x() - lv.centre_mm.x(), x.y() - lv.centre_mm.y());
@@ -45,7 +45,7 @@ Eigen::Vector3d synthetic_displacement_m(const Eigen::Vector3d& rest_m, double s
 }
 
 HeartMotion make_synthetic_heart_motion(const SyntheticMotionSpec& spec) {
-  const Eigen::Matrix3Xd& v = template_heart_mesh().vertices_m;
+  const Eigen::Matrix3Xd& v = anatomy::template_heart_mesh().vertices_m;
   MotionGrid grid;
   const double h = spec.grid_spacing_m;
   const Eigen::Vector3d lo = v.rowwise().minCoeff().array() - h, hi = v.rowwise().maxCoeff().array() + h;

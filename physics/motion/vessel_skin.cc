@@ -34,7 +34,7 @@ void validate(const VesselMotionParams& m) {
   require(in(m.blend_radius_m, 1e-3, 0.02), "vessel_motion.blend_radius_m: expected [1e-3, 0.02] m");
 }
 
-VesselSkin::VesselSkin(const VesselTree& rest_tree, const Eigen::Matrix3Xd& rest_surface_m,
+VesselSkin::VesselSkin(const anatomy::VesselTree& rest_tree, const Eigen::Matrix3Xd& rest_surface_m,
                        std::span<const std::array<int, 3>> triangles, const VesselMotionParams& params)
     : params_(params), triangles_(triangles.begin(), triangles.end()) {
   const int surface_n = static_cast<int>(rest_surface_m.cols());

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "physics/motion/vessel_motion_params.h"
-#include "physics/vessel/vessel_tree.h"
+#include "anatomy/vessel/vessel_tree.h"
 
 namespace pcisim::physics {
 
@@ -22,7 +22,7 @@ class VesselSkin {
  public:
   // surface_m: the epicardial particles at rest (columns); triangles index them. Throws like
   // validate(), or when a triangle indexes past the surface
-  VesselSkin(const VesselTree& rest_tree, const Eigen::Matrix3Xd& rest_surface_m,
+  VesselSkin(const anatomy::VesselTree& rest_tree, const Eigen::Matrix3Xd& rest_surface_m,
              std::span<const std::array<int, 3>> triangles, const VesselMotionParams& params);
 
   // moves every centerline point with the surface's current positions (same columns as at rest)

@@ -2,11 +2,11 @@
 
 namespace pcisim::physics {
 
-SignedDistanceField build_lumen_sdf(const VesselTree& tree, double spacing_m, const LumenMeshSpec& mesh_spec) {
+SignedDistanceField build_lumen_sdf(const anatomy::VesselTree& tree, double spacing_m, const anatomy::LumenMeshSpec& mesh_spec) {
   SdfBuildSpec spec;
   spec.spacing_m = spacing_m;
   spec.padding_m = 1e-3;
-  return SignedDistanceField::build(loft_lumen(tree, mesh_spec), spec);
+  return SignedDistanceField::build(anatomy::loft_lumen(tree, mesh_spec), spec);
 }
 
 }  // namespace pcisim::physics

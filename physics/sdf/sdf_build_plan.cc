@@ -32,7 +32,7 @@ int edge_side(const std::vector<Eigen::Vector3d>& v, int ia, int ib, double y, d
   return flip ? -side : side;
 }
 
-void build_parity_rows(const TriangleMesh& mesh, const BuildGrid& g, ComponentPlan& c) {
+void build_parity_rows(const anatomy::TriangleMesh& mesh, const BuildGrid& g, ComponentPlan& c) {
   const int nj = c.j1 - c.j0 + 1, nk = c.k1 - c.k0 + 1;
   if (nj <= 0 || nk <= 0) {
     c.row_begin.assign(1, 0);
@@ -81,7 +81,7 @@ void build_parity_rows(const TriangleMesh& mesh, const BuildGrid& g, ComponentPl
 
 }  // namespace
 
-BuildPlan make_build_plan(const TriangleMesh& mesh, double spacing_m, double padding_m, double band_m) {
+BuildPlan make_build_plan(const anatomy::TriangleMesh& mesh, double spacing_m, double padding_m, double band_m) {
   if (mesh.triangles.empty()) throw std::invalid_argument("SignedDistanceField: empty mesh");
   if (!(spacing_m > 0.0) || !std::isfinite(spacing_m)) {
     throw std::invalid_argument("SignedDistanceField: spacing_m must be > 0, got " + std::to_string(spacing_m));

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "physics/geometry/triangle_mesh.h"
+#include "anatomy/mesh/triangle_mesh.h"
 #include "physics/sdf/sdf_kernels.h"
 
 namespace pcisim::physics::sdf {
@@ -30,7 +30,7 @@ struct BuildPlan {
 };
 
 // throws std::invalid_argument for an empty mesh, a bad spacing/band or a grid that would not fit
-BuildPlan make_build_plan(const TriangleMesh& mesh, double spacing_m, double padding_m, double band_m);
+BuildPlan make_build_plan(const anatomy::TriangleMesh& mesh, double spacing_m, double padding_m, double band_m);
 
 // after every component's values are folded into pool: points of other components' bricks that
 // lie inside a component become -band, and untouched bricks inside any component become inside

@@ -8,7 +8,7 @@
 
 namespace pcisim::physics {
 
-SignedDistanceField SignedDistanceField::build(const TriangleMesh& lumen, double spacing_m, double padding_m) {
+SignedDistanceField SignedDistanceField::build(const anatomy::TriangleMesh& lumen, double spacing_m, double padding_m) {
   SdfBuildSpec spec;
   spec.spacing_m = spacing_m;
   spec.padding_m = padding_m;
@@ -18,7 +18,7 @@ SignedDistanceField SignedDistanceField::build(const TriangleMesh& lumen, double
 // the paper's construction (section B, fig. 8a), per closed tube of the mesh: every triangle's
 // prism of +-band along its normal, that prism's box, exact point-triangle distances (eq 13),
 // sign from the face normal (eq 14); tubes folded by min (the union); the rest by ray parity.
-SignedDistanceField SignedDistanceField::build(const TriangleMesh& lumen, const SdfBuildSpec& spec) {
+SignedDistanceField SignedDistanceField::build(const anatomy::TriangleMesh& lumen, const SdfBuildSpec& spec) {
   sdf::BuildPlan plan = sdf::make_build_plan(lumen, spec.spacing_m, spec.padding_m, spec.band_m);
   std::vector<float> pool(int64_t(plan.pool_bricks()) * sdf::kBrickPoints, plan.grid.band);
   sdf::fold_components_cpu(plan, pool);

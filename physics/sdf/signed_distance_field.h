@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "physics/geometry/triangle_mesh.h"
+#include "anatomy/mesh/triangle_mesh.h"
 
 namespace pcisim::physics {
 
@@ -32,8 +32,8 @@ class SignedDistanceField {
   // builds from a closed lumen mesh on a grid of spacing_m covering its bounds plus padding_m.
   // The mesh may hold several closed tubes (connected components); the lumen is their union.
   // Throws std::invalid_argument for an empty mesh, spacing <= 0 or a grid over 2^31 points.
-  static SignedDistanceField build(const TriangleMesh& lumen, double spacing_m, double padding_m);
-  static SignedDistanceField build(const TriangleMesh& lumen, const SdfBuildSpec& spec);
+  static SignedDistanceField build(const anatomy::TriangleMesh& lumen, double spacing_m, double padding_m);
+  static SignedDistanceField build(const anatomy::TriangleMesh& lumen, const SdfBuildSpec& spec);
 
   // trilinear sample. Outside the grid the answer is safe and finite: see the implementation
   // comment for the exact rule. Allocates nothing.

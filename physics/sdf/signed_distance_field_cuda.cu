@@ -97,7 +97,7 @@ bool cuda_sdf_available(std::string* why) {
   return true;
 }
 
-SignedDistanceField build_sdf_cuda(const TriangleMesh& lumen, const SdfBuildSpec& spec,
+SignedDistanceField build_sdf_cuda(const anatomy::TriangleMesh& lumen, const SdfBuildSpec& spec,
                                    CudaSdfBuildTimings* timings) {
   CudaSdfBuildTimings local;
   CudaSdfBuildTimings& tm = timings ? *timings : local;

@@ -23,7 +23,7 @@ struct CudaSdfBuildTimings {
 // the GPU twin of SignedDistanceField::build: one thread per triangle rasterizes the prisms with
 // 64-bit atomicMin on (distance float bits, triangle index); one thread per brick point folds the
 // tube into the union. Throws std::runtime_error on a CUDA error.
-SignedDistanceField build_sdf_cuda(const TriangleMesh& lumen, const SdfBuildSpec& spec,
+SignedDistanceField build_sdf_cuda(const anatomy::TriangleMesh& lumen, const SdfBuildSpec& spec,
                                    CudaSdfBuildTimings* timings = nullptr);
 
 // a field copied to the GPU for batched queries: n points in, distance + unit gradient out

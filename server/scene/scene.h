@@ -38,7 +38,7 @@ struct Scene {
 // every effect name a scene may list, in the order the pipeline steps them
 const std::vector<std::string>& known_effects();
 
-// parse a scene; throws SceneError "<source>: <json path>: <what was expected>"
+// parse a scene; throws json::JsonError "<source>: <json path>: <what was expected>"
 Scene parse_scene(const std::string& text, const std::string& source);
 // refuses a file over kMaxSceneFileBytes before reading it
 inline constexpr std::uintmax_t kMaxSceneFileBytes = 1 << 20;

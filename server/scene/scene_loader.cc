@@ -6,7 +6,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "server/scene/json_reader.h"
+#include "json/json_reader.h"
 #include "server/scene/scene.h"
 #include "xray/projectors/trilinear_projector.h"
 
@@ -15,7 +15,7 @@ namespace {
 
 constexpr double kMm = 1e-3;
 
-physics::GuidewireParams read_guidewire(JsonReader r) {
+physics::GuidewireParams read_guidewire(json::JsonReader r) {
   physics::GuidewireParams p;
   p.length_m = r.number("length_mm", p.length_m / kMm, 20, 2000) * kMm;
   p.segment_count = r.integer("segments", p.segment_count, 4, 4000);
@@ -37,7 +37,7 @@ physics::GuidewireParams read_guidewire(JsonReader r) {
   return p;
 }
 
-physics::VesselContactParams read_vessel_contact(JsonReader r) {
+physics::VesselContactParams read_vessel_contact(json::JsonReader r) {
   physics::VesselContactParams p;
   p.sdf_spacing_m = r.number("sdf_spacing_mm", p.sdf_spacing_m / kMm, 0.05, 2.0) * kMm;
   p.wall_margin_m = r.number("wall_margin_mm", p.wall_margin_m / kMm, 0.0, 1.0) * kMm;
@@ -46,7 +46,7 @@ physics::VesselContactParams read_vessel_contact(JsonReader r) {
   return p;
 }
 
-physics::FrictionParams read_friction(JsonReader r) {
+physics::FrictionParams read_friction(json::JsonReader r) {
   physics::FrictionParams p;
   p.body_static = r.number("body_static", p.body_static, 0, 2);
   p.body_kinetic = r.number("body_kinetic", p.body_kinetic, 0, 2);
@@ -58,7 +58,7 @@ physics::FrictionParams read_friction(JsonReader r) {
   return p;
 }
 
-physics::BloodFlowParams read_blood_flow(JsonReader r) {
+physics::BloodFlowParams read_blood_flow(json::JsonReader r) {
   physics::BloodFlowParams p;
   p.mean_velocity_m_per_s = r.number("mean_velocity_mm_s", p.mean_velocity_m_per_s / kMm, 0, 2000) * kMm;
   p.drift_gain = r.number("drift_gain", p.drift_gain, 0, 1);
@@ -69,7 +69,7 @@ physics::BloodFlowParams read_blood_flow(JsonReader r) {
   return p;
 }
 
-physics::HeartBeatParams read_heart_beat(JsonReader r, const std::string& scene_dir) {
+physics::HeartBeatParams read_heart_beat(json::JsonReader r, const std::string& scene_dir) {
   physics::HeartBeatParams p;
   p.rate_bpm = r.number("rate_bpm", p.rate_bpm, 20, 250);
   p.motion_file = r.text("motion_file", "");
@@ -98,7 +98,7 @@ physics::HeartBeatParams read_heart_beat(JsonReader r, const std::string& scene_
   return p;
 }
 
-physics::VesselMotionParams read_vessel_motion(JsonReader r) {
+physics::VesselMotionParams read_vessel_motion(json::JsonReader r) {
   physics::VesselMotionParams p;
   p.attach_distance_m = r.number("attach_mm", p.attach_distance_m / kMm, 0, 50) * kMm;
   p.fade_distance_m = r.number("fade_mm", p.fade_distance_m / kMm, 0, 100) * kMm;
@@ -107,7 +107,7 @@ physics::VesselMotionParams read_vessel_motion(JsonReader r) {
   return p;
 }
 
-haptics::HapticParams read_haptics(JsonReader r) {
+haptics::HapticParams read_haptics(json::JsonReader r) {
   haptics::HapticParams p;
   p.peak_force_n = r.number("peak_force_n", p.peak_force_n, 0, 20);
   p.peak_torque_nm = r.number("peak_torque_nm", p.peak_torque_nm, 0, 1);
@@ -129,7 +129,7 @@ haptics::HapticParams read_haptics(JsonReader r) {
   return p;
 }
 
-XraySpec read_xray(JsonReader r) {
+XraySpec read_xray(json::JsonReader r) {
   XraySpec x;
   auto& f = x.fluoro;
   const std::string projector = r.text("projector", "cpu", {"cpu", "exact", "gl", "cuda"});
@@ -167,7 +167,7 @@ XraySpec read_xray(JsonReader r) {
 }
 
 // the cath lab's bounds on console commands (server/session_limits.h)
-SessionLimitParams read_session(JsonReader r) {
+SessionLimitParams read_session(json::JsonReader r) {
   SessionLimitParams p;
   p.min_reset_interval_s = r.number("min_reset_interval_s", p.min_reset_interval_s, 0, 600);
   p.min_scene_load_interval_s = r.number("min_scene_load_interval_s", p.min_scene_load_interval_s, 0, 600);
@@ -178,7 +178,7 @@ SessionLimitParams read_session(JsonReader r) {
   return p;
 }
 
-void read_contrast(JsonReader r, XraySpec& x) {
+void read_contrast(json::JsonReader r, XraySpec& x) {
   x.contrast = true;
   x.fluoro.iodine_mu_per_mm = r.number("iodine_mu_per_mm", x.fluoro.iodine_mu_per_mm, 0, 2);
   x.injection_volume_ml = r.number("injection_ml", x.injection_volume_ml, 0.5, 30);
@@ -186,7 +186,7 @@ void read_contrast(JsonReader r, XraySpec& x) {
   r.finish();
 }
 
-void read_detector_noise(JsonReader r, XraySpec& x) {
+void read_detector_noise(json::JsonReader r, XraySpec& x) {
   x.fluoro.photons_per_pixel = r.number("photons_per_pixel", 2000, 10, 1e7);
   r.finish();
 }
@@ -195,19 +195,19 @@ void read_detector_noise(JsonReader r, XraySpec& x) {
 void require(const Scene& s, const std::string& effect, const std::string& needs) {
   const auto& e = s.effects;
   if (std::find(e.begin(), e.end(), needs) == e.end())
-    throw SceneError(fmt::format("effects.{}: needs effect \"{}\" in the same scene", effect, needs));
+    throw json::JsonError(fmt::format("effects.{}: needs effect \"{}\" in the same scene", effect, needs));
 }
 
 Scene parse(const nlohmann::json& doc, const std::string& source) {
   Scene s;
   const std::string scene_dir = source == "built-in" ? "" : std::filesystem::path(source).parent_path().string();
   s.source = source;
-  JsonReader top(doc, "");
+  json::JsonReader top(doc, "");
   s.name = top.text("name", "unnamed");
   s.physics_rate_hz = top.number("physics_rate_hz", s.physics_rate_hz, 1, 1000);
   s.world.step_s = 1.0 / s.physics_rate_hz;
 
-  JsonReader anatomy = top.child("anatomy");
+  json::JsonReader anatomy = top.child("anatomy");
   s.world.anatomy.seed = static_cast<uint32_t>(anatomy.integer("phantom_seed", 1, 0, 1 << 30));
   anatomy.finish();
 
@@ -215,7 +215,7 @@ Scene parse(const nlohmann::json& doc, const std::string& source) {
   s.session = read_session(top.child("session"));
 
   if (!doc.contains("effects")) top.fail("effects", "expected an object listing the effects to simulate");
-  JsonReader effects = top.child("effects");
+  json::JsonReader effects = top.child("effects");
   const auto& known = known_effects();
   for (const auto& [name, params] : doc.at("effects").items())
     if (std::find(known.begin(), known.end(), name) == known.end())
@@ -223,7 +223,7 @@ Scene parse(const nlohmann::json& doc, const std::string& source) {
   for (const auto& name : known) {
     if (!effects.has(name)) continue;
     s.effects.push_back(name);
-    JsonReader r = effects.child(name);
+    json::JsonReader r = effects.child(name);
     if (name == "guidewire") s.world.guidewire = read_guidewire(r);
     if (name == "vessel_contact") s.world.vessel_contact = read_vessel_contact(r);
     if (name == "friction") s.world.friction = read_friction(r);
@@ -255,27 +255,27 @@ const std::vector<std::string>& known_effects() {
 }
 
 Scene parse_scene(const std::string& text, const std::string& source) {
-  const nlohmann::json doc = parse_json_checked(text, source);
+  const nlohmann::json doc = json::parse_json_checked(text, source);
   try {
     return parse(doc, source);
-  } catch (const SceneError& e) {
-    throw SceneError(fmt::format("{}: {}", source, e.what()));
+  } catch (const json::JsonError& e) {
+    throw json::JsonError(fmt::format("{}: {}", source, e.what()));
   }
 }
 
 Scene load_scene_file(const std::string& path) {
   // a regular file, checked before opening (a FIFO would block the reader); the error_code form,
-  // so an over-long or unreadable path is a SceneError rather than a filesystem_error
+  // so an over-long or unreadable path is a json::JsonError rather than a filesystem_error
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec) || ec)
-    throw SceneError(fmt::format("{}: cannot read the scene file (missing or not a file)", path));
+    throw json::JsonError(fmt::format("{}: cannot read the scene file (missing or not a file)", path));
   // a scene is a page of JSON; a huge file would hold the LCM thread and its memory for seconds
   const auto size = std::filesystem::file_size(path, ec);
   if (ec || size > kMaxSceneFileBytes)
-    throw SceneError(fmt::format("{}: scene file of {} bytes is over the {} byte limit", path, ec ? 0 : size,
+    throw json::JsonError(fmt::format("{}: scene file of {} bytes is over the {} byte limit", path, ec ? 0 : size,
                                  kMaxSceneFileBytes));
   std::ifstream in(path);
-  if (!in) throw SceneError(fmt::format("{}: cannot read the scene file (missing or not a file)", path));
+  if (!in) throw json::JsonError(fmt::format("{}: cannot read the scene file (missing or not a file)", path));
   std::stringstream text;
   text << in.rdbuf();
   return parse_scene(text.str(), path);

@@ -9,8 +9,8 @@
 #include "pcisim_lcm/instrument_state_t.hpp"
 #include "protocol/channels.h"
 #include "protocol/message_checks.h"
-#include "server/realtime/clock.h"
-#include "server/realtime/deadline_schedule.h"
+#include "realtime/clock.h"
+#include "realtime/deadline_schedule.h"
 #include "server/scene/scene.h"
 #include "server/server.h"
 
@@ -42,17 +42,17 @@ struct FakeTrainee {
   }
   void run() {
     pcisim_lcm::instrument_state_t m{};
-    DeadlineSchedule schedule(monotonic_ns(), 1'000'000);
+    realtime::DeadlineSchedule schedule(realtime::monotonic_ns(), 1'000'000);
     for (int64_t seq = 0; !done; ++seq) {
       if (publishing) {
         m.seq = seq;
-        m.utime = monotonic_us();
+        m.utime = realtime::monotonic_us();
         m.insertion_mm = 0.005 * static_cast<double>(seq);  // 5 mm/s
         m.insertion_rate_mm_s = 5.0;
         lcm.publish(protocol::kInstrumentChannel, &m);
       }
-      sleep_until_ns(schedule.deadline_ns());
-      schedule.complete(monotonic_ns());
+      realtime::sleep_until_ns(schedule.deadline_ns());
+      schedule.complete(realtime::monotonic_ns());
     }
   }
 };

@@ -13,7 +13,7 @@
 #include "pcisim_lcm/wire_state_t.hpp"
 #include "protocol/channels.h"
 #include "protocol/message_checks.h"
-#include "server/realtime/clock.h"
+#include "realtime/clock.h"
 #include "server/server.h"
 
 namespace pcisim::server {
@@ -30,10 +30,10 @@ struct Timed {
 
 // records when wire states and force commands arrive, relative to the test's start
 struct Recorder {
-  int64_t start_ns = monotonic_ns();
+  int64_t start_ns = realtime::monotonic_ns();
   std::mutex mutex;
   std::vector<Timed> wires, forces;
-  double now_s() const { return (monotonic_ns() - start_ns) * 1e-9; }
+  double now_s() const { return (realtime::monotonic_ns() - start_ns) * 1e-9; }
   void on_wire(const lcm::ReceiveBuffer* r, const std::string&) {
     pcisim_lcm::wire_state_t m;
     if (!protocol::decode_checked(*r, m)) return;

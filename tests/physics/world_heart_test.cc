@@ -43,7 +43,7 @@ double epicardium_distance(const BeatingHeart& heart, const Eigen::Vector3d& p) 
 
 // how far p is outside the lumen of the tree as it is now (negative inside): distance to the
 // nearest moved centerline segment minus the radius there
-double outside_lumen(const VesselTree& rest, const VesselSkin& skin, const Eigen::Vector3d& p) {
+double outside_lumen(const anatomy::VesselTree& rest, const VesselSkin& skin, const Eigen::Vector3d& p) {
   const auto pts = skin.points_m();
   const auto off = skin.branch_offsets();
   double best = std::numeric_limits<double>::infinity();
@@ -141,7 +141,7 @@ TEST_P(WorldHeartSeeds, HeartDoesNotSwallowTheTree) {
   // radial clearance of every fully attached coronary point above the heart's epicardium at rest
   // (ray from the heart centre, Moller-Trumbore), minus the vessel's radius
   const VesselSkin& skin = *w.vessel_skin();
-  const VesselTree& tree = w.vessel_tree();
+  const anatomy::VesselTree& tree = w.vessel_tree();
   double worst = 1e9;
   for (size_t b = 0; b < tree.branches.size(); ++b) {
     if (tree.branches[b].name == "aorta") continue;

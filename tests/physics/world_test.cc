@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "physics/vessel/coronary_phantom.h"
-#include "physics/vessel/vessel_tree.h"
+#include "anatomy/phantom/coronary_phantom.h"
+#include "anatomy/vessel/vessel_tree.h"
 #include "tests/common/counting_new.h"
 
 
@@ -135,7 +135,7 @@ TEST(World, WireComesOutOfTheCatheterAndIsTimed) {
   WorldSnapshot snap;
   w.write_snapshot(snap);
   ASSERT_EQ(snap.wire_nodes_m.size(), static_cast<size_t>(GuidewireParams{}.segment_count + 1));
-  const auto path = guide_catheter_path(make_coronary_phantom({1}));
+  const auto path = anatomy::guide_catheter_path(anatomy::make_coronary_phantom({1}));
   // 30 mm out of the exit, give or take the chain-mail's compression slack
   const double out = (snap.tip_m - path.back()).norm();
   EXPECT_GT(out, 0.020);

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <thread>
 
-#include "server/realtime/clock.h"
+#include "realtime/clock.h"
 #include "tests/common/counting_new.h"
 
 
@@ -28,11 +28,11 @@ TEST(HapticLoop, TicksWithoutAllocatingAndAnswersTheNewestSample) {
   for (int i = 0; i < 600; ++i) {
     InstrumentSlot& slot = state.instrument_for_haptics.write_slot();
     slot.seq = i;
-    slot.sample.received_us = monotonic_us();
+    slot.sample.received_us = realtime::monotonic_us();
     state.instrument_for_haptics.publish();
     if (i % 33 == 0) {
       physics::LocalForceModel& m = state.force_model.write_slot();
-      m.made_utime = monotonic_us();
+      m.made_utime = realtime::monotonic_us();
       m.valid_for_us = 1'000'000;  // a stall of the test thread must not make it stale
       m.f0_n = 0.5;
       state.force_model.publish();

@@ -9,7 +9,7 @@
 
 #include "protocol/channels.h"
 #include "protocol/message_checks.h"
-#include "server/realtime/clock.h"
+#include "realtime/clock.h"
 #include "fuzz/lcm_mutants.h"
 
 namespace pcisim::server {

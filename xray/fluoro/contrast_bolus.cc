@@ -7,7 +7,7 @@ namespace pcisim::xray {
 namespace {
 
 // distance from p to the polyline through points [lo, hi] of branch, and the radius there
-bool inside_lumen(const physics::VesselBranch& branch, int lo, int hi, const Eigen::Vector3d& p_m) {
+bool inside_lumen(const anatomy::VesselBranch& branch, int lo, int hi, const Eigen::Vector3d& p_m) {
   const auto& pts = branch.points;
   lo = std::max(lo, 0);
   hi = std::min<int>(hi, static_cast<int>(pts.size()) - 1);
@@ -22,7 +22,7 @@ bool inside_lumen(const physics::VesselBranch& branch, int lo, int hi, const Eig
 
 }  // namespace
 
-ContrastBolus::ContrastBolus(const physics::VesselTree& tree, const ContrastBolusSpec& spec) : spec_(spec) {
+ContrastBolus::ContrastBolus(const anatomy::VesselTree& tree, const ContrastBolusSpec& spec) : spec_(spec) {
   const int n = static_cast<int>(tree.branches.size());
   const int aorta = tree.find("aorta");
   branch_names_.reserve(n);

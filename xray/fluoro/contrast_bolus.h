@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "physics/vessel/vessel_tree.h"
+#include "anatomy/vessel/vessel_tree.h"
 
 namespace pcisim::xray {
 
@@ -56,7 +56,7 @@ class ContrastBolus {
   // segments every branch except the aorta; the stretch of a branch inside its parent's lumen
   // (the LM and RCA inside the aortic root, a side branch's first points) is left out, and the
   // ostium (s = 0) is where the LM or RCA leaves the aorta
-  ContrastBolus(const physics::VesselTree& tree, const ContrastBolusSpec& spec);
+  ContrastBolus(const anatomy::VesselTree& tree, const ContrastBolusSpec& spec);
 
   // concentration (0..1) at s mm below `ostium` at time t_s, summed over the injections
   double opacity(double s_mm, CoronaryOstium ostium, double t_s, std::span<const ContrastInjection> injections) const;

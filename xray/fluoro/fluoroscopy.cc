@@ -6,7 +6,7 @@
 
 #include "xray/overlay/tube_overlay.h"
 #include "xray/overlay/wire_overlay.h"
-#include "xray/phantom/thorax_phantom.h"
+#include "anatomy/phantom/thorax_phantom.h"
 
 namespace pcisim::xray {
 namespace {
@@ -16,13 +16,13 @@ bool same_geometry(const DetectorGeometry& a, const DetectorGeometry& b) {
          a.pixel_mm == b.pixel_mm && a.width == b.width && a.height == b.height;
 }
 
-Volume make_background_volume(const physics::VesselTree& tree, const FluoroSpec& spec) {
-  ThoraxPhantomSpec p;
+anatomy::Volume make_background_volume(const anatomy::VesselTree& tree, const FluoroSpec& spec) {
+  anatomy::ThoraxPhantomSpec p;
   p.seed = spec.seed;
   p.dims = spec.volume_dims;
   p.spacing_mm = spec.volume_spacing_mm;
   p.contrast = false;  // blood-filled lumens: the iodine comes per frame, analytically
-  return make_thorax_phantom(p, tree);
+  return anatomy::make_thorax_phantom(p, tree);
 }
 
 }  // namespace
@@ -42,7 +42,7 @@ struct FluoroscopyRenderer::Impl {
   std::vector<Eigen::Vector3d> wire_mm;
   WireSpec wire;
 
-  Impl(const physics::VesselTree& tree, const FluoroSpec& s)
+  Impl(const anatomy::VesselTree& tree, const FluoroSpec& s)
       : spec(s),
         bolus(tree, s.contrast),
         drr(make_background_volume(tree, s), s.projector),
@@ -50,7 +50,7 @@ struct FluoroscopyRenderer::Impl {
         wire{.radius_mm = s.wire_radius_mm, .mu_per_mm = s.wire_mu_per_mm} {}
 };
 
-FluoroscopyRenderer::FluoroscopyRenderer(const physics::VesselTree& tree, const FluoroSpec& spec)
+FluoroscopyRenderer::FluoroscopyRenderer(const anatomy::VesselTree& tree, const FluoroSpec& spec)
     : impl_(std::make_unique<Impl>(tree, spec)) {}
 
 FluoroscopyRenderer::~FluoroscopyRenderer() = default;

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "physics/vessel/vessel_tree.h"
+#include "anatomy/vessel/vessel_tree.h"
 #include "xray/fluoro/contrast_bolus.h"
 #include "xray/fluoro/detector_chain.h"
 #include "xray/geometry/c_arm.h"
@@ -79,7 +79,7 @@ struct FluoroFrame {
 class FluoroscopyRenderer {
  public:
   // builds the thorax phantom around `tree` and prepares the projector (seconds at most)
-  FluoroscopyRenderer(const physics::VesselTree& tree, const FluoroSpec& spec);
+  FluoroscopyRenderer(const anatomy::VesselTree& tree, const FluoroSpec& spec);
   ~FluoroscopyRenderer();
 
   // renders one frame into out; after the first frame of a given size nothing is allocated

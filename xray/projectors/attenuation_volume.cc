@@ -10,7 +10,7 @@ namespace pcisim::xray {
 
 void AttenuationVolume::FreeMu::operator()(float* p) const { std::free(p); }
 
-AttenuationVolume::AttenuationVolume(const Volume& v, const AttenuationParams& params) : params_(params) {
+AttenuationVolume::AttenuationVolume(const anatomy::Volume& v, const AttenuationParams& params) : params_(params) {
   if (const std::string bad = validate(v); !bad.empty()) throw std::invalid_argument("AttenuationVolume: " + bad);
   if (params.brick_voxels < 1) throw std::invalid_argument("AttenuationVolume: brick_voxels must be >= 1");
   for (int a = 0; a < 3; ++a) {

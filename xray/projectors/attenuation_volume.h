@@ -9,7 +9,7 @@
 #include <memory>
 #include <vector>
 
-#include "xray/volume/volume.h"
+#include "anatomy/volume/volume.h"
 
 namespace pcisim::xray {
 
@@ -21,7 +21,7 @@ struct AttenuationParams {
 
 class AttenuationVolume {
  public:
-  AttenuationVolume(const Volume& volume, const AttenuationParams& params = {});
+  AttenuationVolume(const anatomy::Volume& volume, const AttenuationParams& params = {});
 
   double mu_of_hu(double hu) const {
     return hu < params_.air_below_hu ? 0.0 : params_.mu_water_per_mm * (1.0 + hu / 1000.0);

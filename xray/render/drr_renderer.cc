@@ -33,7 +33,7 @@ struct DrrRenderer::Impl {
 #endif
 };
 
-DrrRenderer::DrrRenderer(const Volume& volume, const DrrRendererOptions& options)
+DrrRenderer::DrrRenderer(const anatomy::Volume& volume, const DrrRendererOptions& options)
     : options_(options),
       attenuation_(std::make_unique<AttenuationVolume>(volume, options.attenuation)),
       impl_(std::make_unique<Impl>()) {

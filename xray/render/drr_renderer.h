@@ -10,7 +10,7 @@
 #include "xray/projectors/attenuation_volume.h"
 #include "xray/projectors/image.h"
 #include "xray/projectors/trilinear_projector.h"
-#include "xray/volume/volume.h"
+#include "anatomy/volume/volume.h"
 
 namespace pcisim::xray {
 
@@ -29,7 +29,7 @@ class DrrRenderer {
  public:
   // builds the attenuation volume (and uploads it for CUDA); throws std::runtime_error when the
   // CUDA projector is asked for and no GPU is there (or the build has no CUDA)
-  DrrRenderer(const Volume& volume, const DrrRendererOptions& options = {});
+  DrrRenderer(const anatomy::Volume& volume, const DrrRendererOptions& options = {});
   ~DrrRenderer();
 
   // line integrals for the detector g into image, resized only when g's size differs

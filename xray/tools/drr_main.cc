@@ -18,14 +18,14 @@
 
 #include "xray/frame/png_writer.h"
 #include "xray/geometry/detector_geometry.h"
-#include "xray/phantom/thorax_phantom.h"
+#include "anatomy/phantom/thorax_phantom.h"
 #include "xray/projectors/attenuation_volume.h"
 #include "xray/projectors/siddon_projector.h"
 #include "xray/projectors/trilinear_projector.h"
 #ifdef PCISIM_HAVE_OSMESA
 #include "xray/projectors/gl/gl_projector.h"
 #endif
-#include "xray/volume/volume_io.h"
+#include "anatomy/volume/volume_io.h"
 #ifdef PCISIM_HAVE_CUDA
 #include "xray/projectors/cuda_projector.h"
 #endif
@@ -33,6 +33,7 @@
 namespace {
 
 using namespace pcisim::xray;
+namespace anatomy = pcisim::anatomy;
 
 constexpr const char* kHelp = R"(pcisim-drr: X-ray line integrals (DRRs) from a CT volume, or the procedural phantom as a file.
 
@@ -172,7 +173,7 @@ int write_phantom(const Args& a) {
                         "--projector", "--step", "--mu-water", "--out"}) {
     if (a.values.count(k)) throw ArgError(fmt::format("{}: not used with --write-phantom", k));
   }
-  ThoraxPhantomSpec spec;
+  anatomy::ThoraxPhantomSpec spec;
   if (a.values.count("--seed")) {
     long long s = 0;
     if (!to_int(a.values.at("--seed"), &s) || s < 0 || s > 0xffffffffLL) bad("--seed", "an integer in [0, 2^32)", a.values.at("--seed"));
@@ -190,13 +191,13 @@ int write_phantom(const Args& a) {
   }
   spec.contrast = !has_flag(a, "--no-contrast");
   const auto t0 = std::chrono::steady_clock::now();
-  const Volume v = make_thorax_phantom(spec);
+  const anatomy::Volume v = anatomy::make_thorax_phantom(spec);
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   const std::string l = path.size() >= 5 ? path.substr(path.size() - 5) : path;
   if (l == ".nrrd") {
-    write_nrrd(v, path);
+    anatomy::write_nrrd(v, path);
   } else {
-    write_metaimage(v, path);  // rejects other extensions with a message
+    anatomy::write_metaimage(v, path);  // rejects other extensions with a message
   }
   std::printf("pcisim-drr: wrote %s (%lldx%lldx%lld at %.3g mm, seed %u, built in %.0f ms)\n", path.c_str(),
               (long long)v.dims[0], (long long)v.dims[1], (long long)v.dims[2], spec.spacing_mm, spec.seed, ms);
@@ -256,10 +257,10 @@ int render(const Args& a) {
   if (projector == "gl") bad("--projector", "exact, cpu or cuda (this build has no OSMesa)", projector);
 #endif
 
-  Volume volume;
+  anatomy::Volume volume;
   try {
-    volume = read_volume(volume_path);
-  } catch (const VolumeIoError& e) {
+    volume = anatomy::read_volume(volume_path);
+  } catch (const anatomy::VolumeIoError& e) {
     throw ArgError(fmt::format("--volume: {}", e.what()));
   }
   const AttenuationVolume att(volume, params);

@@ -4,7 +4,7 @@
 
 #include "clients/remote/keyboard_instrument.h"
 #include "remote_test_support.h"
-#include "server/realtime/clock.h"
+#include "realtime/clock.h"
 
 namespace pcisim::remote::test {
 namespace {
@@ -120,7 +120,7 @@ TEST(RemoteKeyboard, HardwareInstrumentWins) {
       std::this_thread::sleep_for(5ms);
     }
   });
-  ASSERT_TRUE(eventually([&] { return g.gateway->tracker().other_instrument_active(server::monotonic_ns()); }));
+  ASSERT_TRUE(eventually([&] { return g.gateway->tracker().other_instrument_active(realtime::monotonic_ns()); }));
   ctl.send({{"type", "keyboard"}, {"enable", true}});
   auto err = ctl.next_of("error");
   ASSERT_TRUE(err);

@@ -8,7 +8,7 @@
 #include <tuple>
 
 #include "physics/guidewire/catheter_path.h"
-#include "physics/vessel/coronary_phantom.h"
+#include "anatomy/phantom/coronary_phantom.h"
 #include "tests/common/counting_new.h"
 
 namespace pcisim::physics {
@@ -30,7 +30,7 @@ TEST(BloodFlowWaveform, MeanIsOneSystoleIsThrottledDiastoleCarriesTheRest) {
 
 class BloodChainMailTest : public ::testing::Test {
  protected:
-  VesselTree tree = make_coronary_phantom({1});
+  anatomy::VesselTree tree = anatomy::make_coronary_phantom({1});
   BloodFlowParams params;
 };
 
@@ -44,7 +44,7 @@ TEST_F(BloodChainMailTest, ProfileIsParabolicAndFlowsDownstream) {
   int axis = 0, ring = 0;
   for (int c = 0; c < blood.cell_count(); ++c) {
     double dist = 0.0;
-    const int b = nearest_branch(tree, pos[c], &dist);
+    const int b = anatomy::nearest_branch(tree, pos[c], &dist);
     ASSERT_GE(b, 0);
     const double speed = vel[c].norm();
     // Poiseuille: 2 x mean on the axis, 2 (1 - 0.6^2) x mean on the ring at 0.6 R
@@ -98,7 +98,7 @@ TEST_F(BloodChainMailTest, CellsAdvanceByTheirVelocityAndRecirculate) {
   for (int k = 0; k < 300; ++k) blood.step(1.0 / 30, k / 25.0);
   for (int c = 0; c < blood.cell_count(); c += 7) {
     double dist = 0.0;
-    const int b = nearest_branch(tree, blood.cell_positions_m()[c], &dist);
+    const int b = anatomy::nearest_branch(tree, blood.cell_positions_m()[c], &dist);
     ASSERT_GE(b, 0);
     EXPECT_LT(dist, 0.0021) << c;
   }
@@ -107,7 +107,7 @@ TEST_F(BloodChainMailTest, CellsAdvanceByTheirVelocityAndRecirculate) {
 TEST_F(BloodChainMailTest, WireFreeNodesTakeTheWeightedBloodVelocity) {
   BloodChainMail blood(params, tree);
   blood.step(1.0 / 30, 0.6);
-  ChainMailWire wire(GuidewireParams{}, CatheterPath(guide_catheter_path(tree)));
+  ChainMailWire wire(GuidewireParams{}, CatheterPath(anatomy::guide_catheter_path(tree)));
   wire.begin_step(0.010, 0.0);
   wire.restore_limits();
   const std::vector<Eigen::Vector3d> before(wire.nodes_m().begin(), wire.nodes_m().end());
@@ -126,9 +126,9 @@ TEST_F(BloodChainMailTest, WireFreeNodesTakeTheWeightedBloodVelocity) {
 // two straight vessels 3 mm apart, flowing opposite ways: eq 12 by hand (inverse-distance weights
 // over the chain-mails within the link radius, of the nearest vessel only) against linked_velocity
 TEST(BloodChainMailLinks, NearestVesselsChainMailsBlendedByInverseDistance) {
-  VesselTree t;
+  anatomy::VesselTree t;
   for (const auto& [name, y, dir] : {std::tuple{"A", 0.0, 1.0}, std::tuple{"B", 3e-3, -1.0}}) {
-    VesselBranch b;
+    anatomy::VesselBranch b;
     b.name = name;
     for (int k = 0; k <= 40; ++k) b.points.push_back({Eigen::Vector3d(dir * 0.5e-3 * k + (dir < 0 ? 20e-3 : 0.0), y, 0), 1e-3});
     t.branches.push_back(b);
@@ -180,7 +180,7 @@ TEST(BloodChainMailLinks, NearestVesselsChainMailsBlendedByInverseDistance) {
 }
 
 TEST(BloodChainMailLinks, BadParametersAreRefusedByName) {
-  const VesselTree t = make_coronary_phantom({1});
+  const anatomy::VesselTree t = anatomy::make_coronary_phantom({1});
   for (auto [field, bad] : {std::pair{"blood_flow.cell_spacing_m", 0.0}, std::pair{"blood_flow.link_radius_m", 0.0}}) {
     BloodFlowParams p;
     (std::string(field).find("cell") != std::string::npos ? p.cell_spacing_m : p.link_radius_m) = bad;
@@ -195,7 +195,7 @@ TEST(BloodChainMailLinks, BadParametersAreRefusedByName) {
 
 TEST_F(BloodChainMailTest, StepAndApplyAllocateNothing) {
   BloodChainMail blood(params, tree);
-  ChainMailWire wire(GuidewireParams{}, CatheterPath(guide_catheter_path(tree)));
+  ChainMailWire wire(GuidewireParams{}, CatheterPath(anatomy::guide_catheter_path(tree)));
   wire.begin_step(0.010, 0.0);
   wire.restore_limits();
   long n = -1;

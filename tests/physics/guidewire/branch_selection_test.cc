@@ -4,7 +4,7 @@
 // reports it.
 #include <gtest/gtest.h>
 
-#include "physics/vessel/vessel_tree.h"
+#include "anatomy/vessel/vessel_tree.h"
 #include "tests/physics/guidewire/wire_test_support.h"
 
 namespace pcisim::physics {
@@ -13,7 +13,7 @@ namespace {
 // runs the script and returns the names of the branches the tip visited past the LM, in order
 std::vector<std::string> run_session(World& world, const test::BranchScript& script, WorldSnapshot& snap) {
   std::vector<std::string> visited;
-  const VesselTree& tree = world.vessel_tree();
+  const anatomy::VesselTree& tree = world.vessel_tree();
   for (double t = 0.0; t <= script.end_s(); t += test::default_scene().step_s) {
     world.step(script.at(t));
     world.write_snapshot(snap);
@@ -36,7 +36,7 @@ TEST(BranchSelection, TurningTheTipSendsTheWireIntoTheLadOrTheLcx) {
     script.turn_deg = c.turn_deg;
     WorldSnapshot snap;
     const auto visited = run_session(world, script, snap);
-    const VesselTree& tree = world.vessel_tree();
+    const anatomy::VesselTree& tree = world.vessel_tree();
     ASSERT_GE(snap.tip_branch, 0);
     EXPECT_EQ(tree.branches[snap.tip_branch].name, c.branch) << "turn " << c.turn_deg;
     // it got there directly: the first branch past the LM was the target (on the way down
@@ -45,7 +45,7 @@ TEST(BranchSelection, TurningTheTipSendsTheWireIntoTheLadOrTheLcx) {
     EXPECT_EQ(visited.front(), c.branch) << "turn " << c.turn_deg;
     // well inside the branch, not at the fork: 58 mm inserted, 53 mm after the pull
     double d = 0.0;
-    EXPECT_EQ(nearest_branch(tree, snap.tip_m, &d), tree.find(c.branch));
+    EXPECT_EQ(anatomy::nearest_branch(tree, snap.tip_m, &d), tree.find(c.branch));
     EXPECT_LT(d, 2.5e-3);
     EXPECT_GT((snap.tip_m - tree.branches[tree.find(c.branch)].points.front().position_m).norm(), 15e-3);
   }

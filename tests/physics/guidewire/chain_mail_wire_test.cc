@@ -7,7 +7,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 
-#include "physics/vessel/coronary_phantom.h"
+#include "anatomy/phantom/coronary_phantom.h"
 #include "tests/physics/guidewire/wire_test_support.h"
 
 namespace pcisim::physics {
@@ -18,7 +18,7 @@ using test::check_limits;
 using test::kDeg;
 
 ChainMailWire free_wire(const GuidewireParams& p = GuidewireParams{}) {
-  return ChainMailWire(p, CatheterPath(guide_catheter_path(make_coronary_phantom({1}))));
+  return ChainMailWire(p, CatheterPath(anatomy::guide_catheter_path(anatomy::make_coronary_phantom({1}))));
 }
 
 void step_free(ChainMailWire& w, double insertion_m, double rotation_rad, int passes = 2) {

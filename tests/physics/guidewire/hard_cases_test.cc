@@ -11,7 +11,7 @@
 #include "physics/guidewire/sdf_lumen.h"
 #include "physics/guidewire/tube_lumen.h"
 #include "physics/guidewire/wall_contact.h"
-#include "physics/vessel/coronary_phantom.h"
+#include "anatomy/phantom/coronary_phantom.h"
 #include "tests/physics/guidewire/wire_test_support.h"
 
 namespace pcisim::physics {
@@ -54,7 +54,7 @@ void expect_settles(World& world, const InstrumentInput& hold) {
   EXPECT_LE(test::worst_wall_distance_m(w, *world.lumen()), eps + 1e-9);
 }
 
-bool in_subtree(const VesselTree& tree, int branch, const char* root) {
+bool in_subtree(const anatomy::VesselTree& tree, int branch, const char* root) {
   const int r = tree.find(root);
   for (int b = branch; b >= 0; b = tree.branches[b].parent) {
     if (b == r) return true;
@@ -186,11 +186,11 @@ TEST(GuidewireHardCases, NonFiniteInstrumentInputIsRejectedAndThePreviousSampleK
 // the pieces of the world's guidewire pipeline, so a test can put the wire where the world
 // never would
 struct Pipeline {
-  VesselTree tree = make_coronary_phantom({1});
+  anatomy::VesselTree tree = anatomy::make_coronary_phantom({1});
   GuidewireParams gp;
   VesselContactParams cp;
   FrictionParams fp;
-  ChainMailWire wire{gp, CatheterPath(guide_catheter_path(tree))};
+  ChainMailWire wire{gp, CatheterPath(anatomy::guide_catheter_path(tree))};
   SdfLumen lumen{tree, cp.sdf_spacing_m};
   WallContact contact{cp, lumen, wire.node_count()};
   CoulombFriction friction{fp, wire.node_count()};

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "physics/vessel/vessel_tree.h"
+#include "anatomy/vessel/vessel_tree.h"
 #include "tests/physics/guidewire/wire_test_support.h"
 
 namespace pcisim::physics {

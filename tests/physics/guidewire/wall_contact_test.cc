@@ -8,7 +8,7 @@
 
 #include "physics/guidewire/sdf_lumen.h"
 #include "physics/guidewire/tube_lumen.h"
-#include "physics/vessel/coronary_phantom.h"
+#include "anatomy/phantom/coronary_phantom.h"
 #include "tests/physics/guidewire/wire_test_support.h"
 
 namespace pcisim::physics {
@@ -84,7 +84,7 @@ TEST(WallContact, NoFreeNodeEndsAStepOutsideTheLumenByMoreThanTheMargin) {
 }
 
 TEST(WallContact, SdfLumenAgreesWithTheAnalyticTubesNearTheWall) {
-  const VesselTree tree = make_coronary_phantom({1});
+  const anatomy::VesselTree tree = anatomy::make_coronary_phantom({1});
   const SdfLumen sdf(tree, 0.2e-3);
   const TubeLumen tubes(tree);
   // points across the LAD at its 100th centerline point

@@ -9,7 +9,7 @@
 #include <cstdio>
 
 #include "physics/heart/beating_heart.h"
-#include "physics/heart/heart_frame.h"
+#include "anatomy/heart/heart_frame.h"
 #include "tests/physics/heart/heart_health.h"
 
 namespace pcisim::physics {
@@ -151,7 +151,7 @@ TEST(HeartHardCases, InvertedGlobalCluster) {
   run(h, kDt, 8);
   Eigen::Matrix3Xd& x = h.system().particles().position_m;
   const Vector3d centre = x.rowwise().mean();
-  const Vector3d n = heart_to_patient().col(1);  // mirror left-right through the heart's centre
+  const Vector3d n = anatomy::heart_to_patient().col(1);  // mirror left-right through the heart's centre
   for (int i = 0; i < x.cols(); ++i) x.col(i) -= 2 * n.dot(x.col(i) - centre) * n;
   h.system().particles().velocity_m_per_s.setZero();
   const HeartHealth during = run(h, kDt, 30);

@@ -9,7 +9,7 @@
 #include <stdexcept>
 
 #include "physics/heart/beating_heart.h"
-#include "physics/heart/heart_frame.h"
+#include "anatomy/heart/heart_frame.h"
 #include "physics/heart/heart_motion.h"
 #include "physics/heart/synthetic_heart_motion.h"
 #include "tests/common/counting_new.h"

@@ -7,9 +7,9 @@
 #include <cmath>
 
 #include "physics/heart/heart_fit.h"
-#include "physics/heart/heart_mesh.h"
-#include "physics/heart/template_heart_surface.h"
-#include "physics/vessel/coronary_phantom.h"
+#include "anatomy/heart/heart_mesh.h"
+#include "anatomy/heart/template_heart_surface.h"
+#include "anatomy/phantom/coronary_phantom.h"
 
 namespace pcisim::physics {
 namespace {
@@ -18,9 +18,9 @@ using Eigen::Vector3d;
 
 // radius of the mesh's epicardium along the unit direction u from the heart centre (the surface is
 // star-shaped about it): Moller-Trumbore against every epicardial triangle
-double mesh_radius_m(const HeartMesh& m, const Vector3d& u) {
+double mesh_radius_m(const anatomy::HeartMesh& m, const Vector3d& u) {
   for (size_t f = 0; f < m.faces.size(); ++f) {
-    if (m.face_markers[f] != kEpicardium) continue;
+    if (m.face_markers[f] != anatomy::kEpicardium) continue;
     const Vector3d a = m.vertices_m.col(m.faces[f][0]), b = m.vertices_m.col(m.faces[f][1]),
                    c = m.vertices_m.col(m.faces[f][2]);
     const Vector3d e1 = b - a, e2 = c - a, p = u.cross(e2);
@@ -37,7 +37,7 @@ double mesh_radius_m(const HeartMesh& m, const Vector3d& u) {
 }
 
 // deepest sinking of any non-aorta centerline point into the mesh (negative: sunk), metres
-double worst_clearance_m(const HeartMesh& m, const VesselTree& tree) {
+double worst_clearance_m(const anatomy::HeartMesh& m, const anatomy::VesselTree& tree) {
   double worst = 1e9;
   for (const auto& branch : tree.branches) {
     if (branch.name == "aorta") continue;
@@ -49,26 +49,26 @@ double worst_clearance_m(const HeartMesh& m, const VesselTree& tree) {
   return worst;
 }
 
-double tet_volume_m3(const HeartMesh& m, const std::array<int, 4>& t) {
+double tet_volume_m3(const anatomy::HeartMesh& m, const std::array<int, 4>& t) {
   const Vector3d a = m.vertices_m.col(t[0]);
   return (m.vertices_m.col(t[1]) - a).cross(m.vertices_m.col(t[2]) - a).dot(m.vertices_m.col(t[3]) - a) / 6.0;
 }
 
 TEST(HeartFit, TreesTheTemplateFitsLeaveItUntouched) {
   for (uint32_t seed : {1u, 4u, 6u, 7u}) {
-    HeartMesh m = template_heart_mesh();
-    const HeartFitReport r = fit_heart_under_tree(make_coronary_phantom({seed}), HeartFitParams{}, &m);
+    anatomy::HeartMesh m = anatomy::template_heart_mesh();
+    const HeartFitReport r = fit_heart_under_tree(anatomy::make_coronary_phantom({seed}), HeartFitParams{}, &m);
     EXPECT_EQ(r.branches_lifted, 0) << "seed " << seed;
     EXPECT_EQ(r.vertices_moved, 0) << "seed " << seed;
-    EXPECT_TRUE(m.vertices_m == template_heart_mesh().vertices_m) << "seed " << seed;
+    EXPECT_TRUE(m.vertices_m == anatomy::template_heart_mesh().vertices_m) << "seed " << seed;
   }
 }
 
 TEST(HeartFit, SunkenBranchesAreLiftedClearByALocalDent) {
-  const HeartMesh& original = template_heart_mesh();
+  const anatomy::HeartMesh& original = anatomy::template_heart_mesh();
   for (uint32_t seed : {2u, 3u, 5u, 8u}) {
-    const VesselTree tree = make_coronary_phantom({seed});
-    HeartMesh m = original;
+    const anatomy::VesselTree tree = anatomy::make_coronary_phantom({seed});
+    anatomy::HeartMesh m = original;
     const double before_m = worst_clearance_m(m, tree);
     const HeartFitReport r = fit_heart_under_tree(tree, HeartFitParams{}, &m);
     const double after_m = worst_clearance_m(m, tree);
@@ -109,8 +109,8 @@ TEST(HeartFit, SunkenBranchesAreLiftedClearByALocalDent) {
 }
 
 TEST(HeartFit, TighterToleranceLiftsMore) {
-  const VesselTree tree = make_coronary_phantom({2});
-  HeartMesh loose = template_heart_mesh(), tight = template_heart_mesh();
+  const anatomy::VesselTree tree = anatomy::make_coronary_phantom({2});
+  anatomy::HeartMesh loose = anatomy::template_heart_mesh(), tight = anatomy::template_heart_mesh();
   HeartFitParams p;
   const HeartFitReport a = fit_heart_under_tree(tree, p, &loose);
   p.tolerance_m = 0.1e-3;

@@ -10,11 +10,11 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "physics/heart/heart_frame.h"
-#include "physics/heart/heart_mesh.h"
+#include "anatomy/heart/heart_frame.h"
+#include "anatomy/heart/heart_mesh.h"
 #include "physics/heart/heart_motion.h"
 #include "physics/heart/synthetic_heart_motion.h"
-#include "physics/heart/template_heart_surface.h"
+#include "anatomy/heart/template_heart_surface.h"
 
 namespace pcisim::physics {
 namespace {
@@ -86,7 +86,7 @@ TEST(HeartMotion, TrilinearInSpaceThroughFramesInTime) {
 
 TEST(HeartMotion, PeriodicAndContinuousAcrossTheCycle) {
   const HeartMotion m = make_synthetic_heart_motion();
-  const Vector3d p = heart_to_patient() * Vector3d(0.03, 0.02, 0.0);
+  const Vector3d p = anatomy::heart_to_patient() * Vector3d(0.03, 0.02, 0.0);
   for (double phase : {0.0, 0.1, 0.35, 0.6, 0.95}) {
     EXPECT_LT((m.displacement_m(p, phase) - m.displacement_m(p, phase + 1.0)).norm(), 1e-12);
     EXPECT_LT((m.displacement_m(p, phase) - m.displacement_m(p, phase - 3.0)).norm(), 1e-12);
@@ -148,10 +148,10 @@ TEST(HeartMotion, BadFilesNameWhatIsWrong) {
 
 // LV cavity volume (m^3) with the cavity's vertices moved by the sequence at phase
 double lv_volume_m3(const HeartMotion& m, double phase) {
-  const HeartMesh& mesh = template_heart_mesh();
+  const anatomy::HeartMesh& mesh = anatomy::template_heart_mesh();
   double v = 0;
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
-    if (mesh.face_markers[f] != kLvEndocardium) continue;
+    if (mesh.face_markers[f] != anatomy::kLvEndocardium) continue;
     Vector3d x[3];
     for (int k = 0; k < 3; ++k) {
       const Vector3d r = mesh.vertices_m.col(mesh.faces[f][k]);
@@ -183,8 +183,8 @@ TEST(HeartSyntheticMotion, EjectionFractionAndSystole) {
 
 TEST(HeartSyntheticMotion, WallThickensBaseDescendsApexTwists) {
   const HeartMotion m = make_synthetic_heart_motion();
-  const Eigen::Matrix3d h = heart_to_patient();
-  const CavityEllipsoid lv = lv_cavity();
+  const Eigen::Matrix3d h = anatomy::heart_to_patient();
+  const anatomy::CavityEllipsoid lv = anatomy::lv_cavity();
   const double es = 0.35;
   // mid-ventricle, lateral LV wall (away from the RV): endocardium at the cavity, epicardium at 50 mm
   const Vector3d axis_point_mm(lv.centre_mm.x(), lv.centre_mm.y(), lv.centre_mm.z());
@@ -224,11 +224,11 @@ TEST(HeartSyntheticMotion, WallThickensBaseDescendsApexTwists) {
 
 TEST(HeartSyntheticMotion, EpicardialDisplacementIsAFewMillimetres) {
   const HeartMotion m = make_synthetic_heart_motion();
-  const HeartMesh& mesh = template_heart_mesh();
-  const Eigen::Matrix3d h = heart_to_patient();
+  const anatomy::HeartMesh& mesh = anatomy::template_heart_mesh();
+  const Eigen::Matrix3d h = anatomy::heart_to_patient();
   double largest = 0, smallest = 1;
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
-    if (mesh.face_markers[f] != kEpicardium) continue;
+    if (mesh.face_markers[f] != anatomy::kEpicardium) continue;
     for (int v : mesh.faces[f]) {
       const Vector3d r = mesh.vertices_m.col(v);
       if ((h.transpose() * r).z() > 0.030) continue;  // the ventricles' epicardium

@@ -8,7 +8,7 @@
 #include <cmath>
 #include <map>
 
-#include "physics/vessel/coronary_phantom.h"
+#include "anatomy/phantom/coronary_phantom.h"
 
 namespace pcisim::physics {
 namespace {
@@ -55,7 +55,7 @@ Surface sphere(double radius_m, int subdivisions) {
 
 class VesselSkinTest : public ::testing::Test {
  protected:
-  VesselTree tree = make_coronary_phantom({1});
+  anatomy::VesselTree tree = anatomy::make_coronary_phantom({1});
   Surface heart = sphere(0.050, 4);
   VesselSkin skin{tree, heart.points_m, heart.triangles, VesselMotionParams{}};
 };

@@ -11,8 +11,8 @@
 
 #include "physics/sdf/signed_distance_field.h"
 #include "physics/sdf/signed_distance_field_cuda.h"
-#include "physics/vessel/coronary_phantom.h"
-#include "physics/vessel/lumen_mesh.h"
+#include "anatomy/phantom/coronary_phantom.h"
+#include "anatomy/vessel/lumen_mesh.h"
 
 using namespace pcisim::physics;
 using Clock = std::chrono::steady_clock;
@@ -33,8 +33,8 @@ int main() {
   }
   cudaDeviceProp prop{};
   cudaGetDeviceProperties(&prop, 0);
-  const VesselTree tree = make_coronary_phantom({});
-  const TriangleMesh lumen = loft_lumen(tree, {});
+  const anatomy::VesselTree tree = anatomy::make_coronary_phantom({});
+  const anatomy::TriangleMesh lumen = anatomy::loft_lumen(tree, {});
   std::printf("# SDF build and query, CPU twin vs CUDA twin\n\nGPU: %s (sm_%d%d). Host CPU: 1 thread. Phantom seed 1, "
               "lumen incl. aorta, %zu triangles, band 4 cells, padding 1 mm.\n\n",
               prop.name, prop.major, prop.minor, lumen.triangles.size());
@@ -75,7 +75,7 @@ int main() {
   std::vector<double> xyz(3 * size_t(n));
   std::mt19937 rng(1);
   std::normal_distribution<double> jitter(0.0, 1.0e-3);
-  std::vector<const CenterlinePoint*> all;
+  std::vector<const anatomy::CenterlinePoint*> all;
   for (const auto& b : tree.branches) for (const auto& p : b.points) all.push_back(&p);
   for (int i = 0; i < n; ++i) {
     pts[i] = all[i % all.size()]->position_m + Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng));

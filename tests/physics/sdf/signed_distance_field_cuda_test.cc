@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "physics/sdf/signed_distance_field.h"
-#include "physics/vessel/coronary_phantom.h"
-#include "physics/vessel/lumen_mesh.h"
+#include "anatomy/phantom/coronary_phantom.h"
+#include "anatomy/vessel/lumen_mesh.h"
 
 #ifdef PCISIM_HAVE_CUDA
 #include "physics/sdf/signed_distance_field_cuda.h"
@@ -30,7 +30,7 @@ void skip_without_gpu() {
 TEST(SdfCudaTest, BuildMatchesTheCpuTwin) {
   skip_without_gpu();
   if (IsSkipped()) return;
-  const TriangleMesh lumen = loft_lumen(make_coronary_phantom({.seed = 2}), {});
+  const anatomy::TriangleMesh lumen = anatomy::loft_lumen(anatomy::make_coronary_phantom({.seed = 2}), {});
   SdfBuildSpec spec;
   spec.spacing_m = 0.2e-3;
   const SignedDistanceField cpu = SignedDistanceField::build(lumen, spec);
@@ -53,8 +53,8 @@ TEST(SdfCudaTest, BuildMatchesTheCpuTwin) {
 TEST(SdfCudaTest, BatchedSamplesMatchTheCpuTwin) {
   skip_without_gpu();
   if (IsSkipped()) return;
-  const VesselTree tree = make_coronary_phantom({});
-  const SignedDistanceField field = SignedDistanceField::build(loft_lumen(tree, {}), 0.2e-3, 1e-3);
+  const anatomy::VesselTree tree = anatomy::make_coronary_phantom({});
+  const SignedDistanceField field = SignedDistanceField::build(anatomy::loft_lumen(tree, {}), 0.2e-3, 1e-3);
   // points near every centerline, some far outside the grid, and non-finite ones
   std::mt19937 rng(3);
   std::normal_distribution<double> jitter(0.0, 1.5e-3);

@@ -9,8 +9,8 @@
 #include <stdexcept>
 
 #include "physics/sdf/lumen_sdf.h"
-#include "physics/vessel/coronary_phantom.h"
-#include "physics/vessel/lumen_mesh.h"
+#include "anatomy/phantom/coronary_phantom.h"
+#include "anatomy/vessel/lumen_mesh.h"
 
 namespace pcisim::physics {
 namespace {
@@ -19,16 +19,16 @@ constexpr double kR = 1.5e-3, kLen = 10e-3, kH = 0.2e-3;
 const Eigen::Vector3d kAxis0(0.0, 1e-3, -2e-3);
 
 // a straight 1.5 mm tube along x with hemispherical ends: the capsule has a closed-form distance
-TriangleMesh capsule_mesh() {
-  VesselTree tree;
-  VesselBranch b;
+anatomy::TriangleMesh capsule_mesh() {
+  anatomy::VesselTree tree;
+  anatomy::VesselBranch b;
   b.name = "tube";
   for (int i = 0; i <= 20; ++i) b.points.push_back({kAxis0 + Eigen::Vector3d(kLen * i / 20, 0, 0), kR});
   tree.branches.push_back(b);
-  LumenMeshSpec spec;
+  anatomy::LumenMeshSpec spec;
   spec.segments = 64;  // sag 1.5 mm * (1 - cos(pi/64)) < 2 um
   spec.cap_rings = 12;
-  return loft_lumen(tree, spec);
+  return anatomy::loft_lumen(tree, spec);
 }
 
 double capsule_distance(const Eigen::Vector3d& p) {
@@ -144,12 +144,12 @@ TEST(SdfTest, OutsideTheGridIsFiniteAndPointsBackOut) {
 // and through both cap poles: the parity rule must still count crossings right everywhere
 TEST(SdfTest, GridAlignedTubeHasNoSignErrors) {
   const double r = 1.6e-3, h = 0.2e-3, len = 4e-3;
-  VesselTree tree;
-  VesselBranch b;
+  anatomy::VesselTree tree;
+  anatomy::VesselBranch b;
   b.name = "aligned";
   for (int i = 0; i <= 8; ++i) b.points.push_back({Eigen::Vector3d(len * i / 8, 0, 0), r});
   tree.branches.push_back(b);
-  LumenMeshSpec mesh_spec;
+  anatomy::LumenMeshSpec mesh_spec;
   mesh_spec.segments = 16;
   mesh_spec.cap_rings = 4;
   mesh_spec.max_chord_error_m = 0.0;  // exactly 16 segments: vertices at 0, 22.5, 45, 90 deg
@@ -157,7 +157,7 @@ TEST(SdfTest, GridAlignedTubeHasNoSignErrors) {
   spec.spacing_m = h;
   spec.padding_m = 0.4e-3;  // origin at -(r + padding) = -10 cells: rows through y = 0, z = 0, z = r
   spec.band_m = 0.4e-3;     // thinner than the radius: the middle relies on parity alone
-  const SignedDistanceField sdf = SignedDistanceField::build(loft_lumen(tree, mesh_spec), spec);
+  const SignedDistanceField sdf = SignedDistanceField::build(anatomy::loft_lumen(tree, mesh_spec), spec);
   ASSERT_NEAR(sdf.origin_m().y(), -2.0e-3, 1e-12);
   const double sag = r * (1 - std::cos(M_PI / 16)) + 1e-6;
   int checked = 0;
@@ -176,7 +176,7 @@ TEST(SdfTest, GridAlignedTubeHasNoSignErrors) {
 }
 
 TEST(SdfTest, BadInputsThrow) {
-  EXPECT_THROW(SignedDistanceField::build(TriangleMesh{}, 0.2e-3, 1e-3), std::invalid_argument);
+  EXPECT_THROW(SignedDistanceField::build(anatomy::TriangleMesh{}, 0.2e-3, 1e-3), std::invalid_argument);
   EXPECT_THROW(SignedDistanceField::build(capsule_mesh(), 0.0, 1e-3), std::invalid_argument);
   EXPECT_THROW(SignedDistanceField::build(capsule_mesh(), NAN, 1e-3), std::invalid_argument);
   EXPECT_THROW(SignedDistanceField::build(capsule_mesh(), 1e-9, 1e-3), std::invalid_argument) << "grid too large";
@@ -186,18 +186,18 @@ TEST(SdfTest, BadInputsThrow) {
 class SdfPhantomTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    tree_ = new VesselTree(make_coronary_phantom({}));
+    tree_ = new anatomy::VesselTree(anatomy::make_coronary_phantom({}));
     sdf_ = new SignedDistanceField(build_lumen_sdf(*tree_, 0.2e-3));
   }
   static void TearDownTestSuite() {
     delete sdf_;
     delete tree_;
   }
-  static const VesselBranch& branch(const char* name) { return tree_->branches.at(tree_->find(name)); }
-  static VesselTree* tree_;
+  static const anatomy::VesselBranch& branch(const char* name) { return tree_->branches.at(tree_->find(name)); }
+  static anatomy::VesselTree* tree_;
   static SignedDistanceField* sdf_;
 };
-VesselTree* SdfPhantomTest::tree_ = nullptr;
+anatomy::VesselTree* SdfPhantomTest::tree_ = nullptr;
 SignedDistanceField* SdfPhantomTest::sdf_ = nullptr;
 
 TEST_F(SdfPhantomTest, EveryCenterlinePointIsInside) {
@@ -225,7 +225,7 @@ TEST_F(SdfPhantomTest, NoFalseWallThroughTheForkOrTheOstium) {
     }
   }
   // the guide catheter's path lies in the aorta and ends in the LM: inside all the way
-  for (const Eigen::Vector3d& p : guide_catheter_path(*tree_)) EXPECT_LT(sdf_->sample(p).distance_m, 0.0);
+  for (const Eigen::Vector3d& p : anatomy::guide_catheter_path(*tree_)) EXPECT_LT(sdf_->sample(p).distance_m, 0.0);
 }
 
 TEST_F(SdfPhantomTest, TubeWallInsideTheAortaIsNotAWall) {
@@ -241,7 +241,7 @@ TEST_F(SdfPhantomTest, TubeWallInsideTheAortaIsNotAWall) {
     for (int a = 0; a < 8; ++a) {
       const Eigen::Vector3d p = c + (lm.points[k].radius_m + 0.3e-3) * (std::cos(a * M_PI / 4) * u + std::sin(a * M_PI / 4) * v);
       double to_aorta_axis = 0;
-      nearest_branch(VesselTree{{aorta}}, p, &to_aorta_axis);
+      anatomy::nearest_branch(anatomy::VesselTree{{aorta}}, p, &to_aorta_axis);
       if (to_aorta_axis > aorta_r - 1.5e-3) continue;  // near or beyond the aortic wall
       EXPECT_LT(sdf_->sample(p).distance_m, 0.0) << "LM[" << k << "] angle " << a;
       ++checked;
@@ -267,7 +267,7 @@ TEST_F(SdfPhantomTest, OutsideTheWallNextToEveryBranchIsPositive) {
         const Eigen::Vector3d p = c + (b.points[k].radius_m + 0.4e-3) * radial;
         double dc = 0;
         // skip spots where another branch passes close by
-        if (nearest_branch(*tree_, p, &dc) != tree_->find(b.name)) continue;
+        if (anatomy::nearest_branch(*tree_, p, &dc) != tree_->find(b.name)) continue;
         const SdfSample s = sdf_->sample(p);
         EXPECT_GT(s.distance_m, 0.2e-3) << b.name << "[" << k << "]";
         EXPECT_GT(s.gradient.dot(radial), 0.9) << b.name << "[" << k << "]";

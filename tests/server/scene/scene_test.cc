@@ -6,7 +6,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "server/scene/json_reader.h"
+#include "json/json_reader.h"
 
 namespace pcisim::server {
 namespace {
@@ -18,11 +18,11 @@ std::string read_file(const std::string& path) {
   return s.str();
 }
 
-// the message of the SceneError a scene text raises, or "" when it parses
+// the message of the json::JsonError a scene text raises, or "" when it parses
 std::string error_of(const std::string& text) {
   try {
     parse_scene(text, "test.json");
-  } catch (const SceneError& e) {
+  } catch (const json::JsonError& e) {
     return e.what();
   }
   return "";
@@ -122,8 +122,8 @@ TEST(Scene, EachBadInputNamesItsJsonPathAndWhatWasExpected) {
 TEST(Scene, MissingFileIsAClearError) {
   try {
     load_scene_file("/nonexistent/scene.json");
-    FAIL() << "expected SceneError";
-  } catch (const SceneError& e) {
+    FAIL() << "expected json::JsonError";
+  } catch (const json::JsonError& e) {
     EXPECT_STREQ(e.what(), "/nonexistent/scene.json: cannot read the scene file (missing or not a file)");
   }
 }
@@ -179,8 +179,8 @@ TEST(Scene, AnOversizedSceneFileIsRefusedUnread) {
   }
   try {
     load_scene_file(path);
-    FAIL() << "expected SceneError";
-  } catch (const SceneError& e) {
+    FAIL() << "expected json::JsonError";
+  } catch (const json::JsonError& e) {
     EXPECT_NE(std::string(e.what()).find("over the 1048576 byte limit"), std::string::npos) << e.what();
   }
   std::remove(path.c_str());

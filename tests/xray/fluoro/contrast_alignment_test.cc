@@ -5,11 +5,11 @@
 
 #include <cmath>
 
-#include "physics/vessel/coronary_phantom.h"
+#include "anatomy/phantom/coronary_phantom.h"
 #include "xray/fluoro/contrast_bolus.h"
 #include "xray/geometry/c_arm.h"
 #include "xray/overlay/tube_overlay.h"
-#include "xray/phantom/thorax_phantom.h"
+#include "anatomy/phantom/thorax_phantom.h"
 #include "xray/render/drr_renderer.h"
 
 namespace pcisim::xray {
@@ -30,9 +30,9 @@ double correlation(const Image& a, const Image& b, int dc, int dr) {
 }
 
 TEST(ContrastAlignment, AnalyticIodineMatchesTheCtLumens) {
-  const physics::VesselTree tree = physics::make_coronary_phantom({.seed = 1});
+  const anatomy::VesselTree tree = anatomy::make_coronary_phantom({.seed = 1});
   const double mu_water = 0.02, iodine_mu = 0.05;  // +2500 HU: fits the phantom's int16 range
-  ThoraxPhantomSpec ps;
+  anatomy::ThoraxPhantomSpec ps;
   ps.dims = {120, 120, 120};
   ps.spacing_mm = 1.0;
   ps.center_mm = Eigen::Vector3d::Zero();  // the heart only
@@ -41,10 +41,10 @@ TEST(ContrastAlignment, AnalyticIodineMatchesTheCtLumens) {
   DrrRendererOptions o;
   o.trilinear.threads = 1;
   o.attenuation.mu_water_per_mm = mu_water;
-  DrrRenderer blood(make_thorax_phantom(ps, tree), o);
+  DrrRenderer blood(anatomy::make_thorax_phantom(ps, tree), o);
   ps.contrast = true;
   ps.contrast_hu = ps.hu.blood + 1000.0 * iodine_mu / mu_water;
-  DrrRenderer iodine(make_thorax_phantom(ps, tree), o);
+  DrrRenderer iodine(anatomy::make_thorax_phantom(ps, tree), o);
 
   CArmSpec c;
   c.width = c.height = 128;

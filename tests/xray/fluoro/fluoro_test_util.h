@@ -1,7 +1,7 @@
 #pragma once
 // A small fluoroscopy setup for tests: the seed-1 coronary tree, a coarse phantom and a 256^2
 // detector at 0.8 mm (the default 205 mm field), LAO 30 / CRA 20 at the heart centre.
-#include "physics/vessel/coronary_phantom.h"
+#include "anatomy/phantom/coronary_phantom.h"
 #include "xray/fluoro/fluoroscopy.h"
 
 namespace pcisim::xray::testing {

@@ -10,7 +10,7 @@ namespace pcisim::xray {
 namespace {
 
 TEST(FluoroscopyNoAllocation, SecondAndLaterFramesAllocateNothing) {
-  const physics::VesselTree tree = physics::make_coronary_phantom({.seed = 1});
+  const anatomy::VesselTree tree = anatomy::make_coronary_phantom({.seed = 1});
   FluoroSpec s = testing::small_fluoro_spec();  // CPU projector, noise and blur on
   FluoroscopyRenderer fr(tree, s);
   const auto& lad = tree.branches[tree.find("LAD")].points;

@@ -18,8 +18,8 @@ namespace {
 using testing::lao30_cra20;
 using testing::small_fluoro_spec;
 
-const physics::VesselTree& tree() {
-  static const physics::VesselTree t = physics::make_coronary_phantom({.seed = 1});
+const anatomy::VesselTree& tree() {
+  static const anatomy::VesselTree t = anatomy::make_coronary_phantom({.seed = 1});
   return t;
 }
 

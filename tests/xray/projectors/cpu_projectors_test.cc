@@ -46,7 +46,7 @@ double brute_force_nearest(const AttenuationVolume& a, const Vector3d& p0, const
 TEST(SiddonProjector, MatchesBruteForceNearestVoxelOnRandomVolumes) {
   std::mt19937 rng(11);
   for (int trial = 0; trial < 4; ++trial) {
-    const Volume v = random_volume(rng, /*smooth=*/false);
+    const anatomy::Volume v = random_volume(rng, /*smooth=*/false);
     const AttenuationVolume a(v);
     const DetectorGeometry g = random_geometry(rng, v, 6, 5);
     for (int r = 0; r < g.height; ++r) {
@@ -65,7 +65,7 @@ TEST(SiddonProjector, MatchesBruteForceNearestVoxelOnRandomVolumes) {
 TEST(SiddonProjector, FastPathEqualsTheReferenceTraversal) {
   std::mt19937 rng(17);
   for (int trial = 0; trial < 3; ++trial) {
-    const Volume v = random_volume(rng, /*smooth=*/true);  // blobs in air: empty bricks
+    const anatomy::Volume v = random_volume(rng, /*smooth=*/true);  // blobs in air: empty bricks
     AttenuationParams params;
     params.brick_voxels = 3;
     const AttenuationVolume a(v, params);
@@ -85,7 +85,7 @@ TEST(SiddonProjector, FastPathEqualsTheReferenceTraversal) {
 // a water box (HU 0 -> mu_water) with faces on voxel boundaries: the exact integral of any ray
 // is mu_water times the length of its chord through the box, in closed form by slab clipping
 TEST(Projectors, WaterBoxMatchesClosedForm) {
-  Volume v = Volume::make({40, 36, 30}, Vector3d(0.5, 0.75, 1.0), Vector3d(-10, -13, -15), VoxelType::kInt16);
+  anatomy::Volume v = anatomy::Volume::make({40, 36, 30}, Vector3d(0.5, 0.75, 1.0), Vector3d(-10, -13, -15), anatomy::VoxelType::kInt16);
   std::fill(v.hu_i16.begin(), v.hu_i16.end(), int16_t(-1000));
   const int lo[3] = {8, 6, 5}, hi[3] = {31, 27, 24};  // inclusive voxel ranges
   for (int k = lo[2]; k <= hi[2]; ++k)
@@ -140,7 +140,7 @@ TEST(Projectors, WaterBoxMatchesClosedForm) {
 TEST(Projectors, WaterCylinderMatchesClosedForm) {
   const int n = 48, nz = 20;
   const double s = 0.5, radius_mm = 9.0;
-  Volume v = Volume::make({n, n, nz}, Vector3d(s, s, s), Vector3d(-(n - 1) * s / 2, -(n - 1) * s / 2, 0), VoxelType::kInt16);
+  anatomy::Volume v = anatomy::Volume::make({n, n, nz}, Vector3d(s, s, s), Vector3d(-(n - 1) * s / 2, -(n - 1) * s / 2, 0), anatomy::VoxelType::kInt16);
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) {
@@ -179,7 +179,7 @@ TEST(Projectors, WaterCylinderMatchesClosedForm) {
 TEST(TrilinearProjector, ConvergesToExactOnSmoothRandomVolumes) {
   std::mt19937 rng(21);
   for (int trial = 0; trial < 3; ++trial) {
-    const Volume v = random_volume(rng, /*smooth=*/true);
+    const anatomy::Volume v = random_volume(rng, /*smooth=*/true);
     const AttenuationVolume a(v);
     const DetectorGeometry g = random_geometry(rng, v, 20, 16);
     Image exact, fine, coarse;
@@ -201,7 +201,7 @@ TEST(TrilinearProjector, ConvergesToExactOnSmoothRandomVolumes) {
 
 TEST(TrilinearProjector, SkippingEmptySpaceChangesNothingAndThreadsChangeNothing) {
   std::mt19937 rng(8);
-  const Volume v = random_volume(rng, /*smooth=*/true);  // blobs in air: many empty bricks
+  const anatomy::Volume v = random_volume(rng, /*smooth=*/true);  // blobs in air: many empty bricks
   AttenuationParams params;
   params.brick_voxels = 4;
   const AttenuationVolume a(v, params);
@@ -223,7 +223,7 @@ TEST(TrilinearProjector, SkippingEmptySpaceChangesNothingAndThreadsChangeNothing
 
 TEST(Projectors, RayMissingTheVolumeIsZeroAndWrongImageSizeThrows) {
   std::mt19937 rng(2);
-  const Volume v = random_volume(rng, true);
+  const anatomy::Volume v = random_volume(rng, true);
   const AttenuationVolume a(v);
   const Vector3d far = v.center_mm() + Vector3d(1000, 0, 0);
   EXPECT_EQ(exact_line_integral(a, far, far + Vector3d(0, 1000, 0)), 0.0);
@@ -235,7 +235,7 @@ TEST(Projectors, RayMissingTheVolumeIsZeroAndWrongImageSizeThrows) {
 }
 
 TEST(AttenuationVolume, MuFromHuWithAirThreshold) {
-  Volume v = Volume::make({3, 1, 1}, Vector3d::Ones(), Vector3d::Zero(), VoxelType::kInt16);
+  anatomy::Volume v = anatomy::Volume::make({3, 1, 1}, Vector3d::Ones(), Vector3d::Zero(), anatomy::VoxelType::kInt16);
   v.hu_i16 = {-801, -800, 1000};
   AttenuationParams p;
   p.mu_water_per_mm = 0.025;

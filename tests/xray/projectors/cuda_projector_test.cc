@@ -5,7 +5,7 @@
 
 #include "tests/xray/projectors/projector_test_util.h"
 #include "xray/geometry/c_arm.h"
-#include "xray/phantom/thorax_phantom.h"
+#include "anatomy/phantom/thorax_phantom.h"
 #include "xray/projectors/trilinear_projector.h"
 #ifdef PCISIM_HAVE_CUDA
 #include "xray/projectors/cuda_projector.h"
@@ -43,17 +43,17 @@ TEST(CudaProjector, MatchesCpuTrilinearTwin) {
   if (!CudaTrilinearProjector::available(&why)) GTEST_SKIP() << "CUDA projector not compared: " << why;
   std::mt19937 rng(31);
   for (int trial = 0; trial < 3; ++trial) {
-    const Volume v = testing::random_volume(rng, /*smooth=*/true);
+    const anatomy::Volume v = testing::random_volume(rng, /*smooth=*/true);
     const AttenuationVolume a(v);
     const DetectorGeometry g = testing::random_geometry(rng, v, 40, 33);
     expect_twins(a, g, 0.5, true);
     expect_twins(a, g, 1.0, false);
   }
   // a coarse thorax phantom through a C-arm at LAO 30 / CRA 20
-  ThoraxPhantomSpec s;
+  anatomy::ThoraxPhantomSpec s;
   s.dims = {128, 128, 64};
   s.spacing_mm = 2.8;
-  const Volume v = make_thorax_phantom(s);
+  const anatomy::Volume v = anatomy::make_thorax_phantom(s);
   const AttenuationVolume a(v);
   CArmSpec c;
   c.width = 96;

@@ -42,7 +42,7 @@ TEST(GlProjector, MatchesItsCpuTwinAndTheExactProjector) {
   if (!gl_projector_available(&why)) GTEST_SKIP() << "GL projector not compared: " << why;
   std::mt19937 rng(47);
   for (int trial = 0; trial < 3; ++trial) {
-    const Volume v = testing::random_volume(rng, /*smooth=*/true);
+    const anatomy::Volume v = testing::random_volume(rng, /*smooth=*/true);
     const AttenuationVolume a(v);
     const DetectorGeometry g = testing::random_geometry(rng, v, 48, 37);
     Image gl, cpu, exact;
@@ -69,7 +69,7 @@ TEST(GlProjector, WaterBoxGivesItsChordLength) {
   std::string why;
   if (!gl_projector_available(&why)) GTEST_SKIP() << why;
   // a 20 mm water cube (HU 0: mu = 0.02 / mm) seen straight on: the central ray crosses 20 mm
-  Volume v = Volume::make({20, 20, 20}, Eigen::Vector3d(1, 1, 1), Eigen::Vector3d(-9.5, -9.5, -9.5), VoxelType::kFloat32);
+  anatomy::Volume v = anatomy::Volume::make({20, 20, 20}, Eigen::Vector3d(1, 1, 1), Eigen::Vector3d(-9.5, -9.5, -9.5), anatomy::VoxelType::kFloat32);
   std::fill(v.hu_f32.begin(), v.hu_f32.end(), 0.0f);
   const AttenuationVolume a(v);
   DetectorGeometry g;

@@ -5,7 +5,7 @@
 #include <random>
 
 #include "xray/geometry/detector_geometry.h"
-#include "xray/volume/volume.h"
+#include "anatomy/volume/volume.h"
 
 namespace pcisim::xray::testing {
 
@@ -15,11 +15,11 @@ inline double uniform(std::mt19937& rng, double lo, double hi) {
 
 // a rotated, anisotropic volume; smooth: a few Gaussian blobs (so interpolation converges),
 // else independent random HU per voxel (for the exact projector)
-inline Volume random_volume(std::mt19937& rng, bool smooth) {
-  Volume v = Volume::make({int64_t(uniform(rng, 14, 24)), int64_t(uniform(rng, 14, 24)), int64_t(uniform(rng, 12, 20))},
+inline anatomy::Volume random_volume(std::mt19937& rng, bool smooth) {
+  anatomy::Volume v = anatomy::Volume::make({int64_t(uniform(rng, 14, 24)), int64_t(uniform(rng, 14, 24)), int64_t(uniform(rng, 12, 20))},
                           Eigen::Vector3d(uniform(rng, 0.6, 1.4), uniform(rng, 0.6, 1.4), uniform(rng, 0.8, 2.0)),
                           Eigen::Vector3d(uniform(rng, -20, 20), uniform(rng, -20, 20), uniform(rng, -20, 20)),
-                          VoxelType::kFloat32);
+                          anatomy::VoxelType::kFloat32);
   const Eigen::Vector3d axis = Eigen::Vector3d(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)).normalized();
   v.direction = Eigen::AngleAxisd(uniform(rng, -3, 3), axis).toRotationMatrix();
   struct Blob {
@@ -52,7 +52,7 @@ inline Volume random_volume(std::mt19937& rng, bool smooth) {
 }
 
 // a cone beam from a random direction, the detector's footprint covering the volume
-inline DetectorGeometry random_geometry(std::mt19937& rng, const Volume& v, int width, int height) {
+inline DetectorGeometry random_geometry(std::mt19937& rng, const anatomy::Volume& v, int width, int height) {
   const Eigen::Vector3d c = v.center_mm();
   const double size = (v.spacing_mm.cwiseProduct(Eigen::Vector3d(v.dims[0], v.dims[1], v.dims[2]))).norm();
   const Eigen::Vector3d d = Eigen::Vector3d(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)).normalized();

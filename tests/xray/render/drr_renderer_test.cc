@@ -2,17 +2,17 @@
 
 #include <gtest/gtest.h>
 
-#include "xray/phantom/thorax_phantom.h"
+#include "anatomy/phantom/thorax_phantom.h"
 #include "xray/projectors/siddon_projector.h"
 
 namespace pcisim::xray {
 namespace {
 
 TEST(DrrRenderer, RendersAPoseLikeTheProjectorItWraps) {
-  ThoraxPhantomSpec s;
+  anatomy::ThoraxPhantomSpec s;
   s.dims = {64, 64, 32};
   s.spacing_mm = 5.6;
-  const Volume v = make_thorax_phantom(s);
+  const anatomy::Volume v = anatomy::make_thorax_phantom(s);
   CArmSpec c;
   c.width = 24;
   c.height = 20;

@@ -9,7 +9,7 @@
 #include <unistd.h>
 
 #include "xray/projectors/siddon_projector.h"
-#include "xray/volume/volume_io.h"
+#include "anatomy/volume/volume_io.h"
 
 namespace pcisim::xray {
 namespace {
@@ -84,7 +84,7 @@ TEST_F(DrrTool, RenderMatchesTheLibraryAndWritesTheSidecar) {
   std::vector<float> got(9 * 7);
   std::ifstream(out + ".f32", std::ios::binary).read(reinterpret_cast<char*>(got.data()), got.size() * 4);
 
-  const Volume v = read_volume(vol);
+  const anatomy::Volume v = anatomy::read_volume(vol);
   const AttenuationVolume a(v);
   DetectorGeometry g;
   g.source_mm = {10, 600, 20};

@@ -1,0 +1,46 @@
+#pragma once
+// A procedural thorax CT in Hounsfield units, built around the procedural coronary tree so that
+// the DRR, the wire and the lumen mesh all agree: body wall and fat, lungs, liver dome, spine,
+// ribs and sternum, heart (myocardium, chambers, pericardial fat), aorta with arch and descending
+// part, and the coronary lumens rasterised from the tree's centerlines and radii.
+// Frame: patient LPS in mm, heart centre at the origin (the tree's frame scaled by 1000).
+#include <array>
+#include <cstdint>
+#include <limits>
+
+#include "anatomy/vessel/vessel_tree.h"
+#include "anatomy/volume/volume.h"
+
+namespace pcisim::anatomy {
+
+// tissue values (HU). Typical ranges: fat -120..-90, soft tissue and muscle +35..+55, unenhanced
+// blood +30..+45, aerated lung -900..-700, cancellous bone +300..+400, cortical bone +700..+1900,
+// iodinated lumen in coronary CT angiography +300..+450. Sources: T. M. Buzug, Computed
+// Tomography (Springer 2008), table 1.1; Radiopaedia, "Hounsfield unit"; SCCT guidelines on
+// coronary CT angiography contrast enhancement (Abbara et al., J Cardiovasc Comput Tomogr 2016).
+struct ThoraxTissueHu {
+  double air = -1000, fat = -100, soft_tissue = 40, muscle = 45, liver = 55, lung = -800;
+  double myocardium = 40, blood = 45, cartilage = 150;
+  double cancellous_bone = 400, cortical_bone = 900, rib = 700, sternum = 600;
+  double csf = 10, disc = 80;
+};
+
+struct ThoraxPhantomSpec {
+  uint32_t seed = 1;                       // also seeds the coronary tree
+  std::array<int64_t, 3> dims{512, 512, 256};
+  double spacing_mm = 0.7;                 // isotropic
+  bool contrast = true;                    // coronary lumens iodine-filled (else blood)
+  double contrast_hu = 400;                // 300..450 for a selective injection
+  ThoraxTissueHu hu;
+  int threads = 0;                         // 0: std::thread::hardware_concurrency()
+  // volume centre (mm); NaN: the thorax default, 20 mm above the heart centre
+  Eigen::Vector3d center_mm = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+};
+
+// builds the coronary tree from spec.seed, then the volume (int16 HU, identity direction).
+// The volume is centred on the thorax, 20 mm above the heart centre, at any dims/spacing.
+Volume make_thorax_phantom(const ThoraxPhantomSpec& spec);
+// the same around a given tree (positions in metres, LPS, heart centre at origin)
+Volume make_thorax_phantom(const ThoraxPhantomSpec& spec, const VesselTree& tree);
+
+}  // namespace pcisim::anatomy

@@ -1,0 +1,154 @@
+#include <gtest/gtest.h>
+
+#include "anatomy/phantom/coronary_phantom.h"
+
+#ifdef PCISIM_HAVE_JSON
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include "anatomy/vessel/vessel_tree_json.h"
+#endif
+
+namespace pcisim::anatomy {
+namespace {
+
+#ifdef PCISIM_HAVE_JSON
+
+std::string temp_path(const std::string& name) {
+  return (std::filesystem::temp_directory_path() /
+          ("pcisim_vtj_" + std::to_string(::getpid()) + "_" + name)).string();
+}
+
+std::string write_text(const std::string& name, const std::string& text) {
+  const std::string path = temp_path(name);
+  std::ofstream(path) << text;
+  return path;
+}
+
+// the message read_vessel_tree_json throws for this text, or "" if it did not throw
+std::string error_for(const std::string& name, const std::string& text) {
+  const std::string path = write_text(name, text);
+  std::string message;
+  try {
+    read_vessel_tree_json(path);
+  } catch (const std::runtime_error& e) {
+    message = e.what();
+  }
+  std::filesystem::remove(path);
+  EXPECT_NE(message.find(path), std::string::npos) << "the message should name the file: " << message;
+  return message;
+}
+
+// a small valid tree with the one field under test replaced
+std::string tree_text(const std::string& second_branch_extra, const std::string& radius = "0.001",
+                      const std::string& parent = "0", const std::string& parent_point = "1") {
+  return R"({
+  // comments are allowed
+  "format": "pcisim-vessel-tree", "version": 1,
+  "branches": [
+    {"name": "aorta", "parent": -1, "parent_point": -1, "points": [
+      {"position_m": [0, 0, 0], "radius_m": 0.014}, {"position_m": [0, 0, 0.001], "radius_m": 0.014}]},
+    {"name": "LM", "parent": )" + parent + R"(, "parent_point": )" + parent_point + R"(, "points": [
+      {"position_m": [0, 0, 0.001], "radius_m": 0.002}, {"position_m": [0.001, 0, 0.001], "radius_m": 0.002},
+      {"position_m": [0.002, 0, 0.001], "radius_m": )" + radius + "}]" + second_branch_extra + R"(}
+  ]
+})";
+}
+
+TEST(VesselTreeJsonTest, RoundTripKeepsEveryBit) {
+  const VesselTree tree = make_coronary_phantom({.seed = 3});
+  const std::string path = temp_path("roundtrip.json");
+  write_vessel_tree_json(tree, path);
+  const VesselTree back = read_vessel_tree_json(path);
+  std::filesystem::remove(path);
+  ASSERT_EQ(back.branches.size(), tree.branches.size());
+  for (size_t i = 0; i < tree.branches.size(); ++i) {
+    const auto& a = tree.branches[i];
+    const auto& b = back.branches[i];
+    EXPECT_EQ(a.name, b.name);
+    EXPECT_EQ(a.parent, b.parent);
+    EXPECT_EQ(a.parent_point, b.parent_point);
+    ASSERT_EQ(a.points.size(), b.points.size());
+    for (size_t k = 0; k < a.points.size(); ++k) {
+      EXPECT_EQ(a.points[k].position_m, b.points[k].position_m);
+      EXPECT_EQ(a.points[k].radius_m, b.points[k].radius_m);
+    }
+  }
+}
+
+TEST(VesselTreeJsonTest, ValidSmallFileReads) {
+  const std::string path = write_text("small.json", tree_text(""));
+  const VesselTree t = read_vessel_tree_json(path);
+  std::filesystem::remove(path);
+  ASSERT_EQ(t.branches.size(), 2u);
+  EXPECT_EQ(t.branches[1].name, "LM");
+  EXPECT_EQ(t.branches[1].parent, 0);
+  EXPECT_EQ(t.branches[1].parent_point, 1);
+  EXPECT_DOUBLE_EQ(t.branches[1].points[2].radius_m, 0.001);
+}
+
+TEST(VesselTreeJsonTest, BadFilesNameTheFileAndTheField) {
+  struct Case { const char* name; std::string text; const char* expect; };
+  const Case cases[] = {
+      {"radius", tree_text("", "-0.5"), "branches[1].points[2].radius_m: expected a number > 0"},
+      {"radius_string", tree_text("", "\"big\""), "branches[1].points[2].radius_m: expected a number > 0"},
+      {"parent", tree_text("", "0.001", "4"), "branches[1].parent: expected an integer in [-1, 0], got 4"},
+      {"parent_point", tree_text("", "0.001", "0", "7"),
+       "branches[1].parent_point: expected an integer in [0, 1], got 7"},
+      {"unknown", tree_text(", \"colour\": 1"), "branches[1].colour: unknown key"},
+      {"syntax", "{ \"branches\": [ ", "not valid JSON"},
+      {"root", "[1, 2]", "(root): expected an object"},
+      {"format", R"({"format": "obj", "version": 1, "branches": []})", "format: expected \"pcisim-vessel-tree\""},
+      {"empty", R"({"format": "pcisim-vessel-tree", "version": 1, "branches": []})",
+       "branches: expected a non-empty array"},
+      {"position", R"({"format": "pcisim-vessel-tree", "version": 1, "branches": [{"name": "a", "parent": -1,
+         "points": [{"position_m": [0, 0], "radius_m": 1}, {"position_m": [0, 0, 1], "radius_m": 1}]}]})",
+       "branches[0].points[0].position_m: expected an array of 3 numbers"},
+      {"coordinate", R"({"format": "pcisim-vessel-tree", "version": 1, "branches": [{"name": "a", "parent": -1,
+         "points": [{"position_m": [0, 0, 0], "radius_m": 1}, {"position_m": [0, "x", 1], "radius_m": 1}]}]})",
+       "branches[0].points[1].position_m[1]: expected a number"},
+      {"missing", R"({"format": "pcisim-vessel-tree", "version": 1, "branches": [{"name": "a", "parent": -1}]})",
+       "branches[0].points: missing"},
+      {"duplicate", R"({"format": "pcisim-vessel-tree", "version": 1, "branches": [
+         {"name": "a", "parent": -1, "points": [{"position_m": [0, 0, 0], "radius_m": 1}, {"position_m": [0, 0, 1], "radius_m": 1}]},
+         {"name": "a", "parent": 0, "parent_point": 0, "points": [{"position_m": [0, 0, 0], "radius_m": 1}, {"position_m": [0, 0, 1], "radius_m": 1}]}]})",
+       "branches[1].name: duplicate branch name \"a\""},
+      {"few_points", R"({"format": "pcisim-vessel-tree", "version": 1, "branches": [{"name": "a", "parent": -1,
+         "points": [{"position_m": [0, 0, 0], "radius_m": 1}]}]})",
+       "branches[0].points: expected an array of at least 2 points"},
+  };
+  for (const Case& c : cases) {
+    const std::string message = error_for(std::string(c.name) + ".json", c.text);
+    EXPECT_NE(message.find(c.expect), std::string::npos)
+        << "case " << c.name << ": got \"" << message << "\", expected it to contain \"" << c.expect << "\"";
+  }
+  // a file that is not there
+  const std::string nowhere = temp_path("does_not_exist.json");
+  try {
+    read_vessel_tree_json(nowhere);
+    ADD_FAILURE() << "reading a missing file should throw";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(nowhere + ": cannot open"), std::string::npos) << e.what();
+  }
+  // a folder that is not there, for writing
+  try {
+    write_vessel_tree_json(make_coronary_phantom({}), "/nonexistent-dir/x.json");
+    ADD_FAILURE() << "writing into a missing folder should throw";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent-dir/x.json"), std::string::npos) << e.what();
+  }
+}
+
+#else
+
+TEST(VesselTreeJsonTest, SkippedWithoutJson) {
+  GTEST_SKIP() << "built without nlohmann-json: vessel tree JSON I/O is left out";
+}
+
+#endif
+
+}  // namespace
+}  // namespace pcisim::anatomy

@@ -27,7 +27,7 @@ bool parse_bool(std::string_view v, bool* out) {
 
 }  // namespace
 
-Volume read_metaimage(const std::string& path) {
+Volume read_metaimage(const std::string& path, bool require_spacing) {
   const std::string text = io::read_file(path);
   std::map<std::string, std::string> keys;  // lower-case key -> value
   std::map<std::string, std::string> spelled;
@@ -99,6 +99,9 @@ Volume read_metaimage(const std::string& path) {
       fail(path, "ElementType", fmt::format("unsupported '{}' (expected MET_SHORT or MET_FLOAT)", v));
     }
   }
+  // a CT without its voxel size would be simulated at a made-up scale
+  if (require_spacing && !get("ElementSpacing") && !get("ElementSize"))
+    fail(path, "ElementSpacing", "missing (a CT needs its voxel spacing)");
   for (const char* k : {"ElementSpacing", "ElementSize"}) {
     if (const auto* v = get(k)) {
       double s[3];

@@ -27,7 +27,7 @@ bool volume_io_has_gzip() {
 #endif
 }
 
-Volume read_nrrd(const std::string& path) {
+Volume read_nrrd(const std::string& path, bool require_spacing) {
   const std::string text = io::read_file(path);
   if (text.size() < 8 || text.compare(0, 7, "NRRD000") != 0 || text[7] < '1' || text[7] > '5') {
     fail(path, "magic", "the file does not start with NRRD0001..NRRD0005");
@@ -135,6 +135,9 @@ Volume read_nrrd(const std::string& path) {
       fail(path, "spacings", fmt::format("expected 3 positive numbers, got '{}'", *v));
     }
     vol.spacing_mm = Eigen::Vector3d(s[0], s[1], s[2]);
+  } else if (require_spacing) {
+    // a CT without its voxel size would be simulated at a made-up scale
+    fail(path, "space directions", "missing (neither 'space directions' nor 'spacings': a CT needs its voxel spacing)");
   }
   if (const auto* v = get("space origin")) {
     double o[3];
@@ -209,14 +212,14 @@ void write_nrrd(const Volume& v, const std::string& path, bool gzip) {
   }
 }
 
-Volume read_volume(const std::string& path) {
+Volume read_volume(const std::string& path, bool require_spacing) {
   const std::string l = io::lower(path);
   auto ends = [&l](const char* s) {
     const size_t n = std::strlen(s);
     return l.size() >= n && l.compare(l.size() - n, n, s) == 0;
   };
-  if (ends(".mha") || ends(".mhd")) return read_metaimage(path);
-  if (ends(".nrrd") || ends(".nhdr")) return read_nrrd(path);
+  if (ends(".mha") || ends(".mhd")) return read_metaimage(path, require_spacing);
+  if (ends(".nrrd") || ends(".nhdr")) return read_nrrd(path, require_spacing);
   throw VolumeIoError(fmt::format("{}: file name: expected .mha, .mhd, .nrrd or .nhdr", io::base_name(path)));
 }
 

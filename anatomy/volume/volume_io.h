@@ -17,13 +17,15 @@ struct VolumeIoError : std::runtime_error {
 bool volume_io_has_gzip();
 
 // by extension: .mha/.mhd (MetaImage) or .nrrd/.nhdr (NRRD)
-Volume read_volume(const std::string& path);
+// require_spacing: refuse a file that does not give the voxel spacing (a CT needs it; without it
+// the formats default to 1 mm)
+Volume read_volume(const std::string& path, bool require_spacing = false);
 
-Volume read_metaimage(const std::string& path);
+Volume read_metaimage(const std::string& path, bool require_spacing = false);
 // .mha: header and data in one file; .mhd: header, data in <stem>.raw beside it
 void write_metaimage(const Volume& volume, const std::string& path);
 
-Volume read_nrrd(const std::string& path);
+Volume read_nrrd(const std::string& path, bool require_spacing = false);
 // .nrrd with attached data; gzip needs zlib (throws otherwise)
 void write_nrrd(const Volume& volume, const std::string& path, bool gzip = false);
 

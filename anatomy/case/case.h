@@ -1,0 +1,30 @@
+#pragma once
+// A patient case: everything a scene's anatomy is, as plain data. The server builds one per scene
+// (from a case folder or a phantom seed) and hands the same value to physics, imaging and status.
+// Frame: patient LPS (x left, y posterior, z superior). Format on disk: docs/anatomy.md.
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "anatomy/mesh/triangle_mesh.h"
+#include "anatomy/vessel/vessel_tree.h"
+#include "anatomy/volume/volume.h"
+
+namespace pcisim::anatomy {
+
+struct Landmark {
+  std::string name;
+  Eigen::Vector3d position_m;
+};
+
+struct Case {
+  std::string name;               // for logs and status
+  VesselTree vessels;             // centerlines and radii, metres
+  TriangleMesh lumen;             // the lumen surface, metres, closed; empty when the case has none
+  std::optional<Volume> ct;       // CT in HU, mm
+  bool ct_lumen_enhanced = false; // the CT's lumens hold contrast (a CT angiogram) rather than blood
+  std::vector<Landmark> landmarks;
+};
+
+}  // namespace pcisim::anatomy

@@ -1,0 +1,159 @@
+#include "anatomy/case/case_folder.h"
+
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "anatomy/case/slicer_markups.h"
+#include "anatomy/mesh/mesh_io.h"
+#include "anatomy/vessel/vessel_tree_json.h"
+#include "anatomy/volume/io_text.h"
+#include "anatomy/volume/volume_io.h"
+#include "json/json_reader.h"
+
+namespace pcisim::anatomy {
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+[[noreturn]] void fail(const std::string& file, const std::string& field, const std::string& what) {
+  throw CaseError(fmt::format("{}: {}: {}", file, field, what));
+}
+
+// a file named by case.json: relative, inside the folder, present
+std::string member_file(const fs::path& dir, const std::string& case_json, const std::string& field,
+                        const std::string& name) {
+  const fs::path p(name);
+  if (name.empty() || p.is_absolute() || name.find("..") != std::string::npos)
+    fail(case_json, field, fmt::format("'{}' must be a file name inside the case folder", name));
+  const fs::path full = dir / p;
+  std::error_code ec;
+  if (!fs::is_regular_file(full, ec)) fail(case_json, field, fmt::format("file '{}' not found in {}", name, dir.string()));
+  return full.string();
+}
+
+// every centerline point inside the CT's extent (half a voxel beyond the outer voxel centres)
+void check_vessels_inside(const VesselTree& tree, const Volume& ct, const std::string& vessels_file,
+                          const std::string& ct_file) {
+  for (size_t b = 0; b < tree.branches.size(); ++b) {
+    const auto& branch = tree.branches[b];
+    for (size_t i = 0; i < branch.points.size(); ++i) {
+      const Eigen::Vector3d p_mm = branch.points[i].position_m * 1e3;
+      const Eigen::Vector3d ijk = ct.physical_to_index(p_mm);
+      bool inside = true;
+      for (int a = 0; a < 3; ++a) inside = inside && ijk[a] >= -0.5 && ijk[a] <= ct.dims[a] - 0.5;
+      if (!inside)
+        fail(vessels_file, fmt::format("branches[{}] ({}).points[{}]", b, branch.name, i),
+             fmt::format("at ({:.1f}, {:.1f}, {:.1f}) mm, outside the CT {} (voxel index {:.1f}, {:.1f}, {:.1f} of "
+                         "{}x{}x{})", p_mm.x(), p_mm.y(), p_mm.z(), fs::path(ct_file).filename().string(), ijk.x(),
+                         ijk.y(), ijk.z(), ct.dims[0], ct.dims[1], ct.dims[2]));
+    }
+  }
+}
+
+}  // namespace
+
+void write_case(const Case& c, const std::string& dir_name) {
+  const fs::path dir(dir_name);
+  std::error_code ec;
+  fs::create_directories(dir / "slicer", ec);
+  if (ec) throw CaseError(fmt::format("{}: cannot create the case folder ({})", dir_name, ec.message()));
+  Json doc = {{"format", kCaseFormat}, {"version", kCaseVersion}, {"name", c.name}, {"units", "mm"}, {"frame", "LPS"}};
+  write_vessel_tree_json(c.vessels, (dir / "vessels.json").string());
+  doc["vessels"] = "vessels.json";
+  if (!c.lumen.triangles.empty()) {
+    write_stl(c.lumen, (dir / "lumen.stl").string(), "pcisim lumen");
+    doc["lumen"] = "lumen.stl";
+  }
+  if (c.ct) {
+    write_nrrd(*c.ct, (dir / "ct.nrrd").string(), volume_io_has_gzip());
+    doc["ct"] = {{"file", "ct.nrrd"}, {"lumen_enhanced", c.ct_lumen_enhanced}};
+  }
+  Json landmarks = Json::array();
+  for (const auto& l : c.landmarks)
+    landmarks.push_back({{"name", l.name}, {"position_m", {l.position_m.x(), l.position_m.y(), l.position_m.z()}}});
+  doc["landmarks"] = landmarks;
+  // for 3D Slicer: each centerline as a markups curve (the lumen and CT open as they are)
+  Json curves = Json::array();
+  for (const auto& b : c.vessels.branches) {
+    const std::string name = "slicer/" + b.name + ".mrk.json";
+    write_markups_curve(b, (dir / name).string());
+    curves.push_back(name);
+  }
+  doc["slicer_centerlines"] = curves;
+  std::ofstream out(dir / "case.json");
+  out << doc.dump(2) << '\n';
+  if (!out) throw CaseError((dir / "case.json").string() + ": cannot write");
+}
+
+Case read_case(const std::string& dir_name) {
+  const fs::path dir(dir_name);
+  const std::string case_json = (dir / "case.json").string();
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw CaseError(fmt::format("{}: not a case folder (no such directory)", dir_name));
+  if (!fs::is_regular_file(case_json, ec)) throw CaseError(fmt::format("{}: missing (a case folder needs case.json)", case_json));
+  Case c;
+  std::string vessels_file, ct_file;
+  try {
+    const Json doc = json::parse_json_checked(io::read_file(case_json), case_json);
+    json::JsonReader r(doc, "");
+    if (r.text("format", "") != kCaseFormat) r.fail("format", fmt::format("expected \"{}\"", kCaseFormat));
+    r.integer("version", 0, kCaseVersion, kCaseVersion);
+    c.name = r.text("name", dir.filename().string());
+    r.text("units", "", {"mm"});
+    r.text("frame", "", {"LPS"});
+    vessels_file = member_file(dir, case_json, "vessels", r.text("vessels", ""));
+    if (r.has("lumen")) {
+      const std::string lumen_file = member_file(dir, case_json, "lumen", r.text("lumen", ""));
+      c.lumen = read_mesh(lumen_file, kMillimetre);
+      if (const std::string why = check_closed_manifold(c.lumen); !why.empty())
+        fail(lumen_file, "mesh", why + " (the lumen must be a closed, manifold surface)");
+    }
+    if (r.has("ct")) {
+      json::JsonReader ct = r.child("ct");
+      ct_file = member_file(dir, case_json, "ct.file", ct.text("file", ""));
+      c.ct_lumen_enhanced = ct.boolean("lumen_enhanced", true);
+      ct.finish();
+    }
+    for (const auto& l : r.list("landmarks")) {
+      json::JsonReader lr(l, "landmarks[]");
+      Landmark m;
+      m.name = lr.text("name", "");
+      const auto& p = lr.list("position_m");
+      if (m.name.empty()) lr.fail("name", "expected a non-empty name");
+      if (p.size() != 3 || !p[0].is_number() || !p[1].is_number() || !p[2].is_number())
+        lr.fail("position_m", "expected [x, y, z] in metres");
+      m.position_m = {p[0].get<double>(), p[1].get<double>(), p[2].get<double>()};
+      lr.finish();
+      c.landmarks.push_back(m);
+    }
+    r.list("slicer_centerlines");  // written for viewers, not needed to simulate
+    r.finish();
+  } catch (const json::JsonError& e) {
+    throw CaseError(fmt::format("{}: {}", case_json, e.what()));
+  } catch (const MeshIoError& e) {
+    throw CaseError(e.what());
+  } catch (const std::runtime_error& e) {
+    if (dynamic_cast<const CaseError*>(&e)) throw;
+    throw CaseError(fmt::format("{}: {}", case_json, e.what()));
+  }
+  try {
+    c.vessels = read_vessel_tree_json(vessels_file);
+  } catch (const std::runtime_error& e) {
+    throw CaseError(e.what());
+  }
+  if (!ct_file.empty()) {
+    try {
+      c.ct = read_volume(ct_file, /*require_spacing=*/true);
+    } catch (const VolumeIoError& e) {
+      throw CaseError(e.what());
+    }
+    check_vessels_inside(c.vessels, *c.ct, vessels_file, ct_file);
+  }
+  return c;
+}
+
+}  // namespace pcisim::anatomy

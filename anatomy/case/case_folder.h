@@ -1,0 +1,29 @@
+#pragma once
+// A case on disk (docs/anatomy.md): a folder with case.json naming what is present,
+//   vessels.json   centerlines and radii (the pcisim-vessel-tree format, metres)
+//   lumen.stl      the lumen surface, binary STL, millimetres, LPS
+//   ct.nrrd|.mha   optional CT in HU
+//   slicer/<branch>.mrk.json   each centerline as a 3D Slicer markups curve (written, not read)
+// Built only with nlohmann-json. Readers throw CaseError "<file>: <field>: <what>".
+#include <stdexcept>
+#include <string>
+
+#include "anatomy/case/case.h"
+
+namespace pcisim::anatomy {
+
+struct CaseError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+inline constexpr const char* kCaseFormat = "pcisim-case";
+inline constexpr int kCaseVersion = 1;
+
+// writes the case into `dir` (created; files of the same names are replaced)
+void write_case(const Case& c, const std::string& dir);
+
+// reads and checks a case folder: every named file present and readable, units "mm", frame "LPS",
+// the lumen closed and manifold, the CT with its spacing, every centerline point inside the CT
+Case read_case(const std::string& dir);
+
+}  // namespace pcisim::anatomy

@@ -1,0 +1,14 @@
+#pragma once
+// 3D Slicer markups files (.mrk.json): a vessel branch's centerline as an open curve, LPS mm.
+// The fields follow Slicer's markups schema v1.0.3 ("coordinateSystem": "LPS",
+// "coordinateUnits": "mm"); docs/anatomy.md says how this was checked.
+#include <string>
+
+#include "anatomy/vessel/vessel_tree.h"
+
+namespace pcisim::anatomy {
+
+// one curve, its control points the branch's centerline points; throws std::runtime_error
+void write_markups_curve(const VesselBranch& branch, const std::string& path);
+
+}  // namespace pcisim::anatomy

@@ -1,0 +1,320 @@
+#include "anatomy/mesh/mesh_io.h"
+
+#include <fmt/format.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <unordered_map>
+
+#include "anatomy/volume/io_text.h"
+
+namespace pcisim::anatomy {
+namespace {
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+  throw MeshIoError(path + ": " + what);
+}
+
+std::string extension_of(const std::string& path) {
+  const auto dot = path.find_last_of('.');
+  return dot == std::string::npos ? "" : io::lower(path.substr(dot));
+}
+
+// one vertex per distinct position, in order of first appearance (STL repeats every corner)
+class Welder {
+ public:
+  explicit Welder(TriangleMesh& mesh) : mesh_(mesh) {}
+  int add(const std::array<float, 3>& p, double scale) {
+    auto [it, fresh] = index_.try_emplace(p, static_cast<int>(mesh_.vertices_m.size()));
+    if (fresh) mesh_.vertices_m.emplace_back(p[0] * scale, p[1] * scale, p[2] * scale);
+    return it->second;
+  }
+
+ private:
+  TriangleMesh& mesh_;
+  std::map<std::array<float, 3>, int> index_;
+};
+
+void check_finite(const std::string& path, const Eigen::Vector3d& v, size_t index) {
+  if (!v.allFinite()) fail(path, fmt::format("vertex {} is not finite", index));
+}
+
+TriangleMesh read_stl(const std::string& path, const std::string& bytes, double scale) {
+  TriangleMesh mesh;
+  Welder weld(mesh);
+  // binary: 80-byte header, uint32 count, 50 bytes per triangle; anything else is ASCII
+  if (bytes.size() >= 84) {
+    uint32_t n = 0;
+    std::memcpy(&n, bytes.data() + 80, 4);
+    if (bytes.size() == 84 + uint64_t{50} * n) {
+      mesh.triangles.reserve(n);
+      for (uint32_t t = 0; t < n; ++t) {
+        const char* rec = bytes.data() + 84 + size_t{50} * t + 12;  // skip the normal
+        std::array<int, 3> tri{};
+        for (int c = 0; c < 3; ++c) {
+          std::array<float, 3> p{};
+          std::memcpy(p.data(), rec + 12 * c, 12);
+          if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+            fail(path, fmt::format("triangle {}: a corner is not finite", t));
+          tri[c] = weld.add(p, scale);
+        }
+        mesh.triangles.push_back(tri);
+      }
+      return mesh;
+    }
+  }
+  if (bytes.rfind("solid", 0) != 0)
+    fail(path, fmt::format("neither binary STL (size {} bytes does not match its triangle count) nor ASCII "
+                           "STL (no 'solid')", bytes.size()));
+  std::istringstream in(bytes);
+  std::string word;
+  std::array<int, 3> tri{};
+  int corner = 0;
+  while (in >> word) {
+    if (word != "vertex") continue;
+    std::array<float, 3> p{};
+    if (!(in >> p[0] >> p[1] >> p[2]) || !std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+      fail(path, fmt::format("triangle {}: a vertex is not three finite numbers", mesh.triangles.size()));
+    tri[corner++] = weld.add(p, scale);
+    if (corner == 3) {
+      mesh.triangles.push_back(tri);
+      corner = 0;
+    }
+  }
+  if (corner != 0) fail(path, "ends inside a facet");
+  return mesh;
+}
+
+// PLY: vertex x y z (float or double, other properties skipped) and faces as index lists
+TriangleMesh read_ply(const std::string& path, const std::string& bytes, double scale) {
+  struct Property {
+    std::string name, type, count_type;  // count_type set for a list
+  };
+  struct Element {
+    std::string name;
+    int64_t count = 0;
+    std::vector<Property> props;
+  };
+  const auto end = bytes.find("end_header");
+  if (bytes.rfind("ply", 0) != 0 || end == std::string::npos) fail(path, "not a PLY file (no 'ply' ... 'end_header')");
+  std::istringstream header(bytes.substr(0, end));
+  std::string line, format;
+  std::vector<Element> elements;
+  while (std::getline(header, line)) {
+    std::istringstream w(line);
+    std::string key;
+    w >> key;
+    if (key == "format") {
+      w >> format;
+    } else if (key == "element") {
+      Element e;
+      if (!(w >> e.name >> e.count) || e.count < 0) fail(path, "header: bad element line '" + line + "'");
+      elements.push_back(e);
+    } else if (key == "property") {
+      if (elements.empty()) fail(path, "header: property before any element");
+      Property p;
+      w >> p.type;
+      if (p.type == "list") w >> p.count_type >> p.type;
+      w >> p.name;
+      elements.back().props.push_back(p);
+    }
+  }
+  const bool ascii = format == "ascii";
+  if (!ascii && format != "binary_little_endian")
+    fail(path, "format: '" + format + "' is not supported (ascii or binary_little_endian)");
+  size_t pos = bytes.find('\n', end);
+  if (pos == std::string::npos) fail(path, "nothing after end_header");
+  ++pos;
+  std::istringstream text(ascii ? bytes.substr(pos) : std::string());
+  auto size_of = [&](const std::string& t) -> int {
+    if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+    if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+    if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" || t == "float32") return 4;
+    if (t == "double" || t == "float64") return 8;
+    fail(path, "header: unknown property type '" + t + "'");
+  };
+  // one scalar of type t, from text or little-endian bytes
+  auto scalar = [&](const std::string& t) -> double {
+    if (ascii) {
+      double v = 0;
+      if (!(text >> v)) fail(path, "data ends early");
+      return v;
+    }
+    const int n = size_of(t);
+    if (pos + n > bytes.size()) fail(path, "data ends early");
+    const char* p = bytes.data() + pos;
+    pos += n;
+    auto get = [p](auto v) { std::memcpy(&v, p, sizeof v); return static_cast<double>(v); };
+    if (t == "char" || t == "int8") return get(int8_t{});
+    if (t == "uchar" || t == "uint8") return get(uint8_t{});
+    if (t == "short" || t == "int16") return get(int16_t{});
+    if (t == "ushort" || t == "uint16") return get(uint16_t{});
+    if (t == "int" || t == "int32") return get(int32_t{});
+    if (t == "uint" || t == "uint32") return get(uint32_t{});
+    if (t == "float" || t == "float32") return get(float{});
+    return get(double{});
+  };
+  TriangleMesh mesh;
+  for (const auto& e : elements) {
+    for (const auto& p : e.props) size_of(p.type);
+    if (e.name == "vertex") {
+      if (e.count > (int64_t{1} << 28)) fail(path, "element vertex: too many vertices");
+      mesh.vertices_m.reserve(e.count);
+    }
+    for (int64_t i = 0; i < e.count; ++i) {
+      Eigen::Vector3d v = Eigen::Vector3d::Zero();
+      for (const auto& p : e.props) {
+        if (!p.count_type.empty()) {
+          const double n = scalar(p.count_type);
+          if (!(n >= 0 && n <= 1024)) fail(path, fmt::format("{} {}: list length {} out of range", e.name, i, n));
+          std::vector<int> idx(static_cast<size_t>(n));
+          for (auto& k : idx) k = static_cast<int>(scalar(p.type));
+          if (e.name == "face" && (p.name == "vertex_indices" || p.name == "vertex_index")) {
+            if (idx.size() < 3) fail(path, fmt::format("face {}: fewer than 3 vertices", i));
+            for (size_t k = 1; k + 1 < idx.size(); ++k) mesh.triangles.push_back({idx[0], idx[k], idx[k + 1]});
+          }
+          continue;
+        }
+        const double x = scalar(p.type);
+        if (e.name == "vertex") {
+          if (p.name == "x") v.x() = x;
+          if (p.name == "y") v.y() = x;
+          if (p.name == "z") v.z() = x;
+        }
+      }
+      if (e.name == "vertex") {
+        check_finite(path, v, mesh.vertices_m.size());
+        mesh.vertices_m.push_back(v * scale);
+      }
+    }
+  }
+  return mesh;
+}
+
+// OBJ: "v x y z" and "f a b c ..." (a/b/c forms, negative indices from the end); polygons fanned
+TriangleMesh read_obj(const std::string& path, const std::string& bytes, double scale) {
+  TriangleMesh mesh;
+  std::istringstream in(bytes);
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    std::istringstream w(line);
+    std::string key;
+    w >> key;
+    if (key == "v") {
+      Eigen::Vector3d v;
+      if (!(w >> v.x() >> v.y() >> v.z()) || !v.allFinite())
+        fail(path, fmt::format("line {}: a vertex needs three finite numbers", line_no));
+      mesh.vertices_m.push_back(v * scale);
+    } else if (key == "f") {
+      std::vector<int> idx;
+      std::string corner;
+      while (w >> corner) {
+        long k = 0;
+        try {
+          k = std::stol(corner.substr(0, corner.find('/')));
+        } catch (const std::exception&) {
+          fail(path, fmt::format("line {}: bad face corner '{}'", line_no, corner));
+        }
+        const long n = static_cast<long>(mesh.vertices_m.size());
+        const long zero_based = k > 0 ? k - 1 : n + k;
+        if (k == 0 || zero_based < 0 || zero_based >= n)
+          fail(path, fmt::format("line {}: vertex {} does not exist (there are {} so far)", line_no, k, n));
+        idx.push_back(static_cast<int>(zero_based));
+      }
+      if (idx.size() < 3) fail(path, fmt::format("line {}: a face needs 3 vertices", line_no));
+      for (size_t k = 1; k + 1 < idx.size(); ++k) mesh.triangles.push_back({idx[0], idx[k], idx[k + 1]});
+    }
+  }
+  return mesh;
+}
+
+}  // namespace
+
+TriangleMesh read_mesh(const std::string& path, double metres_per_unit) {
+  const std::string ext = extension_of(path);
+  if (ext != ".stl" && ext != ".ply" && ext != ".obj")
+    fail(path, "unknown mesh format (expected .stl, .ply or .obj)");
+  std::string bytes;
+  try {
+    bytes = io::read_file(path);
+  } catch (const std::exception& e) {
+    throw MeshIoError(e.what());
+  }
+  TriangleMesh mesh = ext == ".stl"   ? read_stl(path, bytes, metres_per_unit)
+                      : ext == ".ply" ? read_ply(path, bytes, metres_per_unit)
+                                      : read_obj(path, bytes, metres_per_unit);
+  const int n = static_cast<int>(mesh.vertices_m.size());
+  for (size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int k : mesh.triangles[t])
+      if (k < 0 || k >= n) fail(path, fmt::format("triangle {}: vertex {} does not exist ({} vertices)", t, k, n));
+  if (mesh.triangles.empty()) fail(path, "no triangles");
+  return mesh;
+}
+
+void write_stl(const TriangleMesh& mesh, const std::string& path, const std::string& title) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw MeshIoError(path + ": cannot open for writing");
+  char header[80] = {};
+  const std::string h = fmt::format("{} SPACE=LPS units=mm", title).substr(0, 79);
+  std::memcpy(header, h.data(), h.size());
+  out.write(header, 80);
+  const uint32_t n = static_cast<uint32_t>(mesh.triangles.size());
+  out.write(reinterpret_cast<const char*>(&n), 4);
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3d a = mesh.vertices_m[t[0]], b = mesh.vertices_m[t[1]], c = mesh.vertices_m[t[2]];
+    const Eigen::Vector3d normal = (b - a).cross(c - a).normalized();
+    std::array<float, 12> rec{};
+    for (int k = 0; k < 3; ++k) rec[k] = static_cast<float>(normal[k]);
+    for (int v = 0; v < 3; ++v)
+      for (int k = 0; k < 3; ++k) rec[3 + 3 * v + k] = static_cast<float>(mesh.vertices_m[t[v]][k] * 1e3);
+    out.write(reinterpret_cast<const char*>(rec.data()), 48);
+    const uint16_t attributes = 0;
+    out.write(reinterpret_cast<const char*>(&attributes), 2);
+  }
+  out.flush();
+  if (!out) throw MeshIoError(path + ": write failed");
+}
+
+void round_to_float_mm(TriangleMesh& mesh) {
+  // the value read back is float(mm) * 1e-3 computed in double, exactly as read_stl does
+  for (auto& v : mesh.vertices_m)
+    for (int k = 0; k < 3; ++k) v[k] = static_cast<float>(v[k] * 1e3) * kMillimetre;
+}
+
+std::string check_closed_manifold(const TriangleMesh& mesh) {
+  if (mesh.triangles.empty()) return "no triangles";
+  // each directed edge once; its reverse exactly once
+  std::unordered_map<uint64_t, int> directed;
+  directed.reserve(mesh.triangles.size() * 3);
+  auto key = [](int a, int b) { return (uint64_t(uint32_t(a)) << 32) | uint32_t(b); };
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const auto& tri = mesh.triangles[t];
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2])
+      return fmt::format("triangle {} repeats a vertex (degenerate)", t);
+    for (int e = 0; e < 3; ++e) {
+      if (++directed[key(tri[e], tri[(e + 1) % 3])] > 1)
+        return fmt::format("non-manifold or inconsistently oriented: edge {}-{} is run the same way by two triangles "
+                           "(second: triangle {})", tri[e], tri[(e + 1) % 3], t);
+    }
+  }
+  int open = 0;
+  std::string first;
+  for (const auto& tri : mesh.triangles) {
+    for (int e = 0; e < 3; ++e) {
+      if (directed.contains(key(tri[(e + 1) % 3], tri[e]))) continue;
+      if (open++ == 0) first = fmt::format("{}-{}", tri[e], tri[(e + 1) % 3]);
+    }
+  }
+  if (open > 0) return fmt::format("open: {} edges belong to one triangle only (first: vertices {})", open, first);
+  return "";
+}
+
+}  // namespace pcisim::anatomy

@@ -1,0 +1,36 @@
+#pragma once
+// Triangle meshes from and to files: STL (binary and ASCII), PLY (ASCII and binary little-endian)
+// and OBJ. Files hold lengths in a unit the caller names (pcisim's case files: millimetres, LPS);
+// the mesh in memory is in metres. Errors throw MeshIoError "<file>: <what>".
+#include <stdexcept>
+#include <string>
+
+#include "anatomy/mesh/triangle_mesh.h"
+
+namespace pcisim::anatomy {
+
+struct MeshIoError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// metres per file unit: 1e-3 for millimetre files (what users bring, what Slicer writes)
+inline constexpr double kMillimetre = 1e-3;
+
+// by extension (.stl, .ply, .obj, any case). STL has no shared vertices: corners at the same
+// position are welded into one vertex, in order of first appearance.
+TriangleMesh read_mesh(const std::string& path, double metres_per_unit = kMillimetre);
+
+// binary STL in millimetres; the 80-byte header says "SPACE=LPS" (3D Slicer reads the space from
+// it) and "units=mm". Coordinates are float32: write_stl then read_mesh gives the mesh rounded to
+// float, and a mesh already at float precision (round_to_float_mm) comes back bit for bit.
+void write_stl(const TriangleMesh& mesh, const std::string& path, const std::string& title = "pcisim");
+
+// every vertex rounded to the float32 millimetre value an STL file stores
+void round_to_float_mm(TriangleMesh& mesh);
+
+// "" when every edge is shared by exactly two triangles running it in opposite directions (the
+// surface is closed, manifold and consistently oriented) and no triangle is degenerate; otherwise
+// the first problem found, e.g. "open: 12 edges belong to one triangle only (first: vertices 3-7)"
+std::string check_closed_manifold(const TriangleMesh& mesh);
+
+}  // namespace pcisim::anatomy

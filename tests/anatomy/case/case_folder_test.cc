@@ -1,0 +1,246 @@
+// A case folder written and read back is the same case; every kind of bad case is refused
+// naming the file and the field; the mesh formats users bring read to the same surface.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "anatomy/case/case_folder.h"
+#include "anatomy/mesh/mesh_io.h"
+#include "anatomy/phantom/phantom_case.h"
+#include "anatomy/volume/volume_io.h"
+
+namespace pcisim::anatomy {
+namespace {
+
+namespace fs = std::filesystem;
+
+// a small phantom case: the whole tree inside a coarse CT (fast to build)
+PhantomCaseSpec small_spec() {
+  PhantomCaseSpec s;
+  s.seed = 3;
+  s.ct_dims = {64, 64, 40};
+  s.ct_spacing_mm = 4.0;
+  return s;
+}
+
+const Case& small_case() {
+  static const Case c = make_phantom_case(small_spec());
+  return c;
+}
+
+class CaseFolder : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("pcisim-case-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    write_case(small_case(), dir_.string());
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  nlohmann::json case_json() const { return nlohmann::json::parse(std::ifstream(dir_ / "case.json")); }
+  void set_case_json(const nlohmann::json& j) const { std::ofstream(dir_ / "case.json") << j.dump(1); }
+  // the message read_case gives, or "" when it reads
+  std::string refusal() const {
+    try {
+      read_case(dir_.string());
+    } catch (const CaseError& e) {
+      return e.what();
+    }
+    return "";
+  }
+  fs::path dir_;
+};
+
+TEST_F(CaseFolder, WrittenAndReadBackIsTheSameCase) {
+  const Case& a = small_case();
+  const Case b = read_case(dir_.string());
+  EXPECT_EQ(b.name, a.name);
+  // centerlines: bit-exact doubles
+  ASSERT_EQ(b.vessels.branches.size(), a.vessels.branches.size());
+  for (size_t i = 0; i < a.vessels.branches.size(); ++i) {
+    const auto &x = a.vessels.branches[i], &y = b.vessels.branches[i];
+    EXPECT_EQ(y.name, x.name);
+    EXPECT_EQ(y.parent, x.parent);
+    EXPECT_EQ(y.parent_point, x.parent_point);
+    ASSERT_EQ(y.points.size(), x.points.size());
+    for (size_t k = 0; k < x.points.size(); ++k) {
+      EXPECT_EQ(y.points[k].position_m, x.points[k].position_m) << x.name << " point " << k;
+      EXPECT_EQ(y.points[k].radius_m, x.points[k].radius_m);
+    }
+  }
+  // lumen: same vertex count, and every triangle's corners at exactly the same positions
+  ASSERT_EQ(b.lumen.vertices_m.size(), a.lumen.vertices_m.size());
+  ASSERT_EQ(b.lumen.triangles.size(), a.lumen.triangles.size());
+  for (size_t t = 0; t < a.lumen.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k)
+      ASSERT_EQ(b.lumen.vertices_m[b.lumen.triangles[t][k]], a.lumen.vertices_m[a.lumen.triangles[t][k]]) << t;
+  EXPECT_EQ(check_closed_manifold(b.lumen), "");
+  // CT: same voxels and geometry
+  ASSERT_TRUE(b.ct.has_value());
+  EXPECT_EQ(b.ct->dims, a.ct->dims);
+  EXPECT_EQ(b.ct->spacing_mm, a.ct->spacing_mm);
+  EXPECT_EQ(b.ct->origin_mm, a.ct->origin_mm);
+  EXPECT_EQ(b.ct->direction, a.ct->direction);
+  EXPECT_EQ(b.ct->hu_i16, a.ct->hu_i16);
+  EXPECT_EQ(b.ct_lumen_enhanced, a.ct_lumen_enhanced);
+  ASSERT_EQ(b.landmarks.size(), a.landmarks.size());
+  for (size_t i = 0; i < a.landmarks.size(); ++i) {
+    EXPECT_EQ(b.landmarks[i].name, a.landmarks[i].name);
+    EXPECT_EQ(b.landmarks[i].position_m, a.landmarks[i].position_m);
+  }
+}
+
+TEST_F(CaseFolder, SlicerCurvesAreLpsMillimetresAlongTheCenterline) {
+  const auto& lad = small_case().vessels.branches.at(small_case().vessels.find("LAD"));
+  const auto doc = nlohmann::json::parse(std::ifstream(dir_ / "slicer" / "LAD.mrk.json"));
+  const auto& m = doc.at("markups").at(0);
+  EXPECT_EQ(m.at("type"), "Curve");
+  EXPECT_EQ(m.at("coordinateSystem"), "LPS");
+  EXPECT_EQ(m.at("coordinateUnits"), "mm");
+  ASSERT_EQ(m.at("controlPoints").size(), lad.points.size());
+  for (size_t i = 0; i < lad.points.size(); i += 37) {
+    const auto& p = m.at("controlPoints").at(i).at("position");
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(p.at(a).get<double>(), lad.points[i].position_m[a] * 1e3, 1e-9);
+  }
+  EXPECT_EQ(case_json().at("slicer_centerlines").size(), small_case().vessels.branches.size());
+  // the STL header tells Slicer the space
+  std::ifstream stl(dir_ / "lumen.stl", std::ios::binary);
+  std::string header(80, '\0');
+  stl.read(header.data(), 80);
+  EXPECT_NE(header.find("SPACE=LPS"), std::string::npos) << header;
+}
+
+TEST_F(CaseFolder, MissingFileIsRefusedNamingTheField) {
+  fs::remove(dir_ / "vessels.json");
+  EXPECT_NE(refusal().find("case.json: vessels: file 'vessels.json' not found"), std::string::npos) << refusal();
+}
+
+TEST_F(CaseFolder, MissingCaseJsonIsRefused) {
+  fs::remove(dir_ / "case.json");
+  EXPECT_NE(refusal().find("case.json: missing"), std::string::npos) << refusal();
+}
+
+TEST_F(CaseFolder, WrongUnitsAreRefused) {
+  auto j = case_json();
+  j["units"] = "cm";
+  set_case_json(j);
+  EXPECT_NE(refusal().find("case.json: units: "), std::string::npos) << refusal();
+  EXPECT_NE(refusal().find("mm"), std::string::npos) << refusal();
+}
+
+TEST_F(CaseFolder, WrongFrameIsRefused) {
+  auto j = case_json();
+  j["frame"] = "RAS";
+  set_case_json(j);
+  EXPECT_NE(refusal().find("case.json: frame: "), std::string::npos) << refusal();
+}
+
+TEST_F(CaseFolder, AFileOutsideTheFolderIsRefused) {
+  auto j = case_json();
+  j["lumen"] = "../lumen.stl";
+  set_case_json(j);
+  EXPECT_NE(refusal().find("case.json: lumen: '../lumen.stl' must be a file name inside the case folder"),
+            std::string::npos) << refusal();
+}
+
+TEST_F(CaseFolder, AnOpenLumenIsRefused) {
+  TriangleMesh m = small_case().lumen;
+  m.triangles.pop_back();
+  write_stl(m, (dir_ / "lumen.stl").string());
+  EXPECT_NE(refusal().find("lumen.stl: mesh: open: 3 edges belong to one triangle only"), std::string::npos) << refusal();
+}
+
+TEST_F(CaseFolder, ANonManifoldLumenIsRefused) {
+  TriangleMesh m = small_case().lumen;
+  m.triangles.push_back(m.triangles.front());  // a face twice: its edges run the same way twice
+  write_stl(m, (dir_ / "lumen.stl").string());
+  EXPECT_NE(refusal().find("lumen.stl: mesh: non-manifold"), std::string::npos) << refusal();
+}
+
+TEST_F(CaseFolder, ACtWithoutSpacingIsRefused) {
+  std::ofstream(dir_ / "ct.nrrd") << "NRRD0004\ntype: short\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n"
+                                     "endian: little\n\n" << std::string(16, '\0');
+  EXPECT_NE(refusal().find("ct.nrrd: space directions: missing"), std::string::npos) << refusal();
+}
+
+TEST_F(CaseFolder, AVesselOutsideTheCtIsRefused) {
+  // the same CT shrunk to a 40 mm cube around the heart: the aorta's top leaves it
+  Volume ct = Volume::make({10, 10, 10}, Eigen::Vector3d::Constant(4.0), Eigen::Vector3d::Constant(-18.0),
+                           VoxelType::kInt16);
+  write_nrrd(ct, (dir_ / "ct.nrrd").string());
+  const std::string why = refusal();
+  EXPECT_NE(why.find("vessels.json: branches[0] (aorta).points["), std::string::npos) << why;
+  EXPECT_NE(why.find("outside the CT ct.nrrd"), std::string::npos) << why;
+}
+
+TEST_F(CaseFolder, AnUnknownKeyIsRefused) {
+  auto j = case_json();
+  j["motion"] = "motion.bin";
+  set_case_json(j);
+  EXPECT_NE(refusal().find("case.json: motion: unknown key"), std::string::npos) << refusal();
+}
+
+TEST_F(CaseFolder, ABadVesselFileIsRefusedNamingItsField) {
+  std::ofstream(dir_ / "vessels.json") << R"({"format": "pcisim-vessel-tree", "version": 1, "branches": [
+    {"name": "LM", "parent": -1, "points": [{"position_m": [0, 0, 0], "radius_m": -1},
+                                           {"position_m": [0, 0, 0.001], "radius_m": 0.002}]}]})";
+  EXPECT_NE(refusal().find("vessels.json: branches[0].points[0].radius_m"), std::string::npos) << refusal();
+}
+
+// the same surface from every format a user may bring
+TEST(MeshFiles, StlPlyAndObjReadToTheSameSurface) {
+  const fs::path dir = fs::temp_directory_path() / ("pcisim-mesh-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const TriangleMesh& lumen = small_case().lumen;
+  // pcisim's OBJ and PLY writers write metres
+  write_obj(lumen, (dir / "l.obj").string());
+  write_ply(lumen, (dir / "l.ply").string());
+  write_stl(lumen, (dir / "l.stl").string());
+  const TriangleMesh obj = read_mesh((dir / "l.obj").string(), 1.0), ply = read_mesh((dir / "l.ply").string(), 1.0);
+  const TriangleMesh stl = read_mesh((dir / "l.stl").string());
+  for (const TriangleMesh* m : {&obj, &ply, &stl}) {
+    ASSERT_EQ(m->triangles.size(), lumen.triangles.size());
+    for (size_t t = 0; t < lumen.triangles.size(); t += 97)
+      for (int k = 0; k < 3; ++k)
+        EXPECT_EQ(m->vertices_m[m->triangles[t][k]], lumen.vertices_m[lumen.triangles[t][k]]) << t;
+    EXPECT_EQ(check_closed_manifold(*m), "");
+  }
+  // ASCII STL, and a binary little-endian PLY with float vertices and a quad
+  std::ofstream(dir / "a.stl") << "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n"
+                                  "endloop\nendfacet\nendsolid t\n";
+  const TriangleMesh a = read_mesh((dir / "a.stl").string());
+  ASSERT_EQ(a.triangles.size(), 1u);
+  EXPECT_DOUBLE_EQ(a.vertices_m[1].x(), 1e-3);
+  {
+    std::ofstream b(dir / "b.ply", std::ios::binary);
+    b << "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+         "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    const float v[12] = {0, 0, 0, 2, 0, 0, 2, 2, 0, 0, 2, 0};
+    b.write(reinterpret_cast<const char*>(v), sizeof v);
+    const unsigned char n = 4;
+    const int idx[4] = {0, 1, 2, 3};
+    b.write(reinterpret_cast<const char*>(&n), 1);
+    b.write(reinterpret_cast<const char*>(idx), sizeof idx);
+  }
+  const TriangleMesh quad = read_mesh((dir / "b.ply").string());
+  ASSERT_EQ(quad.triangles.size(), 2u);
+  EXPECT_DOUBLE_EQ(quad.vertices_m[2].y(), 2e-3);
+  // refusals name the file
+  std::ofstream(dir / "bad.obj") << "v 0 0 0\nf 1 2 3\n";
+  try {
+    read_mesh((dir / "bad.obj").string());
+    ADD_FAILURE() << "a face on missing vertices was read";
+  } catch (const MeshIoError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.obj: line 2: vertex 2 does not exist"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(read_mesh((dir / "l.vtk").string()), MeshIoError);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace pcisim::anatomy

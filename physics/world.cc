@@ -88,6 +88,10 @@ struct World::Impl {
 World::World(const WorldSpec& spec) : World(spec, nullptr) {}
 
 World::World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_geometry)
+    : World(spec, anatomy::make_coronary_phantom(anatomy::CoronaryPhantomSpec{spec.anatomy.seed}),
+            std::move(contact_geometry)) {}
+
+World::World(const WorldSpec& spec, const anatomy::VesselTree& tree, std::shared_ptr<const LumenQuery> contact_geometry)
     : impl_(std::make_unique<Impl>()) {
   validate(spec);
   Impl& w = *impl_;
@@ -107,7 +111,7 @@ World::World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_ge
   if (spec.heart_beat && !spec.vessel_motion) w.heart.emplace(*spec.heart_beat);
   if (!spec.guidewire && !spec.vessel_motion) return;  // nothing else needs the anatomy
 
-  w.tree = anatomy::make_coronary_phantom(anatomy::CoronaryPhantomSpec{spec.anatomy.seed});
+  w.tree = tree;
   if (spec.vessel_motion) {
     // a heart the tree rides must not swallow it: the template is fitted under this tree
     anatomy::HeartMesh mesh = anatomy::template_heart_mesh();
@@ -119,7 +123,7 @@ World::World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_ge
   }
   if (!spec.guidewire) return;
   auto path = anatomy::guide_catheter_path(w.tree);
-  require(path.size() >= 2, "anatomy: the phantom has no guide catheter path (aorta and LM needed)");
+  require(path.size() >= 2, "anatomy: the vessel tree has no guide catheter path (branches named aorta and LM needed)");
   w.wire.emplace(*spec.guidewire, CatheterPath(std::move(path)));
   if (spec.vessel_contact) {
     // eq 15 against the SDF of the lofted lumen at the scene's spacing

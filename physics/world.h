@@ -34,11 +34,14 @@ struct EffectCost {
 
 class World {
  public:
-  // throws std::invalid_argument naming the bad field when the spec cannot be built
+  // the scene's effects around the vessel tree of an anatomy::Case (the server builds the case
+  // once per scene). Throws std::invalid_argument naming the bad field when it cannot be built.
+  // `contact_geometry`, when given, replaces the SDF the spec would build (benchmarks and tests
+  // share one field across worlds); it must describe the same anatomy.
+  World(const WorldSpec& spec, const anatomy::VesselTree& tree,
+        std::shared_ptr<const LumenQuery> contact_geometry = nullptr);
+  // the same around the procedural phantom of spec.anatomy.seed (tests and benchmarks)
   explicit World(const WorldSpec& spec);
-  // the same, with wall contact against `contact_geometry` instead of the SDF the spec would
-  // build (benchmarks and tests share one field across worlds); it must describe the same
-  // anatomy. Null builds it as above.
   World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_geometry);
   ~World();
   World(const World&) = delete;

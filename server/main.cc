@@ -7,6 +7,8 @@
 #include <spdlog/spdlog.h>
 
 #include "json/json_reader.h"
+#include "anatomy/case/case_folder.h"
+#include "server/case_builder.h"
 #include "server/scene/scene.h"
 #include "server/session_runner.h"
 
@@ -45,6 +47,12 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(-1, 100000))
       ->capture_default_str();
   app.add_option("--write-scene", write_scene_path, "write the built-in scene to this file and exit");
+  std::string write_case_dir, case_dir;
+  app.add_option("--write-case", write_case_dir,
+                 "write the scene's anatomy (the built-in phantom, or --scene's) as a case folder and exit: "
+                 "case.json, vessels.json, lumen.stl (LPS mm), ct.nrrd and slicer/*.mrk.json (docs/anatomy.md)");
+  app.add_option("--case", case_dir,
+                 "run on this case folder instead of the scene's anatomy (the scene's effects are kept)");
   CLI11_PARSE(app, argc, argv);
   // an in-process control bus gets an in-process image bus unless told otherwise
   if (app.count("--lcm-image-url") == 0 && lcm_url.rfind("memq://", 0) == 0) image_url = "memq://";
@@ -67,6 +75,24 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::cerr << "pcisim-server: bad scene: " << e.what() << "\n";
     return 2;
+  }
+  if (!case_dir.empty()) scene.case_dir = case_dir;
+
+  if (!write_case_dir.empty()) {
+    try {
+      // the phantom with its CT at the resolution the scene's fluoroscopy projects, so running on
+      // the written case gives the frames the seed gives
+      const pcisim::anatomy::Case c = scene.case_dir.empty() ? pcisim::anatomy::make_phantom_case(phantom_case_spec(scene))
+                                                            : pcisim::anatomy::read_case(scene.case_dir);
+      pcisim::anatomy::write_case(c, write_case_dir);
+      std::cout << "wrote case '" << c.name << "' to " << write_case_dir << " (" << c.vessels.branches.size()
+                << " branches, " << c.lumen.triangles.size() << " lumen triangles"
+                << (c.ct ? ", CT" : "") << ")\n";
+    } catch (const std::exception& e) {
+      std::cerr << "pcisim-server: cannot write the case: " << e.what() << "\n";
+      return 1;
+    }
+    return 0;
   }
 
   lcm::LCM lcm(lcm_url);

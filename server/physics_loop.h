@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "anatomy/case/case.h"
 #include "physics/world.h"
 #include "server/scene/scene.h"
 #include "server/shared_state.h"
@@ -19,8 +20,9 @@ struct EffectStats {
 
 class PhysicsLoop {
  public:
-  // builds the world now (may take a while: SDF), so the loop itself starts at once
-  PhysicsLoop(const Scene& scene, SharedState& state);
+  // builds the world around the scene's case now (may take a while: SDF), so the loop itself
+  // starts at once; a reset rebuilds it around the same case
+  PhysicsLoop(const Scene& scene, std::shared_ptr<const anatomy::Case> anatomy, SharedState& state);
   void run();  // until state.stop
 
   const std::vector<std::unique_ptr<EffectStats>>& effects() const { return effects_; }
@@ -31,6 +33,7 @@ class PhysicsLoop {
   void step_once(int64_t now_ns);
 
   physics::WorldSpec spec_;
+  std::shared_ptr<const anatomy::Case> case_;
   SharedState& state_;
   double rate_hz_;
   std::unique_ptr<physics::World> world_;

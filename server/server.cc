@@ -7,7 +7,7 @@
 #include <thread>
 
 #include "physics/heart/heart_fit.h"
-#include "anatomy/phantom/coronary_phantom.h"
+#include "server/case_builder.h"
 #include "server/haptic_loop.h"
 #include "server/lcm_io.h"
 #include "server/physics_loop.h"
@@ -19,6 +19,7 @@ namespace pcisim::server {
 
 struct Server::Impl {
   Scene scene;
+  std::shared_ptr<const anatomy::Case> anatomy;  // built once; physics, x-ray and status share it
   lcm::LCM& lcm;
   lcm::LCM* images;
   SessionLimits own_limits;
@@ -89,18 +90,26 @@ Server::Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images, SessionL
   spdlog::info("scene '{}' ({}): effects [{}], physics {} Hz", scene.name, scene.source,
                fmt::format("{}", fmt::join(scene.effects, ", ")), scene.physics_rate_hz);
   const int64_t t0 = realtime::monotonic_ns();
-  impl_->physics = std::make_unique<PhysicsLoop>(scene, impl_->state);
-  spdlog::info("world built in {:.0f} ms", (realtime::monotonic_ns() - t0) * 1e-6);
+  impl_->anatomy = build_case(scene);
+  const anatomy::Case& anatomy = *impl_->anatomy;
+  spdlog::info("anatomy '{}': {} branches, lumen {} triangles, {} ({:.0f} ms)", anatomy.name, anatomy.vessels.branches.size(),
+               anatomy.lumen.triangles.size(),
+               anatomy.ct ? fmt::format("CT {}x{}x{}", anatomy.ct->dims[0], anatomy.ct->dims[1], anatomy.ct->dims[2])
+                          : std::string("no CT"),
+               (realtime::monotonic_ns() - t0) * 1e-6);
+  const int64_t t_world = realtime::monotonic_ns();
+  impl_->physics = std::make_unique<PhysicsLoop>(scene, impl_->anatomy, impl_->state);
+  spdlog::info("world built in {:.0f} ms", (realtime::monotonic_ns() - t_world) * 1e-6);
   if (const auto& fit = impl_->physics->world().heart_fit(); fit.branches_lifted > 0)
-    spdlog::info("heart fitted under anatomy seed {}: {} branch(es) lifted clear, epicardium dented up to {:.1f} mm",
-                 scene.world.anatomy.seed, fit.branches_lifted, fit.max_dent_m * 1e3);
-  // branch names for wire_state_t and the log: the scene's phantom, same seed, same tree
+    spdlog::info("heart fitted under {}: {} branch(es) lifted clear, epicardium dented up to {:.1f} mm",
+                 anatomy.name, fit.branches_lifted, fit.max_dent_m * 1e3);
+  // branch names for wire_state_t and the log: the case's tree, the one physics runs on
   std::vector<std::string> names;
-  for (const auto& b : anatomy::make_coronary_phantom({scene.world.anatomy.seed}).branches) names.push_back(b.name);
+  for (const auto& b : anatomy.vessels.branches) names.push_back(b.name);
   branch_namer = [names](int i) { return i >= 0 && i < static_cast<int>(names.size()) ? names[i] : std::string(); };
   if (scene.xray) {
     const int64_t t1 = realtime::monotonic_ns();
-    impl_->xray = std::make_unique<XrayLoop>(scene, impl_->state, images);
+    impl_->xray = std::make_unique<XrayLoop>(scene, anatomy, impl_->state, images);
     spdlog::info("fluoroscopy ready in {:.0f} ms ({}x{} detector, {} fps, frames {})", (realtime::monotonic_ns() - t1) * 1e-6,
                  scene.xray->fluoro.c_arm.width, scene.xray->fluoro.c_arm.height, scene.xray->pulse_rate_fps,
                  images ? "published" : "not published");

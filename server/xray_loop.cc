@@ -3,18 +3,18 @@
 #include <cmath>
 #include <cstring>
 
-#include "anatomy/phantom/coronary_phantom.h"
+#include "xray/fluoro/case_background.h"
 #include "protocol/channels.h"
 #include "realtime/clock.h"
 #include "realtime/deadline_schedule.h"
 
 namespace pcisim::server {
 
-XrayLoop::XrayLoop(const Scene& scene, SharedState& state, lcm::LCM* images)
+XrayLoop::XrayLoop(const Scene& scene, const anatomy::Case& anatomy, SharedState& state, lcm::LCM* images)
     : spec_(*scene.xray), state_(state), images_(images) {
-  // the same seed gives the same tree the physics uses
-  const anatomy::VesselTree tree = anatomy::make_coronary_phantom({scene.world.anatomy.seed});
-  renderer_ = std::make_unique<xray::FluoroscopyRenderer>(tree, spec_.fluoro);
+  // the case physics runs on: its vessels for the contrast, its CT (or the thorax) behind them
+  renderer_ = std::make_unique<xray::FluoroscopyRenderer>(anatomy.vessels, xray::background_volume(anatomy, spec_.fluoro),
+                                                          spec_.fluoro);
   injections_.reserve(SharedState::kMaxInjections);
   state_.carm_primary_deg = state_.carm_target_primary_deg = spec_.initial_pose.primary_deg;
   state_.carm_secondary_deg = state_.carm_target_secondary_deg = spec_.initial_pose.secondary_deg;

@@ -6,6 +6,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
 
+#include "anatomy/case/case.h"
 #include "pcisim_lcm/xray_frame_t.hpp"
 #include "server/scene/scene.h"
 #include "server/shared_state.h"
@@ -15,8 +16,9 @@ namespace pcisim::server {
 
 class XrayLoop {
  public:
-  // builds the CT phantom and the projector (may take a second or two)
-  XrayLoop(const Scene& scene, SharedState& state, lcm::LCM* images);
+  // prepares the projector over the case's CT (or the thorax phantom around its vessels when the
+  // case has none); may take a second or two
+  XrayLoop(const Scene& scene, const anatomy::Case& anatomy, SharedState& state, lcm::LCM* images);
   void run();  // until state.stop
 
  private:

@@ -27,6 +27,9 @@ struct XraySpec {
 struct Scene {
   std::string name;
   std::string source;                 // file path, or "built-in"
+  // anatomy: a case folder (resolved against the scene file's folder), or "" for the procedural
+  // phantom of world.anatomy.seed (server/case_builder.h builds the one anatomy::Case)
+  std::string case_dir;
   double physics_rate_hz = 30.0;
   physics::WorldSpec world;
   haptics::HapticParams haptics;

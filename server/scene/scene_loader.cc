@@ -208,7 +208,16 @@ Scene parse(const nlohmann::json& doc, const std::string& source) {
   s.world.step_s = 1.0 / s.physics_rate_hz;
 
   json::JsonReader anatomy = top.child("anatomy");
+  // a case folder or a phantom seed, not both
+  if (anatomy.has("case") && anatomy.has("phantom_seed"))
+    anatomy.fail("case", "give either a case folder or a phantom_seed, not both");
   s.world.anatomy.seed = static_cast<uint32_t>(anatomy.integer("phantom_seed", 1, 0, 1 << 30));
+  if (anatomy.has("case")) {
+    const std::string dir = anatomy.text("case", "");
+    if (dir.empty()) anatomy.fail("case", "expected the path of a case folder");
+    const std::filesystem::path p(dir);
+    s.case_dir = p.is_absolute() || scene_dir.empty() ? p.string() : (std::filesystem::path(scene_dir) / p).string();
+  }
   anatomy.finish();
 
   s.haptics = read_haptics(top.child("haptics"));

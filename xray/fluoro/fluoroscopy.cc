@@ -6,7 +6,7 @@
 
 #include "xray/overlay/tube_overlay.h"
 #include "xray/overlay/wire_overlay.h"
-#include "anatomy/phantom/thorax_phantom.h"
+#include "xray/fluoro/case_background.h"
 
 namespace pcisim::xray {
 namespace {
@@ -16,14 +16,6 @@ bool same_geometry(const DetectorGeometry& a, const DetectorGeometry& b) {
          a.pixel_mm == b.pixel_mm && a.width == b.width && a.height == b.height;
 }
 
-anatomy::Volume make_background_volume(const anatomy::VesselTree& tree, const FluoroSpec& spec) {
-  anatomy::ThoraxPhantomSpec p;
-  p.seed = spec.seed;
-  p.dims = spec.volume_dims;
-  p.spacing_mm = spec.volume_spacing_mm;
-  p.contrast = false;  // blood-filled lumens: the iodine comes per frame, analytically
-  return anatomy::make_thorax_phantom(p, tree);
-}
 
 }  // namespace
 
@@ -42,16 +34,20 @@ struct FluoroscopyRenderer::Impl {
   std::vector<Eigen::Vector3d> wire_mm;
   WireSpec wire;
 
-  Impl(const anatomy::VesselTree& tree, const FluoroSpec& s)
+  Impl(const anatomy::VesselTree& tree, anatomy::Volume background, const FluoroSpec& s)
       : spec(s),
         bolus(tree, s.contrast),
-        drr(make_background_volume(tree, s), s.projector),
+        drr(std::move(background), s.projector),
         chain({.photons_per_pixel = s.photons_per_pixel, .blur_sigma_px = s.blur_sigma_px}),
         wire{.radius_mm = s.wire_radius_mm, .mu_per_mm = s.wire_mu_per_mm} {}
 };
 
 FluoroscopyRenderer::FluoroscopyRenderer(const anatomy::VesselTree& tree, const FluoroSpec& spec)
-    : impl_(std::make_unique<Impl>(tree, spec)) {}
+    : impl_(std::make_unique<Impl>(tree, thorax_background(tree, spec), spec)) {}
+
+FluoroscopyRenderer::FluoroscopyRenderer(const anatomy::VesselTree& tree, anatomy::Volume background,
+                                         const FluoroSpec& spec)
+    : impl_(std::make_unique<Impl>(tree, std::move(background), spec)) {}
 
 FluoroscopyRenderer::~FluoroscopyRenderer() = default;
 

@@ -80,6 +80,8 @@ class FluoroscopyRenderer {
  public:
   // builds the thorax phantom around `tree` and prepares the projector (seconds at most)
   FluoroscopyRenderer(const anatomy::VesselTree& tree, const FluoroSpec& spec);
+  // the same over a given background CT (a case's: xray/fluoro/case_background.h)
+  FluoroscopyRenderer(const anatomy::VesselTree& tree, anatomy::Volume background, const FluoroSpec& spec);
   ~FluoroscopyRenderer();
 
   // renders one frame into out; after the first frame of a given size nothing is allocated

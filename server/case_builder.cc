@@ -1,0 +1,25 @@
+#include "server/case_builder.h"
+
+#include "anatomy/case/case_folder.h"
+
+namespace pcisim::server {
+
+anatomy::PhantomCaseSpec phantom_case_spec(const Scene& scene) {
+  anatomy::PhantomCaseSpec p;
+  p.seed = scene.world.anatomy.seed;
+  const xray::FluoroSpec fluoro = scene.xray ? scene.xray->fluoro : xray::FluoroSpec{};
+  p.ct_seed = fluoro.seed;
+  p.ct_dims = fluoro.volume_dims;
+  p.ct_spacing_mm = fluoro.volume_spacing_mm;
+  p.ct_contrast = false;
+  return p;
+}
+
+std::shared_ptr<const anatomy::Case> build_case(const Scene& scene) {
+  if (!scene.case_dir.empty()) return std::make_shared<const anatomy::Case>(anatomy::read_case(scene.case_dir));
+  anatomy::PhantomCaseSpec p = phantom_case_spec(scene);
+  p.with_ct = scene.xray.has_value();  // only the X-ray thread needs the CT
+  return std::make_shared<const anatomy::Case>(anatomy::make_phantom_case(p));
+}
+
+}  // namespace pcisim::server

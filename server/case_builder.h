@@ -1,0 +1,20 @@
+#pragma once
+// The one place a scene's anatomy is built: its case folder read (and checked), or the procedural
+// phantom of its seed generated, once per scene. Physics, the X-ray thread and the status
+// messages all get this same value.
+#include <memory>
+
+#include "anatomy/case/case.h"
+#include "anatomy/phantom/phantom_case.h"
+#include "server/scene/scene.h"
+
+namespace pcisim::server {
+
+// what the phantom of this scene is: its seed; with a CT exactly where and as fine as the scene's
+// X-ray background wants it (blood in the lumens: the iodine comes per frame)
+anatomy::PhantomCaseSpec phantom_case_spec(const Scene& scene);
+
+// throws anatomy::CaseError (a case folder that is missing or wrong) naming the file and field
+std::shared_ptr<const anatomy::Case> build_case(const Scene& scene);
+
+}  // namespace pcisim::server

@@ -1,8 +1,19 @@
 #include "server/case_builder.h"
 
 #include "anatomy/case/case_folder.h"
+#ifdef PCISIM_HAVE_DICOM
+#include "anatomy/dicom/dicom_series.h"
+#endif
 
 namespace pcisim::server {
+
+anatomy::Case read_case_folder(const std::string& dir) {
+#ifdef PCISIM_HAVE_DICOM
+  return anatomy::read_case(dir, [](const std::string& folder) { return anatomy::read_dicom_series(folder); });
+#else
+  return anatomy::read_case(dir);
+#endif
+}
 
 anatomy::PhantomCaseSpec phantom_case_spec(const Scene& scene) {
   anatomy::PhantomCaseSpec p;
@@ -16,7 +27,7 @@ anatomy::PhantomCaseSpec phantom_case_spec(const Scene& scene) {
 }
 
 std::shared_ptr<const anatomy::Case> build_case(const Scene& scene) {
-  if (!scene.case_dir.empty()) return std::make_shared<const anatomy::Case>(anatomy::read_case(scene.case_dir));
+  if (!scene.case_dir.empty()) return std::make_shared<const anatomy::Case>(read_case_folder(scene.case_dir));
   anatomy::PhantomCaseSpec p = phantom_case_spec(scene);
   p.with_ct = scene.xray.has_value();  // only the X-ray thread needs the CT
   return std::make_shared<const anatomy::Case>(anatomy::make_phantom_case(p));

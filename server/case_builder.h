@@ -17,4 +17,7 @@ anatomy::PhantomCaseSpec phantom_case_spec(const Scene& scene);
 // throws anatomy::CaseError (a case folder that is missing or wrong) naming the file and field
 std::shared_ptr<const anatomy::Case> build_case(const Scene& scene);
 
+// a case folder, its CT possibly a DICOM series (when this build has the DICOM reader)
+anatomy::Case read_case_folder(const std::string& dir);
+
 }  // namespace pcisim::server

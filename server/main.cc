@@ -83,7 +83,7 @@ int main(int argc, char** argv) {
       // the phantom with its CT at the resolution the scene's fluoroscopy projects, so running on
       // the written case gives the frames the seed gives
       const pcisim::anatomy::Case c = scene.case_dir.empty() ? pcisim::anatomy::make_phantom_case(phantom_case_spec(scene))
-                                                            : pcisim::anatomy::read_case(scene.case_dir);
+                                                            : read_case_folder(scene.case_dir);
       pcisim::anatomy::write_case(c, write_case_dir);
       std::cout << "wrote case '" << c.name << "' to " << write_case_dir << " (" << c.vessels.branches.size()
                 << " branches, " << c.lumen.triangles.size() << " lumen triangles"

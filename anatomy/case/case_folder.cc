@@ -44,7 +44,8 @@ void check_vessels_inside(const VesselTree& tree, const Volume& ct, const std::s
       const Eigen::Vector3d p_mm = branch.points[i].position_m * 1e3;
       const Eigen::Vector3d ijk = ct.physical_to_index(p_mm);
       bool inside = true;
-      for (int a = 0; a < 3; ++a) inside = inside && ijk[a] >= -0.5 && ijk[a] <= ct.dims[a] - 0.5;
+      // (a thousandth of a voxel of slack: positions from DICOM text round)
+      for (int a = 0; a < 3; ++a) inside = inside && ijk[a] >= -0.501 && ijk[a] <= ct.dims[a] - 0.499;
       if (!inside)
         fail(vessels_file, fmt::format("branches[{}] ({}).points[{}]", b, branch.name, i),
              fmt::format("at ({:.1f}, {:.1f}, {:.1f}) mm, outside the CT {} (voxel index {:.1f}, {:.1f}, {:.1f} of "
@@ -89,14 +90,14 @@ void write_case(const Case& c, const std::string& dir_name) {
   if (!out) throw CaseError((dir / "case.json").string() + ": cannot write");
 }
 
-Case read_case(const std::string& dir_name) {
+Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom) {
   const fs::path dir(dir_name);
   const std::string case_json = (dir / "case.json").string();
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw CaseError(fmt::format("{}: not a case folder (no such directory)", dir_name));
   if (!fs::is_regular_file(case_json, ec)) throw CaseError(fmt::format("{}: missing (a case folder needs case.json)", case_json));
   Case c;
-  std::string vessels_file, ct_file;
+  std::string vessels_file, ct_file, ct_dicom;
   try {
     const Json doc = json::parse_json_checked(io::read_file(case_json), case_json);
     json::JsonReader r(doc, "");
@@ -114,7 +115,17 @@ Case read_case(const std::string& dir_name) {
     }
     if (r.has("ct")) {
       json::JsonReader ct = r.child("ct");
-      ct_file = member_file(dir, case_json, "ct.file", ct.text("file", ""));
+      // a volume file, or a DICOM series folder
+      if (ct.has("dicom") == ct.has("file")) ct.fail("file", "expected either \"file\" (NRRD/MetaImage) or \"dicom\" (a series folder)");
+      if (ct.has("file")) ct_file = member_file(dir, case_json, "ct.file", ct.text("file", ""));
+      if (ct.has("dicom")) {
+        const std::string name = ct.text("dicom", "");
+        if (name.empty() || fs::path(name).is_absolute() || name.find("..") != std::string::npos)
+          fail(case_json, "ct.dicom", fmt::format("'{}' must be a folder inside the case folder", name));
+        ct_dicom = (dir / name).string();
+        if (!fs::is_directory(ct_dicom, ec)) fail(case_json, "ct.dicom", fmt::format("folder '{}' not found in {}", name, dir.string()));
+        if (!read_dicom) fail(case_json, "ct.dicom", "this program was built without the DICOM reader (ITK)");
+      }
       c.ct_lumen_enhanced = ct.boolean("lumen_enhanced", true);
       ct.finish();
     }
@@ -151,8 +162,16 @@ Case read_case(const std::string& dir_name) {
     } catch (const VolumeIoError& e) {
       throw CaseError(e.what());
     }
-    check_vessels_inside(c.vessels, *c.ct, vessels_file, ct_file);
   }
+  if (!ct_dicom.empty()) {
+    try {
+      c.ct = read_dicom(ct_dicom);
+    } catch (const std::runtime_error& e) {
+      throw CaseError(e.what());
+    }
+    ct_file = ct_dicom;
+  }
+  if (c.ct) check_vessels_inside(c.vessels, *c.ct, vessels_file, ct_file);
   return c;
 }
 

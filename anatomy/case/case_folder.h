@@ -5,6 +5,7 @@
 //   ct.nrrd|.mha   optional CT in HU
 //   slicer/<branch>.mrk.json   each centerline as a 3D Slicer markups curve (written, not read)
 // Built only with nlohmann-json. Readers throw CaseError "<file>: <field>: <what>".
+#include <functional>
 #include <stdexcept>
 #include <string>
 
@@ -22,8 +23,13 @@ inline constexpr int kCaseVersion = 1;
 // writes the case into `dir` (created; files of the same names are replaced)
 void write_case(const Case& c, const std::string& dir);
 
+// how a CT given as a DICOM series folder ("ct": {"dicom": "ct/"}) is read: the DICOM reader
+// lives in its own library (anatomy/dicom, ITK), so the caller hands it in; without one such a
+// case is refused saying so
+using DicomFolderReader = std::function<Volume(const std::string& folder)>;
+
 // reads and checks a case folder: every named file present and readable, units "mm", frame "LPS",
 // the lumen closed and manifold, the CT with its spacing, every centerline point inside the CT
-Case read_case(const std::string& dir);
+Case read_case(const std::string& dir, const DicomFolderReader& read_dicom = nullptr);
 
 }  // namespace pcisim::anatomy

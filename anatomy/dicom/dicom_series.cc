@@ -1,0 +1,163 @@
+#include "anatomy/dicom/dicom_series.h"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <sstream>
+#include <vector>
+
+#include "anatomy/dicom/itk_dicom_io.h"
+
+namespace pcisim::anatomy {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Slice {
+  std::string file;
+  Eigen::Vector3d position_mm;           // ImagePositionPatient (0020,0032)
+  Eigen::Vector3d row_dir, column_dir;   // ImageOrientationPatient (0020,0037)
+  double row_spacing_mm = 0, column_spacing_mm = 0;  // PixelSpacing (0028,0030)
+  double along_normal_mm = 0;
+};
+
+// "a\b\c" as n numbers
+bool parse_backslashed(const std::string& text, int n, double* out) {
+  std::string s = text;
+  std::replace(s.begin(), s.end(), '\\', ' ');
+  std::istringstream in(s);
+  for (int i = 0; i < n; ++i)
+    if (!(in >> out[i]) || !std::isfinite(out[i])) return false;
+  return true;
+}
+
+// the geometry tags of one file, without its pixels
+Slice read_slice_header(const std::string& file) {
+  std::vector<std::string> tags;
+  try {
+    tags = itk_io::read_tags(file, {"0020|0032", "0020|0037", "0028|0030"});
+  } catch (const std::runtime_error& e) {
+    throw DicomError(file + ": " + e.what());
+  }
+  Slice s;
+  s.file = file;
+  double p[3], o[6], px[2];
+  if (!parse_backslashed(tags[0], 3, p))
+    throw DicomError(file + ": ImagePositionPatient (0020,0032) missing or not three numbers");
+  if (!parse_backslashed(tags[1], 6, o))
+    throw DicomError(file + ": ImageOrientationPatient (0020,0037) missing or not six numbers");
+  if (!parse_backslashed(tags[2], 2, px) || !(px[0] > 0 && px[1] > 0))
+    throw DicomError(file + ": PixelSpacing (0028,0030) missing or not two positive numbers");
+  s.position_mm = {p[0], p[1], p[2]};
+  s.row_dir = Eigen::Vector3d(o[0], o[1], o[2]).normalized();
+  s.column_dir = Eigen::Vector3d(o[3], o[4], o[5]).normalized();
+  s.row_spacing_mm = px[0];     // between rows: along the column direction
+  s.column_spacing_mm = px[1];  // between columns: along the row direction
+  return s;
+}
+
+std::string name_of(const std::string& file) { return fs::path(file).filename().string(); }
+
+// every slice like the first, stacked along its normal at one spacing; returns that spacing
+double check_stack(std::vector<Slice>& slices, const std::string& folder) {
+  const Slice& first = slices.front();
+  const Eigen::Vector3d normal = first.row_dir.cross(first.column_dir);
+  if (std::abs(first.row_dir.dot(first.column_dir)) > 1e-3 || normal.norm() < 0.99)
+    throw DicomError(first.file + ": ImageOrientationPatient: row and column directions are not orthogonal unit vectors");
+  for (auto& s : slices) {
+    if ((s.row_dir - first.row_dir).norm() > 1e-4 || (s.column_dir - first.column_dir).norm() > 1e-4)
+      throw DicomError(s.file + ": ImageOrientationPatient differs from " + name_of(first.file) + "'s");
+    if (std::abs(s.row_spacing_mm - first.row_spacing_mm) > 1e-4 * first.row_spacing_mm ||
+        std::abs(s.column_spacing_mm - first.column_spacing_mm) > 1e-4 * first.column_spacing_mm)
+      throw DicomError(s.file + ": PixelSpacing differs from " + name_of(first.file) + "'s");
+    s.along_normal_mm = normal.dot(s.position_mm);
+  }
+  std::sort(slices.begin(), slices.end(), [](const Slice& a, const Slice& b) { return a.along_normal_mm < b.along_normal_mm; });
+  std::vector<double> gaps;
+  for (size_t i = 1; i < slices.size(); ++i) gaps.push_back(slices[i].along_normal_mm - slices[i - 1].along_normal_mm);
+  std::vector<double> sorted = gaps;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const double spacing = sorted[sorted.size() / 2];
+  if (!(spacing > 1e-3)) throw DicomError(folder + ": slices share positions (spacing " + fmt::format("{:.3f}", spacing) + " mm)");
+  const double tolerance = std::max(0.01 * spacing, 0.01);
+  for (size_t i = 0; i < gaps.size(); ++i) {
+    if (std::abs(gaps[i] - spacing) > tolerance)
+      throw DicomError(fmt::format("{}: gap of {:.2f} mm after the previous slice ({}), the series' spacing is {:.2f} mm "
+                                   "(a missing slice or uneven spacing)",
+                                   slices[i + 1].file, gaps[i], name_of(slices[i].file), spacing));
+    // stacked straight along the normal (no gantry tilt: a sheared grid is not a Volume)
+    const Eigen::Vector3d offset = slices[i + 1].position_mm - first.position_mm;
+    if ((offset - normal * normal.dot(offset)).norm() > tolerance)
+      throw DicomError(slices[i + 1].file + ": not stacked along the slice normal (gantry tilt or a shifted slice)");
+  }
+  return spacing;
+}
+
+}  // namespace
+
+Volume read_dicom_series(const std::string& folder, const std::string& series_uid) {
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec)) throw DicomError(folder + ": not a folder");
+  try {
+    // the series in the folder, by SeriesInstanceUID
+    const std::vector<std::string> uids = itk_io::series_uids(folder);
+    if (uids.empty()) throw DicomError(folder + ": no DICOM series found");
+    std::string uid = series_uid;
+    if (uid.empty()) {
+      if (uids.size() > 1)
+        throw DicomError(fmt::format("{}: {} series found ({}): name one", folder, uids.size(), fmt::join(uids, ", ")));
+      uid = uids.front();
+    } else if (std::find(uids.begin(), uids.end(), uid) == uids.end()) {
+      throw DicomError(fmt::format("{}: no series {} (found: {})", folder, uid, fmt::join(uids, ", ")));
+    }
+    const std::vector<std::string> files = itk_io::series_files(folder, uid);
+    if (files.size() < 2) throw DicomError(fmt::format("{}: series {} has {} slice(s), a CT needs at least 2", folder, uid, files.size()));
+
+    // geometry first, from every file's own tags
+    std::vector<Slice> slices;
+    for (const auto& f : files) slices.push_back(read_slice_header(f));
+    const double slice_spacing_mm = check_stack(slices, folder);
+
+    // then the voxels, in that order (rescale slope and intercept applied by the IO)
+    std::vector<std::string> ordered;
+    for (const auto& s : slices) ordered.push_back(s.file);
+    std::array<int64_t, 3> dims{};
+    const std::vector<float> voxels = itk_io::read_voxels(ordered, &dims);
+    if (dims[2] != int64_t(slices.size()))
+      throw DicomError(fmt::format("{}: {} slices read from {} files (multi-frame files are not supported)", folder, dims[2], slices.size()));
+
+    const Slice& first = slices.front();
+    Volume v;
+    v.dims = dims;
+    v.spacing_mm = {first.column_spacing_mm, first.row_spacing_mm, slice_spacing_mm};
+    v.origin_mm = first.position_mm;
+    v.direction.col(0) = first.row_dir;
+    v.direction.col(1) = first.column_dir;
+    v.direction.col(2) = first.row_dir.cross(first.column_dir);
+    const float* px = voxels.data();
+    const int64_t n = v.voxel_count();
+    bool fits_int16 = true;
+    for (int64_t i = 0; i < n && fits_int16; ++i)
+      fits_int16 = px[i] == std::round(px[i]) && px[i] >= -32768.f && px[i] <= 32767.f;
+    v.type = fits_int16 ? VoxelType::kInt16 : VoxelType::kFloat32;
+    if (fits_int16) {
+      v.hu_i16.resize(n);
+      for (int64_t i = 0; i < n; ++i) v.hu_i16[i] = static_cast<int16_t>(px[i]);
+    } else {
+      v.hu_f32.assign(px, px + n);
+    }
+    if (const std::string why = validate(v); !why.empty()) throw DicomError(folder + ": " + why);
+    return v;
+  } catch (const DicomError&) {
+    throw;
+  } catch (const std::runtime_error& e) {
+    throw DicomError(folder + ": " + e.what());
+  }
+}
+
+}  // namespace pcisim::anatomy

@@ -14,4 +14,13 @@ inline void require(bool ok, const std::string& what) {
 // finite and within [lo, hi]
 inline bool in(double x, double lo, double hi) { return std::isfinite(x) && x >= lo && x <= hi; }
 
+// a parameter's allowed range, defined once beside its params struct: the component validates
+// with it and the scene loader reads with it, so the two cannot disagree
+struct ParamRange {
+  double min, max;
+  bool contains(double x) const { return in(x, min, max); }
+  // "[min, max]", shortest form ("[0, 90]")
+  std::string describe() const;
+};
+
 }  // namespace pcisim::physics

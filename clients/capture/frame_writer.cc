@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <unistd.h>
 
-#include "clients/capture/png16.h"
+#include "png/png_gray.h"
 
 namespace pcisim::clients {
 namespace fs = std::filesystem;
@@ -68,7 +68,7 @@ std::string FrameWriter::write(const pcisim_lcm::xray_frame_t& f) {
   const fs::path png_tmp = dir / fmt::format(".frame_{:06d}.png.tmp", f.seq);
   const fs::path json_tmp = dir / fmt::format(".frame_{:06d}.json.tmp", f.seq);
   try {
-    write_png16(png_tmp.string(), f.width, f.height, reinterpret_cast<const uint16_t*>(f.data.data()));
+    png::write_png_gray16(png_tmp.string(), f.width, f.height, reinterpret_cast<const uint16_t*>(f.data.data()));
     std::ofstream out(json_tmp);
     out << sidecar(f).dump(1) << "\n";
     out.flush();

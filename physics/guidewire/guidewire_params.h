@@ -2,6 +2,8 @@
 // Scene parameters of the guidewire effects (chain-mail paper, sections III-V).
 // Defaults describe a 0.014" workhorse wire with a soft angled tip.
 
+#include "physics/param_checks.h"
+
 namespace pcisim::physics {
 
 struct GuidewireParams {
@@ -14,8 +16,8 @@ struct GuidewireParams {
   // alpha_min in [0.5, 1], alpha_max in [1, 2]. beta: largest bend of a link away from its rest
   // direction, in degrees per millimetre of wire (scaled by the link length, but never below
   // 1.5 mm of wire, so a segment sweep keeps the same wire: see link_spec.cc), [0, 90].
-  double body_alpha_min = 0.98, body_alpha_max = 1.02, body_beta_deg = 15.0;
-  double tip_alpha_min = 0.95, tip_alpha_max = 1.05, tip_beta_deg = 40.0;
+  double body_alpha_min = 0.98, body_alpha_max = 1.02, body_beta_deg_per_mm = 15.0;
+  double tip_alpha_min = 0.95, tip_alpha_max = 1.05, tip_beta_deg_per_mm = 40.0;
   // haptic force (eqs 19-20): axial stiffness of the wire's refused feed and first link, N/m,
   // [0, 1e5]; damping along insertion, N s/m, [0, 100]
   double axial_stiffness_n_per_m = 200.0;
@@ -24,6 +26,20 @@ struct GuidewireParams {
   double torsional_rigidity_nm2 = 1.2e-5;
   double torsion_damping_nm_s_per_rad = 1e-5;
 };
+
+// each field's range, the one source for validate() (link_spec.cc) and the scene loader
+inline constexpr ParamRange kGuidewireLengthM{0.02, 2.0};
+inline constexpr ParamRange kGuidewireSegments{4, 4000};
+inline constexpr ParamRange kGuidewireOptimisationPasses{0, 64};
+inline constexpr ParamRange kGuidewireTipLengthM{0.0, 0.1};  // and below length_m
+inline constexpr ParamRange kGuidewireTipAngleDeg{0, 180};
+inline constexpr ParamRange kGuidewireAlphaMin{0.5, 1.0};
+inline constexpr ParamRange kGuidewireAlphaMax{1.0, 2.0};
+inline constexpr ParamRange kGuidewireBetaDegPerMm{0, 90};
+inline constexpr ParamRange kGuidewireAxialStiffnessNPerM{0, 1e5};
+inline constexpr ParamRange kGuidewireAxialDampingNSPerM{0, 100};
+inline constexpr ParamRange kGuidewireTorsionalRigidityNm2{0, 1e-2};
+inline constexpr ParamRange kGuidewireTorsionDampingNmSPerRad{0, 1};
 
 struct VesselContactParams {
   double sdf_spacing_m = 0.2e-3;     // SDF grid spacing

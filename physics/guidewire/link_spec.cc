@@ -26,26 +26,25 @@ void check(bool ok, const char* field, const char* expected) {
 }  // namespace
 
 void validate(const GuidewireParams& p) {
-  check(std::isfinite(p.length_m) && p.length_m > 0.0 && p.length_m <= 2.0, "length_m", "(0, 2]");
-  check(p.segment_count >= 4 && p.segment_count <= 4000, "segment_count", "[4, 4000]");
-  check(p.optimisation_passes >= 0 && p.optimisation_passes <= 64, "optimisation_passes", "[0, 64]");
-  check(std::isfinite(p.tip_length_m) && p.tip_length_m >= 0.0 && p.tip_length_m < p.length_m,
-        "tip_length_m", "[0, length_m)");
-  check(p.tip_angle_deg >= 0.0 && p.tip_angle_deg <= 180.0, "tip_angle_deg", "[0, 180]");
-  check(p.body_alpha_min >= 0.5 && p.body_alpha_min <= 1.0, "body_alpha_min", "[0.5, 1]");
-  check(p.body_alpha_max >= 1.0 && p.body_alpha_max <= 2.0, "body_alpha_max", "[1, 2]");
-  check(p.tip_alpha_min >= 0.5 && p.tip_alpha_min <= 1.0, "tip_alpha_min", "[0.5, 1]");
-  check(p.tip_alpha_max >= 1.0 && p.tip_alpha_max <= 2.0, "tip_alpha_max", "[1, 2]");
-  check(p.body_beta_deg >= 0.0 && p.body_beta_deg <= 90.0, "body_beta_deg", "[0, 90]");
-  check(p.tip_beta_deg >= 0.0 && p.tip_beta_deg <= 90.0, "tip_beta_deg", "[0, 90]");
-  check(p.axial_stiffness_n_per_m >= 0.0 && p.axial_stiffness_n_per_m <= 1e5,
-        "axial_stiffness_n_per_m", "[0, 1e5]");
-  check(p.axial_damping_n_s_per_m >= 0.0 && p.axial_damping_n_s_per_m <= 100.0,
-        "axial_damping_n_s_per_m", "[0, 100]");
-  check(p.torsional_rigidity_nm2 >= 0.0 && p.torsional_rigidity_nm2 <= 1e-2,
-        "torsional_rigidity_nm2", "[0, 1e-2]");
-  check(p.torsion_damping_nm_s_per_rad >= 0.0 && p.torsion_damping_nm_s_per_rad <= 1.0,
-        "torsion_damping_nm_s_per_rad", "[0, 1]");
+  auto in_range = [](double v, const ParamRange& r, const char* field) {
+    check(r.contains(v), field, r.describe().c_str());
+  };
+  in_range(p.length_m, kGuidewireLengthM, "length_m");
+  in_range(p.segment_count, kGuidewireSegments, "segment_count");
+  in_range(p.optimisation_passes, kGuidewireOptimisationPasses, "optimisation_passes");
+  in_range(p.tip_length_m, kGuidewireTipLengthM, "tip_length_m");
+  check(p.tip_length_m < p.length_m, "tip_length_m", "below length_m");
+  in_range(p.tip_angle_deg, kGuidewireTipAngleDeg, "tip_angle_deg");
+  in_range(p.body_alpha_min, kGuidewireAlphaMin, "body_alpha_min");
+  in_range(p.body_alpha_max, kGuidewireAlphaMax, "body_alpha_max");
+  in_range(p.tip_alpha_min, kGuidewireAlphaMin, "tip_alpha_min");
+  in_range(p.tip_alpha_max, kGuidewireAlphaMax, "tip_alpha_max");
+  in_range(p.body_beta_deg_per_mm, kGuidewireBetaDegPerMm, "body_beta_deg_per_mm");
+  in_range(p.tip_beta_deg_per_mm, kGuidewireBetaDegPerMm, "tip_beta_deg_per_mm");
+  in_range(p.axial_stiffness_n_per_m, kGuidewireAxialStiffnessNPerM, "axial_stiffness_n_per_m");
+  in_range(p.axial_damping_n_s_per_m, kGuidewireAxialDampingNSPerM, "axial_damping_n_s_per_m");
+  in_range(p.torsional_rigidity_nm2, kGuidewireTorsionalRigidityNm2, "torsional_rigidity_nm2");
+  in_range(p.torsion_damping_nm_s_per_rad, kGuidewireTorsionDampingNmSPerRad, "torsion_damping_nm_s_per_rad");
 }
 
 std::vector<LinkSpec> make_link_specs(const GuidewireParams& p) {
@@ -69,7 +68,7 @@ std::vector<LinkSpec> make_link_specs(const GuidewireParams& p) {
     l.length_max_m = (l.tip ? p.tip_alpha_max : p.body_alpha_max) * h;
     // beta is given per millimetre of wire, resolved over at least kShearLengthM; a link never
     // bends more than a right angle
-    l.beta_rad = std::min((l.tip ? p.tip_beta_deg : p.body_beta_deg) * kDeg * shear_mm, std::numbers::pi / 2);
+    l.beta_rad = std::min((l.tip ? p.tip_beta_deg_per_mm : p.body_beta_deg_per_mm) * kDeg * shear_mm, std::numbers::pi / 2);
     l.cos_beta = std::cos(l.beta_rad);
     l.bend_rad = l.tip ? bend_per_link : 0.0;
     l.cos_bend = std::cos(l.bend_rad);

@@ -25,30 +25,26 @@ constexpr double kDensityKgPerM3 = 1050.0;  // myocardium
 constexpr double kAvPlaneZM = 0.030;
 
 // no strings unless it fails: set_rate_bpm runs between steps and must not allocate
-void check(bool ok, const char* field, const char* rule, double value) {
-  if (!ok)
-    throw std::invalid_argument(std::string("heart_beat.") + field + " must be " + rule + ", got " + std::to_string(value));
+void check(const ParamRange& range, double value, const char* field) {
+  if (!range.contains(value))
+    throw std::invalid_argument(std::string("heart_beat.") + field + " must be in " + range.describe() + ", got " +
+                                std::to_string(value));
 }
 
-void validate_rate(double rate_bpm) { check(rate_bpm > 0.0 && rate_bpm <= 400.0, "rate_bpm", "in (0, 400]", rate_bpm); }
+void validate_rate(double rate_bpm) { check(kHeartRateBpm, rate_bpm, "rate_bpm"); }
 
 void validate(const HeartBeatParams& p) {
   validate_rate(p.rate_bpm);
-  check(p.substeps >= 1 && p.substeps <= 1000, "substeps", "in [1, 1000]", p.substeps);
-  check(p.iterations >= 1 && p.iterations <= 1000, "iterations", "in [1, 1000]", p.iterations);
-  check(p.sor_w >= 1.0 && p.sor_w <= 2.0, "sor_w", "in [1, 2]", p.sor_w);
-  check(p.stretch_compliance_m_per_n >= 0.0 && std::isfinite(p.stretch_compliance_m_per_n),
-        "stretch_compliance_m_per_n", "finite and >= 0", p.stretch_compliance_m_per_n);
-  check(p.bend_compliance_per_n_m >= 0.0 && std::isfinite(p.bend_compliance_per_n_m), "bend_compliance_per_n_m",
-        "finite and >= 0", p.bend_compliance_per_n_m);
-  check(p.shape_compliance_s2 >= 0.0 && std::isfinite(p.shape_compliance_s2), "shape_compliance_s2",
-        "finite and >= 0", p.shape_compliance_s2);
-  check(p.damping_per_s >= 0.0 && std::isfinite(p.damping_per_s), "damping_per_s", "finite and >= 0",
-        p.damping_per_s);
+  check(kHeartSubsteps, p.substeps, "substeps");
+  check(kHeartIterations, p.iterations, "iterations");
+  check(kHeartSorW, p.sor_w, "sor_w");
+  check(kHeartStretchComplianceMPerN, p.stretch_compliance_m_per_n, "stretch_compliance_m_per_n");
+  check(kHeartBendCompliancePerNM, p.bend_compliance_per_n_m, "bend_compliance_per_n_m");
+  check(kHeartShapeComplianceS2, p.shape_compliance_s2, "shape_compliance_s2");
+  check(kHeartDampingPerS, p.damping_per_s, "damping_per_s");
   // local clusters smaller than a few tet edges hold too few particles to match a shape (and a
   // grid of sub-millimetre cubes over the heart would take for ever to fill)
-  check(p.cluster_size_m == 0.0 || (p.cluster_size_m >= kMinClusterSizeM && p.cluster_size_m <= 0.2),
-        "cluster_size_m", "0 (the global cluster only) or in [0.005, 0.2] m", p.cluster_size_m);
+  if (p.cluster_size_m != 0.0) check(kHeartClusterSizeM, p.cluster_size_m, "cluster_size_m");
 }
 
 HeartMotion load_motion(const HeartBeatParams& p) {

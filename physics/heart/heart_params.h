@@ -2,6 +2,7 @@
 // What a scene sets for the beating heart (effect `heart_beat`). Units are in the names.
 #include <string>
 
+#include "physics/param_checks.h"
 #include "physics/pbd/pbd_params.h"
 
 namespace pcisim::physics {
@@ -34,5 +35,18 @@ struct HeartBeatParams {
 };
 
 inline constexpr double kMinClusterSizeM = 0.005;
+
+// each field's range, the one source for BeatingHeart and the scene loader. Substeps reach 256
+// for the benchmark's converged reference (bench/heart_bench.cc); a scene may ask as many and
+// then overruns its step, which the physics loop counts
+inline constexpr ParamRange kHeartRateBpm{20, 250};
+inline constexpr ParamRange kHeartSubsteps{1, 256};
+inline constexpr ParamRange kHeartIterations{1, 200};
+inline constexpr ParamRange kHeartSorW{1, 2};
+inline constexpr ParamRange kHeartStretchComplianceMPerN{0, 1};
+inline constexpr ParamRange kHeartBendCompliancePerNM{0, 100};
+inline constexpr ParamRange kHeartShapeComplianceS2{0, 1};
+inline constexpr ParamRange kHeartDampingPerS{0, 1000};
+inline constexpr ParamRange kHeartClusterSizeM{kMinClusterSizeM, 0.2};  // or 0: the global cluster only
 
 }  // namespace pcisim::physics

@@ -15,23 +15,36 @@ namespace {
 
 constexpr double kMm = 1e-3;
 
+// a number within the component's own range (physics/*_params.h), in the scene's unit
+double in_range(json::JsonReader& r, const std::string& key, double fallback, const physics::ParamRange& range,
+                double scene_unit = 1.0) {
+  return r.number(key, fallback / scene_unit, range.min / scene_unit, range.max / scene_unit) * scene_unit;
+}
+int in_range(json::JsonReader& r, const std::string& key, int fallback, const physics::ParamRange& range) {
+  return r.integer(key, fallback, static_cast<int>(range.min), static_cast<int>(range.max));
+}
+
 physics::GuidewireParams read_guidewire(json::JsonReader r) {
   physics::GuidewireParams p;
-  p.length_m = r.number("length_mm", p.length_m / kMm, 20, 2000) * kMm;
-  p.segment_count = r.integer("segments", p.segment_count, 4, 4000);
-  p.optimisation_passes = r.integer("optimisation_passes", p.optimisation_passes, 0, 64);
-  p.tip_length_m = r.number("tip_length_mm", p.tip_length_m / kMm, 0, 100) * kMm;
-  p.tip_angle_deg = r.number("tip_angle_deg", p.tip_angle_deg, 0, 180);
-  p.body_alpha_min = r.number("body_alpha_min", p.body_alpha_min, 0.5, 1.0);
-  p.body_alpha_max = r.number("body_alpha_max", p.body_alpha_max, 1.0, 2.0);
-  p.body_beta_deg = r.number("body_beta_deg_per_mm", p.body_beta_deg, 0, 90);
-  p.tip_alpha_min = r.number("tip_alpha_min", p.tip_alpha_min, 0.5, 1.0);
-  p.tip_alpha_max = r.number("tip_alpha_max", p.tip_alpha_max, 1.0, 2.0);
-  p.tip_beta_deg = r.number("tip_beta_deg_per_mm", p.tip_beta_deg, 0, 90);
-  p.axial_stiffness_n_per_m = r.number("axial_stiffness_n_per_m", p.axial_stiffness_n_per_m, 0, 1e5);
-  p.axial_damping_n_s_per_m = r.number("axial_damping_n_s_per_m", p.axial_damping_n_s_per_m, 0, 100);
-  p.torsional_rigidity_nm2 = r.number("torsional_rigidity_nm2", p.torsional_rigidity_nm2, 0, 1e-2);
-  p.torsion_damping_nm_s_per_rad = r.number("torsion_damping_nm_s_per_rad", p.torsion_damping_nm_s_per_rad, 0, 1);
+  p.length_m = in_range(r, "length_mm", p.length_m, physics::kGuidewireLengthM, kMm);
+  p.segment_count = in_range(r, "segments", p.segment_count, physics::kGuidewireSegments);
+  p.optimisation_passes = in_range(r, "optimisation_passes", p.optimisation_passes, physics::kGuidewireOptimisationPasses);
+  p.tip_length_m = in_range(r, "tip_length_mm", p.tip_length_m, physics::kGuidewireTipLengthM, kMm);
+  p.tip_angle_deg = in_range(r, "tip_angle_deg", p.tip_angle_deg, physics::kGuidewireTipAngleDeg);
+  p.body_alpha_min = in_range(r, "body_alpha_min", p.body_alpha_min, physics::kGuidewireAlphaMin);
+  p.body_alpha_max = in_range(r, "body_alpha_max", p.body_alpha_max, physics::kGuidewireAlphaMax);
+  p.body_beta_deg_per_mm = in_range(r, "body_beta_deg_per_mm", p.body_beta_deg_per_mm, physics::kGuidewireBetaDegPerMm);
+  p.tip_alpha_min = in_range(r, "tip_alpha_min", p.tip_alpha_min, physics::kGuidewireAlphaMin);
+  p.tip_alpha_max = in_range(r, "tip_alpha_max", p.tip_alpha_max, physics::kGuidewireAlphaMax);
+  p.tip_beta_deg_per_mm = in_range(r, "tip_beta_deg_per_mm", p.tip_beta_deg_per_mm, physics::kGuidewireBetaDegPerMm);
+  p.axial_stiffness_n_per_m =
+      in_range(r, "axial_stiffness_n_per_m", p.axial_stiffness_n_per_m, physics::kGuidewireAxialStiffnessNPerM);
+  p.axial_damping_n_s_per_m =
+      in_range(r, "axial_damping_n_s_per_m", p.axial_damping_n_s_per_m, physics::kGuidewireAxialDampingNSPerM);
+  p.torsional_rigidity_nm2 =
+      in_range(r, "torsional_rigidity_nm2", p.torsional_rigidity_nm2, physics::kGuidewireTorsionalRigidityNm2);
+  p.torsion_damping_nm_s_per_rad = in_range(r, "torsion_damping_nm_s_per_rad", p.torsion_damping_nm_s_per_rad,
+                                            physics::kGuidewireTorsionDampingNmSPerRad);
   r.finish();
   if (p.tip_length_m >= p.length_m) r.fail("tip_length_mm", "expected less than length_mm");
   return p;
@@ -71,7 +84,7 @@ physics::BloodFlowParams read_blood_flow(json::JsonReader r) {
 
 physics::HeartBeatParams read_heart_beat(json::JsonReader r, const std::string& scene_dir) {
   physics::HeartBeatParams p;
-  p.rate_bpm = r.number("rate_bpm", p.rate_bpm, 20, 250);
+  p.rate_bpm = in_range(r, "rate_bpm", p.rate_bpm, physics::kHeartRateBpm);
   p.motion_file = r.text("motion_file", "");
   // a relative motion file is found beside the scene file
   if (!p.motion_file.empty() && !scene_dir.empty() && std::filesystem::path(p.motion_file).is_relative())
@@ -79,18 +92,19 @@ physics::HeartBeatParams read_heart_beat(json::JsonReader r, const std::string& 
   std::error_code ec;
   if (!p.motion_file.empty() && (!std::filesystem::is_regular_file(p.motion_file, ec) || ec))
     r.fail("motion_file", fmt::format("expected a heart motion file (docs/heart.md), cannot read \"{}\"", p.motion_file));
-  p.substeps = r.integer("substeps", p.substeps, 1, 64);
-  p.iterations = r.integer("iterations", p.iterations, 1, 200);
+  p.substeps = in_range(r, "substeps", p.substeps, physics::kHeartSubsteps);
+  p.iterations = in_range(r, "iterations", p.iterations, physics::kHeartIterations);
   const std::string solver = r.text("solver", "jacobi", {"jacobi", "gauss_seidel", "jacobi_cuda"});
   p.solver = solver == "jacobi"        ? physics::pbd::SolverKind::kJacobi
              : solver == "jacobi_cuda" ? physics::pbd::SolverKind::kJacobiCuda
                                        : physics::pbd::SolverKind::kGaussSeidel;
-  p.sor_w = r.number("sor_w", p.sor_w, 1, 2);
-  p.stretch_compliance_m_per_n = r.number("stretch_compliance_m_per_n", p.stretch_compliance_m_per_n, 0, 1);
-  p.bend_compliance_per_n_m = r.number("bend_compliance_per_n_m", p.bend_compliance_per_n_m, 0, 100);
-  p.shape_compliance_s2 = r.number("shape_compliance_s2", p.shape_compliance_s2, 0, 1);
-  p.damping_per_s = r.number("damping_per_s", p.damping_per_s, 0, 1000);
-  p.cluster_size_m = r.number("cluster_size_mm", p.cluster_size_m / kMm, 0, 200) * kMm;
+  p.sor_w = in_range(r, "sor_w", p.sor_w, physics::kHeartSorW);
+  p.stretch_compliance_m_per_n =
+      in_range(r, "stretch_compliance_m_per_n", p.stretch_compliance_m_per_n, physics::kHeartStretchComplianceMPerN);
+  p.bend_compliance_per_n_m = in_range(r, "bend_compliance_per_n_m", p.bend_compliance_per_n_m, physics::kHeartBendCompliancePerNM);
+  p.shape_compliance_s2 = in_range(r, "shape_compliance_s2", p.shape_compliance_s2, physics::kHeartShapeComplianceS2);
+  p.damping_per_s = in_range(r, "damping_per_s", p.damping_per_s, physics::kHeartDampingPerS);
+  p.cluster_size_m = r.number("cluster_size_mm", p.cluster_size_m / kMm, 0, physics::kHeartClusterSizeM.max / kMm) * kMm;
   if (p.cluster_size_m > 0.0 && p.cluster_size_m < physics::kMinClusterSizeM)
     r.fail("cluster_size_mm",
            fmt::format("expected 0 (the global cluster only) or a number in [5, 200], got {}", p.cluster_size_m / kMm));

@@ -26,13 +26,14 @@ const std::map<std::string, std::vector<std::string>>& allowed() {
       {"anatomy", {"json"}},
       {"realtime", {}},
       {"json", {}},
+      {"png", {}},
       {"physics", {"anatomy"}},
       {"haptics", {"physics/local_force_model.h"}},
-      {"xray", {"anatomy"}},
+      {"xray", {"anatomy", "png"}},
       {"modeling", {"anatomy"}},
       {"protocol", {"pcisim_lcm"}},
-      {"server", {"anatomy", "physics", "haptics", "xray", "protocol", "pcisim_lcm", "realtime", "json"}},
-      {"clients", {"protocol", "pcisim_lcm", "realtime", "json", "anatomy"}},
+      {"server", {"anatomy", "physics", "haptics", "xray", "protocol", "pcisim_lcm", "realtime", "json", "png"}},
+      {"clients", {"protocol", "pcisim_lcm", "realtime", "json", "anatomy", "png"}},
   };
   return rules;
 }

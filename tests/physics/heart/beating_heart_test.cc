@@ -58,7 +58,7 @@ TEST(HeartBeating, BuildsTheTemplate) {
 TEST(HeartBeating, ParamsAreCheckedByName) {
   HeartBeatParams p;
   p.rate_bpm = 0;
-  EXPECT_EQ(construct_error(p).rfind("heart_beat.rate_bpm must be in (0, 400]", 0), 0u) << construct_error(p);
+  EXPECT_EQ(construct_error(p).rfind("heart_beat.rate_bpm must be in [20, 250], got 0", 0), 0u) << construct_error(p);
   p = {};
   p.iterations = 0;
   EXPECT_EQ(construct_error(p).rfind("heart_beat.iterations", 0), 0u);

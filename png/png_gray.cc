@@ -1,0 +1,64 @@
+#include "png/png_gray.h"
+
+#include <fmt/format.h>
+#include <png.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+#include <vector>
+
+namespace pcisim::png {
+namespace {
+
+// one grey image, `bits` per sample; row(r, out) fills row r as PNG stores it
+template <class RowFn>
+void write_gray(const std::string& path, int width, int height, int bits, int level, RowFn row_of) {
+  if (width <= 0 || height <= 0) throw std::runtime_error(fmt::format("{}: empty image ({}x{})", path, width, height));
+  FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) throw std::runtime_error(fmt::format("{}: cannot write: {}", path, std::strerror(errno)));
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png ? png_create_info_struct(png) : nullptr;
+  std::vector<uint8_t> row(static_cast<size_t>(width) * bits / 8);
+  bool ok = png && info && !setjmp(png_jmpbuf(png));
+  if (ok) {
+    png_init_io(png, f);
+    png_set_IHDR(png, info, width, height, bits, PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+                 PNG_FILTER_TYPE_DEFAULT);
+    if (level >= 0) png_set_compression_level(png, level);
+    png_write_info(png, info);
+    for (int r = 0; r < height; ++r) {
+      row_of(r, row.data());
+      png_write_row(png, row.data());
+    }
+    png_write_end(png, nullptr);
+  }
+  png_destroy_write_struct(&png, &info);
+  const bool flushed = std::fflush(f) == 0 && !std::ferror(f);
+  const int saved = errno;
+  const bool closed = std::fclose(f) == 0;
+  if (!ok || !flushed || !closed)
+    throw std::runtime_error(fmt::format("{}: writing the PNG failed: {}", path, std::strerror(saved ? saved : EIO)));
+}
+
+}  // namespace
+
+void write_png_gray16(const std::string& path, int width, int height, const uint16_t* pixels, bool fast) {
+  // png stores 16-bit samples big-endian
+  write_gray(path, width, height, 16, fast ? 1 : -1, [&](int r, uint8_t* out) {
+    const uint16_t* src = pixels + static_cast<size_t>(r) * width;
+    for (int c = 0; c < width; ++c) {
+      out[2 * c] = static_cast<uint8_t>(src[c] >> 8);
+      out[2 * c + 1] = static_cast<uint8_t>(src[c] & 0xff);
+    }
+  });
+}
+
+void write_png_gray8(const std::string& path, int width, int height, const uint8_t* pixels) {
+  write_gray(path, width, height, 8, -1, [&](int r, uint8_t* out) {
+    std::memcpy(out, pixels + static_cast<size_t>(r) * width, static_cast<size_t>(width));
+  });
+}
+
+}  // namespace pcisim::png

@@ -1,0 +1,15 @@
+#pragma once
+// Grey PNG files (libpng): 16-bit frames, the format labelled fluoroscopy datasets keep, and 8-bit
+// pictures for people. The one PNG writer of pcisim: the X-ray tools, the capture client and the
+// case overviews use it.
+#include <cstdint>
+#include <string>
+
+namespace pcisim::png {
+
+// pixels row-major, row 0 first. Throws std::runtime_error naming the path and the reason.
+// fast: zlib level 1 (frames arrive at up to 30 per second)
+void write_png_gray16(const std::string& path, int width, int height, const uint16_t* pixels, bool fast = true);
+void write_png_gray8(const std::string& path, int width, int height, const uint8_t* pixels);
+
+}  // namespace pcisim::png

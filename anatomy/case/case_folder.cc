@@ -6,6 +6,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "anatomy/case/case_overview.h"
 #include "anatomy/case/slicer_markups.h"
 #include "anatomy/mesh/mesh_io.h"
 #include "anatomy/vessel/vessel_tree_json.h"
@@ -85,6 +86,9 @@ void write_case(const Case& c, const std::string& dir_name) {
     curves.push_back(name);
   }
   doc["slicer_centerlines"] = curves;
+  // a picture for people: front and side views of the CT with the vessels over it
+  write_case_overview(c, (dir / "overview.png").string());
+  doc["overview"] = "overview.png";
   std::ofstream out(dir / "case.json");
   out << doc.dump(2) << '\n';
   if (!out) throw CaseError((dir / "case.json").string() + ": cannot write");
@@ -142,6 +146,7 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
       c.landmarks.push_back(m);
     }
     r.list("slicer_centerlines");  // written for viewers, not needed to simulate
+    r.text("overview", "");        // a picture for people
     r.finish();
   } catch (const json::JsonError& e) {
     throw CaseError(fmt::format("{}: {}", case_json, e.what()));

@@ -23,7 +23,7 @@ namespace fs = std::filesystem;
 // only (haptics sees the plain local force model, not physics)
 const std::map<std::string, std::vector<std::string>>& allowed() {
   static const std::map<std::string, std::vector<std::string>> rules = {
-      {"anatomy", {"json"}},
+      {"anatomy", {"json", "png"}},
       {"realtime", {}},
       {"json", {}},
       {"png", {}},

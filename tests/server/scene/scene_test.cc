@@ -119,6 +119,18 @@ TEST(Scene, EachBadInputNamesItsJsonPathAndWhatWasExpected) {
   EXPECT_NE(error_of(R"({"effects": {)").find("test.json: effects: not valid JSON"), std::string::npos);
 }
 
+// the anatomy is a phantom seed or a case folder, found beside the scene file
+TEST(Scene, AnatomyIsASeedOrACaseFolderBesideTheScene) {
+  const std::string effects = R"(, "effects": {"guidewire": {}}})";
+  EXPECT_EQ(parse_scene(R"({"anatomy": {"case": "cases/p7"})" + effects, "/data/scenes/s.json").case_dir,
+            "/data/scenes/cases/p7");
+  EXPECT_EQ(parse_scene(R"({"anatomy": {"case": "/abs/p7"})" + effects, "/data/scenes/s.json").case_dir, "/abs/p7");
+  EXPECT_EQ(parse_scene(R"({"anatomy": {"phantom_seed": 3})" + effects, "/data/s.json").case_dir, "");
+  EXPECT_EQ(error_of(R"({"anatomy": {"case": "p7", "phantom_seed": 3})" + effects),
+            "test.json: anatomy.case: give either a case folder or a phantom_seed, not both");
+  EXPECT_EQ(error_of(R"({"anatomy": {"case": ""})" + effects), "test.json: anatomy.case: expected the path of a case folder");
+}
+
 TEST(Scene, MissingFileIsAClearError) {
   try {
     load_scene_file("/nonexistent/scene.json");

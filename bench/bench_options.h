@@ -10,7 +10,7 @@ namespace pcisim::bench {
 
 struct BenchOptions {
   bool quick = false;
-  bool plot = true;                       // benchmarks without a plot ignore it
+  bool plot = true;  // benchmarks without a plot ignore it
   std::string out_dir = "docs/benchmarks";
 };
 

@@ -43,7 +43,9 @@ using Eigen::Vector3d;
 constexpr double kDtS = 1.0 / 30.0;
 constexpr double kReferenceSpacingMm = 0.25;
 
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
 
 // a probe point inside a vessel and the analytic velocity there at flow fraction 1
 struct Probe {
@@ -142,7 +144,7 @@ struct Row {
   double cell_step_ms = 0;
   double mean_dv_mm_s = 0, max_dv_mm_s = 0, rel_err = 0, unreached = 0, poiseuille_rel = 0;
   double blood_p50_ms = 0, blood_p99_ms = 0, step_p50_ms = 0, tip_rms_mm = 0, tip_max_mm = 0;
-  double same_branch = 0;  // fraction of steps with the tip in the reference run's branch
+  double same_branch = 0;      // fraction of steps with the tip in the reference run's branch
   double tip_max_same_mm = 0;  // largest distance over those steps
   std::string final_branch;
 };
@@ -225,22 +227,25 @@ int run_bench(const std::vector<std::string>& args) {
       r.same_branch = same / static_cast<double>(scene.tip_m.size());
       r.final_branch = scene.final_branch;
       rows.push_back(r);
-      std::printf("blood: spacing %.2f mm link %.2f mm: %d cells, field err %.1f %% (max %.1f mm/s), unreached %.1f %%, "
-                  "vs Poiseuille %.1f %%; blood %.3f/%.3f ms p50/p99; tip RMS %.2f max %.2f mm, same branch %.0f %%, ends in %s\n",
-                  spacing, link, r.cells, 100 * r.rel_err, r.max_dv_mm_s, 100 * r.unreached, 100 * r.poiseuille_rel,
-                  r.blood_p50_ms, r.blood_p99_ms, r.tip_rms_mm, r.tip_max_mm, 100 * r.same_branch,
-                  r.final_branch.c_str());
+      std::printf(
+          "blood: spacing %.2f mm link %.2f mm: %d cells, field err %.1f %% (max %.1f mm/s), unreached %.1f %%, "
+          "vs Poiseuille %.1f %%; blood %.3f/%.3f ms p50/p99; tip RMS %.2f max %.2f mm, same branch %.0f %%, ends in "
+          "%s\n",
+          spacing, link, r.cells, 100 * r.rel_err, r.max_dv_mm_s, 100 * r.unreached, 100 * r.poiseuille_rel,
+          r.blood_p50_ms, r.blood_p99_ms, r.tip_rms_mm, r.tip_max_mm, 100 * r.same_branch, r.final_branch.c_str());
     }
   }
 
   {
     std::ofstream f(o.out_dir + "/blood.json");
-    f << "{\n" << fmt::format("  \"machine\": \"{}\",\n  \"quick\": {},\n  \"probes\": {},\n  \"rows\": [\n", machine,
-                               o.quick, probes.size());
+    f << "{\n"
+      << fmt::format("  \"machine\": \"{}\",\n  \"quick\": {},\n  \"probes\": {},\n  \"rows\": [\n", machine, o.quick,
+                     probes.size());
     for (size_t i = 0; i < rows.size(); ++i) {
       const Row& r = rows[i];
       f << fmt::format(
-          "    {{\"spacing_mm\": {}, \"link_mm\": {}, \"cells\": {}, \"cell_step_ms\": {:.4f}, \"mean_dv_mm_s\": {:.3f}, "
+          "    {{\"spacing_mm\": {}, \"link_mm\": {}, \"cells\": {}, \"cell_step_ms\": {:.4f}, \"mean_dv_mm_s\": "
+          "{:.3f}, "
           "\"max_dv_mm_s\": {:.3f}, \"rel_err\": {:.5f}, \"unreached\": {:.5f}, \"poiseuille_rel\": {:.5f}, "
           "\"blood_p50_ms\": {:.4f}, \"blood_p99_ms\": {:.4f}, \"step_p50_ms\": {:.3f}, \"tip_rms_mm\": {:.4f}, "
           "\"tip_max_mm\": {:.4f}, \"same_branch\": {:.4f}, \"final_branch\": \"{}\"}}{}\n",
@@ -263,7 +268,8 @@ int run_bench(const std::vector<std::string>& args) {
         "is compared with the {} mm run at the same link radius: mean |dv|, largest |dv|, and mean |dv| over the "
         "reference's mean speed. *Unreached*: probes with no blood chain-mail within the link radius (velocity 0). "
         "*vs Poiseuille*: mean |v - v_analytic| over the mean analytic speed, v_analytic = 2 u_mean q(phase) "
-        "(1 - (r/R)^2) along the centerline: what the inverse-distance blend of eq 12 smooths away, at any spacing.\n\n",
+        "(1 - (r/R)^2) along the centerline: what the inverse-distance blend of eq 12 smooths away, at any "
+        "spacing.\n\n",
         defaults.pulsatility, probes.size(), kReferenceSpacingMm);
     f << "**Scene.** The full default beating scene (heart, moving tree, 200-segment wire, contact, friction) over "
          "the built-in trainee's session (19.5 s at 30 Hz) with these blood parameters: the `blood_flow` effect's "
@@ -273,11 +279,12 @@ int run_bench(const std::vector<std::string>& args) {
          "blood p50 ms | blood p99 ms | step p50 ms | tip RMS mm | tip max mm | tip in ref's branch % | tip ends in |\n"
          "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const Row& r : rows)
-      f << fmt::format("| {}{} | {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.3f} | {:.3f} | {:.3f} | {:.2f} | {:.2f} | {:.2f} | {:.0f} | {} |\n",
-                       r.spacing_mm, r.spacing_mm == kReferenceSpacingMm ? " (ref)" : "", r.link_mm, r.cells,
-                       100 * r.rel_err, r.max_dv_mm_s, 100 * r.unreached, 100 * r.poiseuille_rel, r.cell_step_ms,
-                       r.blood_p50_ms, r.blood_p99_ms, r.step_p50_ms, r.tip_rms_mm, r.tip_max_mm,
-                       100 * r.same_branch, r.final_branch);
+      f << fmt::format(
+          "| {}{} | {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.3f} | {:.3f} | {:.3f} | {:.2f} | {:.2f} | {:.2f} "
+          "| {:.0f} | {} |\n",
+          r.spacing_mm, r.spacing_mm == kReferenceSpacingMm ? " (ref)" : "", r.link_mm, r.cells, 100 * r.rel_err,
+          r.max_dv_mm_s, 100 * r.unreached, 100 * r.poiseuille_rel, r.cell_step_ms, r.blood_p50_ms, r.blood_p99_ms,
+          r.step_p50_ms, r.tip_rms_mm, r.tip_max_mm, 100 * r.same_branch, r.final_branch);
     if (o.plot) f << "\n![field error and tip deviation against blood ms per step](blood.png)\n";
     // findings, computed from the rows above
     f << "\n## Findings (computed from the table)\n\n";
@@ -288,18 +295,22 @@ int run_bench(const std::vector<std::string>& args) {
       for (const Row& r : rows) {
         if (r.link_mm != link) continue;
         if (r.spacing_mm == kReferenceSpacingMm) ref = &r;
-        if (r.rel_err <= 0.05 && r.unreached == 0.0 && (!coarsest || r.spacing_mm > coarsest->spacing_mm)) coarsest = &r;
+        if (r.rel_err <= 0.05 && r.unreached == 0.0 && (!coarsest || r.spacing_mm > coarsest->spacing_mm))
+          coarsest = &r;
         if (r.unreached > 0.0 && (!first_gap || r.spacing_mm < first_gap->spacing_mm)) first_gap = &r;
       }
       if (!ref || !coarsest) continue;
-      f << fmt::format("- Link radius {} mm: the coarsest spacing within 5 % of the reference field is **{} mm** "
-                       "({:.1f} %, blood p50 {:.3f} ms against the reference's {:.3f} ms); its tip path stays within "
-                       "{:.2f} mm RMS of the reference's, in the reference's branch {:.0f} % of the steps.",
-                       link, coarsest->spacing_mm, 100 * coarsest->rel_err, coarsest->blood_p50_ms, ref->blood_p50_ms,
-                       coarsest->tip_rms_mm, 100 * coarsest->same_branch);
+      f << fmt::format(
+          "- Link radius {} mm: the coarsest spacing within 5 % of the reference field is **{} mm** "
+          "({:.1f} %, blood p50 {:.3f} ms against the reference's {:.3f} ms); its tip path stays within "
+          "{:.2f} mm RMS of the reference's, in the reference's branch {:.0f} % of the steps.",
+          link, coarsest->spacing_mm, 100 * coarsest->rel_err, coarsest->blood_p50_ms, ref->blood_p50_ms,
+          coarsest->tip_rms_mm, 100 * coarsest->same_branch);
       if (first_gap)
-        f << fmt::format(" From {} mm spacing some probes reach no blood ({:.1f} %): the cells are farther apart "
-                         "than the link radius reaches.", first_gap->spacing_mm, 100 * first_gap->unreached);
+        f << fmt::format(
+            " From {} mm spacing some probes reach no blood ({:.1f} %): the cells are farther apart "
+            "than the link radius reaches.",
+            first_gap->spacing_mm, 100 * first_gap->unreached);
       f << "\n";
     }
     double smallest_max_dv = 1e300, largest_tip_max = 0.0, largest_tip_max_same = 0.0;
@@ -313,8 +324,9 @@ int run_bench(const std::vector<std::string>& args) {
         "- The largest |dv| is at least {:.0f} mm/s in every non-reference row (peak flow on the axis is {:.0f} mm/s): "
         "a probe links to one vessel's blood, the vessel whose chain-mail is nearest, and near a fork a small "
         "shift of the cells can flip that choice. Read the mean error; the maximum is a few probes.\n",
-        smallest_max_dv, 1e3 * 2.0 * defaults.mean_velocity_m_per_s *
-                             coronary_flow_fraction(0.5 * (1.0 + kSystoleFraction), defaults.pulsatility));
+        smallest_max_dv,
+        1e3 * 2.0 * defaults.mean_velocity_m_per_s *
+            coronary_flow_fraction(0.5 * (1.0 + kSystoleFraction), defaults.pulsatility));
     f << fmt::format(
         "- The tip's largest distance from the reference path is up to {:.1f} mm ({:.1f} mm over the steps where both "
         "tips are in the same branch): single steps of the wire's path differ far more than the session does; "
@@ -325,7 +337,8 @@ int run_bench(const std::vector<std::string>& args) {
   return 0;
 }
 
-const bool registered = add("blood", "blood chain-mail spacing x link radius: field error, cost, wire tip path", run_bench);
+const bool registered =
+    add("blood", "blood chain-mail spacing x link radius: field error, cost, wire tip path", run_bench);
 
 }  // namespace
 }  // namespace pcisim::bench

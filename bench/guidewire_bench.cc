@@ -52,8 +52,6 @@ struct Row {
   int steps = 0;
 };
 
-
-
 double thread_cpu_ms() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
@@ -94,7 +92,8 @@ Row run(const Setting& s, std::shared_ptr<const LumenQuery> lumen, const LumenQu
     cpu.push_back(c1 - c0);
     const ChainMailWire& w = *world.guidewire_state();
     const auto x = w.nodes_m();
-    for (int i = w.first_free_node(); i < w.node_count(); ++i) worst = std::max(worst, reference.sample(x[i]).distance_m);
+    for (int i = w.first_free_node(); i < w.node_count(); ++i)
+      worst = std::max(worst, reference.sample(x[i]).distance_m);
     tips.push_back(x.back());
   }
   WorldSnapshot snap;
@@ -146,8 +145,8 @@ int run_bench(const std::vector<std::string>& args) {
   // the reference run first: every other tip is compared with its trajectory
   std::vector<Eigen::Vector3d> ref_tips, tips;
   Row ref_row = run(finest, reference, *reference, ref_tips);
-  std::printf("guidewire: reference %d segments, %d passes, %.1f mm: tip ends in %s\n", finest.segments,
-              finest.passes, finest.spacing_mm, ref_row.final_branch.c_str());
+  std::printf("guidewire: reference %d segments, %d passes, %.1f mm: tip ends in %s\n", finest.segments, finest.passes,
+              finest.spacing_mm, ref_row.final_branch.c_str());
 
   std::vector<Row> rows;
   for (double sp : spacings) {
@@ -164,10 +163,10 @@ int run_bench(const std::vector<std::string>& args) {
         r.tip_rms_mm = m ? std::sqrt(sum / m) * 1e3 : 0.0;
         r.tip_final_mm = m ? (tt[m - 1] - ref_tips[m - 1]).norm() * 1e3 : 0.0;
         rows.push_back(r);
-        std::printf("guidewire: %4d seg %d pass %.1f mm: median %.3f ms p99 %.3f ms (cpu p99 %.3f)  tip rms %.2f mm  "
-                    "pen %.3f mm  -> %s\n",
-                    n, p, sp, r.median_ms, r.p99_ms, r.cpu_p99_ms, r.tip_rms_mm, r.max_penetration_mm,
-                    r.final_branch.c_str());
+        std::printf(
+            "guidewire: %4d seg %d pass %.1f mm: median %.3f ms p99 %.3f ms (cpu p99 %.3f)  tip rms %.2f mm  "
+            "pen %.3f mm  -> %s\n",
+            n, p, sp, r.median_ms, r.p99_ms, r.cpu_p99_ms, r.tip_rms_mm, r.max_penetration_mm, r.final_branch.c_str());
       }
     }
   }
@@ -177,8 +176,8 @@ int run_bench(const std::vector<std::string>& args) {
     std::ofstream f(o.out_dir + "/guidewire.json");
     f << "{\n" << fmt::format("  \"machine\": \"{}\",\n  \"quick\": {},\n", machine, o.quick);
     f << "  \"session\": \"built-in trainee, turn 90 deg toward the LAD, 19.5 s at 30 Hz\",\n";
-    f << fmt::format("  \"reference\": {{\"segments\": {}, \"passes\": {}, \"sdf_spacing_mm\": {}}},\n", finest.segments,
-                     finest.passes, finest.spacing_mm);
+    f << fmt::format("  \"reference\": {{\"segments\": {}, \"passes\": {}, \"sdf_spacing_mm\": {}}},\n",
+                     finest.segments, finest.passes, finest.spacing_mm);
     f << "  \"sdf_build_ms\": {";
     bool first = true;
     for (const auto& [sp, ms] : build_ms) {
@@ -191,7 +190,8 @@ int run_bench(const std::vector<std::string>& args) {
       f << fmt::format(
           "    {{\"segments\": {}, \"passes\": {}, \"sdf_spacing_mm\": {}, \"steps\": {}, \"median_ms\": {:.4f}, "
           "\"p99_ms\": {:.4f}, \"max_ms\": {:.4f}, \"cpu_median_ms\": {:.4f}, \"cpu_p99_ms\": {:.4f}, "
-          "\"tip_rms_mm\": {:.4f}, \"tip_final_mm\": {:.4f}, \"max_penetration_mm\": {:.4f}, \"final_branch\": \"{}\"}}{}\n",
+          "\"tip_rms_mm\": {:.4f}, \"tip_final_mm\": {:.4f}, \"max_penetration_mm\": {:.4f}, \"final_branch\": "
+          "\"{}\"}}{}\n",
           r.s.segments, r.s.passes, r.s.spacing_mm, r.steps, r.median_ms, r.p99_ms, r.max_ms, r.cpu_median_ms,
           r.cpu_p99_ms, r.tip_rms_mm, r.tip_final_mm, r.max_penetration_mm, r.final_branch,
           i + 1 < rows.size() ? "," : "");
@@ -208,16 +208,18 @@ int run_bench(const std::vector<std::string>& args) {
          "30 Hz). Session: the built-in trainee toward the LAD (insert 8 mm over 3 s, turn 90 deg over 2 s, advance "
          "50 mm over 10 s, pull 5 mm), "
       << rows.front().steps << " steps.\n\n";
-    f << fmt::format("Reference: {} segments, {} passes, SDF {} mm. Tip error: RMS over the session of the distance "
-                     "between the tip and the reference's tip at the same step. Penetration: the deepest any free node "
-                     "ended a step outside the lumen, measured on the {} mm SDF (the wall margin is 0.05 mm inside). "
-                     "Times: wall clock of `World::step` (median, p99), and the calling thread's CPU time (p99), which "
-                     "other processes on the machine cannot inflate.\n\n",
-                     finest.segments, finest.passes, finest.spacing_mm, finest.spacing_mm);
+    f << fmt::format(
+        "Reference: {} segments, {} passes, SDF {} mm. Tip error: RMS over the session of the distance "
+        "between the tip and the reference's tip at the same step. Penetration: the deepest any free node "
+        "ended a step outside the lumen, measured on the {} mm SDF (the wall margin is 0.05 mm inside). "
+        "Times: wall clock of `World::step` (median, p99), and the calling thread's CPU time (p99), which "
+        "other processes on the machine cannot inflate.\n\n",
+        finest.segments, finest.passes, finest.spacing_mm, finest.spacing_mm);
     f << "SDF builds (once per spacing, not in the step):";
     for (const auto& [sp, ms] : build_ms) f << fmt::format(" {} mm {:.0f} ms;", sp, ms);
     f << "\n\n";
-    f << "| segments | passes | SDF mm | median ms | p99 ms | CPU p99 ms | tip RMS mm | tip final mm | penetration mm | tip ends in |\n";
+    f << "| segments | passes | SDF mm | median ms | p99 ms | CPU p99 ms | tip RMS mm | tip final mm | penetration mm "
+         "| tip ends in |\n";
     f << "|---|---|---|---|---|---|---|---|---|---|\n";
     for (const Row& r : rows) {
       f << fmt::format("| {} | {} | {} | {:.3f} | {:.3f} | {:.3f} | {:.2f} | {:.2f} | {:.3f} | {} |\n", r.s.segments,
@@ -232,8 +234,9 @@ int run_bench(const std::vector<std::string>& args) {
     f << "\nTargets (default 2 passes, 0.2 mm SDF): ";
     for (const auto& [n, target] : {std::pair{200, 1.0}, std::pair{800, 4.0}}) {
       if (const Row* r = find(n, 2, 0.2)) {
-        f << fmt::format("{} segments p99 {:.3f} ms (CPU {:.3f} ms) vs {:.0f} ms: {}. ", n, r->p99_ms, r->cpu_p99_ms,
-                         target, r->p99_ms <= target ? "met" : (r->cpu_p99_ms <= target ? "met in CPU time, not wall" : "missed"));
+        f << fmt::format(
+            "{} segments p99 {:.3f} ms (CPU {:.3f} ms) vs {:.0f} ms: {}. ", n, r->p99_ms, r->cpu_p99_ms, target,
+            r->p99_ms <= target ? "met" : (r->cpu_p99_ms <= target ? "met in CPU time, not wall" : "missed"));
       }
     }
     // what the table says about convergence, computed from it
@@ -266,8 +269,8 @@ int run_bench(const std::vector<std::string>& args) {
     f << "\nPlot: `guidewire.png` (tip error vs median ms per step), drawn by `scripts/plot_bench.py`.\n";
   }
   if (o.plot)
-    o.plot = run_plot_script("guidewire",
-                             fmt::format("scripts/plot_bench.py {}/guidewire.json {}/guidewire.png", o.out_dir, o.out_dir));
+    o.plot = run_plot_script(
+        "guidewire", fmt::format("scripts/plot_bench.py {}/guidewire.json {}/guidewire.png", o.out_dir, o.out_dir));
   std::printf("guidewire: wrote %s/guidewire.md, .json%s\n", o.out_dir.c_str(), o.plot ? ", .png" : "");
   return 0;
 }

@@ -70,7 +70,6 @@ struct Frame {
   std::vector<Eigen::Vector3d> tree_m;
 };
 
-
 double thread_cpu_ms() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
@@ -113,7 +112,8 @@ Row run(double cluster_mm, const Solver& solver, int substeps, int iterations, i
     const auto t1 = std::chrono::steady_clock::now();
     cpu.push_back(thread_cpu_ms() - c0);
     wall.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
-    for (size_t i = 0; i < free.size(); ++i) x_free.col(static_cast<Eigen::Index>(i)) = heart.positions_m().col(free[i]);
+    for (size_t i = 0; i < free.size(); ++i)
+      x_free.col(static_cast<Eigen::Index>(i)) = heart.positions_m().col(free[i]);
     skin.update(heart.positions_m());
     if (record) record->push_back({x_free, {skin.points_m().begin(), skin.points_m().end()}});
     if (ref) {
@@ -186,23 +186,27 @@ int run_bench(const std::vector<std::string>& args) {
     reference.reserve(steps);
     Row ref = run(cm, {SolverKind::kGaussSeidel, 1.0}, ref_substeps, ref_iterations, steps, skin, &reference, nullptr);
     // is the reference converged? the same run with half the substeps and half the iterations
-    const Row half =
-        run(cm, {SolverKind::kGaussSeidel, 1.0}, ref_substeps / 2, ref_iterations / 2, steps, skin, nullptr, &reference);
+    const Row half = run(cm, {SolverKind::kGaussSeidel, 1.0}, ref_substeps / 2, ref_iterations / 2, steps, skin,
+                         nullptr, &reference);
     ref.mean_err_mm = half.mean_err_mm;
     ref.max_err_mm = half.max_err_mm;
     ref.tree_drift_mm = half.tree_drift_mm;
     refs.push_back(ref);
-    std::printf("heart: cluster %.0f mm (%d clusters): reference GS %dx%d median %.2f ms; half of it differs by mean %.4f max %.4f mm\n",
-                cm, ref.clusters, ref_substeps, ref_iterations, ref.median_ms, half.mean_err_mm, half.max_err_mm);
+    std::printf(
+        "heart: cluster %.0f mm (%d clusters): reference GS %dx%d median %.2f ms; half of it differs by mean %.4f max "
+        "%.4f mm\n",
+        cm, ref.clusters, ref_substeps, ref_iterations, ref.median_ms, half.mean_err_mm, half.max_err_mm);
     for (const Solver& s : all_solvers)
       for (int sub : substeps)
         for (int it : iterations) {
           if (sub * it > 32) continue;  // beyond any real-time budget here
           Row r = run(cm, s, sub, it, steps, skin, nullptr, &reference);
           rows.push_back(r);
-          std::printf("heart: %4.0f mm %-12s sub %d it %2d: median %.3f ms p99 %.3f ms  err mean %.3f max %.3f mm  tree %.3f mm%s\n",
-                      cm, s.name().c_str(), sub, it, r.median_ms, r.p99_ms, r.mean_err_mm, r.max_err_mm, r.tree_drift_mm,
-                      r.finite ? "" : "  NON-FINITE");
+          std::printf(
+              "heart: %4.0f mm %-12s sub %d it %2d: median %.3f ms p99 %.3f ms  err mean %.3f max %.3f mm  tree %.3f "
+              "mm%s\n",
+              cm, s.name().c_str(), sub, it, r.median_ms, r.p99_ms, r.mean_err_mm, r.max_err_mm, r.tree_drift_mm,
+              r.finite ? "" : "  NON-FINITE");
         }
   }
 
@@ -211,8 +215,8 @@ int run_bench(const std::vector<std::string>& args) {
     double cm;
     std::string solver;
     int cost;
-    const Row* by_substeps;   // most substeps, fewest iterations
-    const Row* by_iterations; // fewest substeps, most iterations
+    const Row* by_substeps;    // most substeps, fewest iterations
+    const Row* by_iterations;  // fewest substeps, most iterations
   };
   std::vector<Pair> pairs;
   for (double cm : cluster_mm)
@@ -233,22 +237,26 @@ int run_bench(const std::vector<std::string>& args) {
     std::ofstream f(o.out_dir + "/heart.json");
     f << "{\n" << fmt::format("  \"machine\": \"{}\",\n  \"quick\": {},\n", machine, o.quick);
     f << fmt::format(
-        "  \"body\": {{\"particles\": {}, \"driven\": {}, \"free\": {}, \"springs\": {}, \"bends\": {}, \"dt_s\": {:.6f}, "
+        "  \"body\": {{\"particles\": {}, \"driven\": {}, \"free\": {}, \"springs\": {}, \"bends\": {}, \"dt_s\": "
+        "{:.6f}, "
         "\"steps\": {}, \"rate_bpm\": {}}},\n",
         particles, driven, free_n, springs, bends, kDtS, steps, kRateBpm);
     f << "  \"references\": [";
     for (size_t i = 0; i < refs.size(); ++i)
-      f << fmt::format("{}{{\"cluster_mm\": {}, \"clusters\": {}, \"substeps\": {}, \"iterations\": {}, \"median_ms\": {:.3f}, "
-                       "\"half_mean_err_mm\": {:.5f}, \"half_max_err_mm\": {:.5f}, \"half_tree_drift_mm\": {:.5f}}}",
-                       i ? ", " : "", refs[i].cluster_mm, refs[i].clusters, ref_substeps, ref_iterations, refs[i].median_ms,
-                       refs[i].mean_err_mm, refs[i].max_err_mm, refs[i].tree_drift_mm);
+      f << fmt::format(
+          "{}{{\"cluster_mm\": {}, \"clusters\": {}, \"substeps\": {}, \"iterations\": {}, \"median_ms\": {:.3f}, "
+          "\"half_mean_err_mm\": {:.5f}, \"half_max_err_mm\": {:.5f}, \"half_tree_drift_mm\": {:.5f}}}",
+          i ? ", " : "", refs[i].cluster_mm, refs[i].clusters, ref_substeps, ref_iterations, refs[i].median_ms,
+          refs[i].mean_err_mm, refs[i].max_err_mm, refs[i].tree_drift_mm);
     f << "],\n  \"rows\": [\n";
     for (size_t i = 0; i < rows.size(); ++i) {
       const Row& r = rows[i];
       f << fmt::format(
-    "    {{\"cluster_mm\": {}, \"clusters\": {}, \"solver\": \"{}\", \"sor_w\": {}, \"substeps\": {}, \"iterations\": {}, "
-    "\"mean_err_mm\": {:.5f}, \"max_err_mm\": {:.5f}, \"final_mean_err_mm\": {:.5f}, \"median_ms\": {:.4f}, "
-    "\"p99_ms\": {:.4f}, \"cpu_median_ms\": {:.4f}, \"cpu_p99_ms\": {:.4f}, \"tree_drift_mm\": {:.5f}, \"finite\": {}}}{}\n",
+          "    {{\"cluster_mm\": {}, \"clusters\": {}, \"solver\": \"{}\", \"sor_w\": {}, \"substeps\": {}, "
+          "\"iterations\": {}, "
+          "\"mean_err_mm\": {:.5f}, \"max_err_mm\": {:.5f}, \"final_mean_err_mm\": {:.5f}, \"median_ms\": {:.4f}, "
+          "\"p99_ms\": {:.4f}, \"cpu_median_ms\": {:.4f}, \"cpu_p99_ms\": {:.4f}, \"tree_drift_mm\": {:.5f}, "
+          "\"finite\": {}}}{}\n",
           r.cluster_mm, r.clusters, r.solver.name(), r.solver.w, r.substeps, r.iterations, r.mean_err_mm, r.max_err_mm,
           r.final_mean_err_mm, r.median_ms, r.p99_ms, r.cpu_median_ms, r.cpu_p99_ms, r.tree_drift_mm, r.finite,
           i + 1 < rows.size() ? "," : "");
@@ -258,7 +266,8 @@ int run_bench(const std::vector<std::string>& args) {
   {
     std::ofstream f(o.out_dir + "/heart.md");
     f << "# Heart benchmark: PBD accuracy against time on the beating heart\n\n";
-    f << fmt::format("Generated by `pcisim-bench heart{}` on {}; single-threaded.\n\n", o.quick ? " --quick" : "", machine);
+    f << fmt::format("Generated by `pcisim-bench heart{}` on {}; single-threaded.\n\n", o.quick ? " --quick" : "",
+                     machine);
     f << fmt::format(
         "Body: the template heart (docs/heart.md): {} particles at the TetGen vertices, {} of them driven by the "
         "synthetic motion sequence (the ventricles), {} free (atria, AV plane); {} stretch/twist springs and {} "
@@ -277,25 +286,29 @@ int run_bench(const std::vector<std::string>& args) {
         ref_substeps, ref_iterations);
     f << "Reference convergence (the reference run with half its substeps and half its iterations, against it):";
     for (const Row& r : refs)
-      f << fmt::format(" cluster size {} mm ({} clusters): mean {:.4f} mm, max {:.4f} mm, tree {:.4f} mm, {:.1f} ms per step;",
-                       r.cluster_mm, r.clusters, r.mean_err_mm, r.max_err_mm, r.tree_drift_mm, r.median_ms);
+      f << fmt::format(
+          " cluster size {} mm ({} clusters): mean {:.4f} mm, max {:.4f} mm, tree {:.4f} mm, {:.1f} ms per step;",
+          r.cluster_mm, r.clusters, r.mean_err_mm, r.max_err_mm, r.tree_drift_mm, r.median_ms);
     f << "\n\n";
     f << "Cluster mm 0: the global cluster only.\n\n";
-    f << "| cluster mm | clusters | solver | substeps | iterations | sweeps | mean err mm | max err mm | tree drift mm | median ms | p99 ms | CPU median ms | CPU p99 ms |\n";
+    f << "| cluster mm | clusters | solver | substeps | iterations | sweeps | mean err mm | max err mm | tree drift mm "
+         "| median ms | p99 ms | CPU median ms | CPU p99 ms |\n";
     f << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const Row& r : rows)
-      f << fmt::format("| {} | {} | {}{} | {} | {} | {} | {:.3f} | {:.3f} | {:.3f} | {:.3f} | {:.3f} | {:.3f} | {:.3f} |\n",
-                       r.cluster_mm, r.clusters, r.solver.name(), r.finite ? "" : " (quarantined particles)", r.substeps,
-                       r.iterations, r.substeps * r.iterations, r.mean_err_mm, r.max_err_mm, r.tree_drift_mm, r.median_ms,
-                       r.p99_ms, r.cpu_median_ms, r.cpu_p99_ms);
+      f << fmt::format(
+          "| {} | {} | {}{} | {} | {} | {} | {:.3f} | {:.3f} | {:.3f} | {:.3f} | {:.3f} | {:.3f} | {:.3f} |\n",
+          r.cluster_mm, r.clusters, r.solver.name(), r.finite ? "" : " (quarantined particles)", r.substeps,
+          r.iterations, r.substeps * r.iterations, r.mean_err_mm, r.max_err_mm, r.tree_drift_mm, r.median_ms, r.p99_ms,
+          r.cpu_median_ms, r.cpu_p99_ms);
     f << "\n## Substeps or iterations at equal cost\n\n";
     f << "Jacobi here is averaged per constraint (the heart's setting, momentum-conserving; docs/pbd.md).\n\n";
     f << "Pairs with the same number of sweeps per step (substeps x iterations), all substeps vs all iterations:\n\n";
-    f << "| cluster mm | solver | sweeps | substeps x iterations: mean err mm | ms | vs | mean err mm | ms | better |\n";
+    f << "| cluster mm | solver | sweeps | substeps x iterations: mean err mm | ms | vs | mean err mm | ms | better "
+         "|\n";
     f << "|---|---|---|---|---|---|---|---|---|\n";
     for (const Pair& p : pairs)
-      f << fmt::format("| {} | {} | {} | {}x{}: {:.3f} | {:.3f} | {}x{}: | {:.3f} | {:.3f} | {} |\n", p.cm, p.solver, p.cost,
-                       p.by_substeps->substeps, p.by_substeps->iterations, p.by_substeps->mean_err_mm,
+      f << fmt::format("| {} | {} | {} | {}x{}: {:.3f} | {:.3f} | {}x{}: | {:.3f} | {:.3f} | {} |\n", p.cm, p.solver,
+                       p.cost, p.by_substeps->substeps, p.by_substeps->iterations, p.by_substeps->mean_err_mm,
                        p.by_substeps->median_ms, p.by_iterations->substeps, p.by_iterations->iterations,
                        p.by_iterations->mean_err_mm, p.by_iterations->median_ms,
                        p.by_substeps->mean_err_mm < p.by_iterations->mean_err_mm ? "substeps" : "iterations");
@@ -305,12 +318,15 @@ int run_bench(const std::vector<std::string>& args) {
       for (double budget_ms : {2.0, 5.0, 10.0}) {
         const Row* best = nullptr;
         for (const Row& r : rows)
-          if (r.cluster_mm == cm && r.finite && r.median_ms <= budget_ms && (!best || r.mean_err_mm < best->mean_err_mm)) best = &r;
+          if (r.cluster_mm == cm && r.finite && r.median_ms <= budget_ms &&
+              (!best || r.mean_err_mm < best->mean_err_mm))
+            best = &r;
         if (best)
-          f << fmt::format("- {} mm clusters, median step within {} ms: best is {} {}x{} (mean {:.3f} mm, max {:.3f} mm, "
-                           "tree drift {:.3f} mm, median {:.2f} ms, p99 {:.2f} ms).\n",
-                           cm, budget_ms, best->solver.name(), best->substeps, best->iterations, best->mean_err_mm,
-                           best->max_err_mm, best->tree_drift_mm, best->median_ms, best->p99_ms);
+          f << fmt::format(
+              "- {} mm clusters, median step within {} ms: best is {} {}x{} (mean {:.3f} mm, max {:.3f} mm, "
+              "tree drift {:.3f} mm, median {:.2f} ms, p99 {:.2f} ms).\n",
+              cm, budget_ms, best->solver.name(), best->substeps, best->iterations, best->mean_err_mm, best->max_err_mm,
+              best->tree_drift_mm, best->median_ms, best->p99_ms);
       }
     }
     // where iterations beat substeps at equal cost, named
@@ -335,21 +351,23 @@ int run_bench(const std::vector<std::string>& args) {
       w_blind += same;
     }
     if (one_iteration_groups > 0)
-      f << fmt::format("- Jacobi with one iteration per substep: the rows for every w are identical in {} of {} "
-                       "settings (the last iteration of a substep is never over-relaxed; docs/pbd.md).\n",
-                       w_blind, one_iteration_groups);
+      f << fmt::format(
+          "- Jacobi with one iteration per substep: the rows for every w are identical in {} of {} "
+          "settings (the last iteration of a substep is never over-relaxed; docs/pbd.md).\n",
+          w_blind, one_iteration_groups);
     f << "\nNote: errors close to the reference's own convergence figure above are not resolved; below it the "
          "ranking of settings is noise.\n";
     f << "\nPlot: `heart.png` (mean error vs median ms per step), drawn by `docs/benchmarks/heart.py`.\n";
   }
   if (o.plot) o.plot = run_plot_script("heart", "docs/benchmarks/heart.py " + o.out_dir);
-  std::printf("heart: substeps won %d of %zu equal-cost pairs; wrote %s/heart.md, .json%s\n", substeps_win, pairs.size(),
-              o.out_dir.c_str(), o.plot ? ", .png" : "");
+  std::printf("heart: substeps won %d of %zu equal-cost pairs; wrote %s/heart.md, .json%s\n", substeps_win,
+              pairs.size(), o.out_dir.c_str(), o.plot ? ", .png" : "");
   return 0;
 }
 
 const bool registered =
-    add("heart", "beating heart PBD: error and tree drift vs ms over iterations x substeps x solver x cluster size", run_bench);
+    add("heart", "beating heart PBD: error and tree drift vs ms over iterations x substeps x solver x cluster size",
+        run_bench);
 
 }  // namespace
 }  // namespace pcisim::bench

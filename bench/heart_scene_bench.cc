@@ -39,7 +39,9 @@ using Clock = std::chrono::steady_clock;
 
 constexpr double kDtS = 1.0 / 30.0;
 
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
 
 struct Stats {
   double p50 = 0, p99 = 0, max = 0;
@@ -71,8 +73,8 @@ SceneRun run_scene(bool beating, std::shared_ptr<const LumenQuery> lumen, int re
 
 struct LumenRow {
   double phase = 0;
-  double rebuild_ms = 0;        // SdfLumen of the moved tree
-  double deform_ms = 0;         // skin update + carrying the wire's nodes into the world
+  double rebuild_ms = 0;                     // SdfLumen of the moved tree
+  double deform_ms = 0;                      // skin update + carrying the wire's nodes into the world
   double mean_diff_mm = 0, max_diff_mm = 0;  // deformed vs rebuilt wall distance at the nodes
   int nodes = 0;
 };
@@ -169,8 +171,10 @@ int run_bench(const std::vector<std::string>& args) {
         }
         row.mean_diff_mm = row.nodes ? sum / row.nodes : 0.0;
         by_spacing[sp].push_back(row);
-        std::printf("heart-scene: phase %.2f SDF %.1f mm: rebuild %.0f ms, deform %.3f ms; |d| diff mean %.3f max %.3f mm over %d nodes\n",
-                    row.phase, sp, row.rebuild_ms, row.deform_ms, row.mean_diff_mm, row.max_diff_mm, row.nodes);
+        std::printf(
+            "heart-scene: phase %.2f SDF %.1f mm: rebuild %.0f ms, deform %.3f ms; |d| diff mean %.3f max %.3f mm over "
+            "%d nodes\n",
+            row.phase, sp, row.rebuild_ms, row.deform_ms, row.mean_diff_mm, row.max_diff_mm, row.nodes);
       }
     }
   }
@@ -190,8 +194,9 @@ int run_bench(const std::vector<std::string>& args) {
     f << fmt::format("  \"cycle\": {{\"real_ms\": {:.1f}, \"p50_ms\": {:.2f}, \"p99_ms\": {:.2f}, \"cycles\": {}}},\n",
                      cycle_s * 1e3, cycle.p50, cycle.p99, cycle_ms.size());
     for (const auto& [name, r] : {std::pair{"beating", &beating}, std::pair{"still", &still}}) {
-      f << fmt::format("  \"{}\": {{\"step_ms\": {{\"p50\": {:.3f}, \"p99\": {:.3f}, \"max\": {:.3f}}}, \"effects_p50_ms\": {{", name,
-                       r->step_ms.p50, r->step_ms.p99, r->step_ms.max);
+      f << fmt::format(
+          "  \"{}\": {{\"step_ms\": {{\"p50\": {:.3f}, \"p99\": {:.3f}, \"max\": {:.3f}}}, \"effects_p50_ms\": {{",
+          name, r->step_ms.p50, r->step_ms.p99, r->step_ms.max);
       bool first = true;
       for (const auto& [e, v] : r->effect_ms) {
         f << fmt::format("{}\"{}\": {:.4f}", first ? "" : ", ", e, percentile(v, 0.5));
@@ -203,9 +208,10 @@ int run_bench(const std::vector<std::string>& args) {
     bool first = true;
     for (const auto& [sp, rows] : by_spacing)
       for (const LumenRow& r : rows) {
-        f << fmt::format("{}{{\"sdf_mm\": {}, \"phase\": {:.3f}, \"rebuild_ms\": {:.1f}, \"deform_ms\": {:.4f}, "
-                         "\"mean_diff_mm\": {:.4f}, \"max_diff_mm\": {:.4f}, \"nodes\": {}}}",
-                         first ? "" : ", ", sp, r.phase, r.rebuild_ms, r.deform_ms, r.mean_diff_mm, r.max_diff_mm, r.nodes);
+        f << fmt::format(
+            "{}{{\"sdf_mm\": {}, \"phase\": {:.3f}, \"rebuild_ms\": {:.1f}, \"deform_ms\": {:.4f}, "
+            "\"mean_diff_mm\": {:.4f}, \"max_diff_mm\": {:.4f}, \"nodes\": {}}}",
+            first ? "" : ", ", sp, r.phase, r.rebuild_ms, r.deform_ms, r.mean_diff_mm, r.max_diff_mm, r.nodes);
         first = false;
       }
     f << "]\n}\n";
@@ -218,21 +224,27 @@ int run_bench(const std::vector<std::string>& args) {
     f << "## One cardiac cycle of the heart alone\n\n";
     f << fmt::format(
         "Default `heart_beat` (72 bpm: a {:.0f} ms cycle, {} steps): p50 **{:.1f} ms**, p99 {:.1f} ms per cycle over "
-        "{} cycles, i.e. {:.1f} % of real time at the median. (The heart paper reports a few tens of ms per cycle.)\n\n",
+        "{} cycles, i.e. {:.1f} % of real time at the median. (The heart paper reports a few tens of ms per "
+        "cycle.)\n\n",
         cycle_s * 1e3, static_cast<int>(std::lround(cycle_s / kDtS)), cycle.p50, cycle.p99, cycle_ms.size(),
         100.0 * cycle.p50 / (cycle_s * 1e3));
     f << "## The full default scene\n\n";
     f << fmt::format(
         "The built-in trainee's session ({} s: insert 8 mm, quarter turn, 50 mm into the LAD, pull 5 mm) at 30 Hz, {} "
-        "run(s); every step timed. One SDF (0.2 mm, built once in {:.0f} ms) serves every run. Target: p99 <= 20 ms.\n\n",
+        "run(s); every step timed. One SDF (0.2 mm, built once in {:.0f} ms) serves every run. Target: p99 <= 20 "
+        "ms.\n\n",
         kSessionS, repeats, sdf_ms);
     f << "| scene | step p50 ms | p99 ms | max ms |\n|---|---|---|---|\n";
-    f << fmt::format("| beating (heart_beat, vessel_motion, guidewire, blood_flow, vessel_contact, friction) | {:.2f} | **{:.2f}** | {:.2f} |\n",
-                     beating.step_ms.p50, beating.step_ms.p99, beating.step_ms.max);
+    f << fmt::format(
+        "| beating (heart_beat, vessel_motion, guidewire, blood_flow, vessel_contact, friction) | {:.2f} | **{:.2f}** "
+        "| {:.2f} |\n",
+        beating.step_ms.p50, beating.step_ms.p99, beating.step_ms.max);
     f << fmt::format("| still (the same without heart_beat and vessel_motion) | {:.2f} | {:.2f} | {:.2f} |\n\n",
                      still.step_ms.p50, still.step_ms.p99, still.step_ms.max);
-    f << "Per effect, beating scene (ms):\n\n| effect | p50 | p99 | max |\n|---|---|---|---|\n" << effect_table(beating);
-    f << "\nPer effect, still scene (ms): the heart's effects are absent, not idle:\n\n| effect | p50 | p99 | max |\n|---|---|---|---|\n"
+    f << "Per effect, beating scene (ms):\n\n| effect | p50 | p99 | max |\n|---|---|---|---|\n"
+      << effect_table(beating);
+    f << "\nPer effect, still scene (ms): the heart's effects are absent, not idle:\n\n| effect | p50 | p99 | max "
+         "|\n|---|---|---|---|\n"
       << effect_table(still);
     f << "\n## Moving lumen: deform or rebuild\n\n";
     f << "The wire, its contact and the blood are simulated in the vessels' rest frame against the SDF built once; "
@@ -240,7 +252,8 @@ int run_bench(const std::vector<std::string>& args) {
          "the moved tree every step (**rebuild**). After the trainee's session the wire lies in the LAD; at four "
          "phases the deformed wall distance at each free node (rest SDF at the node's rest-frame place) is compared "
          "with the rebuilt field's distance at the node's world place.\n\n";
-    f << "| SDF mm | phase | rebuild ms | deform ms | mean abs diff mm | max abs diff mm | nodes |\n|---|---|---|---|---|---|---|\n";
+    f << "| SDF mm | phase | rebuild ms | deform ms | mean abs diff mm | max abs diff mm | nodes "
+         "|\n|---|---|---|---|---|---|---|\n";
     for (const auto& [sp, rows] : by_spacing)
       for (const LumenRow& r : rows)
         f << fmt::format("| {} | {:.2f} | {:.0f} | {:.3f} | {:.3f} | {:.3f} | {} |\n", sp, r.phase, r.rebuild_ms,
@@ -252,17 +265,19 @@ int run_bench(const std::vector<std::string>& args) {
     f << "\nAt phase 0 (end-diastole, the rest pose) the difference is the rebuilt grid's own error against the 0.2 mm "
          "field the scene uses. Elsewhere the deformed distance also differs where the tree stretches or turns (the "
          "skin carries each cross-section without rotating it). ";
-    f << fmt::format("The fastest rebuild here took {:.0f} ms, {} the {:.1f} ms physics period{}; the CUDA build's "
-                     "figures are in docs/benchmarks/sdf-gpu.md.\n",
-                     fastest_rebuild_ms, fastest_rebuild_ms > period_ms ? "more than" : "within", period_ms,
-                     fastest_rebuild_ms > period_ms ? ", so the scene deforms" : "");
+    f << fmt::format(
+        "The fastest rebuild here took {:.0f} ms, {} the {:.1f} ms physics period{}; the CUDA build's "
+        "figures are in docs/benchmarks/sdf-gpu.md.\n",
+        fastest_rebuild_ms, fastest_rebuild_ms > period_ms ? "more than" : "within", period_ms,
+        fastest_rebuild_ms > period_ms ? ", so the scene deforms" : "");
   }
   std::printf("heart-scene: wrote %s/heart-scene.md, .json\n", out_dir.c_str());
   return 0;
 }
 
 const bool registered =
-    add("heart-scene", "the beating scene: one cycle, the full default scene's step, moving lumen deform vs rebuild", run_bench);
+    add("heart-scene", "the beating scene: one cycle, the full default scene's step, moving lumen deform vs rebuild",
+        run_bench);
 
 }  // namespace
 }  // namespace pcisim::bench

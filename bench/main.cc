@@ -10,7 +10,8 @@ int main(int argc, char** argv) {
   auto& entries = pcisim::bench::registry();
   const std::string name = argc > 1 ? argv[1] : "";
   if (name.empty() || name == "--help" || name == "-h" || !entries.count(name)) {
-    if (!name.empty() && name != "--help" && name != "-h") std::fprintf(stderr, "pcisim-bench: unknown benchmark '%s'\n\n", name.c_str());
+    if (!name.empty() && name != "--help" && name != "-h")
+      std::fprintf(stderr, "pcisim-bench: unknown benchmark '%s'\n\n", name.c_str());
     std::printf("usage: pcisim-bench NAME [options]   (pcisim-bench NAME --help for its options)\n\nbenchmarks:\n");
     for (const auto& [n, e] : entries) std::printf("  %-12s %s\n", n.c_str(), e.help.c_str());
     return name.empty() || name == "--help" || name == "-h" ? 0 : 2;

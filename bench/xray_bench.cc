@@ -51,13 +51,12 @@ struct Options {
 struct Row {
   std::string projector;  // exact, cpu, cuda
   int detector = 0;
-  double step = 0;        // 0 for exact
+  double step = 0;  // 0 for exact
   double median_ms = 0, p99_ms = 0;
   double cpu_ms = 0;  // process CPU time per frame (all threads); wall ~ cpu / threads when no one else runs
   int frames = 0;
   double rmse_rel = 0, max_rel = 0;  // vs exact, relative to the largest exact line integral
 };
-
 
 double process_cpu_ms() {
   timespec ts{};
@@ -97,14 +96,14 @@ void errors(const Image& got, const Image& ref, Row* row) {
 struct FluoroResult {
   int detector = 0;
   int frames = 0;
-  double build_ms = 0;          // renderer construction (phantom, attenuation)
-  double background_ms = 0;     // one background projection (on a pose change)
+  double build_ms = 0;                                             // renderer construction (phantom, attenuation)
+  double background_ms = 0;                                        // one background projection (on a pose change)
   double frame_median_ms = 0, frame_p99_ms = 0, frame_cpu_ms = 0;  // per frame, pose unchanged
-  double chain_median_ms = 0;   // of which the image chain (noise, blur, log, window)
+  double chain_median_ms = 0;                  // of which the image chain (noise, blur, log, window)
   double full_median_ms = 0, full_p99_ms = 0;  // full re-projection per frame (voxelise + mu + project + chain)
   double full_voxelise_ms = 0, full_mu_ms = 0, full_project_ms = 0;
   int full_frames = 0;
-  double rmse_rel = 0, max_rel = 0;                 // line integrals, whole image, relative to max
+  double rmse_rel = 0, max_rel = 0;                  // line integrals, whole image, relative to max
   double overlay_rmse_rel = 0, overlay_max_rel = 0;  // the added iodine + wire only, relative to its max
   std::vector<std::string> pngs;
 };
@@ -119,7 +118,8 @@ void voxelise_cone(const anatomy::Volume& v, const Eigen::Vector3d& a, const Eig
   int64_t lo[3], hi[3];
   for (int ax = 0; ax < 3; ++ax) {
     lo[ax] = std::max<int64_t>(0, static_cast<int64_t>(std::floor((std::min(a[ax], b[ax]) - rmax - o[ax]) / s[ax])));
-    hi[ax] = std::min<int64_t>(v.dims[ax] - 1, static_cast<int64_t>(std::ceil((std::max(a[ax], b[ax]) + rmax - o[ax]) / s[ax])));
+    hi[ax] = std::min<int64_t>(v.dims[ax] - 1,
+                               static_cast<int64_t>(std::ceil((std::max(a[ax], b[ax]) + rmax - o[ax]) / s[ax])));
     if (hi[ax] < lo[ax]) return;
   }
   auto inside = [&](const Eigen::Vector3d& p) {
@@ -144,8 +144,8 @@ void voxelise_cone(const anatomy::Volume& v, const Eigen::Vector3d& a, const Eig
           for (int z = 0; z < sub; ++z) {
             for (int y = 0; y < sub; ++y) {
               for (int x = 0; x < sub; ++x) {
-                const Eigen::Vector3d q = c + s.cwiseProduct(Eigen::Vector3d((x + 0.5) / sub - 0.5, (y + 0.5) / sub - 0.5,
-                                                                             (z + 0.5) / sub - 0.5));
+                const Eigen::Vector3d q = c + s.cwiseProduct(Eigen::Vector3d(
+                                                  (x + 0.5) / sub - 0.5, (y + 0.5) / sub - 0.5, (z + 0.5) / sub - 0.5));
                 in += inside(q);
               }
             }
@@ -279,13 +279,13 @@ FluoroResult run_fluoro(const Options& o) {
   }
   res.overlay_rmse_rel = n_add ? std::sqrt(se_add / n_add) / max_add : 0;
   res.overlay_max_rel = worst_add / max_add;
-  std::printf("xray: fluoro %d^2: build %.0f ms, background %.1f ms; frame median %.2f ms p99 %.2f ms (cpu %.2f, chain %.2f); "
-              "full re-projection %.0f ms (voxelise %.0f, mu %.0f, project %.0f); rmse %.4f %% max %.3f %%; "
-              "overlay part rmse %.2f %% max %.1f %%\n",
-              res.detector, res.build_ms, res.background_ms, res.frame_median_ms, res.frame_p99_ms, res.frame_cpu_ms,
-              res.chain_median_ms,
-              res.full_median_ms, res.full_voxelise_ms, res.full_mu_ms, res.full_project_ms, 100 * res.rmse_rel,
-              100 * res.max_rel, 100 * res.overlay_rmse_rel, 100 * res.overlay_max_rel);
+  std::printf(
+      "xray: fluoro %d^2: build %.0f ms, background %.1f ms; frame median %.2f ms p99 %.2f ms (cpu %.2f, chain %.2f); "
+      "full re-projection %.0f ms (voxelise %.0f, mu %.0f, project %.0f); rmse %.4f %% max %.3f %%; "
+      "overlay part rmse %.2f %% max %.1f %%\n",
+      res.detector, res.build_ms, res.background_ms, res.frame_median_ms, res.frame_p99_ms, res.frame_cpu_ms,
+      res.chain_median_ms, res.full_median_ms, res.full_voxelise_ms, res.full_mu_ms, res.full_project_ms,
+      100 * res.rmse_rel, 100 * res.max_rel, 100 * res.overlay_rmse_rel, 100 * res.overlay_max_rel);
 
   // example frames (16-bit grey, as the renderer makes them)
   auto png = [&](const std::string& name, const FluoroFrame& f) {
@@ -304,43 +304,52 @@ FluoroResult run_fluoro(const Options& o) {
   FluoroFrame full_frame = frame;
   full_frame.pixels = full_pixels;
   png("fluoro_lao30_cra20_full_reprojection.png", full_frame);
-  fr.render({.time_s = 1.6, .pose = CArmPose{-30, -20, Eigen::Vector3d::Zero()}, .wire_m = wire_m,
-             .injections = {&inj, 1}}, frame);
+  fr.render(
+      {.time_s = 1.6, .pose = CArmPose{-30, -20, Eigen::Vector3d::Zero()}, .wire_m = wire_m, .injections = {&inj, 1}},
+      frame);
   png("fluoro_rao30_cau20_contrast.png", frame);
   return res;
 }
 
 void write_fluoro_section(std::ofstream& f, const FluoroResult& fl) {
-  f << fmt::format("\n## Fluoroscopy frames: cached background + analytic overlays vs full re-projection\n\n"
-                   "`FluoroscopyRenderer` at {0}^2 (0.4 mm pixels), default `FluoroSpec`: phantom 256 x 256 x 128 at "
-                   "1.4 mm with blood-filled lumens, CPU trilinear background at 1 voxel, 2000 quanta per pixel, "
-                   "blur sigma 0.7 px; LAO 30 / CRA 20; a ~90 mm wire (LM into the LAD, 0.5 mm nodes) and a left "
-                   "injection (8 ml over 2 s) running. Per frame (pose unchanged): copy of the cached background, "
-                   "iodine through every lumen segment holding contrast, the wire, Poisson noise, blur, log and window, "
-                   "single-threaded; median and p99 of {1} frames at 15 fps simulation times after one warm-up. "
-                   "Full re-projection: the same iodine (at the same opacities) and wire voxelised into a float copy of "
-                   "the volume (partial-volume fractions from 4^3 / 8^3 sub-samples per boundary voxel), HU to mu and "
-                   "bricks rebuilt, projected with the same projector, same image chain; {2} frames.\n\n",
-                   fl.detector, fl.frames, fl.full_frames);
+  f << fmt::format(
+      "\n## Fluoroscopy frames: cached background + analytic overlays vs full re-projection\n\n"
+      "`FluoroscopyRenderer` at {0}^2 (0.4 mm pixels), default `FluoroSpec`: phantom 256 x 256 x 128 at "
+      "1.4 mm with blood-filled lumens, CPU trilinear background at 1 voxel, 2000 quanta per pixel, "
+      "blur sigma 0.7 px; LAO 30 / CRA 20; a ~90 mm wire (LM into the LAD, 0.5 mm nodes) and a left "
+      "injection (8 ml over 2 s) running. Per frame (pose unchanged): copy of the cached background, "
+      "iodine through every lumen segment holding contrast, the wire, Poisson noise, blur, log and window, "
+      "single-threaded; median and p99 of {1} frames at 15 fps simulation times after one warm-up. "
+      "Full re-projection: the same iodine (at the same opacities) and wire voxelised into a float copy of "
+      "the volume (partial-volume fractions from 4^3 / 8^3 sub-samples per boundary voxel), HU to mu and "
+      "bricks rebuilt, projected with the same projector, same image chain; {2} frames.\n\n",
+      fl.detector, fl.frames, fl.full_frames);
   f << "| scheme | median ms | p99 ms | what |\n|---|---|---|---|\n";
-  f << fmt::format("| cached background + overlays | {:.2f} | {:.2f} | per frame; process CPU {:.2f} ms per frame; "
-                   "of which the image chain (noise, blur, log, window) {:.2f} ms median |\n",
-                   fl.frame_median_ms, fl.frame_p99_ms, fl.frame_cpu_ms, fl.chain_median_ms);
-  f << fmt::format("| full re-projection | {:.0f} | {:.0f} | voxelise {:.0f} + HU to mu {:.0f} + project {:.0f} ms, + image chain |\n",
-                   fl.full_median_ms, fl.full_p99_ms, fl.full_voxelise_ms, fl.full_mu_ms, fl.full_project_ms);
-  f << fmt::format("| background projection | {:.0f} | - | once per pose change (the first frame of a pose), all threads |\n",
-                   fl.background_ms);
-  f << fmt::format("| renderer construction | {:.0f} | - | phantom + attenuation volume, once per scene |\n\n", fl.build_ms);
-  f << fmt::format("Difference of the noiseless line integrals (same frame, t = 1.2 s): RMSE {:.4f} % and worst pixel "
-                   "{:.2f} % of the largest line integral; over the footprint of the iodine and the wire alone "
-                   "(both minus the same background), RMSE {:.1f} % and worst {:.0f} % of the largest added "
-                   "integral. The analytic chords are exact for the cone model; most of the difference is the "
-                   "voxelised side (a 0.36 mm wire and 1-2 mm lumens on 1.4 mm voxels, trilinear reads).\n\n",
-                   100 * fl.rmse_rel, 100 * fl.max_rel, 100 * fl.overlay_rmse_rel, 100 * fl.overlay_max_rel);
+  f << fmt::format(
+      "| cached background + overlays | {:.2f} | {:.2f} | per frame; process CPU {:.2f} ms per frame; "
+      "of which the image chain (noise, blur, log, window) {:.2f} ms median |\n",
+      fl.frame_median_ms, fl.frame_p99_ms, fl.frame_cpu_ms, fl.chain_median_ms);
+  f << fmt::format(
+      "| full re-projection | {:.0f} | {:.0f} | voxelise {:.0f} + HU to mu {:.0f} + project {:.0f} ms, + image chain "
+      "|\n",
+      fl.full_median_ms, fl.full_p99_ms, fl.full_voxelise_ms, fl.full_mu_ms, fl.full_project_ms);
+  f << fmt::format(
+      "| background projection | {:.0f} | - | once per pose change (the first frame of a pose), all threads |\n",
+      fl.background_ms);
+  f << fmt::format("| renderer construction | {:.0f} | - | phantom + attenuation volume, once per scene |\n\n",
+                   fl.build_ms);
+  f << fmt::format(
+      "Difference of the noiseless line integrals (same frame, t = 1.2 s): RMSE {:.4f} % and worst pixel "
+      "{:.2f} % of the largest line integral; over the footprint of the iodine and the wire alone "
+      "(both minus the same background), RMSE {:.1f} % and worst {:.0f} % of the largest added "
+      "integral. The analytic chords are exact for the cone model; most of the difference is the "
+      "voxelised side (a 0.36 mm wire and 1-2 mm lumens on 1.4 mm voxels, trilinear reads).\n\n",
+      100 * fl.rmse_rel, 100 * fl.max_rel, 100 * fl.overlay_rmse_rel, 100 * fl.overlay_max_rel);
   const bool met = fl.frame_p99_ms < 1000.0 / 15;
-  f << fmt::format("Target: >= 15 frames/s at 512^2 on this machine without a GPU (per-frame work well under 60 ms): "
-                   "{:.1f} ms median, {:.1f} ms p99, i.e. {:.0f} frames/s from the median: **{}**.\n\n",
-                   fl.frame_median_ms, fl.frame_p99_ms, 1000.0 / fl.frame_median_ms, met ? "met" : "not met");
+  f << fmt::format(
+      "Target: >= 15 frames/s at 512^2 on this machine without a GPU (per-frame work well under 60 ms): "
+      "{:.1f} ms median, {:.1f} ms p99, i.e. {:.0f} frames/s from the median: **{}**.\n\n",
+      fl.frame_median_ms, fl.frame_p99_ms, 1000.0 / fl.frame_median_ms, met ? "met" : "not met");
   if (!fl.pngs.empty()) {
     f << "Example frames (16-bit PNG as the renderer outputs them; LAO 30 / CRA 20 with contrast at t = 1.6 s, the "
          "wire alone, the full re-projection at t = 1.2 s, RAO 30 / CAU 20 with contrast):\n\n";
@@ -488,48 +497,54 @@ int run(const std::vector<std::string>& args) {
   // json
   {
     std::ofstream f(o.out_dir + "/xray.json");
-    f << "{\n" << fmt::format("  \"machine\": \"{}\",\n  \"gpu\": \"{}\",\n  \"cpu_threads\": {},\n", machine,
-                              gpu_name, cpu_threads);
-    f << fmt::format("  \"quick\": {},\n  \"phantom\": {{\"dims\": [512, 512, 256], \"spacing_mm\": 0.7, \"seed\": 1, "
-                     "\"build_ms\": {:.1f}, \"attenuation_ms\": {:.1f}}},\n",
-                     o.quick, phantom_ms, mu_ms);
+    f << "{\n"
+      << fmt::format("  \"machine\": \"{}\",\n  \"gpu\": \"{}\",\n  \"cpu_threads\": {},\n", machine, gpu_name,
+                     cpu_threads);
+    f << fmt::format(
+        "  \"quick\": {},\n  \"phantom\": {{\"dims\": [512, 512, 256], \"spacing_mm\": 0.7, \"seed\": 1, "
+        "\"build_ms\": {:.1f}, \"attenuation_ms\": {:.1f}}},\n",
+        o.quick, phantom_ms, mu_ms);
     f << "  \"c_arm\": {\"primary_deg\": 30, \"secondary_deg\": 20, \"sid_mm\": 1100, \"sad_mm\": 750, "
          "\"field_mm\": 204.8},\n  \"rows\": [\n";
     for (size_t i = 0; i < rows.size(); ++i) {
       const Row& r = rows[i];
-      f << fmt::format("    {{\"projector\": \"{}\", \"detector\": {}, \"step_voxels\": {}, \"median_ms\": {:.4f}, "
-                       "\"p99_ms\": {:.4f}, \"cpu_ms\": {:.2f}, \"frames\": {}, \"rmse_rel\": {:.6g}, \"max_rel\": {:.6g}}}{}\n",
-                       r.projector, r.detector, r.step, r.median_ms, r.p99_ms, r.cpu_ms, r.frames, r.rmse_rel, r.max_rel,
-                       i + 1 < rows.size() ? "," : "");
+      f << fmt::format(
+          "    {{\"projector\": \"{}\", \"detector\": {}, \"step_voxels\": {}, \"median_ms\": {:.4f}, "
+          "\"p99_ms\": {:.4f}, \"cpu_ms\": {:.2f}, \"frames\": {}, \"rmse_rel\": {:.6g}, \"max_rel\": {:.6g}}}{}\n",
+          r.projector, r.detector, r.step, r.median_ms, r.p99_ms, r.cpu_ms, r.frames, r.rmse_rel, r.max_rel,
+          i + 1 < rows.size() ? "," : "");
     }
     f << "  ],\n";
-    f << fmt::format("  \"fluoro\": {{\"detector\": {}, \"frames\": {}, \"build_ms\": {:.1f}, \"background_ms\": {:.2f}, "
-                     "\"frame_median_ms\": {:.3f}, \"frame_p99_ms\": {:.3f}, \"frame_cpu_ms\": {:.3f}, \"chain_median_ms\": {:.3f}, "
-                     "\"full_median_ms\": {:.1f}, \"full_p99_ms\": {:.1f}, \"full_frames\": {}, \"full_voxelise_ms\": {:.1f}, "
-                     "\"full_mu_ms\": {:.1f}, \"full_project_ms\": {:.1f}, \"rmse_rel\": {:.6g}, \"max_rel\": {:.6g}, "
-                     "\"overlay_rmse_rel\": {:.6g}, \"overlay_max_rel\": {:.6g}}}\n",
-                     fl.detector, fl.frames, fl.build_ms, fl.background_ms, fl.frame_median_ms, fl.frame_p99_ms,
-                     fl.frame_cpu_ms, fl.chain_median_ms, fl.full_median_ms, fl.full_p99_ms, fl.full_frames, fl.full_voxelise_ms, fl.full_mu_ms,
-                     fl.full_project_ms, fl.rmse_rel, fl.max_rel, fl.overlay_rmse_rel, fl.overlay_max_rel);
+    f << fmt::format(
+        "  \"fluoro\": {{\"detector\": {}, \"frames\": {}, \"build_ms\": {:.1f}, \"background_ms\": {:.2f}, "
+        "\"frame_median_ms\": {:.3f}, \"frame_p99_ms\": {:.3f}, \"frame_cpu_ms\": {:.3f}, \"chain_median_ms\": {:.3f}, "
+        "\"full_median_ms\": {:.1f}, \"full_p99_ms\": {:.1f}, \"full_frames\": {}, \"full_voxelise_ms\": {:.1f}, "
+        "\"full_mu_ms\": {:.1f}, \"full_project_ms\": {:.1f}, \"rmse_rel\": {:.6g}, \"max_rel\": {:.6g}, "
+        "\"overlay_rmse_rel\": {:.6g}, \"overlay_max_rel\": {:.6g}}}\n",
+        fl.detector, fl.frames, fl.build_ms, fl.background_ms, fl.frame_median_ms, fl.frame_p99_ms, fl.frame_cpu_ms,
+        fl.chain_median_ms, fl.full_median_ms, fl.full_p99_ms, fl.full_frames, fl.full_voxelise_ms, fl.full_mu_ms,
+        fl.full_project_ms, fl.rmse_rel, fl.max_rel, fl.overlay_rmse_rel, fl.overlay_max_rel);
     f << "}\n";
   }
   // markdown
   {
     std::ofstream f(o.out_dir + "/xray.md");
     f << "# X-ray projection (DRR) benchmark\n\n";
-    f << fmt::format("Generated by `pcisim-bench xray{}` on {}; {} CPU threads{}.\n\n", o.quick ? " --quick" : "", machine,
-                     cpu_threads, gpu_name.empty() ? "; no GPU" : "; GPU: " + gpu_name);
+    f << fmt::format("Generated by `pcisim-bench xray{}` on {}; {} CPU threads{}.\n\n", o.quick ? " --quick" : "",
+                     machine, cpu_threads, gpu_name.empty() ? "; no GPU" : "; GPU: " + gpu_name);
     f << "Phantom: seeded thorax (seed 1), 512 x 512 x 256 voxels at 0.7 mm, iodine lumens at 400 HU "
       << fmt::format("(built in {:.0f} ms; HU to mu in {:.0f} ms). ", phantom_ms, mu_ms)
       << "C-arm LAO 30 / CRA 20, SID 1100 mm, SAD 750 mm, isocentre at the heart centre; 512^2 detector at 0.4 mm, "
          "1024^2 at 0.2 mm (same field). mu_water 0.02 /mm, HU < -800 is air.\n\n";
     f << "Errors are against the exact (Siddon) projection of the same geometry: RMSE and worst pixel, relative to the "
          "largest exact line integral. CPU times: wall clock per frame, median and p99 of "
-      << cpu_frames << " frames after one warm-up (p99 of so few frames is their maximum), and the process CPU time "
+      << cpu_frames
+      << " frames after one warm-up (p99 of so few frames is their maximum), and the process CPU time "
          "per frame (wall x threads when nothing else runs; more wall than that means the cores were shared). "
          "GPU times: kernel only, "
          "CUDA events, median and p99 of 100-200 launches after 10 warm-up launches.\n\n";
-    f << "| projector | detector | step (voxel) | median ms | p99 ms | CPU ms (all threads) | RMSE % of max | max % of max |\n";
+    f << "| projector | detector | step (voxel) | median ms | p99 ms | CPU ms (all threads) | RMSE % of max | max % of "
+         "max |\n";
     f << "|---|---|---|---|---|---|---|---|\n";
     for (const Row& r : rows) {
       f << fmt::format("| {} | {}^2 | {} | {:.3f} | {:.3f} | {} | {} | {} |\n", r.projector, r.detector,

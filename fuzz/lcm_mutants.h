@@ -1,8 +1,9 @@
 #pragma once
 // Every malformed shape of every pcisim LCM message, for the tests that show no handler in any
 // program lets one through or falls over, and for pcisim-lcm-flood (scripts/soak). The shapes:
-// truncation at every byte, trailing bytes, a wrong fingerprint, and for each string length and array count 0, -1, INT32_MIN, just past the end,
-// INT32_MAX and 1e8. Length fields are found in a valid encoding by their known neighbours.
+// truncation at every byte, trailing bytes, a wrong fingerprint, and for each string length and array count 0, -1,
+// INT32_MIN, just past the end, INT32_MAX and 1e8. Length fields are found in a valid encoding by their known
+// neighbours.
 #include <cstdint>
 #include <cstring>
 #include <optional>
@@ -45,7 +46,9 @@ inline Bytes cat(Bytes a, const Bytes& b) {
   return a;
 }
 
-inline Bytes text(const std::string& s) { return Bytes(s.begin(), s.end()); }
+inline Bytes text(const std::string& s) {
+  return Bytes(s.begin(), s.end());
+}
 
 // offset of the int32 length/count field that comes just before `after` in `good`
 inline size_t length_field(const Bytes& good, const Bytes& after) {
@@ -57,7 +60,8 @@ inline size_t length_field(const Bytes& good, const Bytes& after) {
 // truncations, trailing bytes, a wrong fingerprint
 inline std::vector<Mutant> framing_mutants(const Bytes& good) {
   std::vector<Mutant> out;
-  for (size_t n = 0; n < good.size(); ++n) out.push_back({"truncated to " + std::to_string(n), Bytes(good.begin(), good.begin() + n)});
+  for (size_t n = 0; n < good.size(); ++n)
+    out.push_back({"truncated to " + std::to_string(n), Bytes(good.begin(), good.begin() + n)});
   out.push_back({"one trailing byte", cat(good, {0})});
   Bytes wrong = good;
   wrong[3] ^= 0x5a;
@@ -121,7 +125,8 @@ inline MessageCase session_case() {
   m.command = pcisim_lcm::session_command_t::CMD_PAUSE;
   m.scene_path = "SCENE-PATH";
   const Bytes good = encode(m);
-  return {"session_command_t", good, all_mutants(good, {{length_field(good, text("SCENE-PATH")), "scene_path length"}})};
+  return {"session_command_t", good,
+          all_mutants(good, {{length_field(good, text("SCENE-PATH")), "scene_path length"}})};
 }
 
 inline MessageCase status_case() {

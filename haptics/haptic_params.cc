@@ -8,9 +8,13 @@ namespace pcisim::haptics {
 namespace {
 
 void require(bool ok, const char* field, const char* rule, double value) {
-  if (!ok) throw std::invalid_argument(std::string("haptics.") + field + " must be " + rule + ", got " + std::to_string(value));
+  if (!ok)
+    throw std::invalid_argument(std::string("haptics.") + field + " must be " + rule + ", got " +
+                                std::to_string(value));
 }
-bool finite_in(double x, double lo, double hi) { return std::isfinite(x) && x >= lo && x <= hi; }
+bool finite_in(double x, double lo, double hi) {
+  return std::isfinite(x) && x >= lo && x <= hi;
+}
 
 }  // namespace
 

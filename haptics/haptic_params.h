@@ -12,16 +12,16 @@ enum class Interpolation {
 
 struct HapticParams {
   Interpolation interpolation = Interpolation::kLocalModel;
-  bool passivity = true;                       // time-domain passivity observer/controller
+  bool passivity = true;  // time-domain passivity observer/controller
   double passivity_max_damping_n_s_per_m = 200.0;
   double passivity_max_damping_nm_s_per_rad = 0.05;
-  double peak_force_n = 4.0;         // |axial force| never exceeds this
-  double peak_torque_nm = 0.02;      // |torque| never exceeds this
-  double slew_n_per_s = 200.0;       // force may change at most this fast
-  double slew_nm_per_s = 1.0;        // torque likewise
-  double blend_ms = 5.0;             // a new model takes over over this long (no step)
-  double fade_ms = 50.0;             // fade to zero on stale model, silent instrument or fault
-  double ramp_in_ms = 200.0;         // ramp up on start and after a fault
+  double peak_force_n = 4.0;            // |axial force| never exceeds this
+  double peak_torque_nm = 0.02;         // |torque| never exceeds this
+  double slew_n_per_s = 200.0;          // force may change at most this fast
+  double slew_nm_per_s = 1.0;           // torque likewise
+  double blend_ms = 5.0;                // a new model takes over over this long (no step)
+  double fade_ms = 50.0;                // fade to zero on stale model, silent instrument or fault
+  double ramp_in_ms = 200.0;            // ramp up on start and after a fault
   double instrument_timeout_ms = 50.0;  // no instrument sample for this long: fade
 };
 

@@ -73,9 +73,9 @@ nlohmann::json parse_json_checked(const std::string& text, const std::string& so
 const nlohmann::json JsonReader::kEmpty = nlohmann::json::object();
 const nlohmann::json JsonReader::kEmptyList = nlohmann::json::array();
 
-JsonReader::JsonReader(const nlohmann::json& object, std::string path)
-    : object_(object), path_(std::move(path)) {
-  if (!object_.is_object()) throw JsonError(fmt::format("{}: expected an object", path_.empty() ? "(top level)" : path_));
+JsonReader::JsonReader(const nlohmann::json& object, std::string path) : object_(object), path_(std::move(path)) {
+  if (!object_.is_object())
+    throw JsonError(fmt::format("{}: expected an object", path_.empty() ? "(top level)" : path_));
 }
 
 std::string JsonReader::path_of(const std::string& key) const {
@@ -86,7 +86,9 @@ void JsonReader::fail(const std::string& key, const std::string& expected) const
   throw JsonError(fmt::format("{}: {}", path_of(key), expected));
 }
 
-bool JsonReader::has(const std::string& key) const { return object_.contains(key); }
+bool JsonReader::has(const std::string& key) const {
+  return object_.contains(key);
+}
 
 double JsonReader::number(const std::string& key, double fallback, double min, double max) {
   read_.insert(key);
@@ -121,10 +123,12 @@ std::string JsonReader::text(const std::string& key, const std::string& fallback
   read_.insert(key);
   if (!has(key)) return fallback;
   const auto& v = object_.at(key);
-  const bool ok = v.is_string() && (allowed.empty() || std::find(allowed.begin(), allowed.end(), v.get<std::string>()) != allowed.end());
+  const bool ok = v.is_string() &&
+                  (allowed.empty() || std::find(allowed.begin(), allowed.end(), v.get<std::string>()) != allowed.end());
   if (!ok)
-    fail(key, allowed.empty() ? fmt::format("expected a string, got {}", short_dump(v))
-                              : fmt::format("expected one of \"{}\", got {}", fmt::join(allowed, "\", \""), short_dump(v)));
+    fail(key, allowed.empty()
+                  ? fmt::format("expected a string, got {}", short_dump(v))
+                  : fmt::format("expected one of \"{}\", got {}", fmt::join(allowed, "\", \""), short_dump(v)));
   return v.get<std::string>();
 }
 
@@ -145,7 +149,7 @@ void JsonReader::finish() const {
   for (const auto& [key, value] : object_.items()) {
     if (read_.count(key)) continue;
     throw JsonError(fmt::format("{}: unknown key (this object accepts: {})", path_of(key),
-                                 read_.empty() ? std::string("nothing") : fmt::format("{}", fmt::join(read_, ", "))));
+                                read_.empty() ? std::string("nothing") : fmt::format("{}", fmt::join(read_, ", "))));
   }
 }
 

@@ -31,10 +31,9 @@ class JsonReader {
   double number(const std::string& key, double fallback, double min, double max);
   int integer(const std::string& key, int fallback, int min, int max);
   bool boolean(const std::string& key, bool fallback);
-  std::string text(const std::string& key, const std::string& fallback,
-                   const std::vector<std::string>& allowed = {});
+  std::string text(const std::string& key, const std::string& fallback, const std::vector<std::string>& allowed = {});
   bool has(const std::string& key) const;
-  JsonReader child(const std::string& key);  // an object; {} when absent
+  JsonReader child(const std::string& key);            // an object; {} when absent
   const nlohmann::json& list(const std::string& key);  // an array; [] when absent
 
   // throws if any key was never read, listing the keys this object accepts

@@ -12,15 +12,15 @@
 namespace pcisim::physics {
 
 struct LocalForceModel {
-  int64_t made_utime = 0;     // physics time stamp of the step that produced it (µs)
-  int64_t valid_for_us = 0;   // evaluate no longer than this after made_utime; 0 = invalid model
-  double x0_m = 0.0;          // insertion the model was linearised at
-  double f0_n = 0.0;          // axial force at x0 (positive resists insertion)
-  double k_n_per_m = 0.0;     // d(force)/d(insertion), >= 0
-  double b_n_s_per_m = 0.0;   // damping along insertion, >= 0 (resists the insertion rate)
-  double q0_rad = 0.0;        // rotation the model was linearised at
-  double t0_nm = 0.0;         // torque at q0
-  double kt_nm_per_rad = 0.0; // d(torque)/d(rotation), >= 0
+  int64_t made_utime = 0;      // physics time stamp of the step that produced it (µs)
+  int64_t valid_for_us = 0;    // evaluate no longer than this after made_utime; 0 = invalid model
+  double x0_m = 0.0;           // insertion the model was linearised at
+  double f0_n = 0.0;           // axial force at x0 (positive resists insertion)
+  double k_n_per_m = 0.0;      // d(force)/d(insertion), >= 0
+  double b_n_s_per_m = 0.0;    // damping along insertion, >= 0 (resists the insertion rate)
+  double q0_rad = 0.0;         // rotation the model was linearised at
+  double t0_nm = 0.0;          // torque at q0
+  double kt_nm_per_rad = 0.0;  // d(torque)/d(rotation), >= 0
   double bt_nm_s_per_rad = 0.0;
 };
 

@@ -4,6 +4,8 @@
 
 namespace pcisim::physics {
 
-std::string ParamRange::describe() const { return fmt::format("[{}, {}]", min, max); }
+std::string ParamRange::describe() const {
+  return fmt::format("[{}, {}]", min, max);
+}
 
 }  // namespace pcisim::physics

@@ -12,7 +12,9 @@ inline void require(bool ok, const std::string& what) {
 }
 
 // finite and within [lo, hi]
-inline bool in(double x, double lo, double hi) { return std::isfinite(x) && x >= lo && x <= hi; }
+inline bool in(double x, double lo, double hi) {
+  return std::isfinite(x) && x >= lo && x <= hi;
+}
 
 // a parameter's allowed range, defined once beside its params struct: the component validates
 // with it and the scene loader reads with it, so the two cannot disagree

@@ -259,25 +259,49 @@ void World::write_snapshot(WorldSnapshot& out) const {
   out.tip_m = out.wire_nodes_m.back();
 }
 
-LocalForceModel World::force_model() const { return impl_->model; }
-std::span<const EffectCost> World::effect_costs() const { return impl_->costs; }
-double World::time_s() const { return impl_->time_s; }
-int64_t World::rejected_inputs() const { return impl_->guard.rejected(); }
+LocalForceModel World::force_model() const {
+  return impl_->model;
+}
+std::span<const EffectCost> World::effect_costs() const {
+  return impl_->costs;
+}
+double World::time_s() const {
+  return impl_->time_s;
+}
+int64_t World::rejected_inputs() const {
+  return impl_->guard.rejected();
+}
 double World::refused_feed_m() const {
   return impl_->wire ? impl_->wire->commanded_feed_m() - impl_->wire->fed_length_m() : 0.0;
 }
 
-const ChainMailWire* World::guidewire_state() const { return impl_->wire ? &*impl_->wire : nullptr; }
-const WallContact* World::contact_state() const { return impl_->contact ? &*impl_->contact : nullptr; }
+const ChainMailWire* World::guidewire_state() const {
+  return impl_->wire ? &*impl_->wire : nullptr;
+}
+const WallContact* World::contact_state() const {
+  return impl_->contact ? &*impl_->contact : nullptr;
+}
 const CoulombFriction* World::friction_state() const {
   return impl_->friction ? &*impl_->friction : nullptr;
 }
-const LumenQuery* World::lumen() const { return impl_->lumen.get(); }
-const anatomy::VesselTree& World::vessel_tree() const { return impl_->tree; }
-const HeartFitReport& World::heart_fit() const { return impl_->heart_fit; }
+const LumenQuery* World::lumen() const {
+  return impl_->lumen.get();
+}
+const anatomy::VesselTree& World::vessel_tree() const {
+  return impl_->tree;
+}
+const HeartFitReport& World::heart_fit() const {
+  return impl_->heart_fit;
+}
 
-const BeatingHeart* World::heart_state() const { return impl_->heart ? &*impl_->heart : nullptr; }
-const VesselSkin* World::vessel_skin() const { return impl_->skin ? &*impl_->skin : nullptr; }
-const BloodChainMail* World::blood_state() const { return impl_->blood ? &*impl_->blood : nullptr; }
+const BeatingHeart* World::heart_state() const {
+  return impl_->heart ? &*impl_->heart : nullptr;
+}
+const VesselSkin* World::vessel_skin() const {
+  return impl_->skin ? &*impl_->skin : nullptr;
+}
+const BloodChainMail* World::blood_state() const {
+  return impl_->blood ? &*impl_->blood : nullptr;
+}
 
 }  // namespace pcisim::physics

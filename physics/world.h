@@ -69,12 +69,12 @@ class World {
   const ChainMailWire* guidewire_state() const;
   const WallContact* contact_state() const;
   const CoulombFriction* friction_state() const;
-  const LumenQuery* lumen() const;  // the contact geometry (null without vessel_contact)
+  const LumenQuery* lumen() const;                 // the contact geometry (null without vessel_contact)
   const anatomy::VesselTree& vessel_tree() const;  // at rest; empty without guidewire and vessel_motion
   const BeatingHeart* heart_state() const;
   // how the template heart was fitted under this scene's tree (vessel_motion; all zero otherwise)
   const HeartFitReport& heart_fit() const;
-  const VesselSkin* vessel_skin() const;   // the tree now (vessel_motion)
+  const VesselSkin* vessel_skin() const;  // the tree now (vessel_motion)
   const BloodChainMail* blood_state() const;
 
  private:

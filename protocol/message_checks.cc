@@ -32,8 +32,7 @@ bool is_well_formed(const pcisim_lcm::wire_state_t& m) {
   if (m.num_nodes < 0 || m.node_mm.size() != static_cast<size_t>(m.num_nodes)) return false;
   for (const auto& p : m.node_mm)
     if (!finite(p[0], p[1], p[2])) return false;
-  return finite(m.sim_time_s, m.insertion_mm, m.rotation_rad, m.tip_mm[0], m.tip_mm[1],
-                m.tip_mm[2], m.heart_phase);
+  return finite(m.sim_time_s, m.insertion_mm, m.rotation_rad, m.tip_mm[0], m.tip_mm[1], m.tip_mm[2], m.heart_phase);
 }
 
 bool is_well_formed(const pcisim_lcm::sim_status_t& m) {
@@ -41,10 +40,9 @@ bool is_well_formed(const pcisim_lcm::sim_status_t& m) {
   for (double v : m.effect_step_ms_p50)
     if (!finite(v)) return false;
   if (!finite(m.fluoro_time_s, m.carm_primary_deg, m.carm_secondary_deg, m.contrast_ml)) return false;
-  return finite(m.haptic_rate_hz, m.haptic_period_us_p50, m.haptic_period_us_p99,
-                m.haptic_period_us_p999, m.haptic_period_us_max, m.haptic_compute_us_p50,
-                m.haptic_compute_us_p99, m.haptic_compute_us_max, m.physics_rate_hz,
-                m.physics_step_ms_p50, m.physics_step_ms_p99, m.physics_step_ms_max, m.xray_fps);
+  return finite(m.haptic_rate_hz, m.haptic_period_us_p50, m.haptic_period_us_p99, m.haptic_period_us_p999,
+                m.haptic_period_us_max, m.haptic_compute_us_p50, m.haptic_compute_us_p99, m.haptic_compute_us_max,
+                m.physics_rate_hz, m.physics_step_ms_p50, m.physics_step_ms_p99, m.physics_step_ms_max, m.xray_fps);
 }
 
 bool is_well_formed(const pcisim_lcm::xray_frame_t& m) {
@@ -59,8 +57,8 @@ bool is_well_formed(const pcisim_lcm::xray_frame_t& m) {
     if (!finite(m.source_mm[k], m.detector_center_mm[k], m.detector_u[k], m.detector_v[k])) return false;
   for (const auto& p : m.wire_mm)
     if (!finite(p[0], p[1], p[2])) return false;
-  return finite(m.primary_angle_deg, m.secondary_angle_deg, m.source_to_image_mm,
-                m.source_to_axis_mm, m.pixel_mm, m.sim_time_s);
+  return finite(m.primary_angle_deg, m.secondary_angle_deg, m.source_to_image_mm, m.source_to_axis_mm, m.pixel_mm,
+                m.sim_time_s);
 }
 
 }  // namespace pcisim::protocol

@@ -23,7 +23,9 @@ bool is_well_formed(const pcisim_lcm::xray_frame_t& m);
 
 // CMD_CONTRAST: the volume a command may name (0.5-30 ml); outside it, or 0, the scene's volume is
 // injected. One rule for the server, which injects, and the clients that count what was used.
-inline bool is_commanded_contrast_volume(double ml) { return ml >= 0.5 && ml <= 30.0; }  // false for NaN
+inline bool is_commanded_contrast_volume(double ml) {
+  return ml >= 0.5 && ml <= 30.0;
+}  // false for NaN
 
 // decodes data into out; false on a wrong fingerprint, truncation, trailing bytes, a bad length or
 // count, or a bad field. The one path every handler in every program decodes through: whatever

@@ -22,8 +22,7 @@ int64_t LatencyHistogram::bucket_low_ns(int bucket) {
 void LatencyHistogram::record(int64_t value_ns) {
   counts_[bucket_of(value_ns)].fetch_add(1, std::memory_order_relaxed);
   int64_t seen = max_ns_.load(std::memory_order_relaxed);
-  while (value_ns > seen && !max_ns_.compare_exchange_weak(seen, value_ns, std::memory_order_relaxed)) {
-  }
+  while (value_ns > seen && !max_ns_.compare_exchange_weak(seen, value_ns, std::memory_order_relaxed)) {}
 }
 
 void LatencyHistogram::reset() {

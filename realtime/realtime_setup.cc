@@ -16,7 +16,9 @@ bool try_sched_fifo(int priority) {
   return pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp) == 0;
 }
 
-bool try_mlockall() { return mlockall(MCL_CURRENT | MCL_FUTURE) == 0; }
+bool try_mlockall() {
+  return mlockall(MCL_CURRENT | MCL_FUTURE) == 0;
+}
 
 CpuLatencyRequest::CpuLatencyRequest(int latency_us) {
   if (latency_us < 0) return;

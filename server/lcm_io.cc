@@ -127,8 +127,12 @@ void LcmIo::on_session(const lcm::ReceiveBuffer* rbuf, const std::string&) {
       }
       request_scene(session_msg_.scene_path);
       break;
-    case C::CMD_FLUORO_PEDAL: state_.fluoro_pedal_console = session_msg_.pedal_down != 0; break;
-    case C::CMD_CINE: state_.cine_console = session_msg_.pedal_down != 0; break;
+    case C::CMD_FLUORO_PEDAL:
+      state_.fluoro_pedal_console = session_msg_.pedal_down != 0;
+      break;
+    case C::CMD_CINE:
+      state_.cine_console = session_msg_.pedal_down != 0;
+      break;
     case C::CMD_CARM:
       if (std::abs(session_msg_.primary_angle_deg) > 180 || std::abs(session_msg_.secondary_angle_deg) > 90) {
         refuse("C-arm move", fmt::format("angles ({}, {}) out of range", session_msg_.primary_angle_deg,
@@ -142,7 +146,9 @@ void LcmIo::on_session(const lcm::ReceiveBuffer* rbuf, const std::string&) {
       state_.carm_target_seq.fetch_add(1, std::memory_order_acq_rel);  // even: whole
       state_.carm_requests.fetch_add(1, std::memory_order_relaxed);
       break;
-    case C::CMD_CONTRAST: add_injection(session_msg_.contrast_ml, session_msg_.contrast_ml_s); break;
+    case C::CMD_CONTRAST:
+      add_injection(session_msg_.contrast_ml, session_msg_.contrast_ml_s);
+      break;
     default:
       refuse("command", fmt::format("unknown command {}", static_cast<int>(session_msg_.command)));
   }
@@ -182,7 +188,8 @@ void LcmIo::add_injection(double volume_ml, double rate_ml_per_s) {
   }
   state_.injection_start_s[n] = state_.sim_time_s.load(std::memory_order_relaxed);
   state_.injection_volume_ml[n] = volume_ok ? volume_ml : 0.0;
-  const double duration_s = volume_ok && std::isfinite(rate_ml_per_s) && rate_ml_per_s > 0 ? volume_ml / rate_ml_per_s : 0.0;
+  const double duration_s =
+      volume_ok && std::isfinite(rate_ml_per_s) && rate_ml_per_s > 0 ? volume_ml / rate_ml_per_s : 0.0;
   state_.injection_duration_s[n] = duration_s >= 0.2 && duration_s <= 10.0 ? duration_s : 0.0;
   state_.injections.store(n + 1, std::memory_order_release);
 }

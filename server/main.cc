@@ -15,7 +15,9 @@
 namespace {
 
 std::atomic<bool> g_stop{false};
-extern "C" void on_signal(int) { g_stop = true; }
+extern "C" void on_signal(int) {
+  g_stop = true;
+}
 
 }  // namespace
 
@@ -82,12 +84,12 @@ int main(int argc, char** argv) {
     try {
       // the phantom with its CT at the resolution the scene's fluoroscopy projects, so running on
       // the written case gives the frames the seed gives
-      const pcisim::anatomy::Case c = scene.case_dir.empty() ? pcisim::anatomy::make_phantom_case(phantom_case_spec(scene))
-                                                            : read_case_folder(scene.case_dir);
+      const pcisim::anatomy::Case c = scene.case_dir.empty()
+                                          ? pcisim::anatomy::make_phantom_case(phantom_case_spec(scene))
+                                          : read_case_folder(scene.case_dir);
       pcisim::anatomy::write_case(c, write_case_dir);
       std::cout << "wrote case '" << c.name << "' to " << write_case_dir << " (" << c.vessels.branches.size()
-                << " branches, " << c.lumen.triangles.size() << " lumen triangles"
-                << (c.ct ? ", CT" : "") << ")\n";
+                << " branches, " << c.lumen.triangles.size() << " lumen triangles" << (c.ct ? ", CT" : "") << ")\n";
     } catch (const std::exception& e) {
       std::cerr << "pcisim-server: cannot write the case: " << e.what() << "\n";
       return 1;

@@ -8,7 +8,10 @@
 namespace pcisim::server {
 
 PhysicsLoop::PhysicsLoop(const Scene& scene, std::shared_ptr<const anatomy::Case> anatomy, SharedState& state)
-    : spec_(scene.world), case_(std::move(anatomy)), state_(state), rate_hz_(scene.physics_rate_hz),
+    : spec_(scene.world),
+      case_(std::move(anatomy)),
+      state_(state),
+      rate_hz_(scene.physics_rate_hz),
       world_(std::make_unique<physics::World>(spec_, case_->vessels)) {
   for (const auto& cost : world_->effect_costs()) {
     effects_.push_back(std::make_unique<EffectStats>());

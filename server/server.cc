@@ -92,8 +92,8 @@ Server::Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images, SessionL
   const int64_t t0 = realtime::monotonic_ns();
   impl_->anatomy = build_case(scene);
   const anatomy::Case& anatomy = *impl_->anatomy;
-  spdlog::info("anatomy '{}': {} branches, lumen {} triangles, {} ({:.0f} ms)", anatomy.name, anatomy.vessels.branches.size(),
-               anatomy.lumen.triangles.size(),
+  spdlog::info("anatomy '{}': {} branches, lumen {} triangles, {} ({:.0f} ms)", anatomy.name,
+               anatomy.vessels.branches.size(), anatomy.lumen.triangles.size(),
                anatomy.ct ? fmt::format("CT {}x{}x{}", anatomy.ct->dims[0], anatomy.ct->dims[1], anatomy.ct->dims[2])
                           : std::string("no CT"),
                (realtime::monotonic_ns() - t0) * 1e-6);
@@ -101,8 +101,8 @@ Server::Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images, SessionL
   impl_->physics = std::make_unique<PhysicsLoop>(scene, impl_->anatomy, impl_->state);
   spdlog::info("world built in {:.0f} ms", (realtime::monotonic_ns() - t_world) * 1e-6);
   if (const auto& fit = impl_->physics->world().heart_fit(); fit.branches_lifted > 0)
-    spdlog::info("heart fitted under {}: {} branch(es) lifted clear, epicardium dented up to {:.1f} mm",
-                 anatomy.name, fit.branches_lifted, fit.max_dent_m * 1e3);
+    spdlog::info("heart fitted under {}: {} branch(es) lifted clear, epicardium dented up to {:.1f} mm", anatomy.name,
+                 fit.branches_lifted, fit.max_dent_m * 1e3);
   // branch names for wire_state_t and the log: the case's tree, the one physics runs on
   std::vector<std::string> names;
   for (const auto& b : anatomy.vessels.branches) names.push_back(b.name);
@@ -110,9 +110,9 @@ Server::Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images, SessionL
   if (scene.xray) {
     const int64_t t1 = realtime::monotonic_ns();
     impl_->xray = std::make_unique<XrayLoop>(scene, anatomy, impl_->state, images);
-    spdlog::info("fluoroscopy ready in {:.0f} ms ({}x{} detector, {} fps, frames {})", (realtime::monotonic_ns() - t1) * 1e-6,
-                 scene.xray->fluoro.c_arm.width, scene.xray->fluoro.c_arm.height, scene.xray->pulse_rate_fps,
-                 images ? "published" : "not published");
+    spdlog::info("fluoroscopy ready in {:.0f} ms ({}x{} detector, {} fps, frames {})",
+                 (realtime::monotonic_ns() - t1) * 1e-6, scene.xray->fluoro.c_arm.width,
+                 scene.xray->fluoro.c_arm.height, scene.xray->pulse_rate_fps, images ? "published" : "not published");
   }
 }
 
@@ -122,8 +122,9 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   Impl& m = *impl_;
   const bool locked = realtime::try_mlockall();
   const realtime::CpuLatencyRequest latency(cpu_latency_us);
-  LcmIo io(m.lcm, m.state, *m.limits, m.scene.xray ? m.scene.xray->injection_volume_ml : 0.0, [&m] { return m.status(); },
-           branch_namer);
+  LcmIo io(
+      m.lcm, m.state, *m.limits, m.scene.xray ? m.scene.xray->injection_volume_ml : 0.0, [&m] { return m.status(); },
+      branch_namer);
 
   m.start_ns = m.last_status_ns = realtime::monotonic_ns();
   io.start();
@@ -150,8 +151,8 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
       spdlog::info("t={:5.1f}s  insertion {:6.1f} mm  rotation {:6.2f} rad  tip in {}  contacts {:3d}  haptic {} ticks",
                    (realtime::monotonic_ns() - m.start_ns) * 1e-9, m.state.wire_insertion_mm.load(),
                    m.state.wire_rotation_rad.load(),
-                   branch_namer && branch >= 0 ? branch_namer(branch) : std::string("-"),
-                   m.state.wire_contacts.load(), m.state.haptic.iterations.load());
+                   branch_namer && branch >= 0 ? branch_namer(branch) : std::string("-"), m.state.wire_contacts.load(),
+                   m.state.haptic.iterations.load());
     }
   }
 

@@ -32,7 +32,8 @@ bool SessionLimits::allow_injection(int64_t now_ns, double volume_ml) {
   // the n-th newest injection must be a minute old before another may start
   const int n = params_.max_injections_per_min;
   const int64_t booked = injections_.load(std::memory_order_relaxed);
-  const bool rate_ok = n > 0 && (booked < n || now_ns - injection_ns_[(ring_next_ - n + kWindow) % kWindow] >= 60'000'000'000);
+  const bool rate_ok =
+      n > 0 && (booked < n || now_ns - injection_ns_[(ring_next_ - n + kWindow) % kWindow] >= 60'000'000'000);
   const bool volume_ok = std::isfinite(volume_ml) && contrast_ml() + volume_ml <= params_.max_contrast_ml + 1e-9;
   if (!rate_ok || !volume_ok) {
     injections_refused_.fetch_add(1, std::memory_order_relaxed);

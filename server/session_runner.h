@@ -15,9 +15,9 @@
 namespace pcisim::server {
 
 struct SessionOptions {
-  double duration_s = 0;           // running time of all pipelines together; 0: until stopped
-  int cpu_latency_us = 0;          // PM QoS while running; < 0 leaves the CPUs alone
-  std::string image_url;           // the frames' LCM URL, opened when a scene has x-ray
+  double duration_s = 0;   // running time of all pipelines together; 0: until stopped
+  int cpu_latency_us = 0;  // PM QoS while running; < 0 leaves the CPUs alone
+  std::string image_url;   // the frames' LCM URL, opened when a scene has x-ray
 };
 
 // throws when the first scene cannot be built (there is nothing to fall back to); returns the

@@ -100,8 +100,8 @@ struct SharedState {
   std::array<double, kMaxInjections> injection_start_s{};  // sim time of each contrast injection
   // each injection's volume and duration; 0: the scene's contrast.injection_ml / injection_s
   std::array<double, kMaxInjections> injection_volume_ml{}, injection_duration_s{};
-  std::atomic<int> injections{0};                           // entries written (single writer: lcm rx)
-  bool contrast_button_down = false;                        // lcm rx only: edge detection
+  std::atomic<int> injections{0};     // entries written (single writer: lcm rx)
+  bool contrast_button_down = false;  // lcm rx only: edge detection
   realtime::LatencyHistogram xray_render_ns;
   std::atomic<int64_t> xray_frames{0};
   std::atomic<int64_t> xray_on_ns{0};  // time with the pedal down

@@ -5,12 +5,10 @@
 namespace pcisim::server {
 
 Percentiles percentiles(const realtime::LatencyHistogram& h, double scale) {
-  return {h.quantile_ns(0.5) * scale, h.quantile_ns(0.99) * scale, h.quantile_ns(0.999) * scale,
-          h.max_ns() * scale};
+  return {h.quantile_ns(0.5) * scale, h.quantile_ns(0.99) * scale, h.quantile_ns(0.999) * scale, h.max_ns() * scale};
 }
 
-StatsReport collect_stats(const SharedState& state, const PhysicsLoop& physics, double elapsed_s,
-                          bool haptic_fifo) {
+StatsReport collect_stats(const SharedState& state, const PhysicsLoop& physics, double elapsed_s, bool haptic_fifo) {
   StatsReport r;
   r.elapsed_s = elapsed_s;
   r.haptic_ticks = state.haptic.iterations.load();
@@ -27,7 +25,8 @@ StatsReport collect_stats(const SharedState& state, const PhysicsLoop& physics, 
   r.physics_step_ms = percentiles(state.physics.compute_ns, 1e-6);
   r.physics_period_ms = percentiles(state.physics.period_ns, 1e-6);
   r.physics_overruns = state.physics.overruns.load();
-  for (const auto& e : physics.effects()) r.effect_step_ms_p50.emplace_back(e->name, e->step_ns.quantile_ns(0.5) * 1e-6);
+  for (const auto& e : physics.effects())
+    r.effect_step_ms_p50.emplace_back(e->name, e->step_ns.quantile_ns(0.5) * 1e-6);
   r.lcm_rx = state.lcm_rx.load();
   r.lcm_tx = state.lcm_tx.load();
   r.lcm_dropped_bad = state.lcm_dropped_bad.load();

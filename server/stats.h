@@ -40,8 +40,7 @@ struct StatsReport {
 Percentiles percentiles(const realtime::LatencyHistogram& h, double scale);
 
 // rates are those the loops achieved while running; elapsed_s is the whole run
-StatsReport collect_stats(const SharedState& state, const PhysicsLoop& physics, double elapsed_s,
-                          bool haptic_fifo);
+StatsReport collect_stats(const SharedState& state, const PhysicsLoop& physics, double elapsed_s, bool haptic_fifo);
 nlohmann::json to_json(const StatsReport& r);
 pcisim_lcm::sim_status_t to_message(const StatsReport& r, int64_t utime, int64_t seq, bool paused);
 std::string human_summary(const StatsReport& r);

@@ -13,8 +13,8 @@ namespace pcisim::server {
 XrayLoop::XrayLoop(const Scene& scene, const anatomy::Case& anatomy, SharedState& state, lcm::LCM* images)
     : spec_(*scene.xray), state_(state), images_(images) {
   // the case physics runs on: its vessels for the contrast, its CT (or the thorax) behind them
-  renderer_ = std::make_unique<xray::FluoroscopyRenderer>(anatomy.vessels, xray::background_volume(anatomy, spec_.fluoro),
-                                                          spec_.fluoro);
+  renderer_ = std::make_unique<xray::FluoroscopyRenderer>(anatomy.vessels,
+                                                          xray::background_volume(anatomy, spec_.fluoro), spec_.fluoro);
   injections_.reserve(SharedState::kMaxInjections);
   state_.carm_primary_deg = state_.carm_target_primary_deg = spec_.initial_pose.primary_deg;
   state_.carm_secondary_deg = state_.carm_target_secondary_deg = spec_.initial_pose.secondary_deg;
@@ -121,8 +121,8 @@ void XrayLoop::run() {
     realtime::sleep_until_ns(schedule.deadline_ns());
     const int64_t wake_ns = realtime::monotonic_ns();
     const bool cine = state_.instrument_pedal_down(state_.cine_instrument, wake_ns) || state_.cine_console;
-    const bool on = cine || state_.instrument_pedal_down(state_.fluoro_pedal_instrument, wake_ns) ||
-                    state_.fluoro_pedal_console;
+    const bool on =
+        cine || state_.instrument_pedal_down(state_.fluoro_pedal_instrument, wake_ns) || state_.fluoro_pedal_console;
     if (cine && !was_cine_) ++cine_run_;
     was_cine_ = cine;
     const double rate = cine ? spec_.cine_rate_fps : spec_.pulse_rate_fps;

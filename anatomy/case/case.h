@@ -19,11 +19,11 @@ struct Landmark {
 };
 
 struct Case {
-  std::string name;               // for logs and status
-  VesselTree vessels;             // centerlines and radii, metres
-  TriangleMesh lumen;             // the lumen surface, metres, closed; empty when the case has none
-  std::optional<Volume> ct;       // CT in HU, mm
-  bool ct_lumen_enhanced = false; // the CT's lumens hold contrast (a CT angiogram) rather than blood
+  std::string name;                // for logs and status
+  VesselTree vessels;              // centerlines and radii, metres
+  TriangleMesh lumen;              // the lumen surface, metres, closed; empty when the case has none
+  std::optional<Volume> ct;        // CT in HU, mm
+  bool ct_lumen_enhanced = false;  // the CT's lumens hold contrast (a CT angiogram) rather than blood
   std::vector<Landmark> landmarks;
 };
 

@@ -32,7 +32,8 @@ std::string member_file(const fs::path& dir, const std::string& case_json, const
     fail(case_json, field, fmt::format("'{}' must be a file name inside the case folder", name));
   const fs::path full = dir / p;
   std::error_code ec;
-  if (!fs::is_regular_file(full, ec)) fail(case_json, field, fmt::format("file '{}' not found in {}", name, dir.string()));
+  if (!fs::is_regular_file(full, ec))
+    fail(case_json, field, fmt::format("file '{}' not found in {}", name, dir.string()));
   return full.string();
 }
 
@@ -50,8 +51,9 @@ void check_vessels_inside(const VesselTree& tree, const Volume& ct, const std::s
       if (!inside)
         fail(vessels_file, fmt::format("branches[{}] ({}).points[{}]", b, branch.name, i),
              fmt::format("at ({:.1f}, {:.1f}, {:.1f}) mm, outside the CT {} (voxel index {:.1f}, {:.1f}, {:.1f} of "
-                         "{}x{}x{})", p_mm.x(), p_mm.y(), p_mm.z(), fs::path(ct_file).filename().string(), ijk.x(),
-                         ijk.y(), ijk.z(), ct.dims[0], ct.dims[1], ct.dims[2]));
+                         "{}x{}x{})",
+                         p_mm.x(), p_mm.y(), p_mm.z(), fs::path(ct_file).filename().string(), ijk.x(), ijk.y(), ijk.z(),
+                         ct.dims[0], ct.dims[1], ct.dims[2]));
     }
   }
 }
@@ -99,7 +101,8 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
   const std::string case_json = (dir / "case.json").string();
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw CaseError(fmt::format("{}: not a case folder (no such directory)", dir_name));
-  if (!fs::is_regular_file(case_json, ec)) throw CaseError(fmt::format("{}: missing (a case folder needs case.json)", case_json));
+  if (!fs::is_regular_file(case_json, ec))
+    throw CaseError(fmt::format("{}: missing (a case folder needs case.json)", case_json));
   Case c;
   std::string vessels_file, ct_file, ct_dicom;
   try {
@@ -120,14 +123,16 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
     if (r.has("ct")) {
       json::JsonReader ct = r.child("ct");
       // a volume file, or a DICOM series folder
-      if (ct.has("dicom") == ct.has("file")) ct.fail("file", "expected either \"file\" (NRRD/MetaImage) or \"dicom\" (a series folder)");
+      if (ct.has("dicom") == ct.has("file"))
+        ct.fail("file", "expected either \"file\" (NRRD/MetaImage) or \"dicom\" (a series folder)");
       if (ct.has("file")) ct_file = member_file(dir, case_json, "ct.file", ct.text("file", ""));
       if (ct.has("dicom")) {
         const std::string name = ct.text("dicom", "");
         if (name.empty() || fs::path(name).is_absolute() || name.find("..") != std::string::npos)
           fail(case_json, "ct.dicom", fmt::format("'{}' must be a folder inside the case folder", name));
         ct_dicom = (dir / name).string();
-        if (!fs::is_directory(ct_dicom, ec)) fail(case_json, "ct.dicom", fmt::format("folder '{}' not found in {}", name, dir.string()));
+        if (!fs::is_directory(ct_dicom, ec))
+          fail(case_json, "ct.dicom", fmt::format("folder '{}' not found in {}", name, dir.string()));
         if (!read_dicom) fail(case_json, "ct.dicom", "this program was built without the DICOM reader (ITK)");
       }
       c.ct_lumen_enhanced = ct.boolean("lumen_enhanced", true);

@@ -33,7 +33,8 @@ void write_case_overview(const Case& c, const std::string& png_path) {
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
   if (c.ct) {
     for (int k = 0; k < 8; ++k) {
-      const Eigen::Vector3d ijk((k & 1) ? c.ct->dims[0] - 1 : 0, (k & 2) ? c.ct->dims[1] - 1 : 0, (k & 4) ? c.ct->dims[2] - 1 : 0);
+      const Eigen::Vector3d ijk((k & 1) ? c.ct->dims[0] - 1 : 0, (k & 2) ? c.ct->dims[1] - 1 : 0,
+                                (k & 4) ? c.ct->dims[2] - 1 : 0);
       const Eigen::Vector3d p = c.ct->index_to_physical_mm(ijk);
       lo = lo.cwiseMin(p);
       hi = hi.cwiseMax(p);

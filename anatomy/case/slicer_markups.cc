@@ -16,18 +16,17 @@ void write_markups_curve(const VesselBranch& branch, const std::string& path) {
                       {"position", {p.x(), p.y(), p.z()}},
                       {"positionStatus", "defined"}});
   }
-  const json doc = {
-      {"@schema",
-       "https://raw.githubusercontent.com/slicer/slicer/master/Modules/Loadable/Markups/Resources/Schema/"
-       "markups-schema-v1.0.3.json#"},
-      {"markups",
-       {{{"type", "Curve"},
-         {"coordinateSystem", "LPS"},
-         {"coordinateUnits", "mm"},
-         {"locked", true},
-         {"labelFormat", branch.name + "-%d"},
-         {"controlPoints", points},
-         {"display", {{"pointLabelsVisibility", false}, {"glyphScale", 0.5}}}}}}};
+  const json doc = {{"@schema",
+                     "https://raw.githubusercontent.com/slicer/slicer/master/Modules/Loadable/Markups/Resources/Schema/"
+                     "markups-schema-v1.0.3.json#"},
+                    {"markups",
+                     {{{"type", "Curve"},
+                       {"coordinateSystem", "LPS"},
+                       {"coordinateUnits", "mm"},
+                       {"locked", true},
+                       {"labelFormat", branch.name + "-%d"},
+                       {"controlPoints", points},
+                       {"display", {{"pointLabelsVisibility", false}, {"glyphScale", 0.5}}}}}}};
   std::ofstream out(path);
   out << doc.dump(1) << '\n';
   if (!out) throw std::runtime_error(path + ": cannot write");

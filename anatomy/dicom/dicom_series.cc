@@ -20,8 +20,8 @@ namespace fs = std::filesystem;
 
 struct Slice {
   std::string file;
-  Eigen::Vector3d position_mm;           // ImagePositionPatient (0020,0032)
-  Eigen::Vector3d row_dir, column_dir;   // ImageOrientationPatient (0020,0037)
+  Eigen::Vector3d position_mm;                       // ImagePositionPatient (0020,0032)
+  Eigen::Vector3d row_dir, column_dir;               // ImageOrientationPatient (0020,0037)
   double row_spacing_mm = 0, column_spacing_mm = 0;  // PixelSpacing (0028,0030)
   double along_normal_mm = 0;
 };
@@ -61,14 +61,17 @@ Slice read_slice_header(const std::string& file) {
   return s;
 }
 
-std::string name_of(const std::string& file) { return fs::path(file).filename().string(); }
+std::string name_of(const std::string& file) {
+  return fs::path(file).filename().string();
+}
 
 // every slice like the first, stacked along its normal at one spacing; returns that spacing
 double check_stack(std::vector<Slice>& slices, const std::string& folder) {
   const Slice& first = slices.front();
   const Eigen::Vector3d normal = first.row_dir.cross(first.column_dir);
   if (std::abs(first.row_dir.dot(first.column_dir)) > 1e-3 || normal.norm() < 0.99)
-    throw DicomError(first.file + ": ImageOrientationPatient: row and column directions are not orthogonal unit vectors");
+    throw DicomError(first.file +
+                     ": ImageOrientationPatient: row and column directions are not orthogonal unit vectors");
   for (auto& s : slices) {
     if ((s.row_dir - first.row_dir).norm() > 1e-4 || (s.column_dir - first.column_dir).norm() > 1e-4)
       throw DicomError(s.file + ": ImageOrientationPatient differs from " + name_of(first.file) + "'s");
@@ -77,19 +80,22 @@ double check_stack(std::vector<Slice>& slices, const std::string& folder) {
       throw DicomError(s.file + ": PixelSpacing differs from " + name_of(first.file) + "'s");
     s.along_normal_mm = normal.dot(s.position_mm);
   }
-  std::sort(slices.begin(), slices.end(), [](const Slice& a, const Slice& b) { return a.along_normal_mm < b.along_normal_mm; });
+  std::sort(slices.begin(), slices.end(),
+            [](const Slice& a, const Slice& b) { return a.along_normal_mm < b.along_normal_mm; });
   std::vector<double> gaps;
   for (size_t i = 1; i < slices.size(); ++i) gaps.push_back(slices[i].along_normal_mm - slices[i - 1].along_normal_mm);
   std::vector<double> sorted = gaps;
   std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
   const double spacing = sorted[sorted.size() / 2];
-  if (!(spacing > 1e-3)) throw DicomError(folder + ": slices share positions (spacing " + fmt::format("{:.3f}", spacing) + " mm)");
+  if (!(spacing > 1e-3))
+    throw DicomError(folder + ": slices share positions (spacing " + fmt::format("{:.3f}", spacing) + " mm)");
   const double tolerance = std::max(0.01 * spacing, 0.01);
   for (size_t i = 0; i < gaps.size(); ++i) {
     if (std::abs(gaps[i] - spacing) > tolerance)
-      throw DicomError(fmt::format("{}: gap of {:.2f} mm after the previous slice ({}), the series' spacing is {:.2f} mm "
-                                   "(a missing slice or uneven spacing)",
-                                   slices[i + 1].file, gaps[i], name_of(slices[i].file), spacing));
+      throw DicomError(
+          fmt::format("{}: gap of {:.2f} mm after the previous slice ({}), the series' spacing is {:.2f} mm "
+                      "(a missing slice or uneven spacing)",
+                      slices[i + 1].file, gaps[i], name_of(slices[i].file), spacing));
     // stacked straight along the normal (no gantry tilt: a sheared grid is not a Volume)
     const Eigen::Vector3d offset = slices[i + 1].position_mm - first.position_mm;
     if ((offset - normal * normal.dot(offset)).norm() > tolerance)
@@ -116,7 +122,8 @@ Volume read_dicom_series(const std::string& folder, const std::string& series_ui
       throw DicomError(fmt::format("{}: no series {} (found: {})", folder, uid, fmt::join(uids, ", ")));
     }
     const std::vector<std::string> files = itk_io::series_files(folder, uid);
-    if (files.size() < 2) throw DicomError(fmt::format("{}: series {} has {} slice(s), a CT needs at least 2", folder, uid, files.size()));
+    if (files.size() < 2)
+      throw DicomError(fmt::format("{}: series {} has {} slice(s), a CT needs at least 2", folder, uid, files.size()));
 
     // geometry first, from every file's own tags
     std::vector<Slice> slices;
@@ -129,7 +136,8 @@ Volume read_dicom_series(const std::string& folder, const std::string& series_ui
     std::array<int64_t, 3> dims{};
     const std::vector<float> voxels = itk_io::read_voxels(ordered, &dims);
     if (dims[2] != int64_t(slices.size()))
-      throw DicomError(fmt::format("{}: {} slices read from {} files (multi-frame files are not supported)", folder, dims[2], slices.size()));
+      throw DicomError(fmt::format("{}: {} slices read from {} files (multi-frame files are not supported)", folder,
+                                   dims[2], slices.size()));
 
     const Slice& first = slices.front();
     Volume v;

@@ -59,8 +59,9 @@ class Lines {
   }
   // the header: its first token, a count, and the whole token list for the caller to check
   void need(const std::vector<std::string_view>& tokens, size_t n, const char* what) const {
-    if (tokens.size() < n) fail(std::string(what) + ": expected at least " + std::to_string(n) + " fields, got " +
-                                std::to_string(tokens.size()));
+    if (tokens.size() < n)
+      fail(std::string(what) + ": expected at least " + std::to_string(n) + " fields, got " +
+           std::to_string(tokens.size()));
   }
 
  private:

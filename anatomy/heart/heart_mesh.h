@@ -10,10 +10,10 @@
 namespace pcisim::anatomy {
 
 struct HeartMesh {
-  Eigen::Matrix3Xd vertices_m;               // patient LPS
-  std::vector<std::array<int, 4>> tets;      // indices into vertices_m
-  std::vector<std::array<int, 3>> faces;     // boundary faces, ccw seen from outside the tissue
-  std::vector<int> face_markers;             // HeartSurfaceMarker per face (0 when unmarked)
+  Eigen::Matrix3Xd vertices_m;            // patient LPS
+  std::vector<std::array<int, 4>> tets;   // indices into vertices_m
+  std::vector<std::array<int, 3>> faces;  // boundary faces, ccw seen from outside the tissue
+  std::vector<int> face_markers;          // HeartSurfaceMarker per face (0 when unmarked)
 };
 
 // one TetGen text file and the name its errors use
@@ -25,8 +25,7 @@ struct TetgenText {
 // parses the three files; vertex coordinates are multiplied by scale_to_m (files in mm: 1e-3).
 // Throws std::invalid_argument "<name> line <n>: <what is wrong>". Faces are re-oriented so their
 // normals point away from the tet they bound; a face that bounds no tet is an error.
-HeartMesh parse_tetgen_mesh(const TetgenText& node, const TetgenText& ele, const TetgenText& face,
-                            double scale_to_m);
+HeartMesh parse_tetgen_mesh(const TetgenText& node, const TetgenText& ele, const TetgenText& face, double scale_to_m);
 
 // reads <stem>.node, <stem>.ele, <stem>.face from disk (millimetres)
 HeartMesh read_tetgen_mesh(const std::string& stem);

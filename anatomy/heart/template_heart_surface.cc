@@ -14,7 +14,7 @@ namespace {
 
 using Eigen::Vector3d;
 constexpr double kDeg = std::numbers::pi / 180.0;
-constexpr double kSphereMm = 50.0;  // the phantom's kHeartRadiusMm
+constexpr double kSphereMm = 50.0;   // the phantom's kHeartRadiusMm
 constexpr int kEpicardiumLevel = 3;  // icosphere subdivisions: 642 vertices, ~6.6 mm edges
 constexpr int kCavityLevel = 2;      // 162 vertices per cavity
 
@@ -51,12 +51,12 @@ const Bump kBumps[] = {
 // icosphere: unit-sphere vertices and outward ccw triangles
 void icosphere(int level, std::vector<Vector3d>* v, std::vector<std::array<int, 3>>* t) {
   const double g = (1.0 + std::sqrt(5.0)) / 2.0;
-  *v = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0}, {0, -1, g}, {0, 1, g},
-        {0, -1, -g}, {0, 1, -g}, {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
+  *v = {{-1, g, 0},  {1, g, 0},  {-1, -g, 0}, {1, -g, 0}, {0, -1, g},  {0, 1, g},
+        {0, -1, -g}, {0, 1, -g}, {g, 0, -1},  {g, 0, 1},  {-g, 0, -1}, {-g, 0, 1}};
   for (auto& p : *v) p.normalize();
-  *t = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-        {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
-        {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  *t = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+        {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+        {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   for (int l = 0; l < level; ++l) {
     std::map<std::pair<int, int>, int> mid;
     auto midpoint = [&](int a, int b) {
@@ -89,7 +89,9 @@ double epicardial_radius_mm(const Vector3d& heart_dir) {
 
 // LV: left-posterior of the septum (the LAD's groove at azimuth ~25 deg, the PDA's at ~190),
 // reaching the mitral plane near the AV groove; ~80 ml at end-diastole
-CavityEllipsoid lv_cavity() { return {{-3.0, 9.5, -6.0}, {24.0, 24.0, 34.0}, 108.0 * kDeg}; }
+CavityEllipsoid lv_cavity() {
+  return {{-3.0, 9.5, -6.0}, {24.0, 24.0, 34.0}, 108.0 * kDeg};
+}
 
 // RV: a flattened ellipsoid anterior-right of the septum (~25 ml: smaller than a real RV, which
 // wraps around the LV as a crescent; the phantom's heart is a 100 mm ball)
@@ -111,7 +113,8 @@ HeartSurface template_heart_surface() {
     s.markers.push_back(kEpicardium);
   }
   icosphere(kCavityLevel, &unit, &tris);
-  for (const auto& [cavity, marker] : {std::pair{lv_cavity(), kLvEndocardium}, std::pair{rv_cavity(), kRvEndocardium}}) {
+  for (const auto& [cavity, marker] :
+       {std::pair{lv_cavity(), kLvEndocardium}, std::pair{rv_cavity(), kRvEndocardium}}) {
     const int offset = static_cast<int>(s.vertices_mm.size());
     const Eigen::Matrix3d axes = cavity_axes(cavity);
     for (const auto& u : unit)
@@ -134,8 +137,8 @@ void write_tetgen_poly(const HeartSurface& s, std::ostream& out) {
     out << i << ' ' << s.vertices_mm[i].x() << ' ' << s.vertices_mm[i].y() << ' ' << s.vertices_mm[i].z() << '\n';
   out << s.triangles.size() << " 1\n";
   for (size_t i = 0; i < s.triangles.size(); ++i)
-    out << "1 0 " << s.markers[i] << "\n3 " << s.triangles[i][0] << ' ' << s.triangles[i][1] << ' '
-        << s.triangles[i][2] << '\n';
+    out << "1 0 " << s.markers[i] << "\n3 " << s.triangles[i][0] << ' ' << s.triangles[i][1] << ' ' << s.triangles[i][2]
+        << '\n';
   out << s.holes_mm.size() << '\n';
   for (size_t i = 0; i < s.holes_mm.size(); ++i)
     out << i << ' ' << s.holes_mm[i].x() << ' ' << s.holes_mm[i].y() << ' ' << s.holes_mm[i].z() << '\n';

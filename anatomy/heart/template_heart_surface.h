@@ -13,7 +13,7 @@ namespace pcisim::anatomy {
 enum HeartSurfaceMarker : int { kEpicardium = 1, kLvEndocardium = 2, kRvEndocardium = 3 };
 
 struct HeartSurface {
-  std::vector<Eigen::Vector3d> vertices_mm;  // patient LPS
+  std::vector<Eigen::Vector3d> vertices_mm;   // patient LPS
   std::vector<std::array<int, 3>> triangles;  // counter-clockwise seen from the tissue's outside
   std::vector<int> markers;                   // one HeartSurfaceMarker per triangle
   std::vector<Eigen::Vector3d> holes_mm;      // one point inside each cavity

@@ -71,7 +71,8 @@ TriangleMesh read_stl(const std::string& path, const std::string& bytes, double 
   }
   if (bytes.rfind("solid", 0) != 0)
     fail(path, fmt::format("neither binary STL (size {} bytes does not match its triangle count) nor ASCII "
-                           "STL (no 'solid')", bytes.size()));
+                           "STL (no 'solid')",
+                           bytes.size()));
   std::istringstream in(bytes);
   std::string word;
   std::array<int, 3> tri{};
@@ -150,7 +151,10 @@ TriangleMesh read_ply(const std::string& path, const std::string& bytes, double 
     if (pos + n > bytes.size()) fail(path, "data ends early");
     const char* p = bytes.data() + pos;
     pos += n;
-    auto get = [p](auto v) { std::memcpy(&v, p, sizeof v); return static_cast<double>(v); };
+    auto get = [p](auto v) {
+      std::memcpy(&v, p, sizeof v);
+      return static_cast<double>(v);
+    };
     if (t == "char" || t == "int8") return get(int8_t{});
     if (t == "uchar" || t == "uint8") return get(uint8_t{});
     if (t == "short" || t == "int16") return get(int16_t{});
@@ -240,8 +244,7 @@ TriangleMesh read_obj(const std::string& path, const std::string& bytes, double 
 
 TriangleMesh read_mesh(const std::string& path, double metres_per_unit) {
   const std::string ext = extension_of(path);
-  if (ext != ".stl" && ext != ".ply" && ext != ".obj")
-    fail(path, "unknown mesh format (expected .stl, .ply or .obj)");
+  if (ext != ".stl" && ext != ".ply" && ext != ".obj") fail(path, "unknown mesh format (expected .stl, .ply or .obj)");
   std::string bytes;
   try {
     bytes = io::read_file(path);
@@ -301,8 +304,10 @@ std::string check_closed_manifold(const TriangleMesh& mesh) {
       return fmt::format("triangle {} repeats a vertex (degenerate)", t);
     for (int e = 0; e < 3; ++e) {
       if (++directed[key(tri[e], tri[(e + 1) % 3])] > 1)
-        return fmt::format("non-manifold or inconsistently oriented: edge {}-{} is run the same way by two triangles "
-                           "(second: triangle {})", tri[e], tri[(e + 1) % 3], t);
+        return fmt::format(
+            "non-manifold or inconsistently oriented: edge {}-{} is run the same way by two triangles "
+            "(second: triangle {})",
+            tri[e], tri[(e + 1) % 3], t);
     }
   }
   int open = 0;

@@ -56,7 +56,7 @@ struct Walk {
   double length_mm = 0.0;
   double radius0_mm = 1.0, radius1_mm = 1.0;  // linear taper after the straight stretch
   double shell_mm = kHeartRadiusMm + 1.5;
-  double max_curvature_per_mm = 1.0 / 12.0;   // the wire must be able to follow it
+  double max_curvature_per_mm = 1.0 / 12.0;  // the wire must be able to follow it
   double wiggle_per_mm = 0.0, wiggle_wavelength_mm = 30.0, wiggle_phase = 0.0;
 };
 
@@ -93,8 +93,7 @@ std::vector<CenterlinePoint> walk(const Walk& w) {
         const double max_turn = w.max_curvature_per_mm * kStepMm;
         turn = std::clamp(angle, -max_turn, max_turn);
       }
-      turn += w.wiggle_per_mm * kStepMm *
-              std::sin(2 * kPi * s / w.wiggle_wavelength_mm + w.wiggle_phase);
+      turn += w.wiggle_per_mm * kStepMm * std::sin(2 * kPi * s / w.wiggle_wavelength_mm + w.wiggle_phase);
       // relax the radius onto the epicardial shell over ~10 mm instead of jumping onto it
       const double radial = std::clamp((w.shell_mm - p.norm()) / 10.0, -0.5, 0.5);
       const Vector3d want_t = (rotate(tc, n, turn) + radial * n).normalized();
@@ -129,15 +128,13 @@ VesselTree make_coronary_phantom(const CoronaryPhantomSpec& spec) {
   // ascending aorta: superior, slightly right and anterior (patient frame), then into heart frame
   const Vector3d aorta_dir =
       patient_to_heart * Vector3d(draw.around(-0.2, 0.05), draw.around(-0.1, 0.05), 1.0).normalized();
-  const Vector3d aorta_bend =
-      perpendicular_part(patient_to_heart * Vector3d(0.3, 0.6, 0.2), aorta_dir);
+  const Vector3d aorta_bend = perpendicular_part(patient_to_heart * Vector3d(0.3, 0.6, 0.2), aorta_dir);
 
   // the LM aims at a point on the epicardial shell, left and anterior of the aortic root; the
   // aorta is placed so the LM leaves its centerline
   const double shell_mm = kHeartRadiusMm + 2.0;
   const Vector3d lm_aim_mm = on_shell(draw.around(38, 3), draw.around(55, 5), shell_mm);
-  const Vector3d lm_dir = perpendicular_part(
-      Vector3d(draw.around(0.2, 0.1), 1.0, draw.around(-0.25, 0.1)), aorta_dir);
+  const Vector3d lm_dir = perpendicular_part(Vector3d(draw.around(0.2, 0.1), 1.0, draw.around(-0.25, 0.1)), aorta_dir);
   const double lm_outside_mm = draw.around(10.0, 1.0);
   const double lm_length_mm = std::round((kAortaRadiusMm + lm_outside_mm) / kStepMm) * kStepMm;
   // the LM leaves the aorta's centerline 10 mm above the root; the aorta is placed to match
@@ -145,8 +142,7 @@ VesselTree make_coronary_phantom(const CoronaryPhantomSpec& spec) {
   const Vector3d lm_start_mm = lm_aim_mm - lm_length_mm * lm_dir;
 
   VesselTree tree;
-  auto add = [&tree](std::string name, int parent, int parent_point,
-                     std::vector<CenterlinePoint> points) {
+  auto add = [&tree](std::string name, int parent, int parent_point, std::vector<CenterlinePoint> points) {
     tree.branches.push_back({std::move(name), parent, parent_point, std::move(points)});
     return static_cast<int>(tree.branches.size()) - 1;
   };
@@ -157,8 +153,7 @@ VesselTree make_coronary_phantom(const CoronaryPhantomSpec& spec) {
   const double aorta_radius_mm = draw.around(kAortaRadiusMm, 0.5);
   for (int i = 0; i <= 120; ++i) {
     const double s = (i - lm_parent_point) * kStepMm;
-    aorta.push_back({lm_start_mm + s * aorta_dir + (s * s / (2 * aorta_bend_radius_mm)) * aorta_bend,
-                     aorta_radius_mm});
+    aorta.push_back({lm_start_mm + s * aorta_dir + (s * s / (2 * aorta_bend_radius_mm)) * aorta_bend, aorta_radius_mm});
   }
   const int aorta_id = add("aorta", -1, -1, aorta);
 
@@ -196,8 +191,7 @@ VesselTree make_coronary_phantom(const CoronaryPhantomSpec& spec) {
   lad.start_dir = daughter_dir(sign * lad_turn);
   lad.waypoints_mm = {on_shell(draw.around(70, 4), draw.around(22, 4), shell),
                       on_shell(draw.around(120, 4), draw.around(25, 5), shell),
-                      on_shell(draw.around(165, 4), draw.around(60, 8), shell),
-                      on_shell(150, 200, shell)};
+                      on_shell(draw.around(165, 4), draw.around(60, 8), shell), on_shell(150, 200, shell)};
   lad.length_mm = draw.around(120, 8);
   lad.radius0_mm = draw.around(1.8, 0.05);
   lad.radius1_mm = draw.around(0.8, 0.04);
@@ -213,8 +207,7 @@ VesselTree make_coronary_phantom(const CoronaryPhantomSpec& spec) {
   lcx.waypoints_mm = {on_shell(draw.around(50, 2), draw.around(95, 5), shell),
                       on_shell(draw.around(60, 2), draw.around(130, 5), shell),
                       on_shell(draw.around(50, 2), draw.around(165, 5), shell),
-                      on_shell(draw.around(68, 3), draw.around(200, 5), shell),
-                      on_shell(90, 235, shell)};
+                      on_shell(draw.around(68, 3), draw.around(200, 5), shell), on_shell(90, 235, shell)};
   lcx.length_mm = draw.around(80, 6);
   lcx.radius0_mm = draw.around(1.6, 0.05);
   lcx.radius1_mm = draw.around(0.8, 0.04);
@@ -225,15 +218,13 @@ VesselTree make_coronary_phantom(const CoronaryPhantomSpec& spec) {
 
   // side branches leave their parent at an angle about the local heart normal, then steer
   // toward a waypoint given relative to the branch point (theta, phi offsets on the shell)
-  auto side = [&](const char* name, int parent, const std::vector<CenterlinePoint>& parent_points,
-                  double at_mm, double angle_deg, double dtheta_deg, double dphi_deg,
-                  double length_mm) {
-    const int k = std::clamp(static_cast<int>(std::lround(at_mm / kStepMm)), 1,
-                             static_cast<int>(parent_points.size()) - 2);
+  auto side = [&](const char* name, int parent, const std::vector<CenterlinePoint>& parent_points, double at_mm,
+                  double angle_deg, double dtheta_deg, double dphi_deg, double length_mm) {
+    const int k =
+        std::clamp(static_cast<int>(std::lround(at_mm / kStepMm)), 1, static_cast<int>(parent_points.size()) - 2);
     const Vector3d p = parent_points[k].position_m;
     const Vector3d n = p.normalized();
-    const Vector3d tangent = perpendicular_part(
-        parent_points[k + 1].position_m - parent_points[k - 1].position_m, n);
+    const Vector3d tangent = perpendicular_part(parent_points[k + 1].position_m - parent_points[k - 1].position_m, n);
     const double theta = std::acos(std::clamp(p.z() / p.norm(), -1.0, 1.0)) / kDeg;
     const double phi = std::atan2(p.y(), p.x()) / kDeg;
     const Vector3d target = on_shell(theta + dtheta_deg, phi + dphi_deg, shell);
@@ -260,8 +251,7 @@ VesselTree make_coronary_phantom(const CoronaryPhantomSpec& spec) {
   Walk rca;
   const int rca_parent_point = 24;
   rca.start_mm = aorta[rca_parent_point].position_m;
-  rca.start_dir = perpendicular_part(
-      patient_to_heart * Vector3d(-1.0, draw.around(-0.6, 0.1), -0.1), aorta_dir);
+  rca.start_dir = perpendicular_part(patient_to_heart * Vector3d(-1.0, draw.around(-0.6, 0.1), -0.1), aorta_dir);
   rca.straight_mm = kAortaRadiusMm + 2.0;
   rca.waypoints_mm = {on_shell(draw.around(55, 3), draw.around(-45, 5), shell),
                       on_shell(draw.around(60, 3), draw.around(-110, 5), shell),

@@ -10,13 +10,13 @@
 namespace pcisim::anatomy {
 
 struct PhantomCaseSpec {
-  uint32_t seed = 1;                               // the coronary tree's seed
+  uint32_t seed = 1;  // the coronary tree's seed
   bool with_ct = true;
-  uint32_t ct_seed = 1;                            // the thorax's seed
+  uint32_t ct_seed = 1;  // the thorax's seed
   std::array<int64_t, 3> ct_dims{256, 256, 128};
   double ct_spacing_mm = 1.4;
-  bool ct_contrast = false;                        // iodine in the coronary lumens (a CTA)
-  LumenMeshSpec lumen;                             // the loft of the lumen surface
+  bool ct_contrast = false;  // iodine in the coronary lumens (a CTA)
+  LumenMeshSpec lumen;       // the loft of the lumen surface
 };
 
 // the lumen is rounded to float millimetres (what lumen.stl stores), so the case reads back

@@ -110,8 +110,10 @@ class Painter {
       bool empty = false;
       for (int ax = 0; ax < 3; ++ax) {
         const double n = static_cast<double>(v_->dims[ax]);
-        ib[0][ax] = std::max<int64_t>(0, static_cast<int64_t>(std::clamp(std::ceil((lo[ax] - o[ax]) / s[ax]), -1.0, n)));
-        ib[1][ax] = std::min<int64_t>(v_->dims[ax] - 1, static_cast<int64_t>(std::clamp(std::floor((hi[ax] - o[ax]) / s[ax]), -1.0, n)));
+        ib[0][ax] =
+            std::max<int64_t>(0, static_cast<int64_t>(std::clamp(std::ceil((lo[ax] - o[ax]) / s[ax]), -1.0, n)));
+        ib[1][ax] = std::min<int64_t>(v_->dims[ax] - 1,
+                                      static_cast<int64_t>(std::clamp(std::floor((hi[ax] - o[ax]) / s[ax]), -1.0, n)));
         if (ib[1][ax] < ib[0][ax]) empty = true;
       }
       ib[0][2] = std::max(ib[0][2], k_lo);
@@ -138,7 +140,9 @@ class Painter {
   Volume* v_;
 };
 
-int16_t to_hu(double v) { return static_cast<int16_t>(std::lround(std::clamp(v, -1024.0, 3071.0))); }
+int16_t to_hu(double v) {
+  return static_cast<int16_t>(std::lround(std::clamp(v, -1024.0, 3071.0)));
+}
 
 }  // namespace
 
@@ -178,10 +182,10 @@ Volume make_thorax_phantom(const ThoraxPhantomSpec& spec, const VesselTree& tree
   q.push_back(cylinder_z(bx, by, ax, ay, -1e30, 1e30, hu.fat));
   q.push_back(cylinder_z(bx, by + 2, ax - fat_mm, ay - fat_mm * 0.8, -1e30, 1e30, hu.muscle));
   // lungs: right larger, left with the cardiac notch (the heart is painted over it)
-  q.push_back(ellipsoid(Vector3d(bx - draw.around(72, 4), by + 8, 15), Vector3d(62, 82, 125),
-                        Matrix3d::Identity(), hu.lung));
-  q.push_back(ellipsoid(Vector3d(bx + draw.around(78, 4), by + 12, 12), Vector3d(58, 78, 120),
-                        Matrix3d::Identity(), hu.lung));
+  q.push_back(
+      ellipsoid(Vector3d(bx - draw.around(72, 4), by + 8, 15), Vector3d(62, 82, 125), Matrix3d::Identity(), hu.lung));
+  q.push_back(
+      ellipsoid(Vector3d(bx + draw.around(78, 4), by + 12, 12), Vector3d(58, 78, 120), Matrix3d::Identity(), hu.lung));
   // mediastinal soft tissue between the lungs, in front of the spine
   q.push_back(cylinder_z(bx + 5, by - 10, 28, 60, -1e30, 1e30, hu.soft_tissue));
   // liver dome under the right hemidiaphragm
@@ -274,8 +278,8 @@ Volume make_thorax_phantom(const ThoraxPhantomSpec& spec, const VesselTree& tree
   }
 
   // paint in slabs of z, one per thread; within a slab: quadric spans row by row, then tubes
-  const int threads = std::max(1, spec.threads > 0 ? spec.threads
-                                                   : static_cast<int>(std::thread::hardware_concurrency()));
+  const int threads =
+      std::max(1, spec.threads > 0 ? spec.threads : static_cast<int>(std::thread::hardware_concurrency()));
   const Painter painter(&v);
   auto slab = [&](int64_t k_lo, int64_t k_hi) {
     for (int64_t k = k_lo; k < k_hi; ++k) {

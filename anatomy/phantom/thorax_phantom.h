@@ -26,13 +26,13 @@ struct ThoraxTissueHu {
 };
 
 struct ThoraxPhantomSpec {
-  uint32_t seed = 1;                       // also seeds the coronary tree
+  uint32_t seed = 1;  // also seeds the coronary tree
   std::array<int64_t, 3> dims{512, 512, 256};
-  double spacing_mm = 0.7;                 // isotropic
-  bool contrast = true;                    // coronary lumens iodine-filled (else blood)
-  double contrast_hu = 400;                // 300..450 for a selective injection
+  double spacing_mm = 0.7;   // isotropic
+  bool contrast = true;      // coronary lumens iodine-filled (else blood)
+  double contrast_hu = 400;  // 300..450 for a selective injection
   ThoraxTissueHu hu;
-  int threads = 0;                         // 0: std::thread::hardware_concurrency()
+  int threads = 0;  // 0: std::thread::hardware_concurrency()
   // volume centre (mm); NaN: the thorax default, 20 mm above the heart centre
   Eigen::Vector3d center_mm = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
 };

@@ -111,16 +111,15 @@ TriangleMesh loft_branch(const VesselTree& tree, const VesselBranch& branch, con
   const Vector3d t0 = first.u.cross(first.v);
   for (int k = k_cap - 1; k >= 1; --k) {
     const double a = quarter * k / k_cap;
-    rings.push_back({first.center_m - first.radius_m * std::sin(a) * t0, first.u, first.v,
-                     first.radius_m * std::cos(a)});
+    rings.push_back(
+        {first.center_m - first.radius_m * std::sin(a) * t0, first.u, first.v, first.radius_m * std::cos(a)});
   }
   rings.insert(rings.end(), body.begin(), body.end());
   const Ring& last = body.back();
   const Vector3d t1 = last.u.cross(last.v);
   for (int k = 1; k < k_cap; ++k) {
     const double a = quarter * k / k_cap;
-    rings.push_back({last.center_m + last.radius_m * std::sin(a) * t1, last.u, last.v,
-                     last.radius_m * std::cos(a)});
+    rings.push_back({last.center_m + last.radius_m * std::sin(a) * t1, last.u, last.v, last.radius_m * std::cos(a)});
   }
 
   mesh.vertices_m.reserve(rings.size() * segs + 2);

@@ -10,10 +10,10 @@
 namespace pcisim::anatomy {
 
 struct LumenMeshSpec {
-  int segments = 16;                  // ring vertices, at least; more where the radius needs it
-  double max_chord_error_m = 0.05e-3; // a ring's polygon sags at most this far inside the circle
-  int cap_rings = 4;                  // latitude rings of each hemispherical end cap, at least
-  std::vector<std::string> exclude;   // branch names left out (e.g. "aorta")
+  int segments = 16;                   // ring vertices, at least; more where the radius needs it
+  double max_chord_error_m = 0.05e-3;  // a ring's polygon sags at most this far inside the circle
+  int cap_rings = 4;                   // latitude rings of each hemispherical end cap, at least
+  std::vector<std::string> exclude;    // branch names left out (e.g. "aorta")
 };
 
 // one closed tube per branch, in the tree's branch order (an excluded branch gives an empty mesh).

@@ -16,8 +16,7 @@ int VesselTree::find(std::string_view name) const {
 namespace {
 
 // squared distance from p to the segment ab (a degenerate segment is a point)
-double segment_distance_sq(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                           const Eigen::Vector3d& b) {
+double segment_distance_sq(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   const Eigen::Vector3d ab = b - a;
   const double len_sq = ab.squaredNorm();
   double t = len_sq > 0.0 ? (p - a).dot(ab) / len_sq : 0.0;
@@ -27,8 +26,7 @@ double segment_distance_sq(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
 
 }  // namespace
 
-int nearest_branch(const VesselTree& tree, const Eigen::Vector3d& p_m,
-                   double* distance_to_centerline_m) {
+int nearest_branch(const VesselTree& tree, const Eigen::Vector3d& p_m, double* distance_to_centerline_m) {
   int best = -1;
   double best_sq = std::numeric_limits<double>::infinity();
   for (size_t i = 0; i < tree.branches.size(); ++i) {

@@ -14,9 +14,9 @@ struct CenterlinePoint {
 };
 
 struct VesselBranch {
-  std::string name;            // "aorta", "LM", "LAD", "LCx", "RCA", "D1", "OM1", ...
-  int parent = -1;             // index into VesselTree::branches, -1 for the root
-  int parent_point = -1;       // index of the parent's centerline point this branch leaves from
+  std::string name;                     // "aorta", "LM", "LAD", "LCx", "RCA", "D1", "OM1", ...
+  int parent = -1;                      // index into VesselTree::branches, -1 for the root
+  int parent_point = -1;                // index of the parent's centerline point this branch leaves from
   std::vector<CenterlinePoint> points;  // ordered from proximal to distal
 };
 
@@ -31,8 +31,7 @@ struct VesselTree {
 // Brute force over segments, allocates nothing; meant for a few queries per step (the wire tip).
 // Exact ties go to the lower index (a child's first point lies on its parent's centerline, so
 // that point reports the parent). A NaN point returns -1 and an infinite distance.
-int nearest_branch(const VesselTree& tree, const Eigen::Vector3d& p_m,
-                   double* distance_to_centerline_m = nullptr);
+int nearest_branch(const VesselTree& tree, const Eigen::Vector3d& p_m, double* distance_to_centerline_m = nullptr);
 
 // arc length of a branch's centerline polyline
 double branch_length_m(const VesselBranch& branch);

@@ -16,8 +16,8 @@ using nlohmann::json;
   throw std::runtime_error(file + ": " + path + ": " + what);
 }
 
-void reject_unknown_keys(const json& object, std::initializer_list<const char*> known,
-                         const std::string& file, const std::string& path) {
+void reject_unknown_keys(const json& object, std::initializer_list<const char*> known, const std::string& file,
+                         const std::string& path) {
   for (auto it = object.begin(); it != object.end(); ++it) {
     bool ok = false;
     for (const char* k : known) ok = ok || it.key() == k;
@@ -27,8 +27,7 @@ void reject_unknown_keys(const json& object, std::initializer_list<const char*> 
 
 // a pointer, not a reference: gcc 13 takes a reference returned next to temporary arguments
 // for a dangling one
-const json* member(const json& object, const char* key, const std::string& file,
-                   const std::string& path) {
+const json* member(const json& object, const char* key, const std::string& file, const std::string& path) {
   const auto it = object.find(key);
   if (it == object.end()) fail(file, path + "." + key, "missing");
   return &*it;
@@ -47,8 +46,8 @@ int integer_in(const json& v, int lo, int hi, const std::string& file, const std
   }
   const auto x = v.get<long long>();
   if (x < lo || x > hi) {
-    fail(file, path, "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
-                         "], got " + std::to_string(x));
+    fail(file, path,
+         "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + std::to_string(x));
   }
   return static_cast<int>(x);
 }
@@ -60,13 +59,11 @@ void write_vessel_tree_json(const VesselTree& tree, const std::string& path) {
   for (const auto& b : tree.branches) {
     json points = json::array();
     for (const auto& p : b.points) {
-      points.push_back({{"position_m", {p.position_m.x(), p.position_m.y(), p.position_m.z()}},
-                        {"radius_m", p.radius_m}});
+      points.push_back(
+          {{"position_m", {p.position_m.x(), p.position_m.y(), p.position_m.z()}}, {"radius_m", p.radius_m}});
     }
-    branches.push_back({{"name", b.name},
-                        {"parent", b.parent},
-                        {"parent_point", b.parent_point},
-                        {"points", std::move(points)}});
+    branches.push_back(
+        {{"name", b.name}, {"parent", b.parent}, {"parent_point", b.parent_point}, {"points", std::move(points)}});
   }
   const json doc = {{"format", "pcisim-vessel-tree"}, {"version", 1}, {"branches", std::move(branches)}};
   std::ofstream out(path);
@@ -112,11 +109,10 @@ VesselTree read_vessel_tree_json(const std::string& file) {
     if (tree.find(b.name) >= 0) fail(file, bp + ".name", "duplicate branch name \"" + b.name + "\"");
     // parents come first in the list, which also rules out cycles
     b.parent = integer_in(*member(jb, "parent", file, bp), -1, static_cast<int>(i) - 1, file, bp + ".parent");
-    const int parent_points =
-        b.parent >= 0 ? static_cast<int>(tree.branches[b.parent].points.size()) : 0;
+    const int parent_points = b.parent >= 0 ? static_cast<int>(tree.branches[b.parent].points.size()) : 0;
     if (b.parent >= 0) {
-      b.parent_point = integer_in(*member(jb, "parent_point", file, bp), 0, parent_points - 1, file,
-                                  bp + ".parent_point");
+      b.parent_point =
+          integer_in(*member(jb, "parent_point", file, bp), 0, parent_points - 1, file, bp + ".parent_point");
     } else {
       b.parent_point = -1;
       if (jb.contains("parent_point")) integer_in(jb["parent_point"], -1, -1, file, bp + ".parent_point");

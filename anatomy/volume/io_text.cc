@@ -76,9 +76,9 @@ void load_voxels(const std::string& path, const VoxelData& d, Volume& vol) {
   // sizes agree before anything is allocated: raw data exactly, compressed data within deflate's
   // best ratio (about 1032:1, RFC 1951's longest match per bit pattern)
   if (!d.compressed && available != expected)
-    fail(d.size_field, fmt::format("{}x{}x{} {} voxels need {} bytes but the data ({}) holds {}", vol.dims[0],
-                                   vol.dims[1], vol.dims[2], voxel_type_name(vol.type), expected,
-                                   base_name(d.data_name), available));
+    fail(d.size_field,
+         fmt::format("{}x{}x{} {} voxels need {} bytes but the data ({}) holds {}", vol.dims[0], vol.dims[1],
+                     vol.dims[2], voxel_type_name(vol.type), expected, base_name(d.data_name), available));
   if (d.compressed && available * 1032 < expected)
     fail(d.size_field, fmt::format("{} voxel bytes cannot come from {} compressed bytes", expected, available));
   if (vol.type == VoxelType::kInt16) {
@@ -179,8 +179,7 @@ bool parse_int64s(std::string_view text, int n, int64_t* out) {
   return true;
 }
 
-bool inflate_bytes(const char* in, int64_t in_bytes, void* out, int64_t expected_bytes,
-                   std::string* error) {
+bool inflate_bytes(const char* in, int64_t in_bytes, void* out, int64_t expected_bytes, std::string* error) {
 #ifdef PCISIM_ANATOMY_HAVE_ZLIB
   z_stream zs{};
   // 15 + 32: accept a zlib or a gzip header
@@ -198,8 +197,8 @@ bool inflate_bytes(const char* in, int64_t in_bytes, void* out, int64_t expected
   if (rc != Z_STREAM_END) {
     *error = rc == Z_BUF_ERROR && zs.avail_out == 0
                  ? "compressed data holds more than the header's sizes"
-                 : "corrupt or truncated compressed data (" + std::to_string(produced) +
-                       " of " + std::to_string(expected_bytes) + " bytes inflated)";
+                 : "corrupt or truncated compressed data (" + std::to_string(produced) + " of " +
+                       std::to_string(expected_bytes) + " bytes inflated)";
     return false;
   }
   if (produced != expected_bytes) {

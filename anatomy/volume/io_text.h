@@ -18,7 +18,7 @@ std::string read_file(const std::string& path);
 struct VoxelData {
   const char* bytes = nullptr;  // the data part (after the header, or the data file's bytes)
   int64_t available = 0;
-  int64_t skip = 0;             // bytes before the voxels; -1: the voxels are the last bytes
+  int64_t skip = 0;  // bytes before the voxels; -1: the voxels are the last bytes
   bool compressed = false, big_endian = false;
   std::string data_name;        // the file the bytes came from, for messages
   const char* size_field = "";  // the header field naming the dimensions, for messages
@@ -44,8 +44,7 @@ bool parse_doubles(std::string_view text, int n, double* out, bool loose = false
 bool parse_int64s(std::string_view text, int n, int64_t* out);
 
 // zlib inflate of gzip or zlib data into exactly expected bytes; false on failure or no zlib
-bool inflate_bytes(const char* in, int64_t in_bytes, void* out, int64_t expected_bytes,
-                   std::string* error);
+bool inflate_bytes(const char* in, int64_t in_bytes, void* out, int64_t expected_bytes, std::string* error);
 bool deflate_gzip(const void* in, int64_t in_bytes, std::string* out);
 
 }  // namespace pcisim::anatomy::io

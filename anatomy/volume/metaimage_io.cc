@@ -24,7 +24,6 @@ bool parse_bool(std::string_view v, bool* out) {
   return false;
 }
 
-
 }  // namespace
 
 Volume read_metaimage(const std::string& path, bool require_spacing) {
@@ -180,9 +179,15 @@ Volume read_metaimage(const std::string& path, bool require_spacing) {
   }
   // a compressed file's HeaderSize -1 has no meaning (its size is not the voxels'): ignored
   io::load_voxels(path,
-                  {.bytes = bytes, .available = available, .skip = header_size == -1 && compressed ? 0 : header_size,
-                   .compressed = compressed, .big_endian = msb, .data_name = data_name, .size_field = "DimSize",
-                   .skip_field = "HeaderSize", .compression_field = "CompressedData"},
+                  {.bytes = bytes,
+                   .available = available,
+                   .skip = header_size == -1 && compressed ? 0 : header_size,
+                   .compressed = compressed,
+                   .big_endian = msb,
+                   .data_name = data_name,
+                   .size_field = "DimSize",
+                   .skip_field = "HeaderSize",
+                   .compression_field = "CompressedData"},
                   vol);
   return vol;
 }

@@ -67,8 +67,8 @@ Volume read_nrrd(const std::string& path, bool require_spacing) {
   Volume vol;
   {
     const std::string t = io::lower(require("type"));
-    if (t == "short" || t == "signed short" || t == "short int" || t == "signed short int" ||
-        t == "int16" || t == "int16_t") {
+    if (t == "short" || t == "signed short" || t == "short int" || t == "signed short int" || t == "int16" ||
+        t == "int16_t") {
       vol.type = VoxelType::kInt16;
     } else if (t == "float") {
       vol.type = VoxelType::kFloat32;
@@ -109,8 +109,10 @@ Volume read_nrrd(const std::string& path, bool require_spacing) {
     if (s == "right-anterior-superior" || s == "ras") {
       flip.diagonal() << -1, -1, 1;
     } else if (s != "left-posterior-superior" && s != "lps") {
-      fail(path, "space", fmt::format("unsupported '{}' (expected left-posterior-superior or "
-                                      "right-anterior-superior)", *v));
+      fail(path, "space",
+           fmt::format("unsupported '{}' (expected left-posterior-superior or "
+                       "right-anterior-superior)",
+                       *v));
     }
   } else if (const auto* v = get("space dimension")) {
     int64_t n = 0;
@@ -124,7 +126,8 @@ Volume read_nrrd(const std::string& path, bool require_spacing) {
     for (int c = 0; c < 3; ++c) {
       const Eigen::Vector3d axis = flip * Eigen::Vector3d(m[3 * c], m[3 * c + 1], m[3 * c + 2]);
       const double len = axis.norm();
-      if (!(len > 0) || !std::isfinite(len)) fail(path, "space directions", fmt::format("axis {} has zero or non-finite length", c));
+      if (!(len > 0) || !std::isfinite(len))
+        fail(path, "space directions", fmt::format("axis {} has zero or non-finite length", c));
       vol.spacing_mm[c] = len;
       vol.direction.col(c) = axis / len;
     }
@@ -175,8 +178,14 @@ Volume read_nrrd(const std::string& path, bool require_spacing) {
     available = static_cast<int64_t>(external.size());
   }
   io::load_voxels(path,
-                  {.bytes = bytes, .available = available, .skip = byte_skip, .compressed = gzip,
-                   .big_endian = big_endian, .data_name = data_name, .size_field = "sizes", .skip_field = "byte skip",
+                  {.bytes = bytes,
+                   .available = available,
+                   .skip = byte_skip,
+                   .compressed = gzip,
+                   .big_endian = big_endian,
+                   .data_name = data_name,
+                   .size_field = "sizes",
+                   .skip_field = "byte skip",
                    .compression_field = "encoding"},
                   vol);
   return vol;

@@ -10,10 +10,12 @@ const char* voxel_type_name(VoxelType type) {
   return type == VoxelType::kInt16 ? "int16" : "float32";
 }
 
-int voxel_type_bytes(VoxelType type) { return type == VoxelType::kInt16 ? 2 : 4; }
+int voxel_type_bytes(VoxelType type) {
+  return type == VoxelType::kInt16 ? 2 : 4;
+}
 
-Volume Volume::make(std::array<int64_t, 3> dims, const Eigen::Vector3d& spacing_mm,
-                    const Eigen::Vector3d& origin_mm, VoxelType type) {
+Volume Volume::make(std::array<int64_t, 3> dims, const Eigen::Vector3d& spacing_mm, const Eigen::Vector3d& origin_mm,
+                    VoxelType type) {
   Volume v;
   v.dims = dims;
   v.spacing_mm = spacing_mm;
@@ -28,13 +30,11 @@ Volume Volume::make(std::array<int64_t, 3> dims, const Eigen::Vector3d& spacing_
 }
 
 const void* Volume::data() const {
-  return type == VoxelType::kInt16 ? static_cast<const void*>(hu_i16.data())
-                                   : static_cast<const void*>(hu_f32.data());
+  return type == VoxelType::kInt16 ? static_cast<const void*>(hu_i16.data()) : static_cast<const void*>(hu_f32.data());
 }
 
 void* Volume::data() {
-  return type == VoxelType::kInt16 ? static_cast<void*>(hu_i16.data())
-                                   : static_cast<void*>(hu_f32.data());
+  return type == VoxelType::kInt16 ? static_cast<void*>(hu_i16.data()) : static_cast<void*>(hu_f32.data());
 }
 
 Eigen::Vector3d Volume::index_to_physical_mm(const Eigen::Vector3d& ijk) const {
@@ -56,7 +56,8 @@ std::string validate(const Volume& v) {
   int64_t count = 1;
   for (int a = 0; a < 3; ++a) {
     if (v.dims[a] <= 0) return fmt::format("dims[{}] = {} is not positive", a, v.dims[a]);
-    if (count > INT64_MAX / 4 / v.dims[a]) return fmt::format("dims {}x{}x{} overflow", v.dims[0], v.dims[1], v.dims[2]);
+    if (count > INT64_MAX / 4 / v.dims[a])
+      return fmt::format("dims {}x{}x{} overflow", v.dims[0], v.dims[1], v.dims[2]);
     count *= v.dims[a];
     if (!(v.spacing_mm[a] > 0) || !std::isfinite(v.spacing_mm[a])) {
       return fmt::format("spacing_mm[{}] = {} is not a positive finite number", a, v.spacing_mm[a]);

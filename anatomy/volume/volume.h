@@ -19,20 +19,18 @@ int voxel_type_bytes(VoxelType type);
 struct Volume {
   std::array<int64_t, 3> dims{0, 0, 0};
   Eigen::Vector3d spacing_mm = Eigen::Vector3d::Ones();
-  Eigen::Vector3d origin_mm = Eigen::Vector3d::Zero();     // centre of voxel (0, 0, 0)
+  Eigen::Vector3d origin_mm = Eigen::Vector3d::Zero();      // centre of voxel (0, 0, 0)
   Eigen::Matrix3d direction = Eigen::Matrix3d::Identity();  // column a: physical axis of index a
   VoxelType type = VoxelType::kInt16;
   std::vector<int16_t> hu_i16;  // used when type == kInt16
   std::vector<float> hu_f32;    // used when type == kFloat32
 
   // a zero-filled volume of the given size (allocates once)
-  static Volume make(std::array<int64_t, 3> dims, const Eigen::Vector3d& spacing_mm,
-                     const Eigen::Vector3d& origin_mm, VoxelType type);
+  static Volume make(std::array<int64_t, 3> dims, const Eigen::Vector3d& spacing_mm, const Eigen::Vector3d& origin_mm,
+                     VoxelType type);
 
   int64_t voxel_count() const { return dims[0] * dims[1] * dims[2]; }
-  int64_t linear_index(int64_t i, int64_t j, int64_t k) const {
-    return i + dims[0] * (j + dims[1] * k);
-  }
+  int64_t linear_index(int64_t i, int64_t j, int64_t k) const { return i + dims[0] * (j + dims[1] * k); }
   float hu(int64_t i, int64_t j, int64_t k) const {
     const int64_t n = linear_index(i, j, k);
     return type == VoxelType::kInt16 ? static_cast<float>(hu_i16[n]) : hu_f32[n];

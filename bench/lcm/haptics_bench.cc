@@ -52,7 +52,6 @@ struct Options {
   std::string out_dir = PCISIM_SOURCE_DIR "/docs/benchmarks";
 };
 
-
 pid_t spawn(const std::vector<std::string>& args) {
   std::vector<char*> argv;
   for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
@@ -78,7 +77,9 @@ struct Probe {
   int64_t forces = 0;
   pcisim_lcm::force_command_t msg{};
 
-  Probe(const std::string& url, size_t capacity) : lcm(url), publish_ns(capacity, 0) { round_trip_us.reserve(capacity); }
+  Probe(const std::string& url, size_t capacity) : lcm(url), publish_ns(capacity, 0) {
+    round_trip_us.reserve(capacity);
+  }
 
   void on_force(const lcm::ReceiveBuffer* r, const std::string&) {
     const int64_t now = realtime::monotonic_ns();
@@ -97,13 +98,16 @@ struct Probe {
 json timing_run(const Options& o, bool loaded, bool no_qos) {
   const std::string url = "udpm://239.255.76.67:7667?ttl=0";
   const std::string stats_path =
-      fs::temp_directory_path() / fmt::format("pcisim_haptics_{}{}.json", loaded ? "loaded" : "idle", no_qos ? "_noqos" : "");
+      fs::temp_directory_path() /
+      fmt::format("pcisim_haptics_{}{}.json", loaded ? "loaded" : "idle", no_qos ? "_noqos" : "");
   fs::remove(stats_path);
   pid_t hog = 0;
-  if (loaded) hog = spawn({"stress-ng", "--cpu", "2", "--quiet", "--timeout", fmt::format("{}s", static_cast<int>(o.seconds + 20))});
-  const pid_t server_pid = spawn({PCISIM_BINARY_DIR "/server/pcisim-server", "--duration", fmt::format("{}", o.seconds + 2),
-                                  "--lcm-url", url, "--stats-json", stats_path, "--log-level", "warn", "--cpu-latency-us",
-                                  no_qos ? "-1" : "0"});
+  if (loaded)
+    hog = spawn(
+        {"stress-ng", "--cpu", "2", "--quiet", "--timeout", fmt::format("{}s", static_cast<int>(o.seconds + 20))});
+  const pid_t server_pid =
+      spawn({PCISIM_BINARY_DIR "/server/pcisim-server", "--duration", fmt::format("{}", o.seconds + 2), "--lcm-url",
+             url, "--stats-json", stats_path, "--log-level", "warn", "--cpu-latency-us", no_qos ? "-1" : "0"});
 
   const auto script = clients::TraineeScript::parse(clients::TraineeScript::builtin_text(), "built-in");
   Probe probe(url, static_cast<size_t>((o.seconds + 30) * 1000));
@@ -115,7 +119,8 @@ json timing_run(const Options& o, bool loaded, bool no_qos) {
   // wait for the server's first answer, then play the script at 1 kHz for the run
   pcisim_lcm::instrument_state_t m{};
   const int64_t give_up = realtime::monotonic_ns() + 60'000'000'000;
-  while (probe.forces == 0 && realtime::monotonic_ns() < give_up) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  while (probe.forces == 0 && realtime::monotonic_ns() < give_up)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
   const int64_t start = realtime::monotonic_ns();
   realtime::DeadlineSchedule schedule(start, 1'000'000);
   for (int64_t seq = 0; seq < static_cast<int64_t>(probe.publish_ns.size()); ++seq) {
@@ -145,7 +150,8 @@ json timing_run(const Options& o, bool loaded, bool no_qos) {
   std::ifstream in(stats_path);
   json stats = json::parse(in);
   const auto& rt = probe.round_trip_us;
-  stats["round_trip_us"] = {{"p50", percentile(rt, 0.5)}, {"p99", percentile(rt, 0.99)},
+  stats["round_trip_us"] = {{"p50", percentile(rt, 0.5)},
+                            {"p99", percentile(rt, 0.99)},
                             {"max", rt.empty() ? 0.0 : *std::max_element(rt.begin(), rt.end())},
                             {"samples", rt.size()}};
   stats["load"] = std::string(loaded ? "stress-ng --cpu 2" : "idle") + (no_qos ? ", no PM QoS" : "");
@@ -172,8 +178,11 @@ json host_probe(double seconds) {
   });
   probe.join();
   return {{"seconds", seconds},
-          {"late_us", {{"p50", percentile(late_us, 0.5)}, {"p99", percentile(late_us, 0.99)},
-                       {"p999", percentile(late_us, 0.999)}, {"max", *std::max_element(late_us.begin(), late_us.end())}}}};
+          {"late_us",
+           {{"p50", percentile(late_us, 0.5)},
+            {"p99", percentile(late_us, 0.99)},
+            {"p999", percentile(late_us, 0.999)},
+            {"max", *std::max_element(late_us.begin(), late_us.end())}}}};
 }
 
 struct Trace {
@@ -187,7 +196,8 @@ json accuracy_run(double seconds, Trace& trace) {
   physics::WorldSpec fast = scene.world, slow = scene.world;
   fast.step_s = 1e-3;
   physics::World reference(fast), world(slow);
-  const haptics::Interpolation modes[] = {haptics::Interpolation::kZeroOrderHold, haptics::Interpolation::kLinearExtrapolation,
+  const haptics::Interpolation modes[] = {haptics::Interpolation::kZeroOrderHold,
+                                          haptics::Interpolation::kLinearExtrapolation,
                                           haptics::Interpolation::kLocalModel};
   const char* names[] = {"zero_order_hold", "linear_extrapolation", "local_model"};
   std::vector<haptics::ForceEvaluator> evaluators;
@@ -204,7 +214,8 @@ json accuracy_run(double seconds, Trace& trace) {
   for (int k = 0; k < ticks; ++k) {
     const double t_s = k * 1e-3;
     const auto r = script.sample(t_s);
-    physics::InstrumentInput in{r.insertion_mm * 1e-3, r.rotation_rad, r.insertion_rate_mm_s * 1e-3, r.rotation_rate_rad_s, 0};
+    physics::InstrumentInput in{r.insertion_mm * 1e-3, r.rotation_rad, r.insertion_rate_mm_s * 1e-3,
+                                r.rotation_rate_rad_s, 0};
     reference.step(in);
     // the physics force itself; the local model's damping term is part of what is compared
     const double f_ref = reference.force_model().f0_n;
@@ -215,7 +226,8 @@ json accuracy_run(double seconds, Trace& trace) {
       m.made_utime = now_us;
       for (auto& e : evaluators) e.set_model(m, now_us);
     }
-    haptics::InstrumentSample s{now_us, in.insertion_m, in.rotation_rad, in.insertion_rate_m_per_s, in.rotation_rate_rad_per_s};
+    haptics::InstrumentSample s{now_us, in.insertion_m, in.rotation_rad, in.insertion_rate_m_per_s,
+                                in.rotation_rate_rad_per_s};
     trace.t_s.push_back(t_s);
     trace.reference_n.push_back(f_ref);
     for (int i = 0; i < 3; ++i) {
@@ -223,7 +235,8 @@ json accuracy_run(double seconds, Trace& trace) {
       const double f = evaluators[i].tick(s, now_us).axial_force_n;
       cost_ns[i].push_back(static_cast<double>(realtime::monotonic_ns() - a));
       trace.mode_n[i].push_back(f);
-      if (t_s > 0.5) errors[i].push_back(std::abs(f - std::clamp(f_ref, -scene.haptics.peak_force_n, scene.haptics.peak_force_n)));
+      if (t_s > 0.5)
+        errors[i].push_back(std::abs(f - std::clamp(f_ref, -scene.haptics.peak_force_n, scene.haptics.peak_force_n)));
     }
   }
   json out = json::array();
@@ -242,14 +255,15 @@ json accuracy_run(double seconds, Trace& trace) {
 std::string timing_row(const json& s) {
   const auto& h = s["haptic"];
   const double overrun_pct = 100.0 * h["overruns"].get<double>() / std::max(1.0, h["ticks"].get<double>());
-  return fmt::format("| {} | {:.1f} | {:.0f} / {:.0f} / {:.0f} / {:.0f} | {:.2f} / {:.2f} / {:.1f} | {} ({:.3f} %) | {:.0f} / {:.0f} / {:.0f} | {} |",
-                     s["load"].get<std::string>(), h["rate_hz"].get<double>(), h["wake_late_us"]["p50"].get<double>(),
-                     h["wake_late_us"]["p99"].get<double>(), h["wake_late_us"]["p999"].get<double>(),
-                     h["wake_late_us"]["max"].get<double>(), h["compute_us"]["p50"].get<double>(),
-                     h["compute_us"]["p99"].get<double>(), h["compute_us"]["max"].get<double>(),
-                     h["overruns"].get<int64_t>(), overrun_pct, s["round_trip_us"]["p50"].get<double>(),
-                     s["round_trip_us"]["p99"].get<double>(), s["round_trip_us"]["max"].get<double>(),
-                     h["sched_fifo"].get<bool>() ? "FIFO" : "OTHER");
+  return fmt::format(
+      "| {} | {:.1f} | {:.0f} / {:.0f} / {:.0f} / {:.0f} | {:.2f} / {:.2f} / {:.1f} | {} ({:.3f} %) | {:.0f} / {:.0f} "
+      "/ {:.0f} | {} |",
+      s["load"].get<std::string>(), h["rate_hz"].get<double>(), h["wake_late_us"]["p50"].get<double>(),
+      h["wake_late_us"]["p99"].get<double>(), h["wake_late_us"]["p999"].get<double>(),
+      h["wake_late_us"]["max"].get<double>(), h["compute_us"]["p50"].get<double>(),
+      h["compute_us"]["p99"].get<double>(), h["compute_us"]["max"].get<double>(), h["overruns"].get<int64_t>(),
+      overrun_pct, s["round_trip_us"]["p50"].get<double>(), s["round_trip_us"]["p99"].get<double>(),
+      s["round_trip_us"]["max"].get<double>(), h["sched_fifo"].get<bool>() ? "FIFO" : "OTHER");
 }
 
 int run(const std::vector<std::string>& args) {
@@ -261,10 +275,11 @@ int run(const std::vector<std::string>& args) {
       return args[++i];
     };
     if (a == "--help") {
-      std::printf("pcisim-bench haptics [--seconds S (60)] [--only idle|loaded] [--out DIR (docs/benchmarks)]\n"
-                  "Runs pcisim-server twice (idle, then with stress-ng on both cores) in a private network\n"
-                  "namespace (needs root), measures wakeup lateness, compute time, overruns and the LCM round\n"
-                  "trip, then compares the haptic interpolation schemes against 1 kHz physics.\n");
+      std::printf(
+          "pcisim-bench haptics [--seconds S (60)] [--only idle|loaded] [--out DIR (docs/benchmarks)]\n"
+          "Runs pcisim-server twice (idle, then with stress-ng on both cores) in a private network\n"
+          "namespace (needs root), measures wakeup lateness, compute time, overruns and the LCM round\n"
+          "trip, then compares the haptic interpolation schemes against 1 kHz physics.\n");
       return 0;
     } else if (a == "--seconds") {
       o.seconds = std::stod(value());
@@ -290,7 +305,8 @@ int run(const std::vector<std::string>& args) {
   }
   std::printf("haptics: host noise probe, 5 s ...\n");
   std::fflush(stdout);
-  json report = {{"machine", machine_info()}, {"seconds", o.seconds}, {"host_probe", host_probe(5.0)}, {"runs", json::array()}};
+  json report = {
+      {"machine", machine_info()}, {"seconds", o.seconds}, {"host_probe", host_probe(5.0)}, {"runs", json::array()}};
   // idle and loaded with the server's default PM QoS request; idle without it for comparison
   for (const auto& [loaded, no_qos] : {std::pair{false, false}, {false, true}, {true, false}}) {
     if ((loaded && !o.loaded) || (!loaded && !o.idle)) continue;
@@ -316,14 +332,17 @@ int run(const std::vector<std::string>& args) {
      << "Generated by `pcisim-bench haptics --seconds " << o.seconds << "` on " << machine_info() << ".\n"
      << "The server runs the built-in scene; a 1 kHz instrument in another process plays the built-in trainee\n"
      << "over udpm in a private network namespace. Targets (issue): compute p99 <= 20 us; wakeup lateness\n"
-     << "p99 <= 100 us and p99.9 <= 500 us with physics running; overruns < 0.1 % of ticks; LCM round trip p99 <= 2 ms.\n"
+     << "p99 <= 100 us and p99.9 <= 500 us with physics running; overruns < 0.1 % of ticks; LCM round trip p99 <= 2 "
+        "ms.\n"
      << "The server asks the kernel to keep CPU wake-ups within 0 us while it runs (PM QoS, /dev/cpu_dma_latency;\n"
      << "`--cpu-latency-us`): idle cores poll instead of halting. The 'no PM QoS' row runs without that request.\n"
-     << fmt::format("Host noise just before the runs: a bare 1 kHz sleep loop in this process with the server's settings\n"
-                    "(SCHED_FIFO, PM QoS 0 us) but no server woke late by p50 {:.0f} / p99 {:.0f} / p99.9 {:.0f} / max {:.0f} us\n"
-                    "over 5 s: what the machine itself allowed while these figures were taken.\n\n",
-                    report["host_probe"]["late_us"]["p50"].get<double>(), report["host_probe"]["late_us"]["p99"].get<double>(),
-                    report["host_probe"]["late_us"]["p999"].get<double>(), report["host_probe"]["late_us"]["max"].get<double>())
+     << fmt::format(
+            "Host noise just before the runs: a bare 1 kHz sleep loop in this process with the server's settings\n"
+            "(SCHED_FIFO, PM QoS 0 us) but no server woke late by p50 {:.0f} / p99 {:.0f} / p99.9 {:.0f} / max {:.0f} "
+            "us\n"
+            "over 5 s: what the machine itself allowed while these figures were taken.\n\n",
+            report["host_probe"]["late_us"]["p50"].get<double>(), report["host_probe"]["late_us"]["p99"].get<double>(),
+            report["host_probe"]["late_us"]["p999"].get<double>(), report["host_probe"]["late_us"]["max"].get<double>())
      << "| load | rate Hz | wakeup lateness us p50 / p99 / p99.9 / max | compute us p50 / p99 / max | overruns | "
         "LCM round trip us p50 / p99 / max | sched |\n|---|---|---|---|---|---|---|\n";
   for (const auto& r : report["runs"]) md << timing_row(r) << "\n";
@@ -332,8 +351,9 @@ int run(const std::vector<std::string>& args) {
      << "and the cost of one tick of the evaluator (safety layers included).\n\n"
      << "| scheme | RMSE N | max error N | tick ns p50 | tick ns p99 |\n|---|---|---|---|---|\n";
   for (const auto& m : report["interpolation"])
-    md << fmt::format("| {} | {:.4f} | {:.4f} | {:.0f} | {:.0f} |\n", m["mode"].get<std::string>(), m["rmse_n"].get<double>(),
-                      m["max_error_n"].get<double>(), m["tick_ns_p50"].get<double>(), m["tick_ns_p99"].get<double>());
+    md << fmt::format("| {} | {:.4f} | {:.4f} | {:.0f} | {:.0f} |\n", m["mode"].get<std::string>(),
+                      m["rmse_n"].get<double>(), m["max_error_n"].get<double>(), m["tick_ns_p50"].get<double>(),
+                      m["tick_ns_p99"].get<double>());
   // how far the schemes are from each other, against how far they are from the reference
   double between = 0.0, lo = 1e300, hi = 0.0;
   for (size_t a = 0; a < trace.mode_n.size(); ++a) {
@@ -347,19 +367,22 @@ int run(const std::vector<std::string>& args) {
     lo = std::min(lo, m["rmse_n"].get<double>());
     hi = std::max(hi, m["rmse_n"].get<double>());
   }
-  md << fmt::format("\nThe schemes differ from each other by at most {:.4f} N RMS over the trace, against {:.4f}-{:.4f} N\n"
-                    "from the reference: most of the error is the difference between the wire stepped at 1 kHz and at\n"
-                    "30 Hz (the chain-mail solution depends on the step), which all three share. The plot shows both.\n",
-                    between, lo, hi);
+  md << fmt::format(
+      "\nThe schemes differ from each other by at most {:.4f} N RMS over the trace, against {:.4f}-{:.4f} N\n"
+      "from the reference: most of the error is the difference between the wire stepped at 1 kHz and at\n"
+      "30 Hz (the chain-mail solution depends on the step), which all three share. The plot shows both.\n",
+      between, lo, hi);
   md << "\n![force traces](haptics.png)\n";
   std::ofstream(fs::path(o.out_dir) / "haptics.md") << md.str();
   const std::string plot = fmt::format("/usr/bin/python3 {}/scripts/plot_haptics.py {}", PCISIM_SOURCE_DIR, o.out_dir);
-  if (std::system(plot.c_str()) != 0) std::fprintf(stderr, "haptics: the plot failed (is python3-matplotlib installed?)\n");
+  if (std::system(plot.c_str()) != 0)
+    std::fprintf(stderr, "haptics: the plot failed (is python3-matplotlib installed?)\n");
   std::printf("%s", md.str().c_str());
   return 0;
 }
 
-const bool registered = add("haptics", "1 kHz loop timing idle and under load, LCM round trip, interpolation accuracy", run);
+const bool registered =
+    add("haptics", "1 kHz loop timing idle and under load, LCM round trip, interpolation accuracy", run);
 
 }  // namespace
 }  // namespace pcisim::bench

@@ -20,7 +20,9 @@
 namespace {
 
 std::atomic<bool> g_stop{false};
-extern "C" void on_signal(int) { g_stop = true; }
+extern "C" void on_signal(int) {
+  g_stop = true;
+}
 
 using pcisim::realtime::monotonic_ns;
 
@@ -41,8 +43,7 @@ struct Watch {
     int used = -1;
     try {
       used = force.decode(r->data, 0, static_cast<int>(r->data_size));
-    } catch (...) {
-    }
+    } catch (...) {}
     if (used != static_cast<int>(r->data_size) || force.utime <= 0) {
       ++forces_bad;
       return;
@@ -89,10 +90,12 @@ pcisim_lcm::session_command_t command(int8_t cmd, int64_t seq) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"pcisim-soak-console: an instructor's console for scripts/soak. Keeps fluoroscopy on, moves the "
-               "C-arm, injects contrast and reloads the scene on a schedule; checks every force command is finite "
-               "and within the peak; counts the frames it receives. Writes a JSON summary."};
-  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0", image_url = "udpm://239.255.76.67:7668?ttl=0&recv_buf_size=4194304";
+  CLI::App app{
+      "pcisim-soak-console: an instructor's console for scripts/soak. Keeps fluoroscopy on, moves the "
+      "C-arm, injects contrast and reloads the scene on a schedule; checks every force command is finite "
+      "and within the peak; counts the frames it receives. Writes a JSON summary."};
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0",
+              image_url = "udpm://239.255.76.67:7668?ttl=0&recv_buf_size=4194304";
   std::string scene_path, out_path;
   double seconds = 60, carm_every_s = 5, contrast_every_s = 20, reload_every_s = 120;
   uint32_t seed = 1;
@@ -101,11 +104,15 @@ int main(int argc, char** argv) {
   app.add_option("--lcm-image-url", image_url, "image LCM URL")->capture_default_str();
   app.add_option("--seconds", seconds, "how long to run")->check(CLI::Range(1.0, 1e6))->capture_default_str();
   app.add_option("--scene", scene_path, "scene file to reload on the schedule (absolute path); none: no reloads");
-  app.add_option("--carm-every-s", carm_every_s, "C-arm move period")->check(CLI::Range(0.1, 1e6))->capture_default_str();
+  app.add_option("--carm-every-s", carm_every_s, "C-arm move period")
+      ->check(CLI::Range(0.1, 1e6))
+      ->capture_default_str();
   app.add_option("--contrast-every-s", contrast_every_s, "contrast injection period")
       ->check(CLI::Range(0.1, 1e6))
       ->capture_default_str();
-  app.add_option("--reload-every-s", reload_every_s, "scene reload period")->check(CLI::Range(1.0, 1e6))->capture_default_str();
+  app.add_option("--reload-every-s", reload_every_s, "scene reload period")
+      ->check(CLI::Range(1.0, 1e6))
+      ->capture_default_str();
   app.add_option("--peak-force-n", w.peak_force_n, "the scene's haptics.peak_force_n")->capture_default_str();
   app.add_option("--peak-torque-nmm", w.peak_torque_nmm, "the scene's haptics.peak_torque_nm, in N mm")
       ->capture_default_str();
@@ -171,19 +178,22 @@ int main(int argc, char** argv) {
   g_stop = true;
   image_rx.join();
 
-  nlohmann::json j = {
-      {"seconds", (monotonic_ns() - t0) * 1e-9},
-      {"sent", {{"pedal_presses", pedal_presses}, {"carm_moves", carm_moves}, {"injections", injections}, {"reloads", reloads}}},
-      {"forces",
-       {{"received", w.forces},
-        {"undecodable", w.forces_bad},
-        {"non_finite", w.forces_non_finite},
-        {"over_peak", w.forces_over_peak},
-        {"max_abs_force_n", w.max_abs_force_n},
-        {"max_abs_torque_nmm", w.max_abs_torque_nmm},
-        {"peak_force_n", w.peak_force_n}}},
-      {"frames", {{"received", w.frames_received}, {"undecodable", w.frames_bad}}},
-      {"status", {{"received", w.statuses}, {"undecodable", w.status_bad}, {"last", w.last_status}}}};
+  nlohmann::json j = {{"seconds", (monotonic_ns() - t0) * 1e-9},
+                      {"sent",
+                       {{"pedal_presses", pedal_presses},
+                        {"carm_moves", carm_moves},
+                        {"injections", injections},
+                        {"reloads", reloads}}},
+                      {"forces",
+                       {{"received", w.forces},
+                        {"undecodable", w.forces_bad},
+                        {"non_finite", w.forces_non_finite},
+                        {"over_peak", w.forces_over_peak},
+                        {"max_abs_force_n", w.max_abs_force_n},
+                        {"max_abs_torque_nmm", w.max_abs_torque_nmm},
+                        {"peak_force_n", w.peak_force_n}}},
+                      {"frames", {{"received", w.frames_received}, {"undecodable", w.frames_bad}}},
+                      {"status", {{"received", w.statuses}, {"undecodable", w.status_bad}, {"last", w.last_status}}}};
   std::ofstream out(out_path);
   out << j.dump(2) << "\n";
   if (!out.flush()) {

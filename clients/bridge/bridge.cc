@@ -62,7 +62,8 @@ BridgeStats Bridge::run(const std::atomic<bool>& stop) {
     const int64_t now_ns = monotonic_ns();
     if (waiting && (forces_received_ > 0 || (now_ns - start_ns) * 1e-9 > options_.wait_for_server_s)) {
       waiting = false;
-      if (forces_received_ == 0) spdlog::warn("bridge: no answer from the server after {} s, starting anyway", options_.wait_for_server_s);
+      if (forces_received_ == 0)
+        spdlog::warn("bridge: no answer from the server after {} s, starting anyway", options_.wait_for_server_s);
       start_ns = now_ns;  // the device's clock starts now
       next_log_ns = now_ns + 1'000'000'000;
     }
@@ -94,10 +95,11 @@ BridgeStats Bridge::run(const std::atomic<bool>& stop) {
 
     if (options_.log_each_second && !waiting && now_ns >= next_log_ns) {
       next_log_ns += 1'000'000'000;
-      spdlog::info("bridge: t={:5.1f}s insertion {:6.1f} mm rotation {:6.2f} rad buttons {:#x}{} | renders {:+.3f} N "
-                   "{:+.3f} N·mm ({} commands)",
-                   t_s, r.insertion_mm, r.rotation_rad, r.buttons, ok ? "" : " FAULT", last_force_n_.load(),
-                   last_torque_nmm_.load(), forces_received_.load());
+      spdlog::info(
+          "bridge: t={:5.1f}s insertion {:6.1f} mm rotation {:6.2f} rad buttons {:#x}{} | renders {:+.3f} N "
+          "{:+.3f} N·mm ({} commands)",
+          t_s, r.insertion_mm, r.rotation_rad, r.buttons, ok ? "" : " FAULT", last_force_n_.load(),
+          last_torque_nmm_.load(), forces_received_.load());
     }
     realtime::sleep_until_ns(schedule.deadline_ns());
     stats.missed_periods += schedule.complete(monotonic_ns());

@@ -16,16 +16,19 @@
 namespace {
 
 std::atomic<bool> g_stop{false};
-extern "C" void on_signal(int) { g_stop = true; }
+extern "C" void on_signal(int) {
+  g_stop = true;
+}
 
 }  // namespace
 
 int main(int argc, char** argv) {
   using namespace pcisim::clients;
-  CLI::App app{"pcisim-bridge: turns an instrument into instrument_state_t at 1 kHz for pcisim-server and logs "
-               "the force_command_t it sends back. Devices: scripted (a trainee script, docs/trainee-script.md), "
-               "replay (an lcm-logger log of a session, docs/recording.md), serial (an encoder box, "
-               "docs/serial-protocol.md)."};
+  CLI::App app{
+      "pcisim-bridge: turns an instrument into instrument_state_t at 1 kHz for pcisim-server and logs "
+      "the force_command_t it sends back. Devices: scripted (a trainee script, docs/trainee-script.md), "
+      "replay (an lcm-logger log of a session, docs/recording.md), serial (an encoder box, "
+      "docs/serial-protocol.md)."};
   std::string device = "scripted", script_path, log_path, port, lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   std::string replay_channel = pcisim::protocol::kInstrumentChannel;
   double duration_s = 0, wait_for_server_s = 0, speed = 1.0;
@@ -41,7 +44,8 @@ int main(int argc, char** argv) {
   app.add_option("--speed", speed, "replay: 1 = real time, 2 = twice as fast, 0 = stepped (one sample per tick)")
       ->check(CLI::Range(0.0, 100.0))
       ->capture_default_str();
-  app.add_option("--replay-channel", replay_channel, "replay: channel of the recorded instrument")->capture_default_str();
+  app.add_option("--replay-channel", replay_channel, "replay: channel of the recorded instrument")
+      ->capture_default_str();
   app.add_option("--port", port, "serial: the serial port or pseudo-terminal, e.g. /dev/ttyUSB0");
   app.add_option("--baud", baud, "serial: baud rate")->capture_default_str();
   app.add_option("--mm-per-count", cal.mm_per_count, "serial: insertion encoder calibration")->capture_default_str();
@@ -51,7 +55,8 @@ int main(int argc, char** argv) {
   app.add_option("--lcm-url", lcm_url, "LCM URL shared with the server")->capture_default_str();
   app.add_option("--duration", duration_s, "seconds to run; 0 = until SIGINT/SIGTERM (or the end of a replay)")
       ->check(CLI::Range(0.0, 1e7));
-  app.add_option("--wait-for-server", wait_for_server_s, "hold the device at t=0 until the server answers (up to S seconds)")
+  app.add_option("--wait-for-server", wait_for_server_s,
+                 "hold the device at t=0 until the server answers (up to S seconds)")
       ->check(CLI::Range(0.0, 600.0));
   app.add_option("--rate-hz", options.rate_hz, "publish rate")->check(CLI::Range(1.0, 10000.0))->capture_default_str();
   app.add_option("--device-id", options.device_id, "instrument_state_t.device_id")->capture_default_str();
@@ -65,8 +70,9 @@ int main(int argc, char** argv) {
   std::unique_ptr<InstrumentDevice> dev;
   try {
     if (device == "scripted") {
-      dev = std::make_unique<ScriptedDevice>(script_path.empty() ? TraineeScript::parse(TraineeScript::builtin_text(), "built-in")
-                                                                 : TraineeScript::load(script_path));
+      dev = std::make_unique<ScriptedDevice>(script_path.empty()
+                                                 ? TraineeScript::parse(TraineeScript::builtin_text(), "built-in")
+                                                 : TraineeScript::load(script_path));
     } else if (device == "replay") {
       if (log_path.empty()) throw std::runtime_error("--device replay needs --log FILE");
       dev = std::make_unique<ReplayDevice>(log_path, speed, replay_channel);
@@ -94,9 +100,10 @@ int main(int argc, char** argv) {
   if (auto* serial = dynamic_cast<SerialDevice*>(dev.get()))
     extra = fmt::format(", serial lines {} ok / {} malformed{}", serial->lines(), serial->malformed(),
                         serial->unplugged() ? ", unplugged" : "");
-  spdlog::info("bridge: done, {} samples published ({:.0f} Hz, {} in fault, {} periods missed), {} force commands "
-               "received, {} bad{}",
-               s.published, s.elapsed_s > 0 ? (s.published - 1) / s.elapsed_s : 0.0, s.fault_samples, s.missed_periods,
-               s.forces_received, s.forces_bad, extra);
+  spdlog::info(
+      "bridge: done, {} samples published ({:.0f} Hz, {} in fault, {} periods missed), {} force commands "
+      "received, {} bad{}",
+      s.published, s.elapsed_s > 0 ? (s.published - 1) / s.elapsed_s : 0.0, s.fault_samples, s.missed_periods,
+      s.forces_received, s.forces_bad, extra);
   return 0;
 }

@@ -18,15 +18,24 @@ namespace {
 
 speed_t baud_constant(int baud) {
   switch (baud) {
-    case 9600: return B9600;
-    case 19200: return B19200;
-    case 38400: return B38400;
-    case 57600: return B57600;
-    case 115200: return B115200;
-    case 230400: return B230400;
-    case 460800: return B460800;
-    case 921600: return B921600;
-    default: throw std::runtime_error(fmt::format("baud {} is not supported (9600 ... 921600)", baud));
+    case 9600:
+      return B9600;
+    case 19200:
+      return B19200;
+    case 38400:
+      return B38400;
+    case 57600:
+      return B57600;
+    case 115200:
+      return B115200;
+    case 230400:
+      return B230400;
+    case 460800:
+      return B460800;
+    case 921600:
+      return B921600;
+    default:
+      throw std::runtime_error(fmt::format("baud {} is not supported (9600 ... 921600)", baud));
   }
 }
 
@@ -55,7 +64,8 @@ bool parse_encoder_line(const std::string& line, EncoderLine& out) {
   if (end - p < 2 || p[0] != 'E' || p[1] != ' ') return false;
   p += 1;
   int64_t buttons = 0;
-  if (!field(p, end, out.insertion_counts) || !field(p, end, out.rotation_counts) || !field(p, end, buttons)) return false;
+  if (!field(p, end, out.insertion_counts) || !field(p, end, out.rotation_counts) || !field(p, end, buttons))
+    return false;
   while (p < end && *p == ' ') ++p;
   if (p != end || buttons < 0 || buttons > 0xffff) return false;
   // counts beyond 2^40 come from no encoder (and would overflow the zero offset): malformed
@@ -71,8 +81,10 @@ void validate(const SerialCalibration& c) {
   require(std::isfinite(c.mm_per_count) && c.mm_per_count != 0.0, "mm_per_count must be finite and non-zero");
   require(std::isfinite(c.rad_per_count) && c.rad_per_count != 0.0, "rad_per_count must be finite and non-zero");
   require(counts_in_range(c.insertion_zero_counts), "insertion_zero_counts must be within +-2^40");
-  require(std::isfinite(c.min_insertion_mm) && std::isfinite(c.max_insertion_mm) && c.min_insertion_mm <= c.max_insertion_mm,
-          fmt::format("insertion range [{}, {}] mm must be finite with min <= max", c.min_insertion_mm, c.max_insertion_mm));
+  require(std::isfinite(c.min_insertion_mm) && std::isfinite(c.max_insertion_mm) &&
+              c.min_insertion_mm <= c.max_insertion_mm,
+          fmt::format("insertion range [{}, {}] mm must be finite with min <= max", c.min_insertion_mm,
+                      c.max_insertion_mm));
   require(std::isfinite(c.silent_timeout_s) && c.silent_timeout_s > 0.0, "silent_timeout_s must be finite and > 0");
 }
 
@@ -117,8 +129,10 @@ bool SerialDevice::read(double t_s, InstrumentReading& out) {
     if (n > 0) {
       for (ssize_t i = 0; i < n; ++i) {
         if (buf[i] != '\n') {
-          if (pending_.size() < kMaxLine) pending_.push_back(buf[i]);
-          else overlong_ = true;
+          if (pending_.size() < kMaxLine)
+            pending_.push_back(buf[i]);
+          else
+            overlong_ = true;
           continue;
         }
         EncoderLine e;

@@ -10,12 +10,12 @@
 namespace pcisim::clients {
 
 struct SerialCalibration {
-  double mm_per_count = 0.01;       // insertion encoder
-  double rad_per_count = 0.001;     // rotation encoder
+  double mm_per_count = 0.01;    // insertion encoder
+  double rad_per_count = 0.001;  // rotation encoder
   int64_t insertion_zero_counts = 0;
-  double min_insertion_mm = 0.0;    // readings are clamped into this range
+  double min_insertion_mm = 0.0;  // readings are clamped into this range
   double max_insertion_mm = 400.0;
-  double silent_timeout_s = 0.05;   // no valid line for this long: fault
+  double silent_timeout_s = 0.05;  // no valid line for this long: fault
 };
 
 // throws std::invalid_argument ("serial calibration: ...") for zero or non-finite scales, an

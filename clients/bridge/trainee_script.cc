@@ -14,12 +14,13 @@
 namespace pcisim::clients {
 namespace {
 
-using json::JsonReader;
 using json::JsonError;
+using json::JsonReader;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // the main job's trainee: engage the LM, steer the angled tip toward the LAD and advance
-const char* kBuiltin = R"json(// built-in trainee: into the left main, turn toward the LAD, advance under fluoroscopy with two
+const char* kBuiltin =
+    R"json(// built-in trainee: into the left main, turn toward the LAD, advance under fluoroscopy with two
 // contrast puffs (one as the wire leaves the left main, one with the wire in the LAD)
 {
   "name": "lad-approach",

@@ -15,25 +15,31 @@
 namespace {
 
 std::atomic<bool> g_stop{false};
-extern "C" void on_signal(int) { g_stop = true; }
+extern "C" void on_signal(int) {
+  g_stop = true;
+}
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"pcisim-capture: records the fluoroscopy pcisim-server streams, one 16-bit PNG and one JSON sidecar "
-               "per frame (geometry, time, the wire's 3D nodes and 2D polyline, branches holding contrast). "
-               "Fluoroscopy goes to OUT/fluoro/, each cine run to OUT/cine_NNN/."};
-  std::string out_dir, image_url = "udpm://239.255.76.67:7668?ttl=0&recv_buf_size=4194304", lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  CLI::App app{
+      "pcisim-capture: records the fluoroscopy pcisim-server streams, one 16-bit PNG and one JSON sidecar "
+      "per frame (geometry, time, the wire's 3D nodes and 2D polyline, branches holding contrast). "
+      "Fluoroscopy goes to OUT/fluoro/, each cine run to OUT/cine_NNN/."};
+  std::string out_dir, image_url = "udpm://239.255.76.67:7668?ttl=0&recv_buf_size=4194304",
+                       lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   int64_t max_frames = 0;
   double duration_s = 0;
   bool only_while_pedal = false;
   app.add_option("--out", out_dir, "output folder (created)")->required();
   app.add_option("--lcm-image-url", image_url, "LCM URL of the frames")->capture_default_str();
-  app.add_option("--lcm-url", lcm_url, "LCM URL of the control traffic (for --only-while-pedal)")->capture_default_str();
+  app.add_option("--lcm-url", lcm_url, "LCM URL of the control traffic (for --only-while-pedal)")
+      ->capture_default_str();
   app.add_option("--frames", max_frames, "stop after this many frames; 0 = no limit")->check(CLI::NonNegativeNumber);
   app.add_option("--duration", duration_s, "seconds to run; 0 = until SIGINT/SIGTERM")->check(CLI::Range(0.0, 1e7));
-  app.add_flag("--only-while-pedal", only_while_pedal,
-               "keep frames only while the instrument's fluoroscopy or cine pedal is down (not console-triggered ones)");
+  app.add_flag(
+      "--only-while-pedal", only_while_pedal,
+      "keep frames only while the instrument's fluoroscopy or cine pedal is down (not console-triggered ones)");
   CLI11_PARSE(app, argc, argv);
 
   std::unique_ptr<pcisim::clients::FrameWriter> writer;
@@ -62,9 +68,9 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   spdlog::info("capture: frames from {} into {}", image_url, out_dir);
-  const int64_t end_ns = duration_s > 0 ? pcisim::realtime::monotonic_ns() + static_cast<int64_t>(duration_s * 1e9) : INT64_MAX;
-  while (!g_stop && pcisim::realtime::monotonic_ns() < end_ns && !capture.done())
-    images.handleTimeout(50);
+  const int64_t end_ns =
+      duration_s > 0 ? pcisim::realtime::monotonic_ns() + static_cast<int64_t>(duration_s * 1e9) : INT64_MAX;
+  while (!g_stop && pcisim::realtime::monotonic_ns() < end_ns && !capture.done()) images.handleTimeout(50);
   g_stop = true;
   if (control_rx.joinable()) control_rx.join();
   spdlog::info("capture: {} frames written to {}, {} undecodable, {} skipped (pedal up), {} bad instrument samples",

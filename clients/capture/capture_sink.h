@@ -24,9 +24,9 @@ class CaptureSink {
 
   bool done() const { return !error_.empty() || (max_frames_ > 0 && writer_.written() >= max_frames_); }
   const std::string& error() const { return error_; }  // why writing stopped (a full disk, say)
-  int64_t bad() const { return bad_; }                  // undecodable frames
+  int64_t bad() const { return bad_; }                 // undecodable frames
   int64_t bad_instrument() const { return bad_instrument_; }
-  int64_t skipped() const { return skipped_; }          // good frames dropped with the pedal up
+  int64_t skipped() const { return skipped_; }  // good frames dropped with the pedal up
 
  private:
   FrameWriter& writer_;

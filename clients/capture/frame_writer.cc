@@ -35,11 +35,19 @@ nlohmann::json FrameWriter::sidecar(const pcisim_lcm::xray_frame_t& f) {
       {"utime", f.utime},
       {"cine", f.cine != 0},
       {"cine_run", f.cine_run},
-      {"c_arm", {{"primary_deg", f.primary_angle_deg}, {"secondary_deg", f.secondary_angle_deg},
-                 {"source_to_image_mm", f.source_to_image_mm}, {"source_to_axis_mm", f.source_to_axis_mm}}},
+      {"c_arm",
+       {{"primary_deg", f.primary_angle_deg},
+        {"secondary_deg", f.secondary_angle_deg},
+        {"source_to_image_mm", f.source_to_image_mm},
+        {"source_to_axis_mm", f.source_to_axis_mm}}},
       {"detector",
-       {{"width", f.width}, {"height", f.height}, {"pixel_mm", f.pixel_mm}, {"source_mm", v3(f.source_mm)},
-        {"center_mm", v3(f.detector_center_mm)}, {"u", v3(f.detector_u)}, {"v", v3(f.detector_v)},
+       {{"width", f.width},
+        {"height", f.height},
+        {"pixel_mm", f.pixel_mm},
+        {"source_mm", v3(f.source_mm)},
+        {"center_mm", v3(f.detector_center_mm)},
+        {"u", v3(f.detector_u)},
+        {"v", v3(f.detector_v)},
         {"pixel_center",
          "center_mm + (c - (width-1)/2) pixel_mm u + (r - (height-1)/2) pixel_mm v; rays from source_mm"}}},
       {"labels",
@@ -57,7 +65,10 @@ std::string FrameWriter::write(const pcisim_lcm::xray_frame_t& f) {
   // a server that restarts its pipeline (a scene reload) numbers its frames from 0 again: a frame
   // whose file exists starts a new restart_NN/ folder, so no frame is ever written over
   const std::string leaf = f.cine ? fmt::format("cine_{:03d}", f.cine_run) : std::string("fluoro");
-  auto folder = [&] { return restart_ == 0 ? fs::path(out_dir_) / leaf : fs::path(out_dir_) / fmt::format("restart_{:02d}", restart_) / leaf; };
+  auto folder = [&] {
+    return restart_ == 0 ? fs::path(out_dir_) / leaf
+                         : fs::path(out_dir_) / fmt::format("restart_{:02d}", restart_) / leaf;
+  };
   std::error_code ec;
   while (fs::exists(folder() / fmt::format("frame_{:06d}.png", f.seq), ec)) ++restart_;
   const fs::path dir = folder();
@@ -72,7 +83,9 @@ std::string FrameWriter::write(const pcisim_lcm::xray_frame_t& f) {
     std::ofstream out(json_tmp);
     out << sidecar(f).dump(1) << "\n";
     out.flush();
-    if (!out) throw std::runtime_error(fmt::format("{}: writing the sidecar failed: {}", json_tmp.string(), std::strerror(errno)));
+    if (!out)
+      throw std::runtime_error(
+          fmt::format("{}: writing the sidecar failed: {}", json_tmp.string(), std::strerror(errno)));
     out.close();
     // the sidecar lands first: a PNG in place always has its labels
     fs::rename(json_tmp, json);

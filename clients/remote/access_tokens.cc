@@ -5,7 +5,9 @@
 
 namespace pcisim::remote {
 
-const char* role_name(Role role) { return role == Role::kController ? "controller" : "observer"; }
+const char* role_name(Role role) {
+  return role == Role::kController ? "controller" : "observer";
+}
 
 AccessTokens::AccessTokens() : observer_(random_token()), controller_(random_token()) {}
 

@@ -21,7 +21,9 @@ FrameEncoder::~FrameEncoder() {
   if (jpeg_) tjDestroy(static_cast<tjhandle>(jpeg_));
 }
 
-const char* FrameEncoder::mime() const { return options_.format == ImageFormat::kJpeg ? "image/jpeg" : "image/png"; }
+const char* FrameEncoder::mime() const {
+  return options_.format == ImageFormat::kJpeg ? "image/jpeg" : "image/png";
+}
 
 void FrameEncoder::window(const pcisim_lcm::xray_frame_t& f) {
   const size_t n = static_cast<size_t>(f.width) * static_cast<size_t>(f.height);

@@ -31,8 +31,8 @@ Gateway::Gateway(const GatewayOptions& options, lcm::LCM& control, lcm::LCM& ima
       tick_timer_(io_) {
   if (&control == &images) throw std::invalid_argument("the control and image buses need separate LCM instances");
   if (options_.keyboard_instrument)
-    keyboard_ = std::make_unique<KeyboardInstrument>(control_, options_.keyboard,
-                                                     [this] { return tracker_.other_instrument_active(monotonic_ns()); });
+    keyboard_ = std::make_unique<KeyboardInstrument>(
+        control_, options_.keyboard, [this] { return tracker_.other_instrument_active(monotonic_ns()); });
   auto sink = [this](const pcisim_lcm::session_command_t& c) { control_.publish(protocol::kSessionChannel, &c); };
   hub_ = std::make_unique<Hub>(options_.hub, options_.commands, sink, tracker_, keyboard_.get());
   control_subs_ = {control_.subscribe(protocol::kWireChannel, &Gateway::on_wire, this),
@@ -58,7 +58,8 @@ void Gateway::start() {
   if (!ec) acceptor_.set_option(net::socket_base::reuse_address(true), ec);
   if (!ec) acceptor_.bind(endpoint, ec);
   if (!ec) acceptor_.listen(net::socket_base::max_listen_connections, ec);
-  if (ec) throw std::runtime_error(fmt::format("cannot listen on {}:{}: {}", options_.bind, options_.port, ec.message()));
+  if (ec)
+    throw std::runtime_error(fmt::format("cannot listen on {}:{}: {}", options_.bind, options_.port, ec.message()));
   port_ = acceptor_.local_endpoint().port();
   running_ = true;
   accept();

@@ -19,7 +19,9 @@ namespace http = beast::http;
 HttpSession::HttpSession(boost::asio::ip::tcp::socket&& socket, Hub& hub, const AccessTokens& tokens)
     : stream_(std::move(socket)), hub_(hub), tokens_(tokens) {}
 
-void HttpSession::run() { read(); }
+void HttpSession::run() {
+  read();
+}
 
 void HttpSession::read() {
   parser_.emplace();
@@ -30,7 +32,9 @@ void HttpSession::read() {
 }
 
 namespace {
-std::string_view sv(beast::string_view s) { return {s.data(), s.size()}; }
+std::string_view sv(beast::string_view s) {
+  return {s.data(), s.size()};
+}
 
 http::response<http::string_body> plain(unsigned version, http::status status, std::string text) {
   http::response<http::string_body> res{status, version};
@@ -97,8 +101,7 @@ void HttpSession::upgrade(http::request<http::string_body>&& req) {
     try {
       const double want = std::stod(*asked);
       if (std::isfinite(want)) fps = std::clamp(want, 0.5, hub_.limits().max_fps);
-    } catch (const std::exception&) {
-    }
+    } catch (const std::exception&) {}
   }
   stream_.expires_never();  // the WebSocket keeps its own timeouts
   std::make_shared<WsSession>(stream_.release_socket(), hub_, *role, fps)->start(std::move(req));

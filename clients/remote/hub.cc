@@ -15,7 +15,11 @@ using C = pcisim_lcm::session_command_t;
 
 Hub::Hub(const HubLimits& limits, const CommandLimits& command_limits, CommandSink sink, SessionTracker& tracker,
          KeyboardInstrument* keyboard)
-    : limits_(limits), command_limits_(command_limits), sink_(std::move(sink)), tracker_(tracker), keyboard_(keyboard) {}
+    : limits_(limits),
+      command_limits_(command_limits),
+      sink_(std::move(sink)),
+      tracker_(tracker),
+      keyboard_(keyboard) {}
 
 bool Hub::full(Role role) const {
   if (sessions_.size() >= limits_.max_clients) return true;
@@ -106,14 +110,16 @@ void Hub::handle(WsSession& s, const json& msg) {
     s.set_max_fps(fps);
     return s.reply(json{{"type", "ack"}, {"id", id}, {"fps", fps}}.dump());
   }
-  if (type != "command" && type != "keyboard" && !is_keys) return error("bad_message", "unknown message type '" + type + "'");
+  if (type != "command" && type != "keyboard" && !is_keys)
+    return error("bad_message", "unknown message type '" + type + "'");
   if (s.role() != Role::kController) {
     ++commands_refused_;
     return error("forbidden", "observers may watch but not control");
   }
   if (type == "keyboard") {
     if (!keyboard_) return error("unavailable", "the keyboard instrument is off (--no-keyboard-instrument)");
-    if (!msg.contains("enable") || !msg["enable"].is_boolean()) return error("bad_message", "'enable' must be true or false");
+    if (!msg.contains("enable") || !msg["enable"].is_boolean())
+      return error("bad_message", "'enable' must be true or false");
     if (!msg["enable"].get<bool>()) {
       keyboard_->disable(s.id());
       return s.reply(json{{"type", "ack"}, {"id", id}, {"keyboard", false}}.dump());
@@ -172,9 +178,15 @@ void Hub::close_all() {
     if (auto s = weak.lock()) s->close();
 }
 
-void Hub::count_frame_sent(size_t) { ++frames_sent_; }
-void Hub::count_frame_dropped(size_t) { ++frames_dropped_; }
-void Hub::count_frame_pending(int64_t delta_bytes) { bytes_pending_ += delta_bytes; }
+void Hub::count_frame_sent(size_t) {
+  ++frames_sent_;
+}
+void Hub::count_frame_dropped(size_t) {
+  ++frames_dropped_;
+}
+void Hub::count_frame_pending(int64_t delta_bytes) {
+  bytes_pending_ += delta_bytes;
+}
 
 HubStats Hub::stats() const {
   HubStats s;

@@ -22,14 +22,14 @@ class KeyboardInstrument;
 class SessionTracker;
 
 struct HubLimits {
-  double max_fps = 30;                            // per connection; a page may ask for less
-  double command_rate = 5, command_burst = 10;    // session commands per second, per connection
-  double keys_rate = 40, keys_burst = 80;         // keyboard-instrument updates
+  double max_fps = 30;                          // per connection; a page may ask for less
+  double command_rate = 5, command_burst = 10;  // session commands per second, per connection
+  double keys_rate = 40, keys_burst = 80;       // keyboard-instrument updates
   size_t max_clients = 64;
-  size_t max_replies = 16;                        // queued answers per connection, oldest dropped
-  size_t max_message_bytes = 4096;                // a page's message; bigger closes the connection
-  int socket_send_buffer = 256 * 1024;            // kernel send buffer per connection (0: the OS's):
-                                                  // frames queued there are stale frames too
+  size_t max_replies = 16;              // queued answers per connection, oldest dropped
+  size_t max_message_bytes = 4096;      // a page's message; bigger closes the connection
+  int socket_send_buffer = 256 * 1024;  // kernel send buffer per connection (0: the OS's):
+                                        // frames queued there are stale frames too
 };
 
 struct HubStats {

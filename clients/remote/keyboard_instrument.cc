@@ -11,7 +11,8 @@ namespace pcisim::remote {
 
 using realtime::monotonic_ns;
 
-KeyboardInstrument::KeyboardInstrument(lcm::LCM& lcm, const KeyboardOptions& options, std::function<bool()> other_active)
+KeyboardInstrument::KeyboardInstrument(lcm::LCM& lcm, const KeyboardOptions& options,
+                                       std::function<bool()> other_active)
     : lcm_(lcm), options_(options), other_active_(std::move(other_active)) {
   thread_ = std::thread([this] { run(); });
 }
@@ -29,7 +30,8 @@ std::string KeyboardInstrument::enable(uint64_t owner, double start_insertion_mm
   if (!owner_.compare_exchange_strong(expected, owner) && expected != owner)
     return "another page already drives the keyboard instrument";
   if (expected == owner) return "";
-  insertion_mm_ = std::clamp(std::isfinite(start_insertion_mm) ? start_insertion_mm : 0.0, 0.0, options_.max_insertion_mm);
+  insertion_mm_ =
+      std::clamp(std::isfinite(start_insertion_mm) ? start_insertion_mm : 0.0, 0.0, options_.max_insertion_mm);
   rotation_rad_ = std::isfinite(start_rotation_rad) ? start_rotation_rad : 0.0;
   insert_ = rotate_ = 0;
   keys_ns_ = monotonic_ns();

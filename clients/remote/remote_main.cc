@@ -15,7 +15,9 @@
 namespace {
 
 std::atomic<bool> g_stop{false};
-extern "C" void on_signal(int) { g_stop = true; }
+extern "C" void on_signal(int) {
+  g_stop = true;
+}
 
 }  // namespace
 
@@ -45,7 +47,9 @@ int main(int argc, char** argv) {
   app.add_option("--format", format, "image format sent to browsers")
       ->check(CLI::IsMember({"jpeg", "png"}))
       ->capture_default_str();
-  app.add_option("--jpeg-quality", o.encoder.jpeg_quality, "JPEG quality")->check(CLI::Range(10, 100))->capture_default_str();
+  app.add_option("--jpeg-quality", o.encoder.jpeg_quality, "JPEG quality")
+      ->check(CLI::Range(10, 100))
+      ->capture_default_str();
   app.add_option("--window", window, "display window LO HI: 16-bit values mapped to black and white (default 0 65535)")
       ->expected(2)
       ->check(CLI::Range(0, 65535));
@@ -67,7 +71,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.5, 30.0))
       ->capture_default_str();
   app.add_flag("--no-keyboard-instrument", no_keyboard, "do not offer the keyboard instrument");
-  app.add_option("--keyboard-device-id", o.keyboard.device_id, "instrument_state_t.device_id of the keyboard instrument")
+  app.add_option("--keyboard-device-id", o.keyboard.device_id,
+                 "instrument_state_t.device_id of the keyboard instrument")
       ->capture_default_str();
   app.add_option("--keyboard-rate-hz", o.keyboard.rate_hz, "publish rate of the keyboard instrument")
       ->check(CLI::Range(50.0, 2000.0))
@@ -139,9 +144,10 @@ int main(int argc, char** argv) {
   gateway.stop();
   const auto s = gateway.hub_stats();
   const auto c = gateway.counters();
-  spdlog::info("remote: done: {} connections, {} frames received, {} encoded, {} sent, {} dropped for slow pages, "
-               "{} commands forwarded, {} refused, {} rate-limited, {} bad frames, {} bad control messages",
-               s.connections_total, c.frames_received, c.frames_encoded, s.frames_sent, s.frames_dropped,
-               s.commands_forwarded, s.commands_refused, s.rate_limited, c.frames_bad, c.control_bad);
+  spdlog::info(
+      "remote: done: {} connections, {} frames received, {} encoded, {} sent, {} dropped for slow pages, "
+      "{} commands forwarded, {} refused, {} rate-limited, {} bad frames, {} bad control messages",
+      s.connections_total, c.frames_received, c.frames_encoded, s.frames_sent, s.frames_dropped, s.commands_forwarded,
+      s.commands_refused, s.rate_limited, c.frames_bad, c.control_bad);
   return 0;
 }

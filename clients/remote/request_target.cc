@@ -4,7 +4,9 @@
 
 namespace pcisim::remote {
 
-std::string_view target_path(std::string_view target) { return target.substr(0, target.find('?')); }
+std::string_view target_path(std::string_view target) {
+  return target.substr(0, target.find('?'));
+}
 
 std::optional<std::string> query_param(std::string_view target, std::string_view key) {
   const size_t q = target.find('?');

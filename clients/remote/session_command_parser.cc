@@ -40,7 +40,8 @@ ParsedCommand parse_session_command(const nlohmann::json& msg, const CommandLimi
     c.pedal_down = it->get<bool>() ? 1 : 0;
   } else if (name == "carm") {
     if (!number_in(msg, "primary_deg", -limits.primary_abs_deg, limits.primary_abs_deg, c.primary_angle_deg, err) ||
-        !number_in(msg, "secondary_deg", -limits.secondary_abs_deg, limits.secondary_abs_deg, c.secondary_angle_deg, err))
+        !number_in(msg, "secondary_deg", -limits.secondary_abs_deg, limits.secondary_abs_deg, c.secondary_angle_deg,
+                   err))
       return err;
     c.command = C::CMD_CARM;
   } else if (name == "contrast") {

@@ -11,9 +11,9 @@
 namespace pcisim::remote {
 
 struct CommandLimits {
-  double primary_abs_deg = 180;    // the server ignores |primary| > 180
-  double secondary_abs_deg = 90;   // and |secondary| > 90
-  double contrast_ml_min = 0.5, contrast_ml_max = 30;   // a scene's injection_ml range
+  double primary_abs_deg = 180;                        // the server ignores |primary| > 180
+  double secondary_abs_deg = 90;                       // and |secondary| > 90
+  double contrast_ml_min = 0.5, contrast_ml_max = 30;  // a scene's injection_ml range
   double contrast_ml_s_min = 0.5, contrast_ml_s_max = 20;
   double default_contrast_ml = 8, default_contrast_ml_s = 4;
 };

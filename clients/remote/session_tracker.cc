@@ -45,8 +45,12 @@ double SessionTracker::local_beam_s(int64_t now_ns) const {
 void SessionTracker::on_session(const pcisim_lcm::session_command_t& m, int64_t now_ns) {
   std::lock_guard lock(mutex_);
   switch (m.command) {
-    case C::CMD_FLUORO_PEDAL: console_fluoro_ = m.pedal_down != 0; break;
-    case C::CMD_CINE: console_cine_ = m.pedal_down != 0; break;
+    case C::CMD_FLUORO_PEDAL:
+      console_fluoro_ = m.pedal_down != 0;
+      break;
+    case C::CMD_CINE:
+      console_cine_ = m.pedal_down != 0;
+      break;
     case C::CMD_CARM:
       // the server's own range check: what it ignores, we do not show
       if (std::abs(m.primary_angle_deg) <= 180 && std::abs(m.secondary_angle_deg) <= 90) {
@@ -58,7 +62,8 @@ void SessionTracker::on_session(const pcisim_lcm::session_command_t& m, int64_t 
       // the server's rule: the volume the command names, else the scene's
       add_injection(protocol::is_commanded_contrast_volume(m.contrast_ml) ? m.contrast_ml : options_.injection_ml);
       break;
-    default: break;
+    default:
+      break;
   }
   update_beam(now_ns);
 }
@@ -164,7 +169,8 @@ nlohmann::json SessionTracker::status_json(int64_t now_ns) const {
   if (!status_) return nullptr;
   const auto& s = *status_;
   nlohmann::json effects = nlohmann::json::array();
-  for (int i = 0; i < s.num_effects; ++i) effects.push_back({{"name", s.effect_name[i]}, {"step_ms_p50", s.effect_step_ms_p50[i]}});
+  for (int i = 0; i < s.num_effects; ++i)
+    effects.push_back({{"name", s.effect_name[i]}, {"step_ms_p50", s.effect_step_ms_p50[i]}});
   return {{"type", "status"},
           {"seq", s.seq},
           {"age_s", (now_ns - status_ns_) * 1e-9},

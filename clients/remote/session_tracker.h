@@ -21,9 +21,9 @@
 namespace pcisim::remote {
 
 struct TrackerOptions {
-  double injection_ml = 8;          // per injection seen on the bus before a status reports it
-  int max_injections = 256;         // the server keeps this many
-  int32_t own_device_id = 90;       // the keyboard instrument's samples are ours, not "another instrument"
+  double injection_ml = 8;                     // per injection seen on the bus before a status reports it
+  int max_injections = 256;                    // the server keeps this many
+  int32_t own_device_id = 90;                  // the keyboard instrument's samples are ours, not "another instrument"
   int64_t instrument_active_ns = 200'000'000;  // an instrument heard within this is active
   int64_t server_alive_ns = 3'000'000'000;     // a status within this: the server runs
 };
@@ -49,7 +49,7 @@ class SessionTracker {
   std::optional<std::pair<double, double>> wire_insertion_rotation() const;
 
  private:
-  void update_beam(int64_t now_ns);  // call with the lock held after any pedal change
+  void update_beam(int64_t now_ns);           // call with the lock held after any pedal change
   double local_beam_s(int64_t now_ns) const;  // lock held
   void add_injection(double volume_ml);
 

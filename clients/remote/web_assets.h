@@ -6,7 +6,7 @@
 namespace pcisim::remote {
 
 struct WebAsset {
-  std::string_view path;          // "/", "/app.js", ...
+  std::string_view path;  // "/", "/app.js", ...
   std::string_view content_type;
   std::string_view body;
 };

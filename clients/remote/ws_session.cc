@@ -60,7 +60,9 @@ void WsSession::fail() {
   hub_.leave(*this);
 }
 
-void WsSession::set_max_fps(double fps) { max_fps_ = fps; }
+void WsSession::set_max_fps(double fps) {
+  max_fps_ = fps;
+}
 
 void WsSession::offer_frame(std::shared_ptr<const EncodedFrame> frame) {
   if (!open_) return;

@@ -8,9 +8,9 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
-    const auto m = pcisim::physics::HeartMotion::parse(std::string(reinterpret_cast<const char*>(data), size), "fuzz.motion");
+    const auto m =
+        pcisim::physics::HeartMotion::parse(std::string(reinterpret_cast<const char*>(data), size), "fuzz.motion");
     (void)m.frame_displacement_m(0, Eigen::Vector3d::Zero());
-  } catch (const std::invalid_argument&) {
-  }
+  } catch (const std::invalid_argument&) {}
   return 0;
 }

@@ -11,7 +11,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (msg.is_discarded()) return 0;
   try {
     (void)pcisim::remote::parse_session_command(msg, pcisim::remote::CommandLimits{});
-  } catch (const std::exception&) {
-  }
+  } catch (const std::exception&) {}
   return 0;
 }

@@ -7,9 +7,9 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
-    const auto s = pcisim::clients::TraineeScript::parse(std::string(reinterpret_cast<const char*>(data), size), "fuzz.json");
+    const auto s =
+        pcisim::clients::TraineeScript::parse(std::string(reinterpret_cast<const char*>(data), size), "fuzz.json");
     for (double t : {0.0, 1.0, 1e3}) (void)s.sample(t);
-  } catch (const std::exception&) {
-  }
+  } catch (const std::exception&) {}
   return 0;
 }

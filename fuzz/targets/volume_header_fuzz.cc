@@ -15,7 +15,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
 #else
     (void)pcisim::anatomy::read_metaimage(file.path());
 #endif
-  } catch (const pcisim::anatomy::VolumeIoError&) {
-  }
+  } catch (const pcisim::anatomy::VolumeIoError&) {}
   return 0;
 }

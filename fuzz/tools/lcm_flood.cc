@@ -22,7 +22,9 @@
 namespace {
 
 std::atomic<bool> g_stop{false};
-extern "C" void on_signal(int) { g_stop = true; }
+extern "C" void on_signal(int) {
+  g_stop = true;
+}
 
 using pcisim::fuzz::Bytes;
 
@@ -68,8 +70,9 @@ std::vector<Bytes> poisoned_messages() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"pcisim-lcm-flood: publishes malformed and poisoned pcisim LCM messages of every type on every "
-               "channel, for soak and fault runs (scripts/soak). Never point it at a session a trainee is using."};
+  CLI::App app{
+      "pcisim-lcm-flood: publishes malformed and poisoned pcisim LCM messages of every type on every "
+      "channel, for soak and fault runs (scripts/soak). Never point it at a session a trainee is using."};
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0", image_url = "udpm://239.255.76.67:7668?ttl=0";
   std::string json_path;
   double seconds = 10, rate_hz = 200;
@@ -77,7 +80,9 @@ int main(int argc, char** argv) {
   app.add_option("--lcm-url", lcm_url, "control LCM URL")->capture_default_str();
   app.add_option("--image-lcm-url", image_url, "image LCM URL (the frames' channel)")->capture_default_str();
   app.add_option("--seconds", seconds, "how long to flood")->check(CLI::Range(0.1, 1e6))->capture_default_str();
-  app.add_option("--rate-hz", rate_hz, "messages per second, over all channels")->check(CLI::Range(1.0, 1e5))->capture_default_str();
+  app.add_option("--rate-hz", rate_hz, "messages per second, over all channels")
+      ->check(CLI::Range(1.0, 1e5))
+      ->capture_default_str();
   app.add_option("--seed", seed, "random seed")->capture_default_str();
   app.add_option("--json", json_path, "write what was sent (per channel and kind) to this file");
   CLI11_PARSE(app, argc, argv);
@@ -92,7 +97,8 @@ int main(int argc, char** argv) {
 
   // every type's malformed shapes, to go on every channel
   using namespace pcisim::fuzz;
-  const std::vector<MessageCase> cases = {instrument_case(), force_case(), session_case(), status_case(), wire_case(), xray_case()};
+  const std::vector<MessageCase> cases = {instrument_case(), force_case(), session_case(),
+                                          status_case(),     wire_case(),  xray_case()};
   const std::vector<Bytes> poisoned = poisoned_messages();
   const std::vector<const char*> channels = {pcisim::protocol::kInstrumentChannel, pcisim::protocol::kForceChannel,
                                              pcisim::protocol::kWireChannel,       pcisim::protocol::kStatusChannel,

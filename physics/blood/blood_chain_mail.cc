@@ -11,14 +11,15 @@
 namespace pcisim::physics {
 namespace {
 
-constexpr int kRing = 6;                 // chain-mails around the axis at each station
-constexpr double kRingFraction = 0.6;    // of the radius: samples the profile between axis and wall
+constexpr int kRing = 6;               // chain-mails around the axis at each station
+constexpr double kRingFraction = 0.6;  // of the radius: samples the profile between axis and wall
 constexpr int kHashBits = 14;
 constexpr uint32_t kHashMask = (1u << kHashBits) - 1;
 
 uint32_t hash_cell(int x, int y, int z) {
   return (static_cast<uint32_t>(x) * 73856093u ^ static_cast<uint32_t>(y) * 19349663u ^
-          static_cast<uint32_t>(z) * 83492791u) & kHashMask;
+          static_cast<uint32_t>(z) * 83492791u) &
+         kHashMask;
 }
 
 Eigen::Vector3i cell_of(const Eigen::Vector3d& p, double h) {
@@ -158,7 +159,8 @@ Eigen::Vector3d BloodChainMail::linked_velocity(const Eigen::Vector3d& p) const 
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx) {
         const uint32_t b = hash_cell(g.x() + dx, g.y() + dy, g.z() + dz);
-        if (std::find(buckets, buckets + bucket_n, b) == buckets + bucket_n) buckets[bucket_n++] = b;  // two cells, one bucket
+        if (std::find(buckets, buckets + bucket_n, b) == buckets + bucket_n)
+          buckets[bucket_n++] = b;  // two cells, one bucket
       }
   // the node links to the blood of one vessel, the one whose chain-mail is nearest: at a fork
   // the flows of parent and daughters would otherwise average into a direction none of them has

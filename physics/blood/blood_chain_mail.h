@@ -53,11 +53,11 @@ class BloodChainMail {
   };
   struct Cell {
     int branch = 0;
-    double s_m = 0.0;             // arc length along the branch
-    double ring_angle = 0.0;      // around the axis
-    double radial_fraction = 0.0; // of the local radius: 0 on the axis
+    double s_m = 0.0;              // arc length along the branch
+    double ring_angle = 0.0;       // around the axis
+    double radial_fraction = 0.0;  // of the local radius: 0 on the axis
   };
-  void place(int c);              // position and velocity of cell c from its s
+  void place(int c);                             // position and velocity of cell c from its s
   double speed_m_per_s(const Cell& cell) const;  // at the current flow rate
   void rebuild_hash();
 

@@ -69,30 +69,30 @@ double place_inside(const Eigen::Vector3d& sponsor, const ValidRegion& r, const 
   bool found_inside = false;
   const int rings = may_swing ? 8 : 4, lengths = may_swing ? 3 : 1;
   for (int li = 0; li < lengths; ++li)
-  for (int ring = 0; ring <= rings; ++ring) {
-    const double cone = r.beta_rad * ring / rings;
-    const double reach = len + (r.length_max_m - len) * li / std::max(lengths - 1, 1);
-    for (int k = 0; k < (ring == 0 ? 1 : 16); ++k) {
-      const double phi = k * (std::numbers::pi / 8.0);
-      const Eigen::Vector3d dir = std::cos(cone) * r.axis + std::sin(cone) * (std::cos(phi) * u + std::sin(phi) * v);
-      const Eigen::Vector3d c = sponsor + reach * dir;
-      const double d = lumen.sample(c).distance_m;
-      const double gap = (c - q0).squaredNorm();
-      if (gap > max_gap_sq) continue;  // a swing across the cone flings everything distal
-      if (lumen.sample(0.5 * (sponsor + c)).distance_m > 0.0) continue;
-      if (d <= eps) {
-        if (!found_inside || gap < best_gap) {
-          found_inside = true;
-          best_gap = gap;
+    for (int ring = 0; ring <= rings; ++ring) {
+      const double cone = r.beta_rad * ring / rings;
+      const double reach = len + (r.length_max_m - len) * li / std::max(lengths - 1, 1);
+      for (int k = 0; k < (ring == 0 ? 1 : 16); ++k) {
+        const double phi = k * (std::numbers::pi / 8.0);
+        const Eigen::Vector3d dir = std::cos(cone) * r.axis + std::sin(cone) * (std::cos(phi) * u + std::sin(phi) * v);
+        const Eigen::Vector3d c = sponsor + reach * dir;
+        const double d = lumen.sample(c).distance_m;
+        const double gap = (c - q0).squaredNorm();
+        if (gap > max_gap_sq) continue;  // a swing across the cone flings everything distal
+        if (lumen.sample(0.5 * (sponsor + c)).distance_m > 0.0) continue;
+        if (d <= eps) {
+          if (!found_inside || gap < best_gap) {
+            found_inside = true;
+            best_gap = gap;
+            best_d = d;
+            best = c;
+          }
+        } else if (!found_inside && d < best_d) {
           best_d = d;
           best = c;
         }
-      } else if (!found_inside && d < best_d) {
-        best_d = d;
-        best = c;
       }
     }
-  }
   q = best;
   return best_d;
 }

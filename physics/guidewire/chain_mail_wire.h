@@ -83,8 +83,8 @@ class ChainMailWire {
   Eigen::Vector3d ref_b_;  // reference director at the exit, fixed in the world
   std::vector<LinkSpec> links_;
   std::vector<Eigen::Vector3d> nodes_, start_;
-  std::vector<Eigen::Vector3d> track_;  // scratch: the exit then the free nodes of the step start
-  std::vector<double> cum_;             // scratch: arc length along track_
+  std::vector<Eigen::Vector3d> track_;              // scratch: the exit then the free nodes of the step start
+  std::vector<double> cum_;                         // scratch: arc length along track_
   std::vector<Eigen::Vector3d> frame_t_, frame_m_;  // per link, refreshed by compute_frames()
   int first_free_ = 0;
   int tip_links_ = 0;

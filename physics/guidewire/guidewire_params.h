@@ -7,11 +7,11 @@
 namespace pcisim::physics {
 
 struct GuidewireParams {
-  double length_m = 0.30;            // simulated distal length of the wire, (tip_length_m, 2]
-  int segment_count = 200;           // chain-mail links, [4, 4000]
-  int optimisation_passes = 2;       // physical-optimisation passes per step (eqs 5-10), [0, 64]
-  double tip_length_m = 0.012;       // soft shaped tip, [0, length_m)
-  double tip_angle_deg = 45.0;       // pre-bend of the tip, spread evenly over the tip, [0, 180]
+  double length_m = 0.30;       // simulated distal length of the wire, (tip_length_m, 2]
+  int segment_count = 200;      // chain-mail links, [4, 4000]
+  int optimisation_passes = 2;  // physical-optimisation passes per step (eqs 5-10), [0, 64]
+  double tip_length_m = 0.012;  // soft shaped tip, [0, length_m)
+  double tip_angle_deg = 45.0;  // pre-bend of the tip, spread evenly over the tip, [0, 180]
   // body / tip chain-mail limits (eqs 1-4). alpha: link length ratios (compress, stretch),
   // alpha_min in [0.5, 1], alpha_max in [1, 2]. beta: largest bend of a link away from its rest
   // direction, in degrees per millimetre of wire (scaled by the link length, but never below
@@ -42,8 +42,8 @@ inline constexpr ParamRange kGuidewireTorsionalRigidityNm2{0, 1e-2};
 inline constexpr ParamRange kGuidewireTorsionDampingNmSPerRad{0, 1};
 
 struct VesselContactParams {
-  double sdf_spacing_m = 0.2e-3;     // SDF grid spacing
-  double wall_margin_m = 0.05e-3;    // epsilon of eq 15
+  double sdf_spacing_m = 0.2e-3;   // SDF grid spacing
+  double wall_margin_m = 0.05e-3;  // epsilon of eq 15
   // penalty stiffness turning the wall and friction corrections (metres) into the haptic force
   // (eqs 19-20), N/m, [0, 1e5]: 1000 N/m gives tenths of a newton of friction down a coronary
   double wall_stiffness_n_per_m = 1000.0;

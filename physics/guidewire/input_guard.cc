@@ -6,7 +6,9 @@ namespace pcisim::physics {
 namespace {
 
 // |x| below 1e6 (a kilometre of wire, a million radians) and finite
-bool sane(double x) { return std::isfinite(x) && std::abs(x) < 1e6; }
+bool sane(double x) {
+  return std::isfinite(x) && std::abs(x) < 1e6;
+}
 
 }  // namespace
 

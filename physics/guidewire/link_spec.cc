@@ -68,7 +68,8 @@ std::vector<LinkSpec> make_link_specs(const GuidewireParams& p) {
     l.length_max_m = (l.tip ? p.tip_alpha_max : p.body_alpha_max) * h;
     // beta is given per millimetre of wire, resolved over at least kShearLengthM; a link never
     // bends more than a right angle
-    l.beta_rad = std::min((l.tip ? p.tip_beta_deg_per_mm : p.body_beta_deg_per_mm) * kDeg * shear_mm, std::numbers::pi / 2);
+    l.beta_rad =
+        std::min((l.tip ? p.tip_beta_deg_per_mm : p.body_beta_deg_per_mm) * kDeg * shear_mm, std::numbers::pi / 2);
     l.cos_beta = std::cos(l.beta_rad);
     l.bend_rad = l.tip ? bend_per_link : 0.0;
     l.cos_bend = std::cos(l.bend_rad);

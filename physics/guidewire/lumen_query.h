@@ -6,7 +6,7 @@
 namespace pcisim::physics {
 
 struct WallSample {
-  double distance_m = 0.0;  // < 0 inside the lumen
+  double distance_m = 0.0;                            // < 0 inside the lumen
   Eigen::Vector3d normal = Eigen::Vector3d::UnitX();  // unit, points out of the lumen
 };
 

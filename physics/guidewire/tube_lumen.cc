@@ -11,8 +11,7 @@ TubeLumen::TubeLumen(const anatomy::VesselTree& tree, double bin_m, double band_
   for (const auto& branch : tree.branches) {
     const auto& pts = branch.points;
     for (size_t k = 0; k + 1 < pts.size(); ++k) {
-      segments_.push_back({pts[k].position_m, pts[k + 1].position_m, pts[k].radius_m,
-                           pts[k + 1].radius_m});
+      segments_.push_back({pts[k].position_m, pts[k + 1].position_m, pts[k].radius_m, pts[k + 1].radius_m});
     }
     if (pts.size() == 1) {
       segments_.push_back({pts[0].position_m, pts[0].position_m, pts[0].radius_m, pts[0].radius_m});

@@ -18,12 +18,12 @@ class WallContact {
   // `lumen` must outlive this object
   WallContact(const VesselContactParams& params, const LumenQuery& lumen, int node_count);
 
-  void begin_step();                // clears the per-step record
+  void begin_step();                  // clears the per-step record
   void project(ChainMailWire& wire);  // one pass of eq 15 over the free nodes
 
   const VesselContactParams& params() const { return params_; }
   const LumenQuery& lumen() const { return lumen_; }
-  std::span<const uint8_t> touched() const { return touched_; }  // in contact during this step
+  std::span<const uint8_t> touched() const { return touched_; }        // in contact during this step
   std::span<const Eigen::Vector3d> normal() const { return normal_; }  // last wall normal
   // |delta p_n| of the last pass, and the correction vectors summed over the step
   std::span<const double> pass_normal_m() const { return pass_normal_; }

@@ -20,8 +20,8 @@ constexpr double kWireRadiusM = 0.178e-3;
 
 }  // namespace
 
-WireFeedback compute_feedback(const ChainMailWire& wire, const GuidewireParams& params,
-                              const WallContact* contact, const CoulombFriction* friction) {
+WireFeedback compute_feedback(const ChainMailWire& wire, const GuidewireParams& params, const WallContact* contact,
+                              const CoulombFriction* friction) {
   WireFeedback f;
   const auto x = wire.nodes_m();
   const double k_wall = contact ? contact->params().wall_stiffness_n_per_m : 0.0;
@@ -69,8 +69,8 @@ WireFeedback compute_feedback(const ChainMailWire& wire, const GuidewireParams& 
   return f;
 }
 
-LocalForceModel to_local_force_model(const WireFeedback& f, const InstrumentInput& at,
-                                     const GuidewireParams& params, double time_s, double step_s) {
+LocalForceModel to_local_force_model(const WireFeedback& f, const InstrumentInput& at, const GuidewireParams& params,
+                                     double time_s, double step_s) {
   LocalForceModel m;
   m.made_utime = static_cast<int64_t>(std::llround(time_s * 1e6));
   m.valid_for_us = static_cast<int64_t>(std::llround(2.0 * step_s * 1e6));  // two physics periods

@@ -10,19 +10,19 @@
 namespace pcisim::physics {
 
 struct WireFeedback {
-  double friction_n = 0.0;   // F_friction along insertion (positive resists insertion)
-  double internal_n = 0.0;   // F_internal, eq 20
+  double friction_n = 0.0;  // F_friction along insertion (positive resists insertion)
+  double internal_n = 0.0;  // F_internal, eq 20
   double stiffness_n_per_m = 0.0;
-  double torque_nm = 0.0;    // magnitude of the wall friction torque against turning
+  double torque_nm = 0.0;  // magnitude of the wall friction torque against turning
   double torsion_stiffness_nm_per_rad = 0.0;
 };
 
 // contact and friction may be null when the scene does not list them
-WireFeedback compute_feedback(const ChainMailWire& wire, const GuidewireParams& params,
-                              const WallContact* contact, const CoulombFriction* friction);
+WireFeedback compute_feedback(const ChainMailWire& wire, const GuidewireParams& params, const WallContact* contact,
+                              const CoulombFriction* friction);
 
 // linearised at the instrument sample the step used
-LocalForceModel to_local_force_model(const WireFeedback& f, const InstrumentInput& at,
-                                     const GuidewireParams& params, double time_s, double step_s);
+LocalForceModel to_local_force_model(const WireFeedback& f, const InstrumentInput& at, const GuidewireParams& params,
+                                     double time_s, double step_s);
 
 }  // namespace pcisim::physics

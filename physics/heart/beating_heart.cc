@@ -31,7 +31,9 @@ void check(const ParamRange& range, double value, const char* field) {
                                 std::to_string(value));
 }
 
-void validate_rate(double rate_bpm) { check(kHeartRateBpm, rate_bpm, "rate_bpm"); }
+void validate_rate(double rate_bpm) {
+  check(kHeartRateBpm, rate_bpm, "rate_bpm");
+}
 
 void validate(const HeartBeatParams& p) {
   validate_rate(p.rate_bpm);
@@ -109,7 +111,8 @@ struct BeatingHeart::Impl {
       if (!(mass_kg[i] > 0.0)) throw std::invalid_argument(where() + ": its tetrahedra have no volume");
       if (scaling.mass_scale) {
         const double m = scaling.mass_scale(rest_m.col(i));
-        if (!(m > 0.0) || !std::isfinite(m)) throw std::invalid_argument(where() + ": mass scale must be finite and > 0, got " + std::to_string(m));
+        if (!(m > 0.0) || !std::isfinite(m))
+          throw std::invalid_argument(where() + ": mass scale must be finite and > 0, got " + std::to_string(m));
         mass_kg[i] *= m;
       }
       if (scaling.compliance_scale) {
@@ -237,7 +240,8 @@ BeatingHeart::BeatingHeart(const HeartBeatParams& params) : BeatingHeart(params,
 BeatingHeart::BeatingHeart(const HeartBeatParams& params, const HeartTissueScaling& scaling)
     : BeatingHeart(params, anatomy::template_heart_mesh(), scaling) {}
 
-BeatingHeart::BeatingHeart(const HeartBeatParams& params, const anatomy::HeartMesh& mesh, const HeartTissueScaling& scaling) {
+BeatingHeart::BeatingHeart(const HeartBeatParams& params, const anatomy::HeartMesh& mesh,
+                           const HeartTissueScaling& scaling) {
   validate(params);
   impl_ = std::make_unique<Impl>(params, mesh, scaling);
 }
@@ -268,19 +272,47 @@ void BeatingHeart::set_rate_bpm(double rate_bpm) {
   impl_->params.rate_bpm = rate_bpm;
 }
 
-double BeatingHeart::phase() const { return impl_->phase; }
-double BeatingHeart::time_s() const { return impl_->time_s; }
-const Eigen::Matrix3Xd& BeatingHeart::positions_m() const { return impl_->system.particles().position_m; }
-const Eigen::Matrix3Xd& BeatingHeart::rest_positions_m() const { return impl_->rest_m; }
-std::span<const std::array<int, 3>> BeatingHeart::epicardium() const { return impl_->epicardium; }
-std::span<const int> BeatingHeart::driven() const { return impl_->driven; }
-std::span<const int> BeatingHeart::free_particles() const { return impl_->free; }
-std::span<const std::array<int, 4>> BeatingHeart::tets() const { return impl_->tets; }
-std::span<const std::array<int, 3>> BeatingHeart::lv_endocardium() const { return impl_->lv_endocardium; }
-const HeartMotion& BeatingHeart::motion() const { return impl_->motion; }
-Eigen::Vector3d BeatingHeart::driven_position_m(int i, double phase) const { return impl_->driven_position(i, phase); }
-const pbd::PbdSystem& BeatingHeart::system() const { return impl_->system; }
-pbd::PbdSystem& BeatingHeart::system() { return impl_->system; }
-const HeartBeatParams& BeatingHeart::params() const { return impl_->params; }
+double BeatingHeart::phase() const {
+  return impl_->phase;
+}
+double BeatingHeart::time_s() const {
+  return impl_->time_s;
+}
+const Eigen::Matrix3Xd& BeatingHeart::positions_m() const {
+  return impl_->system.particles().position_m;
+}
+const Eigen::Matrix3Xd& BeatingHeart::rest_positions_m() const {
+  return impl_->rest_m;
+}
+std::span<const std::array<int, 3>> BeatingHeart::epicardium() const {
+  return impl_->epicardium;
+}
+std::span<const int> BeatingHeart::driven() const {
+  return impl_->driven;
+}
+std::span<const int> BeatingHeart::free_particles() const {
+  return impl_->free;
+}
+std::span<const std::array<int, 4>> BeatingHeart::tets() const {
+  return impl_->tets;
+}
+std::span<const std::array<int, 3>> BeatingHeart::lv_endocardium() const {
+  return impl_->lv_endocardium;
+}
+const HeartMotion& BeatingHeart::motion() const {
+  return impl_->motion;
+}
+Eigen::Vector3d BeatingHeart::driven_position_m(int i, double phase) const {
+  return impl_->driven_position(i, phase);
+}
+const pbd::PbdSystem& BeatingHeart::system() const {
+  return impl_->system;
+}
+pbd::PbdSystem& BeatingHeart::system() {
+  return impl_->system;
+}
+const HeartBeatParams& BeatingHeart::params() const {
+  return impl_->params;
+}
 
 }  // namespace pcisim::physics

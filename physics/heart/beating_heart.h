@@ -48,7 +48,7 @@ class BeatingHeart {
   // a new heart rate from the next step on (the phase carries on); throws like the constructor
   void set_rate_bpm(double rate_bpm);
 
-  double phase() const;    // [0, 1) of the cardiac cycle; 0 = end-diastole
+  double phase() const;  // [0, 1) of the cardiac cycle; 0 = end-diastole
   double time_s() const;
 
   // one entry per particle (= tet vertex)

@@ -35,7 +35,8 @@ double clearance_above_epicardium_m(const anatomy::CenterlinePoint& point) {
   return r - point.radius_m - surface_radius_m(point.position_m / r);
 }
 
-HeartFitReport fit_heart_under_tree(const anatomy::VesselTree& tree, const HeartFitParams& params, anatomy::HeartMesh* mesh) {
+HeartFitReport fit_heart_under_tree(const anatomy::VesselTree& tree, const HeartFitParams& params,
+                                    anatomy::HeartMesh* mesh) {
   HeartFitReport report;
   // the branches that sink deeper than the tolerance, every point of them below the surface
   std::vector<Dent> dents;

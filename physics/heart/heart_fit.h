@@ -16,7 +16,7 @@ struct HeartFitParams {
   // full dent within this distance (along the surface) of a sunken point: more than the template's
   // largest facet circumradius (~3.8 mm), so every facet under the vessel sinks whole
   double core_m = 4.0e-3;
-  double fade_m = 8.0e-3;   // then fading to none over this distance
+  double fade_m = 8.0e-3;    // then fading to none over this distance
   double depth_m = 10.0e-3;  // and fading to none this far into the wall
 };
 
@@ -31,6 +31,7 @@ struct HeartFitReport {
 double clearance_above_epicardium_m(const anatomy::CenterlinePoint& point);
 
 // dents mesh->vertices_m where a non-aorta branch sinks deeper than params.tolerance_m
-HeartFitReport fit_heart_under_tree(const anatomy::VesselTree& tree, const HeartFitParams& params, anatomy::HeartMesh* mesh);
+HeartFitReport fit_heart_under_tree(const anatomy::VesselTree& tree, const HeartFitParams& params,
+                                    anatomy::HeartMesh* mesh);
 
 }  // namespace pcisim::physics

@@ -130,7 +130,8 @@ HeartMotion HeartMotion::parse(std::string_view bytes, const std::string& name) 
     out->assign(count, 0.0);
     for (int i = 0; i < count; ++i)
       if (!(in >> (*out)[i]) || !std::isfinite((*out)[i]))
-        fail(name, "field '" + std::string(key) + "' needs " + std::to_string(count) + " finite numbers, got '" + rest + "'");
+        fail(name,
+             "field '" + std::string(key) + "' needs " + std::to_string(count) + " finite numbers, got '" + rest + "'");
     std::string extra;
     if (in >> extra) fail(name, "field '" + std::string(key) + "' has extra text '" + extra + "'");
   };

@@ -34,8 +34,8 @@ Eigen::Vector3d synthetic_displacement_m(const Eigen::Vector3d& rest_m, double s
   const double k = 1.0 - (1.0 - spec.lv_radial_scale_es) * s;    // cavity radius scale
   // the cavity scales by k; outside it each cross-section keeps its wall area times 1/lambda
   // (incompressible), so the endocardium moves in more than the epicardium: the wall thickens
-  const double rho_new = rho <= rho_endo ? k * rho
-                                         : std::sqrt(k * k * rho_endo * rho_endo + (rho * rho - rho_endo * rho_endo) / lambda);
+  const double rho_new =
+      rho <= rho_endo ? k * rho : std::sqrt(k * k * rho_endo * rho_endo + (rho * rho - rho_endo * rho_endo) / lambda);
   const double psi = s * spec.twist_deg * kPi / 180.0 * (-zc);  // apex one way, base the other
   Eigen::Vector2d rel_new = Eigen::Rotation2Dd(psi) * rel;
   if (rho > 1e-9) rel_new *= rho_new / rho;
@@ -59,8 +59,7 @@ HeartMotion make_synthetic_heart_motion(const SyntheticMotionSpec& spec) {
     for (int k = 0; k < grid.dims.z(); ++k)
       for (int j = 0; j < grid.dims.y(); ++j)
         for (int i = 0; i < grid.dims.x(); ++i) {
-          const Eigen::Vector3d d =
-              synthetic_displacement_m(grid.origin_m + h * Eigen::Vector3d(i, j, k), s, spec);
+          const Eigen::Vector3d d = synthetic_displacement_m(grid.origin_m + h * Eigen::Vector3d(i, j, k), s, spec);
           data.insert(data.end(), {float(d.x()), float(d.y()), float(d.z())});
         }
   }

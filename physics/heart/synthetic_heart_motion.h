@@ -9,13 +9,13 @@ struct SyntheticMotionSpec {
   int frames = 20;
   double cycle_s = 60.0 / 72.0;
   double grid_spacing_m = 0.005;
-  double systole_fraction = 0.35;        // of the cycle, end-diastole to end-systole
-  double filling_fraction = 0.25;        // rapid filling after end-systole, then still
-  double longitudinal_shortening = 0.12; // base toward apex, of the apex-to-point height
+  double systole_fraction = 0.35;         // of the cycle, end-diastole to end-systole
+  double filling_fraction = 0.25;         // rapid filling after end-systole, then still
+  double longitudinal_shortening = 0.12;  // base toward apex, of the apex-to-point height
   // LV cavity radius at end-systole / end-diastole; the 5 mm grid blurs the kink at the endocardium,
   // so the sampled sequence ejects ~60 % where the analytic field would eject ~66 %
   double lv_radial_scale_es = 0.62;
-  double twist_deg = 5.0;                // base and apex turn this much, opposite ways
+  double twist_deg = 5.0;  // base and apex turn this much, opposite ways
 };
 
 // 0 at end-diastole, 1 at end-systole; C1 and periodic

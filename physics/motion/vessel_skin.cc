@@ -12,8 +12,12 @@
 namespace pcisim::physics {
 namespace {
 
-sdf::V3 v3(const Eigen::Vector3d& p) { return {p.x(), p.y(), p.z()}; }
-Eigen::Vector3d ev(const sdf::V3& p) { return {p.x, p.y, p.z}; }
+sdf::V3 v3(const Eigen::Vector3d& p) {
+  return {p.x(), p.y(), p.z()};
+}
+Eigen::Vector3d ev(const sdf::V3& p) {
+  return {p.x, p.y, p.z};
+}
 
 // a triangle's affine frame: columns edge 1, edge 2, unit normal
 Eigen::Matrix3d frame(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
@@ -40,7 +44,8 @@ VesselSkin::VesselSkin(const anatomy::VesselTree& rest_tree, const Eigen::Matrix
   const int surface_n = static_cast<int>(rest_surface_m.cols());
   for (const auto& t : triangles_)
     for (int v : t)
-      if (v < 0 || v >= surface_n) throw std::invalid_argument("vessel_motion: an epicardial triangle indexes past the surface");
+      if (v < 0 || v >= surface_n)
+        throw std::invalid_argument("vessel_motion: an epicardial triangle indexes past the surface");
   validate(params);
 
   // flatten the tree

@@ -35,8 +35,8 @@ double wrapped_angle_error(double theta_rad, double rest_rad) {
   return c;
 }
 
-bool project_dihedral_bending(const Eigen::Vector3d x[4], const double w[4], double rest_angle_rad,
-                              double alpha_tilde, double lambda, double* dlambda, Eigen::Vector3d dx[4]) {
+bool project_dihedral_bending(const Eigen::Vector3d x[4], const double w[4], double rest_angle_rad, double alpha_tilde,
+                              double lambda, double* dlambda, Eigen::Vector3d dx[4]) {
   double theta = 0.0;
   Eigen::Vector3d g[4];
   if (!dihedral_angle(x[0], x[1], x[2], x[3], &theta, g)) return false;

@@ -23,8 +23,8 @@ bool dihedral_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Ei
 
 // One XPBD projection (soft-tissue paper eqs 3-5 with alpha~ = alpha / dt^2); x and w are
 // ordered a, b, c, d. Returns false when there is nothing finite to do.
-bool project_dihedral_bending(const Eigen::Vector3d x[4], const double w[4], double rest_angle_rad,
-                              double alpha_tilde, double lambda, double* dlambda, Eigen::Vector3d dx[4]);
+bool project_dihedral_bending(const Eigen::Vector3d x[4], const double w[4], double rest_angle_rad, double alpha_tilde,
+                              double lambda, double* dlambda, Eigen::Vector3d dx[4]);
 
 // theta - theta0 wrapped into (-pi, pi], so a rest angle near +-pi does not jump by 2 pi
 double wrapped_angle_error(double theta_rad, double rest_rad);

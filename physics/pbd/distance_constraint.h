@@ -17,9 +17,9 @@ inline constexpr double kMinDistanceM = 1e-12;
 // One projection. Soft-tissue paper eqs 3-5 (heart paper eqs 5-6): dx = M^-1 grad C^T dlambda,
 // with the XPBD compliance term: dlambda = (-C - alpha~ lambda) / (w_i + w_j + alpha~),
 // alpha~ = alpha / dt^2. Returns false (and leaves outputs alone) when there is nothing finite to do.
-inline bool project_distance(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj, double wi, double wj,
-                             double rest_m, double alpha_tilde, double lambda, double* dlambda,
-                             Eigen::Vector3d* dxi, Eigen::Vector3d* dxj) {
+inline bool project_distance(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj, double wi, double wj, double rest_m,
+                             double alpha_tilde, double lambda, double* dlambda, Eigen::Vector3d* dxi,
+                             Eigen::Vector3d* dxj) {
   const Eigen::Vector3d d = xi - xj;
   const double len = d.norm();
   const double denom = wi + wj + alpha_tilde;

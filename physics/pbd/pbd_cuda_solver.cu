@@ -29,7 +29,9 @@ void check(cudaError_t e, const char* what) {
   if (e != cudaSuccess) throw std::runtime_error(std::string("pbd CUDA ") + what + ": " + cudaGetErrorString(e));
 }
 
-int blocks_for(long n) { return static_cast<int>((n + kThreads - 1) / kThreads); }
+int blocks_for(long n) {
+  return static_cast<int>((n + kThreads - 1) / kThreads);
+}
 
 template <class T>
 struct DeviceArray {
@@ -55,7 +57,8 @@ struct DeviceArray {
 // --- kernels: one thread per particle, constraint or slot unless said otherwise ---
 
 enum : uint8_t { kFree = 0, kPinned = 1, kDriven = 2, kQuarantined = 3 };
-static_assert(static_cast<uint8_t>(ParticleState::kFree) == kFree && static_cast<uint8_t>(ParticleState::kPinned) == kPinned &&
+static_assert(static_cast<uint8_t>(ParticleState::kFree) == kFree &&
+              static_cast<uint8_t>(ParticleState::kPinned) == kPinned &&
               static_cast<uint8_t>(ParticleState::kDriven) == kDriven &&
               static_cast<uint8_t>(ParticleState::kQuarantined) == kQuarantined);
 
@@ -203,7 +206,8 @@ __global__ void cluster_moment_partials(const int* chunk_begin, const int* chunk
     const int i = member[s];
     const Vec3 mp = mass[i] * (device::load(xp, i) - t), q = device::load(rest_offset, s);
     const double qc[3] = {q.x, q.y, q.z};
-    for (int col = 0; col < 3; ++col) a[3 * col] = mp.x * qc[col], a[3 * col + 1] = mp.y * qc[col], a[3 * col + 2] = mp.z * qc[col];
+    for (int col = 0; col < 3; ++col)
+      a[3 * col] = mp.x * qc[col], a[3 * col + 1] = mp.y * qc[col], a[3 * col + 2] = mp.z * qc[col];
   }
   for (int k = 0; k < 9; ++k) {
     const double total = block_sum(a[k], sh);
@@ -318,34 +322,31 @@ struct PbdCudaSolver::Impl {
   void solve_jacobi(double h, double sor_w, bool per_particle) {
     const double inv_h2 = 1.0 / (h * h);
     if (distances > 0) {
-      project_distances<<<blocks_for(distances), kThreads, 0, stream>>>(distances, d_ij.ptr, d_rest.ptr, d_compliance.ptr,
-                                                                       d_mean_inv.ptr, d_min_inv.ptr, d_lambda.ptr,
-                                                                       d_slot.ptr, xp.ptr, inv_mass.ptr, inv_h2, sor_w,
-                                                                       per_particle);
+      project_distances<<<blocks_for(distances), kThreads, 0, stream>>>(
+          distances, d_ij.ptr, d_rest.ptr, d_compliance.ptr, d_mean_inv.ptr, d_min_inv.ptr, d_lambda.ptr, d_slot.ptr,
+          xp.ptr, inv_mass.ptr, inv_h2, sor_w, per_particle);
       gather<<<blocks_for(n), kThreads, 0, stream>>>(n, d_gather.offset.ptr, d_gather.order.ptr, d_gather.inv_count.ptr,
                                                      d_slot.ptr, xp.ptr, sor_w, per_particle);
     }
     if (bendings > 0) {
-      project_bendings<<<blocks_for(bendings), kThreads, 0, stream>>>(bendings, b_abcd.ptr, b_rest.ptr, b_compliance.ptr,
-                                                                     b_mean_inv.ptr, b_min_inv.ptr, b_lambda.ptr,
-                                                                     b_slot.ptr, xp.ptr, inv_mass.ptr, inv_h2, sor_w,
-                                                                     per_particle);
+      project_bendings<<<blocks_for(bendings), kThreads, 0, stream>>>(
+          bendings, b_abcd.ptr, b_rest.ptr, b_compliance.ptr, b_mean_inv.ptr, b_min_inv.ptr, b_lambda.ptr, b_slot.ptr,
+          xp.ptr, inv_mass.ptr, inv_h2, sor_w, per_particle);
       gather<<<blocks_for(n), kThreads, 0, stream>>>(n, b_gather.offset.ptr, b_gather.order.ptr, b_gather.inv_count.ptr,
                                                      b_slot.ptr, xp.ptr, sor_w, per_particle);
     }
     if (clusters > 0) {
       cluster_mass_partials<<<chunks, kChunk, 0, stream>>>(chunk_begin.ptr, chunk_end.ptr, member.ptr, mass.ptr, xp.ptr,
-                                                          partial4.ptr);
+                                                           partial4.ptr);
       cluster_moment_partials<<<chunks, kChunk, 0, stream>>>(chunk_begin.ptr, chunk_end.ptr, chunk_cluster.ptr,
-                                                            cluster_chunks.ptr, partial4.ptr, member.ptr, mass.ptr,
-                                                            xp.ptr, rest_offset.ptr, partial9.ptr);
-      cluster_rotations<<<blocks_for(clusters), kThreads, 0, stream>>>(clusters, cluster_chunks.ptr, partial4.ptr,
-                                                                      partial9.ptr, rest_moment.ptr, rotation.ptr,
-                                                                      centre.ptr);
-      project_goals<<<blocks_for(slots), kThreads, 0, stream>>>(slots, member.ptr, slot_cluster.ptr, rest_offset.ptr,
-                                                               rotation.ptr, centre.ptr, c_compliance.ptr, c_min_inv.ptr,
-                                                               c_gather.inv_count.ptr, mass.ptr, inv_mass.ptr, xp.ptr,
-                                                               c_lambda.ptr, c_slot.ptr, h, sor_w, per_particle);
+                                                             cluster_chunks.ptr, partial4.ptr, member.ptr, mass.ptr,
+                                                             xp.ptr, rest_offset.ptr, partial9.ptr);
+      cluster_rotations<<<blocks_for(clusters), kThreads, 0, stream>>>(
+          clusters, cluster_chunks.ptr, partial4.ptr, partial9.ptr, rest_moment.ptr, rotation.ptr, centre.ptr);
+      project_goals<<<blocks_for(slots), kThreads, 0, stream>>>(
+          slots, member.ptr, slot_cluster.ptr, rest_offset.ptr, rotation.ptr, centre.ptr, c_compliance.ptr,
+          c_min_inv.ptr, c_gather.inv_count.ptr, mass.ptr, inv_mass.ptr, xp.ptr, c_lambda.ptr, c_slot.ptr, h, sor_w,
+          per_particle);
       gather<<<blocks_for(n), kThreads, 0, stream>>>(n, c_gather.offset.ptr, c_gather.order.ptr, c_gather.inv_count.ptr,
                                                      c_slot.ptr, xp.ptr, sor_w, per_particle);
     }
@@ -361,7 +362,8 @@ struct PbdCudaSolver::Impl {
     check(cudaMemcpyAsync(start.ptr, x.ptr, 3 * sizeof(double) * n, cudaMemcpyDeviceToDevice, stream), "copy start");
     for (int s = 0; s < substeps; ++s) {
       predict<<<blocks_for(n), kThreads, 0, stream>>>(n, state.ptr, x.ptr, xp.ptr, v.ptr, start.ptr, target.ptr, h,
-                                                      static_cast<double>(s + 1) / substeps, s + 1 == substeps, g, drag);
+                                                      static_cast<double>(s + 1) / substeps, s + 1 == substeps, g,
+                                                      drag);
       if (distances > 0) check(cudaMemsetAsync(d_lambda.ptr, 0, sizeof(double) * distances, stream), "memset");
       if (bendings > 0) check(cudaMemsetAsync(b_lambda.ptr, 0, sizeof(double) * bendings, stream), "memset");
       if (slots > 0) check(cudaMemsetAsync(c_lambda.ptr, 0, 3 * sizeof(double) * slots, stream), "memset");
@@ -394,7 +396,8 @@ PbdCudaSolver::PbdCudaSolver(const PbdSystem& sys) : impl_(std::make_unique<Impl
   {
     std::vector<int2> ij;
     std::vector<double> rest, compliance;
-    for (const auto& c : sys.distance_) ij.push_back({c.i, c.j}), rest.push_back(c.rest_m), compliance.push_back(c.compliance_m_per_n);
+    for (const auto& c : sys.distance_)
+      ij.push_back({c.i, c.j}), rest.push_back(c.rest_m), compliance.push_back(c.compliance_m_per_n);
     d.d_ij.upload(ij);
     d.d_rest.upload(rest);
     d.d_compliance.upload(compliance);
@@ -409,7 +412,8 @@ PbdCudaSolver::PbdCudaSolver(const PbdSystem& sys) : impl_(std::make_unique<Impl
     std::vector<int4> abcd;
     std::vector<double> rest, compliance;
     for (const auto& c : sys.bending_)
-      abcd.push_back({c.a, c.b, c.c, c.d}), rest.push_back(c.rest_angle_rad), compliance.push_back(c.compliance_per_n_m);
+      abcd.push_back({c.a, c.b, c.c, c.d}), rest.push_back(c.rest_angle_rad),
+          compliance.push_back(c.compliance_per_n_m);
     d.b_abcd.upload(abcd);
     d.b_rest.upload(rest);
     d.b_compliance.upload(compliance);
@@ -486,16 +490,21 @@ void PbdCudaSolver::run_step(PbdSystem& sys, double dt_s, const PbdParams& param
     check(cudaMemcpyAsync(d.c_compliance.ptr, d.host_compliance.data(), sizeof(double) * d.clusters,
                           cudaMemcpyHostToDevice, st),
           "upload compliance");
-    check(cudaMemcpyAsync(d.rotation.ptr, d.host_rotation.data(), sizeof(Mat3) * d.clusters, cudaMemcpyHostToDevice, st),
-          "upload rotations");
+    check(
+        cudaMemcpyAsync(d.rotation.ptr, d.host_rotation.data(), sizeof(Mat3) * d.clusters, cudaMemcpyHostToDevice, st),
+        "upload rotations");
   }
   check(cudaEventRecord(d.ev[1], st), "event");
   if (d.n > 0) {
     // one graph per (dt, params): launching ~10 kernels per iteration one by one costs more
     // than the work itself on small bodies
-    Impl::Key key{dt_s, params.sor_w, params.damping_per_s,
+    Impl::Key key{dt_s,
+                  params.sor_w,
+                  params.damping_per_s,
                   {params.gravity_m_per_s2.x(), params.gravity_m_per_s2.y(), params.gravity_m_per_s2.z()},
-                  params.substeps, params.iterations, params.averaging};
+                  params.substeps,
+                  params.iterations,
+                  params.averaging};
     if (!d.graph || !(key == d.key)) {
       if (d.graph) cudaGraphExecDestroy(d.graph), d.graph = nullptr;
       cudaGraph_t g = nullptr;
@@ -518,8 +527,9 @@ void PbdCudaSolver::run_step(PbdSystem& sys, double dt_s, const PbdParams& param
     check(cudaMemcpyAsync(p.state.data(), d.state.ptr, d.n, cudaMemcpyDeviceToHost, st), "download states");
   }
   if (d.clusters > 0)
-    check(cudaMemcpyAsync(d.host_rotation.data(), d.rotation.ptr, sizeof(Mat3) * d.clusters, cudaMemcpyDeviceToHost, st),
-          "download rotations");
+    check(
+        cudaMemcpyAsync(d.host_rotation.data(), d.rotation.ptr, sizeof(Mat3) * d.clusters, cudaMemcpyDeviceToHost, st),
+        "download rotations");
   check(cudaEventRecord(d.ev[3], st), "event");
   check(cudaEventSynchronize(d.ev[3]), "step");
   check(cudaGetLastError(), "kernels");
@@ -528,7 +538,8 @@ void PbdCudaSolver::run_step(PbdSystem& sys, double dt_s, const PbdParams& param
   timings_ = {ms[0], ms[1], ms[2], d.graph != nullptr};
   // after an update x* equals x (a quarantined particle's x* is its frozen x)
   p.predicted_m = p.position_m;
-  for (int c = 0; c < d.clusters; ++c) cl.set_rotation(c, Eigen::Map<const Eigen::Matrix3d>(d.host_rotation.data() + 9 * c));
+  for (int c = 0; c < d.clusters; ++c)
+    cl.set_rotation(c, Eigen::Map<const Eigen::Matrix3d>(d.host_rotation.data() + 9 * c));
   sys.quarantined_total_ += sys.quarantined_now() - quarantined_before;
 }
 

@@ -14,7 +14,9 @@ bool pbd_cuda_available(std::string* why) {
   return false;
 }
 
-std::string pbd_cuda_device_name() { return {}; }
+std::string pbd_cuda_device_name() {
+  return {};
+}
 
 PbdCudaSolver::PbdCudaSolver(const PbdSystem&) {
   throw std::invalid_argument("pbd: solver kJacobiCuda needs CUDA, and this build has none");

@@ -45,9 +45,8 @@ void PbdSystem::add_bending(int a, int b, int c, int d, double compliance_per_n_
   require_building(finalized_);
   double theta = 0.0;
   Eigen::Vector3d g[4];
-  if (!(compliance_per_n_m >= 0.0) ||
-      !dihedral_angle(build_position_m_.at(a), build_position_m_.at(b), build_position_m_.at(c),
-                      build_position_m_.at(d), &theta, g))
+  if (!(compliance_per_n_m >= 0.0) || !dihedral_angle(build_position_m_.at(a), build_position_m_.at(b),
+                                                      build_position_m_.at(c), build_position_m_.at(d), &theta, g))
     throw std::invalid_argument("pbd: bending needs two non-degenerate triangles at rest");
   bending_.push_back({a, b, c, d, theta, compliance_per_n_m});
 }
@@ -177,7 +176,8 @@ void PbdSystem::step(double dt_s, const PbdParams& params) {
     step_on_cpu(dt_s, params);
   }
   for (int i = 0; i < particle_count(); ++i)
-    if (particles_.state[i] != ParticleState::kQuarantined) particles_.last_finite_m.col(i) = particles_.position_m.col(i);
+    if (particles_.state[i] != ParticleState::kQuarantined)
+      particles_.last_finite_m.col(i) = particles_.position_m.col(i);
 }
 
 void PbdSystem::step_on_cpu(double dt_s, const PbdParams& params) {
@@ -306,8 +306,8 @@ void PbdSystem::solve_jacobi(double h_s, double sor_w, JacobiAveraging averaging
       Eigen::Vector3d xs[4], dx[4];
       double ws[4], dl;
       for (int m = 0; m < 4; ++m) xs[m] = x.col(idx[m]), ws[m] = w[idx[m]];
-      const bool ok =
-          project_dihedral_bending(xs, ws, c.rest_angle_rad, c.compliance_per_n_m * inv_h2, bending_lambda_[k], &dl, dx);
+      const bool ok = project_dihedral_bending(xs, ws, c.rest_angle_rad, c.compliance_per_n_m * inv_h2,
+                                               bending_lambda_[k], &dl, dx);
       const double share = per_particle ? 1.0 : bending_min_inv_count_[k];
       if (ok) bending_lambda_[k] += sor_w * (per_particle ? bending_mean_inv_count_[k] : share) * dl;
       for (int m = 0; m < 4; ++m) slot.col(4 * k + m) = ok ? Eigen::Vector3d(share * dx[m]) : Eigen::Vector3d::Zero();

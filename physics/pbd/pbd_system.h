@@ -60,7 +60,10 @@ class PbdSystem {
     std::shared_ptr<PbdCudaSolver> solver;
     CudaSlot() = default;
     CudaSlot(const CudaSlot&) {}
-    CudaSlot& operator=(const CudaSlot&) { solver.reset(); return *this; }
+    CudaSlot& operator=(const CudaSlot&) {
+      solver.reset();
+      return *this;
+    }
     CudaSlot(CudaSlot&&) = default;
     CudaSlot& operator=(CudaSlot&&) = default;
   };

@@ -36,7 +36,7 @@ Ventricle build_ventricle(const VentricleSpec& s) {
         points.push_back(p);
       }
   // springs to face and edge neighbours (each pair once)
-  const int offsets[9][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 0}, {1, -1, 0},
+  const int offsets[9][3] = {{1, 0, 0}, {0, 1, 0},  {0, 0, 1}, {1, 1, 0}, {1, -1, 0},
                              {1, 0, 1}, {1, 0, -1}, {0, 1, 1}, {0, 1, -1}};
   for (int k = 0; k < dim_z; ++k)
     for (int j = 0; j < dim_x; ++j)

@@ -47,8 +47,8 @@ class ShapeMatchingClusters {
 // iteration and lambda = 0 this is dx = k (g - x), k = 1 / (1 + alpha/dt^2): the paper's
 // stiffness alpha in [0, 1], but no longer tied to dt and iteration count.
 inline bool project_to_goal(const Eigen::Vector3d& x, const Eigen::Vector3d& goal, double w, double mass_kg,
-                            double compliance_s2, double dt_s, const Eigen::Vector3d& lambda,
-                            Eigen::Vector3d* dlambda, Eigen::Vector3d* dx) {
+                            double compliance_s2, double dt_s, const Eigen::Vector3d& lambda, Eigen::Vector3d* dlambda,
+                            Eigen::Vector3d* dx) {
   const double alpha_tilde = compliance_s2 / (mass_kg * dt_s * dt_s);
   const double denom = w + alpha_tilde;
   if (!(denom > 0.0)) return false;

@@ -63,8 +63,8 @@ void build_parity_rows(const anatomy::TriangleMesh& mesh, const BuildGrid& g, Co
         };
         const double wa = ef(b, cc), wb = ef(cc, a), wc = ef(a, b);
         const double sum = wa + wb + wc;
-        const double x = std::abs(sum) > 0 ? (wa * a.x() + wb * b.x() + wc * cc.x()) / sum
-                                           : (a.x() + b.x() + cc.x()) / 3.0;
+        const double x =
+            std::abs(sum) > 0 ? (wa * a.x() + wb * b.x() + wc * cc.x()) / sum : (a.x() + b.x() + cc.x()) / 3.0;
         hits.push_back({(j - c.j0) + int64_t(nj) * (k - c.k0), x});
       }
     }

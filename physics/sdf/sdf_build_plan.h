@@ -15,14 +15,14 @@ struct ComponentPlan {
   std::vector<int32_t> bricks;      // pool bricks touched by this component's bands
   int lo[3], hi[3];                 // grid-point box of the component (inclusive)
   int j0 = 0, j1 = -1, k0 = 0, k1 = -1;
-  std::vector<int32_t> row_begin;   // parity rows, see ParityView
+  std::vector<int32_t> row_begin;  // parity rows, see ParityView
   std::vector<double> xs;
   ParityView parity() const { return {j0, j1, k0, k1, row_begin.data(), xs.data()}; }
 };
 
 struct BuildPlan {
-  BuildGrid grid{};                  // grid.table points into table
-  std::vector<int32_t> table;        // kBrickOutside until classified; >= 0 pool brick
+  BuildGrid grid{};                        // grid.table points into table
+  std::vector<int32_t> table;              // kBrickOutside until classified; >= 0 pool brick
   std::vector<int32_t> pool_brick_coords;  // 3 per pool brick
   std::vector<Triangle> triangles;
   std::vector<ComponentPlan> components;

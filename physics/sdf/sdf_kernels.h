@@ -13,20 +13,28 @@
 
 namespace pcisim::physics::sdf {
 
-constexpr int kBrick = 8;                        // bricks of 8x8x8 grid points
+constexpr int kBrick = 8;  // bricks of 8x8x8 grid points
 constexpr int kBrickPoints = kBrick * kBrick * kBrick;
-constexpr int32_t kBrickOutside = -1;            // brick table: no surface near, outside the lumen
-constexpr int32_t kBrickInside = -2;             // no surface near, inside the lumen
-constexpr uint64_t kNoKey = ~uint64_t{0};        // no triangle has reached this point yet
-constexpr double kFarDistanceM = 1.0;            // reported for non-finite query points
+constexpr int32_t kBrickOutside = -1;      // brick table: no surface near, outside the lumen
+constexpr int32_t kBrickInside = -2;       // no surface near, inside the lumen
+constexpr uint64_t kNoKey = ~uint64_t{0};  // no triangle has reached this point yet
+constexpr double kFarDistanceM = 1.0;      // reported for non-finite query points
 
 struct V3 {
   double x, y, z;
 };
-PCISIM_HD inline V3 sub(V3 a, V3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-PCISIM_HD inline V3 add(V3 a, V3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-PCISIM_HD inline V3 mul(V3 a, double s) { return {a.x * s, a.y * s, a.z * s}; }
-PCISIM_HD inline double dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+PCISIM_HD inline V3 sub(V3 a, V3 b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+PCISIM_HD inline V3 add(V3 a, V3 b) {
+  return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+PCISIM_HD inline V3 mul(V3 a, double s) {
+  return {a.x * s, a.y * s, a.z * s};
+}
+PCISIM_HD inline double dot(V3 a, V3 b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
 PCISIM_HD inline V3 cross(V3 a, V3 b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
@@ -35,9 +43,9 @@ PCISIM_HD inline V3 cross(V3 a, V3 b) {
 struct GridView {
   double origin[3];
   double spacing;
-  int dims[3];       // grid points per axis (a multiple of kBrick)
-  int bricks[3];     // dims / kBrick
-  float band;        // |values| never exceed this
+  int dims[3];           // grid points per axis (a multiple of kBrick)
+  int bricks[3];         // dims / kBrick
+  float band;            // |values| never exceed this
   const int32_t* table;  // bricks[0]*bricks[1]*bricks[2] entries: pool brick, or kBrickOutside/Inside
   const float* pool;     // kBrickPoints floats per pool brick, x fastest within a brick
 };
@@ -62,8 +70,8 @@ PCISIM_HD inline float grid_value(const GridView& g, int i, int j, int k) {
 // body that left the grid is pushed back toward it. Non-finite points: kFarDistanceM, gradient +x.
 // The gradient is unit length; where the interpolant is flat (deep inside the clamped band) it is
 // +x. Nothing here can produce NaN from finite grid values.
-PCISIM_HD inline void sample_grid(const GridView& g, const double p[3], double* distance,
-                                  double gradient[3], bool* inside_grid) {
+PCISIM_HD inline void sample_grid(const GridView& g, const double p[3], double* distance, double gradient[3],
+                                  bool* inside_grid) {
   gradient[0] = 1.0, gradient[1] = 0.0, gradient[2] = 0.0;
   if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))) {
     *distance = kFarDistanceM;
@@ -122,17 +130,32 @@ PCISIM_HD inline void sample_grid(const GridView& g, const double p[3], double* 
 PCISIM_HD inline V3 closest_on_triangle(V3 p, V3 a, V3 b, V3 c, int* region) {
   const V3 ab = sub(b, a), ac = sub(c, a), ap = sub(p, a);
   const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-  if (d1 <= 0 && d2 <= 0) { *region = 2; return a; }
+  if (d1 <= 0 && d2 <= 0) {
+    *region = 2;
+    return a;
+  }
   const V3 bp = sub(p, b);
   const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) { *region = 2; return b; }
+  if (d3 >= 0 && d4 <= d3) {
+    *region = 2;
+    return b;
+  }
   const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) { *region = 1; return add(a, mul(ab, d1 / (d1 - d3))); }
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    *region = 1;
+    return add(a, mul(ab, d1 / (d1 - d3)));
+  }
   const V3 cp = sub(p, c);
   const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) { *region = 2; return c; }
+  if (d6 >= 0 && d5 <= d6) {
+    *region = 2;
+    return c;
+  }
   const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) { *region = 1; return add(a, mul(ac, d2 / (d2 - d6))); }
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    *region = 1;
+    return add(a, mul(ac, d2 / (d2 - d6)));
+  }
   const double va = d3 * d6 - d5 * d4;
   if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
     *region = 1;
@@ -146,12 +169,18 @@ PCISIM_HD inline V3 closest_on_triangle(V3 p, V3 a, V3 b, V3 c, int* region) {
 PCISIM_HD inline uint64_t make_key(float distance, uint32_t triangle) {
   // non-negative floats order like their bit patterns, so the smallest key is the nearest
   // triangle (ties: the lowest triangle index, on the CPU and the GPU alike)
-  union { float f; uint32_t u; } bits;
+  union {
+    float f;
+    uint32_t u;
+  } bits;
   bits.f = distance;
   return (uint64_t(bits.u) << 32) | triangle;
 }
 PCISIM_HD inline float key_distance(uint64_t key) {
-  union { float f; uint32_t u; } bits;
+  union {
+    float f;
+    uint32_t u;
+  } bits;
   bits.u = uint32_t(key >> 32);
   return bits.f;
 }
@@ -178,8 +207,8 @@ PCISIM_HD inline V3 grid_point(const BuildGrid& g, int i, int j, int k) {
 // and every grid point of that AABB that lies inside the prism's slab gets the exact distance to
 // the triangle if it beats what it holds. Update(key_slot, key) is a plain or atomic min.
 template <class Update>
-PCISIM_HD inline void rasterize_triangle(const BuildGrid& g, const Triangle& t, uint32_t index,
-                                         uint64_t* keys, Update update) {
+PCISIM_HD inline void rasterize_triangle(const BuildGrid& g, const Triangle& t, uint32_t index, uint64_t* keys,
+                                         Update update) {
   const V3 n_raw = cross(sub(t.b, t.a), sub(t.c, t.a));
   const double n_len = std::sqrt(dot(n_raw, n_raw));
   if (!(n_len > 0.0)) return;  // a degenerate triangle has no face; its neighbours cover it
@@ -207,7 +236,11 @@ PCISIM_HD inline void rasterize_triangle(const BuildGrid& g, const Triangle& t, 
       int i_lo = lo[0], i_hi = hi[0];
       if (step != 0.0) {
         double x0 = (-w - plane0) / step, x1 = (w - plane0) / step;
-        if (x0 > x1) { const double tmp = x0; x0 = x1; x1 = tmp; }
+        if (x0 > x1) {
+          const double tmp = x0;
+          x0 = x1;
+          x1 = tmp;
+        }
         const double c0 = std::ceil(x0), c1 = std::floor(x1);
         if (c0 > i_lo) i_lo = c0 > i_hi ? i_hi + 1 : int(c0);
         if (c1 < i_hi) i_hi = c1 < i_lo ? i_lo - 1 : int(c1);
@@ -218,7 +251,8 @@ PCISIM_HD inline void rasterize_triangle(const BuildGrid& g, const Triangle& t, 
         const V3 p = grid_point(g, i, j, k);
         const double plane = dot(sub(p, t.a), n);
         if (std::fabs(plane) > w) continue;  // rounding at the run's ends
-        const int32_t b = g.table[(i / kBrick) + int64_t(g.bricks[0]) * ((j / kBrick) + int64_t(g.bricks[1]) * (k / kBrick))];
+        const int32_t b =
+            g.table[(i / kBrick) + int64_t(g.bricks[0]) * ((j / kBrick) + int64_t(g.bricks[1]) * (k / kBrick))];
         if (b < 0) continue;  // cannot happen for a planned grid; keeps a bad plan from writing wild
         uint64_t* slot = keys + int64_t(b) * kBrickPoints + local_index(i, j, k);
         // the plane distance bounds the exact one from below: skip what cannot win. (kNoKey reads
@@ -249,7 +283,10 @@ PCISIM_HD inline bool inside_by_parity(const ParityView& pv, double x, int j, in
   const int first = lo;
   while (lo < hi) {  // first crossing at or beyond x
     const int mid = (lo + hi) / 2;
-    if (pv.xs[mid] < x) lo = mid + 1; else hi = mid;
+    if (pv.xs[mid] < x)
+      lo = mid + 1;
+    else
+      hi = mid;
   }
   return ((lo - first) & 1) != 0;
 }
@@ -258,8 +295,8 @@ PCISIM_HD inline bool inside_by_parity(const ParityView& pv, double x, int j, in
 // signed distance and fold it into the union (min over components). Sign: eq 14 (the face normal
 // of the nearest triangle) where the nearest point is inside that face; where it is an edge or a
 // vertex eq 14 is ambiguous and the parity test decides; beyond the band, parity gives +-band.
-PCISIM_HD inline float component_value(const BuildGrid& g, const Triangle* triangles,
-                                       const ParityView& pv, uint64_t key, int i, int j, int k) {
+PCISIM_HD inline float component_value(const BuildGrid& g, const Triangle* triangles, const ParityView& pv,
+                                       uint64_t key, int i, int j, int k) {
   const V3 p = grid_point(g, i, j, k);
   if (key == kNoKey || key_distance(key) > g.band) {
     return inside_by_parity(pv, p.x, j, k) ? -g.band : g.band;

@@ -25,14 +25,12 @@ SignedDistanceField SignedDistanceField::build(const anatomy::TriangleMesh& lume
   sdf::classify_remaining(plan, pool);
   const auto& g = plan.grid;
   return from_parts(g.spacing, Eigen::Vector3d(g.origin[0], g.origin[1], g.origin[2]),
-                    Eigen::Vector3i(g.dims[0], g.dims[1], g.dims[2]), g.band, std::move(plan.table),
-                    std::move(pool));
+                    Eigen::Vector3i(g.dims[0], g.dims[1], g.dims[2]), g.band, std::move(plan.table), std::move(pool));
 }
 
 SignedDistanceField SignedDistanceField::from_parts(double spacing_m, const Eigen::Vector3d& origin_m,
                                                     const Eigen::Vector3i& dims, double band_m,
-                                                    std::vector<int32_t> brick_table,
-                                                    std::vector<float> values_m) {
+                                                    std::vector<int32_t> brick_table, std::vector<float> values_m) {
   if (dims.minCoeff() < 2 || dims.x() % kBrick || dims.y() % kBrick || dims.z() % kBrick) {
     throw std::invalid_argument("SignedDistanceField: dims must be >= 2 and multiples of 8");
   }

@@ -14,9 +14,9 @@
 namespace pcisim::physics {
 
 struct SdfSample {
-  double distance_m = 0.0;   // < 0 inside the lumen
+  double distance_m = 0.0;                              // < 0 inside the lumen
   Eigen::Vector3d gradient = Eigen::Vector3d::UnitX();  // unit length, points out of the lumen
-  bool inside_grid = true;   // false: the point lies outside the grid (see sample())
+  bool inside_grid = true;                              // false: the point lies outside the grid (see sample())
 };
 
 struct SdfBuildSpec {
@@ -54,14 +54,11 @@ class SignedDistanceField {
   // one entry per brick (x fastest): a pool brick index, -1 uniformly +band, -2 uniformly -band
   const std::vector<int32_t>& brick_table() const { return brick_table_; }
   Eigen::Vector3i brick_dims() const { return dims_ / kBrick; }
-  size_t memory_bytes() const {
-    return values_m_.size() * sizeof(float) + brick_table_.size() * sizeof(int32_t);
-  }
+  size_t memory_bytes() const { return values_m_.size() * sizeof(float) + brick_table_.size() * sizeof(int32_t); }
 
   // assembles a field from its parts (the CUDA twin's builder uses it)
-  static SignedDistanceField from_parts(double spacing_m, const Eigen::Vector3d& origin_m,
-                                        const Eigen::Vector3i& dims, double band_m,
-                                        std::vector<int32_t> brick_table, std::vector<float> values_m);
+  static SignedDistanceField from_parts(double spacing_m, const Eigen::Vector3d& origin_m, const Eigen::Vector3i& dims,
+                                        double band_m, std::vector<int32_t> brick_table, std::vector<float> values_m);
 
  private:
   double spacing_m_ = 0.0;

@@ -32,7 +32,9 @@ struct DeviceArray {
   DeviceArray(const std::vector<T>& host) : DeviceArray(host.size()) {
     if (n) check(cudaMemcpy(ptr, host.data(), n * sizeof(T), cudaMemcpyHostToDevice), "upload");
   }
-  ~DeviceArray() { if (ptr) cudaFree(ptr); }
+  ~DeviceArray() {
+    if (ptr) cudaFree(ptr);
+  }
   DeviceArray(const DeviceArray&) = delete;
   DeviceArray& operator=(const DeviceArray&) = delete;
 };
@@ -48,8 +50,7 @@ __global__ void reset_keys(const int32_t* bricks, uint64_t* keys) {
 }
 
 // one thread per triangle: the paper's prism, its AABB, exact distances (eq 13), atomic min
-__global__ void rasterize(BuildGrid g, const Triangle* triangles, const uint32_t* list, int count,
-                          uint64_t* keys) {
+__global__ void rasterize(BuildGrid g, const Triangle* triangles, const uint32_t* list, int count, uint64_t* keys) {
   const int t = blockIdx.x * blockDim.x + threadIdx.x;
   if (t >= count) return;
   const uint32_t index = list[t];
@@ -110,10 +111,13 @@ SignedDistanceField build_sdf_cuda(const anatomy::TriangleMesh& lumen, const Sdf
   std::vector<uint32_t> tri_list;
   std::vector<int32_t> brick_list, row_begin;
   std::vector<double> xs;
-  struct Offsets { size_t tri, tri_n, brick, brick_n, row, x; };
+  struct Offsets {
+    size_t tri, tri_n, brick, brick_n, row, x;
+  };
   std::vector<Offsets> off;
   for (const ComponentPlan& c : plan.components) {
-    off.push_back({tri_list.size(), c.triangles.size(), brick_list.size(), c.bricks.size(), row_begin.size(), xs.size()});
+    off.push_back(
+        {tri_list.size(), c.triangles.size(), brick_list.size(), c.bricks.size(), row_begin.size(), xs.size()});
     tri_list.insert(tri_list.end(), c.triangles.begin(), c.triangles.end());
     brick_list.insert(brick_list.end(), c.bricks.begin(), c.bricks.end());
     row_begin.insert(row_begin.end(), c.row_begin.begin(), c.row_begin.end());
@@ -141,11 +145,11 @@ SignedDistanceField build_sdf_cuda(const anatomy::TriangleMesh& lumen, const Sdf
     if (o.brick_n == 0) continue;
     reset_keys<<<unsigned(o.brick_n), kBrickPoints>>>(d_bricks.ptr + o.brick, d_keys.ptr);
     const int threads = 128;
-    rasterize<<<unsigned((o.tri_n + threads - 1) / threads), threads>>>(g, d_tri.ptr, d_list.ptr + o.tri,
-                                                                        int(o.tri_n), d_keys.ptr);
+    rasterize<<<unsigned((o.tri_n + threads - 1) / threads), threads>>>(g, d_tri.ptr, d_list.ptr + o.tri, int(o.tri_n),
+                                                                        d_keys.ptr);
     const ParityView pv{c.j0, c.j1, c.k0, c.k1, d_rows.ptr + o.row, d_xs.ptr + o.x};
-    fold<<<unsigned(o.brick_n), kBrickPoints>>>(g, d_tri.ptr, pv, d_bricks.ptr + o.brick, d_coords.ptr,
-                                               d_keys.ptr, d_pool.ptr);
+    fold<<<unsigned(o.brick_n), kBrickPoints>>>(g, d_tri.ptr, pv, d_bricks.ptr + o.brick, d_coords.ptr, d_keys.ptr,
+                                                d_pool.ptr);
   }
   check(cudaGetLastError(), "kernel launch");
   check(cudaEventRecord(stop), "event");
@@ -214,8 +218,7 @@ double CudaSdfSampler::sample_device(const double* points_m, int n, double* dist
   return ms;
 }
 
-void CudaSdfSampler::sample(const double* points_m, int n, double* distance_m, double* gradient,
-                            uint8_t* inside_grid) {
+void CudaSdfSampler::sample(const double* points_m, int n, double* distance_m, double* gradient, uint8_t* inside_grid) {
   if (n <= 0) return;
   Impl& m = *impl_;
   if (size_t(n) > m.capacity) {

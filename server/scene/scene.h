@@ -16,26 +16,26 @@ namespace pcisim::server {
 
 // the fluoroscopy effects: "xray" (frames), "contrast" (injections show), "detector_noise"
 struct XraySpec {
-  xray::FluoroSpec fluoro;        // detector, projector, volume, noise, contrast strength
-  double pulse_rate_fps = 15.0;   // fluoroscopy: 30, 15 or 7.5
-  double cine_rate_fps = 30.0;    // cine runs
-  xray::CArmPose initial_pose;    // until a session command moves the C-arm
-  bool contrast = false;          // the scene lists "contrast"
+  xray::FluoroSpec fluoro;       // detector, projector, volume, noise, contrast strength
+  double pulse_rate_fps = 15.0;  // fluoroscopy: 30, 15 or 7.5
+  double cine_rate_fps = 30.0;   // cine runs
+  xray::CArmPose initial_pose;   // until a session command moves the C-arm
+  bool contrast = false;         // the scene lists "contrast"
   double injection_volume_ml = 8.0, injection_duration_s = 2.0;
 };
 
 struct Scene {
   std::string name;
-  std::string source;                 // file path, or "built-in"
+  std::string source;  // file path, or "built-in"
   // anatomy: a case folder (resolved against the scene file's folder), or "" for the procedural
   // phantom of world.anatomy.seed (server/case_builder.h builds the one anatomy::Case)
   std::string case_dir;
   double physics_rate_hz = 30.0;
   physics::WorldSpec world;
   haptics::HapticParams haptics;
-  std::optional<XraySpec> xray;       // present when the scene lists "xray"
-  SessionLimitParams session;         // bounds on console commands
-  std::vector<std::string> effects;   // the listed effects, in step order
+  std::optional<XraySpec> xray;      // present when the scene lists "xray"
+  SessionLimitParams session;        // bounds on console commands
+  std::vector<std::string> effects;  // the listed effects, in step order
 };
 
 // every effect name a scene may list, in the order the pipeline steps them

@@ -28,7 +28,8 @@ physics::GuidewireParams read_guidewire(json::JsonReader r) {
   physics::GuidewireParams p;
   p.length_m = in_range(r, "length_mm", p.length_m, physics::kGuidewireLengthM, kMm);
   p.segment_count = in_range(r, "segments", p.segment_count, physics::kGuidewireSegments);
-  p.optimisation_passes = in_range(r, "optimisation_passes", p.optimisation_passes, physics::kGuidewireOptimisationPasses);
+  p.optimisation_passes =
+      in_range(r, "optimisation_passes", p.optimisation_passes, physics::kGuidewireOptimisationPasses);
   p.tip_length_m = in_range(r, "tip_length_mm", p.tip_length_m, physics::kGuidewireTipLengthM, kMm);
   p.tip_angle_deg = in_range(r, "tip_angle_deg", p.tip_angle_deg, physics::kGuidewireTipAngleDeg);
   p.body_alpha_min = in_range(r, "body_alpha_min", p.body_alpha_min, physics::kGuidewireAlphaMin);
@@ -91,7 +92,8 @@ physics::HeartBeatParams read_heart_beat(json::JsonReader r, const std::string& 
     p.motion_file = (std::filesystem::path(scene_dir) / p.motion_file).string();
   std::error_code ec;
   if (!p.motion_file.empty() && (!std::filesystem::is_regular_file(p.motion_file, ec) || ec))
-    r.fail("motion_file", fmt::format("expected a heart motion file (docs/heart.md), cannot read \"{}\"", p.motion_file));
+    r.fail("motion_file",
+           fmt::format("expected a heart motion file (docs/heart.md), cannot read \"{}\"", p.motion_file));
   p.substeps = in_range(r, "substeps", p.substeps, physics::kHeartSubsteps);
   p.iterations = in_range(r, "iterations", p.iterations, physics::kHeartIterations);
   const std::string solver = r.text("solver", "jacobi", {"jacobi", "gauss_seidel", "jacobi_cuda"});
@@ -101,10 +103,12 @@ physics::HeartBeatParams read_heart_beat(json::JsonReader r, const std::string& 
   p.sor_w = in_range(r, "sor_w", p.sor_w, physics::kHeartSorW);
   p.stretch_compliance_m_per_n =
       in_range(r, "stretch_compliance_m_per_n", p.stretch_compliance_m_per_n, physics::kHeartStretchComplianceMPerN);
-  p.bend_compliance_per_n_m = in_range(r, "bend_compliance_per_n_m", p.bend_compliance_per_n_m, physics::kHeartBendCompliancePerNM);
+  p.bend_compliance_per_n_m =
+      in_range(r, "bend_compliance_per_n_m", p.bend_compliance_per_n_m, physics::kHeartBendCompliancePerNM);
   p.shape_compliance_s2 = in_range(r, "shape_compliance_s2", p.shape_compliance_s2, physics::kHeartShapeComplianceS2);
   p.damping_per_s = in_range(r, "damping_per_s", p.damping_per_s, physics::kHeartDampingPerS);
-  p.cluster_size_m = r.number("cluster_size_mm", p.cluster_size_m / kMm, 0, physics::kHeartClusterSizeM.max / kMm) * kMm;
+  p.cluster_size_m =
+      r.number("cluster_size_mm", p.cluster_size_m / kMm, 0, physics::kHeartClusterSizeM.max / kMm) * kMm;
   if (p.cluster_size_m > 0.0 && p.cluster_size_m < physics::kMinClusterSizeM)
     r.fail("cluster_size_mm",
            fmt::format("expected 0 (the global cluster only) or a number in [5, 200], got {}", p.cluster_size_m / kMm));
@@ -131,12 +135,14 @@ haptics::HapticParams read_haptics(json::JsonReader r) {
   p.fade_ms = r.number("fade_ms", p.fade_ms, 1, 2000);
   p.ramp_in_ms = r.number("ramp_in_ms", p.ramp_in_ms, 1, 5000);
   p.instrument_timeout_ms = r.number("instrument_timeout_ms", p.instrument_timeout_ms, 5, 1000);
-  const std::string mode = r.text("interpolation", "local_model", {"local_model", "zero_order_hold", "linear_extrapolation"});
+  const std::string mode =
+      r.text("interpolation", "local_model", {"local_model", "zero_order_hold", "linear_extrapolation"});
   p.interpolation = mode == "zero_order_hold"        ? haptics::Interpolation::kZeroOrderHold
                     : mode == "linear_extrapolation" ? haptics::Interpolation::kLinearExtrapolation
                                                      : haptics::Interpolation::kLocalModel;
   p.passivity = r.boolean("passivity", p.passivity);
-  p.passivity_max_damping_n_s_per_m = r.number("passivity_max_damping_n_s_per_m", p.passivity_max_damping_n_s_per_m, 0, 1e5);
+  p.passivity_max_damping_n_s_per_m =
+      r.number("passivity_max_damping_n_s_per_m", p.passivity_max_damping_n_s_per_m, 0, 1e5);
   p.passivity_max_damping_nm_s_per_rad =
       r.number("passivity_max_damping_nm_s_per_rad", p.passivity_max_damping_nm_s_per_rad, 0, 100);
   r.finish();
@@ -151,8 +157,8 @@ XraySpec read_xray(json::JsonReader r) {
                           : projector == "cuda" ? xray::ProjectorKind::kCudaTrilinear
                           : projector == "gl"   ? xray::ProjectorKind::kGl
                                                 : xray::ProjectorKind::kCpuTrilinear;
-  f.projector.trilinear.step_voxels = r.number("step_voxels", f.projector.trilinear.step_voxels,
-                                                 xray::kMinSceneStepVoxels, xray::kMaxSceneStepVoxels);
+  f.projector.trilinear.step_voxels =
+      r.number("step_voxels", f.projector.trilinear.step_voxels, xray::kMinSceneStepVoxels, xray::kMaxSceneStepVoxels);
   const int px = r.integer("detector_px", f.c_arm.width, 16, 2048);
   f.c_arm.width = f.c_arm.height = px;
   f.c_arm.pixel_mm = r.number("pixel_mm", f.c_arm.pixel_mm, 0.05, 2);
@@ -272,8 +278,9 @@ Scene parse(const nlohmann::json& doc, const std::string& source) {
 }  // namespace
 
 const std::vector<std::string>& known_effects() {
-  static const std::vector<std::string> names = {"heart_beat", "vessel_motion", "guidewire", "blood_flow",
-                                                 "vessel_contact", "friction", "xray", "contrast", "detector_noise"};
+  static const std::vector<std::string> names = {"heart_beat", "vessel_motion",  "guidewire",
+                                                 "blood_flow", "vessel_contact", "friction",
+                                                 "xray",       "contrast",       "detector_noise"};
   return names;
 }
 
@@ -295,8 +302,8 @@ Scene load_scene_file(const std::string& path) {
   // a scene is a page of JSON; a huge file would hold the LCM thread and its memory for seconds
   const auto size = std::filesystem::file_size(path, ec);
   if (ec || size > kMaxSceneFileBytes)
-    throw json::JsonError(fmt::format("{}: scene file of {} bytes is over the {} byte limit", path, ec ? 0 : size,
-                                 kMaxSceneFileBytes));
+    throw json::JsonError(
+        fmt::format("{}: scene file of {} bytes is over the {} byte limit", path, ec ? 0 : size, kMaxSceneFileBytes));
   std::ifstream in(path);
   if (!in) throw json::JsonError(fmt::format("{}: cannot read the scene file (missing or not a file)", path));
   std::stringstream text;
@@ -304,6 +311,8 @@ Scene load_scene_file(const std::string& path) {
   return parse_scene(text.str(), path);
 }
 
-Scene default_scene() { return parse_scene(default_scene_text(), "built-in"); }
+Scene default_scene() {
+  return parse_scene(default_scene_text(), "built-in");
+}
 
 }  // namespace pcisim::server

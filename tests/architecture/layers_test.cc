@@ -117,8 +117,7 @@ std::vector<Violation> check_links(const fs::path& targets_file, int* targets_se
       if (it == layer_of.end()) continue;  // a third-party library
       // a target whose layer is one header (the local force model) is an edge to that header
       const std::string edge = it->second.ends_with(".h") ? it->second : it->second + "/";
-      if (!edge_allowed(layer, edge))
-        out.push_back({target, layer + " links " + dep + " (" + it->second + ")"});
+      if (!edge_allowed(layer, edge)) out.push_back({target, layer + " links " + dep + " (" + it->second + ")"});
     }
   }
   return out;

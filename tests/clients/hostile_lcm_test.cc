@@ -63,8 +63,7 @@ TEST(HostileLcm, CaptureCountsEveryMalformedFrameAndSampleAndWritesNone) {
   const auto instrument = pcisim::fuzz::instrument_case();
   const int64_t bad_frames = publish_all(images, protocol::kXrayChannel, frames);
   const int64_t bad_samples = publish_all(control, protocol::kInstrumentChannel, instrument);
-  while (images.handleTimeout(10) > 0 || control.handleTimeout(10) > 0) {
-  }
+  while (images.handleTimeout(10) > 0 || control.handleTimeout(10) > 0) {}
   EXPECT_EQ(sink.bad(), bad_frames);
   EXPECT_EQ(sink.bad_instrument(), bad_samples);
   EXPECT_EQ(writer.written(), 0);

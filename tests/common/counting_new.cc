@@ -18,11 +18,21 @@ void* operator new(std::size_t n) {
   if (void* p = std::malloc(n ? n : 1)) return p;
   throw std::bad_alloc();
 }
-void* operator new[](std::size_t n) { return operator new(n); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void* operator new[](std::size_t n) {
+  return operator new(n);
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+  std::free(p);
+}
 
 namespace pcisim::testing {
 
@@ -31,9 +41,17 @@ AllocationCount::AllocationCount() {
   g_bytes = g_largest = 0;
   g_counting = true;
 }
-AllocationCount::~AllocationCount() { g_counting = false; }
-long AllocationCount::allocations() const { return g_allocations; }
-long long AllocationCount::bytes() const { return g_bytes; }
-long long AllocationCount::largest() const { return g_largest; }
+AllocationCount::~AllocationCount() {
+  g_counting = false;
+}
+long AllocationCount::allocations() const {
+  return g_allocations;
+}
+long long AllocationCount::bytes() const {
+  return g_bytes;
+}
+long long AllocationCount::largest() const {
+  return g_largest;
+}
 
 }  // namespace pcisim::testing

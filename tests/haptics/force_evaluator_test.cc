@@ -266,7 +266,8 @@ TEST(ForceEvaluator, NonFiniteOrNegativeLimitsAreRefusedByName) {
       {"haptics.peak_force_n", [](HapticParams& p) { p.peak_force_n = std::nan(""); }},
       {"haptics.slew_n_per_s", [](HapticParams& p) { p.slew_n_per_s = -1.0; }},
       {"haptics.instrument_timeout_ms", [](HapticParams& p) { p.instrument_timeout_ms = std::nan(""); }},
-      {"haptics.passivity_max_damping_n_s_per_m", [](HapticParams& p) { p.passivity_max_damping_n_s_per_m = INFINITY; }},
+      {"haptics.passivity_max_damping_n_s_per_m",
+       [](HapticParams& p) { p.passivity_max_damping_n_s_per_m = INFINITY; }},
   };
   for (const auto& [field, spoil] : cases) {
     HapticParams p;

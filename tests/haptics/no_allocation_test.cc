@@ -5,7 +5,6 @@
 #include "haptics/force_evaluator.h"
 #include "tests/common/counting_new.h"
 
-
 namespace pcisim::haptics {
 namespace {
 
@@ -21,7 +20,8 @@ TEST(NoAllocation, CounterSeesAnAllocation) {
 }
 
 TEST(NoAllocation, TenThousandTicksAllocateNothing) {
-  for (Interpolation mode : {Interpolation::kLocalModel, Interpolation::kZeroOrderHold, Interpolation::kLinearExtrapolation}) {
+  for (Interpolation mode :
+       {Interpolation::kLocalModel, Interpolation::kZeroOrderHold, Interpolation::kLinearExtrapolation}) {
     HapticParams p;
     p.interpolation = mode;
     ForceEvaluator e(p);

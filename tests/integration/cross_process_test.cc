@@ -45,8 +45,7 @@ TEST(CrossProcess, BridgeAndServerTalkOverUdpmInAPrivateNamespace) {
 
   std::smatch m;
   const std::string bridge_log = slurp(dir / "bridge.log");
-  ASSERT_TRUE(std::regex_search(bridge_log, m, std::regex("(\\d+) force commands received, (\\d+) bad")))
-      << bridge_log;
+  ASSERT_TRUE(std::regex_search(bridge_log, m, std::regex("(\\d+) force commands received, (\\d+) bad"))) << bridge_log;
   EXPECT_GT(std::stoll(m[1]), 1500) << "force commands came back at about 1 kHz";
   EXPECT_EQ(std::stoll(m[2]), 0);
 }

@@ -39,15 +39,19 @@ TEST(EndToEnd, ServerBridgeAndCaptureProduceLabelledFramesAndForces) {
       {"at_s": 1.8, "do": "rotate", "deg": 90, "over_s": 1},
       {"at_s": 2.8, "do": "insert", "mm": 15, "over_s": 1.5},
       {"at_s": 4.5, "do": "pedal", "down": false}]})";
-  const std::string url = "'udpm://239.255.76.67:7667?ttl=0'", images = "'udpm://239.255.76.67:7668?ttl=0&recv_buf_size=4194304'";
+  const std::string url = "'udpm://239.255.76.67:7667?ttl=0'",
+                    images = "'udpm://239.255.76.67:7668?ttl=0&recv_buf_size=4194304'";
   const std::string bin = PCISIM_BINARY_DIR, d = dir.string();
-  const std::string body =
-      bin + "/clients/pcisim-capture --out " + d + "/frames --lcm-image-url " + images + " > " + d + "/capture.txt 2>&1 & C=\\$!; " +
-      bin + "/server/pcisim-server --duration 8 --scene " + d + "/scene.json --lcm-url " + url + " --lcm-image-url " + images +
-      " --stats-json " + d + "/stats.json > " + d + "/server.txt 2>&1 & S=\\$!; " +
-      bin + "/clients/pcisim-bridge --duration 5 --wait-for-server 60 --script " + d + "/script.json --lcm-url " + url +
-      " > " + d + "/bridge.txt 2>&1; B=\\$?; kill -TERM \\$S; wait \\$S; R=\\$?; sleep 0.3; kill -TERM \\$C; wait \\$C; exit \\$((B + R))";
-  const int status = std::system((std::string(PCISIM_SOURCE_DIR) + "/scripts/in-private-netns bash -c \"" + body + "\"").c_str());
+  const std::string body = bin + "/clients/pcisim-capture --out " + d + "/frames --lcm-image-url " + images + " > " +
+                           d + "/capture.txt 2>&1 & C=\\$!; " + bin + "/server/pcisim-server --duration 8 --scene " +
+                           d + "/scene.json --lcm-url " + url + " --lcm-image-url " + images + " --stats-json " + d +
+                           "/stats.json > " + d + "/server.txt 2>&1 & S=\\$!; " + bin +
+                           "/clients/pcisim-bridge --duration 5 --wait-for-server 60 --script " + d +
+                           "/script.json --lcm-url " + url + " > " + d +
+                           "/bridge.txt 2>&1; B=\\$?; kill -TERM \\$S; wait \\$S; R=\\$?; sleep 0.3; kill -TERM \\$C; "
+                           "wait \\$C; exit \\$((B + R))";
+  const int status =
+      std::system((std::string(PCISIM_SOURCE_DIR) + "/scripts/in-private-netns bash -c \"" + body + "\"").c_str());
   ASSERT_TRUE(WIFEXITED(status));
   if (WEXITSTATUS(status) == 77) GTEST_SKIP() << "in-private-netns could not create a namespace";
   ASSERT_EQ(WEXITSTATUS(status), 0) << slurp(dir / "server.txt") << slurp(dir / "bridge.txt");
@@ -68,7 +72,9 @@ TEST(EndToEnd, ServerBridgeAndCaptureProduceLabelledFramesAndForces) {
     EXPECT_TRUE(fs::exists(fs::path(path).replace_extension(".png"))) << path;
     const auto j = nlohmann::json::parse(slurp(path));
     const auto& det = j["detector"];
-    auto vec = [](const nlohmann::json& a) { return Eigen::Vector3d(a[0].get<double>(), a[1].get<double>(), a[2].get<double>()); };
+    auto vec = [](const nlohmann::json& a) {
+      return Eigen::Vector3d(a[0].get<double>(), a[1].get<double>(), a[2].get<double>());
+    };
     const Eigen::Vector3d s = vec(det["source_mm"]), c = vec(det["center_mm"]), u = vec(det["u"]), v = vec(det["v"]);
     const double pitch = det["pixel_mm"].get<double>();
     const int w = det["width"].get<int>(), h = det["height"].get<int>();
@@ -82,7 +88,8 @@ TEST(EndToEnd, ServerBridgeAndCaptureProduceLabelledFramesAndForces) {
       const Eigen::Vector3d p = vec(wire_mm[i]);
       const Eigen::Vector3d hit = s + ((c - s).dot(n) / (p - s).dot(n)) * (p - s);
       const double col = (hit - c).dot(u) / pitch + 0.5 * (w - 1), row = (hit - c).dot(v) / pitch + 0.5 * (h - 1);
-      worst = std::max({worst, std::abs(col - wire_px[i][0].get<double>()), std::abs(row - wire_px[i][1].get<double>())});
+      worst =
+          std::max({worst, std::abs(col - wire_px[i][0].get<double>()), std::abs(row - wire_px[i][1].get<double>())});
     }
     EXPECT_LT(worst, 0.5) << "re-projection error of " << path;
     with_contrast += !j["labels"]["contrast_branches"].empty();

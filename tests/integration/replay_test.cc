@@ -43,10 +43,12 @@ int session(const fs::path& dir, const std::string& bridge_args, const std::stri
   const std::string scene = " --scene " + (dir / "still.json").string();
   const std::string url = "'udpm://239.255.76.67:7667?ttl=0'";
   const std::string bin = PCISIM_BINARY_DIR;
-  const std::string body = "lcm-logger --quiet --lcm-url " + url + " " + (dir / log_name).string() + " & L=\\$!; " + bin +
-                           "/server/pcisim-server --duration 9 --lcm-url " + url + scene + " --log-level warn & S=\\$!; " + bin +
-                           "/clients/pcisim-bridge --wait-for-server 30 --lcm-url " + url + " " + bridge_args +
-                           " > " + (dir / (log_name + ".bridge.txt")).string() + " 2>&1; kill -TERM \\$S; wait \\$S; sleep 0.3; kill -TERM \\$L; wait \\$L; true";
+  const std::string body = "lcm-logger --quiet --lcm-url " + url + " " + (dir / log_name).string() + " & L=\\$!; " +
+                           bin + "/server/pcisim-server --duration 9 --lcm-url " + url + scene +
+                           " --log-level warn & S=\\$!; " + bin +
+                           "/clients/pcisim-bridge --wait-for-server 30 --lcm-url " + url + " " + bridge_args + " > " +
+                           (dir / (log_name + ".bridge.txt")).string() +
+                           " 2>&1; kill -TERM \\$S; wait \\$S; sleep 0.3; kill -TERM \\$L; wait \\$L; true";
   const std::string cmd = std::string(PCISIM_SOURCE_DIR) + "/scripts/in-private-netns bash -c \"" + body + "\"";
   return std::system(cmd.c_str());
 }
@@ -70,7 +72,8 @@ TEST(Replay, ReplayedSessionFollowsTheLiveWireTrajectory) {
       {"at_s": 0.2, "do": "insert", "mm": 15, "over_s": 3},
       {"at_s": 1.5, "do": "rotate", "deg": 120, "over_s": 2},
       {"at_s": 3.5, "do": "insert", "mm": 10, "over_s": 1.5}]})";
-  ASSERT_EQ(session(dir, "--device scripted --duration 5.5 --script " + (dir / "script.json").string(), "live.lcmlog"), 0);
+  ASSERT_EQ(session(dir, "--device scripted --duration 5.5 --script " + (dir / "script.json").string(), "live.lcmlog"),
+            0);
   ASSERT_EQ(session(dir, "--device replay --log " + (dir / "live.lcmlog").string(), "replay.lcmlog"), 0);
 
   const auto live = wire_states((dir / "live.lcmlog").string());

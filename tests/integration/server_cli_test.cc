@@ -56,7 +56,8 @@ TEST(ServerCli, BadSceneStopsAtStartWithTheJsonPath) {
   std::ofstream(path) << R"({"effects": {"guidewire": {"segments": 1}}})";
   const Result r = run("--duration 1 --lcm-url memq:// --scene " + path.string());
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.output.find("bad scene: " + path.string() + ": effects.guidewire.segments: expected an integer in [4, 4000], got 1"),
+  EXPECT_NE(r.output.find("bad scene: " + path.string() +
+                          ": effects.guidewire.segments: expected an integer in [4, 4000], got 1"),
             std::string::npos)
       << r.output;
   EXPECT_EQ(r.output.find("running"), std::string::npos) << "never starts half a scene";
@@ -84,7 +85,9 @@ TEST(ServerCli, SigtermStopsCleanlyAndStillWritesStats) {
   std::filesystem::create_directories(kDir);
   const auto stats = kDir / "stats_sigterm.json";
   std::filesystem::remove(stats);
-  const std::string cmd = std::string(PCISIM_BINARY_DIR) + "/server/pcisim-server --scene " PCISIM_SOURCE_DIR "/scenes/minimal.json --lcm-url memq:// --log-level warn --stats-json " +
+  const std::string cmd = std::string(PCISIM_BINARY_DIR) +
+                          "/server/pcisim-server --scene " PCISIM_SOURCE_DIR
+                          "/scenes/minimal.json --lcm-url memq:// --log-level warn --stats-json " +
                           stats.string() + " > /dev/null 2>&1 & pid=$!; sleep 1.5; kill -TERM $pid; wait $pid";
   const int status = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(status));

@@ -57,12 +57,12 @@ struct FakeTrainee {
   }
 };
 
-StatsReport run_server(const Scene& scene, lcm::LCM& lcm, double seconds,
-                       const std::function<void()>& midway = {}) {
+StatsReport run_server(const Scene& scene, lcm::LCM& lcm, double seconds, const std::function<void()>& midway = {}) {
   Server server(scene, lcm);
   std::atomic<bool> stop{false};
   std::thread helper;
-  if (midway) helper = std::thread([&] {
+  if (midway)
+    helper = std::thread([&] {
       std::this_thread::sleep_for(std::chrono::duration<double>(seconds / 2));
       midway();
     });
@@ -98,8 +98,7 @@ TEST(ServerRun, MinimalSceneRunsBothLoopsAtTheirRatesAndBuildsOnlyTheWire) {
 
   // the server's receive thread has stopped: deliver what is still queued here
   trainee.done = true;
-  while (lcm.handleTimeout(50) > 0) {
-  }
+  while (lcm.handleTimeout(50) > 0) {}
   std::lock_guard lock(trainee.mutex);
   ASSERT_GT(trainee.forces.size(), 1500u);
   EXPECT_GE(trainee.forces[trainee.forces.size() / 2].instrument_seq, 0) << "forces answer instrument samples";
@@ -113,7 +112,7 @@ TEST(ServerRun, StatsListExactlyTheSceneEffects) {
   const StatsReport r = run_server(default_scene(), lcm, 1.0);
   std::vector<std::string> names;
   for (const auto& [name, ms] : r.effect_step_ms_p50) names.push_back(name);
-  std::vector<std::string> expected = {"heart_beat", "vessel_motion", "guidewire",
+  std::vector<std::string> expected = {"heart_beat", "vessel_motion",  "guidewire",
                                        "blood_flow", "vessel_contact", "friction"};  // the physics ones
   std::sort(names.begin(), names.end());
   std::sort(expected.begin(), expected.end());
@@ -191,14 +190,14 @@ TEST(ServerRun, PhysicsStallOfHalfASecondFadesTheForceAndRecovers) {
   EXPECT_TRUE(trainee.forces[last].flags & F::FLAG_STALE);
   ASSERT_GT(trainee.forces.size(), last + 500);
   const auto& after = trainee.forces[last + 400];
-  EXPECT_EQ(after.flags & (int{F::FLAG_FADED} | int{F::FLAG_STALE} | int{F::FLAG_RAMPING}), 0) << "recovered after physics resumed";
+  EXPECT_EQ(after.flags & (int{F::FLAG_FADED} | int{F::FLAG_STALE} | int{F::FLAG_RAMPING}), 0)
+      << "recovered after physics resumed";
 }
 
 TEST(ServerRun, SilentInstrumentFadesTheForce) {
   lcm::LCM lcm("memq://");
   FakeTrainee trainee(lcm);
-  run_server(load_scene_file(PCISIM_SOURCE_DIR "/scenes/minimal.json"), lcm, 2.0,
-             [&] { trainee.publishing = false; });
+  run_server(load_scene_file(PCISIM_SOURCE_DIR "/scenes/minimal.json"), lcm, 2.0, [&] { trainee.publishing = false; });
   std::lock_guard lock(trainee.mutex);
   // the commands well after the instrument fell silent are faded and zero
   const auto& f = trainee.forces;

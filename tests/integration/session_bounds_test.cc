@@ -49,7 +49,8 @@ TEST(SessionBounds, ASceneThatCannotBeBuiltIsRefusedAndTheSessionGoesOn) {
     send(lcm, C::CMD_LOAD_SCENE, (dir / "scene.json").string());
   });
   StatsReport r;
-  ASSERT_NO_THROW(r = run_session(load_scene_file(PCISIM_SOURCE_DIR "/scenes/minimal.json"), lcm, options, stop, limits));
+  ASSERT_NO_THROW(
+      r = run_session(load_scene_file(PCISIM_SOURCE_DIR "/scenes/minimal.json"), lcm, options, stop, limits));
   console.join();
   EXPECT_EQ(limits.scenes_rejected(), 1);
   EXPECT_GT(r.physics_steps, 0) << "the scene from before runs again";

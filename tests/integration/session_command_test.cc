@@ -74,7 +74,9 @@ struct Instrument {
   }
 };
 
-Scene minimal() { return load_scene_file(PCISIM_SOURCE_DIR "/scenes/minimal.json"); }
+Scene minimal() {
+  return load_scene_file(PCISIM_SOURCE_DIR "/scenes/minimal.json");
+}
 
 TEST(SessionCommands, PauseFreezesPhysicsAndFadesTheForceResumeBringsBothBack) {
   lcm::LCM lcm("memq://");
@@ -95,7 +97,8 @@ TEST(SessionCommands, PauseFreezesPhysicsAndFadesTheForceResumeBringsBothBack) {
 
   std::lock_guard lock(rec.mutex);
   double longest_gap = 0;
-  for (size_t i = 1; i < rec.wires.size(); ++i) longest_gap = std::max(longest_gap, rec.wires[i].t_s - rec.wires[i - 1].t_s);
+  for (size_t i = 1; i < rec.wires.size(); ++i)
+    longest_gap = std::max(longest_gap, rec.wires[i].t_s - rec.wires[i - 1].t_s);
   EXPECT_GT(longest_gap, 0.8) << "no physics step while paused";
   int stale_while_paused = 0, paused_samples = 0, stale_after = 0, after_samples = 0;
   for (const auto& f : rec.forces) {

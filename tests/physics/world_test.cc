@@ -12,7 +12,6 @@
 #include "anatomy/vessel/vessel_tree.h"
 #include "tests/common/counting_new.h"
 
-
 namespace pcisim::physics {
 namespace {
 

@@ -21,19 +21,32 @@ void expect_refused(const MessageCase& c) {
     M fresh;
     pcisim::testing::AllocationCount alloc;
     bool ok = true;
-    EXPECT_NO_THROW(ok = decode_checked(m.bytes.data(), static_cast<int64_t>(m.bytes.size()), fresh)) << c.type << ": " << m.what;
+    EXPECT_NO_THROW(ok = decode_checked(m.bytes.data(), static_cast<int64_t>(m.bytes.size()), fresh))
+        << c.type << ": " << m.what;
     EXPECT_FALSE(ok) << c.type << ": " << m.what;
     // a count the buffer cannot hold is refused before anything is sized by it
     EXPECT_LT(alloc.largest(), 64 * 1024) << c.type << ": " << m.what;
   }
 }
 
-TEST(HostileDecode, InstrumentState) { expect_refused<pcisim_lcm::instrument_state_t>(fuzz::instrument_case()); }
-TEST(HostileDecode, ForceCommand) { expect_refused<pcisim_lcm::force_command_t>(fuzz::force_case()); }
-TEST(HostileDecode, SessionCommand) { expect_refused<pcisim_lcm::session_command_t>(fuzz::session_case()); }
-TEST(HostileDecode, SimStatus) { expect_refused<pcisim_lcm::sim_status_t>(fuzz::status_case()); }
-TEST(HostileDecode, WireState) { expect_refused<pcisim_lcm::wire_state_t>(fuzz::wire_case()); }
-TEST(HostileDecode, XrayFrame) { expect_refused<pcisim_lcm::xray_frame_t>(fuzz::xray_case()); }
+TEST(HostileDecode, InstrumentState) {
+  expect_refused<pcisim_lcm::instrument_state_t>(fuzz::instrument_case());
+}
+TEST(HostileDecode, ForceCommand) {
+  expect_refused<pcisim_lcm::force_command_t>(fuzz::force_case());
+}
+TEST(HostileDecode, SessionCommand) {
+  expect_refused<pcisim_lcm::session_command_t>(fuzz::session_case());
+}
+TEST(HostileDecode, SimStatus) {
+  expect_refused<pcisim_lcm::sim_status_t>(fuzz::status_case());
+}
+TEST(HostileDecode, WireState) {
+  expect_refused<pcisim_lcm::wire_state_t>(fuzz::wire_case());
+}
+TEST(HostileDecode, XrayFrame) {
+  expect_refused<pcisim_lcm::xray_frame_t>(fuzz::xray_case());
+}
 
 // the finding itself: a 66-byte session command whose scene_path length is 0 (it threw
 // std::length_error out of the handler and ended the server)

@@ -9,7 +9,6 @@
 #include "realtime/clock.h"
 #include "tests/common/counting_new.h"
 
-
 namespace pcisim::server {
 namespace {
 

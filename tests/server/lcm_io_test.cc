@@ -134,17 +134,19 @@ TEST_F(LcmIoTest, ForceCommandsWireStateAndStatusGoOut) {
     EXPECT_EQ(listener.wires[0].contact[1], 1);
     EXPECT_EQ(listener.wires[0].tip_branch, "LAD");
   }
-  ASSERT_TRUE(wait_for([&] {
-    std::lock_guard lock(listener.mutex);
-    return listener.statuses > 0;
-  }, 2500ms)) << "sim_status_t once a second";
+  ASSERT_TRUE(wait_for(
+      [&] {
+        std::lock_guard lock(listener.mutex);
+        return listener.statuses > 0;
+      },
+      2500ms))
+      << "sim_status_t once a second";
 }
 
 TEST_F(LcmIoTest, StopPublishesAZeroForceLast) {
   io->stop();
   // nobody handles the instance any more: drain it here
-  while (lcm.handleTimeout(50) > 0) {
-  }
+  while (lcm.handleTimeout(50) > 0) {}
   std::lock_guard lock(listener.mutex);
   ASSERT_FALSE(listener.forces.empty());
   EXPECT_EQ(listener.forces.back().seq, -1);
@@ -187,7 +189,8 @@ TEST_F(LcmIoTest, EveryMalformedShapeOnEveryChannelIsCountedAndTheServerGoesOn) 
 TEST_F(LcmIoTest, ASecondLcmIoOnTheSameLcmHandlesEachMessageOnce) {
   io.reset();
   SharedState second;
-  auto next = std::make_unique<LcmIo>(lcm, second, limits, 8.0, [] { return pcisim_lcm::sim_status_t{}; }, nullptr);
+  auto next = std::make_unique<LcmIo>(
+      lcm, second, limits, 8.0, [] { return pcisim_lcm::sim_status_t{}; }, nullptr);
   next->start();
   pcisim_lcm::session_command_t contrast{};
   contrast.command = pcisim_lcm::session_command_t::CMD_CONTRAST;

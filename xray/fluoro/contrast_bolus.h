@@ -21,8 +21,8 @@ enum class CoronaryOstium { kLeft, kRight };
 
 // contrast in the tree: the bolus enters at the ostium and travels downstream, then washes out
 struct ContrastInjection {
-  double start_s = 0;        // when the injection began (simulation time)
-  double duration_s = 2.0;   // how long it is pushed
+  double start_s = 0;       // when the injection began (simulation time)
+  double duration_s = 2.0;  // how long it is pushed
   double volume_ml = 8.0;
   CoronaryOstium ostium = CoronaryOstium::kLeft;  // the left main (LAD, LCx, D, OM) by default
 };
@@ -31,22 +31,22 @@ struct ContrastBolusSpec {
   // mean coronary flow velocity: 10-30 cm/s at rest by Doppler wire, more in hyperaemia
   // (Doucette et al., Circulation 1992); the bolus front moves with it
   double velocity_mm_per_s = 150;
-  double rise_s = 0.15;     // how fast the ostium fills once the injection starts
-  double washout_s = 1.5;   // exponential clearance after it stops (1-2 s in angiograms)
-  double taper_mm = 300;    // dilution length downstream
+  double rise_s = 0.15;    // how fast the ostium fills once the injection starts
+  double washout_s = 1.5;  // exponential clearance after it stops (1-2 s in angiograms)
+  double taper_mm = 300;   // dilution length downstream
   // resting coronary blood flow ~225 ml/min, ~2/3 of it in the left tree (Guyton & Hall,
   // Textbook of Medical Physiology, ch. 21): an injection faster than this fills the lumen fully
   double left_flow_ml_per_s = 2.5;
   double right_flow_ml_per_s = 1.25;
-  double segment_mm = 2.0;          // lumen segment length for the overlay
-  double visible_opacity = 0.05;    // a branch counts as holding contrast above this
+  double segment_mm = 2.0;        // lumen segment length for the overlay
+  double visible_opacity = 0.05;  // a branch counts as holding contrast above this
 };
 
 struct LumenSegment {
   Eigen::Vector3d a_mm, b_mm;  // axis ends, phantom frame (the tree's x 1000)
   double ra_mm = 0, rb_mm = 0;
-  double s_mm = 0;             // mid-point distance downstream of the ostium
-  int branch = -1;             // index into the tree's branches
+  double s_mm = 0;                 // mid-point distance downstream of the ostium
+  int branch = -1;                 // index into the tree's branches
   int point_a = -1, point_b = -1;  // the centerline points the ends sit on, tree order (flattened)
   CoronaryOstium ostium = CoronaryOstium::kLeft;
 };

@@ -15,7 +15,9 @@ uint64_t mix64(uint64_t z) {
   z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
   return z ^ (z >> 31);
 }
-double uniform01(uint64_t h) { return static_cast<double>(h >> 11) * 0x1.0p-53; }
+double uniform01(uint64_t h) {
+  return static_cast<double>(h >> 11) * 0x1.0p-53;
+}
 
 }  // namespace
 

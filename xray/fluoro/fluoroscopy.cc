@@ -16,7 +16,6 @@ bool same_geometry(const DetectorGeometry& a, const DetectorGeometry& b) {
          a.pixel_mm == b.pixel_mm && a.width == b.width && a.height == b.height;
 }
 
-
 }  // namespace
 
 struct FluoroscopyRenderer::Impl {
@@ -53,8 +52,8 @@ FluoroscopyRenderer::~FluoroscopyRenderer() = default;
 
 void FluoroscopyRenderer::render(const FluoroInput& in, FluoroFrame& out) {
   Impl& m = *impl_;
-  const bool pose_ok = std::isfinite(in.pose.primary_deg) && std::isfinite(in.pose.secondary_deg) &&
-                       in.pose.isocenter_mm.allFinite();
+  const bool pose_ok =
+      std::isfinite(in.pose.primary_deg) && std::isfinite(in.pose.secondary_deg) && in.pose.isocenter_mm.allFinite();
   if (!pose_ok && !m.background_valid) {
     throw std::invalid_argument("FluoroscopyRenderer::render: non-finite C-arm pose and no earlier pose to keep");
   }
@@ -131,13 +130,29 @@ void FluoroscopyRenderer::render(const FluoroInput& in, FluoroFrame& out) {
   out.contrast_branches.resize(k);
 }
 
-int64_t FluoroscopyRenderer::background_renders() const { return impl_->background_renders; }
-void FluoroscopyRenderer::invalidate_background() { impl_->background_valid = false; }
-void FluoroscopyRenderer::set_c_arm(const CArmSpec& c_arm) { impl_->spec.c_arm = c_arm; }
-const Image& FluoroscopyRenderer::line_integrals() const { return impl_->line; }
-const Image& FluoroscopyRenderer::detector_counts() const { return impl_->counts; }
-const ContrastBolus& FluoroscopyRenderer::contrast() const { return impl_->bolus; }
-double FluoroscopyRenderer::window_lo() const { return impl_->chain.window_lo(); }
-double FluoroscopyRenderer::window_hi() const { return impl_->chain.window_hi(); }
+int64_t FluoroscopyRenderer::background_renders() const {
+  return impl_->background_renders;
+}
+void FluoroscopyRenderer::invalidate_background() {
+  impl_->background_valid = false;
+}
+void FluoroscopyRenderer::set_c_arm(const CArmSpec& c_arm) {
+  impl_->spec.c_arm = c_arm;
+}
+const Image& FluoroscopyRenderer::line_integrals() const {
+  return impl_->line;
+}
+const Image& FluoroscopyRenderer::detector_counts() const {
+  return impl_->counts;
+}
+const ContrastBolus& FluoroscopyRenderer::contrast() const {
+  return impl_->bolus;
+}
+double FluoroscopyRenderer::window_lo() const {
+  return impl_->chain.window_lo();
+}
+double FluoroscopyRenderer::window_hi() const {
+  return impl_->chain.window_hi();
+}
 
 }  // namespace pcisim::xray

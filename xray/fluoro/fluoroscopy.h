@@ -29,14 +29,14 @@ inline DrrRendererOptions one_voxel_steps() {
 }
 
 struct FluoroSpec {
-  CArmSpec c_arm;                        // detector size, pitch, SID, SAD
+  CArmSpec c_arm;  // detector size, pitch, SID, SAD
   // background projector; 1-voxel steps: about the same error against the exact projection as
   // 0.5-voxel steps on the phantom (0.080 vs 0.079 % RMSE, docs/benchmarks/xray.md) in half the time
   DrrRendererOptions projector = one_voxel_steps();
   std::array<int64_t, 3> volume_dims{256, 256, 128};  // phantom resolution for the background
   double volume_spacing_mm = 1.4;
-  double photons_per_pixel = 2000;       // incident quanta per pixel at the detector (0: no noise)
-  double blur_sigma_px = 0.7;            // detector blur
+  double photons_per_pixel = 2000;  // incident quanta per pixel at the detector (0: no noise)
+  double blur_sigma_px = 0.7;       // detector blur
   // display dynamic range compression: this fraction of the background's low-pass (over
   // range_compression_mm on the detector) is taken out of the log image; 0: a plain log window
   double range_compression = 0.6;
@@ -45,21 +45,21 @@ struct FluoroSpec {
   // Hubbell & Seltzer) x 0.35 g/ml ~ 0.27 /mm; a hand injection outruns coronary flow, so the
   // lumen holds nearly undiluted contrast (the bolus model scales this by its opacity)
   double iodine_mu_per_mm = 0.25;
-  double wire_radius_mm = 0.1778;        // 0.014"
-  double wire_mu_per_mm = 0.95;          // stainless steel near 60 keV
+  double wire_radius_mm = 0.1778;  // 0.014"
+  double wire_mu_per_mm = 0.95;    // stainless steel near 60 keV
   // the radiopaque tip: a platinum-tungsten coil over the distal ~30 mm. Platinum near 60 keV:
   // mu/rho ~3.4 cm^2/g (NIST XCOM) x 21.4 g/cm^3 ~ 7 /mm solid; a wound coil fills ~half its
   // cross-section. 0 mm: no tip coil
   double wire_tip_mm = 30;
   double wire_tip_mu_per_mm = 3.5;
-  uint32_t seed = 1;                     // phantom and noise
-  ContrastBolusSpec contrast;            // bolus velocity, washout, taper, flows
+  uint32_t seed = 1;           // phantom and noise
+  ContrastBolusSpec contrast;  // bolus velocity, washout, taper, flows
 };
 
 struct FluoroInput {
-  double time_s = 0;                          // simulation time of the frame
+  double time_s = 0;  // simulation time of the frame
   CArmPose pose;
-  std::span<const Eigen::Vector3d> wire_m = {};  // wire nodes, physics frame (metres, LPS); may be empty
+  std::span<const Eigen::Vector3d> wire_m = {};        // wire nodes, physics frame (metres, LPS); may be empty
   std::span<const ContrastInjection> injections = {};  // every injection so far (the renderer fades old ones)
   // the coronary centerline points where the beating heart has carried them (metres, tree order,
   // as physics' VesselSkin gives them); empty: the tree at rest
@@ -68,11 +68,11 @@ struct FluoroInput {
 
 struct FluoroFrame {
   int width = 0, height = 0;
-  std::vector<uint16_t> pixels;          // row-major, row 0 first; dark = radiopaque
-  DetectorGeometry geometry;             // the projection the frame used
+  std::vector<uint16_t> pixels;  // row-major, row 0 first; dark = radiopaque
+  DetectorGeometry geometry;     // the projection the frame used
   CArmPose pose;
   double time_s = 0;
-  std::vector<Eigen::Vector2d> wire_px;  // the wire's projected polyline (column, row); tip last
+  std::vector<Eigen::Vector2d> wire_px;        // the wire's projected polyline (column, row); tip last
   std::vector<std::string> contrast_branches;  // branches holding visible contrast
 };
 

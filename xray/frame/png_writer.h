@@ -12,8 +12,8 @@ namespace pcisim::xray {
 bool png_supported();
 
 // writes the image as 8-bit grey in the look of a fluoroscopy frame: attenuation dark,
-// 255 (1 - (L - L_lo) / (L_hi - L_lo)) clamped, L_lo and L_hi the 0.5th and 99.5th percentiles. False with a reason when
-// libpng is missing or the file cannot be written.
+// 255 (1 - (L - L_lo) / (L_hi - L_lo)) clamped, L_lo and L_hi the 0.5th and 99.5th percentiles. False with a reason
+// when libpng is missing or the file cannot be written.
 bool write_png_preview(const Image& image, const std::string& path, std::string* error);
 
 // writes a display frame (uint16 grey, row-major, row 0 first, as the fluoroscopy renderer

@@ -30,8 +30,8 @@ class ConeChord {
   // chord length (mm) of the segment from the source to s + d (d: source -> pixel centre)
   double chord_mm(const Eigen::Vector3d& d) const {
     const double dd = d.squaredNorm(), dw = d.dot(w_), qb = mp_.dot(d);
-    const double qa = dd - dw * dw;                 // |d projected off the axis|^2
-    if (qa < 1e-18 * dd) return 0.0;                // seen end-on: ignored
+    const double qa = dd - dw * dw;   // |d projected off the axis|^2
+    if (qa < 1e-18 * dd) return 0.0;  // seen end-on: ignored
     // |mp + t dp|^2 = (r0 + k dw t)^2, a quadratic A t^2 + 2 B t + C = 0
     double kk = k_ * dw, r0 = r0_;
     double qa2 = qa - kk * kk;

@@ -11,7 +11,7 @@ namespace pcisim::xray {
 
 // adds mu_per_mm x chord through the cone from a (radius ra_mm) to b (radius rb_mm) to every
 // pixel whose ray (source -> pixel centre) crosses it; segments behind the source are skipped
-void add_cone_segment(const DetectorGeometry& g, const Eigen::Vector3d& a_mm, const Eigen::Vector3d& b_mm,
-                      double ra_mm, double rb_mm, double mu_per_mm, Image* image);
+void add_cone_segment(const DetectorGeometry& g, const Eigen::Vector3d& a_mm, const Eigen::Vector3d& b_mm, double ra_mm,
+                      double rb_mm, double mu_per_mm, Image* image);
 
 }  // namespace pcisim::xray

@@ -8,7 +8,9 @@
 
 namespace pcisim::xray {
 
-void AttenuationVolume::FreeMu::operator()(float* p) const { std::free(p); }
+void AttenuationVolume::FreeMu::operator()(float* p) const {
+  std::free(p);
+}
 
 AttenuationVolume::AttenuationVolume(const anatomy::Volume& v, const AttenuationParams& params) : params_(params) {
   if (const std::string bad = validate(v); !bad.empty()) throw std::invalid_argument("AttenuationVolume: " + bad);

@@ -70,7 +70,9 @@ float* alloc_image(size_t pixels) {
   return p;
 }
 
-void free_image(float* image) { cudaFree(image); }
+void free_image(float* image) {
+  cudaFree(image);
+}
 
 void render(const DeviceGrid& grid, const ray::DetectorView& d, float step, bool skip, float* image) {
   launch(grid, d, step, skip, image);
@@ -81,8 +83,8 @@ void download(const float* device_image, float* host, size_t pixels) {
   check(cudaMemcpy(host, device_image, pixels * sizeof(float), cudaMemcpyDeviceToHost), "cudaMemcpy(image)");
 }
 
-std::vector<float> time_render(const DeviceGrid& grid, const ray::DetectorView& d, float step, bool skip,
-                               float* image, int warmup, int runs) {
+std::vector<float> time_render(const DeviceGrid& grid, const ray::DetectorView& d, float step, bool skip, float* image,
+                               int warmup, int runs) {
   for (int i = 0; i < warmup; ++i) launch(grid, d, step, skip, image);
   check(cudaDeviceSynchronize(), "warm-up");
   cudaEvent_t start, stop;

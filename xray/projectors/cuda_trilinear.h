@@ -33,7 +33,7 @@ void render(const DeviceGrid& grid, const ray::DetectorView& d, float step_voxel
 void download(const float* device_image, float* host, size_t pixels);
 
 // kernel times (ms, CUDA events around each launch) of runs launches after warmup launches
-std::vector<float> time_render(const DeviceGrid& grid, const ray::DetectorView& d, float step_voxels,
-                               bool skip_empty, float* image, int warmup, int runs);
+std::vector<float> time_render(const DeviceGrid& grid, const ray::DetectorView& d, float step_voxels, bool skip_empty,
+                               float* image, int warmup, int runs);
 
 }  // namespace pcisim::xray::cuda

@@ -114,8 +114,8 @@ PCISIM_XRAY_HD float trilinear(const GridView& g, float x, float y, float z) {
 }
 
 // sums trilinear mu at samples t_k = t0 + (k + 1/2) dt, k in [k_lo, k_hi); a branch-free loop
-PCISIM_XRAY_HD float sum_samples(const GridView& g, const float x0[3], const float dx[3], float t0, float dt,
-                                 int k_lo, int k_hi) {
+PCISIM_XRAY_HD float sum_samples(const GridView& g, const float x0[3], const float dx[3], float t0, float dt, int k_lo,
+                                 int k_hi) {
   float acc = 0.f;
   for (int k = k_lo; k < k_hi; ++k) {
     const float t = t0 + (k + 0.5f) * dt;

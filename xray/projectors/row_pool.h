@@ -22,7 +22,8 @@ class RowPool {
   // calls fn(row) once for each row in [0, rows), spread over the pool; returns when all are done
   template <class Fn>
   void for_each_row(int rows, Fn& fn) {
-    run(rows, [](void* ctx, int row) { (*static_cast<Fn*>(ctx))(row); }, &fn);
+    run(
+        rows, [](void* ctx, int row) { (*static_cast<Fn*>(ctx))(row); }, &fn);
   }
 
  private:

@@ -10,8 +10,10 @@ namespace pcisim::xray {
 
 double exact_line_integral(const AttenuationVolume& volume, const Eigen::Vector3d& a_mm, const Eigen::Vector3d& b_mm) {
   // cell coordinates q = index + 1/2: voxel (i, j, k) is the unit cell [i, i+1] x ...
-  const Eigen::Vector3d qa = volume.index_from_physical() * a_mm + volume.index_offset() + Eigen::Vector3d::Constant(0.5);
-  const Eigen::Vector3d qb = volume.index_from_physical() * b_mm + volume.index_offset() + Eigen::Vector3d::Constant(0.5);
+  const Eigen::Vector3d qa =
+      volume.index_from_physical() * a_mm + volume.index_offset() + Eigen::Vector3d::Constant(0.5);
+  const Eigen::Vector3d qb =
+      volume.index_from_physical() * b_mm + volume.index_offset() + Eigen::Vector3d::Constant(0.5);
   const double q0[3] = {qa.x(), qa.y(), qa.z()};
   const double dq[3] = {qb.x() - qa.x(), qb.y() - qa.y(), qb.z() - qa.z()};
   const auto& n = volume.dims();

@@ -14,10 +14,14 @@ namespace pcisim::xray {
 
 const char* projector_name(ProjectorKind kind) {
   switch (kind) {
-    case ProjectorKind::kExact: return "exact";
-    case ProjectorKind::kCpuTrilinear: return "cpu";
-    case ProjectorKind::kCudaTrilinear: return "cuda";
-    case ProjectorKind::kGl: return "gl";
+    case ProjectorKind::kExact:
+      return "exact";
+    case ProjectorKind::kCpuTrilinear:
+      return "cpu";
+    case ProjectorKind::kCudaTrilinear:
+      return "cuda";
+    case ProjectorKind::kGl:
+      return "gl";
   }
   return "?";
 }

@@ -35,7 +35,8 @@ namespace {
 using namespace pcisim::xray;
 namespace anatomy = pcisim::anatomy;
 
-constexpr const char* kHelp = R"(pcisim-drr: X-ray line integrals (DRRs) from a CT volume, or the procedural phantom as a file.
+constexpr const char* kHelp =
+    R"(pcisim-drr: X-ray line integrals (DRRs) from a CT volume, or the procedural phantom as a file.
 
 Render:
   pcisim-drr --volume FILE --source x,y,z --detector-center x,y,z --detector-u x,y,z
@@ -112,7 +113,8 @@ bool to_int(const std::string& s, long long* v) {
 Eigen::Vector3d vec3(const std::string& name, const std::string& s) {
   const auto parts = split(s);
   Eigen::Vector3d v;
-  if (parts.size() != 3 || !to_double(parts[0], &v.x()) || !to_double(parts[1], &v.y()) || !to_double(parts[2], &v.z())) {
+  if (parts.size() != 3 || !to_double(parts[0], &v.x()) || !to_double(parts[1], &v.y()) ||
+      !to_double(parts[2], &v.z())) {
     bad(name, "three numbers x,y,z", s);
   }
   return v;
@@ -140,9 +142,9 @@ struct Args {
 
 Args parse(int argc, char** argv) {
   static const std::vector<std::string> with_value = {
-      "--volume", "--source", "--detector-center", "--detector-u", "--detector-v", "--pixel-mm",
-      "--size", "--projector", "--step", "--mu-water", "--threads", "--out", "--write-phantom",
-      "--seed", "--spacing", "--contrast-hu"};
+      "--volume",    "--source",     "--detector-center", "--detector-u", "--detector-v", "--pixel-mm",      "--size",
+      "--projector", "--step",       "--mu-water",        "--threads",    "--out",        "--write-phantom", "--seed",
+      "--spacing",   "--contrast-hu"};
   Args a;
   for (int i = 1; i < argc; ++i) {
     const std::string k = argv[i];
@@ -165,7 +167,9 @@ const std::string& need(const Args& a, const char* k, const char* what) {
   return it->second;
 }
 
-bool has_flag(const Args& a, const char* f) { return std::find(a.flags.begin(), a.flags.end(), f) != a.flags.end(); }
+bool has_flag(const Args& a, const char* f) {
+  return std::find(a.flags.begin(), a.flags.end(), f) != a.flags.end();
+}
 
 int write_phantom(const Args& a) {
   const std::string path = a.values.at("--write-phantom");
@@ -176,7 +180,8 @@ int write_phantom(const Args& a) {
   anatomy::ThoraxPhantomSpec spec;
   if (a.values.count("--seed")) {
     long long s = 0;
-    if (!to_int(a.values.at("--seed"), &s) || s < 0 || s > 0xffffffffLL) bad("--seed", "an integer in [0, 2^32)", a.values.at("--seed"));
+    if (!to_int(a.values.at("--seed"), &s) || s < 0 || s > 0xffffffffLL)
+      bad("--seed", "an integer in [0, 2^32)", a.values.at("--seed"));
     spec.seed = static_cast<uint32_t>(s);
   }
   if (a.values.count("--size")) {
@@ -186,7 +191,8 @@ int write_phantom(const Args& a) {
   if (a.values.count("--spacing")) spec.spacing_mm = positive("--spacing", a.values.at("--spacing"));
   if (a.values.count("--contrast-hu")) {
     double hu = 0;
-    if (!to_double(a.values.at("--contrast-hu"), &hu) || hu < -1000 || hu > 3000) bad("--contrast-hu", "HU in [-1000, 3000]", a.values.at("--contrast-hu"));
+    if (!to_double(a.values.at("--contrast-hu"), &hu) || hu < -1000 || hu > 3000)
+      bad("--contrast-hu", "HU in [-1000, 3000]", a.values.at("--contrast-hu"));
     spec.contrast_hu = hu;
   }
   spec.contrast = !has_flag(a, "--no-contrast");
@@ -204,7 +210,9 @@ int write_phantom(const Args& a) {
   return 0;
 }
 
-std::string json_vec(const Eigen::Vector3d& v) { return fmt::format("[{:.17g}, {:.17g}, {:.17g}]", v.x(), v.y(), v.z()); }
+std::string json_vec(const Eigen::Vector3d& v) {
+  return fmt::format("[{:.17g}, {:.17g}, {:.17g}]", v.x(), v.y(), v.z());
+}
 
 int render(const Args& a) {
   for (const char* k : {"--seed", "--spacing", "--contrast-hu"}) {
@@ -217,8 +225,10 @@ int render(const Args& a) {
   g.center_mm = vec3("--detector-center", need(a, "--detector-center", "x,y,z"));
   const Eigen::Vector3d u = vec3("--detector-u", need(a, "--detector-u", "a unit vector x,y,z"));
   const Eigen::Vector3d v = vec3("--detector-v", need(a, "--detector-v", "a unit vector x,y,z"));
-  if (std::abs(u.norm() - 1) > 1e-3) bad("--detector-u", "a unit vector (length 1 within 1e-3)", a.values.at("--detector-u"));
-  if (std::abs(v.norm() - 1) > 1e-3) bad("--detector-v", "a unit vector (length 1 within 1e-3)", a.values.at("--detector-v"));
+  if (std::abs(u.norm() - 1) > 1e-3)
+    bad("--detector-u", "a unit vector (length 1 within 1e-3)", a.values.at("--detector-u"));
+  if (std::abs(v.norm() - 1) > 1e-3)
+    bad("--detector-v", "a unit vector (length 1 within 1e-3)", a.values.at("--detector-v"));
   if (std::abs(u.normalized().dot(v.normalized())) > 1e-3) {
     bad("--detector-v", "a vector perpendicular to --detector-u (|u.v| <= 1e-3)", a.values.at("--detector-v"));
   }
@@ -246,7 +256,8 @@ int render(const Args& a) {
   if (a.values.count("--mu-water")) params.mu_water_per_mm = positive("--mu-water", a.values.at("--mu-water"));
   if (a.values.count("--threads")) {
     long long t = 0;
-    if (!to_int(a.values.at("--threads"), &t) || t < 1 || t > 1024) bad("--threads", "an integer in [1, 1024]", a.values.at("--threads"));
+    if (!to_int(a.values.at("--threads"), &t) || t < 1 || t > 1024)
+      bad("--threads", "an integer in [1, 1024]", a.values.at("--threads"));
     opt.threads = static_cast<int>(t);
   }
   const std::string prefix = need(a, "--out", "an output prefix");
@@ -297,7 +308,8 @@ int render(const Args& a) {
 
   {
     std::ofstream f(prefix + ".f32", std::ios::binary);
-    f.write(reinterpret_cast<const char*>(image.pixels.data()), static_cast<std::streamsize>(image.pixels.size() * sizeof(float)));
+    f.write(reinterpret_cast<const char*>(image.pixels.data()),
+            static_cast<std::streamsize>(image.pixels.size() * sizeof(float)));
     if (!f) throw std::runtime_error(prefix + ".f32: write failed");
   }
   float peak = 0;
@@ -309,12 +321,15 @@ int render(const Args& a) {
     f << fmt::format("  \"volume\": \"{}\",\n", volume_path);
     f << fmt::format("  \"volume_dims\": [{}, {}, {}],\n", volume.dims[0], volume.dims[1], volume.dims[2]);
     f << fmt::format("  \"volume_spacing_mm\": {},\n", json_vec(volume.spacing_mm));
-    f << fmt::format("  \"source_mm\": {},\n  \"detector_center_mm\": {},\n", json_vec(g.source_mm), json_vec(g.center_mm));
+    f << fmt::format("  \"source_mm\": {},\n  \"detector_center_mm\": {},\n", json_vec(g.source_mm),
+                     json_vec(g.center_mm));
     f << fmt::format("  \"detector_u\": {},\n  \"detector_v\": {},\n", json_vec(g.u), json_vec(g.v));
     f << fmt::format("  \"pixel_mm\": {:.17g},\n  \"width\": {},\n  \"height\": {},\n", g.pixel_mm, g.width, g.height);
     f << fmt::format("  \"projector\": \"{}\",\n", projector);
-    f << fmt::format("  \"step_voxels\": {},\n", projector == "exact" ? std::string("null") : fmt::format("{:.17g}", opt.step_voxels));
-    f << fmt::format("  \"mu_water_per_mm\": {:.17g},\n  \"air_below_hu\": {:.17g},\n", params.mu_water_per_mm, params.air_below_hu);
+    f << fmt::format("  \"step_voxels\": {},\n",
+                     projector == "exact" ? std::string("null") : fmt::format("{:.17g}", opt.step_voxels));
+    f << fmt::format("  \"mu_water_per_mm\": {:.17g},\n  \"air_below_hu\": {:.17g},\n", params.mu_water_per_mm,
+                     params.air_below_hu);
     f << fmt::format("  \"device\": \"{}\",\n  \"render_ms\": {:.3f},\n", device, ms);
     f << fmt::format("  \"max_line_integral\": {:.9g},\n", peak);
     f << "  \"data\": {\"file\": \"" << prefix.substr(prefix.find_last_of('/') + 1)

@@ -151,14 +151,16 @@ TEST_F(CaseFolder, AFileOutsideTheFolderIsRefused) {
   j["lumen"] = "../lumen.stl";
   set_case_json(j);
   EXPECT_NE(refusal().find("case.json: lumen: '../lumen.stl' must be a file name inside the case folder"),
-            std::string::npos) << refusal();
+            std::string::npos)
+      << refusal();
 }
 
 TEST_F(CaseFolder, AnOpenLumenIsRefused) {
   TriangleMesh m = small_case().lumen;
   m.triangles.pop_back();
   write_stl(m, (dir_ / "lumen.stl").string());
-  EXPECT_NE(refusal().find("lumen.stl: mesh: open: 3 edges belong to one triangle only"), std::string::npos) << refusal();
+  EXPECT_NE(refusal().find("lumen.stl: mesh: open: 3 edges belong to one triangle only"), std::string::npos)
+      << refusal();
 }
 
 TEST_F(CaseFolder, ANonManifoldLumenIsRefused) {
@@ -170,14 +172,15 @@ TEST_F(CaseFolder, ANonManifoldLumenIsRefused) {
 
 TEST_F(CaseFolder, ACtWithoutSpacingIsRefused) {
   std::ofstream(dir_ / "ct.nrrd") << "NRRD0004\ntype: short\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n"
-                                     "endian: little\n\n" << std::string(16, '\0');
+                                     "endian: little\n\n"
+                                  << std::string(16, '\0');
   EXPECT_NE(refusal().find("ct.nrrd: space directions: missing"), std::string::npos) << refusal();
 }
 
 TEST_F(CaseFolder, AVesselOutsideTheCtIsRefused) {
   // the same CT shrunk to a 40 mm cube around the heart: the aorta's top leaves it
-  Volume ct = Volume::make({10, 10, 10}, Eigen::Vector3d::Constant(4.0), Eigen::Vector3d::Constant(-18.0),
-                           VoxelType::kInt16);
+  Volume ct =
+      Volume::make({10, 10, 10}, Eigen::Vector3d::Constant(4.0), Eigen::Vector3d::Constant(-18.0), VoxelType::kInt16);
   write_nrrd(ct, (dir_ / "ct.nrrd").string());
   const std::string why = refusal();
   EXPECT_NE(why.find("vessels.json: branches[0] (aorta).points["), std::string::npos) << why;

@@ -107,7 +107,8 @@ TEST_F(DicomSeries, AMissingSliceIsRefusedNamingTheSliceAfterTheGap) {
   const std::string why = refusal();
   EXPECT_NE(why.find("1_slice_005.dcm: gap of 2.50 mm after the previous slice (1_slice_003.dcm), the series' "
                      "spacing is 1.25 mm (a missing slice or uneven spacing)"),
-            std::string::npos) << why;
+            std::string::npos)
+      << why;
 }
 
 TEST_F(DicomSeries, UnevenSpacingIsRefusedNamingTheSlice) {
@@ -160,7 +161,8 @@ TEST_F(DicomSeries, ACaseMayNameItsCtAsADicomFolder) {
     read_case(dir_.string());
     ADD_FAILURE() << "read a DICOM case without a DICOM reader";
   } catch (const CaseError& e) {
-    EXPECT_NE(std::string(e.what()).find("ct.dicom: this program was built without the DICOM reader"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("ct.dicom: this program was built without the DICOM reader"),
+              std::string::npos)
         << e.what();
   }
 }

@@ -12,11 +12,11 @@ struct DicomSlice {
   std::string file;
   std::string series_uid, study_uid;
   int instance = 1;
-  std::array<double, 3> position_mm{};        // ImagePositionPatient
-  std::array<double, 6> orientation{};        // ImageOrientationPatient: row then column direction
-  std::array<double, 2> pixel_spacing_mm{};   // PixelSpacing: between rows, between columns
+  std::array<double, 3> position_mm{};       // ImagePositionPatient
+  std::array<double, 6> orientation{};       // ImageOrientationPatient: row then column direction
+  std::array<double, 2> pixel_spacing_mm{};  // PixelSpacing: between rows, between columns
   double slice_thickness_mm = 1.0;
-  double rescale_intercept = -1024;           // stored = HU - intercept (slope 1)
+  double rescale_intercept = -1024;  // stored = HU - intercept (slope 1)
 };
 
 // hu: columns x rows, row-major (column index fastest)

@@ -61,7 +61,8 @@ TEST(HeartTemplateMesh, SizeAndSoundness) {
   std::set<int> used;
   for (const auto& t : m.tets) {
     const Vector3d a = m.vertices_m.col(t[0]);
-    const double v = std::abs((m.vertices_m.col(t[1]) - a).cross(m.vertices_m.col(t[2]) - a).dot(m.vertices_m.col(t[3]) - a)) / 6;
+    const double v =
+        std::abs((m.vertices_m.col(t[1]) - a).cross(m.vertices_m.col(t[2]) - a).dot(m.vertices_m.col(t[3]) - a)) / 6;
     EXPECT_GT(v, 1e-10);  // > 0.1 mm^3: no slivers of zero volume
     tissue_m3 += v;
     used.insert(t.begin(), t.end());
@@ -179,7 +180,8 @@ TEST(HeartMeshReader, ErrorsNameFileAndLine) {
   EXPECT_EQ(parse_error(kNode, "1 4 0\n0 0 1 2 2\n", kFace), "t.ele line 2: tet 0 is degenerate (zero volume)");
   EXPECT_EQ(parse_error(kNode, kEle, "4 1\n0 0 1 2 1\n1 0 1 3 1\n2 0 2 3\n3 1 2 3 1\n"),
             "t.face line 4: face: expected at least 5 fields, got 4");
-  EXPECT_EQ(parse_error(kNode, kEle, "4 1\n0 0 1 2 1\n1 0 1 3 1\n2 0 2 3 1\n3 1 2 2 1\n"), "t.face line 5: face 3 bounds no tet");
+  EXPECT_EQ(parse_error(kNode, kEle, "4 1\n0 0 1 2 1\n1 0 1 3 1\n2 0 2 3 1\n3 1 2 2 1\n"),
+            "t.face line 5: face 3 bounds no tet");
   EXPECT_EQ(parse_error(kNode, kEle, ""), "t.face: no header (file ends at line 0)");
   try {
     read_tetgen_mesh("/nonexistent/heart");

@@ -22,8 +22,7 @@ Eigen::Vector3d start_direction(const VesselBranch& b, double mm) {
 }
 
 double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180.0 /
-         std::numbers::pi;
+  return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180.0 / std::numbers::pi;
 }
 
 TEST(PhantomTest, SameSeedSameTreeOtherSeedOtherTree) {
@@ -83,7 +82,10 @@ TEST(PhantomTest, DimensionsAreAdult) {
     const auto& lm = branch(t, "LM");
     EXPECT_NEAR(lm.points[0].radius_m, 2.0e-3, 0.15e-3);
     EXPECT_NEAR(branch_length_m(lm) - aorta.points[0].radius_m, 10e-3, 2e-3);
-    struct Expect { const char* name; double length_m, r0_m, r1_m; };
+    struct Expect {
+      const char* name;
+      double length_m, r0_m, r1_m;
+    };
     for (const Expect& e : {Expect{"LAD", 120e-3, 1.8e-3, 0.8e-3}, Expect{"LCx", 80e-3, 1.6e-3, 0.8e-3},
                             Expect{"RCA", 120e-3, 1.8e-3, 0.9e-3}}) {
       const auto& b = branch(t, e.name);
@@ -117,12 +119,13 @@ TEST(PhantomTest, BranchesTouchOnlyWhereTheyJoin) {
         for (size_t ka = 0; ka < a.points.size(); ++ka) {
           for (size_t kb = 0; kb < b.points.size(); ++kb) {
             // leave out 8 mm about a junction (parent and child, or two daughters of one parent)
-            if (b.parent == static_cast<int>(i) && std::abs(static_cast<int>(ka) - b.parent_point) < 16 && kb < 16) continue;
+            if (b.parent == static_cast<int>(i) && std::abs(static_cast<int>(ka) - b.parent_point) < 16 && kb < 16)
+              continue;
             if (a.parent == b.parent && ka < 16 && kb < 16) continue;
             // the LM and RCA start on the aortic centerline: their first ~16 mm run inside it
             if (a.name == "aorta" && b.parent == static_cast<int>(i) && kb < 36) continue;
-            const double gap = (a.points[ka].position_m - b.points[kb].position_m).norm() -
-                               a.points[ka].radius_m - b.points[kb].radius_m;
+            const double gap = (a.points[ka].position_m - b.points[kb].position_m).norm() - a.points[ka].radius_m -
+                               b.points[kb].radius_m;
             gap_m = std::min(gap_m, gap);
           }
         }

@@ -18,8 +18,7 @@ namespace {
 #ifdef PCISIM_HAVE_JSON
 
 std::string temp_path(const std::string& name) {
-  return (std::filesystem::temp_directory_path() /
-          ("pcisim_vtj_" + std::to_string(::getpid()) + "_" + name)).string();
+  return (std::filesystem::temp_directory_path() / ("pcisim_vtj_" + std::to_string(::getpid()) + "_" + name)).string();
 }
 
 std::string write_text(const std::string& name, const std::string& text) {
@@ -51,9 +50,11 @@ std::string tree_text(const std::string& second_branch_extra, const std::string&
   "branches": [
     {"name": "aorta", "parent": -1, "parent_point": -1, "points": [
       {"position_m": [0, 0, 0], "radius_m": 0.014}, {"position_m": [0, 0, 0.001], "radius_m": 0.014}]},
-    {"name": "LM", "parent": )" + parent + R"(, "parent_point": )" + parent_point + R"(, "points": [
+    {"name": "LM", "parent": )" +
+         parent + R"(, "parent_point": )" + parent_point + R"(, "points": [
       {"position_m": [0, 0, 0.001], "radius_m": 0.002}, {"position_m": [0.001, 0, 0.001], "radius_m": 0.002},
-      {"position_m": [0.002, 0, 0.001], "radius_m": )" + radius + "}]" + second_branch_extra + R"(}
+      {"position_m": [0.002, 0, 0.001], "radius_m": )" +
+         radius + "}]" + second_branch_extra + R"(}
   ]
 })";
 }
@@ -91,7 +92,11 @@ TEST(VesselTreeJsonTest, ValidSmallFileReads) {
 }
 
 TEST(VesselTreeJsonTest, BadFilesNameTheFileAndTheField) {
-  struct Case { const char* name; std::string text; const char* expect; };
+  struct Case {
+    const char* name;
+    std::string text;
+    const char* expect;
+  };
   const Case cases[] = {
       {"radius", tree_text("", "-0.5"), "branches[1].points[2].radius_m: expected a number > 0"},
       {"radius_string", tree_text("", "\"big\""), "branches[1].points[2].radius_m: expected a number > 0"},

@@ -48,7 +48,8 @@ class HostileVolume : public ::testing::Test {
   }
 };
 
-std::string mha(const std::string& dims, const std::string& type = "MET_SHORT", const std::string& data_file = "LOCAL") {
+std::string mha(const std::string& dims, const std::string& type = "MET_SHORT",
+                const std::string& data_file = "LOCAL") {
   return "ObjectType = Image\nNDims = 3\nDimSize = " + dims + "\nElementType = " + type +
          "\nElementDataFile = " + data_file + "\n";
 }
@@ -75,9 +76,12 @@ TEST_F(HostileVolume, SizesOverTheVoxelLimitAreRefused) {
 TEST_F(HostileVolume, AHeaderClaimingMoreThanItsDataIsRefusedBeforeAllocating) {
   const std::string m = refusal(write("e.mha", mha("512 512 512") + std::string(100, '\0')));
   EXPECT_NE(m.find("e.mha: DimSize: 512x512x512 int16 voxels need 268435456 bytes"), std::string::npos) << m;
-  const std::string gz = refusal(write("f.nrrd", "NRRD0004\ntype: short\ndimension: 3\nsizes: 1024 1024 512\n"
-                                                 "encoding: gzip\n\n" + std::string(64, 'x')));
-  EXPECT_NE(gz.find("f.nrrd: sizes: 1073741824 voxel bytes cannot come from 64 compressed bytes"), std::string::npos) << gz;
+  const std::string gz = refusal(write("f.nrrd",
+                                       "NRRD0004\ntype: short\ndimension: 3\nsizes: 1024 1024 512\n"
+                                       "encoding: gzip\n\n" +
+                                           std::string(64, 'x')));
+  EXPECT_NE(gz.find("f.nrrd: sizes: 1073741824 voxel bytes cannot come from 64 compressed bytes"), std::string::npos)
+      << gz;
 }
 
 // a FIFO as the data file blocked the reader for ever; /dev/zero read 2 GB
@@ -99,11 +103,13 @@ TEST_F(HostileVolume, ADataFileThatIsAFifoOrADeviceIsRefusedWithoutBlocking) {
 TEST_F(HostileVolume, NonFiniteVoxelsAreRefusedNamingTheVoxel) {
   float voxels[8] = {0, 1, 2, 3, 4, 5, 6, 7};
   voxels[5] = std::nanf("");
-  const std::string m = refusal(write("i.mha", mha("2 2 2", "MET_FLOAT") + std::string(reinterpret_cast<char*>(voxels), sizeof voxels)));
+  const std::string m =
+      refusal(write("i.mha", mha("2 2 2", "MET_FLOAT") + std::string(reinterpret_cast<char*>(voxels), sizeof voxels)));
   EXPECT_NE(m.find("i.mha: voxels: voxel (1, 0, 1) is nan"), std::string::npos) << m;
   voxels[5] = 0;
   voxels[7] = INFINITY;
-  const std::string inf = refusal(write("j.mha", mha("2 2 2", "MET_FLOAT") + std::string(reinterpret_cast<char*>(voxels), sizeof voxels)));
+  const std::string inf =
+      refusal(write("j.mha", mha("2 2 2", "MET_FLOAT") + std::string(reinterpret_cast<char*>(voxels), sizeof voxels)));
   EXPECT_NE(inf.find("voxel (1, 1, 1) is inf"), std::string::npos) << inf;
 }
 

@@ -46,8 +46,7 @@ TEST(Bridge, AFaultyDeviceIsPublishedAsFaultWithNoMotion) {
   Bridge bridge(lcm, device, o);
   std::atomic<bool> stop{false};
   const BridgeStats s = bridge.run(stop);
-  while (lcm.handleTimeout(50) > 0) {
-  }
+  while (lcm.handleTimeout(50) > 0) {}
   EXPECT_GT(s.fault_samples, 50);
   std::lock_guard lock(sink.mutex);
   ASSERT_EQ(static_cast<int64_t>(sink.samples.size()), s.published);

@@ -21,9 +21,9 @@ TEST(EncoderLine, ParsesTheDocumentedFormatAndRejectsEverythingElse) {
   EXPECT_EQ(e.rotation_counts, -300);
   EXPECT_EQ(e.buttons, 5);
   EXPECT_TRUE(parse_encoder_line("E 1 2 0\r", e)) << "CRLF line ends are fine";
-  for (const char* bad : {"", "E", "E 1 2", "E 1 2 3 4", "X 1 2 3", "E1 2 3", "E 1.5 2 3", "E a b c", "E 1 2 -1",
-                          "E 99999999999999999999 2 3", "E -9223372036854775808 0 0", "E 0 2000000000000 0",
-                          "garbage \x01\x02"})
+  for (const char* bad :
+       {"", "E", "E 1 2", "E 1 2 3 4", "X 1 2 3", "E1 2 3", "E 1.5 2 3", "E a b c", "E 1 2 -1",
+        "E 99999999999999999999 2 3", "E -9223372036854775808 0 0", "E 0 2000000000000 0", "garbage \x01\x02"})
     EXPECT_FALSE(parse_encoder_line(bad, e)) << "'" << bad << "'";
 }
 
@@ -37,7 +37,9 @@ class SerialOverPty : public ::testing::Test {
     if (master >= 0) close(master);
     if (slave >= 0) close(slave);
   }
-  void box_says(const std::string& text) { ASSERT_EQ(write(master, text.data(), text.size()), static_cast<ssize_t>(text.size())); }
+  void box_says(const std::string& text) {
+    ASSERT_EQ(write(master, text.data(), text.size()), static_cast<ssize_t>(text.size()));
+  }
   static void settle() { usleep(20000); }
 };
 

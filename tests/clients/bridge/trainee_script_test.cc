@@ -22,7 +22,8 @@ TEST(TraineeScript, RampsAddUpAndReportTheirRates) {
   const auto s = TraineeScript::parse(R"({"actions": [
       {"at_s": 1, "do": "insert", "mm": 10, "over_s": 2},
       {"at_s": 2, "do": "rotate", "deg": 180, "over_s": 1},
-      {"at_s": 4, "do": "pull", "mm": 4, "over_s": 1}]})", "s");
+      {"at_s": 4, "do": "pull", "mm": 4, "over_s": 1}]})",
+                                      "s");
   EXPECT_DOUBLE_EQ(s.sample(0.5).insertion_mm, 0.0);
   const auto mid = s.sample(2.5);
   EXPECT_DOUBLE_EQ(mid.insertion_mm, 7.5);
@@ -39,7 +40,8 @@ TEST(TraineeScript, PedalHoldsUntilReleasedAndContrastForItsDuration) {
   const auto s = TraineeScript::parse(R"({"actions": [
       {"at_s": 1, "do": "pedal", "down": true},
       {"at_s": 2, "do": "contrast", "for_s": 1},
-      {"at_s": 4, "do": "pedal", "down": false}]})", "s");
+      {"at_s": 4, "do": "pedal", "down": false}]})",
+                                      "s");
   EXPECT_EQ(s.sample(0.5).buttons, 0);
   EXPECT_EQ(s.sample(1.5).buttons, I::BUTTON_FLUORO_PEDAL);
   EXPECT_EQ(s.sample(2.5).buttons, int{I::BUTTON_FLUORO_PEDAL} | int{I::BUTTON_CONTRAST});
@@ -56,7 +58,8 @@ TEST(TraineeScript, BuiltInScriptParsesAndLastsAboutTwentySeconds) {
 
 TEST(TraineeScript, BadScriptsNameThePath) {
   EXPECT_EQ(error_of(R"({"actions": [{"at_s": 1, "do": "jump"}]})"),
-            "s.json: actions[0].do: expected one of \"insert\", \"pull\", \"rotate\", \"pedal\", \"cine\", \"contrast\", got \"jump\"");
+            "s.json: actions[0].do: expected one of \"insert\", \"pull\", \"rotate\", \"pedal\", \"cine\", "
+            "\"contrast\", got \"jump\"");
   EXPECT_EQ(error_of(R"({"actions": [{"at_s": 1, "do": "insert", "mm": 5, "speed": 2}]})"),
             "s.json: actions[0].speed: unknown key (this object accepts: at_s, do, mm, over_s)");
   EXPECT_EQ(error_of(R"({"actions": [{"at_s": -1, "do": "insert"}]})"),

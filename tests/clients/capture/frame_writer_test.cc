@@ -117,7 +117,8 @@ TEST(FrameWriter, AFolderThatCannotBeMadeIsAClearError) {
     FrameWriter writer("/dev/null/frames");
     FAIL();
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("/dev/null/frames: cannot create the output folder"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("/dev/null/frames: cannot create the output folder"), std::string::npos)
+        << e.what();
   }
 }
 

@@ -12,7 +12,9 @@ namespace {
 using C = pcisim_lcm::session_command_t;
 using nlohmann::json;
 
-const C* ok(const ParsedCommand& p) { return std::get_if<C>(&p); }
+const C* ok(const ParsedCommand& p) {
+  return std::get_if<C>(&p);
+}
 std::string code(const ParsedCommand& p) {
   const auto* e = std::get_if<CommandError>(&p);
   return e ? e->code : "";
@@ -27,11 +29,15 @@ TEST(RemoteCommands, ParserKnowsThePermittedCommandsAndTheirRanges) {
   EXPECT_DOUBLE_EQ(ok(p)->secondary_angle_deg, 20);
   // the server's limits: |primary| <= 180, |secondary| <= 90
   EXPECT_TRUE(ok(parse_session_command(json{{"command", "carm"}, {"primary_deg", 180}, {"secondary_deg", -90}}, lim)));
-  EXPECT_EQ(code(parse_session_command(json{{"command", "carm"}, {"primary_deg", 181}, {"secondary_deg", 0}}, lim)), "out_of_range");
-  EXPECT_EQ(code(parse_session_command(json{{"command", "carm"}, {"primary_deg", 0}, {"secondary_deg", -90.5}}, lim)), "out_of_range");
-  EXPECT_EQ(code(parse_session_command(json{{"command", "carm"}, {"primary_deg", "10"}, {"secondary_deg", 0}}, lim)), "bad_command");
+  EXPECT_EQ(code(parse_session_command(json{{"command", "carm"}, {"primary_deg", 181}, {"secondary_deg", 0}}, lim)),
+            "out_of_range");
+  EXPECT_EQ(code(parse_session_command(json{{"command", "carm"}, {"primary_deg", 0}, {"secondary_deg", -90.5}}, lim)),
+            "out_of_range");
+  EXPECT_EQ(code(parse_session_command(json{{"command", "carm"}, {"primary_deg", "10"}, {"secondary_deg", 0}}, lim)),
+            "bad_command");
   EXPECT_EQ(code(parse_session_command(json{{"command", "carm"}, {"primary_deg", 10}}, lim)), "bad_command");
-  EXPECT_EQ(code(parse_session_command(json{{"command", "carm"}, {"primary_deg", true}, {"secondary_deg", 0}}, lim)), "bad_command");
+  EXPECT_EQ(code(parse_session_command(json{{"command", "carm"}, {"primary_deg", true}, {"secondary_deg", 0}}, lim)),
+            "bad_command");
 
   p = parse_session_command(json{{"command", "fluoro"}, {"down", true}}, lim);
   ASSERT_TRUE(ok(p));
@@ -50,9 +56,11 @@ TEST(RemoteCommands, ParserKnowsThePermittedCommandsAndTheirRanges) {
   EXPECT_EQ(code(parse_session_command(json{{"command", "contrast"}, {"ml", 100}}, lim)), "out_of_range");
   EXPECT_EQ(code(parse_session_command(json{{"command", "contrast"}, {"ml", 5}, {"ml_s", 0}}, lim)), "out_of_range");
 
-  for (const char* name : {"reset", "pause", "resume"}) EXPECT_TRUE(ok(parse_session_command(json{{"command", name}}, lim))) << name;
+  for (const char* name : {"reset", "pause", "resume"})
+    EXPECT_TRUE(ok(parse_session_command(json{{"command", name}}, lim))) << name;
   // loading a scene names a file on the server's host: not for remote pages
-  EXPECT_EQ(code(parse_session_command(json{{"command", "load_scene"}, {"scene_path", "/etc/passwd"}}, lim)), "bad_command");
+  EXPECT_EQ(code(parse_session_command(json{{"command", "load_scene"}, {"scene_path", "/etc/passwd"}}, lim)),
+            "bad_command");
   EXPECT_EQ(code(parse_session_command(json{{"command", 7}}, lim)), "bad_command");
   EXPECT_EQ(code(parse_session_command(json::array(), lim)), "bad_command");
 }

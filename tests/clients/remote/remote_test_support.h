@@ -99,8 +99,9 @@ class WsClient {
     sock.connect({net::ip::address_v4::loopback(), port}, ec);
     if (ec) return -1;  // nothing listens
     if (!authorization.empty())
-      ws_.set_option(websocket::stream_base::decorator(
-          [authorization](websocket::request_type& req) { req.set(beast::http::field::authorization, authorization); }));
+      ws_.set_option(websocket::stream_base::decorator([authorization](websocket::request_type& req) {
+        req.set(beast::http::field::authorization, authorization);
+      }));
     ws_.handshake("127.0.0.1", target, ec);
     if (ec) return upgrade_status(port, target, authorization);
     connected_ = true;
@@ -236,7 +237,9 @@ class WsClient {
   std::string current_;
 };
 
-inline std::string ws_target(const char* token) { return std::string("/ws?token=") + token; }
+inline std::string ws_target(const char* token) {
+  return std::string("/ws?token=") + token;
+}
 
 // a 16-bit frame: a gradient plus noise (noise makes it as costly to encode as a real one)
 inline pcisim_lcm::xray_frame_t make_frame(int64_t seq, int size = 256, uint16_t base = 0, unsigned noise_seed = 1) {

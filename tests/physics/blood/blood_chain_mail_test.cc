@@ -48,9 +48,12 @@ TEST_F(BloodChainMailTest, ProfileIsParabolicAndFlowsDownstream) {
     ASSERT_GE(b, 0);
     const double speed = vel[c].norm();
     // Poiseuille: 2 x mean on the axis, 2 (1 - 0.6^2) x mean on the ring at 0.6 R
-    if (std::abs(speed - 2.0 * mean) < 1e-9) ++axis;
-    else if (std::abs(speed - 1.28 * mean) < 1e-9) ++ring;
-    else ADD_FAILURE() << "cell " << c << " speed " << speed;
+    if (std::abs(speed - 2.0 * mean) < 1e-9)
+      ++axis;
+    else if (std::abs(speed - 1.28 * mean) < 1e-9)
+      ++ring;
+    else
+      ADD_FAILURE() << "cell " << c << " speed " << speed;
   }
   EXPECT_EQ(ring, 6 * axis);
   // along the LAD the velocity points distally
@@ -130,7 +133,8 @@ TEST(BloodChainMailLinks, NearestVesselsChainMailsBlendedByInverseDistance) {
   for (const auto& [name, y, dir] : {std::tuple{"A", 0.0, 1.0}, std::tuple{"B", 3e-3, -1.0}}) {
     anatomy::VesselBranch b;
     b.name = name;
-    for (int k = 0; k <= 40; ++k) b.points.push_back({Eigen::Vector3d(dir * 0.5e-3 * k + (dir < 0 ? 20e-3 : 0.0), y, 0), 1e-3});
+    for (int k = 0; k <= 40; ++k)
+      b.points.push_back({Eigen::Vector3d(dir * 0.5e-3 * k + (dir < 0 ? 20e-3 : 0.0), y, 0), 1e-3});
     t.branches.push_back(b);
   }
   BloodFlowParams p;

@@ -54,8 +54,8 @@ TEST(BranchSelection, TurningTheTipSendsTheWireIntoTheLadOrTheLcx) {
 TEST(BranchSelection, TheChoiceHoldsOverARangeOfTurns) {
   // a trainee does not turn exactly 90 degrees: 45 and 120 still find the LAD, -45 and -135
   // the LCx
-  for (const auto& [turn, branch] : {std::pair{45.0, "LAD"}, std::pair{120.0, "LAD"},
-                                     std::pair{-45.0, "LCx"}, std::pair{-135.0, "LCx"}}) {
+  for (const auto& [turn, branch] :
+       {std::pair{45.0, "LAD"}, std::pair{120.0, "LAD"}, std::pair{-45.0, "LCx"}, std::pair{-135.0, "LCx"}}) {
     World world(test::default_scene());
     test::BranchScript script;
     script.turn_deg = turn;

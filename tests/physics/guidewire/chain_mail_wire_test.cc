@@ -44,8 +44,8 @@ TEST(ChainMailWire, LimitsHoldAfterEveryStepOfAFreeWire) {
   for (int k = 0; k < 120; ++k) {
     step_free(w, 0.0005 * std::min(k, 60), 0.05 * k);
     const auto r = check_limits(w);
-    ASSERT_EQ(r.bad_links, 0) << "step " << k << " length excess " << r.worst_length_ratio_excess
-                              << " shear excess " << r.worst_shear_excess_rad;
+    ASSERT_EQ(r.bad_links, 0) << "step " << k << " length excess " << r.worst_length_ratio_excess << " shear excess "
+                              << r.worst_shear_excess_rad;
   }
   EXPECT_LT(w.first_free_node(), w.node_count());
 }
@@ -61,8 +61,8 @@ TEST(ChainMailWire, LimitsHoldAfterEveryStepInTheCoronaryTree) {
     for (double t = 0.0; t <= script.end_s(); t += dt, ++steps) {
       world.step(script.at(t));
       const auto r = check_limits(*world.guidewire_state());
-      ASSERT_EQ(r.bad_links, 0) << "turn " << turn << " t " << t << " length excess "
-                                << r.worst_length_ratio_excess << " shear excess " << r.worst_shear_excess_rad;
+      ASSERT_EQ(r.bad_links, 0) << "turn " << turn << " t " << t << " length excess " << r.worst_length_ratio_excess
+                                << " shear excess " << r.worst_shear_excess_rad;
     }
     EXPECT_GT(steps, 500);
   }

@@ -163,11 +163,21 @@ TEST(GuidewireHardCases, NonFiniteInstrumentInputIsRejectedAndThePreviousSampleK
   for (int k = 0; k < 30; ++k, ++sent) {
     InstrumentInput bad = good;
     switch (k % 5) {
-      case 0: bad.insertion_m = nan; break;
-      case 1: bad.rotation_rad = inf; break;
-      case 2: bad.insertion_rate_m_per_s = -inf; break;
-      case 3: bad.rotation_rate_rad_per_s = nan; break;
-      default: bad.insertion_m = 1e300; break;  // finite but absurd
+      case 0:
+        bad.insertion_m = nan;
+        break;
+      case 1:
+        bad.rotation_rad = inf;
+        break;
+      case 2:
+        bad.insertion_rate_m_per_s = -inf;
+        break;
+      case 3:
+        bad.rotation_rate_rad_per_s = nan;
+        break;
+      default:
+        bad.insertion_m = 1e300;
+        break;  // finite but absurd
     }
     world.step(bad);
     expect_sound(world, t);
@@ -234,10 +244,10 @@ TEST(GuidewireHardCases, ZeroLengthAndFoldedSegments) {
   const double h = p.wire.rest_length_m();
   auto x = p.wire.mutable_nodes_m();
   const Eigen::Vector3d t = (x[n - 12] - x[n - 13]).normalized();
-  x[n - 14] = x[n - 15];                // a zero-length link
-  x[n - 10] = x[n - 11] - h * t;        // a link folded straight back
-  x[n - 5] = x[n - 6] = x[n - 4];       // three coincident nodes in the tip
-  x[n] = x[n - 1] - 0.5 * h * t;        // the tip folded onto itself
+  x[n - 14] = x[n - 15];           // a zero-length link
+  x[n - 10] = x[n - 11] - h * t;   // a link folded straight back
+  x[n - 5] = x[n - 6] = x[n - 4];  // three coincident nodes in the tip
+  x[n] = x[n - 1] - 0.5 * h * t;   // the tip folded onto itself
   p.step(0.030, 0.0);
   ASSERT_TRUE(sane(p.wire));
   EXPECT_EQ(check_limits(p.wire).bad_links, 0);  // restored within the step

@@ -18,7 +18,7 @@ struct Session {
   std::vector<Eigen::Vector3d> tips;  // tip after every step
   double worst_wall_m = -1.0;         // deepest any free node ended a step outside the lumen
   std::string final_branch;
-  std::string final_main_branch;      // the LAD for its diagonals, the LCx for its marginals
+  std::string final_main_branch;  // the LAD for its diagonals, the LCx for its marginals
   int bad_links_at_end = 0;
 };
 
@@ -75,9 +75,13 @@ void expect_converged(double turn_deg, const char* branch) {
   }
 }
 
-TEST(SegmentConvergence, FinerWiresReachTheLadLikeTheDefaultWire) { expect_converged(90.0, "LAD"); }
+TEST(SegmentConvergence, FinerWiresReachTheLadLikeTheDefaultWire) {
+  expect_converged(90.0, "LAD");
+}
 
-TEST(SegmentConvergence, FinerWiresReachTheLcxLikeTheDefaultWire) { expect_converged(-90.0, "LCx"); }
+TEST(SegmentConvergence, FinerWiresReachTheLcxLikeTheDefaultWire) {
+  expect_converged(-90.0, "LCx");
+}
 
 }  // namespace
 }  // namespace pcisim::physics

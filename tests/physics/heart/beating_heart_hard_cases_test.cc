@@ -19,8 +19,8 @@ using Eigen::Vector3d;
 using testing::health;
 using testing::HeartHealth;
 
-constexpr double kDt = 1.0 / 30;  // the physics thread's default step
-constexpr double kBoundM = 0.025; // no particle ever this far from rest (the beat moves < 15 mm)
+constexpr double kDt = 1.0 / 30;   // the physics thread's default step
+constexpr double kBoundM = 0.025;  // no particle ever this far from rest (the beat moves < 15 mm)
 
 HeartHealth run(BeatingHeart& h, double dt, int steps) {
   HeartHealth worst;

@@ -103,7 +103,8 @@ TEST(HeartBeating, DrivenParticlesFollowTheSequenceExactly) {
     ++checked_phases;
     double worst = 0;
     for (int i : h.driven()) {
-      const Vector3d want = h.rest_positions_m().col(i) + h.motion().displacement_m(h.rest_positions_m().col(i), h.phase());
+      const Vector3d want =
+          h.rest_positions_m().col(i) + h.motion().displacement_m(h.rest_positions_m().col(i), h.phase());
       worst = std::max(worst, (h.positions_m().col(i) - want).norm());
     }
     EXPECT_LT(worst, 1e-12) << "phase " << h.phase();
@@ -123,10 +124,13 @@ TEST(HeartBeating, FreeParticlesStayBoundedAndSmooth) {
     worst.merge(health(h));
     const auto& v = h.system().particles().velocity_m_per_s;
     for (int i : h.free_particles()) {
-      if (k >= 1) max_second_difference_m = std::max(max_second_difference_m, (h.positions_m().col(i) - 2 * prev.col(i) + prev2.col(i)).norm());
+      if (k >= 1)
+        max_second_difference_m =
+            std::max(max_second_difference_m, (h.positions_m().col(i) - 2 * prev.col(i) + prev2.col(i)).norm());
       max_speed = std::max(max_speed, v.col(i).norm());
     }
-    for (int i : h.driven()) max_driven_speed = std::max(max_driven_speed, (h.positions_m().col(i) - prev.col(i)).norm() / dt);
+    for (int i : h.driven())
+      max_driven_speed = std::max(max_driven_speed, (h.positions_m().col(i) - prev.col(i)).norm() / dt);
     prev2 = prev;
     prev = h.positions_m();
   }

@@ -80,7 +80,8 @@ TEST(HeartFit, SunkenBranchesAreLiftedClearByALocalDent) {
     double deepest_designed_m = 0.0;  // against the designed surface, which the fit dents
     for (const auto& branch : tree.branches)
       if (branch.name != "aorta")
-        for (const auto& p : branch.points) deepest_designed_m = std::min(deepest_designed_m, clearance_above_epicardium_m(p));
+        for (const auto& p : branch.points)
+          deepest_designed_m = std::min(deepest_designed_m, clearance_above_epicardium_m(p));
     EXPECT_LE(r.max_dent_m, -deepest_designed_m + 1e-12) << "no deeper than the deepest sinking";
 
     // local: a moved vertex lies near some sunken point; the rest of the heart is as designed
@@ -88,13 +89,16 @@ TEST(HeartFit, SunkenBranchesAreLiftedClearByALocalDent) {
     for (int v = 0; v < m.vertices_m.cols(); ++v) {
       if (m.vertices_m.col(v) == original.vertices_m.col(v)) continue;
       ++moved;
-      EXPECT_NEAR((m.vertices_m.col(v) - original.vertices_m.col(v)).normalized().dot(-original.vertices_m.col(v).normalized()),
-                  1.0, 1e-12) << "moves are radial, toward the centre";
+      EXPECT_NEAR(
+          (m.vertices_m.col(v) - original.vertices_m.col(v)).normalized().dot(-original.vertices_m.col(v).normalized()),
+          1.0, 1e-12)
+          << "moves are radial, toward the centre";
       double nearest = 1e9;
       for (const auto& branch : tree.branches)
         if (branch.name != "aorta")
           for (const auto& p : branch.points)
-            if (clearance_above_epicardium_m(p) < 0.0) nearest = std::min(nearest, (p.position_m - original.vertices_m.col(v)).norm());
+            if (clearance_above_epicardium_m(p) < 0.0)
+              nearest = std::min(nearest, (p.position_m - original.vertices_m.col(v)).norm());
       EXPECT_LT(nearest, 25e-3) << "vertex " << v;
     }
     EXPECT_EQ(moved, r.vertices_moved);

@@ -10,9 +10,9 @@ namespace pcisim::physics::testing {
 
 struct HeartHealth {
   bool finite = true;
-  double max_from_rest_m = 0;     // any particle's distance from its rest position
+  double max_from_rest_m = 0;  // any particle's distance from its rest position
   double max_free_from_rest_m = 0;
-  double max_strain = 0;          // |length / rest - 1| over the distance constraints
+  double max_strain = 0;  // |length / rest - 1| over the distance constraints
   double free_kinetic_j = 0;
 
   void merge(const HeartHealth& o) {
@@ -29,7 +29,8 @@ inline HeartHealth health(const BeatingHeart& h) {
   const Eigen::Matrix3Xd& x = h.positions_m();
   const Eigen::Matrix3Xd& rest = h.rest_positions_m();
   out.finite = x.allFinite();
-  for (int i = 0; i < x.cols(); ++i) out.max_from_rest_m = std::max(out.max_from_rest_m, (x.col(i) - rest.col(i)).norm());
+  for (int i = 0; i < x.cols(); ++i)
+    out.max_from_rest_m = std::max(out.max_from_rest_m, (x.col(i) - rest.col(i)).norm());
   const auto& p = h.system().particles();
   for (int i : h.free_particles()) {
     out.max_free_from_rest_m = std::max(out.max_free_from_rest_m, (x.col(i) - rest.col(i)).norm());

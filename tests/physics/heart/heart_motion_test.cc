@@ -78,7 +78,8 @@ TEST(HeartMotion, TrilinearInSpaceThroughFramesInTime) {
     EXPECT_LT((m.displacement_m(p, f / 4.0) - want).norm(), 1e-9) << f;
   }
   // outside the grid the nearest boundary value holds
-  EXPECT_LT((m.displacement_m(Vector3d(1, 1, 1), 0.25) - m.displacement_m(Vector3d(0.01, 0.02, 0.005), 0.25)).norm(), 1e-12);
+  EXPECT_LT((m.displacement_m(Vector3d(1, 1, 1), 0.25) - m.displacement_m(Vector3d(0.01, 0.02, 0.005), 0.25)).norm(),
+            1e-12);
   // non-finite input: zero, never NaN
   EXPECT_EQ(m.displacement_m(Vector3d(NAN, 0, 0), 0.1), Vector3d::Zero());
   EXPECT_EQ(m.displacement_m(p, INFINITY), Vector3d::Zero());
@@ -127,10 +128,12 @@ TEST(HeartMotion, BadFilesNameWhatIsWrong) {
             "m.motion: expected field 'cycle_s' (line 3), got 'period 0.8'");
   EXPECT_NE(parse_error(replace("origin_m ", "origin_m 1 2 #")).find("field 'origin_m' needs 3 finite numbers"),
             std::string::npos);
-  EXPECT_EQ(parse_error(replace("spacing_m 0.01", "spacing_m 0")), "m.motion: field 'spacing_m' must be > 0 on every axis");
+  EXPECT_EQ(parse_error(replace("spacing_m 0.01", "spacing_m 0")),
+            "m.motion: field 'spacing_m' must be > 0 on every axis");
   EXPECT_EQ(parse_error(replace("dims 3 3 2", "dims 3 3 1")), "m.motion: field 'dims' must be integers >= 2");
   EXPECT_EQ(parse_error(replace("dims 3 3 2", "dims 3 3 2 7")), "m.motion: field 'dims' has extra text '7'");
-  EXPECT_EQ(parse_error(replace("data float32-le", "data float64")), "m.motion: field 'data' must say float32-le, got 'float64'");
+  EXPECT_EQ(parse_error(replace("data float32-le", "data float64")),
+            "m.motion: field 'data' must say float32-le, got 'float64'");
   EXPECT_EQ(parse_error(good.substr(0, good.size() - 4)),
             "m.motion: data: expected 864 bytes (frames * dims * 3 float32), got 860");
   std::string nan = good;
@@ -202,7 +205,9 @@ TEST(HeartSyntheticMotion, WallThickensBaseDescendsApexTwists) {
   EXPECT_GT(epi_in, 0.3);
   EXPECT_GT(endo_in, 2.0 * epi_in);  // the wall thickens
   // the base descends toward the apex by 10-15 % of the long axis; the apex stays
-  auto axial_mm = [&](const Vector3d& x_mm) { return (h.transpose() * m.displacement_m(h * x_mm * 1e-3, es)).z() * 1e3; };
+  auto axial_mm = [&](const Vector3d& x_mm) {
+    return (h.transpose() * m.displacement_m(h * x_mm * 1e-3, es)).z() * 1e3;
+  };
   const Vector3d base_mm(0, 0, 28), apex_mm(0, 0, -49);
   const double shortening = (axial_mm(apex_mm) - axial_mm(base_mm)) / (base_mm.z() - apex_mm.z());
   EXPECT_GT(shortening, 0.10);

@@ -21,11 +21,12 @@ struct Surface {
 // icosphere: subdivided icosahedron, outward counter-clockwise triangles
 Surface sphere(double radius_m, int subdivisions) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<Eigen::Vector3d> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                                    {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  std::vector<std::array<int, 3>> f = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                                       {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
-                                       {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  std::vector<Eigen::Vector3d> v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                                    {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<std::array<int, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                                       {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                                       {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                                       {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
   for (auto& p : v) p.normalize();
   for (int s = 0; s < subdivisions; ++s) {
     std::map<std::pair<int, int>, int> mid;
@@ -63,7 +64,8 @@ class VesselSkinTest : public ::testing::Test {
 TEST_F(VesselSkinTest, AtRestEveryPointStaysWhereItIs) {
   skin.update(heart.points_m);
   ASSERT_GT(skin.point_count(), 500);
-  for (int i = 0; i < skin.point_count(); ++i) EXPECT_LT((skin.points_m()[i] - skin.rest_points_m()[i]).norm(), 1e-12) << i;
+  for (int i = 0; i < skin.point_count(); ++i)
+    EXPECT_LT((skin.points_m()[i] - skin.rest_points_m()[i]).norm(), 1e-12) << i;
 }
 
 TEST_F(VesselSkinTest, CoronariesRideTheHeartAndTheAorticRootStays) {
@@ -136,8 +138,9 @@ TEST_F(VesselSkinTest, BadDistancesAreRefusedByName) {
   for (const char* field : {"attach_distance_m", "fade_distance_m", "blend_radius_m"}) {
     VesselMotionParams p;
     const std::string f = field;
-    (f == "attach_distance_m" ? p.attach_distance_m : f == "fade_distance_m" ? p.fade_distance_m : p.blend_radius_m) =
-        std::nan("");
+    (f == "attach_distance_m" ? p.attach_distance_m
+     : f == "fade_distance_m" ? p.fade_distance_m
+                              : p.blend_radius_m) = std::nan("");
     try {
       VesselSkin s(tree, heart.points_m, heart.triangles, p);
       FAIL() << field;

@@ -138,9 +138,15 @@ void run_free_body(SolverKind solver, double sor_w, bool springs, bool clusters,
   EXPECT_LT((angular_momentum(sys) - h0).norm(), (approximate ? 0.1 : 0.02) * h0.norm());
 }
 
-TEST(Momentum, SpringsGaussSeidel) { run_free_body(SolverKind::kGaussSeidel, 1.0, true, false); }
-TEST(Momentum, ClustersGaussSeidel) { run_free_body(SolverKind::kGaussSeidel, 1.0, false, true); }
-TEST(Momentum, SpringsAndClustersJacobiSor) { run_free_body(SolverKind::kJacobi, 1.5, true, true); }
+TEST(Momentum, SpringsGaussSeidel) {
+  run_free_body(SolverKind::kGaussSeidel, 1.0, true, false);
+}
+TEST(Momentum, ClustersGaussSeidel) {
+  run_free_body(SolverKind::kGaussSeidel, 1.0, false, true);
+}
+TEST(Momentum, SpringsAndClustersJacobiSor) {
+  run_free_body(SolverKind::kJacobi, 1.5, true, true);
+}
 TEST(Momentum, SpringsAndClustersJacobiSorPerConstraint) {
   run_free_body(SolverKind::kJacobi, 1.5, true, true, JacobiAveraging::kPerConstraint);
 }
@@ -181,7 +187,8 @@ TEST(DihedralBending, FreeCurvedStripKeepsMomentumAndItsRestAngles) {
       // one corner is also hit, which tries to bend the strip and sets it tumbling
       const Eigen::Vector3d centre = p.position_m.rowwise().mean();
       for (int i = 0; i < p.size(); ++i)
-        p.velocity_m_per_s.col(i) = Eigen::Vector3d(0.01, 0.02, 0.0) + Eigen::Vector3d(0.0, 0.0, 1.0).cross(p.position_m.col(i) - centre);
+        p.velocity_m_per_s.col(i) =
+            Eigen::Vector3d(0.01, 0.02, 0.0) + Eigen::Vector3d(0.0, 0.0, 1.0).cross(p.position_m.col(i) - centre);
       if (kick) p.velocity_m_per_s(2, 9) += 0.5;
       const Eigen::Vector3d l0 = linear_momentum(sys), h0 = angular_momentum(sys);
       PbdParams params;
@@ -210,7 +217,8 @@ TEST(DihedralBending, FreeCurvedStripKeepsMomentumAndItsRestAngles) {
         Eigen::Vector3d g[4];
         ASSERT_TRUE(dihedral_angle(p.position_m.col(b.a), p.position_m.col(b.b), p.position_m.col(b.c),
                                    p.position_m.col(b.d), &theta, g));
-        EXPECT_NEAR(theta, rest_angles[k], 0.02) << "hinge " << k << (kick ? " after the kick" : "") << " variant " << variant;
+        EXPECT_NEAR(theta, rest_angles[k], 0.02)
+            << "hinge " << k << (kick ? " after the kick" : "") << " variant " << variant;
       }
     }
   }

@@ -20,14 +20,20 @@
 namespace pcisim::physics::pbd {
 namespace {
 
-device::Vec3 to_dev(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
-Eigen::Vector3d to_eigen(device::Vec3 v) { return {v.x, v.y, v.z}; }
+device::Vec3 to_dev(const Eigen::Vector3d& v) {
+  return {v.x(), v.y(), v.z()};
+}
+Eigen::Vector3d to_eigen(device::Vec3 v) {
+  return {v.x, v.y, v.z};
+}
 device::Mat3 to_dev(const Eigen::Matrix3d& m) {
   device::Mat3 r;
   for (int k = 0; k < 9; ++k) r.m[k] = m.data()[k];
   return r;
 }
-Eigen::Matrix3d to_eigen(const device::Mat3& m) { return Eigen::Map<const Eigen::Matrix3d>(m.m); }
+Eigen::Matrix3d to_eigen(const device::Mat3& m) {
+  return Eigen::Map<const Eigen::Matrix3d>(m.m);
+}
 
 TEST(DeviceTwins, ProjectionsMatchTheEigenOriginals) {
   std::mt19937 rng(11);
@@ -39,7 +45,8 @@ TEST(DeviceTwins, ProjectionsMatchTheEigenOriginals) {
     Eigen::Vector3d dxi = Eigen::Vector3d::Zero(), dxj = Eigen::Vector3d::Zero();
     device::Vec3 gxi, gxj;
     const bool a = project_distance(xi, xj, 1000.0, 500.0, 0.004, 2e-3 * 900.0, 1e-4, &dl, &dxi, &dxj);
-    const bool b = device::project_distance(to_dev(xi), to_dev(xj), 1000.0, 500.0, 0.004, 2e-3 * 900.0, 1e-4, &ddl, &gxi, &gxj);
+    const bool b =
+        device::project_distance(to_dev(xi), to_dev(xj), 1000.0, 500.0, 0.004, 2e-3 * 900.0, 1e-4, &ddl, &gxi, &gxj);
     ASSERT_EQ(a, b);
     EXPECT_NEAR(dl, ddl, 1e-15 * std::abs(dl) + 1e-30);
     EXPECT_LE((dxi - to_eigen(gxi)).norm(), 1e-15 * dxi.norm() + 1e-30);
@@ -61,7 +68,8 @@ TEST(DeviceTwins, ProjectionsMatchTheEigenOriginals) {
     device::Vec3 dgl, dgdx;
     const Eigen::Vector3d lam = rv();
     ASSERT_TRUE(project_to_goal(xi, xj, 1000.0, 0.001, 1e-4, 1.0 / 60.0, lam, &gl, &gdx2));
-    ASSERT_TRUE(device::project_to_goal(to_dev(xi), to_dev(xj), 1000.0, 0.001, 1e-4, 1.0 / 60.0, to_dev(lam), &dgl, &dgdx));
+    ASSERT_TRUE(
+        device::project_to_goal(to_dev(xi), to_dev(xj), 1000.0, 0.001, 1e-4, 1.0 / 60.0, to_dev(lam), &dgl, &dgdx));
     EXPECT_LE((gl - to_eigen(dgl)).norm(), 1e-15 * gl.norm() + 1e-30);
     EXPECT_LE((gdx2 - to_eigen(dgdx)).norm(), 1e-15 * gdx2.norm() + 1e-30);
   }
@@ -75,8 +83,9 @@ TEST(DeviceTwins, RotationMatchesEigenSvdIncludingInvertedClusters) {
     Eigen::Matrix3d a;
     for (int k = 0; k < 9; ++k) a.data()[k] = g(rng);
     if (trial % 3 == 1) a.col(0) = -a.col(0);  // mirrored: det < 0
-    if (trial % 3 == 2) a = Eigen::AngleAxisd(g(rng), Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized()).toRotationMatrix() *
-                            Eigen::Vector3d(3.0, 2.0, 0.5).asDiagonal();  // a rotated, stretched cluster
+    if (trial % 3 == 2)
+      a = Eigen::AngleAxisd(g(rng), Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized()).toRotationMatrix() *
+          Eigen::Vector3d(3.0, 2.0, 0.5).asDiagonal();  // a rotated, stretched cluster
     const Eigen::Matrix3d prev = Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     const Eigen::Matrix3d cpu = extract_rotation(a, prev, 5.0);
     const Eigen::Matrix3d gpu = to_eigen(device::extract_rotation(to_dev(a), to_dev(prev), 5.0));

@@ -46,7 +46,9 @@ void expect_sane(const PbdSystem& sys, double bound_m, double strain_bound, cons
   EXPECT_LT(max_strain(sys), strain_bound) << what;
 }
 
-double max_distance_m(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b) { return (a - b).colwise().norm().maxCoeff(); }
+double max_distance_m(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b) {
+  return (a - b).colwise().norm().maxCoeff();
+}
 
 TEST(HardCases, TimeStepTimesTen) {
   const BlockSpec s = hanging_block();
@@ -82,7 +84,8 @@ TEST(HardCases, BeatingVentricleAtTenTimesTheStep) {
     for (int step = 1; step <= 30; ++step) {
       const double s = 0.15 * 0.5 * (1.0 - std::cos(2.0 * std::numbers::pi * 1.2 * step * dt));
       for (int i : v.driven)
-        v.system.set_driven_target(i, Eigen::Vector3d(v.rest_m(0, i) * (1 - s), v.rest_m(1, i) * (1 - s), v.rest_m(2, i)));
+        v.system.set_driven_target(i,
+                                   Eigen::Vector3d(v.rest_m(0, i) * (1 - s), v.rest_m(1, i) * (1 - s), v.rest_m(2, i)));
       v.system.step(dt, p);
       expect_sane(v.system, 0.2, 1.0, "beating at dt x10");
     }
@@ -121,7 +124,8 @@ TEST(HardCases, StiffnessAndMassRatiosOfAThousand) {
   // clusters give the lattice its shear stiffness (springs along lattice edges alone are a mechanism)
   Eigen::Matrix3Xd rest(3, n * n * n);
   for (int i = 0; i < n * n * n; ++i) rest.col(i) = s.spacing_m * Eigen::Vector3d(i % n, (i / n) % n, i / (n * n));
-  for (const auto& c : grid_clusters(rest, s.cluster_cube_m, s.cluster_overlap)) mixed.add_cluster(c, s.cluster_compliance_s2);
+  for (const auto& c : grid_clusters(rest, s.cluster_cube_m, s.cluster_overlap))
+    mixed.add_cluster(c, s.cluster_compliance_s2);
   mixed.finalize();
   PbdParams p = hanging_params();
   double worst = 0.0;

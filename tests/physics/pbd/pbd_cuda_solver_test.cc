@@ -32,7 +32,8 @@ constexpr double kVelocityTolMPerS = 1e-6;
 
 void skip_without_gpu() {
   std::string why;
-  if (!pbd_cuda_available(&why)) GTEST_SKIP() << "no usable CUDA device (" << why << "): CUDA vs CPU Jacobi comparison skipped";
+  if (!pbd_cuda_available(&why))
+    GTEST_SKIP() << "no usable CUDA device (" << why << "): CUDA vs CPU Jacobi comparison skipped";
 }
 
 std::string sci(double v) {
@@ -59,7 +60,8 @@ struct Gap {
     const auto& a = cpu.particles();
     const auto& b = gpu.particles();
     position_m = std::max(position_m, (a.position_m - b.position_m).colwise().norm().maxCoeff());
-    velocity_m_per_s = std::max(velocity_m_per_s, (a.velocity_m_per_s - b.velocity_m_per_s).colwise().norm().maxCoeff());
+    velocity_m_per_s =
+        std::max(velocity_m_per_s, (a.velocity_m_per_s - b.velocity_m_per_s).colwise().norm().maxCoeff());
   }
 };
 
@@ -184,7 +186,8 @@ TEST(PbdCudaSolver, BendingSheetMatches) {
       gap.add(cpu, gpu);
     }
     EXPECT_GT((gpu.particles().position_m - start_m).colwise().norm().maxCoeff(), 1e-3) << "it hung down";
-    expect_close(gap, averaging == JacobiAveraging::kPerParticle ? "bending sheet, per particle" : "bending sheet, per constraint");
+    expect_close(gap, averaging == JacobiAveraging::kPerParticle ? "bending sheet, per particle"
+                                                                 : "bending sheet, per constraint");
   }
 }
 
@@ -204,8 +207,9 @@ TEST(PbdCudaSolver, DrivenParticlesArriveExactlyOnTheirTargets) {
     }
     // a driven particle's velocity is its path over the substep: the same on both
     for (int i : gpu.driven)
-      ASSERT_LE((gpu.system.particles().velocity_m_per_s.col(i) - cpu.system.particles().velocity_m_per_s.col(i)).norm(),
-                1e-12);
+      ASSERT_LE(
+          (gpu.system.particles().velocity_m_per_s.col(i) - cpu.system.particles().velocity_m_per_s.col(i)).norm(),
+          1e-12);
     gap.add(cpu.system, gpu.system);
   }
   expect_close(gap, "ventricle, driven check");

@@ -15,7 +15,7 @@
 namespace pcisim::physics::pbd::testing {
 
 struct BlockSpec {
-  int n = 4;                    // n x n x n lattice
+  int n = 4;  // n x n x n lattice
   double spacing_m = 0.01;
   double mass_kg = 0.001;
   double spring_compliance_m_per_n = 1e-3;
@@ -24,10 +24,12 @@ struct BlockSpec {
   double cluster_compliance_s2 = 1e-4;
   bool springs = true;
   bool clusters = true;
-  bool pin_top = false;          // pin the z = max layer
+  bool pin_top = false;  // pin the z = max layer
 };
 
-inline int block_index(int n, int i, int j, int k) { return (k * n + j) * n + i; }
+inline int block_index(int n, int i, int j, int k) {
+  return (k * n + j) * n + i;
+}
 
 // builds without finalizing, so a test can change masses or pin before finalize()
 inline PbdSystem block_unfinalized(const BlockSpec& s, std::vector<double> mass_kg = {}) {
@@ -53,7 +55,8 @@ inline PbdSystem block_unfinalized(const BlockSpec& s, std::vector<double> mass_
           }
   }
   if (s.clusters)
-    for (const auto& c : grid_clusters(rest, s.cluster_cube_m, s.cluster_overlap)) sys.add_cluster(c, s.cluster_compliance_s2);
+    for (const auto& c : grid_clusters(rest, s.cluster_cube_m, s.cluster_overlap))
+      sys.add_cluster(c, s.cluster_compliance_s2);
   return sys;
 }
 
@@ -67,7 +70,9 @@ inline bool all_finite(const PbdSystem& sys) {
   return sys.particles().position_m.allFinite() && sys.particles().velocity_m_per_s.allFinite();
 }
 
-inline double max_abs_coordinate_m(const PbdSystem& sys) { return sys.particles().position_m.cwiseAbs().maxCoeff(); }
+inline double max_abs_coordinate_m(const PbdSystem& sys) {
+  return sys.particles().position_m.cwiseAbs().maxCoeff();
+}
 
 // largest |length - rest| / rest over the distance constraints
 inline double max_strain(const PbdSystem& sys) {

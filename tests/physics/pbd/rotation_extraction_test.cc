@@ -39,7 +39,7 @@ void expect_proper_rotation(const Eigen::Matrix3d& r) {
 
 Eigen::Matrix3Xd solid_cluster() {
   Eigen::Matrix3Xd q(3, 6);
-  q << 1, -1, 0.3, 0.2, -0.4, 0.1,  //
+  q << 1, -1, 0.3, 0.2, -0.4, 0.1,   //
       0.2, 0.1, 2, -1.5, 0.3, -0.2,  //
       0.1, -0.3, 0.2, 0.4, 1.2, -1.0;
   return q;
@@ -59,7 +59,8 @@ TEST(RotationExtraction, RigidRotationIsRecovered) {
 TEST(RotationExtraction, HalfTurnFromAnIdentityWarmStart) {
   // a warm start exactly 180 deg away is a stationary point of iterative methods, not of the SVD
   const Eigen::Matrix3Xd q = solid_cluster();
-  const Eigen::Matrix3d truth = Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Matrix3d truth =
+      Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   const Moments m = moments(q, [&](const Eigen::Vector3d& x) { return truth * x; });
   const Eigen::Matrix3d r = extract_rotation(m.a, Eigen::Matrix3d::Identity(), m.rest_moment);
   expect_proper_rotation(r);
@@ -83,7 +84,7 @@ TEST(RotationExtraction, InvertedClusterGivesAProperRotation) {
 
 TEST(RotationExtraction, CoplanarClusterGivesTheTrueRotation) {
   Eigen::Matrix3Xd q(3, 4);
-  q << 1, -1, 0, 0.5,  //
+  q << 1, -1, 0, 0.5,   //
       0, 0.2, 1, -1.2,  //
       0, 0, 0, 0;
   const Eigen::Matrix3d truth = random_rotation(7);

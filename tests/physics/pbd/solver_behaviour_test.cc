@@ -28,7 +28,8 @@ TEST(ClusteredShapeMatching, RecoversTheRestShapeAfterALargeDeformation) {
     auto& x = sys.particles().position_m;
     for (int i = 0; i < x.cols(); ++i) {
       const double z = x(2, i);
-      const Eigen::Matrix3d twist = Eigen::AngleAxisd(z / 0.04 * std::numbers::pi / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      const Eigen::Matrix3d twist =
+          Eigen::AngleAxisd(z / 0.04 * std::numbers::pi / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
       x.col(i) = twist * Eigen::Vector3d(x(0, i) + 0.5 * z, x(1, i), 0.2 * z);
     }
     ASSERT_GT(shape_error_m(rest, x), 0.02) << "a large deformation";
@@ -38,7 +39,8 @@ TEST(ClusteredShapeMatching, RecoversTheRestShapeAfterALargeDeformation) {
     params.iterations = 10;
     params.damping_per_s = 5.0;
     for (int step = 0; step < 240; ++step) sys.step(1.0 / 60.0, params);
-    EXPECT_LT(shape_error_m(rest, sys.particles().position_m), 1e-4) << (solver == SolverKind::kJacobi ? "jacobi" : "gs");
+    EXPECT_LT(shape_error_m(rest, sys.particles().position_m), 1e-4)
+        << (solver == SolverKind::kJacobi ? "jacobi" : "gs");
   }
 }
 
@@ -58,7 +60,8 @@ TEST(DrivenParticles, FollowTheirTrajectoriesExactly) {
       const Eigen::Vector3d r0 = v.rest_m.col(i);
       // a beating wall: radial contraction plus a small lift, 1.2 Hz
       const double squeeze = 0.15 * 0.5 * (1.0 - std::cos(2.0 * std::numbers::pi * 1.2 * t));
-      v.system.set_driven_target(i, Eigen::Vector3d(r0.x() * (1.0 - squeeze), r0.y() * (1.0 - squeeze), r0.z() + 0.01 * squeeze));
+      v.system.set_driven_target(
+          i, Eigen::Vector3d(r0.x() * (1.0 - squeeze), r0.y() * (1.0 - squeeze), r0.z() + 0.01 * squeeze));
     }
     const Eigen::Matrix3Xd before = v.system.particles().position_m;
     v.system.step(dt, params);

@@ -35,11 +35,13 @@ int main() {
   cudaGetDeviceProperties(&prop, 0);
   const anatomy::VesselTree tree = anatomy::make_coronary_phantom({});
   const anatomy::TriangleMesh lumen = anatomy::loft_lumen(tree, {});
-  std::printf("# SDF build and query, CPU twin vs CUDA twin\n\nGPU: %s (sm_%d%d). Host CPU: 1 thread. Phantom seed 1, "
-              "lumen incl. aorta, %zu triangles, band 4 cells, padding 1 mm.\n\n",
-              prop.name, prop.major, prop.minor, lumen.triangles.size());
-  std::printf("| spacing | grid points (virtual) | bricks stored | memory | CPU build ms | GPU build ms (wall) | "
-              "GPU kernels ms | plan ms | transfer ms | remainder ms | max abs diff CPU-GPU |\n");
+  std::printf(
+      "# SDF build and query, CPU twin vs CUDA twin\n\nGPU: %s (sm_%d%d). Host CPU: 1 thread. Phantom seed 1, "
+      "lumen incl. aorta, %zu triangles, band 4 cells, padding 1 mm.\n\n",
+      prop.name, prop.major, prop.minor, lumen.triangles.size());
+  std::printf(
+      "| spacing | grid points (virtual) | bricks stored | memory | CPU build ms | GPU build ms (wall) | "
+      "GPU kernels ms | plan ms | transfer ms | remainder ms | max abs diff CPU-GPU |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (double h : {0.4e-3, 0.2e-3, 0.1e-3}) {
     SdfBuildSpec spec;
@@ -58,14 +60,16 @@ int main() {
       auto t0 = Clock::now();
       gpu = build_sdf_cuda(lumen, spec, &t);
       gpu_ms.push_back(ms_since(t0));
-      kern.push_back(t.kernels_ms), plan.push_back(t.plan_ms), transfer.push_back(t.transfer_ms), rem.push_back(t.remainder_ms);
+      kern.push_back(t.kernels_ms), plan.push_back(t.plan_ms), transfer.push_back(t.transfer_ms),
+          rem.push_back(t.remainder_ms);
     }
     double worst = 0;
-    for (size_t i = 0; i < cpu.values_m().size(); ++i) worst = std::max(worst, double(std::abs(cpu.values_m()[i] - gpu.values_m()[i])));
+    for (size_t i = 0; i < cpu.values_m().size(); ++i)
+      worst = std::max(worst, double(std::abs(cpu.values_m()[i] - gpu.values_m()[i])));
     const double points = double(cpu.dims().x()) * cpu.dims().y() * cpu.dims().z();
-    std::printf("| %.1f mm | %.0fM | %zu | %.1f MB | %.0f | %.0f | %.1f | %.0f | %.0f | %.0f | %.2g m |\n", h * 1e3, points / 1e6,
-                cpu.values_m().size() / 512, cpu.memory_bytes() / 1e6, median(cpu_ms), median(gpu_ms), median(kern),
-                median(plan), median(transfer), median(rem), worst);
+    std::printf("| %.1f mm | %.0fM | %zu | %.1f MB | %.0f | %.0f | %.1f | %.0f | %.0f | %.0f | %.2g m |\n", h * 1e3,
+                points / 1e6, cpu.values_m().size() / 512, cpu.memory_bytes() / 1e6, median(cpu_ms), median(gpu_ms),
+                median(kern), median(plan), median(transfer), median(rem), worst);
   }
 
   // queries: points jittered about the centerlines (real data, not zeros)
@@ -76,7 +80,8 @@ int main() {
   std::mt19937 rng(1);
   std::normal_distribution<double> jitter(0.0, 1.0e-3);
   std::vector<const anatomy::CenterlinePoint*> all;
-  for (const auto& b : tree.branches) for (const auto& p : b.points) all.push_back(&p);
+  for (const auto& b : tree.branches)
+    for (const auto& p : b.points) all.push_back(&p);
   for (int i = 0; i < n; ++i) {
     pts[i] = all[i % all.size()]->position_m + Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng));
     for (int a = 0; a < 3; ++a) xyz[3 * size_t(i) + a] = pts[i][a];

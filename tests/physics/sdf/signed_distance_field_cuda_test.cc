@@ -45,8 +45,8 @@ TEST(SdfCudaTest, BuildMatchesTheCpuTwin) {
     const double d = std::abs(double(cpu.values_m()[i]) - double(gpu.values_m()[i]));
     if (d > worst) worst = d, worst_at = i;
   }
-  EXPECT_LE(worst, 1e-6) << "at pool index " << worst_at << ": cpu " << cpu.values_m()[worst_at]
-                         << " gpu " << gpu.values_m()[worst_at];
+  EXPECT_LE(worst, 1e-6) << "at pool index " << worst_at << ": cpu " << cpu.values_m()[worst_at] << " gpu "
+                         << gpu.values_m()[worst_at];
   RecordProperty("gpu_kernels_ms", std::to_string(t.kernels_ms));
 }
 
@@ -68,7 +68,8 @@ TEST(SdfCudaTest, BatchedSamplesMatchTheCpuTwin) {
   const int n = static_cast<int>(pts.size());
   std::vector<double> xyz(3 * n), d(n), g(3 * n);
   std::vector<uint8_t> inside(n);
-  for (int i = 0; i < n; ++i) for (int a = 0; a < 3; ++a) xyz[3 * i + a] = pts[i][a];
+  for (int i = 0; i < n; ++i)
+    for (int a = 0; a < 3; ++a) xyz[3 * i + a] = pts[i][a];
   CudaSdfSampler sampler(field);
   sampler.sample(xyz.data(), n, d.data(), g.data(), inside.data());
   for (int i = 0; i < n; ++i) {

@@ -128,7 +128,8 @@ TEST(SdfTest, OutsideTheGridIsFiniteAndPointsBackOut) {
     EXPECT_GT(s.gradient.dot((p - on_box).normalized()), 0.999);
   }
   const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
-  for (const Eigen::Vector3d& p : {Eigen::Vector3d(nan, 0, 0), Eigen::Vector3d(0, inf, 0), Eigen::Vector3d(0, 0, -inf)}) {
+  for (const Eigen::Vector3d& p :
+       {Eigen::Vector3d(nan, 0, 0), Eigen::Vector3d(0, inf, 0), Eigen::Vector3d(0, 0, -inf)}) {
     const SdfSample s = sdf.sample(p);
     EXPECT_FALSE(s.inside_grid);
     EXPECT_EQ(s.distance_m, 1.0) << "non-finite points are reported 1 m outside";
@@ -169,7 +170,8 @@ TEST(SdfTest, GridAlignedTubeHasNoSignErrors) {
         const double exact = (p - Eigen::Vector3d(x, 0, 0)).norm() - r;
         if (std::abs(exact) < 2 * sag) continue;  // the polygon and the capsule differ here
         const float v = sdf.value_at(i, j, k);
-        ASSERT_EQ(v < 0, exact < 0) << "grid point " << i << " " << j << " " << k << " value " << v << " exact " << exact;
+        ASSERT_EQ(v < 0, exact < 0) << "grid point " << i << " " << j << " " << k << " value " << v << " exact "
+                                    << exact;
         ++checked;
       }
   EXPECT_GT(checked, 10000);
@@ -239,7 +241,8 @@ TEST_F(SdfPhantomTest, TubeWallInsideTheAortaIsNotAWall) {
     const Eigen::Vector3d t = (lm.points[k].position_m - lm.points[k - 1].position_m).normalized();
     const Eigen::Vector3d u = t.unitOrthogonal(), v = t.cross(u);
     for (int a = 0; a < 8; ++a) {
-      const Eigen::Vector3d p = c + (lm.points[k].radius_m + 0.3e-3) * (std::cos(a * M_PI / 4) * u + std::sin(a * M_PI / 4) * v);
+      const Eigen::Vector3d p =
+          c + (lm.points[k].radius_m + 0.3e-3) * (std::cos(a * M_PI / 4) * u + std::sin(a * M_PI / 4) * v);
       double to_aorta_axis = 0;
       anatomy::nearest_branch(anatomy::VesselTree{{aorta}}, p, &to_aorta_axis);
       if (to_aorta_axis > aorta_r - 1.5e-3) continue;  // near or beyond the aortic wall

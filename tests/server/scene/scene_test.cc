@@ -60,7 +60,8 @@ TEST(Scene, MinimalSceneBuildsOnlyTheWire) {
 TEST(Scene, CommentsAreAllowedAndUnitsConvert) {
   const Scene s = parse_scene(R"({ // a comment
       "physics_rate_hz": 60, /* another */
-      "effects": {"guidewire": {"length_mm": 150, "segments": 50}}})", "t");
+      "effects": {"guidewire": {"length_mm": 150, "segments": 50}}})",
+                              "t");
   EXPECT_DOUBLE_EQ(s.world.step_s, 1.0 / 60.0);
   EXPECT_DOUBLE_EQ(s.world.guidewire->length_m, 0.150);
   EXPECT_EQ(s.world.guidewire->segment_count, 50);
@@ -87,8 +88,9 @@ TEST(Scene, EachBadInputNamesItsJsonPathAndWhatWasExpected) {
             "test.json: effects.vessel_motion: needs effect \"heart_beat\" in the same scene");
   EXPECT_EQ(error_of(R"({"effects": {"heart_beat": {"rate_bpm": 400}}})"),
             "test.json: effects.heart_beat.rate_bpm: expected a number in [20, 250], got 400");
-  EXPECT_EQ(error_of(R"({"effects": {"guidewire": {}, "xray": {"pulse_rate_fps": 15, "cine_rate_fps": 25}}})"),
-            "test.json: effects.xray.cine_rate_fps: expected a whole multiple or divisor of pulse_rate_fps (15), got 25");
+  EXPECT_EQ(
+      error_of(R"({"effects": {"guidewire": {}, "xray": {"pulse_rate_fps": 15, "cine_rate_fps": 25}}})"),
+      "test.json: effects.xray.cine_rate_fps: expected a whole multiple or divisor of pulse_rate_fps (15), got 25");
   EXPECT_EQ(error_of(R"({"effects": {"heart_beat": {"cluster_size_mm": 0.01}}})"),
             "test.json: effects.heart_beat.cluster_size_mm: expected 0 (the global cluster only) or a number in [5, "
             "200], got 0.01");
@@ -105,12 +107,15 @@ TEST(Scene, EachBadInputNamesItsJsonPathAndWhatWasExpected) {
             "test.json: effects.xray.pulse_rate_fps: expected 7.5, 15 or 30, got 20");
   EXPECT_EQ(error_of(R"({"effects": {"guidewire": {}, "friction": {}}})"),
             "test.json: effects.friction: needs effect \"vessel_contact\" in the same scene");
-  EXPECT_EQ(error_of(R"({"effects": {"guidewire": {}, "vessel_contact": {}, "friction": {"tip_static": 0.1, "tip_kinetic": 0.3}}})"),
-            "test.json: effects.friction.tip_kinetic: expected at most tip_static");
+  EXPECT_EQ(
+      error_of(
+          R"({"effects": {"guidewire": {}, "vessel_contact": {}, "friction": {"tip_static": 0.1, "tip_kinetic": 0.3}}})"),
+      "test.json: effects.friction.tip_kinetic: expected at most tip_static");
   EXPECT_EQ(error_of(R"({"name": "x"})"), "test.json: effects: expected an object listing the effects to simulate");
   EXPECT_EQ(error_of(R"({"effects": [1, 2]})"), "test.json: effects: expected an object");
   EXPECT_EQ(error_of(R"({"effects": {}, "colour": "red"})"),
-            "test.json: colour: unknown key (this object accepts: anatomy, effects, haptics, name, physics_rate_hz, session)");
+            "test.json: colour: unknown key (this object accepts: anatomy, effects, haptics, name, physics_rate_hz, "
+            "session)");
   EXPECT_EQ(error_of(R"({"haptics": {"interpolation": "cubic"}, "effects": {}})"),
             "test.json: haptics.interpolation: expected one of \"local_model\", \"zero_order_hold\", "
             "\"linear_extrapolation\", got \"cubic\"");
@@ -128,7 +133,8 @@ TEST(Scene, AnatomyIsASeedOrACaseFolderBesideTheScene) {
   EXPECT_EQ(parse_scene(R"({"anatomy": {"phantom_seed": 3})" + effects, "/data/s.json").case_dir, "");
   EXPECT_EQ(error_of(R"({"anatomy": {"case": "p7", "phantom_seed": 3})" + effects),
             "test.json: anatomy.case: give either a case folder or a phantom_seed, not both");
-  EXPECT_EQ(error_of(R"({"anatomy": {"case": ""})" + effects), "test.json: anatomy.case: expected the path of a case folder");
+  EXPECT_EQ(error_of(R"({"anatomy": {"case": ""})" + effects),
+            "test.json: anatomy.case: expected the path of a case folder");
 }
 
 TEST(Scene, MissingFileIsAClearError) {
@@ -156,7 +162,8 @@ namespace pcisim::server {
 namespace {
 
 TEST(Scene, SessionBoundsAreReadAndChecked) {
-  const Scene s = parse_scene(R"({"effects": {}, "session": {"max_injections_per_min": 3, "max_contrast_ml": 90}})", "t.json");
+  const Scene s =
+      parse_scene(R"({"effects": {}, "session": {"max_injections_per_min": 3, "max_contrast_ml": 90}})", "t.json");
   EXPECT_EQ(s.session.max_injections_per_min, 3);
   EXPECT_DOUBLE_EQ(s.session.max_contrast_ml, 90.0);
   EXPECT_DOUBLE_EQ(s.session.min_reset_interval_s, SessionLimitParams{}.min_reset_interval_s);
@@ -168,8 +175,9 @@ TEST(Scene, SessionBoundsAreReadAndChecked) {
 // bad value (the last one won); 1e400 named neither the file nor the path
 TEST(Scene, DeepNestingDuplicateKeysAndHugeNumbersAreRefusedNamingThePath) {
   const std::string deep = "{\"effects\": {}, \"name\": " + std::string(100000, '[') + std::string(100000, ']') + "}";
-  EXPECT_EQ(error_of(deep), "test.json: name[][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][]"
-                            "[][][][][][][][][][][][][][][][][][][][]: nested deeper than 64 levels");
+  EXPECT_EQ(error_of(deep),
+            "test.json: name[][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][][]"
+            "[][][][][][][][][][][][][][][][][][][][]: nested deeper than 64 levels");
   EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"segments": 80, "segments": 100000}}})"),
             "test.json: effects.guidewire.segments: the key appears twice in one object");
   const std::string huge = error_of(R"({"effects": {"guidewire": {"segments": 1e400}}})");

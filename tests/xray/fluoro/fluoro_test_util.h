@@ -16,6 +16,8 @@ inline FluoroSpec small_fluoro_spec() {
   return s;
 }
 
-inline CArmPose lao30_cra20() { return CArmPose{30, 20, Eigen::Vector3d::Zero()}; }
+inline CArmPose lao30_cra20() {
+  return CArmPose{30, 20, Eigen::Vector3d::Zero()};
+}
 
 }  // namespace pcisim::xray::testing

@@ -5,7 +5,6 @@
 #include "tests/common/counting_new.h"
 #include "tests/xray/fluoro/fluoro_test_util.h"
 
-
 namespace pcisim::xray {
 namespace {
 
@@ -16,8 +15,9 @@ TEST(FluoroscopyNoAllocation, SecondAndLaterFramesAllocateNothing) {
   const auto& lad = tree.branches[tree.find("LAD")].points;
   std::vector<Eigen::Vector3d> wire_m;
   for (size_t i = 0; i < 120; ++i) wire_m.push_back(lad[i].position_m);
-  const ContrastInjection inj[2] = {{.start_s = 0, .duration_s = 2, .volume_ml = 8},
-                                    {.start_s = 0.5, .duration_s = 1, .volume_ml = 4, .ostium = CoronaryOstium::kRight}};
+  const ContrastInjection inj[2] = {
+      {.start_s = 0, .duration_s = 2, .volume_ml = 8},
+      {.start_s = 0.5, .duration_s = 1, .volume_ml = 4, .ostium = CoronaryOstium::kRight}};
   FluoroFrame f;
   fr.render({.time_s = 0, .pose = testing::lao30_cra20(), .wire_m = wire_m, .injections = inj}, f);
   long allocations = -1;

@@ -85,7 +85,8 @@ TEST(SiddonProjector, FastPathEqualsTheReferenceTraversal) {
 // a water box (HU 0 -> mu_water) with faces on voxel boundaries: the exact integral of any ray
 // is mu_water times the length of its chord through the box, in closed form by slab clipping
 TEST(Projectors, WaterBoxMatchesClosedForm) {
-  anatomy::Volume v = anatomy::Volume::make({40, 36, 30}, Vector3d(0.5, 0.75, 1.0), Vector3d(-10, -13, -15), anatomy::VoxelType::kInt16);
+  anatomy::Volume v = anatomy::Volume::make({40, 36, 30}, Vector3d(0.5, 0.75, 1.0), Vector3d(-10, -13, -15),
+                                            anatomy::VoxelType::kInt16);
   std::fill(v.hu_i16.begin(), v.hu_i16.end(), int16_t(-1000));
   const int lo[3] = {8, 6, 5}, hi[3] = {31, 27, 24};  // inclusive voxel ranges
   for (int k = lo[2]; k <= hi[2]; ++k)
@@ -140,7 +141,8 @@ TEST(Projectors, WaterBoxMatchesClosedForm) {
 TEST(Projectors, WaterCylinderMatchesClosedForm) {
   const int n = 48, nz = 20;
   const double s = 0.5, radius_mm = 9.0;
-  anatomy::Volume v = anatomy::Volume::make({n, n, nz}, Vector3d(s, s, s), Vector3d(-(n - 1) * s / 2, -(n - 1) * s / 2, 0), anatomy::VoxelType::kInt16);
+  anatomy::Volume v = anatomy::Volume::make(
+      {n, n, nz}, Vector3d(s, s, s), Vector3d(-(n - 1) * s / 2, -(n - 1) * s / 2, 0), anatomy::VoxelType::kInt16);
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) {

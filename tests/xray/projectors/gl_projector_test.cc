@@ -69,7 +69,8 @@ TEST(GlProjector, WaterBoxGivesItsChordLength) {
   std::string why;
   if (!gl_projector_available(&why)) GTEST_SKIP() << why;
   // a 20 mm water cube (HU 0: mu = 0.02 / mm) seen straight on: the central ray crosses 20 mm
-  anatomy::Volume v = anatomy::Volume::make({20, 20, 20}, Eigen::Vector3d(1, 1, 1), Eigen::Vector3d(-9.5, -9.5, -9.5), anatomy::VoxelType::kFloat32);
+  anatomy::Volume v = anatomy::Volume::make({20, 20, 20}, Eigen::Vector3d(1, 1, 1), Eigen::Vector3d(-9.5, -9.5, -9.5),
+                                            anatomy::VoxelType::kFloat32);
   std::fill(v.hu_f32.begin(), v.hu_f32.end(), 0.0f);
   const AttenuationVolume a(v);
   DetectorGeometry g;

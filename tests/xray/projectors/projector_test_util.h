@@ -16,11 +16,13 @@ inline double uniform(std::mt19937& rng, double lo, double hi) {
 // a rotated, anisotropic volume; smooth: a few Gaussian blobs (so interpolation converges),
 // else independent random HU per voxel (for the exact projector)
 inline anatomy::Volume random_volume(std::mt19937& rng, bool smooth) {
-  anatomy::Volume v = anatomy::Volume::make({int64_t(uniform(rng, 14, 24)), int64_t(uniform(rng, 14, 24)), int64_t(uniform(rng, 12, 20))},
-                          Eigen::Vector3d(uniform(rng, 0.6, 1.4), uniform(rng, 0.6, 1.4), uniform(rng, 0.8, 2.0)),
-                          Eigen::Vector3d(uniform(rng, -20, 20), uniform(rng, -20, 20), uniform(rng, -20, 20)),
-                          anatomy::VoxelType::kFloat32);
-  const Eigen::Vector3d axis = Eigen::Vector3d(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)).normalized();
+  anatomy::Volume v = anatomy::Volume::make(
+      {int64_t(uniform(rng, 14, 24)), int64_t(uniform(rng, 14, 24)), int64_t(uniform(rng, 12, 20))},
+      Eigen::Vector3d(uniform(rng, 0.6, 1.4), uniform(rng, 0.6, 1.4), uniform(rng, 0.8, 2.0)),
+      Eigen::Vector3d(uniform(rng, -20, 20), uniform(rng, -20, 20), uniform(rng, -20, 20)),
+      anatomy::VoxelType::kFloat32);
+  const Eigen::Vector3d axis =
+      Eigen::Vector3d(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)).normalized();
   v.direction = Eigen::AngleAxisd(uniform(rng, -3, 3), axis).toRotationMatrix();
   struct Blob {
     Eigen::Vector3d c;

@@ -51,7 +51,8 @@ TEST_F(DrrTool, BadArgumentsNameTheArgument) {
       {geo + "--pixel-mm 1 --size 4,4 --projector exact --out x", "--volume: missing"},
       {"--volume v.mha " + geo + "--pixel-mm 1 --size 4,4 --projector fast --out x",
        "--projector: expected exact, cpu, gl or cuda, got 'fast'"},
-      {"--volume v.mha " + geo + "--pixel-mm -1 --size 4,4 --projector cpu --out x", "--pixel-mm: expected a number > 0, got '-1'"},
+      {"--volume v.mha " + geo + "--pixel-mm -1 --size 4,4 --projector cpu --out x",
+       "--pixel-mm: expected a number > 0, got '-1'"},
       {"--volume v.mha --source 0,500 --detector-center 0,-300,0 --detector-u 1,0,0 --detector-v 0,0,-1 "
        "--pixel-mm 1 --size 4,4 --projector cpu --out x",
        "--source: expected three numbers x,y,z, got '0,500'"},
@@ -77,7 +78,8 @@ TEST_F(DrrTool, RenderMatchesTheLibraryAndWritesTheSidecar) {
   ASSERT_EQ(run_tool("--write-phantom " + vol + " --size 40,36,20 --spacing 8 --seed 4").rc, 0);
   const std::string args = "--volume " + vol +
                            " --source 10,600,20 --detector-center -5,-400,0 --detector-u 1,0,0 --detector-v 0,0,-1"
-                           " --pixel-mm 30 --size 9,7 --projector exact --out " + out;
+                           " --pixel-mm 30 --size 9,7 --projector exact --out " +
+                           out;
   const Result r = run_tool(args);
   ASSERT_EQ(r.rc, 0) << r.err;
   ASSERT_EQ(fs::file_size(out + ".f32"), 9u * 7u * 4u);

@@ -100,8 +100,15 @@ struct GlProjector::Impl {
 
 GlProjector::GlProjector(const AttenuationVolume& volume, double step_voxels) : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
-  const int attributes[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_PROFILE, OSMESA_CORE_PROFILE,
-                            OSMESA_CONTEXT_MAJOR_VERSION, 3, OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
+  const int attributes[] = {OSMESA_FORMAT,
+                            OSMESA_RGBA,
+                            OSMESA_PROFILE,
+                            OSMESA_CORE_PROFILE,
+                            OSMESA_CONTEXT_MAJOR_VERSION,
+                            3,
+                            OSMESA_CONTEXT_MINOR_VERSION,
+                            3,
+                            0};
   m.context = OSMesaCreateContextAttribs(attributes, nullptr);
   if (!m.context) throw std::runtime_error("GL projector: OSMesa cannot make an OpenGL 3.3 core context");
   m.make_current();
@@ -113,7 +120,8 @@ GlProjector::GlProjector(const AttenuationVolume& volume, double step_voxels) : 
   glGenTextures(1, &m.texture);
   glBindTexture(GL_TEXTURE_3D, m.texture);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  glTexImage3D(GL_TEXTURE_3D, 0, GL_R32F, m.padded[0], m.padded[1], m.padded[2], 0, GL_RED, GL_FLOAT, volume.padded_mu());
+  glTexImage3D(GL_TEXTURE_3D, 0, GL_R32F, m.padded[0], m.padded[1], m.padded[2], 0, GL_RED, GL_FLOAT,
+               volume.padded_mu());
   for (GLenum p : {GL_TEXTURE_MIN_FILTER, GL_TEXTURE_MAG_FILTER}) glTexParameteri(GL_TEXTURE_3D, p, GL_LINEAR);
   for (GLenum p : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R})
     glTexParameteri(GL_TEXTURE_3D, p, GL_CLAMP_TO_EDGE);
@@ -181,8 +189,8 @@ void GlProjector::project(const DetectorGeometry& g, Image* image) {
   glUniform1f(m.at("pixel_mm"), d.pixel_mm);
   glUniform1f(m.at("step_voxels"), m.step_voxels);
   glUniform2f(m.at("size"), float(g.width), float(g.height));
-  const float diagonal = std::sqrt(float(m.padded[0]) * m.padded[0] + float(m.padded[1]) * m.padded[1] +
-                                   float(m.padded[2]) * m.padded[2]);
+  const float diagonal =
+      std::sqrt(float(m.padded[0]) * m.padded[0] + float(m.padded[1]) * m.padded[1] + float(m.padded[2]) * m.padded[2]);
   glUniform1i(m.at("max_samples"), static_cast<int>(diagonal / m.step_voxels) + 2);
   glBindVertexArray(m.vao);
   glDrawArrays(GL_TRIANGLES, 0, 6);
@@ -193,8 +201,15 @@ void GlProjector::project(const DetectorGeometry& g, Image* image) {
 }
 
 bool gl_projector_available(std::string* why) {
-  const int attributes[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_PROFILE, OSMESA_CORE_PROFILE,
-                            OSMESA_CONTEXT_MAJOR_VERSION, 3, OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
+  const int attributes[] = {OSMESA_FORMAT,
+                            OSMESA_RGBA,
+                            OSMESA_PROFILE,
+                            OSMESA_CORE_PROFILE,
+                            OSMESA_CONTEXT_MAJOR_VERSION,
+                            3,
+                            OSMESA_CONTEXT_MINOR_VERSION,
+                            3,
+                            0};
   OSMesaContext c = OSMesaCreateContextAttribs(attributes, nullptr);
   if (!c) {
     if (why) *why = "OSMesa cannot make an OpenGL 3.3 core context";

@@ -92,7 +92,8 @@ Server::Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images, SessionL
   const int64_t t0 = realtime::monotonic_ns();
   impl_->anatomy = build_case(scene);
   const anatomy::Case& anatomy = *impl_->anatomy;
-  spdlog::info("anatomy '{}': {} branches, lumen {} triangles, {} ({:.0f} ms)", anatomy.name,
+  spdlog::info("anatomy '{}' ({}): {} branches, lumen {} triangles, {} ({:.0f} ms)", anatomy.name,
+               scene.case_dir.empty() ? std::string("procedural phantom") : "case " + scene.case_dir,
                anatomy.vessels.branches.size(), anatomy.lumen.triangles.size(),
                anatomy.ct ? fmt::format("CT {}x{}x{}", anatomy.ct->dims[0], anatomy.ct->dims[1], anatomy.ct->dims[2])
                           : std::string("no CT"),

@@ -15,6 +15,7 @@
 #include "anatomy/vessel/lumen_mesh.h"
 
 using namespace pcisim::physics;
+namespace anatomy = pcisim::anatomy;
 using Clock = std::chrono::steady_clock;
 
 static double median(std::vector<double> v) {

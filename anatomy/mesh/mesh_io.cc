@@ -251,9 +251,15 @@ TriangleMesh read_mesh(const std::string& path, double metres_per_unit) {
   } catch (const std::exception& e) {
     throw MeshIoError(e.what());
   }
-  TriangleMesh mesh = ext == ".stl"   ? read_stl(path, bytes, metres_per_unit)
-                      : ext == ".ply" ? read_ply(path, bytes, metres_per_unit)
-                                      : read_obj(path, bytes, metres_per_unit);
+  return parse_mesh(path, ext, bytes, metres_per_unit);
+}
+
+TriangleMesh parse_mesh(const std::string& path, const std::string& format, const std::string& bytes,
+                        double metres_per_unit) {
+  if (format != ".stl" && format != ".ply" && format != ".obj") fail(path, "unknown mesh format '" + format + "'");
+  TriangleMesh mesh = format == ".stl"   ? read_stl(path, bytes, metres_per_unit)
+                      : format == ".ply" ? read_ply(path, bytes, metres_per_unit)
+                                         : read_obj(path, bytes, metres_per_unit);
   const int n = static_cast<int>(mesh.vertices_m.size());
   for (size_t t = 0; t < mesh.triangles.size(); ++t)
     for (int k : mesh.triangles[t])

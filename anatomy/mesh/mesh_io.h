@@ -19,6 +19,9 @@ inline constexpr double kMillimetre = 1e-3;
 // by extension (.stl, .ply, .obj, any case). STL has no shared vertices: corners at the same
 // position are welded into one vertex, in order of first appearance.
 TriangleMesh read_mesh(const std::string& path, double metres_per_unit = kMillimetre);
+// the same from a file's bytes; `format` is ".stl", ".ply" or ".obj", `name` what errors say
+TriangleMesh parse_mesh(const std::string& name, const std::string& format, const std::string& bytes,
+                        double metres_per_unit = kMillimetre);
 
 // binary STL in millimetres; the 80-byte header says "SPACE=LPS" (3D Slicer reads the space from
 // it) and "units=mm". Coordinates are float32: write_stl then read_mesh gives the mesh rounded to

@@ -20,7 +20,8 @@ inline bool in(double x, double lo, double hi) {
 // with it and the scene loader reads with it, so the two cannot disagree
 struct ParamRange {
   double min, max;
-  bool contains(double x) const { return in(x, min, max); }
+  // (a part in 1e12 of slack: a bound given in mm and converted to m must still pass)
+  bool contains(double x) const { return in(x, min - 1e-12 * std::abs(min), max + 1e-12 * std::abs(max)); }
   // "[min, max]", shortest form ("[0, 90]")
   std::string describe() const;
 };

@@ -39,14 +39,19 @@ void validate(const WorldSpec& s) {
   if (s.guidewire) validate(*s.guidewire);
   if (const auto& c = s.vessel_contact) {
     // finer than 0.05 mm the field of the whole tree outgrows memory (0.1 mm: ~140 MB)
-    require(in(c->sdf_spacing_m, 5e-5, 2e-3), "vessel_contact.sdf_spacing_m: expected [5e-5, 2e-3] m");
-    require(in(c->wall_margin_m, 0.0, 1e-3), "vessel_contact.wall_margin_m: expected [0, 1e-3] m");
-    require(in(c->wall_stiffness_n_per_m, 0.0, 1e5), "vessel_contact.wall_stiffness_n_per_m: expected [0, 1e5]");
+    require(kContactSdfSpacingM.contains(c->sdf_spacing_m),
+            "vessel_contact.sdf_spacing_m: expected " + kContactSdfSpacingM.describe());
+    require(kContactWallMarginM.contains(c->wall_margin_m),
+            "vessel_contact.wall_margin_m: expected " + kContactWallMarginM.describe());
+    require(kContactWallStiffnessNPerM.contains(c->wall_stiffness_n_per_m),
+            "vessel_contact.wall_stiffness_n_per_m: expected " + kContactWallStiffnessNPerM.describe());
   }
   if (const auto& f = s.friction) {
-    require(in(f->body_static, 0.0, 2.0), "friction.body_static: expected [0, 2]");
+    require(kFrictionCoefficient.contains(f->body_static),
+            "friction.body_static: expected " + kFrictionCoefficient.describe());
     require(in(f->body_kinetic, 0.0, f->body_static), "friction.body_kinetic: expected [0, body_static]");
-    require(in(f->tip_static, 0.0, 2.0), "friction.tip_static: expected [0, 2]");
+    require(kFrictionCoefficient.contains(f->tip_static),
+            "friction.tip_static: expected " + kFrictionCoefficient.describe());
     require(in(f->tip_kinetic, 0.0, f->tip_static), "friction.tip_kinetic: expected [0, tip_static]");
   }
   if (s.blood_flow) validate(*s.blood_flow);

@@ -11,7 +11,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string bytes(reinterpret_cast<const char*>(data), size);
   try {
     (void)pcisim::anatomy::parse_mesh("fuzz", PCISIM_FUZZ_MESH_FORMAT, bytes);
-  } catch (const pcisim::anatomy::MeshIoError&) {
-  }
+  } catch (const pcisim::anatomy::MeshIoError&) {}
   return 0;
 }

@@ -41,11 +41,15 @@ double coronary_flow_fraction(double phase, double pulsatility) {
 }
 
 void validate(const BloodFlowParams& b) {
-  require(in(b.mean_velocity_m_per_s, 0.0, 2.0), "blood_flow.mean_velocity_m_per_s: expected [0, 2]");
-  require(in(b.drift_gain, 0.0, 1.0), "blood_flow.drift_gain: expected [0, 1]");
-  require(in(b.pulsatility, 0.0, 1.0), "blood_flow.pulsatility: expected [0, 1]");
-  require(in(b.cell_spacing_m, 2e-4, 5e-3), "blood_flow.cell_spacing_m: expected [2e-4, 5e-3] m");
-  require(in(b.link_radius_m, 2e-4, 5e-3), "blood_flow.link_radius_m: expected [2e-4, 5e-3] m");
+  require(kBloodMeanVelocityMPerS.contains(b.mean_velocity_m_per_s),
+          "blood_flow.mean_velocity_m_per_s: expected " + kBloodMeanVelocityMPerS.describe());
+  require(kBloodDriftGain.contains(b.drift_gain), "blood_flow.drift_gain: expected " + kBloodDriftGain.describe());
+  require(kBloodPulsatility.contains(b.pulsatility),
+          "blood_flow.pulsatility: expected " + kBloodPulsatility.describe());
+  require(kBloodCellSpacingM.contains(b.cell_spacing_m),
+          "blood_flow.cell_spacing_m: expected " + kBloodCellSpacingM.describe());
+  require(kBloodLinkRadiusM.contains(b.link_radius_m),
+          "blood_flow.link_radius_m: expected " + kBloodLinkRadiusM.describe());
 }
 
 BloodChainMail::BloodChainMail(const BloodFlowParams& params, const anatomy::VesselTree& tree) : params_(params) {

@@ -66,4 +66,16 @@ struct BloodFlowParams {
   double link_radius_m = 1.5e-3;  // blood chain-mails this close to a wire node link to it (eq 12)
 };
 
+// ranges of the contact, friction and blood fields (one source for World's validation and the
+// scene loader); a kinetic coefficient is also at most its static one
+inline constexpr ParamRange kContactSdfSpacingM{5e-5, 2e-3};
+inline constexpr ParamRange kContactWallMarginM{0, 1e-3};
+inline constexpr ParamRange kContactWallStiffnessNPerM{0, 1e5};
+inline constexpr ParamRange kFrictionCoefficient{0, 2};
+inline constexpr ParamRange kBloodMeanVelocityMPerS{0, 2};
+inline constexpr ParamRange kBloodDriftGain{0, 1};
+inline constexpr ParamRange kBloodPulsatility{0, 1};
+inline constexpr ParamRange kBloodCellSpacingM{2e-4, 5e-3};
+inline constexpr ParamRange kBloodLinkRadiusM{2e-4, 5e-3};
+
 }  // namespace pcisim::physics

@@ -1,6 +1,8 @@
 #pragma once
 // What a scene sets for effect `vessel_motion`: how the coronary tree is tied to the beating
 // heart's epicardium.
+#include "physics/param_checks.h"
+
 namespace pcisim::physics {
 
 struct VesselMotionParams {
@@ -14,5 +16,10 @@ struct VesselMotionParams {
   // lumen): samples within it weigh in by inverse squared distance
   double blend_radius_m = 0.004;
 };
+
+// each field's range, one source for VesselSkin's validation and the scene loader
+inline constexpr ParamRange kMotionAttachDistanceM{0, 0.05};
+inline constexpr ParamRange kMotionFadeDistanceM{0, 0.1};
+inline constexpr ParamRange kMotionBlendRadiusM{1e-3, 0.02};
 
 }  // namespace pcisim::physics

@@ -33,9 +33,12 @@ Eigen::Matrix3d frame(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const 
 }  // namespace
 
 void validate(const VesselMotionParams& m) {
-  require(in(m.attach_distance_m, 0.0, 0.05), "vessel_motion.attach_distance_m: expected [0, 0.05] m");
-  require(in(m.fade_distance_m, 0.0, 0.1), "vessel_motion.fade_distance_m: expected [0, 0.1] m");
-  require(in(m.blend_radius_m, 1e-3, 0.02), "vessel_motion.blend_radius_m: expected [1e-3, 0.02] m");
+  require(kMotionAttachDistanceM.contains(m.attach_distance_m),
+          "vessel_motion.attach_distance_m: expected " + kMotionAttachDistanceM.describe() + " m");
+  require(kMotionFadeDistanceM.contains(m.fade_distance_m),
+          "vessel_motion.fade_distance_m: expected " + kMotionFadeDistanceM.describe() + " m");
+  require(kMotionBlendRadiusM.contains(m.blend_radius_m),
+          "vessel_motion.blend_radius_m: expected " + kMotionBlendRadiusM.describe() + " m");
 }
 
 VesselSkin::VesselSkin(const anatomy::VesselTree& rest_tree, const Eigen::Matrix3Xd& rest_surface_m,

@@ -18,7 +18,9 @@ constexpr double kMm = 1e-3;
 // a number within the component's own range (physics/*_params.h), in the scene's unit
 double in_range(json::JsonReader& r, const std::string& key, double fallback, const physics::ParamRange& range,
                 double scene_unit = 1.0) {
-  return r.number(key, fallback / scene_unit, range.min / scene_unit, range.max / scene_unit) * scene_unit;
+  // bounds in the scene's unit, rounded to 12 digits (0.05 mm, not 0.05000000000000001)
+  auto tidy = [](double x) { return std::stod(fmt::format("{:.12g}", x)); };
+  return r.number(key, fallback / scene_unit, tidy(range.min / scene_unit), tidy(range.max / scene_unit)) * scene_unit;
 }
 int in_range(json::JsonReader& r, const std::string& key, int fallback, const physics::ParamRange& range) {
   return r.integer(key, fallback, static_cast<int>(range.min), static_cast<int>(range.max));
@@ -53,19 +55,20 @@ physics::GuidewireParams read_guidewire(json::JsonReader r) {
 
 physics::VesselContactParams read_vessel_contact(json::JsonReader r) {
   physics::VesselContactParams p;
-  p.sdf_spacing_m = r.number("sdf_spacing_mm", p.sdf_spacing_m / kMm, 0.05, 2.0) * kMm;
-  p.wall_margin_m = r.number("wall_margin_mm", p.wall_margin_m / kMm, 0.0, 1.0) * kMm;
-  p.wall_stiffness_n_per_m = r.number("wall_stiffness_n_per_m", p.wall_stiffness_n_per_m, 0, 1e5);
+  p.sdf_spacing_m = in_range(r, "sdf_spacing_mm", p.sdf_spacing_m, physics::kContactSdfSpacingM, kMm);
+  p.wall_margin_m = in_range(r, "wall_margin_mm", p.wall_margin_m, physics::kContactWallMarginM, kMm);
+  p.wall_stiffness_n_per_m =
+      in_range(r, "wall_stiffness_n_per_m", p.wall_stiffness_n_per_m, physics::kContactWallStiffnessNPerM);
   r.finish();
   return p;
 }
 
 physics::FrictionParams read_friction(json::JsonReader r) {
   physics::FrictionParams p;
-  p.body_static = r.number("body_static", p.body_static, 0, 2);
-  p.body_kinetic = r.number("body_kinetic", p.body_kinetic, 0, 2);
-  p.tip_static = r.number("tip_static", p.tip_static, 0, 2);
-  p.tip_kinetic = r.number("tip_kinetic", p.tip_kinetic, 0, 2);
+  p.body_static = in_range(r, "body_static", p.body_static, physics::kFrictionCoefficient);
+  p.body_kinetic = in_range(r, "body_kinetic", p.body_kinetic, physics::kFrictionCoefficient);
+  p.tip_static = in_range(r, "tip_static", p.tip_static, physics::kFrictionCoefficient);
+  p.tip_kinetic = in_range(r, "tip_kinetic", p.tip_kinetic, physics::kFrictionCoefficient);
   r.finish();
   if (p.body_kinetic > p.body_static) r.fail("body_kinetic", "expected at most body_static");
   if (p.tip_kinetic > p.tip_static) r.fail("tip_kinetic", "expected at most tip_static");
@@ -74,11 +77,12 @@ physics::FrictionParams read_friction(json::JsonReader r) {
 
 physics::BloodFlowParams read_blood_flow(json::JsonReader r) {
   physics::BloodFlowParams p;
-  p.mean_velocity_m_per_s = r.number("mean_velocity_mm_s", p.mean_velocity_m_per_s / kMm, 0, 2000) * kMm;
-  p.drift_gain = r.number("drift_gain", p.drift_gain, 0, 1);
-  p.pulsatility = r.number("pulsatility", p.pulsatility, 0, 1);
-  p.cell_spacing_m = r.number("cell_spacing_mm", p.cell_spacing_m / kMm, 0.2, 5) * kMm;
-  p.link_radius_m = r.number("link_radius_mm", p.link_radius_m / kMm, 0.2, 5) * kMm;
+  p.mean_velocity_m_per_s =
+      in_range(r, "mean_velocity_mm_s", p.mean_velocity_m_per_s, physics::kBloodMeanVelocityMPerS, kMm);
+  p.drift_gain = in_range(r, "drift_gain", p.drift_gain, physics::kBloodDriftGain);
+  p.pulsatility = in_range(r, "pulsatility", p.pulsatility, physics::kBloodPulsatility);
+  p.cell_spacing_m = in_range(r, "cell_spacing_mm", p.cell_spacing_m, physics::kBloodCellSpacingM, kMm);
+  p.link_radius_m = in_range(r, "link_radius_mm", p.link_radius_m, physics::kBloodLinkRadiusM, kMm);
   r.finish();
   return p;
 }
@@ -118,9 +122,9 @@ physics::HeartBeatParams read_heart_beat(json::JsonReader r, const std::string& 
 
 physics::VesselMotionParams read_vessel_motion(json::JsonReader r) {
   physics::VesselMotionParams p;
-  p.attach_distance_m = r.number("attach_mm", p.attach_distance_m / kMm, 0, 50) * kMm;
-  p.fade_distance_m = r.number("fade_mm", p.fade_distance_m / kMm, 0, 100) * kMm;
-  p.blend_radius_m = r.number("blend_radius_mm", p.blend_radius_m / kMm, 1, 20) * kMm;
+  p.attach_distance_m = in_range(r, "attach_mm", p.attach_distance_m, physics::kMotionAttachDistanceM, kMm);
+  p.fade_distance_m = in_range(r, "fade_mm", p.fade_distance_m, physics::kMotionFadeDistanceM, kMm);
+  p.blend_radius_m = in_range(r, "blend_radius_mm", p.blend_radius_m, physics::kMotionBlendRadiusM, kMm);
   r.finish();
   return p;
 }

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <unordered_map>
@@ -168,7 +169,11 @@ TriangleMesh read_ply(const std::string& path, const std::string& bytes, double 
   for (const auto& e : elements) {
     for (const auto& p : e.props) size_of(p.type);
     if (e.name == "vertex") {
-      if (e.count > (int64_t{1} << 28)) fail(path, "element vertex: too many vertices");
+      // every vertex takes at least 2 bytes of the file (a digit and a space, or more in binary):
+      // a header claiming more than the file can hold is refused before anything is allocated
+      if (e.count > static_cast<int64_t>(bytes.size() - pos) / 2)
+        fail(path, fmt::format("element vertex: {} vertices cannot fit in the {} bytes after the header", e.count,
+                               bytes.size() - pos));
       mesh.vertices_m.reserve(e.count);
     }
     for (int64_t i = 0; i < e.count; ++i) {
@@ -178,7 +183,13 @@ TriangleMesh read_ply(const std::string& path, const std::string& bytes, double 
           const double n = scalar(p.count_type);
           if (!(n >= 0 && n <= 1024)) fail(path, fmt::format("{} {}: list length {} out of range", e.name, i, n));
           std::vector<int> idx(static_cast<size_t>(n));
-          for (auto& k : idx) k = static_cast<int>(scalar(p.type));
+          for (auto& k : idx) {
+            // an index is checked before it becomes an int (a uint or a float can hold anything)
+            const double v = scalar(p.type);
+            if (!(v >= 0 && v <= std::numeric_limits<int>::max()))
+              fail(path, fmt::format("{} {}: vertex index {} out of range", e.name, i, v));
+            k = static_cast<int>(v);
+          }
           if (e.name == "face" && (p.name == "vertex_indices" || p.name == "vertex_index")) {
             if (idx.size() < 3) fail(path, fmt::format("face {}: fewer than 3 vertices", i));
             for (size_t k = 1; k + 1 < idx.size(); ++k) mesh.triangles.push_back({idx[0], idx[k], idx[k + 1]});

@@ -7,7 +7,10 @@
 
 #define PCISIM_STR2(x) #x
 #define PCISIM_STR(x) PCISIM_STR2(x)
-#include PCISIM_STR(pcisim_lcm / PCISIM_FUZZ_TYPE.hpp)
+// (not formatted: spaces around the slash would enter the header name)
+// clang-format off
+#include PCISIM_STR(pcisim_lcm/PCISIM_FUZZ_TYPE.hpp)
+// clang-format on
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   pcisim_lcm::PCISIM_FUZZ_TYPE message;

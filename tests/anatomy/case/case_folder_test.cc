@@ -248,6 +248,23 @@ TEST(MeshFiles, StlPlyAndObjReadToTheSameSurface) {
     EXPECT_NE(std::string(e.what()).find("bad.obj: line 2: vertex 2 does not exist"), std::string::npos) << e.what();
   }
   EXPECT_THROW(read_mesh((dir / "l.vtk").string()), MeshIoError);
+  // found by fuzzing (mesh_ply): a face index beyond int was cast (UB); a header claiming more
+  // vertices than the file holds reserved gigabytes before reading them
+  auto ply_error = [](const std::string& bytes) {
+    try {
+      parse_mesh("f.ply", ".ply", bytes);
+    } catch (const MeshIoError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n";
+  EXPECT_EQ(ply_error(head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 4294967295\n"),
+            "f.ply: face 0: vertex index 4294967295 out of range");
+  EXPECT_EQ(ply_error("ply\nformat ascii 1.0\nelement vertex 268435456\nproperty float x\nend_header\n0 0 0\n"),
+            "f.ply: element vertex: 268435456 vertices cannot fit in the 6 bytes after the header");
   fs::remove_all(dir);
 }
 

@@ -166,6 +166,16 @@ TriangleMesh read_ply(const std::string& path, const std::string& bytes, double 
     return get(double{});
   };
   TriangleMesh mesh;
+  // every row of every element takes at least one byte of the file: a count the file cannot hold,
+  // or rows of no properties (which would loop without reading), is refused before the loop
+  const size_t data_bytes = bytes.size() - pos;
+  for (const auto& e : elements) {
+    if (e.count > 0 && e.props.empty())
+      fail(path, fmt::format("element {}: {} rows of no properties", e.name, e.count));
+    if (static_cast<uint64_t>(e.count) > data_bytes)
+      fail(path,
+           fmt::format("element {}: {} rows cannot fit in the {} bytes after the header", e.name, e.count, data_bytes));
+  }
   for (const auto& e : elements) {
     for (const auto& p : e.props) size_of(p.type);
     if (e.name == "vertex") {

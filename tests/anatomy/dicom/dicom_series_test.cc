@@ -91,14 +91,14 @@ TEST_F(DicomSeries, SameVoxelsAndGeometryAsTheSameVolumeInNrrd) {
   fs::remove(dir_.parent_path() / (dir_.filename().string() + ".nrrd"));
   const Volume dcm = read_dicom_series(dir_.string());
   ASSERT_EQ(dcm.dims, nrrd.dims);
-  EXPECT_LT((dcm.origin_mm - nrrd.origin_mm).norm(), 1e-4) << dcm.origin_mm.transpose();
-  EXPECT_LT((dcm.spacing_mm - nrrd.spacing_mm).norm(), 1e-4) << dcm.spacing_mm.transpose();
-  EXPECT_LT((dcm.direction - nrrd.direction).norm(), 1e-5) << dcm.direction;
+  EXPECT_LT((dcm.origin_mm - nrrd.origin_mm).norm(), 1e-6) << dcm.origin_mm.transpose();
+  EXPECT_LT((dcm.spacing_mm - nrrd.spacing_mm).norm(), 1e-6) << dcm.spacing_mm.transpose();
+  EXPECT_LT((dcm.direction - nrrd.direction).norm(), 1e-6) << dcm.direction;
   ASSERT_EQ(dcm.type, VoxelType::kInt16);
   EXPECT_EQ(dcm.hu_i16, nrrd.hu_i16);
   // a point maps to the same voxel in both
   const Eigen::Vector3d p = nrrd.index_to_physical_mm(Eigen::Vector3d(7, 3, 5));
-  EXPECT_LT((dcm.physical_to_index(p) - Eigen::Vector3d(7, 3, 5)).norm(), 1e-4);
+  EXPECT_LT((dcm.physical_to_index(p) - Eigen::Vector3d(7, 3, 5)).norm(), 1e-6);
 }
 
 TEST_F(DicomSeries, AMissingSliceIsRefusedNamingTheSliceAfterTheGap) {

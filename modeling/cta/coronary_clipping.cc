@@ -1,0 +1,187 @@
+#include "modeling/cta/coronary_clipping.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "modeling/cta/modeling_error.h"
+
+namespace pcisim::modeling {
+namespace {
+
+using Eigen::Vector3d;
+
+Vector3d physical(const ImageGrid& g, int64_t n) {
+  const auto [i, j, k] = g.ijk(n);
+  return g.physical_mm(Vector3d(double(i), double(j), double(k)));
+}
+
+// the voxel of largest distance within radius_mm of p (restricted to mask != 0), or -1
+int64_t ridge_near(const FloatImage& dist, const Vector3d& p_mm, double radius_mm) {
+  const ImageGrid& g = dist.grid;
+  const Vector3d c = g.continuous_index(p_mm);
+  const Vector3d r = Vector3d::Constant(radius_mm).cwiseQuotient(g.spacing_mm);
+  int64_t best = -1;
+  float best_d = 0;
+  for (int64_t k = std::max<int64_t>(0, std::floor(c.z() - r.z())); k <= std::min<int64_t>(g.dims[2] - 1, std::ceil(c.z() + r.z())); ++k) {
+    for (int64_t j = std::max<int64_t>(0, std::floor(c.y() - r.y())); j <= std::min<int64_t>(g.dims[1] - 1, std::ceil(c.y() + r.y())); ++j) {
+      for (int64_t i = std::max<int64_t>(0, std::floor(c.x() - r.x())); i <= std::min<int64_t>(g.dims[0] - 1, std::ceil(c.x() + r.x())); ++i) {
+        const int64_t n = g.index(i, j, k);
+        if (dist.v[n] <= best_d) continue;
+        if ((Vector3d(i, j, k) - c).cwiseProduct(g.spacing_mm).norm() > radius_mm) continue;
+        best = n;
+        best_d = dist.v[n];
+      }
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+Clipping clip_to_coronaries(const LumenSegmentation& seg, const std::vector<Vector3d>& seeds_mm,
+                            const ClippingOptions& o) {
+  const ImageGrid& g = seg.mask.grid;
+  Clipping out;
+  out.distance_mm = distance_inside_mm(seg.mask, o.threads);
+
+  // 1. the opening by a ball: core voxels deep enough, grown back by the same radius
+  Mask core = Mask::zeros(g);
+  for (size_t n = 0; n < core.v.size(); ++n) core.v[n] = out.distance_mm.v[n] >= o.big_radius_mm ? 0 : 1;
+  // distance of every non-core voxel to the core (the core is the mask's "outside" here)
+  const FloatImage to_core = distance_inside_mm(core, o.threads);
+  out.large = Mask::zeros(g);
+  const double reach = o.big_radius_mm + 0.5 * g.spacing_mm.minCoeff();
+  for (size_t n = 0; n < core.v.size(); ++n) out.large.v[n] = seg.mask.v[n] && to_core.v[n] <= reach ? 1 : 0;
+  core = Mask{};
+
+  // the seed's place in the aorta: the deepest voxel near it
+  const int64_t seed_ridge = ridge_near(out.distance_mm, seeds_mm[0], 10.0);
+  if (seed_ridge < 0 || !out.large.v[seed_ridge]) {
+    throw ModelingError(fmt::format(
+        "seed 1 at ({:.1f}, {:.1f}, {:.1f}) mm is not in a lumen wider than {:.1f} mm: put it inside the ascending aorta",
+        seeds_mm[0].x(), seeds_mm[0].y(), seeds_mm[0].z(), 2 * o.big_radius_mm));
+  }
+  out.aorta_at_seed = {physical(g, seed_ridge), out.distance_mm.v[seed_ridge]};
+  const double aortic_radius_mm = out.distance_mm.v[seed_ridge];
+
+  // 2. thin pieces, 26-connected, with their contact on the large lumen
+  const Neighbours26 nb(g.spacing_mm);
+  std::vector<int32_t> piece_of(g.size(), -1);
+  std::vector<int64_t> stack;
+  std::vector<int64_t> seed_voxels;
+  for (size_t s = 1; s < seeds_mm.size(); ++s) {
+    const Vector3d c = g.continuous_index(seeds_mm[s]);
+    const int64_t i = std::llround(c.x()), j = std::llround(c.y()), k = std::llround(c.z());
+    if (g.inside(i, j, k)) seed_voxels.push_back(g.index(i, j, k));
+  }
+  int32_t next_id = 0;
+  for (int64_t start = 0; start < g.size(); ++start) {
+    if (!seg.mask.v[start] || out.large.v[start] || piece_of[start] >= 0) continue;
+    CoronaryPiece piece;
+    std::vector<int64_t> contact;
+    piece_of[start] = next_id;
+    stack.assign(1, start);
+    while (!stack.empty()) {
+      const int64_t n = stack.back();
+      stack.pop_back();
+      piece.voxels.push_back(n);
+      const auto [i, j, k] = g.ijk(n);
+      bool touches = false;
+      for (int q = 0; q < 26; ++q) {
+        const int64_t a = i + nb.d[q][0], b = j + nb.d[q][1], c = k + nb.d[q][2];
+        if (!g.inside(a, b, c)) continue;
+        const int64_t m = g.index(a, b, c);
+        if (!seg.mask.v[m]) continue;
+        if (out.large.v[m]) {
+          touches = true;
+        } else if (piece_of[m] < 0) {
+          piece_of[m] = next_id;
+          stack.push_back(m);
+        }
+      }
+      if (touches) contact.push_back(n);
+    }
+    ++next_id;
+    const bool seeded = std::any_of(seed_voxels.begin(), seed_voxels.end(),
+                                    [&](int64_t s) { return piece_of[s] == next_id - 1; });
+    const Vector3d first = physical(g, start);
+    auto drop = [&](const std::string& why) {
+      if (piece.voxels.size() >= 50) {
+        out.dropped.push_back(fmt::format("{} voxels near ({:.1f}, {:.1f}, {:.1f}) mm: {}", piece.voxels.size(),
+                                          first.x(), first.y(), first.z(), why));
+      }
+    };
+    if (contact.empty()) {
+      drop("not attached to the aorta or a chamber");
+      continue;
+    }
+    // the ostium: the contact voxel nearest the contact's centroid
+    Vector3d centroid = Vector3d::Zero();
+    for (int64_t n : contact) centroid += physical(g, n);
+    centroid /= double(contact.size());
+    double best = 1e300;
+    for (int64_t n : contact) {
+      const double d = (physical(g, n) - centroid).squaredNorm();
+      if (d < best) {
+        best = d;
+        piece.ostium = n;
+      }
+    }
+    piece.ostium_mm = physical(g, piece.ostium);
+    for (int64_t n : piece.voxels) piece.reach_mm = std::max(piece.reach_mm, (physical(g, n) - piece.ostium_mm).norm());
+    const double from_seed_mm = (piece.ostium_mm - seeds_mm[0]).norm();
+    if (!seeded && piece.reach_mm < o.min_length_mm) {
+      drop(fmt::format("reaches {:.1f} mm from its contact, under {:.1f} mm", piece.reach_mm, o.min_length_mm));
+      continue;
+    }
+    if (!seeded && from_seed_mm > o.max_ostium_distance_mm) {
+      drop(fmt::format("attached {:.1f} mm from the aortic seed, beyond {:.1f} mm (a chamber, not the aortic root)",
+                       from_seed_mm, o.max_ostium_distance_mm));
+      continue;
+    }
+    const int64_t c = ridge_near(out.distance_mm, piece.ostium_mm, aortic_radius_mm + 5.0);
+    piece.aortic_centre_mm = c >= 0 ? physical(g, c) : piece.ostium_mm;
+    out.pieces.push_back(std::move(piece));
+  }
+  if (out.pieces.empty()) {
+    throw ModelingError(fmt::format(
+        "no coronary artery found: no thin contrast-filled vessel of at least {:.0f} mm leaves the aorta within {:.0f} mm "
+        "of the seed (lumen HU {:.0f}..{:.0f}; {} thin pieces cut away)",
+        o.min_length_mm, o.max_ostium_distance_mm, seg.lower_hu, seg.upper_hu, out.dropped.size()));
+  }
+  std::sort(out.pieces.begin(), out.pieces.end(),
+            [](const CoronaryPiece& a, const CoronaryPiece& b) { return a.reach_mm > b.reach_mm; });
+
+  // 3. the aorta: from below the ostia through the seed, then up the ridge of the distance map
+  Vector3d root = Vector3d::Zero();
+  for (const auto& p : out.pieces) root += p.aortic_centre_mm;
+  root /= double(out.pieces.size());
+  const Vector3d seed_c = out.aorta_at_seed.position_m;
+  Vector3d axis = seed_c - root;
+  if (axis.norm() < 1.0) axis = Vector3d(0, 0, 1);
+  axis.normalize();
+  std::vector<Vector3d> pts;
+  const double span = (seed_c - root).norm();
+  for (double s = -5.0; s <= span; s += 1.0) pts.push_back(root + s * axis);
+  Vector3d p = seed_c, dir = axis;
+  for (double s = 0; s < o.aorta_above_seed_mm; s += 2.0) {
+    const int64_t c = ridge_near(out.distance_mm, p + 2.0 * dir, 0.25 * aortic_radius_mm + 1.0);
+    if (c < 0 || out.distance_mm.v[c] < 0.5 * aortic_radius_mm) break;
+    const Vector3d q = physical(g, c);
+    if ((q - p).norm() < 0.5) break;
+    dir = (0.5 * dir + 0.5 * (q - p).normalized()).normalized();
+    p = q;
+    pts.push_back(p);
+  }
+  for (const Vector3d& q : pts) {
+    const Vector3d ci = g.continuous_index(q);
+    const int64_t i = std::llround(ci.x()), j = std::llround(ci.y()), k = std::llround(ci.z());
+    const double r = g.inside(i, j, k) ? out.distance_mm.v[g.index(i, j, k)] : 0.0;
+    out.aorta.push_back({q, r > 0 ? r : aortic_radius_mm});
+  }
+  return out;
+}
+
+}  // namespace pcisim::modeling

@@ -1,0 +1,52 @@
+#pragma once
+// Stage (b) of the CTA pipeline (docs/modeling.md): from the coarse lumen, keep the aorta and the
+// coronary trees connected to it; cut away chambers and everything else the contrast region
+// reached. The paper did this by hand. The rule here, automatic:
+//  1. the "large" lumen is the morphological opening of the region by a ball of big_radius_mm
+//     (voxels within big_radius_mm of a voxel whose distance to the region's edge is at least
+//     big_radius_mm): the aorta, the chambers and their connections; no coronary artery is that
+//     wide (a left main is at most ~5.5 mm across);
+//  2. what is left are thin structures; each 26-connected piece of them is a coronary tree when it
+//     touches the large lumen (its ostium), reaches at least min_length_mm from there (trabeculae,
+//     noise and a blurred edge do not) and its ostium lies within max_ostium_distance_mm of the
+//     aortic seed (the coronary ostia sit in the aortic root; pieces on a ventricle or an atrium are
+//     farther). A piece holding a further seed is kept whatever the rule says.
+//  3. the aorta's centerline runs from the ostia's level through the seed and up the ascending
+//     aorta along the ridge of the distance map.
+#include <string>
+#include <vector>
+#include "anatomy/vessel/vessel_tree.h"
+#include "modeling/cta/lumen_segmentation.h"
+
+namespace pcisim::modeling {
+
+struct ClippingOptions {
+  double big_radius_mm = 3.0;
+  double min_length_mm = 15.0;
+  double max_ostium_distance_mm = 70.0;
+  double aorta_above_seed_mm = 30.0;  // how far the aortic centerline goes on past the seed
+  int threads = 0;
+};
+
+struct CoronaryPiece {
+  std::vector<int64_t> voxels;  // crop indices
+  int64_t ostium = -1;          // the piece's voxel at the middle of its contact with the large lumen
+  double reach_mm = 0;          // farthest voxel from the ostium
+  Eigen::Vector3d ostium_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d aortic_centre_mm = Eigen::Vector3d::Zero();  // the aorta's centre beside the ostium
+};
+
+struct Clipping {
+  FloatImage distance_mm;            // each lumen voxel's distance to the lumen's edge (crop grid)
+  Mask large;                        // the opening: aorta, chambers
+  std::vector<CoronaryPiece> pieces; // kept, largest reach first
+  std::vector<std::string> dropped;  // why each other thin piece was cut away (pieces of >= 50 voxels)
+  anatomy::CenterlinePoint aorta_at_seed;
+  std::vector<anatomy::CenterlinePoint> aorta;  // proximal (root) to distal (up the ascending aorta), mm
+};
+
+// throws ModelingError when no piece qualifies (a CTA without visible coronaries)
+Clipping clip_to_coronaries(const LumenSegmentation& seg, const std::vector<Eigen::Vector3d>& seeds_mm,
+                            const ClippingOptions& options);
+
+}  // namespace pcisim::modeling

@@ -1,0 +1,206 @@
+#include "modeling/cta/coronary_labels.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <functional>
+
+namespace pcisim::modeling {
+namespace {
+
+using Eigen::Vector3d;
+
+double polyline_length(const std::vector<Vector3d>& p, size_t from = 0) {
+  double s = 0;
+  for (size_t i = from + 1; i < p.size(); ++i) s += (p[i] - p[i - 1]).norm();
+  return s;
+}
+
+// each branch's own length plus that of everything hanging from it
+std::vector<double> subtree_lengths(const std::vector<ModelBranch>& b) {
+  std::vector<double> len(b.size());
+  for (size_t i = 0; i < b.size(); ++i) len[i] = polyline_length(b[i].points_mm);
+  for (size_t i = b.size(); i-- > 0;) {
+    if (b[i].parent >= 0) len[b[i].parent] += len[i];
+  }
+  return len;
+}
+
+// branch 0 cut at point `at` into two: 0 keeps [0, at], a new last branch holds [at, end] and the
+// children that left from there
+std::vector<ModelBranch> split_first(std::vector<ModelBranch> b, int at, int* tail_index) {
+  ModelBranch tail;
+  tail.points_mm.assign(b[0].points_mm.begin() + at, b[0].points_mm.end());
+  tail.radius_mm.assign(b[0].radius_mm.begin() + at, b[0].radius_mm.end());
+  tail.parent = 0;
+  tail.parent_point = at;
+  b[0].points_mm.resize(at + 1);
+  b[0].radius_mm.resize(at + 1);
+  const int t = static_cast<int>(b.size());
+  for (auto& c : b) {
+    if (c.parent == 0 && c.parent_point > at) {
+      c.parent = t;
+      c.parent_point -= at;
+    }
+  }
+  b.push_back(std::move(tail));
+  *tail_index = t;
+  return b;
+}
+
+double mean_y_first(const ModelBranch& b, double mm) {
+  double s = 0, y = 0;
+  int n = 0;
+  for (size_t i = 0; i < b.points_mm.size() && s <= mm; ++i) {
+    if (i > 0) s += (b.points_mm[i] - b.points_mm[i - 1]).norm();
+    y += b.points_mm[i].y();
+    ++n;
+  }
+  return n ? y / n : 0.0;
+}
+
+}  // namespace
+
+anatomy::VesselTree label_coronary_trees(const std::vector<anatomy::CenterlinePoint>& aorta_mm,
+                                         const std::vector<ModelTree>& trees, const LabelOptions& o) {
+  anatomy::VesselTree out;
+  anatomy::VesselBranch aorta{"aorta", -1, -1, {}};
+  for (const auto& p : aorta_mm) aorta.points.push_back({p.position_m * 1e-3, p.radius_m * 1e-3});
+  out.branches.push_back(std::move(aorta));
+  const std::vector<anatomy::CenterlinePoint> ap = out.branches[0].points;  // a copy: the list grows
+  auto nearest_aorta_point = [&](const Vector3d& p_mm) {
+    int best = 0;
+    for (size_t i = 0; i < ap.size(); ++i) {
+      if ((ap[i].position_m * 1e3 - p_mm).norm() < (ap[best].position_m * 1e3 - p_mm).norm()) best = int(i);
+    }
+    return best;
+  };
+
+  bool have_left = false, have_right = false;
+  int generic = 3;
+  for (const ModelTree& tree : trees) {
+    if (tree.branches.empty()) continue;
+    std::vector<ModelBranch> b = tree.branches;
+    // the piece from the aortic centre to the ostium, in front of the first branch
+    const int on_aorta = nearest_aorta_point(tree.aortic_centre_mm);
+    const Vector3d start = ap[on_aorta].position_m * 1e3;
+    const Vector3d gap = b[0].points_mm.front() - start;
+    const int extra = static_cast<int>(gap.norm() / o.point_spacing_mm);
+    if (extra > 0) {
+      std::vector<Vector3d> p;
+      std::vector<double> r;
+      for (int i = 0; i < extra; ++i) {
+        p.push_back(start + gap * (double(i) / extra));
+        r.push_back(b[0].radius_mm.front());
+      }
+      b[0].points_mm.insert(b[0].points_mm.begin(), p.begin(), p.end());
+      b[0].radius_mm.insert(b[0].radius_mm.begin(), r.begin(), r.end());
+      for (auto& c : b) {
+        if (c.parent == 0) c.parent_point += extra;
+      }
+    }
+
+    // which tree, and its names
+    const bool left = (tree.ostium_mm - tree.aortic_centre_mm).x() > 0;
+    std::vector<std::string> name(b.size());
+    if (left && !have_left) {
+      have_left = true;
+      // the first major branch point within the LM's reach
+      const std::vector<double> sub = subtree_lengths(b);
+      int split = -1;
+      double arc = 0;
+      for (size_t i = 1; i < b[0].points_mm.size() && arc <= o.lm_max_length_mm + gap.norm(); ++i) {
+        arc += (b[0].points_mm[i] - b[0].points_mm[i - 1]).norm();
+        for (size_t c = 1; c < b.size(); ++c) {
+          if (b[c].parent == 0 && b[c].parent_point == int(i) && sub[c] >= o.major_branch_mm) split = int(i);
+        }
+        if (split >= 0) break;
+      }
+      if (split < 0) {
+        name.assign(b.size(), "");
+        name[0] = "LCA";
+      } else {
+        int tail = -1;
+        b = split_first(std::move(b), split, &tail);
+        name.assign(b.size(), "");
+        name[0] = "LM";
+        // the other continuation: the major child at the split
+        int other = -1;
+        const std::vector<double> sub2 = subtree_lengths(b);
+        for (size_t c = 1; c < b.size(); ++c) {
+          if (int(c) != tail && b[c].parent == 0 && b[c].parent_point == split &&
+              (other < 0 || sub2[c] > sub2[other])) {
+            other = int(c);
+          }
+        }
+        const bool tail_anterior = other < 0 || mean_y_first(b[tail], 15) <= mean_y_first(b[other], 15);
+        name[tail] = tail_anterior ? "LAD" : "LCx";
+        if (other >= 0) name[other] = tail_anterior ? "LCx" : "LAD";
+      }
+    } else if (!left && !have_right) {
+      have_right = true;
+      name.assign(b.size(), "");
+      name[0] = "RCA";
+    } else {
+      name.assign(b.size(), "");
+      name[0] = fmt::format("CA{}", generic++);
+    }
+    // side branches, proximal first: diagonals on the LAD, marginals on the LCx, else by parent
+    std::vector<int> order(b.size());
+    for (size_t i = 0; i < b.size(); ++i) order[i] = int(i);
+    std::function<void(int)> name_children = [&](int p) {
+      std::vector<int> kids;
+      for (size_t c = 0; c < b.size(); ++c) {
+        if (b[c].parent == p && name[c].empty()) kids.push_back(int(c));
+      }
+      std::sort(kids.begin(), kids.end(), [&](int a, int c) { return b[a].parent_point < b[c].parent_point; });
+      int k = 1;
+      for (int c : kids) {
+        if (name[p] == "LAD") {
+          name[c] = fmt::format("D{}", k++);
+        } else if (name[p] == "LCx") {
+          name[c] = fmt::format("OM{}", k++);
+        } else {
+          name[c] = fmt::format("{}-{}", name[p], k++);
+        }
+      }
+      for (size_t c = 0; c < b.size(); ++c) {
+        if (b[c].parent == p) name_children(int(c));
+      }
+    };
+    name_children(0);
+
+    // into the tree, parents first (breadth first from the first branch)
+    std::vector<int> index_of(b.size(), -1);
+    std::vector<int> queue{0};
+    for (size_t q = 0; q < queue.size(); ++q) {
+      const int i = queue[q];
+      anatomy::VesselBranch vb;
+      vb.name = name[i];
+      if (i == 0) {
+        vb.parent = 0;
+        vb.parent_point = on_aorta;
+      } else {
+        vb.parent = index_of[b[i].parent];
+        vb.parent_point = std::min<int>(b[i].parent_point, int(b[b[i].parent].points_mm.size()) - 1);
+      }
+      for (size_t k = 0; k < b[i].points_mm.size(); ++k) {
+        vb.points.push_back({b[i].points_mm[k] * 1e-3, b[i].radius_mm[k] * 1e-3});
+      }
+      // a child starts exactly on its parent's point
+      if (i != 0 && !vb.points.empty()) {
+        vb.points.front().position_m = out.branches[vb.parent].points[vb.parent_point].position_m;
+      } else if (!vb.points.empty()) {
+        vb.points.front().position_m = ap[on_aorta].position_m;
+      }
+      index_of[i] = static_cast<int>(out.branches.size());
+      out.branches.push_back(std::move(vb));
+      for (size_t c = 0; c < b.size(); ++c) {
+        if (b[c].parent == i) queue.push_back(int(c));
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace pcisim::modeling

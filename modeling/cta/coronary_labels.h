@@ -1,0 +1,46 @@
+#pragma once
+// Stage (f) of the CTA pipeline (docs/modeling.md): the traced trees as one vessel tree with
+// anatomical names where the anatomy allows them to be inferred, generic names otherwise.
+//  - the aorta is the root;
+//  - a tree whose ostium lies on the patient's left of the aortic centre (+x in LPS) is the left
+//    coronary artery, on the right the right coronary artery (RCA); a third tree is "CA3", ...;
+//  - left: the left main (LM) runs from the ostium to the first branch point within
+//    lm_max_length_mm that starts a subtree of at least major_branch_mm; of its two continuations
+//    the more anterior (smaller y over its first 15 mm) is the LAD, the other the LCx. No such
+//    branch point: the tree is "LCA";
+//  - side branches of the LAD are diagonals D1, D2, ... and of the LCx obtuse marginals OM1, ...,
+//    proximal first; anything else is named after its parent: "RCA-1", "D1-1", ...
+// Every tree starts on the aortic centerline: a straight piece from the aortic centre beside the
+// ostium to the ostium is put in front of its first branch (as the phantom's trees start).
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+#include "anatomy/vessel/vessel_tree.h"
+
+namespace pcisim::modeling {
+
+// a branch in millimetres, before names
+struct ModelBranch {
+  std::vector<Eigen::Vector3d> points_mm;
+  std::vector<double> radius_mm;
+  int parent = -1;  // within its tree; -1: the tree's first branch (from the ostium)
+  int parent_point = -1;
+};
+
+struct ModelTree {
+  std::vector<ModelBranch> branches;  // parents first
+  Eigen::Vector3d ostium_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d aortic_centre_mm = Eigen::Vector3d::Zero();
+};
+
+struct LabelOptions {
+  double lm_max_length_mm = 30.0;
+  double major_branch_mm = 15.0;
+  double point_spacing_mm = 0.5;  // of the piece put in front from the aortic centre
+};
+
+// the named tree in metres, parents before children, "aorta" first
+anatomy::VesselTree label_coronary_trees(const std::vector<anatomy::CenterlinePoint>& aorta_mm,
+                                         const std::vector<ModelTree>& trees, const LabelOptions& options);
+
+}  // namespace pcisim::modeling

@@ -1,0 +1,169 @@
+#include "modeling/cta/cta_pipeline.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <thread>
+
+#include "modeling/cta/modeling_error.h"
+
+namespace pcisim::modeling {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using Eigen::Vector3d;
+
+// runs a stage, timing it and telling the progress callback
+template <typename F>
+void stage(CtaModel* m, const std::string& name, const StageProgress& progress, F&& body) {
+  StageReport r;
+  r.name = name;
+  if (progress) progress(r, false);
+  const auto t0 = Clock::now();
+  body(r);
+  r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  if (progress) progress(r, true);
+  m->stages.push_back(std::move(r));
+}
+
+std::vector<double> median_filter(const std::vector<double>& v, int window) {
+  if (window < 2 || v.size() < 3) return v;
+  std::vector<double> out(v.size()), w;
+  const int h = window / 2;
+  for (int i = 0; i < int(v.size()); ++i) {
+    w.clear();
+    for (int k = std::max(0, i - h); k <= std::min<int>(v.size() - 1, i + h); ++k) w.push_back(v[k]);
+    std::nth_element(w.begin(), w.begin() + w.size() / 2, w.end());
+    out[i] = w[w.size() / 2];
+  }
+  return out;
+}
+
+}  // namespace
+
+CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>& seeds_mm,
+                         const CtaPipelineOptions& options, const StageProgress& progress) {
+  CtaPipelineOptions o = options;
+  const int threads = o.threads > 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
+  o.segmentation.threads = o.clipping.threads = threads;
+  CtaModel m;
+
+  LumenSegmentation seg;
+  stage(&m, "segmentation", progress, [&](StageReport& r) {
+    seg = segment_lumen(ct, seeds_mm, o.segmentation);
+    r.figures = {{"seed_hu", seg.seed_hu},
+                 {"lower_hu", seg.lower_hu},
+                 {"upper_hu", seg.upper_hu},
+                 {"region_voxels", double(seg.region_voxels)},
+                 {"level_set_iterations", double(seg.level_set_iterations)},
+                 {"lumen_voxels", double(seg.mask.count())},
+                 {"crop_voxels", double(seg.mask.grid.size())}};
+  });
+
+  Clipping clip;
+  stage(&m, "clipping", progress, [&](StageReport& r) {
+    clip = clip_to_coronaries(seg, seeds_mm, o.clipping);
+    r.figures = {{"large_voxels", double(clip.large.count())},
+                 {"coronary_trees", double(clip.pieces.size())},
+                 {"aortic_radius_mm", clip.aorta_at_seed.radius_m},
+                 {"pieces_cut_away", double(clip.dropped.size())}};
+    for (const auto& p : clip.pieces) {
+      r.notes.push_back(fmt::format("kept: {} voxels, ostium ({:.1f}, {:.1f}, {:.1f}) mm, reaching {:.1f} mm",
+                                    p.voxels.size(), p.ostium_mm.x(), p.ostium_mm.y(), p.ostium_mm.z(), p.reach_mm));
+    }
+    for (const auto& d : clip.dropped) r.notes.push_back("cut away: " + d);
+  });
+
+  // (c) centerlines, then the B-spline of each branch
+  std::vector<ModelTree> trees;
+  stage(&m, "centerlines", progress, [&](StageReport& r) {
+    int branches = 0;
+    double length = 0;
+    for (const CoronaryPiece& piece : clip.pieces) {
+      const std::vector<TracedBranch> traced = trace_centerlines(clip, piece, o.tracing);
+      ModelTree t;
+      t.ostium_mm = piece.ostium_mm;
+      t.aortic_centre_mm = piece.aortic_centre_mm;
+      for (const TracedBranch& tb : traced) {
+        ModelBranch b;
+        b.points_mm = fit_and_sample(tb.points_mm, o.spline);
+        b.radius_mm = carry_along(tb.points_mm, tb.radius_mm, b.points_mm);
+        b.parent = tb.parent;
+        if (tb.parent >= 0) {
+          // the join, on the parent's samples
+          const Vector3d join = traced[tb.parent].points_mm[tb.parent_point];
+          const auto& pp = t.branches[tb.parent].points_mm;
+          int best = 0;
+          for (size_t i = 0; i < pp.size(); ++i) {
+            if ((pp[i] - join).squaredNorm() < (pp[best] - join).squaredNorm()) best = int(i);
+          }
+          b.parent_point = best;
+          b.points_mm.front() = pp[best];
+        }
+        length += (b.points_mm.size() - 1) * o.spline.sample_spacing_mm;
+        t.branches.push_back(std::move(b));
+      }
+      branches += int(t.branches.size());
+      trees.push_back(std::move(t));
+    }
+    r.figures = {{"branches", double(branches)}, {"centerline_mm", length}};
+  });
+
+  // (d) radii from the cross-sections, on every sample, in parallel over branches
+  stage(&m, "radii", progress, [&](StageReport& r) {
+    std::vector<ModelBranch*> all;
+    for (auto& t : trees) {
+      for (auto& b : t.branches) all.push_back(&b);
+    }
+    std::atomic<size_t> next{0};
+    std::atomic<int64_t> sections{0};
+    auto work = [&] {
+      RadiusWorkspace ws;
+      for (size_t i = next++; i < all.size(); i = next++) {
+        ModelBranch& b = *all[i];
+        const size_t n = b.points_mm.size();
+        std::vector<double> rad(n);
+        for (size_t k = 0; k < n; ++k) {
+          const Vector3d t = b.points_mm[std::min(k + 1, n - 1)] - b.points_mm[k > 0 ? k - 1 : 0];
+          rad[k] = t.norm() > 0 ? cross_section_radius(seg.hu, b.points_mm[k], t, b.radius_mm[k], o.radius, &ws)
+                                : b.radius_mm[k];
+        }
+        b.radius_mm = median_filter(rad, o.radius_median_window);
+        sections += int64_t(n);
+      }
+    };
+    std::vector<std::thread> pool;
+    for (int t = 1; t < threads; ++t) pool.emplace_back(work);
+    work();
+    for (auto& t : pool) t.join();
+    r.figures = {{"cross_sections", double(sections.load())}};
+  });
+
+  stage(&m, "labels", progress, [&](StageReport& r) {
+    m.model.vessels = label_coronary_trees(clip.aorta, trees, o.labels);
+    std::string names;
+    for (const auto& b : m.model.vessels.branches) names += (names.empty() ? "" : " ") + b.name;
+    r.notes.push_back("branches: " + names);
+    r.figures = {{"branches", double(m.model.vessels.branches.size())}};
+  });
+
+  if (o.loft) {
+    stage(&m, "loft", progress, [&](StageReport& r) {
+      m.model.lumen = anatomy::loft_lumen(m.model.vessels, o.lumen);
+      r.figures = {{"vertices", double(m.model.lumen.vertices_m.size())},
+                   {"triangles", double(m.model.lumen.triangles.size())}};
+    });
+  }
+
+  // landmarks: the seeds and each tree's ostium
+  for (size_t s = 0; s < seeds_mm.size(); ++s) m.model.landmarks.push_back({fmt::format("seed{}", s + 1), seeds_mm[s] * 1e-3});
+  for (const auto& b : m.model.vessels.branches) {
+    if (b.parent == 0 && !b.points.empty()) m.model.landmarks.push_back({b.name + " ostium", b.points.front().position_m});
+  }
+  m.model.ct_lumen_enhanced = true;
+  return m;
+}
+
+}  // namespace pcisim::modeling

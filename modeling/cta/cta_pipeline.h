@@ -1,0 +1,59 @@
+#pragma once
+// The CTA pipeline of the heart paper, sections 2-3 (docs/modeling.md): a coronary CT angiogram
+// and one seed in the ascending aorta in, a case (centerlines with radii and names, the lofted
+// lumen, the CT) out. Stages, each its own object:
+//   (a) segment_lumen         coarse lumen [heart eq 1]          modeling/cta/lumen_segmentation.h
+//   (b) clip_to_coronaries    aorta + coronary trees             modeling/cta/coronary_clipping.h
+//   (c) trace_centerlines     minimal paths with topology        modeling/cta/centerline_tracing.h
+//       fit_and_sample        cubic B-spline per branch          modeling/cta/centerline_spline.h
+//   (d) cross_section_radius  2-D level set per sample [eq 2]    modeling/cta/cross_section_radius.h
+//   (f) label_coronary_trees  aorta, LM, LAD, LCx, RCA, D, OM    modeling/cta/coronary_labels.h
+//   (e) loft_lumen            closed tubes per branch            anatomy/vessel/lumen_mesh.h
+#include <functional>
+#include <string>
+#include <vector>
+#include "anatomy/case/case.h"
+#include "anatomy/vessel/lumen_mesh.h"
+#include "modeling/cta/centerline_spline.h"
+#include "modeling/cta/centerline_tracing.h"
+#include "modeling/cta/coronary_clipping.h"
+#include "modeling/cta/coronary_labels.h"
+#include "modeling/cta/cross_section_radius.h"
+#include "modeling/cta/lumen_segmentation.h"
+
+namespace pcisim::modeling {
+
+struct CtaPipelineOptions {
+  SegmentationOptions segmentation;
+  ClippingOptions clipping;
+  TracingOptions tracing;
+  SplineOptions spline;
+  RadiusOptions radius;
+  int radius_median_window = 5;  // samples; a median along the branch removes single bad sections
+  LabelOptions labels;
+  anatomy::LumenMeshSpec lumen;
+  bool loft = true;
+  int threads = 0;  // 0: all cores
+};
+
+// what one stage did: its time, its counts, and what a person should know
+struct StageReport {
+  std::string name;
+  double seconds = 0;
+  std::vector<std::pair<std::string, double>> figures;
+  std::vector<std::string> notes;
+};
+
+struct CtaModel {
+  anatomy::Case model;  // vessels, lumen, landmarks; the CT is left to the caller (it owns it)
+  std::vector<StageReport> stages;
+};
+
+// called as each stage starts and ends (for a terminal's progress lines)
+using StageProgress = std::function<void(const StageReport& stage, bool finished)>;
+
+// throws ModelingError with the input at fault named (a seed, a CTA without coronaries)
+CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Eigen::Vector3d>& seeds_mm,
+                         const CtaPipelineOptions& options, const StageProgress& progress = nullptr);
+
+}  // namespace pcisim::modeling

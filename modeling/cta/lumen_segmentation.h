@@ -1,0 +1,46 @@
+#pragma once
+// Stage (a) of the CTA pipeline (docs/modeling.md): the contrast-filled lumen connected to the
+// seeds, coarse, as [heart eq 1] evolves it. First the region of HU within [lower, upper] connected
+// to the seeds (6-connected; a zero-curvature front of the same speed, run to convergence, which is
+// what the level set would reach from the seeds at far greater cost), then the level set itself
+// from that region with a curvature term, which smooths the noisy boundary and closes pinholes.
+// Thresholds come from the seeds: lower halfway between the tissue and the seed's HU, upper below
+// calcium.
+#include <Eigen/Core>
+#include <vector>
+#include "anatomy/volume/volume.h"
+#include "modeling/image/image3.h"
+#include "modeling/image/itk_filters.h"
+
+namespace pcisim::modeling {
+
+struct SegmentationOptions {
+  double min_seed_hu = 200;       // a seed must sit in contrast: mean HU within 1.5 mm above this
+  double tissue_hu = 40;          // unenhanced soft tissue, the dark side of every lumen edge
+  double lower_fraction = 0.45;   // lower threshold = tissue + fraction (seed HU - tissue)
+  double calcium_hu = 650;        // upper threshold: brighter is calcium or bone, never lumen
+  double max_region_fraction = 0.25;  // a region over this share of the volume is a leak (refused)
+  int margin_voxels = 6;          // the crop around the region
+  LevelSetOptions level_set;      // thresholds are filled in from the above; iterations 0: skipped
+  int threads = 0;
+};
+
+struct LumenSegmentation {
+  Mask mask;                  // the lumen, on the crop grid
+  FloatImage hu;              // the CT's HU on the crop grid
+  std::array<int64_t, 3> crop_lo{0, 0, 0};  // the crop's first voxel in the CT
+  double seed_hu = 0;         // mean HU around the first seed
+  double lower_hu = 0, upper_hu = 0;
+  int64_t region_voxels = 0;  // after the region growing
+  int level_set_iterations = 0;
+};
+
+// the mean HU within radius_mm of p_mm (nearest voxels); NaN when p_mm is outside the volume
+double mean_hu_near(const anatomy::Volume& ct, const Eigen::Vector3d& p_mm, double radius_mm);
+
+// throws ModelingError naming the seed for a seed outside the CT or not in contrast, and naming
+// the region's size for a leak
+LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eigen::Vector3d>& seeds_mm,
+                                const SegmentationOptions& options);
+
+}  // namespace pcisim::modeling

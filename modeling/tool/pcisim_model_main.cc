@@ -1,0 +1,2 @@
+// pcisim-model: a coronary CT angiogram into a case folder (docs/modeling.md)
+int main() { return 0; }

@@ -12,20 +12,21 @@
 namespace pcisim::png {
 namespace {
 
-// one grey image, `bits` per sample; row(r, out) fills row r as PNG stores it
+// one image of `channels` samples per pixel (1 grey, 3 RGB), `bits` per sample; row(r, out) fills
+// row r as PNG stores it
 template <class RowFn>
-void write_gray(const std::string& path, int width, int height, int bits, int level, RowFn row_of) {
+void write_image(const std::string& path, int width, int height, int channels, int bits, int level, RowFn row_of) {
   if (width <= 0 || height <= 0) throw std::runtime_error(fmt::format("{}: empty image ({}x{})", path, width, height));
   FILE* f = std::fopen(path.c_str(), "wb");
   if (!f) throw std::runtime_error(fmt::format("{}: cannot write: {}", path, std::strerror(errno)));
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
-  std::vector<uint8_t> row(static_cast<size_t>(width) * bits / 8);
+  std::vector<uint8_t> row(static_cast<size_t>(width) * channels * bits / 8);
   bool ok = png && info && !setjmp(png_jmpbuf(png));
   if (ok) {
     png_init_io(png, f);
-    png_set_IHDR(png, info, width, height, bits, PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
-                 PNG_FILTER_TYPE_DEFAULT);
+    png_set_IHDR(png, info, width, height, bits, channels == 3 ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_GRAY,
+                 PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
     if (level >= 0) png_set_compression_level(png, level);
     png_write_info(png, info);
     for (int r = 0; r < height; ++r) {
@@ -46,7 +47,7 @@ void write_gray(const std::string& path, int width, int height, int bits, int le
 
 void write_png_gray16(const std::string& path, int width, int height, const uint16_t* pixels, bool fast) {
   // png stores 16-bit samples big-endian
-  write_gray(path, width, height, 16, fast ? 1 : -1, [&](int r, uint8_t* out) {
+  write_image(path, width, height, 1, 16, fast ? 1 : -1, [&](int r, uint8_t* out) {
     const uint16_t* src = pixels + static_cast<size_t>(r) * width;
     for (int c = 0; c < width; ++c) {
       out[2 * c] = static_cast<uint8_t>(src[c] >> 8);
@@ -56,8 +57,14 @@ void write_png_gray16(const std::string& path, int width, int height, const uint
 }
 
 void write_png_gray8(const std::string& path, int width, int height, const uint8_t* pixels) {
-  write_gray(path, width, height, 8, -1, [&](int r, uint8_t* out) {
+  write_image(path, width, height, 1, 8, -1, [&](int r, uint8_t* out) {
     std::memcpy(out, pixels + static_cast<size_t>(r) * width, static_cast<size_t>(width));
+  });
+}
+
+void write_png_rgb8(const std::string& path, int width, int height, const uint8_t* rgb) {
+  write_image(path, width, height, 3, 8, -1, [&](int r, uint8_t* out) {
+    std::memcpy(out, rgb + static_cast<size_t>(r) * width * 3, static_cast<size_t>(width) * 3);
   });
 }
 

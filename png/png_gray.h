@@ -11,5 +11,7 @@ namespace pcisim::png {
 // fast: zlib level 1 (frames arrive at up to 30 per second)
 void write_png_gray16(const std::string& path, int width, int height, const uint16_t* pixels, bool fast = true);
 void write_png_gray8(const std::string& path, int width, int height, const uint8_t* pixels);
+// colour pictures for people: 3 bytes (R, G, B) per pixel, row-major
+void write_png_rgb8(const std::string& path, int width, int height, const uint8_t* rgb);
 
 }  // namespace pcisim::png

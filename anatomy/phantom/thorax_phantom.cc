@@ -161,7 +161,7 @@ Volume make_thorax_phantom(const ThoraxPhantomSpec& spec, const VesselTree& tree
   const double fat_mm = draw.around(12, 3);
 
   const Vector3d center_mm = spec.center_mm.allFinite() ? spec.center_mm : Vector3d(bx, by, 20.0);
-  const Vector3d spacing = Vector3d::Constant(spec.spacing_mm);
+  const Vector3d spacing = spec.spacing_xyz_mm.allFinite() ? spec.spacing_xyz_mm : Vector3d::Constant(spec.spacing_mm);
   const Vector3d half((spec.dims[0] - 1) * 0.5, (spec.dims[1] - 1) * 0.5, (spec.dims[2] - 1) * 0.5);
   Volume v = Volume::make(spec.dims, spacing, center_mm - spacing.cwiseProduct(half), VoxelType::kInt16);
   std::fill(v.hu_i16.begin(), v.hu_i16.end(), to_hu(hu.air));
@@ -175,8 +175,12 @@ Volume make_thorax_phantom(const ThoraxPhantomSpec& spec, const VesselTree& tree
   heart.col(0) = anterior;
   heart.col(1) = base.cross(anterior);
   heart.col(2) = base;
-  auto in_heart = [&heart](double a, double l, double b) -> Vector3d { return heart * Vector3d(a, l, b); };
+  // the heart's pose (identity and 1 by default, which leave every product exact)
+  heart = spec.heart_rotation * heart;
+  const double k = spec.heart_scale;
+  auto in_heart = [&heart, k](double a, double l, double b) -> Vector3d { return heart * Vector3d(a, l, b) * k; };
   const double heart_r = 50.0;  // the tree's epicardial shell sits 1.5 mm above this sphere
+  auto blood_or = [&hu](double v) { return std::isnan(v) ? hu.blood : v; };
 
   std::vector<Quadric> q;
   q.push_back(cylinder_z(bx, by, ax, ay, -1e30, 1e30, hu.fat));
@@ -191,12 +195,13 @@ Volume make_thorax_phantom(const ThoraxPhantomSpec& spec, const VesselTree& tree
   // liver dome under the right hemidiaphragm
   q.push_back(ellipsoid(Vector3d(bx - 35, by - 5, -150), Vector3d(135, 105, 88), Matrix3d::Identity(), hu.liver));
   // heart: pericardial fat, myocardium, chambers (heart frame offsets in mm)
-  q.push_back(ellipsoid(Vector3d::Zero(), Vector3d(55, 55, 56), heart, hu.fat));
-  q.push_back(ellipsoid(Vector3d::Zero(), Vector3d(heart_r, heart_r, heart_r), heart, hu.myocardium));
-  q.push_back(ellipsoid(in_heart(-2, 14, -8), Vector3d(17, 17, 30), heart, hu.blood));   // LV
-  q.push_back(ellipsoid(in_heart(20, -10, -8), Vector3d(11, 24, 28), heart, hu.blood));  // RV
-  q.push_back(ellipsoid(in_heart(-22, 8, 26), Vector3d(15, 18, 14), heart, hu.blood));   // LA
-  q.push_back(ellipsoid(in_heart(2, -26, 22), Vector3d(16, 15, 17), heart, hu.blood));   // RA
+  q.push_back(ellipsoid(Vector3d::Zero(), Vector3d(55, 55, 56) * k, heart, hu.fat));
+  q.push_back(ellipsoid(Vector3d::Zero(), Vector3d(heart_r, heart_r, heart_r) * k, heart, hu.myocardium));
+  const Vector3d lv_center = in_heart(-2, 14, -8);
+  q.push_back(ellipsoid(lv_center, Vector3d(17, 17, 30) * k, heart, blood_or(spec.lv_hu)));              // LV
+  q.push_back(ellipsoid(in_heart(20, -10, -8), Vector3d(11, 24, 28) * k, heart, blood_or(spec.rv_hu)));  // RV
+  q.push_back(ellipsoid(in_heart(-22, 8, 26), Vector3d(15, 18, 14) * k, heart, blood_or(spec.la_hu)));   // LA
+  q.push_back(ellipsoid(in_heart(2, -26, 22), Vector3d(16, 15, 17) * k, heart, blood_or(spec.ra_hu)));   // RA
   // sternum
   q.push_back(cylinder_z(bx + 4, by - ay + fat_mm + 9, 15, 7, -60, 110, hu.sternum));
   // spine: vertebral bodies (cortex, cancellous core), discs, neural arch, canal, spinous process
@@ -238,20 +243,30 @@ Volume make_thorax_phantom(const ThoraxPhantomSpec& spec, const VesselTree& tree
       tubes.push_back(std::move(cartilage));
     }
   }
-  // coronary lumens, then the aorta over them (the LM and RCA start on the aortic centerline)
-  const double lumen_hu = spec.contrast ? spec.contrast_hu : hu.blood;
-  for (size_t b = 0; b < tree.branches.size(); ++b) {
-    if (tree.branches[b].name == "aorta") continue;
-    Tube t{{}, {}, to_hu(lumen_hu)};
-    for (const auto& pt : tree.branches[b].points) {
-      t.p_mm.push_back(pt.position_m * 1000.0);
-      t.r_mm.push_back(pt.radius_m * 1000.0);
+  // epicardial fat sleeves, then the coronary lumens, then the outflow tract and the aorta over
+  // them (the LM and RCA start on the aortic centerline)
+  auto coronary_tubes = [&](double hu_value, double pad_mm) {
+    for (size_t b = 0; b < tree.branches.size(); ++b) {
+      if (tree.branches[b].name == "aorta") continue;
+      Tube t{{}, {}, to_hu(hu_value)};
+      for (const auto& pt : tree.branches[b].points) {
+        t.p_mm.push_back(pt.position_m * 1000.0);
+        t.r_mm.push_back(pt.radius_m * 1000.0 + pad_mm);
+      }
+      tubes.push_back(std::move(t));
     }
-    tubes.push_back(std::move(t));
-  }
+  };
+  if (spec.coronary_fat_sleeve_mm > 0) coronary_tubes(hu.fat, spec.coronary_fat_sleeve_mm);
+  if (spec.coronary_lumens) coronary_tubes(spec.contrast ? spec.contrast_hu : hu.blood, 0.0);
   if (const int a = tree.find("aorta"); a >= 0 && tree.branches[a].points.size() >= 2) {
     const auto& pts = tree.branches[a].points;
-    Tube t{{}, {}, to_hu(hu.blood)};
+    if (spec.lv_outflow) {
+      // from the root's proximal end into the LV cavity; the valve is not drawn, so the outflow
+      // tract, the root and the cavity are one bright region as a CTA shows them
+      const double r = spec.lv_outflow_radius_mm > 0 ? spec.lv_outflow_radius_mm : 0.75 * pts.front().radius_m * 1000;
+      tubes.push_back({{pts.front().position_m * 1000.0, lv_center}, {r, r}, to_hu(blood_or(spec.lv_hu))});
+    }
+    Tube t{{}, {}, to_hu(blood_or(spec.aorta_hu))};
     for (size_t n = 0; n < pts.size(); n += 4) {
       t.p_mm.push_back(pts[n].position_m * 1000.0);
       t.r_mm.push_back(pts[n].radius_m * 1000.0);

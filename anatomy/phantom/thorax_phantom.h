@@ -4,6 +4,9 @@
 // ribs and sternum, heart (myocardium, chambers, pericardial fat), aorta with arch and descending
 // part, and the coronary lumens rasterised from the tree's centerlines and radii.
 // Frame: patient LPS in mm, heart centre at the origin (the tree's frame scaled by 1000).
+// The CT angiogram phantom (phantom_cta.h) uses the same painter with a posed heart, enhanced
+// chambers and aorta, an LV outflow tract, and its own coronary lumens.
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <limits>
@@ -28,13 +31,36 @@ struct ThoraxTissueHu {
 struct ThoraxPhantomSpec {
   uint32_t seed = 1;  // also seeds the coronary tree
   std::array<int64_t, 3> dims{512, 512, 256};
-  double spacing_mm = 0.7;   // isotropic
+  double spacing_mm = 0.7;  // isotropic
+  // per-axis spacing (x, y, z); when finite it replaces spacing_mm
+  Eigen::Vector3d spacing_xyz_mm = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   bool contrast = true;      // coronary lumens iodine-filled (else blood)
   double contrast_hu = 400;  // 300..450 for a selective injection
   ThoraxTissueHu hu;
   int threads = 0;  // 0: std::thread::hardware_concurrency()
   // volume centre (mm); NaN: the thorax default, 20 mm above the heart centre
   Eigen::Vector3d center_mm = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+
+  // the heart's pose about its centre (the origin): the pericardium, myocardium and chambers are
+  // rotated and scaled so; the tree passed in is expected to carry the same pose
+  Eigen::Matrix3d heart_rotation = Eigen::Matrix3d::Identity();
+  double heart_scale = 1.0;
+  // blood of each chamber and of the aorta (HU); NaN: hu.blood (unenhanced)
+  double lv_hu = std::numeric_limits<double>::quiet_NaN();
+  double la_hu = std::numeric_limits<double>::quiet_NaN();
+  double rv_hu = std::numeric_limits<double>::quiet_NaN();
+  double ra_hu = std::numeric_limits<double>::quiet_NaN();
+  double aorta_hu = std::numeric_limits<double>::quiet_NaN();
+  // the LV outflow tract: a tube of lv_hu blood from the aortic root's proximal end to the LV
+  // cavity's centre (radius lv_outflow_radius_mm; 0: 0.75 x the aortic radius), so the aortic
+  // lumen and the LV cavity are one connected region as in real anatomy
+  bool lv_outflow = false;
+  double lv_outflow_radius_mm = 0.0;
+  // false: no coronary lumens (a painter of its own draws them over the volume)
+  bool coronary_lumens = true;
+  // > 0: an epicardial fat sleeve (hu.fat) of this thickness around every coronary branch,
+  // painted before the lumens, the aorta and the outflow tract
+  double coronary_fat_sleeve_mm = 0.0;
 };
 
 // builds the coronary tree from spec.seed, then the volume (int16 HU, identity direction).

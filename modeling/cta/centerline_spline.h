@@ -17,7 +17,8 @@ struct SplineOptions {
 
 // the fitted curve sampled along its length; the first and last points are the inputs' ends
 // (to within the end weight). Fewer than 2 points are returned as they are.
-std::vector<Eigen::Vector3d> fit_and_sample(const std::vector<Eigen::Vector3d>& points_mm, const SplineOptions& options);
+std::vector<Eigen::Vector3d> fit_and_sample(const std::vector<Eigen::Vector3d>& points_mm,
+                                            const SplineOptions& options);
 
 // values v (one per input point) carried onto the samples by arc-length position (linear)
 std::vector<double> carry_along(const std::vector<Eigen::Vector3d>& points_mm, const std::vector<double>& v,

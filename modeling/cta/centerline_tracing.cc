@@ -8,8 +8,7 @@
 
 namespace pcisim::modeling {
 
-std::vector<TracedBranch> trace_centerlines(const Clipping& clip, const CoronaryPiece& piece,
-                                            const TracingOptions& o) {
+std::vector<TracedBranch> trace_centerlines(const Clipping& clip, const CoronaryPiece& piece, const TracingOptions& o) {
   const ImageGrid& g = clip.distance_mm.grid;
   const int32_t n = static_cast<int32_t>(piece.voxels.size());
   std::unordered_map<int64_t, int32_t> id;
@@ -77,7 +76,8 @@ std::vector<TracedBranch> trace_centerlines(const Clipping& clip, const Coronary
       for (int64_t j = j0 - rj; j <= j0 + rj; ++j) {
         for (int64_t i = i0 - ri; i <= i0 + ri; ++i) {
           if (!g.inside(i, j, k)) continue;
-          const Eigen::Vector3d dv((i - i0) * g.spacing_mm.x(), (j - j0) * g.spacing_mm.y(), (k - k0) * g.spacing_mm.z());
+          const Eigen::Vector3d dv((i - i0) * g.spacing_mm.x(), (j - j0) * g.spacing_mm.y(),
+                                   (k - k0) * g.spacing_mm.z());
           if (dv.squaredNorm() > r * r) continue;
           const auto it = id.find(g.index(i, j, k));
           if (it != id.end()) covered[it->second] = 1;

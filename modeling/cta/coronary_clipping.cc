@@ -24,9 +24,12 @@ int64_t ridge_near(const FloatImage& dist, const Vector3d& p_mm, double radius_m
   const Vector3d r = Vector3d::Constant(radius_mm).cwiseQuotient(g.spacing_mm);
   int64_t best = -1;
   float best_d = 0;
-  for (int64_t k = std::max<int64_t>(0, std::floor(c.z() - r.z())); k <= std::min<int64_t>(g.dims[2] - 1, std::ceil(c.z() + r.z())); ++k) {
-    for (int64_t j = std::max<int64_t>(0, std::floor(c.y() - r.y())); j <= std::min<int64_t>(g.dims[1] - 1, std::ceil(c.y() + r.y())); ++j) {
-      for (int64_t i = std::max<int64_t>(0, std::floor(c.x() - r.x())); i <= std::min<int64_t>(g.dims[0] - 1, std::ceil(c.x() + r.x())); ++i) {
+  for (int64_t k = std::max<int64_t>(0, std::floor(c.z() - r.z()));
+       k <= std::min<int64_t>(g.dims[2] - 1, std::ceil(c.z() + r.z())); ++k) {
+    for (int64_t j = std::max<int64_t>(0, std::floor(c.y() - r.y()));
+         j <= std::min<int64_t>(g.dims[1] - 1, std::ceil(c.y() + r.y())); ++j) {
+      for (int64_t i = std::max<int64_t>(0, std::floor(c.x() - r.x()));
+           i <= std::min<int64_t>(g.dims[0] - 1, std::ceil(c.x() + r.x())); ++i) {
         const int64_t n = g.index(i, j, k);
         if (dist.v[n] <= best_d) continue;
         if ((Vector3d(i, j, k) - c).cwiseProduct(g.spacing_mm).norm() > radius_mm) continue;
@@ -52,16 +55,17 @@ Clipping clip_to_coronaries(const LumenSegmentation& seg, const std::vector<Vect
   // distance of every non-core voxel to the core (the core is the mask's "outside" here)
   const FloatImage to_core = distance_inside_mm(core, o.threads);
   out.large = Mask::zeros(g);
-  const double reach = o.big_radius_mm + 0.5 * g.spacing_mm.minCoeff();
+  const double reach = o.big_radius_mm + o.rim_mm + 0.5 * g.spacing_mm.minCoeff();
   for (size_t n = 0; n < core.v.size(); ++n) out.large.v[n] = seg.mask.v[n] && to_core.v[n] <= reach ? 1 : 0;
   core = Mask{};
 
   // the seed's place in the aorta: the deepest voxel near it
   const int64_t seed_ridge = ridge_near(out.distance_mm, seeds_mm[0], 10.0);
   if (seed_ridge < 0 || !out.large.v[seed_ridge]) {
-    throw ModelingError(fmt::format(
-        "seed 1 at ({:.1f}, {:.1f}, {:.1f}) mm is not in a lumen wider than {:.1f} mm: put it inside the ascending aorta",
-        seeds_mm[0].x(), seeds_mm[0].y(), seeds_mm[0].z(), 2 * o.big_radius_mm));
+    throw ModelingError(
+        fmt::format("seed 1 at ({:.1f}, {:.1f}, {:.1f}) mm is not in a lumen wider than {:.1f} mm: put it inside the "
+                    "ascending aorta",
+                    seeds_mm[0].x(), seeds_mm[0].y(), seeds_mm[0].z(), 2 * o.big_radius_mm));
   }
   out.aorta_at_seed = {physical(g, seed_ridge), out.distance_mm.v[seed_ridge]};
   const double aortic_radius_mm = out.distance_mm.v[seed_ridge];
@@ -104,8 +108,8 @@ Clipping clip_to_coronaries(const LumenSegmentation& seg, const std::vector<Vect
       if (touches) contact.push_back(n);
     }
     ++next_id;
-    const bool seeded = std::any_of(seed_voxels.begin(), seed_voxels.end(),
-                                    [&](int64_t s) { return piece_of[s] == next_id - 1; });
+    const bool seeded =
+        std::any_of(seed_voxels.begin(), seed_voxels.end(), [&](int64_t s) { return piece_of[s] == next_id - 1; });
     const Vector3d first = physical(g, start);
     auto drop = [&](const std::string& why) {
       if (piece.voxels.size() >= 50) {
@@ -132,6 +136,12 @@ Clipping clip_to_coronaries(const LumenSegmentation& seg, const std::vector<Vect
     piece.ostium_mm = physical(g, piece.ostium);
     for (int64_t n : piece.voxels) piece.reach_mm = std::max(piece.reach_mm, (physical(g, n) - piece.ostium_mm).norm());
     const double from_seed_mm = (piece.ostium_mm - seeds_mm[0]).norm();
+    float deepest = 0;
+    for (int64_t n : piece.voxels) deepest = std::max(deepest, out.distance_mm.v[n]);
+    if (!seeded && deepest < o.min_piece_radius_mm) {
+      drop(fmt::format("nowhere more than {:.2f} mm from its edge: a rim, not a vessel", deepest));
+      continue;
+    }
     if (!seeded && piece.reach_mm < o.min_length_mm) {
       drop(fmt::format("reaches {:.1f} mm from its contact, under {:.1f} mm", piece.reach_mm, o.min_length_mm));
       continue;
@@ -146,10 +156,11 @@ Clipping clip_to_coronaries(const LumenSegmentation& seg, const std::vector<Vect
     out.pieces.push_back(std::move(piece));
   }
   if (out.pieces.empty()) {
-    throw ModelingError(fmt::format(
-        "no coronary artery found: no thin contrast-filled vessel of at least {:.0f} mm leaves the aorta within {:.0f} mm "
-        "of the seed (lumen HU {:.0f}..{:.0f}; {} thin pieces cut away)",
-        o.min_length_mm, o.max_ostium_distance_mm, seg.lower_hu, seg.upper_hu, out.dropped.size()));
+    throw ModelingError(
+        fmt::format("no coronary artery found: no thin contrast-filled vessel of at least {:.0f} mm leaves the aorta "
+                    "within {:.0f} mm "
+                    "of the seed (lumen HU {:.0f}..{:.0f}; {} thin pieces cut away)",
+                    o.min_length_mm, o.max_ostium_distance_mm, seg.lower_hu, seg.upper_hu, out.dropped.size()));
   }
   std::sort(out.pieces.begin(), out.pieces.end(),
             [](const CoronaryPiece& a, const CoronaryPiece& b) { return a.reach_mm > b.reach_mm; });

@@ -4,11 +4,13 @@
 // reached. The paper did this by hand. The rule here, automatic:
 //  1. the "large" lumen is the morphological opening of the region by a ball of big_radius_mm
 //     (voxels within big_radius_mm of a voxel whose distance to the region's edge is at least
-//     big_radius_mm): the aorta, the chambers and their connections; no coronary artery is that
-//     wide (a left main is at most ~5.5 mm across);
+//     big_radius_mm), grown by rim_mm inside the region so that the noisy edge of the aorta and
+//     the chambers goes with them: the aorta, the chambers and their connections; no coronary
+//     artery is that wide (a left main is at most ~5.5 mm across);
 //  2. what is left are thin structures; each 26-connected piece of them is a coronary tree when it
 //     touches the large lumen (its ostium), reaches at least min_length_mm from there (trabeculae,
-//     noise and a blurred edge do not) and its ostium lies within max_ostium_distance_mm of the
+//     noise and a blurred edge do not), is somewhere at least min_piece_radius_mm from its own
+//     edge (a sheet of edge voxels is not) and its ostium lies within max_ostium_distance_mm of the
 //     aortic seed (the coronary ostia sit in the aortic root; pieces on a ventricle or an atrium are
 //     farther). A piece holding a further seed is kept whatever the rule says.
 //  3. the aorta's centerline runs from the ostia's level through the seed and up the ascending
@@ -22,6 +24,8 @@ namespace pcisim::modeling {
 
 struct ClippingOptions {
   double big_radius_mm = 3.0;
+  double rim_mm = 1.0;               // the large lumen also takes this much of its own rough edge
+  double min_piece_radius_mm = 0.6;  // a piece nowhere this far from its edge is a rim or a sheet, not a vessel
   double min_length_mm = 15.0;
   double max_ostium_distance_mm = 70.0;
   double aorta_above_seed_mm = 30.0;  // how far the aortic centerline goes on past the seed
@@ -37,10 +41,10 @@ struct CoronaryPiece {
 };
 
 struct Clipping {
-  FloatImage distance_mm;            // each lumen voxel's distance to the lumen's edge (crop grid)
-  Mask large;                        // the opening: aorta, chambers
-  std::vector<CoronaryPiece> pieces; // kept, largest reach first
-  std::vector<std::string> dropped;  // why each other thin piece was cut away (pieces of >= 50 voxels)
+  FloatImage distance_mm;             // each lumen voxel's distance to the lumen's edge (crop grid)
+  Mask large;                         // the opening: aorta, chambers
+  std::vector<CoronaryPiece> pieces;  // kept, largest reach first
+  std::vector<std::string> dropped;   // why each other thin piece was cut away (pieces of >= 50 voxels)
   anatomy::CenterlinePoint aorta_at_seed;
   std::vector<anatomy::CenterlinePoint> aorta;  // proximal (root) to distal (up the ascending aorta), mm
 };

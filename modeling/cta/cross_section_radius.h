@@ -17,15 +17,15 @@
 namespace pcisim::modeling {
 
 struct RadiusOptions {
-  double pixels_per_radius = 8;   // section pixel = guess / this, within [0.05, 0.2] mm
-  double field_radii = 2.5;       // the section spans this many guessed radii (+ 0.6 mm) from the centre
-  double presmooth_mm = 0.2;      // Gaussian smoothing of the section
-  double edge_k = 1.0;            // k of g, relative to the section's largest gradient
-  double edge_power = 2;          // p of g
-  double balloon_v = 1.0;         // v, pixels per unit time
-  double curvature_eps = 0.3;     // eps
-  double attraction = 5.0;        // weight of the grad g . grad Phi term
-  int iterations = 150;           // at most
+  double pixels_per_radius = 8;  // section pixel = guess / this, within [0.05, 0.2] mm
+  double field_radii = 2.5;      // the section spans this many guessed radii (+ 0.6 mm) from the centre
+  double presmooth_mm = 0.2;     // Gaussian smoothing of the section
+  double edge_k = 1.0;           // k of g, relative to the section's largest gradient
+  double edge_power = 2;         // p of g
+  double balloon_v = 1.0;        // v, pixels per unit time
+  double curvature_eps = 0.3;    // eps
+  double attraction = 5.0;       // weight of the grad g . grad Phi term
+  int iterations = 150;          // at most
   int rays = 32;
 };
 

@@ -141,6 +141,21 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
     r.figures = {{"cross_sections", double(sections.load())}};
   });
 
+  stage(&m, "checks", progress, [&](StageReport& r) {
+    int cut = 0, abrupt = 0;
+    for (auto& t : trees) {
+      for (auto& n : drop_dark_branches(&t, seg.hu, o.checks)) {
+        r.notes.push_back(n);
+        ++cut;
+      }
+      for (auto& n : find_abrupt_ends(t, o.checks)) {
+        r.notes.push_back(n);
+        ++abrupt;
+      }
+    }
+    r.figures = {{"veins_cut", double(cut)}, {"abrupt_ends", double(abrupt)}};
+  });
+
   stage(&m, "labels", progress, [&](StageReport& r) {
     m.model.vessels = label_coronary_trees(clip.aorta, trees, o.labels);
     std::string names;
@@ -158,9 +173,11 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
   }
 
   // landmarks: the seeds and each tree's ostium
-  for (size_t s = 0; s < seeds_mm.size(); ++s) m.model.landmarks.push_back({fmt::format("seed{}", s + 1), seeds_mm[s] * 1e-3});
+  for (size_t s = 0; s < seeds_mm.size(); ++s)
+    m.model.landmarks.push_back({fmt::format("seed{}", s + 1), seeds_mm[s] * 1e-3});
   for (const auto& b : m.model.vessels.branches) {
-    if (b.parent == 0 && !b.points.empty()) m.model.landmarks.push_back({b.name + " ostium", b.points.front().position_m});
+    if (b.parent == 0 && !b.points.empty())
+      m.model.landmarks.push_back({b.name + " ostium", b.points.front().position_m});
   }
   m.model.ct_lumen_enhanced = true;
   return m;

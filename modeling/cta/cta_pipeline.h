@@ -7,6 +7,7 @@
 //   (c) trace_centerlines     minimal paths with topology        modeling/cta/centerline_tracing.h
 //       fit_and_sample        cubic B-spline per branch          modeling/cta/centerline_spline.h
 //   (d) cross_section_radius  2-D level set per sample [eq 2]    modeling/cta/cross_section_radius.h
+//       drop_dark_branches    veins cut away; abrupt ends noted modeling/cta/branch_checks.h
 //   (f) label_coronary_trees  aorta, LM, LAD, LCx, RCA, D, OM    modeling/cta/coronary_labels.h
 //   (e) loft_lumen            closed tubes per branch            anatomy/vessel/lumen_mesh.h
 #include <functional>
@@ -14,6 +15,7 @@
 #include <vector>
 #include "anatomy/case/case.h"
 #include "anatomy/vessel/lumen_mesh.h"
+#include "modeling/cta/branch_checks.h"
 #include "modeling/cta/centerline_spline.h"
 #include "modeling/cta/centerline_tracing.h"
 #include "modeling/cta/coronary_clipping.h"
@@ -30,6 +32,7 @@ struct CtaPipelineOptions {
   SplineOptions spline;
   RadiusOptions radius;
   int radius_median_window = 5;  // samples; a median along the branch removes single bad sections
+  BranchCheckOptions checks;
   LabelOptions labels;
   anatomy::LumenMeshSpec lumen;
   bool loft = true;

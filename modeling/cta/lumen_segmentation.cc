@@ -11,7 +11,9 @@
 namespace pcisim::modeling {
 namespace {
 
-std::string mm3(const Eigen::Vector3d& p) { return fmt::format("({:.1f}, {:.1f}, {:.1f}) mm", p.x(), p.y(), p.z()); }
+std::string mm3(const Eigen::Vector3d& p) {
+  return fmt::format("({:.1f}, {:.1f}, {:.1f}) mm", p.x(), p.y(), p.z());
+}
 
 std::string extent(const anatomy::Volume& ct) {
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
@@ -93,12 +95,9 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
   for (size_t head = 0; head < queue.size(); ++head) {
     const int64_t n = queue[head];
     const auto [i, j, k] = g.ijk(n);
-    const int64_t nb[6] = {i > 0 ? n - sx : -1,
-                           i + 1 < g.dims[0] ? n + sx : -1,
-                           j > 0 ? n - sy : -1,
-                           j + 1 < g.dims[1] ? n + sy : -1,
-                           k > 0 ? n - sz : -1,
-                           k + 1 < g.dims[2] ? n + sz : -1};
+    const int64_t nb[6] = {i > 0 ? n - sx : -1, i + 1 < g.dims[0] ? n + sx : -1,
+                           j > 0 ? n - sy : -1, j + 1 < g.dims[1] ? n + sy : -1,
+                           k > 0 ? n - sz : -1, k + 1 < g.dims[2] ? n + sz : -1};
     for (int64_t m : nb) {
       if (m < 0 || region.v[m] || !in_range(m)) continue;
       region.v[m] = 1;

@@ -15,21 +15,21 @@
 namespace pcisim::modeling {
 
 struct SegmentationOptions {
-  double min_seed_hu = 200;       // a seed must sit in contrast: mean HU within 1.5 mm above this
-  double tissue_hu = 40;          // unenhanced soft tissue, the dark side of every lumen edge
-  double lower_fraction = 0.45;   // lower threshold = tissue + fraction (seed HU - tissue)
-  double calcium_hu = 650;        // upper threshold: brighter is calcium or bone, never lumen
+  double min_seed_hu = 200;           // a seed must sit in contrast: mean HU within 1.5 mm above this
+  double tissue_hu = 40;              // unenhanced soft tissue, the dark side of every lumen edge
+  double lower_fraction = 0.3;        // lower threshold = tissue + fraction (seed HU - tissue)
+  double calcium_hu = 650;            // upper threshold: brighter is calcium or bone, never lumen
   double max_region_fraction = 0.25;  // a region over this share of the volume is a leak (refused)
-  int margin_voxels = 6;          // the crop around the region
-  LevelSetOptions level_set;      // thresholds are filled in from the above; iterations 0: skipped
+  int margin_voxels = 6;              // the crop around the region
+  LevelSetOptions level_set;          // thresholds are filled in from the above; iterations 0: skipped
   int threads = 0;
 };
 
 struct LumenSegmentation {
-  Mask mask;                  // the lumen, on the crop grid
-  FloatImage hu;              // the CT's HU on the crop grid
+  Mask mask;                                // the lumen, on the crop grid
+  FloatImage hu;                            // the CT's HU on the crop grid
   std::array<int64_t, 3> crop_lo{0, 0, 0};  // the crop's first voxel in the CT
-  double seed_hu = 0;         // mean HU around the first seed
+  double seed_hu = 0;                       // mean HU around the first seed
   double lower_hu = 0, upper_hu = 0;
   int64_t region_voxels = 0;  // after the region growing
   int level_set_iterations = 0;

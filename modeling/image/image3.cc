@@ -6,7 +6,9 @@
 
 namespace pcisim::modeling {
 
-ImageGrid ImageGrid::of(const anatomy::Volume& v) { return {v.dims, v.spacing_mm, v.origin_mm, v.direction}; }
+ImageGrid ImageGrid::of(const anatomy::Volume& v) {
+  return {v.dims, v.spacing_mm, v.origin_mm, v.direction};
+}
 
 Eigen::Vector3d ImageGrid::physical_mm(const Eigen::Vector3d& ijk) const {
   return origin_mm + direction * spacing_mm.cwiseProduct(ijk);
@@ -23,7 +25,9 @@ ImageGrid ImageGrid::crop(const std::array<int64_t, 3>& lo, const std::array<int
   return g;
 }
 
-int64_t Mask::count() const { return std::count_if(v.begin(), v.end(), [](uint8_t x) { return x != 0; }); }
+int64_t Mask::count() const {
+  return std::count_if(v.begin(), v.end(), [](uint8_t x) { return x != 0; });
+}
 
 float FloatImage::at(const Eigen::Vector3d& p, float outside) const {
   const double x = p.x(), y = p.y(), z = p.z();

@@ -19,7 +19,9 @@ struct ImageGrid {
   static ImageGrid of(const anatomy::Volume& v);
   int64_t size() const { return dims[0] * dims[1] * dims[2]; }
   int64_t index(int64_t i, int64_t j, int64_t k) const { return i + dims[0] * (j + dims[1] * k); }
-  std::array<int64_t, 3> ijk(int64_t n) const { return {n % dims[0], (n / dims[0]) % dims[1], n / (dims[0] * dims[1])}; }
+  std::array<int64_t, 3> ijk(int64_t n) const {
+    return {n % dims[0], (n / dims[0]) % dims[1], n / (dims[0] * dims[1])};
+  }
   bool inside(int64_t i, int64_t j, int64_t k) const {
     return i >= 0 && j >= 0 && k >= 0 && i < dims[0] && j < dims[1] && k < dims[2];
   }

@@ -41,7 +41,9 @@ typename itk::Image<T, 3>::Pointer to_itk(const Grid& g, const T* data) {
   return img;
 }
 
-size_t voxels(const Grid& g) { return static_cast<size_t>(g.dims[0] * g.dims[1] * g.dims[2]); }
+size_t voxels(const Grid& g) {
+  return static_cast<size_t>(g.dims[0] * g.dims[1] * g.dims[2]);
+}
 
 }  // namespace
 

@@ -26,9 +26,10 @@ FloatImage distance_inside_mm(const Mask& mask, int threads) {
 
 Mask threshold_level_set(const FloatImage& hu, const Mask& initial, const LevelSetOptions& o, int* iterations_done) {
   Mask out = Mask::zeros(initial.grid);
-  const itk_bridge::LevelSetParams p{o.lower_hu,       o.upper_hu,   o.propagation_weight, o.curvature_weight,
-                                     o.max_rms_change, o.iterations, o.threads};
-  const int it = itk_bridge::threshold_level_set(bridge_grid(initial.grid), hu.v.data(), initial.v.data(), p, out.v.data());
+  const itk_bridge::LevelSetParams p{
+      o.lower_hu, o.upper_hu, o.propagation_weight, o.curvature_weight, o.max_rms_change, o.iterations, o.threads};
+  const int it =
+      itk_bridge::threshold_level_set(bridge_grid(initial.grid), hu.v.data(), initial.v.data(), p, out.v.data());
   if (iterations_done) *iterations_done = it;
   return out;
 }

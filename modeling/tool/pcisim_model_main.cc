@@ -1,2 +1,195 @@
-// pcisim-model: a coronary CT angiogram into a case folder (docs/modeling.md)
-int main() { return 0; }
+// pcisim-model: a coronary CT angiogram into a case folder (docs/modeling.md), and synthetic CTAs
+// with exact truth to test it.
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "anatomy/case/case_folder.h"
+#include "anatomy/dicom/dicom_series.h"
+#include "anatomy/phantom/phantom_cta.h"
+#include "anatomy/volume/volume_io.h"
+#include "modeling/cta/cta_pipeline.h"
+#include "modeling/cta/modeling_error.h"
+#include "modeling/picture/model_overview.h"
+#include "modeling/report/model_report.h"
+
+namespace {
+
+using namespace pcisim;
+namespace fs = std::filesystem;
+
+Eigen::Vector3d parse_point(const std::string& s, const char* what) {
+  Eigen::Vector3d p;
+  char c1 = 0, c2 = 0;
+  std::istringstream in(s);
+  if (!(in >> p.x() >> c1 >> p.y() >> c2 >> p.z()) || c1 != ',' || c2 != ',' || !in.eof() || !p.allFinite()) {
+    throw CLI::ValidationError(what, fmt::format("'{}' is not three numbers x,y,z", s));
+  }
+  return p;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+int make_phantom(uint32_t seed, const std::string& out, const std::string& voxel, const std::string& dims, double noise,
+                 double stenosis, bool no_coronaries, bool flip_z, bool origin_frame) {
+  anatomy::PhantomCtaSpec spec;
+  spec.seed = seed;
+  if (!voxel.empty()) spec.spacing_mm = parse_point(voxel, "--voxel-mm");
+  if (!dims.empty()) {
+    const Eigen::Vector3d d = parse_point(dims, "--dims");
+    spec.dims = {int64_t(d.x()), int64_t(d.y()), int64_t(d.z())};
+  }
+  spec.noise_sigma_hu = noise;
+  spec.stenosis_fraction = stenosis;
+  spec.with_coronaries = !no_coronaries;
+  spec.scanner_frame = !origin_frame;
+  if (flip_z) spec.direction = Eigen::Vector3d(1, 1, -1).asDiagonal();
+  const auto t0 = std::chrono::steady_clock::now();
+  std::printf("phantom CTA %u: %lld x %lld x %lld voxels of %.2f x %.2f x %.2f mm, noise %.0f HU ...\n", seed,
+              (long long)spec.dims[0], (long long)spec.dims[1], (long long)spec.dims[2], spec.spacing_mm.x(),
+              spec.spacing_mm.y(), spec.spacing_mm.z(), spec.noise_sigma_hu);
+  std::fflush(stdout);
+  const anatomy::PhantomCta cta = anatomy::make_phantom_cta(spec);
+  std::printf("  generated in %.1f s; writing %s\n", seconds_since(t0), out.c_str());
+  anatomy::write_phantom_cta(cta, out);
+  modeling::write_model_overview(cta.ct, cta.truth, fmt::format("PHANTOM CTA {} - TRUTH", seed),
+                                 (fs::path(out) / "overview.png").string());
+  std::printf("  aortic seed: --seed %.1f,%.1f,%.1f\n", cta.aortic_seed_mm.x(), cta.aortic_seed_mm.y(),
+              cta.aortic_seed_mm.z());
+  std::printf("done in %.1f s: ct.nrrd, truth.json, phantom.json, overview.png\n", seconds_since(t0));
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "pcisim-model: turns a patient's coronary CT angiogram (CTA) into a pcisim case folder: the contrast-filled\n"
+      "lumen is segmented from one seed in the ascending aorta, clipped to the aorta and the coronary trees,\n"
+      "its centerlines traced with their branches, the radius measured on every cross-section, the lumen lofted\n"
+      "and the branches named (LM, LAD, LCx, RCA, diagonals, marginals). docs/modeling.md describes each stage.\n\n"
+      "  pcisim-model --ct ct.nrrd --seed 12.5,-140,-95 --out cases/patient1\n"
+      "  pcisim-model --make-phantom-cta --seed 3 --out cta3   (a synthetic CTA with its truth)\n"};
+  std::string ct_path, out_dir, voxel, dims;
+  std::vector<std::string> seeds;
+  bool make_phantom_cta = false, no_coronaries = false, flip_z = false, origin_frame = false;
+  double noise_hu = 25, stenosis = -1, memory_gb = 4;
+  int threads = 0;
+  pcisim::modeling::CtaPipelineOptions o;
+  app.add_option("--ct", ct_path,
+                 "the CTA: a volume file (.nrrd, .nhdr, .mha, .mhd) or a folder holding one DICOM series; HU, with "
+                 "its spacing");
+  app.add_option("--seed", seeds,
+                 "x,y,z in millimetres in the CT's physical (LPS) frame; the first inside the ascending aorta, further "
+                 "ones (an ostium, a distal point) keep the vessel they sit in. With --make-phantom-cta: the phantom's "
+                 "number")
+      ->required();
+  app.add_option("--out", out_dir, "the folder to write (created): the case, model-report.json, overview.png")
+      ->required();
+  app.add_option("--threads", threads, "worker threads; 0 = all cores")->check(CLI::Range(0, 256));
+  app.add_option("--memory-gb", memory_gb, "refuse a CT whose pipeline would need more memory than this (GB)")
+      ->check(CLI::Range(0.1, 1024.0));
+  auto* knobs = app.add_option_group("accuracy knobs", "what accuracy costs in time: docs/benchmarks/model.md");
+  knobs
+      ->add_option("--level-set-iterations", o.segmentation.level_set.iterations,
+                   "iterations of the 3-D level set after the region growing [heart eq 1]; 0 skips it")
+      ->check(CLI::Range(0, 10000));
+  knobs
+      ->add_option("--section-spacing-mm", o.spline.sample_spacing_mm,
+                   "distance between cross-sections along each centerline (mm)")
+      ->check(CLI::Range(0.1, 5.0));
+  knobs
+      ->add_option("--knot-spacing-mm", o.spline.knot_spacing_mm,
+                   "B-spline knot spacing along each branch (mm); larger is smoother")
+      ->check(CLI::Range(0.5, 50.0));
+  knobs->add_option("--radius-iterations", o.radius.iterations, "iterations of each 2-D level set [heart eq 2]")
+      ->check(CLI::Range(2, 10000));
+  auto* ph = app.add_option_group("phantom", "synthetic CTAs with exact truth");
+  ph->add_flag("--make-phantom-cta", make_phantom_cta,
+               "write a synthetic CTA (ct.nrrd), its true centerlines and radii (truth.json), what was drawn "
+               "(phantom.json) and a picture; --seed N picks the phantom");
+  ph->add_option("--voxel-mm", voxel, "voxel size x,y,z (mm); default 0.4,0.4,0.6");
+  ph->add_option("--dims", dims, "voxels along x,y,z; default 512,512,250");
+  ph->add_option("--noise-hu", noise_hu, "noise sigma (HU)")->check(CLI::Range(0.0, 200.0));
+  ph->add_option("--stenosis", stenosis, "diameter reduction of the stenosis (0..0.99); default drawn 0.5..0.8")
+      ->check(CLI::Range(0.0, 0.99));
+  ph->add_flag("--no-coronaries", no_coronaries, "a CTA without coronary arteries");
+  ph->add_flag("--flip-z", flip_z, "slices stored feet-first (direction diag(1, 1, -1))");
+  ph->add_flag("--origin-frame", origin_frame, "the heart centre at the origin instead of scanner coordinates");
+  CLI11_PARSE(app, argc, argv);
+  o.threads = threads;
+
+  try {
+    if (make_phantom_cta) {
+      if (seeds.size() != 1) throw CLI::ValidationError("--seed", "--make-phantom-cta takes one --seed N");
+      unsigned long n = 0;
+      try {
+        size_t used = 0;
+        n = std::stoul(seeds[0], &used);
+        if (used != seeds[0].size() || n > 0xffffffffu) throw std::invalid_argument("");
+      } catch (const std::exception&) {
+        throw CLI::ValidationError("--seed", fmt::format("'{}' is not a phantom number", seeds[0]));
+      }
+      return make_phantom(static_cast<uint32_t>(n), out_dir, voxel, dims, noise_hu, stenosis, no_coronaries, flip_z,
+                          origin_frame);
+    }
+    if (ct_path.empty()) throw CLI::ValidationError("--ct", "the CTA to model is required (or --make-phantom-cta)");
+    std::vector<Eigen::Vector3d> seed_mm;
+    for (const auto& s : seeds) seed_mm.push_back(parse_point(s, "--seed"));
+
+    const auto t0 = std::chrono::steady_clock::now();
+    std::printf("reading %s ...\n", ct_path.c_str());
+    std::fflush(stdout);
+    anatomy::Volume ct = fs::is_directory(ct_path) ? anatomy::read_dicom_series(ct_path)
+                                                   : anatomy::read_volume(ct_path, /*require_spacing=*/true);
+    std::printf("  %lld x %lld x %lld voxels of %.2f x %.2f x %.2f mm (%.1f s)\n", (long long)ct.dims[0],
+                (long long)ct.dims[1], (long long)ct.dims[2], ct.spacing_mm.x(), ct.spacing_mm.y(), ct.spacing_mm.z(),
+                seconds_since(t0));
+    // memory: the CT, a mask of it, and the work on a crop of at most a quarter of it (~28 bytes a voxel)
+    const double need_gb = double(ct.voxel_count()) * (2.0 + 1.0 + 0.25 * 28.0) / 1e9;
+    if (need_gb > memory_gb) {
+      throw modeling::ModelingError(fmt::format(
+          "{}: {} x {} x {} voxels would need about {:.1f} GB here (10 bytes a voxel), over the bound of {:.1f} GB "
+          "(--memory-gb); crop the CT to the heart or resample it",
+          ct_path, ct.dims[0], ct.dims[1], ct.dims[2], need_gb, memory_gb));
+    }
+    const auto t1 = std::chrono::steady_clock::now();
+    modeling::CtaModel m = modeling::build_cta_model(ct, seed_mm, o, [](const modeling::StageReport& r, bool done) {
+      if (!done) {
+        std::printf("%-13s ...", r.name.c_str());
+      } else {
+        std::string figs;
+        for (const auto& [k, v] : r.figures) figs += fmt::format("{}{} {:g}", figs.empty() ? "" : ", ", k, v);
+        std::printf(" %.2f s  (%s)\n", r.seconds, figs.c_str());
+      }
+      std::fflush(stdout);
+    });
+    const double model_s = seconds_since(t1);
+    std::printf("model built in %.1f s; writing %s ...\n", model_s, out_dir.c_str());
+    std::fflush(stdout);
+    m.model.name = fs::path(out_dir).filename().string();
+    if (m.model.name.empty()) m.model.name = fs::path(out_dir).parent_path().filename().string();
+    m.model.ct = std::move(ct);
+    anatomy::write_case(m.model, out_dir);
+    modeling::write_model_overview(*m.model.ct, m.model.vessels, m.model.name + " - MODEL",
+                                   (fs::path(out_dir) / "overview.png").string());
+    modeling::write_model_report((fs::path(out_dir) / "model-report.json").string(), ct_path, *m.model.ct, seed_mm, m,
+                                 model_s);
+    std::printf(
+        "done: %zu branches; case folder, model-report.json and overview.png in %s (%.1f s in all, peak %.0f "
+        "MiB)\n",
+        m.model.vessels.branches.size(), out_dir.c_str(), seconds_since(t0), modeling::peak_memory_mib());
+    return 0;
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pcisim-model: %s\n", e.what());
+    return 2;
+  }
+}

@@ -22,7 +22,8 @@ using Eigen::Vector3d;
 struct BlurredDisk {
   double r_mm, sigma_mm, lumen_hu, tissue_hu;
   std::vector<double> table;  // every 0.01 mm
-  BlurredDisk(double r, double s, double lumen, double tissue) : r_mm(r), sigma_mm(s), lumen_hu(lumen), tissue_hu(tissue) {
+  BlurredDisk(double r, double s, double lumen, double tissue)
+      : r_mm(r), sigma_mm(s), lumen_hu(lumen), tissue_hu(tissue) {
     const double h = 0.02;
     for (double rho = 0; rho <= r + 6 * s + 1; rho += 0.01) {
       double sum = 0;

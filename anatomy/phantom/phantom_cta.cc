@@ -1,0 +1,959 @@
+#include "anatomy/phantom/phantom_cta.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <utility>
+
+#include "anatomy/phantom/coronary_phantom.h"
+#include "anatomy/phantom/thorax_phantom.h"
+
+#ifdef PCISIM_HAVE_JSON
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "anatomy/vessel/vessel_tree_json.h"
+#include "anatomy/volume/volume_io.h"
+#endif
+
+namespace pcisim::anatomy {
+namespace {
+
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+constexpr double kPi = std::numbers::pi;
+constexpr double kDeg = kPi / 180.0;
+
+// Contrast and tissue values (HU) of a coronary CTA, the ranges the draws below keep to:
+// - aorta and left heart 300..550: the SCCT guidelines ask for >= 250 HU in the coronaries and
+//   report 300..450 HU as typical aortic-root enhancement after a bolus-tracked injection
+//   (Abbara et al., J Cardiovasc Comput Tomogr 2016);
+// - right heart 100..400: earlier or later in the bolus than the left heart, and diluted by
+//   unenhanced caval inflow (same source; saline chaser protocols aim at a lower right heart);
+// - coronary enhancement falls distally by a few HU per cm ("transluminal attenuation
+//   gradient", about -5..-25 HU/10 mm in healthy arteries: Steigner et al., Int J Cardiovasc
+//   Imaging 2010; Choi et al., JACC Cardiovasc Imaging 2011);
+// - enhanced myocardium 40..100 and epicardial fat -100 (Buzug, Computed Tomography, 2008,
+//   table 1.1; Radiopaedia, "Hounsfield unit");
+// - calcified plaque well above 130 HU (the Agatston threshold) and several hundred HU in CTA,
+//   700..1200 here (Agatston et al., JACC 1990; Radiopaedia, "coronary artery calcium score");
+// - cardiac veins in the arterial phase 150..250, less enhanced than the arteries beside them
+//   (the contrast has not yet come round through the capillaries).
+constexpr double kLumenFloorHu = 250;
+
+// seeded draws without std distributions (their output differs between standard libraries)
+class Draw {
+ public:
+  explicit Draw(uint32_t seed) : rng_(seed ^ 0x85ebca6bu) {}
+  // uniform in [0, 1)
+  double u01() { return static_cast<double>(rng_() >> 8) / double(1u << 24); }
+  double between(double lo, double hi) { return lo + (hi - lo) * u01(); }
+  bool chance(double p) { return u01() < p; }
+
+ private:
+  std::mt19937 rng_;
+};
+
+// splitmix64's output function: a bijective 64-bit mix
+uint64_t mix64(uint64_t z) {
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+
+// splitmix64: a fast, seeded stream for the noise, one per slice (so threads agree). Each
+// slice's start is hashed: streams started at neighbouring states would be shifted copies of
+// each other (correlated noise between slices).
+struct SplitMix {
+  uint64_t s;
+  uint64_t next() { return mix64(s += 0x9e3779b97f4a7c15ull); }
+};
+
+// work items 0..n-1 over the threads; each item writes its own voxels only
+template <typename F>
+void parallel_for(int64_t n, int threads, const F& f) {
+  std::atomic<int64_t> next{0};
+  auto work = [&] {
+    for (int64_t i; (i = next.fetch_add(1)) < n;) f(i);
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < std::min<int64_t>(threads, n); ++t) pool.emplace_back(work);
+  work();
+  for (auto& th : pool) th.join();
+}
+
+double smoothstep(double x) {
+  x = std::clamp(x, 0.0, 1.0);
+  return x * x * (3 - 2 * x);
+}
+
+std::vector<double> arc_lengths(const std::vector<CenterlinePoint>& pts) {
+  std::vector<double> s(pts.size(), 0.0);
+  for (size_t i = 1; i < pts.size(); ++i) s[i] = s[i - 1] + (pts[i].position_m - pts[i - 1].position_m).norm();
+  return s;
+}
+
+int index_at(const std::vector<double>& arc, double s) {
+  const auto it = std::lower_bound(arc.begin(), arc.end(), s);
+  if (it == arc.end()) return static_cast<int>(arc.size()) - 1;
+  const int i = static_cast<int>(it - arc.begin());
+  return (i > 0 && s - arc[i - 1] < arc[i] - s) ? i - 1 : i;
+}
+
+Vector3d tangent(const std::vector<CenterlinePoint>& pts, size_t i) {
+  const size_t a = i > 0 ? i - 1 : 0, b = std::min(pts.size() - 1, i + 1);
+  return (pts[b].position_m - pts[a].position_m).normalized();
+}
+
+// beside the vessel along the heart's surface: perpendicular to the tangent and to the radial
+// direction from the heart centre (the origin)
+Vector3d lateral(const Vector3d& p, const Vector3d& t) {
+  const Vector3d c = t.cross(p.normalized());
+  return c.norm() > 1e-9 ? c.normalized() : Vector3d::Zero();
+}
+
+double distance_to_polyline(const std::vector<CenterlinePoint>& pts, const Vector3d& p) {
+  double best = 1e300;
+  for (size_t i = 0; i + 1 < pts.size(); ++i) {
+    const Vector3d a = pts[i].position_m, ab = pts[i + 1].position_m - a;
+    const double u = std::clamp((p - a).dot(ab) / std::max(ab.squaredNorm(), 1e-18), 0.0, 1.0);
+    best = std::min(best, (p - a - u * ab).norm());
+  }
+  return best;
+}
+
+void drop_leaf(VesselTree* tree, const std::string& name) {
+  const int id = tree->find(name);
+  if (id < 0) return;
+  for (const auto& b : tree->branches) {
+    if (b.parent == id) return;  // not a leaf
+  }
+  tree->branches.erase(tree->branches.begin() + id);
+  for (auto& b : tree->branches) {
+    if (b.parent > id) --b.parent;
+  }
+}
+
+// a primitive the partial-volume painter draws; priority lumen > plaque > vein > background
+enum class Kind { kLumen = 0, kPlaque = 1, kVein = 2 };
+struct Prim {
+  Kind kind;
+  // capsule (rounded cone) a -> b, radii ra, rb, HU ha, hb along it
+  Vector3d a, b;
+  double ra = 0, rb = 0, ha = 0, hb = 0;
+  // ellipsoid: inside when |m (p - a)| <= 1; min_semi for the conservative voxel tests
+  Matrix3d m;
+  double min_semi = 0;
+  Vector3d lo, hi;  // bounding box (mm)
+};
+
+Prim capsule(Kind kind, const Vector3d& a, const Vector3d& b, double ra, double rb, double ha, double hb) {
+  Prim p{kind, a, b, ra, rb, ha, hb, Matrix3d::Zero(), 0, {}, {}};
+  const double r = std::max(ra, rb);
+  p.lo = a.cwiseMin(b) - Vector3d::Constant(r);
+  p.hi = a.cwiseMax(b) + Vector3d::Constant(r);
+  return p;
+}
+
+Prim ellipsoid(const Vector3d& c, const Vector3d& semi, const Matrix3d& axes, double hu) {
+  Prim p{Kind::kPlaque, c, c, 0, 0, hu, hu, Matrix3d::Zero(), semi.minCoeff(), {}, {}};
+  p.m = semi.cwiseInverse().asDiagonal() * axes.transpose();
+  // the box of a rotated ellipsoid: half-extent along world axis e is |diag(semi) axes^T e|
+  const Matrix3d s = semi.asDiagonal() * axes.transpose();
+  for (int d = 0; d < 3; ++d) {
+    const double h = s.col(d).norm();
+    p.lo[d] = c[d] - h;
+    p.hi[d] = c[d] + h;
+  }
+  return p;
+}
+
+// (signed distance-like value at q, HU there); for a capsule the distance from the axis minus
+// the local radius, for an ellipsoid (|m (q - c)| - 1) * min_semi (a lower bound on |distance|
+// only where it is used with a margin)
+inline bool inside(const Prim& p, const Vector3d& q, double* hu) {
+  if (p.kind == Kind::kPlaque) {
+    *hu = p.ha;
+    return (p.m * (q - p.a)).squaredNorm() <= 1.0;
+  }
+  const Vector3d ab = p.b - p.a, aq = q - p.a;
+  const double u = std::clamp(aq.dot(ab) / std::max(ab.squaredNorm(), 1e-18), 0.0, 1.0);
+  const double r = p.ra + (p.rb - p.ra) * u;
+  *hu = p.ha + (p.hb - p.ha) * u;
+  return (aq - u * ab).squaredNorm() <= r * r;
+}
+
+// > margin: the voxel is outside; < -margin: wholly inside; between: partly
+inline double clearance(const Prim& p, const Vector3d& q, double* hu) {
+  if (p.kind == Kind::kPlaque) {
+    *hu = p.ha;
+    return ((p.m * (q - p.a)).norm() - 1.0) * p.min_semi;
+  }
+  const Vector3d ab = p.b - p.a, aq = q - p.a;
+  const double u = std::clamp(aq.dot(ab) / std::max(ab.squaredNorm(), 1e-18), 0.0, 1.0);
+  *hu = p.ha + (p.hb - p.ha) * u;
+  return (aq - u * ab).norm() - (p.ra + (p.rb - p.ra) * u);
+}
+
+// paints the primitives into a float volume (identity direction) with partial volume: voxels
+// near a surface get the mean of 4x4x4 sub-samples, each the value of the highest-priority
+// primitive holding it or the voxel's background
+void paint_partial_volume(std::vector<float>* hu, const std::array<int64_t, 3>& dims, const Vector3d& origin,
+                          const Vector3d& spacing, const std::vector<Prim>& prims, int threads) {
+  constexpr int kCell = 8, kSub = 4;
+  std::array<int64_t, 3> cells;
+  for (int d = 0; d < 3; ++d) cells[d] = (dims[d] + kCell - 1) / kCell;
+  // (cell, primitive) pairs, sorted by cell: each cell lists the primitives whose box meets it
+  std::vector<std::pair<int64_t, int>> pairs;
+  for (size_t n = 0; n < prims.size(); ++n) {
+    int64_t lo[3], hi[3];
+    bool empty = false;
+    for (int d = 0; d < 3; ++d) {
+      // voxels whose cube meets the box, clamped before the casts
+      const double nd = static_cast<double>(dims[d]);
+      const double l = std::clamp(std::ceil((prims[n].lo[d] - origin[d]) / spacing[d] - 0.5), -1.0, nd);
+      const double h = std::clamp(std::floor((prims[n].hi[d] - origin[d]) / spacing[d] + 0.5), -1.0, nd);
+      lo[d] = std::max<int64_t>(0, static_cast<int64_t>(l));
+      hi[d] = std::min<int64_t>(dims[d] - 1, static_cast<int64_t>(h));
+      if (hi[d] < lo[d]) empty = true;
+      lo[d] /= kCell;
+      hi[d] /= kCell;
+    }
+    if (empty) continue;
+    for (int64_t k = lo[2]; k <= hi[2]; ++k) {
+      for (int64_t j = lo[1]; j <= hi[1]; ++j) {
+        for (int64_t i = lo[0]; i <= hi[0]; ++i) pairs.push_back({i + cells[0] * (j + cells[1] * k), int(n)});
+      }
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<size_t> starts;
+  for (size_t n = 0; n < pairs.size(); ++n) {
+    if (n == 0 || pairs[n].first != pairs[n - 1].first) starts.push_back(n);
+  }
+  starts.push_back(pairs.size());
+
+  const double margin = 0.5 * spacing.norm() * 1.5;  // half the voxel diagonal, with room for cones
+  parallel_for(static_cast<int64_t>(starts.size()) - 1, threads, [&](int64_t c) {
+    const int64_t cell = pairs[starts[c]].first;
+    const int64_t ci = cell % cells[0], cj = (cell / cells[0]) % cells[1], ck = cell / (cells[0] * cells[1]);
+    std::vector<const Prim*> near;
+    for (int64_t k = ck * kCell; k < std::min(dims[2], (ck + 1) * kCell); ++k) {
+      for (int64_t j = cj * kCell; j < std::min(dims[1], (cj + 1) * kCell); ++j) {
+        for (int64_t i = ci * kCell; i < std::min(dims[0], (ci + 1) * kCell); ++i) {
+          const Vector3d q = origin + spacing.cwiseProduct(Vector3d(double(i), double(j), double(k)));
+          near.clear();
+          int whole = 3;  // the best kind holding the whole voxel; 3: none
+          double whole_hu = 0;
+          int best_partial = 3;
+          for (size_t n = starts[c]; n < starts[c + 1]; ++n) {
+            const Prim& p = prims[pairs[n].second];
+            double v;
+            const double d = clearance(p, q, &v);
+            if (d > margin) continue;
+            const int kind = static_cast<int>(p.kind);
+            if (d < -margin) {
+              if (kind < whole) whole = kind, whole_hu = v;
+            } else {
+              near.push_back(&p);
+              best_partial = std::min(best_partial, kind);
+            }
+          }
+          float& out = (*hu)[i + dims[0] * (j + dims[1] * k)];
+          if (whole < 3 && whole <= best_partial) {
+            out = static_cast<float>(whole_hu);
+            continue;
+          }
+          if (near.empty()) continue;
+          const double background = out;
+          double sum = 0;
+          for (int c2 = 0; c2 < kSub; ++c2) {
+            for (int b2 = 0; b2 < kSub; ++b2) {
+              for (int a2 = 0; a2 < kSub; ++a2) {
+                const Vector3d f((a2 + 0.5) / kSub - 0.5, (b2 + 0.5) / kSub - 0.5, (c2 + 0.5) / kSub - 0.5);
+                const Vector3d qs = q + spacing.cwiseProduct(f);
+                int best = whole;
+                double value = whole < 3 ? whole_hu : background;
+                for (const Prim* p : near) {
+                  const int kind = static_cast<int>(p->kind);
+                  if (kind >= best) continue;
+                  double v;
+                  if (inside(*p, qs, &v)) best = kind, value = v;
+                }
+                sum += value;
+              }
+            }
+          }
+          out = static_cast<float>(sum / (kSub * kSub * kSub));
+        }
+      }
+    }
+  });
+}
+
+// separable Gaussian blur of a float volume, sigma per axis in voxels; edges replicated
+void blur(std::vector<float>* data, const std::array<int64_t, 3>& dims, const Vector3d& sigma_vox, int threads) {
+  const int64_t nx = dims[0], ny = dims[1], nz = dims[2];
+  float* v = data->data();
+  for (int axis = 0; axis < 3; ++axis) {
+    const double s = sigma_vox[axis];
+    if (!(s > 0.05)) continue;
+    const int r = static_cast<int>(std::ceil(3.0 * s));
+    std::vector<float> w(2 * r + 1);
+    double total = 0;
+    for (int t = -r; t <= r; ++t) total += w[t + r] = static_cast<float>(std::exp(-0.5 * t * t / (s * s)));
+    for (auto& x : w) x = static_cast<float>(x / total);
+    if (axis == 0) {
+      parallel_for(nz, threads, [&](int64_t k) {
+        std::vector<float> row(nx + 2 * r);
+        for (int64_t j = 0; j < ny; ++j) {
+          float* out = v + nx * (j + ny * k);
+          for (int64_t i = 0; i < nx + 2 * r; ++i) row[i] = out[std::clamp<int64_t>(i - r, 0, nx - 1)];
+          for (int64_t i = 0; i < nx; ++i) {
+            float acc = 0;
+            for (int t = 0; t <= 2 * r; ++t) acc += w[t] * row[i + t];
+            out[i] = acc;
+          }
+        }
+      });
+    } else if (axis == 1) {
+      parallel_for(nz, threads, [&](int64_t k) {
+        float* slice = v + nx * ny * k;
+        std::vector<float> copy(slice, slice + nx * ny);
+        for (int64_t j = 0; j < ny; ++j) {
+          float* out = slice + nx * j;
+          std::fill(out, out + nx, 0.0f);
+          for (int t = -r; t <= r; ++t) {
+            const float* in = copy.data() + nx * std::clamp<int64_t>(j + t, 0, ny - 1);
+            const float wt = w[t + r];
+            for (int64_t i = 0; i < nx; ++i) out[i] += wt * in[i];
+          }
+        }
+      });
+    } else {
+      parallel_for(ny, threads, [&](int64_t j) {
+        std::vector<float> plane(nx * nz);
+        for (int64_t k = 0; k < nz; ++k) std::copy_n(v + nx * (j + ny * k), nx, plane.data() + nx * k);
+        for (int64_t k = 0; k < nz; ++k) {
+          float* out = v + nx * (j + ny * k);
+          std::fill(out, out + nx, 0.0f);
+          for (int t = -r; t <= r; ++t) {
+            const float* in = plane.data() + nx * std::clamp<int64_t>(k + t, 0, nz - 1);
+            const float wt = w[t + r];
+            for (int64_t i = 0; i < nx; ++i) out[i] += wt * in[i];
+          }
+        }
+      });
+    }
+  }
+}
+
+// the signed permutation behind a direction matrix: index axis a runs along physical axis
+// axis_of[a], forwards when sign_of[a] > 0
+void signed_permutation(const Matrix3d& d, int axis_of[3], int sign_of[3]) {
+  bool row_used[3] = {false, false, false};
+  for (int a = 0; a < 3; ++a) {
+    int found = -1;
+    for (int r = 0; r < 3; ++r) {
+      const double x = d(r, a);
+      if (x == 0.0) continue;
+      if ((x != 1.0 && x != -1.0) || found >= 0) found = -2;
+      if (found == -1) found = r;
+    }
+    if (found < 0 || row_used[found]) {
+      throw std::invalid_argument("PhantomCtaSpec.direction: expected a signed permutation matrix");
+    }
+    row_used[found] = true;
+    axis_of[a] = found;
+    sign_of[a] = d(found, a) > 0 ? 1 : -1;
+  }
+}
+
+void validate_spec(const PhantomCtaSpec& s) {
+  for (int a = 0; a < 3; ++a) {
+    if (s.dims[a] <= 0 || s.dims[a] > 4096) throw std::invalid_argument("PhantomCtaSpec.dims: expected 1..4096");
+    if (!(s.spacing_mm[a] > 0) || !std::isfinite(s.spacing_mm[a])) {
+      throw std::invalid_argument("PhantomCtaSpec.spacing_mm: expected positive finite values");
+    }
+  }
+  if (!(s.noise_sigma_hu >= 0) || !std::isfinite(s.noise_sigma_hu)) {
+    throw std::invalid_argument("PhantomCtaSpec.noise_sigma_hu: expected >= 0");
+  }
+  if (!(s.blur_sigma_mm >= 0) || !std::isfinite(s.blur_sigma_mm)) {
+    throw std::invalid_argument("PhantomCtaSpec.blur_sigma_mm: expected >= 0");
+  }
+  if (!(s.stenosis_fraction < 1.0) || std::isnan(s.stenosis_fraction)) {
+    throw std::invalid_argument("PhantomCtaSpec.stenosis_fraction: expected < 1");
+  }
+}
+
+}  // namespace
+
+PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
+  validate_spec(spec);
+  int axis_of[3], sign_of[3];
+  signed_permutation(spec.direction, axis_of, sign_of);
+  const int threads =
+      std::max(1, spec.threads > 0 ? spec.threads : static_cast<int>(std::thread::hardware_concurrency()));
+
+  PhantomCta out;
+  out.spec = spec;
+  PhantomCtaFacts& facts = out.facts;
+  Draw draw(spec.seed);
+
+  // the tree in mm (the fields say metres; here they hold mm until the end), heart centre at
+  // the origin, patient LPS
+  VesselTree tree = make_coronary_phantom({.seed = spec.seed});
+  for (auto& b : tree.branches) {
+    for (auto& p : b.points) {
+      p.position_m *= 1000.0;
+      p.radius_m *= 1000.0;
+    }
+  }
+
+  // branch variation: D2 and OM2 are absent in some hearts
+  for (const char* name : {"D2", "OM2"}) {
+    if (draw.chance(0.35)) {
+      drop_leaf(&tree, name);
+      facts.dropped_branches.push_back(name);
+    }
+  }
+
+  // extra tortuosity: a lateral sine along the heart's surface, faded in from the branch's start
+  // (for the RCA, from where it leaves the aorta); a child carries its parent's displacement at
+  // its branch point, faded out over 15 mm. The amplitude is capped so the curvature stays below
+  // 1/8 mm^-1 (a short wavelength gets a small amplitude).
+  {
+    std::vector<std::vector<Vector3d>> disp(tree.branches.size());
+    for (size_t b = 0; b < tree.branches.size(); ++b) {
+      const auto& br = tree.branches[b];
+      const double wavelength = draw.between(10, 30);
+      const double amplitude = std::min(draw.between(0, 2), (1.0 / 8.0) * std::pow(wavelength / (2 * kPi), 2.0));
+      const double phase = draw.between(-kPi, kPi);
+      disp[b].assign(br.points.size(), Vector3d::Zero());
+      if (br.name == "aorta" || br.name == "LM") continue;
+      facts.tortuosity.push_back({br.name, amplitude, wavelength});
+      const double s0 = br.name == "RCA" ? 18.0 : 0.0;
+      const Vector3d carried = br.parent >= 0 ? disp[br.parent][br.parent_point] : Vector3d::Zero();
+      const auto arc = arc_lengths(br.points);
+      for (size_t i = 0; i < br.points.size(); ++i) {
+        const double s = arc[i];
+        const Vector3d side = lateral(br.points[i].position_m, tangent(br.points, i));
+        disp[b][i] =
+            carried * (1.0 - smoothstep(s / 15.0)) +
+            side * (amplitude * std::sin(2 * kPi * (s - s0) / wavelength + phase) * smoothstep((s - s0) / 10.0));
+      }
+    }
+    for (size_t b = 0; b < tree.branches.size(); ++b) {
+      for (size_t i = 0; i < tree.branches[b].points.size(); ++i) tree.branches[b].points[i].position_m += disp[b][i];
+    }
+  }
+
+  // the heart's pose: rotated +-15 deg about each axis (x, then y, then z) and scaled 0.9..1.1
+  // about its centre; radii scaled 0.85..1.15 (the aorta's keeps its own)
+  {
+    Vector3d deg;  // one draw per statement: the order of a call's arguments is unspecified
+    for (int d = 0; d < 3; ++d) deg[d] = draw.between(-15, 15);
+    const Matrix3d r =
+        (Eigen::AngleAxisd(deg.z() * kDeg, Vector3d::UnitZ()) * Eigen::AngleAxisd(deg.y() * kDeg, Vector3d::UnitY()) *
+         Eigen::AngleAxisd(deg.x() * kDeg, Vector3d::UnitX()))
+            .toRotationMatrix();
+    facts.heart_rotation_deg = deg;
+    facts.heart_rotation = r;
+    facts.heart_scale = draw.between(0.9, 1.1);
+    facts.radius_scale = draw.between(0.85, 1.15);
+    for (auto& b : tree.branches) {
+      for (auto& p : b.points) {
+        p.position_m = facts.heart_scale * (r * p.position_m);
+        if (b.name != "aorta") p.radius_m *= facts.radius_scale;
+      }
+    }
+  }
+
+  // contrast timing
+  facts.aorta_hu = facts.contrast_hu_proximal = draw.between(300, 550);
+  facts.lv_hu = facts.aorta_hu - draw.between(0, 30);
+  facts.la_hu = facts.aorta_hu - draw.between(0, 40);
+  facts.rv_hu = draw.between(100, 400);
+  facts.ra_hu = std::clamp(facts.rv_hu + draw.between(-50, 50), 100.0, 400.0);
+  facts.fade_hu_per_mm = draw.between(0.5, 2.0);
+  facts.lumen_floor_hu = kLumenFloorHu;
+  facts.myocardium_hu = draw.between(40, 100);
+  facts.fat_sleeve_mm = draw.between(1.5, 3.0);
+  facts.vein_hu = draw.between(150, 250);
+
+  const int aorta_id = tree.find("aorta");
+  const auto& aorta = tree.branches[aorta_id].points;
+  const double aorta_r = aorta.front().radius_m;
+  auto children_near = [&](int branch, double s, double half, const std::vector<double>& arc) {
+    for (const auto& c : tree.branches) {
+      if (c.parent == branch && std::abs(arc[c.parent_point] - s) < half) return true;
+    }
+    return false;
+  };
+
+  // the radii before the stenosis (the vein and plaques sit against the healthy wall)
+  std::vector<std::vector<double>> healthy(tree.branches.size());
+  for (size_t b = 0; b < tree.branches.size(); ++b) {
+    for (const auto& p : tree.branches[b].points) healthy[b].push_back(p.radius_m);
+  }
+
+  // the stenosis: LAD (proximal or mid) or RCA (past its aortic part), clear of branch points
+  {
+    const bool on_lad = draw.chance(0.5);
+    const int b = tree.find(on_lad ? "LAD" : "RCA");
+    auto& pts = tree.branches[b].points;
+    const auto arc = arc_lengths(pts);
+    const double len = draw.between(4, 8);
+    const double drawn_fraction = draw.between(0.5, 0.8);
+    const double fraction = spec.stenosis_fraction >= 0 ? spec.stenosis_fraction : drawn_fraction;
+    const double lo = on_lad ? 10.0 : 25.0, hi = std::min(on_lad ? 45.0 : 65.0, arc.back() - len);
+    double s = draw.between(lo, hi);
+    for (int tries = 0; tries < 200 && children_near(b, s, len / 2 + 2.0, arc); ++tries) {
+      s += 0.5;
+      if (s > hi) s = lo;
+    }
+    const int centre = index_at(arc, s);
+    s = arc[centre];
+    for (size_t i = 0; i < pts.size(); ++i) {
+      const double x = (arc[i] - s) / len;
+      if (std::abs(x) <= 0.5) pts[i].radius_m *= 1.0 - fraction * 0.5 * (1.0 + std::cos(2 * kPi * x));
+    }
+    facts.stenosis_branch = tree.branches[b].name;
+    facts.stenosis_arc_length_mm = s;
+    facts.stenosis_fraction = fraction;
+    facts.stenosis_length_mm = len;
+    facts.stenosis_reference_radius_mm = healthy[b][centre];
+    facts.stenosis_center_mm = pts[centre].position_m;
+  }
+
+  // the cardiac vein beside the LAD (the great cardiac vein) or the LCx, touching its healthy
+  // outer wall, on the side where it meets no other branch
+  std::vector<Prim> prims;
+  {
+    const bool on_lad = draw.chance(0.5);
+    const int b = tree.find(on_lad ? "LAD" : "LCx");
+    const auto& pts = tree.branches[b].points;
+    const auto arc = arc_lengths(pts);
+    const double rv = draw.between(1.0, 1.5);
+    double len = draw.between(30, 50);
+    len = std::min(len, arc.back() - 12.0);
+    const double start_unit = draw.u01();
+    const double side_sign = draw.chance(0.5) ? 1.0 : -1.0;
+    std::vector<Vector3d> best;
+    double best_clear = -1e300;
+    double best_start = 0;
+    // candidates: the drawn start and side first, then others; the first clear one wins
+    for (int attempt = 0; attempt < 24; ++attempt) {
+      const double start = 8.0 + std::fmod(start_unit + attempt * 0.382, 1.0) * std::max(0.0, arc.back() - len - 12.0);
+      const double sign = (attempt % 2 == 0) ? side_sign : -side_sign;
+      std::vector<Vector3d> path;
+      for (size_t i = 0; i < pts.size(); ++i) {
+        if (arc[i] < start || arc[i] > start + len) continue;
+        const Vector3d side = lateral(pts[i].position_m, tangent(pts, i));
+        path.push_back(pts[i].position_m + sign * (healthy[b][i] + rv) * side);
+      }
+      // clearance from every other branch's lumen
+      double clear = 1e300;
+      for (size_t o = 0; o < tree.branches.size(); ++o) {
+        if (static_cast<int>(o) == b) continue;
+        for (const auto& q : path) {
+          for (const auto& cp : tree.branches[o].points) {
+            clear = std::min(clear, (q - cp.position_m).norm() - cp.radius_m - rv);
+          }
+        }
+      }
+      if (clear > best_clear) best_clear = clear, best = path, best_start = start;
+      if (clear > 1.0) break;
+    }
+    facts.vein_beside = tree.branches[b].name;
+    facts.vein_start_mm = best_start;
+    facts.vein_length_mm = len;
+    facts.vein_radius_mm = rv;
+    facts.vein_points_mm = best;
+    for (size_t i = 0; i + 1 < best.size(); ++i) {
+      prims.push_back(capsule(Kind::kVein, best[i], best[i + 1], rv, rv, facts.vein_hu, facts.vein_hu));
+    }
+  }
+
+  // calcified plaques: 1..3 ellipsoids in the wall of the LAD, LCx or RCA, their inner tip on
+  // the lumen's surface (the widest within their length), clear of branch points, of the
+  // stenosis, of each other and of the vein
+  std::vector<Prim> plaque_prims;
+  {
+    const int count = 1 + std::min(2, static_cast<int>(draw.u01() * 3));
+    for (int n = 0; n < count; ++n) {
+      const double which = draw.u01();
+      const char* name = which < 0.4 ? "LAD" : (which < 0.7 ? "LCx" : "RCA");
+      const double unit = draw.u01(), angle = draw.between(-kPi, kPi);
+      Vector3d semi;
+      semi.x() = draw.between(1.0, 2.0);
+      semi.y() = draw.between(0.8, 1.2);
+      semi.z() = draw.between(1.0, 1.5);
+      const double hu = draw.between(700, 1200);
+      const int b = tree.find(name);
+      const auto& pts = tree.branches[b].points;
+      const auto arc = arc_lengths(pts);
+      const double lo = std::string(name) == "RCA" ? 22.0 : 8.0;
+      const double hi = std::max(lo, std::min(std::string(name) == "LCx" ? 50.0 : 80.0, arc.back() - 6.0));
+      double s = lo + unit * (hi - lo);
+      auto clash = [&](double at) {
+        if (children_near(b, at, semi.x() + 2.0, arc)) return true;
+        if (facts.vein_beside == name && at > facts.vein_start_mm - 4 &&
+            at < facts.vein_start_mm + facts.vein_length_mm + 4)
+          return true;
+        for (const auto& p : facts.plaques) {
+          if (p.branch == name && std::abs(p.arc_length_mm - at) < 5.0) return true;
+        }
+        return facts.stenosis_branch == name &&
+               std::abs(at - facts.stenosis_arc_length_mm) < 0.5 * facts.stenosis_length_mm + semi.x() + 1.0;
+      };
+      for (int tries = 0; tries < 400 && clash(s); ++tries) {
+        s += 0.5;
+        if (s > hi) s = lo;
+      }
+      const int i = index_at(arc, s);
+      const Vector3d p = pts[i].position_m, t = tangent(pts, i);
+      const Vector3d out_dir = (p.normalized() - t * t.dot(p.normalized())).normalized();
+      const Vector3d radial = std::cos(angle) * out_dir + std::sin(angle) * t.cross(out_dir);
+      double wall = 0;
+      for (size_t m = 0; m < pts.size(); ++m) {
+        if (std::abs(arc[m] - arc[i]) <= semi.x() + 0.5) wall = std::max(wall, pts[m].radius_m);
+      }
+      const Vector3d c = p + (wall + semi.y()) * radial;
+      Matrix3d axes;
+      axes.col(0) = t;
+      axes.col(1) = radial;
+      axes.col(2) = t.cross(radial);
+      plaque_prims.push_back(ellipsoid(c, semi, axes, hu));
+      facts.plaques.push_back({name, arc[i], c, semi, hu});
+    }
+  }
+
+  // the field of view: a cardiac CT is centred on the heart; here on the box of the heart (its
+  // pericardium), the coronaries and the ascending aorta up to the aortic seed, with a seeded
+  // shift (within the room the box leaves) so the heart is not always centred
+  std::array<int64_t, 3> cdims;  // the canonical (identity-direction) grid, patient frame
+  Vector3d cspacing;
+  for (int a = 0; a < 3; ++a) {
+    cdims[axis_of[a]] = spec.dims[a];
+    cspacing[axis_of[a]] = spec.spacing_mm[a];
+  }
+  Vector3d hi = Vector3d::Constant(52.0 * facts.heart_scale), lo = -hi;
+  const int seed_index = std::min<int>(50, static_cast<int>(tree.branches[aorta_id].points.size()) - 1);
+  for (const auto& b : tree.branches) {
+    for (size_t i = 0; i < b.points.size(); ++i) {
+      if (b.name == "aorta" && static_cast<int>(i) > seed_index) break;
+      const CenterlinePoint& p = b.points[i];
+      lo = lo.cwiseMin(p.position_m - Vector3d::Constant(p.radius_m));
+      hi = hi.cwiseMax(p.position_m + Vector3d::Constant(p.radius_m));
+    }
+  }
+  Vector3d fov_center = 0.5 * (lo + hi);
+  for (int d = 0; d < 3; ++d) {
+    const double room = (cdims[d] - 1) * cspacing[d] - (hi[d] - lo[d]);
+    fov_center[d] += draw.between(-1, 1) * std::clamp(room / 2 - 5.0, 0.0, 10.0);
+  }
+  // the heart's place in scanner coordinates (tables put the heart near the scanner's axis,
+  // the patient's left, and a table-dependent distance along it)
+  Vector3d drawn_offset;
+  drawn_offset.x() = draw.between(-30, 30);
+  drawn_offset.y() = -120 + draw.between(-30, 30);
+  drawn_offset.z() = -150 + draw.between(-40, 40);
+  const Vector3d offset = spec.scanner_frame ? drawn_offset : Vector3d::Zero();
+  facts.heart_center_mm = offset;
+
+  // the background: the thorax painter with the posed heart, enhanced chambers and aorta, the
+  // outflow tract, fat sleeves and no lumens
+  ThoraxPhantomSpec ts;
+  ts.seed = spec.seed;
+  ts.dims = cdims;
+  ts.spacing_xyz_mm = cspacing;
+  ts.center_mm = fov_center;
+  ts.threads = threads;
+  ts.hu.myocardium = facts.myocardium_hu;
+  ts.heart_rotation = facts.heart_rotation;
+  ts.heart_scale = facts.heart_scale;
+  ts.lv_hu = facts.lv_hu;
+  ts.la_hu = facts.la_hu;
+  ts.rv_hu = facts.rv_hu;
+  ts.ra_hu = facts.ra_hu;
+  ts.aorta_hu = facts.aorta_hu;
+  ts.lv_outflow = true;
+  ts.coronary_lumens = false;
+  ts.coronary_fat_sleeve_mm = spec.with_coronaries ? facts.fat_sleeve_mm : 0.0;
+  VesselTree tree_m = tree;
+  for (auto& b : tree_m.branches) {
+    for (auto& p : b.points) {
+      p.position_m *= 1e-3;
+      p.radius_m *= 1e-3;
+    }
+  }
+  Volume canon = make_thorax_phantom(ts, tree_m);
+  // the LV centre as the thorax painter places it (heart frame offset (-2, 14, -8) mm)
+  {
+    const Vector3d base = Vector3d(-0.45, 0.35, 0.82).normalized();
+    const Vector3d anterior = (Vector3d(0, -1, 0) - base.dot(Vector3d(0, -1, 0)) * base).normalized();
+    Matrix3d heart;
+    heart.col(0) = anterior;
+    heart.col(1) = base.cross(anterior);
+    heart.col(2) = base;
+    facts.lv_center_mm = facts.heart_scale * (facts.heart_rotation * heart * Vector3d(-2, 14, -8)) + offset;
+  }
+
+  // coronary lumens: HU fading with the path length from the ostium, one capsule per segment
+  std::vector<std::vector<double>> path_mm(tree.branches.size());
+  Vector3d lm_ostium = Vector3d::Zero(), rca_ostium = Vector3d::Zero();
+  for (size_t b = 0; b < tree.branches.size(); ++b) {
+    const auto& br = tree.branches[b];
+    const auto arc = arc_lengths(br.points);
+    path_mm[b].assign(br.points.size(), 0.0);
+    if (br.name == "aorta") continue;
+    if (br.parent == aorta_id) {
+      // the ostium: the first point at the aortic wall
+      size_t o = 0;
+      while (o + 1 < br.points.size() && distance_to_polyline(aorta, br.points[o].position_m) < aorta_r) ++o;
+      if (br.name == "LM") lm_ostium = br.points[o].position_m;
+      if (br.name == "RCA") rca_ostium = br.points[o].position_m;
+      for (size_t i = 0; i < br.points.size(); ++i) path_mm[b][i] = std::max(0.0, arc[i] - arc[o]);
+    } else {
+      const double base = path_mm[br.parent][br.parent_point];
+      for (size_t i = 0; i < br.points.size(); ++i) path_mm[b][i] = base + arc[i];
+    }
+  }
+  auto lumen_hu = [&](double d) {
+    return std::max(facts.lumen_floor_hu, facts.contrast_hu_proximal - facts.fade_hu_per_mm * d);
+  };
+  if (spec.with_coronaries) {
+    for (size_t b = 0; b < tree.branches.size(); ++b) {
+      const auto& br = tree.branches[b];
+      if (br.name == "aorta") continue;
+      for (size_t i = 0; i + 1 < br.points.size(); ++i) {
+        prims.push_back(capsule(Kind::kLumen, br.points[i].position_m, br.points[i + 1].position_m,
+                                br.points[i].radius_m, br.points[i + 1].radius_m, lumen_hu(path_mm[b][i]),
+                                lumen_hu(path_mm[b][i + 1])));
+      }
+    }
+    prims.insert(prims.end(), plaque_prims.begin(), plaque_prims.end());
+  }
+
+  // to float; the partial-volume painter, the blur and the noise work on it
+  std::vector<float> hu(canon.hu_i16.begin(), canon.hu_i16.end());
+  std::vector<int16_t>().swap(canon.hu_i16);
+  paint_partial_volume(&hu, cdims, canon.origin_mm, cspacing, prims, threads);
+  if (spec.blur_sigma_mm > 0) blur(&hu, cdims, Vector3d::Constant(spec.blur_sigma_mm).cwiseQuotient(cspacing), threads);
+  if (spec.noise_sigma_hu > 0) {
+    const uint64_t seed = 0x243f6a8885a308d3ull ^ (static_cast<uint64_t>(spec.seed) << 20);
+    const int64_t slice = cdims[0] * cdims[1];
+    parallel_for(cdims[2], threads, [&](int64_t k) {
+      SplitMix rng{mix64(seed ^ mix64(static_cast<uint64_t>(k) + 1))};
+      float* v = hu.data() + slice * k;
+      for (int64_t n = 0; n < slice; n += 2) {
+        // Box-Muller: two normal deviates from two uniforms
+        const double u1 = (static_cast<double>(rng.next() >> 11) + 1.0) * 0x1.0p-53;
+        const double u2 = static_cast<double>(rng.next() >> 11) * 0x1.0p-53;
+        const double r = spec.noise_sigma_hu * std::sqrt(-2.0 * std::log(u1));
+        v[n] += static_cast<float>(r * std::cos(2 * kPi * u2));
+        if (n + 1 < slice) v[n + 1] += static_cast<float>(r * std::sin(2 * kPi * u2));
+      }
+    });
+  }
+
+  // the output grid: the canonical voxels re-ordered along the spec's direction; the physical
+  // box is the same, moved by the scanner offset
+  Vector3d origin = canon.origin_mm + offset;
+  for (int a = 0; a < 3; ++a) {
+    if (sign_of[a] < 0) origin[axis_of[a]] += (spec.dims[a] - 1) * spec.spacing_mm[a];
+  }
+  out.ct = Volume::make(spec.dims, spec.spacing_mm, origin, VoxelType::kInt16);
+  out.ct.direction = spec.direction;
+  {
+    const int64_t cstride[3] = {1, cdims[0], cdims[0] * cdims[1]};
+    int64_t step[3], base = 0;
+    for (int a = 0; a < 3; ++a) {
+      step[a] = sign_of[a] * cstride[axis_of[a]];
+      if (sign_of[a] < 0) base += (spec.dims[a] - 1) * cstride[axis_of[a]];
+    }
+    parallel_for(spec.dims[2], threads, [&](int64_t k) {
+      for (int64_t j = 0; j < spec.dims[1]; ++j) {
+        int16_t* row = out.ct.hu_i16.data() + out.ct.linear_index(0, j, k);
+        const float* src = hu.data() + base + j * step[1] + k * step[2];
+        for (int64_t i = 0; i < spec.dims[0]; ++i) {
+          const double x = std::clamp(static_cast<double>(src[i * step[0]]), -1024.0, 3071.0);
+          row[i] = static_cast<int16_t>(std::lround(x));
+        }
+      }
+    });
+  }
+
+  // truth and landmarks in the CT's frame (metres), facts in mm
+  out.truth = tree;
+  for (auto& b : out.truth.branches) {
+    for (auto& p : b.points) {
+      p.position_m = (p.position_m + offset) * 1e-3;
+      p.radius_m *= 1e-3;
+    }
+  }
+  // the truth holds what the volume shows: a branch ends at its last point inside the grid; one
+  // that starts outside it, or past where its parent was cut, is left out with its children
+  {
+    auto in_grid = [&](const Vector3d& p_m) {
+      const Vector3d ijk = out.ct.physical_to_index(p_m * 1000.0);
+      for (int a = 0; a < 3; ++a) {
+        if (!(ijk[a] >= -1e-6 && ijk[a] <= spec.dims[a] - 1 + 1e-6)) return false;
+      }
+      return true;
+    };
+    VesselTree kept;
+    std::vector<int> renumber(out.truth.branches.size(), -1);
+    for (size_t b = 0; b < out.truth.branches.size(); ++b) {
+      VesselBranch br = out.truth.branches[b];
+      size_t n = 0;
+      while (n < br.points.size() && in_grid(br.points[n].position_m)) ++n;
+      const bool parent_ok =
+          br.parent < 0 || (renumber[br.parent] >= 0 &&
+                            br.parent_point < static_cast<int>(kept.branches[renumber[br.parent]].points.size()));
+      if (n < br.points.size()) facts.clipped_branches.push_back(br.name);
+      if (n < 2 || !parent_ok) continue;
+      br.points.resize(n);
+      if (br.parent >= 0) br.parent = renumber[br.parent];
+      renumber[b] = static_cast<int>(kept.branches.size());
+      kept.branches.push_back(std::move(br));
+    }
+    out.truth = std::move(kept);
+  }
+  facts.stenosis_center_mm += offset;
+  for (auto& p : facts.plaques) p.center_mm += offset;
+  for (auto& p : facts.vein_points_mm) p += offset;
+  out.aortic_seed_mm = aorta[seed_index].position_m + offset;
+  auto mark = [&](std::string name, const Vector3d& p_mm) { out.landmarks.push_back({std::move(name), p_mm * 1e-3}); };
+  mark("aortic seed", out.aortic_seed_mm);
+  mark("aortic root", aorta.front().position_m + offset);
+  mark("LM ostium", lm_ostium + offset);
+  mark("RCA ostium", rca_ostium + offset);
+  mark("stenosis", facts.stenosis_center_mm);
+  for (size_t n = 0; n < facts.plaques.size(); ++n) mark("plaque " + std::to_string(n + 1), facts.plaques[n].center_mm);
+  if (!facts.vein_points_mm.empty()) {
+    mark("vein start", facts.vein_points_mm.front());
+    mark("vein end", facts.vein_points_mm.back());
+  }
+  mark("LV centre", facts.lv_center_mm);
+  mark("heart centre", offset);
+  return out;
+}
+
+#ifdef PCISIM_HAVE_JSON
+namespace {
+
+using ojson = nlohmann::ordered_json;
+
+ojson vec(const Vector3d& v) {
+  return ojson::array({v.x(), v.y(), v.z()});
+}
+
+ojson mat(const Matrix3d& m) {
+  ojson rows = ojson::array();
+  for (int r = 0; r < 3; ++r) rows.push_back(ojson::array({m(r, 0), m(r, 1), m(r, 2)}));
+  return rows;
+}
+
+}  // namespace
+
+void write_phantom_cta(const PhantomCta& cta, const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw std::runtime_error(dir + ": cannot create the folder: " + ec.message());
+  write_nrrd(cta.ct, dir + "/ct.nrrd");
+  write_vessel_tree_json(cta.truth, dir + "/truth.json");
+
+  const PhantomCtaSpec& s = cta.spec;
+  const PhantomCtaFacts& f = cta.facts;
+  ojson spec = {{"seed", s.seed},
+                {"dims", {s.dims[0], s.dims[1], s.dims[2]}},
+                {"spacing_mm", vec(s.spacing_mm)},
+                {"direction", mat(s.direction)},
+                {"noise_sigma_hu", s.noise_sigma_hu},
+                {"blur_sigma_mm", s.blur_sigma_mm},
+                {"scanner_frame", s.scanner_frame},
+                {"stenosis_fraction", s.stenosis_fraction},
+                {"with_coronaries", s.with_coronaries}};
+  ojson plaques = ojson::array();
+  for (const auto& p : f.plaques) {
+    plaques.push_back({{"branch", p.branch},
+                       {"arc_length_mm", p.arc_length_mm},
+                       {"center_mm", vec(p.center_mm)},
+                       {"semi_axes_mm", vec(p.semi_axes_mm)},
+                       {"hu", p.hu}});
+  }
+  ojson tortuosity = ojson::array();
+  for (const auto& t : f.tortuosity) {
+    tortuosity.push_back({{"branch", t.branch}, {"amplitude_mm", t.amplitude_mm}, {"wavelength_mm", t.wavelength_mm}});
+  }
+  ojson vein_points = ojson::array();
+  for (const auto& p : f.vein_points_mm) vein_points.push_back(vec(p));
+  ojson facts = {{"contrast_hu_proximal", f.contrast_hu_proximal},
+                 {"fade_hu_per_mm", f.fade_hu_per_mm},
+                 {"lumen_floor_hu", f.lumen_floor_hu},
+                 {"aorta_hu", f.aorta_hu},
+                 {"lv_hu", f.lv_hu},
+                 {"la_hu", f.la_hu},
+                 {"rv_hu", f.rv_hu},
+                 {"ra_hu", f.ra_hu},
+                 {"myocardium_hu", f.myocardium_hu},
+                 {"fat_sleeve_mm", f.fat_sleeve_mm},
+                 {"stenosis",
+                  {{"branch", f.stenosis_branch},
+                   {"arc_length_mm", f.stenosis_arc_length_mm},
+                   {"fraction", f.stenosis_fraction},
+                   {"length_mm", f.stenosis_length_mm},
+                   {"reference_radius_mm", f.stenosis_reference_radius_mm},
+                   {"center_mm", vec(f.stenosis_center_mm)}}},
+                 {"plaques", std::move(plaques)},
+                 {"vein",
+                  {{"beside", f.vein_beside},
+                   {"start_mm", f.vein_start_mm},
+                   {"length_mm", f.vein_length_mm},
+                   {"radius_mm", f.vein_radius_mm},
+                   {"hu", f.vein_hu},
+                   {"points_mm", std::move(vein_points)}}},
+                 {"heart_rotation_deg", vec(f.heart_rotation_deg)},
+                 {"heart_rotation", mat(f.heart_rotation)},
+                 {"heart_scale", f.heart_scale},
+                 {"heart_center_mm", vec(f.heart_center_mm)},
+                 {"lv_center_mm", vec(f.lv_center_mm)},
+                 {"radius_scale", f.radius_scale},
+                 {"dropped_branches", f.dropped_branches},
+                 {"clipped_branches", f.clipped_branches},
+                 {"tortuosity", std::move(tortuosity)}};
+  ojson landmarks = ojson::array();
+  for (const auto& l : cta.landmarks) landmarks.push_back({{"name", l.name}, {"position_m", vec(l.position_m)}});
+  const ojson doc = {{"format", "pcisim-phantom-cta"},
+                     {"version", 1},
+                     {"ct", "ct.nrrd"},
+                     {"truth", "truth.json"},
+                     {"spec", std::move(spec)},
+                     {"volume",
+                      {{"dims", {cta.ct.dims[0], cta.ct.dims[1], cta.ct.dims[2]}},
+                       {"spacing_mm", vec(cta.ct.spacing_mm)},
+                       {"origin_mm", vec(cta.ct.origin_mm)},
+                       {"direction", mat(cta.ct.direction)}}},
+                     {"aortic_seed_mm", vec(cta.aortic_seed_mm)},
+                     {"facts", std::move(facts)},
+                     {"landmarks", std::move(landmarks)}};
+  const std::string path = dir + "/phantom.json";
+  std::ofstream file(path);
+  if (!file) throw std::runtime_error(path + ": cannot open for writing");
+  file << doc.dump(1) << '\n';
+  file.flush();
+  if (!file) throw std::runtime_error(path + ": write failed");
+}
+#endif
+
+}  // namespace pcisim::anatomy

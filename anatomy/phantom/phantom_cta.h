@@ -1,0 +1,112 @@
+#pragma once
+// Synthetic coronary CT angiograms with exact truth, to test and benchmark the CTA pipeline
+// (segmentation, centerlines, radii). One seed draws the geometry (the coronary phantom posed,
+// scaled, made more tortuous, with branches dropped and radii scaled), the contrast timing, a
+// stenosis, calcified plaques and a cardiac vein beside an artery; the thorax painter supplies
+// the background; the coronary lumens are painted with partial volume; then scanner blur and
+// noise. The truth (centerlines and radii, the stenosis included) is in the CT's physical frame.
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "anatomy/case/case.h"
+#include "anatomy/vessel/vessel_tree.h"
+#include "anatomy/volume/volume.h"
+
+namespace pcisim::anatomy {
+
+struct PhantomCtaSpec {
+  uint32_t seed = 1;  // everything below that is drawn, is drawn from this
+  std::array<int64_t, 3> dims{512, 512, 250};
+  Eigen::Vector3d spacing_mm{0.4, 0.4, 0.6};  // per index axis; clinical 0.3..0.8 mm
+  // any signed permutation matrix (diag(1, 1, -1), an axis swap): the voxels are re-ordered
+  // exactly, so the same physical point holds the same HU whatever the direction
+  Eigen::Matrix3d direction = Eigen::Matrix3d::Identity();
+  double noise_sigma_hu = 25;   // Gaussian, added after the blur; 15..40 typical
+  double blur_sigma_mm = 0.45;  // scanner point spread (Gaussian); 0: none
+  // the heart at a seeded offset in scanner coordinates (as in real scans); false: the heart
+  // centre at the origin (patient frame of the coronary phantom, mm)
+  bool scanner_frame = true;
+  // < 0: drawn (50..80 % diameter reduction); else this diameter reduction (0.95: 95 %)
+  double stenosis_fraction = -1;
+  // false: a CTA with no coronary arteries (no lumens, fat sleeves or plaques; the aorta, the
+  // chambers, the vein and everything else as with them). The truth still holds the tree.
+  bool with_coronaries = true;
+  int threads = 0;  // 0: std::thread::hardware_concurrency(); the volume does not depend on it
+};
+
+struct PhantomCtaPlaque {
+  std::string branch;
+  double arc_length_mm = 0;      // along the branch's truth centerline, from its first point
+  Eigen::Vector3d center_mm;     // CT physical frame
+  Eigen::Vector3d semi_axes_mm;  // along the vessel 1..2, radial 0.8..1.2, circumferential 1..1.5
+  double hu = 0;
+};
+
+struct PhantomCtaTortuosity {
+  std::string branch;
+  double amplitude_mm = 0, wavelength_mm = 0;
+};
+
+// what was drawn, for the pipeline's checks and for people (all positions in the CT's frame, mm)
+struct PhantomCtaFacts {
+  // contrast timing: lumen HU = max(lumen_floor_hu, contrast_hu_proximal - fade_hu_per_mm * d),
+  // d the path length from the ostium (0 inside the aorta)
+  double contrast_hu_proximal = 0, fade_hu_per_mm = 0, lumen_floor_hu = 0;
+  double aorta_hu = 0, lv_hu = 0, la_hu = 0, rv_hu = 0, ra_hu = 0, myocardium_hu = 0;
+  double fat_sleeve_mm = 0;  // epicardial fat around every artery: radius + this
+  // the stenosis: diameter reduction `fraction` at arc length `arc_length_mm` on `branch`,
+  // a raised-cosine profile over `length_mm`
+  std::string stenosis_branch;
+  double stenosis_arc_length_mm = 0, stenosis_fraction = 0, stenosis_length_mm = 0;
+  double stenosis_reference_radius_mm = 0;  // the radius there without the stenosis
+  Eigen::Vector3d stenosis_center_mm = Eigen::Vector3d::Zero();
+  std::vector<PhantomCtaPlaque> plaques;
+  // the cardiac vein: beside `vein_beside` from arc length vein_start_mm over vein_length_mm,
+  // touching the artery's outer wall
+  std::string vein_beside;
+  double vein_start_mm = 0, vein_length_mm = 0, vein_radius_mm = 0, vein_hu = 0;
+  std::vector<Eigen::Vector3d> vein_points_mm;  // its centerline
+  // pose: the heart rotated (x, then y, then z, degrees; about the heart centre) and scaled
+  Eigen::Vector3d heart_rotation_deg = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d heart_rotation = Eigen::Matrix3d::Identity();
+  double heart_scale = 1;
+  Eigen::Vector3d heart_center_mm = Eigen::Vector3d::Zero();  // the scanner offset when scanner_frame
+  Eigen::Vector3d lv_center_mm = Eigen::Vector3d::Zero();
+  double radius_scale = 1;
+  std::vector<std::string> dropped_branches;  // by the seed (D2, OM2)
+  // branches the field of view cuts short or leaves out of the truth (the aorta above the
+  // field is common; coronaries need a field of at least ~120 mm each way)
+  std::vector<std::string> clipped_branches;
+  std::vector<PhantomCtaTortuosity> tortuosity;
+};
+
+struct PhantomCta {
+  PhantomCtaSpec spec;
+  Volume ct;  // int16 HU, spec's dims, spacing and direction
+  // true centerlines and radii (metres, the CT's physical frame, LPS), the stenosis in the
+  // radii; the ascending aorta is the root branch. Only points inside the grid (voxel centres'
+  // box): a branch leaving it ends there (facts.clipped_branches)
+  VesselTree truth;
+  // on the ascending aorta's centerline 25 mm above its root (~15 mm above the LM's origin)
+  Eigen::Vector3d aortic_seed_mm = Eigen::Vector3d::Zero();
+  // "aortic seed", "aortic root", "LM ostium", "RCA ostium", "stenosis", "plaque 1".., "vein
+  // start", "vein end", "LV centre", "heart centre" (metres, CT frame)
+  std::vector<Landmark> landmarks;
+  PhantomCtaFacts facts;
+};
+
+// throws std::invalid_argument for a spec it cannot build (non-positive dims or spacing, a
+// direction that is not a signed permutation, negative noise or blur, a fraction >= 1)
+PhantomCta make_phantom_cta(const PhantomCtaSpec& spec);
+
+#ifdef PCISIM_HAVE_JSON
+// writes dir/ct.nrrd (raw NRRD), dir/truth.json (the vessel tree format) and dir/phantom.json
+// (format "pcisim-phantom-cta": the spec, the facts, the aortic seed and the landmarks);
+// creates dir. Throws std::runtime_error naming the file on failure.
+void write_phantom_cta(const PhantomCta& cta, const std::string& dir);
+#endif
+
+}  // namespace pcisim::anatomy

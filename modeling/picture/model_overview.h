@@ -1,0 +1,16 @@
+#pragma once
+// The picture beside every model pcisim-model builds (overview.png): three maximum-intensity
+// projections of the CT, front (patient left on the image's right, head up), side (anterior on
+// the left, head up) and from the feet (anterior up, patient left on the right), with every
+// branch's centerline drawn in its own colour and named at its far end, and a title line.
+#include <string>
+#include "anatomy/vessel/vessel_tree.h"
+#include "anatomy/volume/volume.h"
+
+namespace pcisim::modeling {
+
+// throws std::runtime_error when the file cannot be written
+void write_model_overview(const anatomy::Volume& ct, const anatomy::VesselTree& tree, const std::string& title,
+                          const std::string& png_path);
+
+}  // namespace pcisim::modeling

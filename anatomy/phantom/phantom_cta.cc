@@ -585,7 +585,7 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
 
   // calcified plaques: 1..3 ellipsoids in the wall of the LAD, LCx or RCA, their inner tip on
   // the lumen's surface (the widest within their length), clear of branch points, of the
-  // stenosis, of each other and of the vein
+  // stenosis, of each other, of the vein and of other branches' lumens
   std::vector<Prim> plaque_prims;
   {
     const int count = 1 + std::min(2, static_cast<int>(draw.u01() * 3));
@@ -604,6 +604,19 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
       const double lo = std::string(name) == "RCA" ? 22.0 : 8.0;
       const double hi = std::max(lo, std::min(std::string(name) == "LCx" ? 50.0 : 80.0, arc.back() - 6.0));
       double s = lo + unit * (hi - lo);
+      // where the plaque sits for arc length `at`: centre and radial direction
+      auto place = [&](double at, Vector3d* centre, Vector3d* radial, int* index) {
+        const int i = index_at(arc, at);
+        const Vector3d p = pts[i].position_m, t = tangent(pts, i);
+        const Vector3d out_dir = (p.normalized() - t * t.dot(p.normalized())).normalized();
+        *radial = std::cos(angle) * out_dir + std::sin(angle) * t.cross(out_dir);
+        double wall = 0;
+        for (size_t m = 0; m < pts.size(); ++m) {
+          if (std::abs(arc[m] - arc[i]) <= semi.x() + 0.5) wall = std::max(wall, pts[m].radius_m);
+        }
+        *centre = p + (wall + semi.y()) * *radial;
+        *index = i;
+      };
       auto clash = [&](double at) {
         if (children_near(b, at, semi.x() + 2.0, arc)) return true;
         if (facts.vein_beside == name && at > facts.vein_start_mm - 4 &&
@@ -612,22 +625,29 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
         for (const auto& p : facts.plaques) {
           if (p.branch == name && std::abs(p.arc_length_mm - at) < 5.0) return true;
         }
-        return facts.stenosis_branch == name &&
-               std::abs(at - facts.stenosis_arc_length_mm) < 0.5 * facts.stenosis_length_mm + semi.x() + 1.0;
+        if (facts.stenosis_branch == name &&
+            std::abs(at - facts.stenosis_arc_length_mm) < 0.5 * facts.stenosis_length_mm + semi.x() + 1.0)
+          return true;
+        // clear of every other branch's lumen (a side branch running alongside near its origin)
+        Vector3d centre, radial;
+        int i;
+        place(at, &centre, &radial, &i);
+        for (size_t o = 0; o < tree.branches.size(); ++o) {
+          if (static_cast<int>(o) == b || tree.branches[o].name == "aorta") continue;
+          for (const auto& q : tree.branches[o].points) {
+            if ((q.position_m - centre).norm() < q.radius_m + semi.maxCoeff() + 0.5) return true;
+          }
+        }
+        return false;
       };
       for (int tries = 0; tries < 400 && clash(s); ++tries) {
         s += 0.5;
         if (s > hi) s = lo;
       }
-      const int i = index_at(arc, s);
-      const Vector3d p = pts[i].position_m, t = tangent(pts, i);
-      const Vector3d out_dir = (p.normalized() - t * t.dot(p.normalized())).normalized();
-      const Vector3d radial = std::cos(angle) * out_dir + std::sin(angle) * t.cross(out_dir);
-      double wall = 0;
-      for (size_t m = 0; m < pts.size(); ++m) {
-        if (std::abs(arc[m] - arc[i]) <= semi.x() + 0.5) wall = std::max(wall, pts[m].radius_m);
-      }
-      const Vector3d c = p + (wall + semi.y()) * radial;
+      Vector3d c, radial;
+      int i;
+      place(s, &c, &radial, &i);
+      const Vector3d t = tangent(pts, i);
       Matrix3d axes;
       axes.col(0) = t;
       axes.col(1) = radial;

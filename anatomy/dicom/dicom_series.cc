@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "anatomy/dicom/itk_dicom_io.h"
+#include "anatomy/volume/io_text.h"
 
 namespace pcisim::anatomy {
 namespace {
@@ -23,6 +24,8 @@ struct Slice {
   Eigen::Vector3d position_mm;                       // ImagePositionPatient (0020,0032)
   Eigen::Vector3d row_dir, column_dir;               // ImageOrientationPatient (0020,0037)
   double row_spacing_mm = 0, column_spacing_mm = 0;  // PixelSpacing (0028,0030)
+  int64_t rows = 0, columns = 0;                     // Rows (0028,0010), Columns (0028,0011)
+  int64_t frames = 1;                                // NumberOfFrames (0028,0008), 1 when absent
   double along_normal_mm = 0;
 };
 
@@ -40,7 +43,7 @@ bool parse_backslashed(const std::string& text, int n, double* out) {
 Slice read_slice_header(const std::string& file) {
   std::vector<std::string> tags;
   try {
-    tags = itk_io::read_tags(file, {"0020|0032", "0020|0037", "0028|0030"});
+    tags = itk_io::read_tags(file, {"0020|0032", "0020|0037", "0028|0030", "0028|0010", "0028|0011", "0028|0008"});
   } catch (const std::runtime_error& e) {
     throw DicomError(file + ": " + e.what());
   }
@@ -53,6 +56,16 @@ Slice read_slice_header(const std::string& file) {
     throw DicomError(file + ": ImageOrientationPatient (0020,0037) missing or not six numbers");
   if (!parse_backslashed(tags[2], 2, px) || !(px[0] > 0 && px[1] > 0))
     throw DicomError(file + ": PixelSpacing (0028,0030) missing or not two positive numbers");
+  double size[2], frames = 1;
+  if (!parse_backslashed(tags[3], 1, &size[0]) || !parse_backslashed(tags[4], 1, &size[1]) || !(size[0] >= 1) ||
+      !(size[1] >= 1) || size[0] > 65535 || size[1] > 65535 || size[0] != std::floor(size[0]) ||
+      size[1] != std::floor(size[1]))
+    throw DicomError(file + ": Rows (0028,0010) or Columns (0028,0011) missing or not a whole number in 1..65535");
+  if (!tags[5].empty() && (!parse_backslashed(tags[5], 1, &frames) || !(frames >= 1) || frames > 1e9))
+    throw DicomError(file + ": NumberOfFrames (0028,0008) not a positive number");
+  s.rows = static_cast<int64_t>(size[0]);
+  s.columns = static_cast<int64_t>(size[1]);
+  s.frames = static_cast<int64_t>(frames);
   s.position_mm = {p[0], p[1], p[2]};
   s.row_dir = Eigen::Vector3d(o[0], o[1], o[2]).normalized();
   s.column_dir = Eigen::Vector3d(o[3], o[4], o[5]).normalized();
@@ -63,6 +76,23 @@ Slice read_slice_header(const std::string& file) {
 
 std::string name_of(const std::string& file) {
   return fs::path(file).filename().string();
+}
+
+// the series' voxel count from the headers, refused over the volume readers' cap before ITK
+// allocates anything (a header may claim 65535 x 65535 pixels)
+void check_size(const std::vector<Slice>& slices, const std::string& folder) {
+  const Slice& first = slices.front();
+  int64_t frames = 0;
+  for (const auto& s : slices) {
+    if (s.rows != first.rows || s.columns != first.columns)
+      throw DicomError(fmt::format("{}: {} rows x {} columns, {} has {} x {}", s.file, s.rows, s.columns,
+                                   name_of(first.file), first.rows, first.columns));
+    frames += s.frames;  // at most 1e9 each: no overflow
+  }
+  const int64_t plane = first.rows * first.columns;  // at most 65535^2
+  if (frames > io::kMaxVoxels / plane)
+    throw DicomError(fmt::format("{}: {} rows x {} columns x {} slices = {} voxels, over the {} voxel limit", folder,
+                                 first.rows, first.columns, frames, plane * frames, io::kMaxVoxels));
 }
 
 // every slice like the first, stacked along its normal at one spacing; returns that spacing
@@ -128,37 +158,40 @@ Volume read_dicom_series(const std::string& folder, const std::string& series_ui
     // geometry first, from every file's own tags
     std::vector<Slice> slices;
     for (const auto& f : files) slices.push_back(read_slice_header(f));
+    check_size(slices, folder);
     const double slice_spacing_mm = check_stack(slices, folder);
 
     // then the voxels, in that order (rescale slope and intercept applied by the IO)
     std::vector<std::string> ordered;
     for (const auto& s : slices) ordered.push_back(s.file);
-    std::array<int64_t, 3> dims{};
-    const std::vector<float> voxels = itk_io::read_voxels(ordered, &dims);
-    if (dims[2] != int64_t(slices.size()))
-      throw DicomError(fmt::format("{}: {} slices read from {} files (multi-frame files are not supported)", folder,
-                                   dims[2], slices.size()));
-
     const Slice& first = slices.front();
     Volume v;
-    v.dims = dims;
     v.spacing_mm = {first.column_spacing_mm, first.row_spacing_mm, slice_spacing_mm};
     v.origin_mm = first.position_mm;
     v.direction.col(0) = first.row_dir;
     v.direction.col(1) = first.column_dir;
     v.direction.col(2) = first.row_dir.cross(first.column_dir);
-    const float* px = voxels.data();
-    const int64_t n = v.voxel_count();
-    bool fits_int16 = true;
-    for (int64_t i = 0; i < n && fits_int16; ++i)
-      fits_int16 = px[i] == std::round(px[i]) && px[i] >= -32768.f && px[i] <= 32767.f;
-    v.type = fits_int16 ? VoxelType::kInt16 : VoxelType::kFloat32;
-    if (fits_int16) {
-      v.hu_i16.resize(n);
-      for (int64_t i = 0; i < n; ++i) v.hu_i16[i] = static_cast<int16_t>(px[i]);
-    } else {
-      v.hu_f32.assign(px, px + n);
-    }
+    // converted straight from ITK's image: at most ITK's floats and the volume's voxels at once
+    itk_io::read_voxels(ordered, [&](const std::array<int64_t, 3>& dims, const float* px) {
+      if (dims[2] != int64_t(slices.size()))
+        throw DicomError(fmt::format("{}: {} slices read from {} files (multi-frame files are not supported)", folder,
+                                     dims[2], slices.size()));
+      if (dims[0] != first.columns || dims[1] != first.rows)
+        throw DicomError(fmt::format("{}: {} x {} pixels read, the headers say {} columns x {} rows", folder, dims[0],
+                                     dims[1], first.columns, first.rows));
+      v.dims = dims;
+      const int64_t n = v.voxel_count();
+      bool fits_int16 = true;
+      for (int64_t i = 0; i < n && fits_int16; ++i)
+        fits_int16 = px[i] == std::round(px[i]) && px[i] >= -32768.f && px[i] <= 32767.f;
+      v.type = fits_int16 ? VoxelType::kInt16 : VoxelType::kFloat32;
+      if (fits_int16) {
+        v.hu_i16.resize(n);
+        for (int64_t i = 0; i < n; ++i) v.hu_i16[i] = static_cast<int16_t>(px[i]);
+      } else {
+        v.hu_f32.assign(px, px + n);
+      }
+    });
     if (const std::string why = validate(v); !why.empty()) throw DicomError(folder + ": " + why);
     return v;
   } catch (const DicomError&) {

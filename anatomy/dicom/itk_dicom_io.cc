@@ -52,19 +52,18 @@ std::vector<std::string> read_tags(const std::string& file, const std::vector<st
   });
 }
 
-std::vector<float> read_voxels(const std::vector<std::string>& files, std::array<int64_t, 3>* dims) {
-  return itk_call([&] {
-    using Image = itk::Image<float, 3>;
-    auto reader = itk::ImageSeriesReader<Image>::New();
+void read_voxels(const std::vector<std::string>& files, const VoxelSink& take) {
+  // ITK's exceptions become runtime_error; the caller's own (thrown by take) pass through
+  auto reader = itk::ImageSeriesReader<itk::Image<float, 3>>::New();
+  itk_call([&] {
     reader->SetImageIO(itk::GDCMImageIO::New());
     reader->SetFileNames(files);
     reader->Update();
-    const Image* image = reader->GetOutput();
-    const auto size = image->GetLargestPossibleRegion().GetSize();
-    *dims = {int64_t(size[0]), int64_t(size[1]), int64_t(size[2])};
-    const float* px = image->GetBufferPointer();
-    return std::vector<float>(px, px + (*dims)[0] * (*dims)[1] * (*dims)[2]);
+    return 0;
   });
+  const auto* image = reader->GetOutput();
+  const auto size = image->GetLargestPossibleRegion().GetSize();
+  take({int64_t(size[0]), int64_t(size[1]), int64_t(size[2])}, image->GetBufferPointer());
 }
 
 }  // namespace pcisim::anatomy::itk_io

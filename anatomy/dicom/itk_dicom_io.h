@@ -4,6 +4,7 @@
 // itk_dicom_io.cc includes ITK. Errors throw std::runtime_error with ITK's description.
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -15,7 +16,10 @@ std::vector<std::string> series_uids(const std::string& folder);
 std::vector<std::string> series_files(const std::string& folder, const std::string& uid);
 // the string value of each tag ("gggg|eeee") in a file's header, "" when absent
 std::vector<std::string> read_tags(const std::string& file, const std::vector<std::string>& tags);
-// the voxels of these files stacked in this order, rescaled to HU (slope and intercept)
-std::vector<float> read_voxels(const std::vector<std::string>& files, std::array<int64_t, 3>* dims);
+// the voxels of these files stacked in this order, rescaled to HU (slope and intercept), handed
+// to `take` (dims, the x-fastest voxels) while ITK's image still holds them: the caller converts
+// them straight into its own storage, so no third copy exists at once
+using VoxelSink = std::function<void(const std::array<int64_t, 3>& dims, const float* voxels)>;
+void read_voxels(const std::vector<std::string>& files, const VoxelSink& take);
 
 }  // namespace pcisim::anatomy::itk_io

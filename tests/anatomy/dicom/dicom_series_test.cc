@@ -11,6 +11,7 @@
 #include <filesystem>
 
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 
 #include "anatomy/case/case_folder.h"
@@ -138,6 +139,47 @@ TEST_F(DicomSeries, TwoSeriesNeedAUid) {
   EXPECT_EQ(b.dims, other.dims);
   EXPECT_EQ(b.hu_i16, other.hu_i16);
   EXPECT_NE(refusal("1.2.3").find("no series 1.2.3"), std::string::npos) << refusal("1.2.3");
+}
+
+// sets a US tag (group 0x0028) in a written DICOM file to `value`, in place (explicit or implicit
+// VR little endian, as ITK writes it); the pixel data stays as it was
+void patch_us_tag(const fs::path& file, uint16_t element, uint16_t value) {
+  std::string bytes;
+  {
+    std::ifstream in(file, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const std::string tag{'\x28', '\x00', char(element & 0xff), char(element >> 8)};
+  const std::string explicit_vr = tag + std::string("US\x02\x00", 4), implicit_vr = tag + std::string("\x02\0\0\0", 4);
+  size_t at = bytes.find(explicit_vr);
+  if (at == std::string::npos) at = bytes.find(implicit_vr);
+  ASSERT_NE(at, std::string::npos) << file << ": no (0028," << std::hex << element << ") tag";
+  bytes[at + 8] = char(value & 0xff);
+  bytes[at + 9] = char(value >> 8);
+  std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+// headers claiming 65535 x 65535 pixels a slice are refused from the headers alone, naming the
+// numbers and the volume readers' cap, before ITK allocates the series (34 G voxels: 137 GB)
+TEST_F(DicomSeries, ASeriesOverTheVoxelCapIsRefusedBeforeAnyVoxelIsRead) {
+  write_series(oblique_volume(), dir_, kSeriesA);
+  for (const auto& f : fs::directory_iterator(dir_)) {
+    patch_us_tag(f.path(), 0x0010, 65535);  // Rows
+    patch_us_tag(f.path(), 0x0011, 65535);  // Columns
+  }
+  const std::string why = refusal();
+  EXPECT_NE(why.find(dir_.string() + ": 65535 rows x 65535 columns x 8 slices = 34358689800 voxels, over the "
+                                     "1073741824 voxel limit"),
+            std::string::npos)
+      << why;
+}
+
+// slices of different sizes are refused naming the file
+TEST_F(DicomSeries, SlicesOfDifferentSizesAreRefused) {
+  write_series(oblique_volume(), dir_, kSeriesA);
+  patch_us_tag(dir_ / "1_slice_003.dcm", 0x0010, 11);  // Rows: 10 in the others
+  const std::string why = refusal();
+  EXPECT_NE(why.find("1_slice_003.dcm: 11 rows x 12 columns, "), std::string::npos) << why;
 }
 
 // a case whose CT is a DICOM series folder reads the same CT as the case's NRRD

@@ -5,12 +5,15 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <fstream>
 #include <limits>
 #include <map>
-#include <sstream>
+#include <string_view>
+#include <system_error>
+#include <type_traits>
 #include <unordered_map>
 
 #include "anatomy/volume/io_text.h"
@@ -26,6 +29,69 @@ std::string extension_of(const std::string& path) {
   const auto dot = path.find_last_of('.');
   return dot == std::string::npos ? "" : io::lower(path.substr(dot));
 }
+
+bool is_space(char c) {
+  return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f';
+}
+
+// a whole word as a number, as `>>` reads one (a leading '+' allowed); false for anything else,
+// trailing characters included. A float out of float's range is parsed as a double and rounded
+// (1e-50 -> 0, 1e50 -> inf: the callers refuse what is not finite).
+template <class T>
+bool parse_number(std::string_view w, T& out) {
+  if (w.size() > 1 && w[0] == '+' && w[1] != '-' && w[1] != '+') w.remove_prefix(1);
+  const char* end = w.data() + w.size();
+  std::from_chars_result r = std::from_chars(w.data(), end, out);
+  if constexpr (std::is_same_v<T, float>) {
+    if (r.ec == std::errc::result_out_of_range) {
+      double d = 0;
+      r = std::from_chars(w.data(), end, d);
+      out = static_cast<float>(d);
+    }
+  }
+  return r.ec == std::errc() && r.ptr == end;
+}
+
+// the whitespace-separated words of a file's bytes, read in place (the file is never copied into
+// a stream: a 500 MB ASCII mesh stays 500 MB)
+class Words {
+ public:
+  explicit Words(std::string_view text) : text_(text) {}
+  bool next(std::string_view& word) {
+    while (pos_ < text_.size() && is_space(text_[pos_])) ++pos_;
+    if (pos_ == text_.size()) return false;
+    const size_t start = pos_;
+    while (pos_ < text_.size() && !is_space(text_[pos_])) ++pos_;
+    word = text_.substr(start, pos_ - start);
+    return true;
+  }
+  template <class T>
+  bool number(T& out) {
+    std::string_view w;
+    return next(w) && parse_number(w, out);
+  }
+
+ private:
+  std::string_view text_;
+  size_t pos_ = 0;
+};
+
+// the lines of a file's bytes, in place ('\n' ends a line; a '\r' before it is whitespace)
+class Lines {
+ public:
+  explicit Lines(std::string_view text) : text_(text) {}
+  bool next(std::string_view& line) {
+    if (pos_ >= text_.size()) return false;
+    const size_t end = std::min(text_.find('\n', pos_), text_.size());
+    line = text_.substr(pos_, end - pos_);
+    pos_ = end + 1;
+    return true;
+  }
+
+ private:
+  std::string_view text_;
+  size_t pos_ = 0;
+};
 
 // one vertex per distinct position, in order of first appearance (STL repeats every corner)
 class Welder {
@@ -46,7 +112,7 @@ void check_finite(const std::string& path, const Eigen::Vector3d& v, size_t inde
   if (!v.allFinite()) fail(path, fmt::format("vertex {} is not finite", index));
 }
 
-TriangleMesh read_stl(const std::string& path, const std::string& bytes, double scale) {
+TriangleMesh read_stl(const std::string& path, std::string_view bytes, double scale) {
   TriangleMesh mesh;
   Welder weld(mesh);
   // binary: 80-byte header, uint32 count, 50 bytes per triangle; anything else is ASCII
@@ -70,18 +136,19 @@ TriangleMesh read_stl(const std::string& path, const std::string& bytes, double 
       return mesh;
     }
   }
-  if (bytes.rfind("solid", 0) != 0)
+  if (bytes.substr(0, 5) != "solid")
     fail(path, fmt::format("neither binary STL (size {} bytes does not match its triangle count) nor ASCII "
                            "STL (no 'solid')",
                            bytes.size()));
-  std::istringstream in(bytes);
-  std::string word;
+  Words in(bytes);
+  std::string_view word;
   std::array<int, 3> tri{};
   int corner = 0;
-  while (in >> word) {
+  while (in.next(word)) {
     if (word != "vertex") continue;
     std::array<float, 3> p{};
-    if (!(in >> p[0] >> p[1] >> p[2]) || !std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+    if (!in.number(p[0]) || !in.number(p[1]) || !in.number(p[2]) || !std::isfinite(p[0]) || !std::isfinite(p[1]) ||
+        !std::isfinite(p[2]))
       fail(path, fmt::format("triangle {}: a vertex is not three finite numbers", mesh.triangles.size()));
     tri[corner++] = weld.add(p, scale);
     if (corner == 3) {
@@ -94,7 +161,7 @@ TriangleMesh read_stl(const std::string& path, const std::string& bytes, double 
 }
 
 // PLY: vertex x y z (float or double, other properties skipped) and faces as index lists
-TriangleMesh read_ply(const std::string& path, const std::string& bytes, double scale) {
+TriangleMesh read_ply(const std::string& path, std::string_view bytes, double scale) {
   struct Property {
     std::string name, type, count_type;  // count_type set for a list
   };
@@ -104,26 +171,35 @@ TriangleMesh read_ply(const std::string& path, const std::string& bytes, double 
     std::vector<Property> props;
   };
   const auto end = bytes.find("end_header");
-  if (bytes.rfind("ply", 0) != 0 || end == std::string::npos) fail(path, "not a PLY file (no 'ply' ... 'end_header')");
-  std::istringstream header(bytes.substr(0, end));
-  std::string line, format;
+  if (bytes.substr(0, 3) != "ply" || end == std::string_view::npos)
+    fail(path, "not a PLY file (no 'ply' ... 'end_header')");
+  Lines header(bytes.substr(0, end));
+  std::string_view line;
+  std::string format;
   std::vector<Element> elements;
-  while (std::getline(header, line)) {
-    std::istringstream w(line);
-    std::string key;
-    w >> key;
+  while (header.next(line)) {
+    Words w(line);
+    std::string_view key, word;
+    w.next(key);
+    // the next word as a string ("" when the line has no more)
+    auto next_word = [&w, &word]() { return w.next(word) ? std::string(word) : std::string(); };
     if (key == "format") {
-      w >> format;
+      format = next_word();
     } else if (key == "element") {
       Element e;
-      if (!(w >> e.name >> e.count) || e.count < 0) fail(path, "header: bad element line '" + line + "'");
+      e.name = next_word();
+      if (e.name.empty() || !w.number(e.count) || e.count < 0)
+        fail(path, fmt::format("header: bad element line '{}'", line.substr(0, 200)));
       elements.push_back(e);
     } else if (key == "property") {
       if (elements.empty()) fail(path, "header: property before any element");
       Property p;
-      w >> p.type;
-      if (p.type == "list") w >> p.count_type >> p.type;
-      w >> p.name;
+      p.type = next_word();
+      if (p.type == "list") {
+        p.count_type = next_word();
+        p.type = next_word();
+      }
+      p.name = next_word();
       elements.back().props.push_back(p);
     }
   }
@@ -131,9 +207,9 @@ TriangleMesh read_ply(const std::string& path, const std::string& bytes, double 
   if (!ascii && format != "binary_little_endian")
     fail(path, "format: '" + format + "' is not supported (ascii or binary_little_endian)");
   size_t pos = bytes.find('\n', end);
-  if (pos == std::string::npos) fail(path, "nothing after end_header");
+  if (pos == std::string_view::npos) fail(path, "nothing after end_header");
   ++pos;
-  std::istringstream text(ascii ? bytes.substr(pos) : std::string());
+  Words text(ascii ? bytes.substr(pos) : std::string_view());
   auto size_of = [&](const std::string& t) -> int {
     if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
     if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
@@ -145,7 +221,9 @@ TriangleMesh read_ply(const std::string& path, const std::string& bytes, double 
   auto scalar = [&](const std::string& t) -> double {
     if (ascii) {
       double v = 0;
-      if (!(text >> v)) fail(path, "data ends early");
+      std::string_view word;
+      if (!text.next(word)) fail(path, "data ends early");
+      if (!parse_number(word, v)) fail(path, fmt::format("data: '{}' is not a number", word.substr(0, 40)));
       return v;
     }
     const int n = size_of(t);
@@ -223,31 +301,29 @@ TriangleMesh read_ply(const std::string& path, const std::string& bytes, double 
 }
 
 // OBJ: "v x y z" and "f a b c ..." (a/b/c forms, negative indices from the end); polygons fanned
-TriangleMesh read_obj(const std::string& path, const std::string& bytes, double scale) {
+TriangleMesh read_obj(const std::string& path, std::string_view bytes, double scale) {
   TriangleMesh mesh;
-  std::istringstream in(bytes);
-  std::string line;
-  int line_no = 0;
-  while (std::getline(in, line)) {
+  Lines in(bytes);
+  std::string_view line;
+  int64_t line_no = 0;
+  std::vector<int> idx;
+  while (in.next(line)) {
     ++line_no;
-    std::istringstream w(line);
-    std::string key;
-    w >> key;
+    Words w(line);
+    std::string_view key;
+    w.next(key);
     if (key == "v") {
       Eigen::Vector3d v;
-      if (!(w >> v.x() >> v.y() >> v.z()) || !v.allFinite())
+      if (!w.number(v.x()) || !w.number(v.y()) || !w.number(v.z()) || !v.allFinite())
         fail(path, fmt::format("line {}: a vertex needs three finite numbers", line_no));
       mesh.vertices_m.push_back(v * scale);
     } else if (key == "f") {
-      std::vector<int> idx;
-      std::string corner;
-      while (w >> corner) {
+      idx.clear();
+      std::string_view corner;
+      while (w.next(corner)) {
         long k = 0;
-        try {
-          k = std::stol(corner.substr(0, corner.find('/')));
-        } catch (const std::exception&) {
-          fail(path, fmt::format("line {}: bad face corner '{}'", line_no, corner));
-        }
+        if (!parse_number(corner.substr(0, corner.find('/')), k))
+          fail(path, fmt::format("line {}: bad face corner '{}'", line_no, corner.substr(0, 100)));
         const long n = static_cast<long>(mesh.vertices_m.size());
         const long zero_based = k > 0 ? k - 1 : n + k;
         if (k == 0 || zero_based < 0 || zero_based >= n)
@@ -268,16 +344,18 @@ TriangleMesh read_mesh(const std::string& path, double metres_per_unit) {
   if (ext != ".stl" && ext != ".ply" && ext != ".obj") fail(path, "unknown mesh format (expected .stl, .ply or .obj)");
   std::string bytes;
   try {
-    bytes = io::read_file(path);
+    bytes = io::read_file(path, kMaxMeshFileBytes);  // refused unread when larger
   } catch (const std::exception& e) {
     throw MeshIoError(e.what());
   }
   return parse_mesh(path, ext, bytes, metres_per_unit);
 }
 
-TriangleMesh parse_mesh(const std::string& path, const std::string& format, const std::string& bytes,
+TriangleMesh parse_mesh(const std::string& path, const std::string& format, std::string_view bytes,
                         double metres_per_unit) {
   if (format != ".stl" && format != ".ply" && format != ".obj") fail(path, "unknown mesh format '" + format + "'");
+  if (static_cast<int64_t>(bytes.size()) > kMaxMeshFileBytes)
+    fail(path, fmt::format("{} bytes, over the {} byte limit for a mesh file", bytes.size(), kMaxMeshFileBytes));
   TriangleMesh mesh = format == ".stl"   ? read_stl(path, bytes, metres_per_unit)
                       : format == ".ply" ? read_ply(path, bytes, metres_per_unit)
                                          : read_obj(path, bytes, metres_per_unit);

@@ -2,8 +2,10 @@
 // Triangle meshes from and to files: STL (binary and ASCII), PLY (ASCII and binary little-endian)
 // and OBJ. Files hold lengths in a unit the caller names (pcisim's case files: millimetres, LPS);
 // the mesh in memory is in metres. Errors throw MeshIoError "<file>: <what>".
+#include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 #include "anatomy/mesh/triangle_mesh.h"
 
@@ -16,11 +18,16 @@ struct MeshIoError : std::runtime_error {
 // metres per file unit: 1e-3 for millimetre files (what users bring, what Slicer writes)
 inline constexpr double kMillimetre = 1e-3;
 
+// the largest mesh file read: a lumen of a million triangles is 50 MB as binary STL, ~250 MB as
+// ASCII; a larger file is refused (naming its size and this limit) before it is read
+inline constexpr int64_t kMaxMeshFileBytes = int64_t{512} << 20;
+
 // by extension (.stl, .ply, .obj, any case). STL has no shared vertices: corners at the same
 // position are welded into one vertex, in order of first appearance.
 TriangleMesh read_mesh(const std::string& path, double metres_per_unit = kMillimetre);
-// the same from a file's bytes; `format` is ".stl", ".ply" or ".obj", `name` what errors say
-TriangleMesh parse_mesh(const std::string& name, const std::string& format, const std::string& bytes,
+// the same from a file's bytes, parsed in place (never copied); `format` is ".stl", ".ply" or
+// ".obj", `name` what errors say
+TriangleMesh parse_mesh(const std::string& name, const std::string& format, std::string_view bytes,
                         double metres_per_unit = kMillimetre);
 
 // binary STL in millimetres; the 80-byte header says "SPACE=LPS" (3D Slicer reads the space from

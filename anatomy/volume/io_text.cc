@@ -22,7 +22,7 @@
 
 namespace pcisim::anatomy::io {
 
-std::string read_file(const std::string& path) {
+std::string read_file(const std::string& path, int64_t max_bytes) {
   // opened without blocking, then checked: only a regular file of a bounded size is read
   const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) throw VolumeIoError(path + ": cannot open the file for reading");
@@ -31,9 +31,9 @@ std::string read_file(const std::string& path) {
     ::close(fd);
     throw VolumeIoError(path + ": not a regular file (a FIFO, device or folder is never read)");
   }
-  if (st.st_size > kMaxFileBytes) {
+  if (st.st_size > max_bytes) {
     ::close(fd);
-    throw VolumeIoError(fmt::format("{}: {} bytes, over the {} byte limit", path, st.st_size, kMaxFileBytes));
+    throw VolumeIoError(fmt::format("{}: {} bytes, over the {} byte limit", path, st.st_size, max_bytes));
   }
   std::string out(static_cast<size_t>(st.st_size), '\0');
   size_t got = 0;

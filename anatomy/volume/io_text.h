@@ -9,10 +9,11 @@
 
 namespace pcisim::anatomy::io {
 
-// the bytes of a regular file of at most kMaxFileBytes; throws VolumeIoError naming the path
-// (a FIFO or device is refused unopened: a FIFO would block for ever, /dev/zero never ends)
+// the bytes of a regular file of at most max_bytes; throws VolumeIoError naming the path (a FIFO
+// or device is refused unopened: a FIFO would block for ever, /dev/zero never ends), and a file
+// over the limit before reading it, naming its size and the limit
 inline constexpr int64_t kMaxFileBytes = int64_t{8} << 30;
-std::string read_file(const std::string& path);
+std::string read_file(const std::string& path, int64_t max_bytes = kMaxFileBytes);
 
 // how a header says its voxels are stored, for load_voxels
 struct VoxelData {

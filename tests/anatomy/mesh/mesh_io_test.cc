@@ -1,0 +1,141 @@
+// Mesh files (anatomy/mesh/mesh_io): a file over the mesh size limit is refused unread, naming its
+// size and the limit; text formats are parsed in place (no copy of the file into a stream); the
+// words a text mesh may hold (CRLF, tabs, '+', exponents, a/b/c corners, negative indices) read as
+// before, and a word that is not a number is refused.
+#include "anatomy/mesh/mesh_io.h"
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <array>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <utility>
+
+#include "tests/common/counting_new.h"
+
+namespace pcisim::anatomy {
+namespace {
+
+namespace fs = std::filesystem;
+
+class MeshIo : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("pcisim-mesh-io-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  fs::path dir_;
+};
+
+std::string refusal(const std::function<void()>& read) {
+  try {
+    read();
+  } catch (const MeshIoError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST_F(MeshIo, AFileOverTheMeshLimitIsRefusedUnreadNamingItsSizeAndTheLimit) {
+  // a sparse file one byte over 512 MiB: takes no disk, and reading it would take half a gigabyte
+  const std::string big = path("big.stl");
+  std::ofstream(big) << "solid x\n";
+  fs::resize_file(big, kMaxMeshFileBytes + 1);
+  const auto start = std::chrono::steady_clock::now();
+  const std::string why = refusal([&] { read_mesh(big); });
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(why, big + ": 536870913 bytes, over the 536870912 byte limit");
+  EXPECT_LT(seconds, 0.1) << "the file was read before it was refused";
+  // a file at the limit is read (and refused for what it holds, not for its size)
+  fs::resize_file(big, 1000);
+  EXPECT_EQ(refusal([&] { read_mesh(big); }).find("over the"), std::string::npos);
+}
+
+TEST_F(MeshIo, AFifoOrAFolderIsRefusedNotWaitedOn) {
+  const std::string fifo = path("pipe.obj");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_NE(refusal([&] { read_mesh(fifo); }).find("pipe.obj: not a regular file"), std::string::npos);
+  fs::create_directories(path("dir.stl"));
+  EXPECT_NE(refusal([&] { read_mesh(path("dir.stl")); }).find("dir.stl: not a regular file"), std::string::npos);
+}
+
+// text formats are parsed where the bytes lie: 4 MB of a file (a long comment, padding) never
+// makes an allocation of its size (a std::istringstream of the file made two)
+TEST_F(MeshIo, TextMeshesAreParsedWithoutCopyingTheFile) {
+  const std::string padding(4 << 20, ' ');
+  const std::string comments = [] {
+    std::string c;
+    while (c.size() < (4u << 20)) c += "# a comment line of the kind exporters write\n";
+    return c;
+  }();
+  std::string ply_comments;
+  while (ply_comments.size() < (1u << 20)) ply_comments += "comment a header line of the kind exporters write\n";
+  const std::string stl = "solid t" + padding +
+                          "\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n"
+                          "endloop\nendfacet\nendsolid t\n";
+  const std::string obj = comments + "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  const std::string ply = "ply\nformat ascii 1.0\n" + ply_comments +
+                          "element vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\n"
+                          "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2" +
+                          padding + "\n";
+  for (const auto& [format, bytes] : {std::pair{".stl", &stl}, std::pair{".obj", &obj}, std::pair{".ply", &ply}}) {
+    TriangleMesh mesh;
+    long long largest = 0;
+    {
+      testing::AllocationCount count;
+      mesh = parse_mesh(std::string("t") + format, format, *bytes);
+      largest = count.largest();
+    }
+    EXPECT_EQ(mesh.triangles.size(), 1u) << format;
+    EXPECT_LT(largest, 64 << 10) << format << ": an allocation of " << largest << " bytes for a " << bytes->size()
+                                 << " byte file";
+  }
+}
+
+TEST_F(MeshIo, TheWordsOfTextMeshesReadAsBefore) {
+  // CRLF, tabs, signs, exponents, v/vt/vn corners, negative (from the end) indices, a quad
+  const std::string obj =
+      "# x\r\nv +1.5e0\t0 -0\r\nv 2.5 0.0 0\r\nv 2.5 1E+0 0\r\nv 1.5 1 0\r\nvt 0 0\r\n"
+      "f 1/1/1 2//2 3/3 -1\r\n";
+  const TriangleMesh m = parse_mesh("t.obj", ".obj", obj, 1.0);
+  ASSERT_EQ(m.vertices_m.size(), 4u);
+  ASSERT_EQ(m.triangles.size(), 2u);
+  EXPECT_EQ(m.vertices_m[0], Eigen::Vector3d(1.5, 0, 0));
+  EXPECT_EQ(m.vertices_m[2], Eigen::Vector3d(2.5, 1, 0));
+  EXPECT_EQ(m.triangles[1], (std::array<int, 3>{0, 2, 3}));
+  // an STL coordinate below float's range is zero (as a stream read it), one above is refused
+  const std::string tiny =
+      "solid t\nfacet normal 0 0 1\n outer loop\n  vertex 1e-50 0 0\n  vertex 1 0 0\n  vertex 0 1 0\n"
+      " endloop\nendfacet\nendsolid t\n";
+  const TriangleMesh s = parse_mesh("t.stl", ".stl", tiny, 1.0);
+  ASSERT_EQ(s.vertices_m.size(), 3u);
+  EXPECT_EQ(s.vertices_m[0].x(), 0.0);
+  std::string huge = tiny;
+  huge.replace(huge.find("1e-50"), 5, "1e+50");
+  EXPECT_EQ(refusal([&] { parse_mesh("t.stl", ".stl", huge, 1.0); }),
+            "t.stl: triangle 0: a vertex is not three finite numbers");
+  // words that are not numbers are refused naming the line or the word
+  EXPECT_EQ(refusal([&] { parse_mesh("t.obj", ".obj", "v 1 2 3x\n", 1.0); }),
+            "t.obj: line 1: a vertex needs three finite numbers");
+  EXPECT_EQ(refusal([&] { parse_mesh("t.obj", ".obj", "v 1 2 3\nv 1 2 4\nv 1 3 3\nf 1 2 z3\n", 1.0); }),
+            "t.obj: line 4: bad face corner 'z3'");
+  EXPECT_EQ(refusal([&] {
+              parse_mesh("t.ply", ".ply",
+                         "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                         "property float z\nend_header\n0 0 0\n1 0 zero\n0 1 0\n",
+                         1.0);
+            }),
+            "t.ply: data: 'zero' is not a number");
+}
+
+}  // namespace
+}  // namespace pcisim::anatomy

@@ -15,8 +15,30 @@ function(pcisim_include_root target layer)
   target_include_directories(${target} ${scope} ${root})
 endfunction()
 
-# pcisim_library(NAME DIR [DEPS ...]): one static library from every .cc (and .cu when CUDA is on)
-# below DIR. Globbing keeps "one concept per file" cheap: add a file, re-run cmake.
+# pcisim_filter_sources(LIST_VAR REGEX...): drops from LIST_VAR (absolute paths) every file whose
+# path below the source tree, with a leading "/" ("/anatomy/case/case_folder.cc"), matches one of
+# the regexes. Never the absolute path: a checkout under /home/x/case/ would match "/case/" in all.
+function(pcisim_filter_sources list_var)
+  set(kept)
+  foreach(src IN LISTS ${list_var})
+    file(RELATIVE_PATH rel ${CMAKE_SOURCE_DIR} ${src})
+    set(drop FALSE)
+    foreach(pattern IN LISTS ARGN)
+      if("/${rel}" MATCHES "${pattern}")
+        set(drop TRUE)
+        break()
+      endif()
+    endforeach()
+    if(NOT drop)
+      list(APPEND kept ${src})
+    endif()
+  endforeach()
+  set(${list_var} ${kept} PARENT_SCOPE)
+endfunction()
+
+# pcisim_library(NAME DIR [DEPS ...] [EXCLUDE REGEX...]): one static library from every .cc (and
+# .cu when CUDA is on) below DIR but those EXCLUDE names (pcisim_filter_sources). Globbing keeps
+# "one concept per file" cheap: add a file, re-run cmake.
 function(pcisim_library name dir)
   cmake_parse_arguments(ARG "" "" "DEPS;EXCLUDE" ${ARGN})
   file(GLOB_RECURSE srcs CONFIGURE_DEPENDS ${dir}/*.cc)
@@ -24,9 +46,7 @@ function(pcisim_library name dir)
     file(GLOB_RECURSE cu_srcs CONFIGURE_DEPENDS ${dir}/*.cu)
     list(APPEND srcs ${cu_srcs})
   endif()
-  foreach(pattern IN LISTS ARG_EXCLUDE)
-    list(FILTER srcs EXCLUDE REGEX "${pattern}")
-  endforeach()
+  pcisim_filter_sources(srcs ${ARG_EXCLUDE})
   # the layer (DESIGN.md) is the top-level folder; tests/architecture checks its links
   file(RELATIVE_PATH rel ${CMAKE_SOURCE_DIR} ${dir})
   string(REGEX REPLACE "/.*" "" layer "${rel}")

@@ -90,6 +90,8 @@ int main(int argc, char** argv) {
       pcisim::anatomy::write_case(c, write_case_dir);
       std::cout << "wrote case '" << c.name << "' to " << write_case_dir << " (" << c.vessels.branches.size()
                 << " branches, " << c.lumen.triangles.size() << " lumen triangles" << (c.ct ? ", CT" : "") << ")\n";
+      if (!pcisim::anatomy::case_overview_written())
+        std::cout << "no overview.png: this pcisim-server was built without libpng\n";
     } catch (const std::exception& e) {
       std::cerr << "pcisim-server: cannot write the case: " << e.what() << "\n";
       return 1;

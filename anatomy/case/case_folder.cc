@@ -6,7 +6,9 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#ifdef PCISIM_ANATOMY_HAVE_PNG
 #include "anatomy/case/case_overview.h"
+#endif
 #include "anatomy/case/slicer_markups.h"
 #include "anatomy/mesh/mesh_io.h"
 #include "anatomy/vessel/vessel_tree_json.h"
@@ -88,9 +90,12 @@ void write_case(const Case& c, const std::string& dir_name) {
     curves.push_back(name);
   }
   doc["slicer_centerlines"] = curves;
-  // a picture for people: front and side views of the CT with the vessels over it
+  // a picture for people: front and side views of the CT with the vessels over it (only when
+  // built with libpng; case_overview_written() says so to callers that log)
+#ifdef PCISIM_ANATOMY_HAVE_PNG
   write_case_overview(c, (dir / "overview.png").string());
   doc["overview"] = "overview.png";
+#endif
   std::ofstream out(dir / "case.json");
   out << doc.dump(2) << '\n';
   if (!out) throw CaseError((dir / "case.json").string() + ": cannot write");

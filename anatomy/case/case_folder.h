@@ -4,6 +4,7 @@
 //   lumen.stl      the lumen surface, binary STL, millimetres, LPS
 //   ct.nrrd|.mha   optional CT in HU
 //   slicer/<branch>.mrk.json   each centerline as a 3D Slicer markups curve (written, not read)
+//   overview.png   a picture for people (written when built with libpng, not read)
 // Built only with nlohmann-json. Readers throw CaseError "<file>: <field>: <what>".
 #include <functional>
 #include <stdexcept>
@@ -22,6 +23,16 @@ inline constexpr int kCaseVersion = 1;
 
 // writes the case into `dir` (created; files of the same names are replaced)
 void write_case(const Case& c, const std::string& dir);
+
+// whether write_case writes overview.png: only when built with libpng (without it case.json names
+// no overview; callers say so in their logs)
+constexpr bool case_overview_written() {
+#ifdef PCISIM_ANATOMY_HAVE_PNG
+  return true;
+#else
+  return false;
+#endif
+}
 
 // how a CT given as a DICOM series folder ("ct": {"dicom": "ct/"}) is read: the DICOM reader
 // lives in its own library (anatomy/dicom, ITK), so the caller hands it in; without one such a

@@ -114,6 +114,9 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
     const Json doc = json::parse_json_checked(io::read_file(case_json), case_json);
     json::JsonReader r(doc, "");
     if (r.text("format", "") != kCaseFormat) r.fail("format", fmt::format("expected \"{}\"", kCaseFormat));
+    // what the numbers mean is never guessed: version, units and frame must be stated
+    for (const char* field : {"version", "units", "frame"})
+      if (!r.has(field)) fail(case_json, field, "missing");
     r.integer("version", 0, kCaseVersion, kCaseVersion);
     c.name = r.text("name", dir.filename().string());
     r.text("units", "", {"mm"});

@@ -151,6 +151,17 @@ TEST_F(CaseFolder, WrongFrameIsRefused) {
   EXPECT_NE(refusal().find("case.json: frame: "), std::string::npos) << refusal();
 }
 
+// version, units and frame have no defaults: a case.json without one is refused naming it
+TEST_F(CaseFolder, MissingVersionUnitsOrFrameIsRefused) {
+  const auto written = case_json();
+  for (const char* field : {"version", "units", "frame"}) {
+    auto j = written;
+    j.erase(field);
+    set_case_json(j);
+    EXPECT_EQ(refusal(), (dir_ / "case.json").string() + ": " + field + ": missing");
+  }
+}
+
 TEST_F(CaseFolder, AFileOutsideTheFolderIsRefused) {
   auto j = case_json();
   j["lumen"] = "../lumen.stl";

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #ifdef PCISIM_ANATOMY_HAVE_PNG
 #include "anatomy/case/case_overview.h"
@@ -24,6 +25,12 @@ using Json = nlohmann::json;
 
 [[noreturn]] void fail(const std::string& file, const std::string& field, const std::string& what) {
   throw CaseError(fmt::format("{}: {}: {}", file, field, what));
+}
+
+std::string lower_ascii(std::string s) {
+  for (char& c : s)
+    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  return s;
 }
 
 // a file named by case.json: relative, inside the folder, present
@@ -82,10 +89,16 @@ void write_case(const Case& c, const std::string& dir_name) {
   for (const auto& l : c.landmarks)
     landmarks.push_back({{"name", l.name}, {"position_m", {l.position_m.x(), l.position_m.y(), l.position_m.z()}}});
   doc["landmarks"] = landmarks;
-  // for 3D Slicer: each centerline as a markups curve (the lumen and CT open as they are)
+  // for 3D Slicer: each centerline as a markups curve (the lumen and CT open as they are). The
+  // file is named after the branch made safe (never a path out of slicer/), and kept distinct
+  // from the others' even on a case-insensitive file system ("a/b" and "a_b": a_b, a_b-2)
   Json curves = Json::array();
+  std::set<std::string> taken;
   for (const auto& b : c.vessels.branches) {
-    const std::string name = "slicer/" + b.name + ".mrk.json";
+    const std::string stem = markups_file_stem(b.name);
+    std::string unique = stem;
+    for (int k = 2; !taken.insert(lower_ascii(unique)).second; ++k) unique = fmt::format("{}-{}", stem, k);
+    const std::string name = "slicer/" + unique + ".mrk.json";
     write_markups_curve(b, (dir / name).string());
     curves.push_back(name);
   }

@@ -3,7 +3,8 @@
 //   vessels.json   centerlines and radii (the pcisim-vessel-tree format, metres)
 //   lumen.stl      the lumen surface, binary STL, millimetres, LPS
 //   ct.nrrd|.mha   optional CT in HU
-//   slicer/<branch>.mrk.json   each centerline as a 3D Slicer markups curve (written, not read)
+//   slicer/<branch>.mrk.json   each centerline as a 3D Slicer markups curve (written, not read;
+//                              the name made safe: markups_file_stem)
 //   overview.png   a picture for people (written when built with libpng, not read)
 // Built only with nlohmann-json. Readers throw CaseError "<file>: <field>: <what>".
 #include <functional>

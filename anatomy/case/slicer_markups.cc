@@ -6,6 +6,13 @@
 
 namespace pcisim::anatomy {
 
+std::string markups_file_stem(const std::string& branch_name) {
+  std::string stem = branch_name.substr(0, 100);
+  for (char& c : stem)
+    if (!((c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-')) c = '_';
+  return stem.empty() ? "branch" : stem;
+}
+
 void write_markups_curve(const VesselBranch& branch, const std::string& path) {
   using nlohmann::json;
   json points = json::array();

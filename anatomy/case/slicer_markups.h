@@ -11,4 +11,8 @@ namespace pcisim::anatomy {
 // one curve, its control points the branch's centerline points; throws std::runtime_error
 void write_markups_curve(const VesselBranch& branch, const std::string& path);
 
+// a branch name made safe as a file name: every character but [A-Za-z0-9_-] becomes '_' (so no
+// '/', '.' or '..' reaches a path), at most 100 characters, "branch" for an empty name
+std::string markups_file_stem(const std::string& branch_name);
+
 }  // namespace pcisim::anatomy

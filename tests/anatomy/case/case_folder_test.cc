@@ -7,8 +7,12 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <set>
+#include <string>
+#include <vector>
 
 #include "anatomy/case/case_folder.h"
+#include "anatomy/case/slicer_markups.h"
 #include "anatomy/mesh/mesh_io.h"
 #include "anatomy/phantom/phantom_case.h"
 #include "anatomy/volume/volume_io.h"
@@ -124,6 +128,35 @@ TEST_F(CaseFolder, SlicerCurvesAreLpsMillimetresAlongTheCenterline) {
     EXPECT_FALSE(fs::exists(dir_ / "overview.png"));
     EXPECT_FALSE(case_json().contains("overview"));
   }
+}
+
+// branch names become file names under slicer/ made safe: "../x" never writes outside it, and
+// names that collide once made safe (or differ only in case) get files of their own
+TEST_F(CaseFolder, SlicerFileNamesNeverLeaveTheSlicerFolder) {
+  Case c = small_case();
+  const std::vector<std::string> names = {"../x", "..", "", "a/b", "a_b", "LAD", "lad"};
+  ASSERT_GE(c.vessels.branches.size(), names.size());
+  c.vessels.branches.resize(names.size());
+  for (size_t i = 0; i < names.size(); ++i) {
+    c.vessels.branches[i].name = names[i];
+    c.vessels.branches[i].parent = -1;
+  }
+  const fs::path sub = dir_ / "sub";
+  write_case(c, sub.string());
+  const std::vector<std::string> files = {"slicer/___x.mrk.json", "slicer/__.mrk.json",    "slicer/branch.mrk.json",
+                                          "slicer/a_b.mrk.json",  "slicer/a_b-2.mrk.json", "slicer/LAD.mrk.json",
+                                          "slicer/lad-2.mrk.json"};
+  const auto doc = nlohmann::json::parse(std::ifstream(sub / "case.json"));
+  EXPECT_EQ(doc.at("slicer_centerlines").get<std::vector<std::string>>(), files);
+  std::set<std::string> in_slicer;
+  for (const auto& f : fs::directory_iterator(sub / "slicer"))
+    in_slicer.insert("slicer/" + f.path().filename().string());
+  EXPECT_EQ(in_slicer, std::set<std::string>(files.begin(), files.end()));
+  EXPECT_FALSE(fs::exists(sub / "x.mrk.json"));
+  // each curve still carries its branch's own name for Slicer's labels
+  const auto curve = nlohmann::json::parse(std::ifstream(sub / files[0]));
+  EXPECT_EQ(curve.at("markups").at(0).at("labelFormat"), "../x-%d");
+  EXPECT_EQ(markups_file_stem(std::string(300, 'A')), std::string(100, 'A'));
 }
 
 TEST_F(CaseFolder, MissingFileIsRefusedNamingTheField) {

@@ -3,8 +3,10 @@
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <stdexcept>
+
+#include "anatomy/volume/io_text.h"
+#include "json/json_reader.h"
 
 namespace pcisim::anatomy {
 namespace {
@@ -75,16 +77,10 @@ void write_vessel_tree_json(const VesselTree& tree, const std::string& path) {
 }
 
 VesselTree read_vessel_tree_json(const std::string& file) {
-  std::ifstream in(file);
-  if (!in) throw std::runtime_error(file + ": cannot open for reading");
-  std::stringstream text;
-  text << in.rdbuf();
-  json doc;
-  try {
-    doc = json::parse(text.str(), nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/true);
-  } catch (const json::exception& e) {  // syntax, or a number out of range (1e400)
-    throw std::runtime_error(file + ": not valid JSON: " + e.what());
-  }
+  // the shared reader: a regular file only (a FIFO would block for ever), refused over the limit
+  // unread; parsed at most kMaxJsonDepth deep (a deep file overflowed the stack), no key twice
+  // (both throw runtime_errors naming the file: unreadable; syntax, or a number out of range)
+  const json doc = pcisim::json::parse_json_checked(io::read_file(file, kMaxVesselTreeFileBytes), file);
   if (!doc.is_object()) fail(file, "(root)", "expected an object");
   reject_unknown_keys(doc, {"format", "version", "branches"}, file, "(root)");
   const json& format = *member(doc, "format", file, "(root)");

@@ -3,6 +3,7 @@
 #include "anatomy/phantom/coronary_phantom.h"
 
 #ifdef PCISIM_HAVE_JSON
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -138,6 +139,25 @@ TEST(VesselTreeJsonTest, BadFilesNameTheFileAndTheField) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find(nowhere + ": cannot open"), std::string::npos) << e.what();
   }
+  // a FIFO (which would block a plain open for ever) and a folder are refused, not waited on
+  const std::string fifo = temp_path("pipe.json");
+  std::filesystem::remove(fifo);
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const std::string folder = temp_path("folder.json");
+  std::filesystem::create_directories(folder);
+  for (const std::string& path : {fifo, folder}) {
+    try {
+      read_vessel_tree_json(path);
+      ADD_FAILURE() << "read " << path;
+    } catch (const std::runtime_error& e) {
+      EXPECT_EQ(std::string(e.what()), path + ": not a regular file (a FIFO, device or folder is never read)");
+    }
+  }
+  std::filesystem::remove(fifo);
+  std::filesystem::remove(folder);
+  // nesting past the JSON reader's depth is refused (a deep enough file overflowed the stack)
+  EXPECT_NE(error_for("deep.json", std::string(100000, '[') + std::string(100000, ']')).find("nested deeper than 64"),
+            std::string::npos);
   // a folder that is not there, for writing
   try {
     write_vessel_tree_json(make_coronary_phantom({}), "/nonexistent-dir/x.json");

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "anatomy/case/heart_center.h"
 #include "xray/fluoro/case_background.h"
 #include "protocol/channels.h"
 #include "realtime/clock.h"
@@ -12,6 +13,8 @@ namespace pcisim::server {
 
 XrayLoop::XrayLoop(const Scene& scene, const anatomy::Case& anatomy, SharedState& state, lcm::LCM* images)
     : spec_(*scene.xray), state_(state), images_(images) {
+  // the table brings the case's heart to the isocentre (a patient's CT is in scanner coordinates)
+  spec_.initial_pose.isocenter_mm = anatomy::heart_center_mm(anatomy);
   // the case physics runs on: its vessels for the contrast, its CT (or the thorax) behind them
   renderer_ = std::make_unique<xray::FluoroscopyRenderer>(anatomy.vessels,
                                                           xray::background_volume(anatomy, spec_.fluoro), spec_.fluoro);

@@ -9,7 +9,8 @@
 namespace pcisim::anatomy {
 
 std::vector<Landmark> phantom_landmarks(const VesselTree& tree) {
-  std::vector<Landmark> out;
+  // the phantom's heart is centred on the origin by construction (coronary_phantom.h)
+  std::vector<Landmark> out{{"heart centre", Eigen::Vector3d::Zero()}};
   for (const auto& b : tree.branches) {
     if (b.points.empty()) continue;
     out.push_back({b.name + " ostium", b.points.front().position_m});

@@ -23,7 +23,8 @@ struct PhantomCaseSpec {
 // exactly as built
 Case make_phantom_case(const PhantomCaseSpec& spec);
 
-// the landmarks the phantom names: each branch's ostium (first point) and end
+// the landmarks the phantom names: its heart centre (the origin), each branch's ostium (first
+// point) and end
 std::vector<Landmark> phantom_landmarks(const VesselTree& tree);
 
 }  // namespace pcisim::anatomy

@@ -709,6 +709,8 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
   ts.lv_outflow = true;
   ts.coronary_lumens = false;
   ts.coronary_fat_sleeve_mm = spec.with_coronaries ? facts.fat_sleeve_mm : 0.0;
+  // chambers behind their walls: 4 mm of myocardium and fat between a chamber and the coronary shell
+  ts.chamber_clearance_mm = 4.0;
   VesselTree tree_m = tree;
   for (auto& b : tree_m.branches) {
     for (auto& p : b.points) {

@@ -36,6 +36,9 @@ struct Quadric {
   Vector3d c;
   double z_lo = -1e30, z_hi = 1e30;
   int16_t hu;
+  // and, when clip_r > 0, inside the sphere of radius clip_r about clip_c
+  Vector3d clip_c = Vector3d::Zero();
+  double clip_r = 0;
 };
 
 Quadric ellipsoid(const Vector3d& c, const Vector3d& semi, const Matrix3d& axes, double hu) {
@@ -92,6 +95,17 @@ class Painter {
       const double t1 = std::clamp(std::floor((-b + s) / a / v_->spacing_mm.x()), -1.0, n);
       i0 = std::max<int64_t>(0, static_cast<int64_t>(t0));
       i1 = std::min<int64_t>(v_->dims[0] - 1, static_cast<int64_t>(t1));
+    }
+    if (q.clip_r > 0) {
+      // the sphere's x-span on this row
+      const double dy = y - q.clip_c.y(), dz = z - q.clip_c.z();
+      const double h2 = q.clip_r * q.clip_r - dy * dy - dz * dz;
+      if (h2 < 0) return;
+      const double h = std::sqrt(h2), n = static_cast<double>(v_->dims[0]);
+      const double t0 = std::clamp(std::ceil((q.clip_c.x() - h - x0) / v_->spacing_mm.x()), -1.0, n);
+      const double t1 = std::clamp(std::floor((q.clip_c.x() + h - x0) / v_->spacing_mm.x()), -1.0, n);
+      i0 = std::max(i0, static_cast<int64_t>(t0));
+      i1 = std::min(i1, static_cast<int64_t>(t1));
     }
     if (i1 < i0) return;
     int16_t* row = v_->hu_i16.data() + v_->linear_index(0, j, k);
@@ -198,10 +212,16 @@ Volume make_thorax_phantom(const ThoraxPhantomSpec& spec, const VesselTree& tree
   q.push_back(ellipsoid(Vector3d::Zero(), Vector3d(55, 55, 56) * k, heart, hu.fat));
   q.push_back(ellipsoid(Vector3d::Zero(), Vector3d(heart_r, heart_r, heart_r) * k, heart, hu.myocardium));
   const Vector3d lv_center = in_heart(-2, 14, -8);
+  const size_t first_chamber = q.size();
   q.push_back(ellipsoid(lv_center, Vector3d(17, 17, 30) * k, heart, blood_or(spec.lv_hu)));              // LV
   q.push_back(ellipsoid(in_heart(20, -10, -8), Vector3d(11, 24, 28) * k, heart, blood_or(spec.rv_hu)));  // RV
   q.push_back(ellipsoid(in_heart(-22, 8, 26), Vector3d(15, 18, 14) * k, heart, blood_or(spec.la_hu)));   // LA
   q.push_back(ellipsoid(in_heart(2, -26, 22), Vector3d(16, 15, 17) * k, heart, blood_or(spec.ra_hu)));   // RA
+  if (spec.chamber_clearance_mm > 0) {
+    // the atria and the right ventricle reach the epicardial surface as ellipsoids; a real chamber's
+    // blood stays behind its wall and the epicardial fat the coronaries run in
+    for (size_t c = first_chamber; c < q.size(); ++c) q[c].clip_r = heart_r * k - spec.chamber_clearance_mm;
+  }
   // sternum
   q.push_back(cylinder_z(bx + 4, by - ay + fat_mm + 9, 15, 7, -60, 110, hu.sternum));
   // spine: vertebral bodies (cortex, cancellous core), discs, neural arch, canal, spinous process

@@ -61,6 +61,9 @@ struct ThoraxPhantomSpec {
   // > 0: an epicardial fat sleeve (hu.fat) of this thickness around every coronary branch,
   // painted before the lumens, the aorta and the outflow tract
   double coronary_fat_sleeve_mm = 0.0;
+  // > 0: every chamber's blood kept this far inside the myocardium's outer surface (0: the
+  // ellipsoids as they are, reaching the surface where the coronaries run)
+  double chamber_clearance_mm = 0.0;
 };
 
 // builds the coronary tree from spec.seed, then the volume (int16 HU, identity direction).

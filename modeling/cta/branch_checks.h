@@ -15,9 +15,9 @@
 namespace pcisim::modeling {
 
 struct BranchCheckOptions {
-  double vein_hu_ratio = 0.75;       // darker than this share of the parent's contrast: a vein
-  double tissue_hu = 40;             // contrast is HU above this
-  double min_radius_mm = 1.0;        // samples narrower than this are not compared
+  double vein_hu_ratio = 0.75;  // darker than this share of the parent's contrast: a vein
+  double tissue_hu = 40;        // contrast is HU above this
+  double min_radius_mm = 1.0;   // samples narrower than this are not compared
   double abrupt_end_radius_mm = 0.8;
 };
 

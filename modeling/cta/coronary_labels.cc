@@ -48,6 +48,55 @@ std::vector<ModelBranch> split_first(std::vector<ModelBranch> b, int at, int* ta
   return b;
 }
 
+// the direction of a polyline from point `from` over `count` points (clamped), normalised
+Vector3d direction(const std::vector<Vector3d>& p, int from, int count) {
+  const int a = std::clamp(from, 0, int(p.size()) - 1), b = std::clamp(from + count, 0, int(p.size()) - 1);
+  const Vector3d d = p[std::max(a, b)] - p[std::min(a, b)];
+  return d.norm() > 0 ? d.normalized() : Vector3d::UnitX();
+}
+
+// the tracing continues each vessel into whichever branch reaches farthest; a vessel continues
+// where it runs on straightest: at every major branch point, when a child leaves more in line with
+// the incoming vessel than the vessel's own continuation (by more than the margin), the two
+// swap: the child becomes the continuation and the old continuation a side branch
+void prefer_straight_continuations(std::vector<ModelBranch>& b, double major_mm, double margin_deg, int look) {
+  const double margin = margin_deg * 3.14159265358979 / 180.0;
+  for (size_t i = 0; i < b.size(); ++i) {
+    for (int j = look; j + look < int(b[i].points_mm.size()); ++j) {
+      const std::vector<double> sub = subtree_lengths(b);
+      for (size_t c = 0; c < b.size(); ++c) {
+        if (b[c].parent != int(i) || b[c].parent_point != j || sub[c] < major_mm) continue;
+        const Vector3d in = direction(b[i].points_mm, j - look, look);
+        const double own = std::acos(std::clamp(in.dot(direction(b[i].points_mm, j, look)), -1.0, 1.0));
+        const double side = std::acos(std::clamp(in.dot(direction(b[c].points_mm, 0, look)), -1.0, 1.0));
+        if (side + margin >= own) continue;
+        // swap the tail of i after j with branch c
+        ModelBranch tail;
+        tail.points_mm.assign(b[i].points_mm.begin() + j, b[i].points_mm.end());
+        tail.radius_mm.assign(b[i].radius_mm.begin() + j, b[i].radius_mm.end());
+        tail.parent = int(i);
+        tail.parent_point = j;
+        b[i].points_mm.resize(j + 1);
+        b[i].radius_mm.resize(j + 1);
+        b[i].points_mm.insert(b[i].points_mm.end(), b[c].points_mm.begin() + 1, b[c].points_mm.end());
+        b[i].radius_mm.insert(b[i].radius_mm.end(), b[c].radius_mm.begin() + 1, b[c].radius_mm.end());
+        for (size_t g = 0; g < b.size(); ++g) {
+          if (g == c) continue;
+          if (b[g].parent == int(i) && b[g].parent_point > j) {
+            b[g].parent = int(c);
+            b[g].parent_point -= j;
+          } else if (b[g].parent == int(c)) {
+            b[g].parent = int(i);
+            b[g].parent_point += j;
+          }
+        }
+        b[c] = std::move(tail);
+        break;
+      }
+    }
+  }
+}
+
 double mean_y_first(const ModelBranch& b, double mm) {
   double s = 0, y = 0;
   int n = 0;
@@ -81,24 +130,55 @@ anatomy::VesselTree label_coronary_trees(const std::vector<anatomy::CenterlinePo
   for (const ModelTree& tree : trees) {
     if (tree.branches.empty()) continue;
     std::vector<ModelBranch> b = tree.branches;
-    // the piece from the aortic centre to the ostium, in front of the first branch
+    // the vessel's own line carried back through the aortic wall, to its closest approach to the
+    // aortic centre beside the ostium, then to that centre: in front of the first branch
     const int on_aorta = nearest_aorta_point(tree.aortic_centre_mm);
     const Vector3d start = ap[on_aorta].position_m * 1e3;
-    const Vector3d gap = b[0].points_mm.front() - start;
-    const int extra = static_cast<int>(gap.norm() / o.point_spacing_mm);
+    const double aortic_r_mm = ap[on_aorta].radius_m * 1e3;
+    // the samples next to the aorta: their path bends into the ostium's funnel and their
+    // cross-sections see the aortic lumen; they are dropped (no child leaves there) and replaced
+    // by the vessel's line and radius from beyond
+    size_t first_clear = 0;
+    while (first_clear + 2 < b[0].points_mm.size() &&
+           (b[0].points_mm[first_clear] - start).norm() < aortic_r_mm + 3.0) {
+      ++first_clear;
+    }
+    for (const auto& c : b) {
+      if (c.parent == 0) first_clear = std::min<size_t>(first_clear, std::max(0, c.parent_point - 1));
+    }
+    std::vector<double> beyond(b[0].radius_mm.begin() + first_clear,
+                               b[0].radius_mm.begin() + std::min(b[0].radius_mm.size(), first_clear + 10));
+    double r_ostium = b[0].radius_mm[first_clear];
+    if (!beyond.empty()) {
+      std::nth_element(beyond.begin(), beyond.begin() + beyond.size() / 2, beyond.end());
+      r_ostium = beyond[beyond.size() / 2];
+    }
+    b[0].points_mm.erase(b[0].points_mm.begin(), b[0].points_mm.begin() + first_clear);
+    b[0].radius_mm.erase(b[0].radius_mm.begin(), b[0].radius_mm.begin() + first_clear);
+    for (auto& c : b) {
+      if (c.parent == 0) c.parent_point -= static_cast<int>(first_clear);
+    }
+    const Vector3d p0 = b[0].points_mm.front();
+    const Vector3d d0 = direction(b[0].points_mm, 0, o.direction_points);
+    const double back = std::max(0.0, (p0 - start).dot(d0));
+    const Vector3d q = p0 - back * d0;
+    std::vector<Vector3d> lead;
+    auto walk = [&](const Vector3d& a, const Vector3d& c) {
+      const int n = static_cast<int>((c - a).norm() / o.point_spacing_mm);
+      for (int i = 0; i < n; ++i) lead.push_back(a + (c - a) * (double(i) / n));
+    };
+    walk(start, q);
+    walk(q, p0);
+    const int extra = static_cast<int>(lead.size());
     if (extra > 0) {
-      std::vector<Vector3d> p;
-      std::vector<double> r;
-      for (int i = 0; i < extra; ++i) {
-        p.push_back(start + gap * (double(i) / extra));
-        r.push_back(b[0].radius_mm.front());
-      }
-      b[0].points_mm.insert(b[0].points_mm.begin(), p.begin(), p.end());
-      b[0].radius_mm.insert(b[0].radius_mm.begin(), r.begin(), r.end());
+      b[0].points_mm.insert(b[0].points_mm.begin(), lead.begin(), lead.end());
+      b[0].radius_mm.insert(b[0].radius_mm.begin(), extra, r_ostium);
       for (auto& c : b) {
         if (c.parent == 0) c.parent_point += extra;
       }
     }
+
+    prefer_straight_continuations(b, o.major_branch_mm, o.straighter_by_deg, o.direction_points);
 
     // which tree, and its names
     const bool left = (tree.ostium_mm - tree.aortic_centre_mm).x() > 0;
@@ -109,7 +189,7 @@ anatomy::VesselTree label_coronary_trees(const std::vector<anatomy::CenterlinePo
       const std::vector<double> sub = subtree_lengths(b);
       int split = -1;
       double arc = 0;
-      for (size_t i = 1; i < b[0].points_mm.size() && arc <= o.lm_max_length_mm + gap.norm(); ++i) {
+      for (size_t i = 1; i < b[0].points_mm.size() && arc <= o.lm_max_length_mm + extra * o.point_spacing_mm; ++i) {
         arc += (b[0].points_mm[i] - b[0].points_mm[i - 1]).norm();
         for (size_t c = 1; c < b.size(); ++c) {
           if (b[c].parent == 0 && b[c].parent_point == int(i) && sub[c] >= o.major_branch_mm) split = int(i);

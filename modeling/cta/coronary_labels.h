@@ -8,10 +8,14 @@
 //    lm_max_length_mm that starts a subtree of at least major_branch_mm; of its two continuations
 //    the more anterior (smaller y over its first 15 mm) is the LAD, the other the LCx. No such
 //    branch point: the tree is "LCA";
+//  - a vessel continues where it runs on straightest: at each branch point leaving a subtree of at
+//    least major_branch_mm, the branch more in line with the incoming vessel is its continuation;
 //  - side branches of the LAD are diagonals D1, D2, ... and of the LCx obtuse marginals OM1, ...,
 //    proximal first; anything else is named after its parent: "RCA-1", "D1-1", ...
-// Every tree starts on the aortic centerline: a straight piece from the aortic centre beside the
-// ostium to the ostium is put in front of its first branch (as the phantom's trees start).
+// Every tree starts on the aortic centerline, as the phantom's trees do: the first branch's own
+// line is carried back through the aortic wall to the aortic centre beside the ostium, and the
+// radii of the samples next to the aorta (whose cross-sections see the aortic lumen) are taken
+// from the vessel just beyond.
 #include <Eigen/Core>
 #include <string>
 #include <vector>
@@ -37,6 +41,8 @@ struct LabelOptions {
   double lm_max_length_mm = 30.0;
   double major_branch_mm = 15.0;
   double point_spacing_mm = 0.5;  // of the piece put in front from the aortic centre
+  double straighter_by_deg = 10;  // a side branch straighter than the continuation by this takes its place
+  int direction_points = 8;       // directions at a branch point are taken over this many points
 };
 
 // the named tree in metres, parents before children, "aorta" first

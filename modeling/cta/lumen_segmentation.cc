@@ -75,7 +75,7 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
   out.lower_hu = o.tissue_hu + o.lower_fraction * (out.seed_hu - o.tissue_hu);
   out.upper_hu = std::max(o.calcium_hu, out.lower_hu + 50);
 
-  // the region within [lower, upper] connected to the seeds (6-connected breadth-first fill)
+  // the region within [lower, upper] connected to the seeds (breadth-first fill)
   const ImageGrid g = ImageGrid::of(ct);
   Mask region = Mask::zeros(g);
   std::vector<int64_t> queue;
@@ -90,16 +90,23 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
       queue.push_back(n);
     }
   }
-  const int64_t sx = 1, sy = g.dims[0], sz = g.dims[0] * g.dims[1];
   const int64_t cap = static_cast<int64_t>(o.max_region_fraction * double(g.size()));
+  const Neighbours26 nb(g.spacing_mm);
+  const int count = o.connectivity == 26 ? 26 : 6;
+  // the 6 face neighbours are those of length equal to one spacing
+  std::vector<int> use;
+  for (int q = 0; q < 26; ++q) {
+    const int steps = std::abs(nb.d[q][0]) + std::abs(nb.d[q][1]) + std::abs(nb.d[q][2]);
+    if (count == 26 || steps == 1) use.push_back(q);
+  }
   for (size_t head = 0; head < queue.size(); ++head) {
     const int64_t n = queue[head];
     const auto [i, j, k] = g.ijk(n);
-    const int64_t nb[6] = {i > 0 ? n - sx : -1, i + 1 < g.dims[0] ? n + sx : -1,
-                           j > 0 ? n - sy : -1, j + 1 < g.dims[1] ? n + sy : -1,
-                           k > 0 ? n - sz : -1, k + 1 < g.dims[2] ? n + sz : -1};
-    for (int64_t m : nb) {
-      if (m < 0 || region.v[m] || !in_range(m)) continue;
+    for (int q : use) {
+      const int64_t a = i + nb.d[q][0], b = j + nb.d[q][1], c = k + nb.d[q][2];
+      if (!g.inside(a, b, c)) continue;
+      const int64_t m = g.index(a, b, c);
+      if (region.v[m] || !in_range(m)) continue;
       region.v[m] = 1;
       queue.push_back(m);
     }

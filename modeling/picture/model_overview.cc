@@ -16,13 +16,13 @@ using Eigen::Vector3d;
 // a view: image x and y as functions of the LPS point (mm)
 struct View {
   const char* name;
-  int ax_x, ax_y;        // LPS axes shown horizontally and vertically
-  double sign_x, sign_y; // +1: increasing to the right / downward
+  int ax_x, ax_y;         // LPS axes shown horizontally and vertically
+  double sign_x, sign_y;  // +1: increasing to the right / downward
 };
 
-constexpr uint8_t kPalette[][3] = {{255, 80, 80},  {80, 200, 255}, {120, 255, 120}, {255, 200, 60}, {220, 120, 255},
-                                   {255, 140, 0},  {0, 220, 200},  {255, 100, 180}, {180, 255, 0},  {120, 160, 255},
-                                   {255, 255, 140}, {200, 200, 200}};
+constexpr uint8_t kPalette[][3] = {{255, 80, 80},   {80, 200, 255},  {120, 255, 120}, {255, 200, 60},
+                                   {220, 120, 255}, {255, 140, 0},   {0, 220, 200},   {255, 100, 180},
+                                   {180, 255, 0},   {120, 160, 255}, {255, 255, 140}, {200, 200, 200}};
 
 }  // namespace
 

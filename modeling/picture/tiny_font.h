@@ -14,6 +14,8 @@ const uint8_t* tiny_glyph(char c);
 void draw_text(uint8_t* rgb, int w, int h, int x, int y, std::string_view text, const uint8_t color[3], int scale = 1);
 
 // the width in pixels draw_text takes
-inline int text_width(std::string_view text, int scale = 1) { return static_cast<int>(text.size()) * 6 * scale; }
+inline int text_width(std::string_view text, int scale = 1) {
+  return static_cast<int>(text.size()) * 6 * scale;
+}
 
 }  // namespace pcisim::modeling

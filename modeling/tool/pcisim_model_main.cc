@@ -101,6 +101,10 @@ int main(int argc, char** argv) {
                    "iterations of the 3-D level set after the region growing [heart eq 1]; 0 skips it")
       ->check(CLI::Range(0, 10000));
   knobs
+      ->add_option("--level-set-curvature", o.segmentation.level_set.curvature_weight,
+                   "weight of the mean-curvature term of that level set (smooths, and thins narrow vessels)")
+      ->check(CLI::Range(0.0, 10.0));
+  knobs
       ->add_option("--section-spacing-mm", o.spline.sample_spacing_mm,
                    "distance between cross-sections along each centerline (mm)")
       ->check(CLI::Range(0.1, 5.0));

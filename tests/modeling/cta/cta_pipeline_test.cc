@@ -15,13 +15,14 @@ namespace {
 
 using Eigen::Vector3d;
 
-// a CTA small enough for a unit test: 0.6 mm voxels over the heart
-anatomy::PhantomCta small_cta(uint32_t seed, bool with_coronaries = true) {
+// a CTA small enough for a unit test: 0.5 mm voxels over the heart, a 60 % stenosis
+anatomy::PhantomCta small_cta(uint32_t seed, bool with_coronaries = true, double stenosis = 0.6) {
   anatomy::PhantomCtaSpec spec;
   spec.seed = seed;
-  spec.dims = {300, 300, 220};
-  spec.spacing_mm = Vector3d(0.6, 0.6, 0.7);
+  spec.dims = {260, 260, 230};
+  spec.spacing_mm = Vector3d(0.5, 0.5, 0.5);
   spec.with_coronaries = with_coronaries;
+  spec.stenosis_fraction = stenosis;
   return anatomy::make_phantom_cta(spec);
 }
 
@@ -51,14 +52,17 @@ TEST(CtaPipeline, OneAorticSeedGivesTheNamedTreeOnTheTruth) {
     int counted = 0;
     const auto& aorta = cta.truth.branches[cta.truth.find("aorta")];
     for (const auto& p : tree.branches[mine].points) {
-      // points inside the aorta (the piece from its centre to the ostium) are not on a coronary
-      if (distance_to(aorta, p.position_m) < aorta.points.front().radius_m) continue;
+      // points inside the aorta (the piece from its centre to the ostium) are not on a coronary,
+      // and within 4 mm of its wall the model's line is the vessel's own carried back straight
+      // through the ostium's funnel (off by up to ~2.5 mm there: docs/modeling.md)
+      if (distance_to(aorta, p.position_m) < aorta.points.front().radius_m + 4e-3) continue;
       ++counted;
       const double d_mm = distance_to(cta.truth.branches[truth], p.position_m) * 1e3;
       sum_mm += d_mm;
       worst_mm = std::max(worst_mm, d_mm);
     }
-    const double mean_mm = sum_mm / std::max(counted, 1);
+    ASSERT_GE(counted, 5) << name;
+    const double mean_mm = sum_mm / counted;
     std::printf("%s: %zu points, %.1f mm long (truth %.1f), mean distance to truth %.2f mm, worst %.2f mm\n", name,
                 tree.branches[mine].points.size(), anatomy::branch_length_m(tree.branches[mine]) * 1e3,
                 anatomy::branch_length_m(cta.truth.branches[truth]) * 1e3, mean_mm, worst_mm);
@@ -96,8 +100,10 @@ TEST(CtaPipeline, ASeedOutsideTheVolumeIsNamedWithTheExtent) {
 
 TEST(CtaPipeline, ASeedNotInContrastIsNamedWithItsHu) {
   const anatomy::PhantomCta cta = small_cta(3);
-  // 40 mm to the patient's right of the heart centre and 60 mm up: lung or chest wall
-  const Vector3d off = cta.facts.heart_center_mm + Vector3d(-70, 0, 0);
+  // 6 mm outward from the middle of the LAD: epicardial or pericardial fat
+  const auto& lad = cta.truth.branches[cta.truth.find("LAD")];
+  const Vector3d mid = lad.points[lad.points.size() / 2].position_m * 1e3;
+  const Vector3d off = mid + 6.0 * (mid - cta.facts.heart_center_mm).normalized();
   try {
     build_cta_model(cta.ct, {cta.aortic_seed_mm, off}, CtaPipelineOptions{});
     FAIL() << "no error";

@@ -54,7 +54,8 @@ int main(int argc, char** argv) {
                  "write the scene's anatomy (the built-in phantom, or --scene's) as a case folder and exit: "
                  "case.json, vessels.json, lumen.stl (LPS mm), ct.nrrd and slicer/*.mrk.json (docs/anatomy.md)");
   app.add_option("--case", case_dir,
-                 "run on this case folder instead of the scene's anatomy (the scene's effects are kept)");
+                 "run on this case folder instead of the scene's anatomy (the scene's effects are kept), for "
+                 "every scene of the session: the first and each one loaded over LCM");
   CLI11_PARSE(app, argc, argv);
   // an in-process control bus gets an in-process image bus unless told otherwise
   if (app.count("--lcm-image-url") == 0 && lcm_url.rfind("memq://", 0) == 0) image_url = "memq://";
@@ -115,6 +116,7 @@ int main(int argc, char** argv) {
   options.duration_s = duration_s;
   options.cpu_latency_us = cpu_latency_us;
   options.image_url = image_url;
+  options.case_dir = case_dir;  // for every scene of the session, not only the first
   try {
     const StatsReport stats = run_session(std::move(scene), lcm, options, g_stop, limits);
     std::cout << human_summary(stats) << "\n";

@@ -15,7 +15,10 @@ StatsReport run_session(Scene scene, lcm::LCM& control, const SessionOptions& op
   std::unique_ptr<lcm::LCM> images;  // frames get their own LCM instance, once a scene shows them
   std::optional<Scene> fallback;     // the last scene that was built
   double ran_s = 0;                  // running time so far (scene builds do not count)
+  bool rebuilding_fallback = false;
   for (;;) {
+    // --case replaces the anatomy of every scene, the first and each one loaded over LCM
+    if (!options.case_dir.empty()) scene.case_dir = options.case_dir;
     if (scene.xray && !images) {
       images = std::make_unique<lcm::LCM>(options.image_url);
       if (!images->good()) throw std::runtime_error("cannot open the image LCM at " + options.image_url);
@@ -24,13 +27,17 @@ StatsReport run_session(Scene scene, lcm::LCM& control, const SessionOptions& op
     try {
       server = std::make_unique<Server>(scene, control, images.get(), &limits);
     } catch (const std::exception& e) {
-      if (!fallback) throw;
+      // nothing to fall back to, or the fallback itself no longer builds (its files changed):
+      // trying it again would loop for ever
+      if (!fallback || rebuilding_fallback) throw;
       limits.count_scene_rejected();
       spdlog::error("session: refused scene {}: it cannot be built: {}; back to {}", scene.source, e.what(),
                     fallback->source);
       scene = *fallback;
+      rebuilding_fallback = true;
       continue;
     }
+    rebuilding_fallback = false;
     fallback = scene;
     server->cpu_latency_us = options.cpu_latency_us;
     const double left_s = options.duration_s > 0 ? std::max(options.duration_s - ran_s, 1e-3) : 0.0;

@@ -1,8 +1,9 @@
 #pragma once
 // A training session: one scene after another on the same LCM buses. A scene asked for over LCM
 // restarts the pipeline with it; one that parses but cannot be built is refused (counted in the
-// status) and the scene that ran before runs again. The session's command bounds (contrast used,
-// refusals) carry across every pipeline.
+// status) and the scene that ran before runs again (if that cannot be rebuilt either, the session
+// ends with its error). The session's command bounds (contrast used, refusals) and its options
+// (--case) carry across every pipeline.
 #include <atomic>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
@@ -18,6 +19,7 @@ struct SessionOptions {
   double duration_s = 0;   // running time of all pipelines together; 0: until stopped
   int cpu_latency_us = 0;  // PM QoS while running; < 0 leaves the CPUs alone
   std::string image_url;   // the frames' LCM URL, opened when a scene has x-ray
+  std::string case_dir;    // --case: every scene of the session runs on this case folder ("": its own anatomy)
 };
 
 // throws when the first scene cannot be built (there is nothing to fall back to); returns the

@@ -1,0 +1,134 @@
+// The session runner (server/session_runner.h) with whole pipelines on memq: --case (the
+// session's case_dir) applies to every scene, also one loaded over LCM that names another
+// anatomy; a fallback scene that no longer builds ends the session instead of looping.
+#include "server/session_runner.h"
+
+#include <gtest/gtest.h>
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "anatomy/case/case_folder.h"
+#include "anatomy/phantom/phantom_case.h"
+#include "pcisim_lcm/session_command_t.hpp"
+#include "protocol/channels.h"
+#include "server/scene/scene.h"
+
+namespace pcisim::server {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+void load_scene_over_lcm(lcm::LCM& lcm, const std::string& path) {
+  pcisim_lcm::session_command_t m{};
+  m.command = pcisim_lcm::session_command_t::CMD_LOAD_SCENE;
+  m.scene_path = path;
+  lcm.publish(protocol::kSessionChannel, &m);
+}
+
+// spdlog's lines while it lives (the server logs each scene and anatomy it builds)
+class CapturedLog {
+ public:
+  CapturedLog() : previous_(spdlog::default_logger()) {
+    spdlog::set_default_logger(
+        std::make_shared<spdlog::logger>("test", std::make_shared<spdlog::sinks::ostream_sink_mt>(text_)));
+  }
+  ~CapturedLog() { spdlog::set_default_logger(previous_); }
+  std::string text() const { return text_.str(); }
+
+ private:
+  std::ostringstream text_;
+  std::shared_ptr<spdlog::logger> previous_;
+};
+
+size_t count(const std::string& text, const std::string& what) {
+  size_t n = 0;
+  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+class SessionRunner : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("pcisim-session-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    // a small phantom case (coarse CT: quick to write and to read)
+    anatomy::PhantomCaseSpec spec;
+    spec.ct_dims = {48, 48, 36};
+    spec.ct_spacing_mm = 5.0;
+    anatomy::write_case(anatomy::make_phantom_case(spec), (dir_ / "patient").string());
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+// a scene loaded over LCM naming a case folder that does not exist still runs on --case: it
+// used to lose --case, fail to build on its own anatomy and be refused
+TEST_F(SessionRunner, TheCaseOptionAppliesToEveryScene) {
+  std::ofstream(dir_ / "reloaded.json")
+      << R"({"name": "reloaded", "anatomy": {"case": "no-such-case"}, "effects": {"guidewire": {}}})";
+  lcm::LCM lcm("memq://");
+  SessionLimits limits;
+  SessionOptions options;
+  options.duration_s = 2.0;
+  options.image_url = "memq://";
+  options.case_dir = (dir_ / "patient").string();
+  std::atomic<bool> stop{false};
+  CapturedLog log;
+  std::thread console([&] {
+    std::this_thread::sleep_for(400ms);
+    load_scene_over_lcm(lcm, (dir_ / "reloaded.json").string());
+  });
+  StatsReport r;
+  ASSERT_NO_THROW(
+      r = run_session(load_scene_file(PCISIM_SOURCE_DIR "/scenes/minimal.json"), lcm, options, stop, limits));
+  console.join();
+  const std::string lines = log.text();
+  EXPECT_EQ(count(lines, "scene 'reloaded'"), 1u) << "the scene was not reloaded:\n" << lines;
+  EXPECT_EQ(count(lines, "(case " + options.case_dir + ")"), 2u) << "both pipelines on --case:\n" << lines;
+  EXPECT_EQ(count(lines, "no-such-case"), 0u) << lines;
+  EXPECT_EQ(r.scenes_rejected, 0);
+  EXPECT_EQ(r.scene_loads_refused, 0);
+  EXPECT_GT(r.physics_steps, 0);
+}
+
+// the scene to fall back to is rebuilt from its files: once they are gone, a refused reload ends
+// the session with the error (it used to retry the fallback for ever, never running again)
+TEST_F(SessionRunner, AFallbackThatNoLongerBuildsEndsTheSession) {
+  std::ofstream(dir_ / "garbage.motion") << "this is not a heart motion file\n";
+  std::ofstream(dir_ / "unbuildable.json") << R"({"effects": {"heart_beat": {"motion_file": "garbage.motion"}}})";
+  lcm::LCM lcm("memq://");
+  SessionLimits limits;
+  SessionOptions options;
+  options.duration_s = 5.0;
+  options.image_url = "memq://";
+  options.case_dir = (dir_ / "patient").string();
+  std::atomic<bool> stop{false};
+  std::thread console([&] {
+    std::this_thread::sleep_for(400ms);
+    fs::remove(dir_ / "patient" / "vessels.json");  // the running scene's case can no longer be read
+    load_scene_over_lcm(lcm, (dir_ / "unbuildable.json").string());
+  });
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    run_session(load_scene_file(PCISIM_SOURCE_DIR "/scenes/minimal.json"), lcm, options, stop, limits);
+    ADD_FAILURE() << "the session went on with a fallback that cannot be built";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("vessels.json"), std::string::npos) << e.what();
+  }
+  console.join();
+  EXPECT_EQ(limits.scenes_rejected(), 1);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 4.0);
+}
+
+}  // namespace
+}  // namespace pcisim::server

@@ -76,6 +76,8 @@ struct World::Impl {
   std::optional<BeatingHeart> heart;
   HeartFitReport heart_fit;
   std::optional<VesselSkin> skin;
+  anatomy::HeartPose heart_pose;     // template frame -> the case's
+  Eigen::Matrix3Xd heart_in_case_m;  // the heart's particles in the case's frame (skin input)
   InputGuard guard;
   InstrumentInput used;
   std::vector<EffectCost> costs;
@@ -96,11 +98,13 @@ World::World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_ge
     : World(spec, anatomy::make_coronary_phantom(anatomy::CoronaryPhantomSpec{spec.anatomy.seed}),
             std::move(contact_geometry)) {}
 
-World::World(const WorldSpec& spec, const anatomy::VesselTree& tree, std::shared_ptr<const LumenQuery> contact_geometry)
+World::World(const WorldSpec& spec, const anatomy::VesselTree& tree, std::shared_ptr<const LumenQuery> contact_geometry,
+             const anatomy::HeartPose& heart_pose)
     : impl_(std::make_unique<Impl>()) {
   validate(spec);
   Impl& w = *impl_;
   w.spec = spec;
+  w.heart_pose = heart_pose;
   // effects in step order; only the listed ones exist (and get a cost slot, -1 otherwise)
   auto cost_slot = [&w](bool listed, const char* name) {
     if (!listed) return -1;
@@ -119,12 +123,24 @@ World::World(const WorldSpec& spec, const anatomy::VesselTree& tree, std::shared
   w.tree = tree;
   if (spec.vessel_motion) {
     // a heart the tree rides must not swallow it: the template is fitted under this tree
+    // (the heart is simulated in the template's frame: the case's heart pose places it under the
+    // tree, so the fit sees the tree in the template's frame and the skin the heart in the case's)
     anatomy::HeartMesh mesh = anatomy::template_heart_mesh();
-    w.heart_fit = fit_heart_under_tree(w.tree, HeartFitParams{}, &mesh);
+    anatomy::VesselTree tree_in_template = w.tree;
+    for (auto& b : tree_in_template.branches) {
+      for (auto& p : b.points) {
+        p.position_m = heart_pose.to_template(p.position_m);
+        p.radius_m /= heart_pose.scale;
+      }
+    }
+    w.heart_fit = fit_heart_under_tree(tree_in_template, HeartFitParams{}, &mesh);
     w.heart.emplace(*spec.heart_beat, mesh);
     // the tree rides the epicardium; the wire, its contact and the blood are simulated in the
     // vessels' rest frame and carried into the world by the same skin (docs/heart.md)
-    w.skin.emplace(w.tree, w.heart->rest_positions_m(), w.heart->epicardium(), *spec.vessel_motion);
+    w.heart_in_case_m.resize(3, w.heart->rest_positions_m().cols());
+    w.heart_in_case_m = (heart_pose.scale * heart_pose.rotation) * w.heart->rest_positions_m();
+    w.heart_in_case_m.colwise() += heart_pose.translation_m;
+    w.skin.emplace(w.tree, w.heart_in_case_m, w.heart->epicardium(), *spec.vessel_motion);
   }
   if (!spec.guidewire) return;
   auto path = anatomy::guide_catheter_path(w.tree);
@@ -163,7 +179,9 @@ void World::step(const InstrumentInput& input) {
     const auto b = Clock::now();
     w.costs[w.cost_heart].last_step_ms = Impl::ms(a, b);
     if (w.skin) {
-      w.skin->update(w.heart->positions_m());
+      w.heart_in_case_m.noalias() = (w.heart_pose.scale * w.heart_pose.rotation) * w.heart->positions_m();
+      w.heart_in_case_m.colwise() += w.heart_pose.translation_m;
+      w.skin->update(w.heart_in_case_m);
       w.costs[w.cost_motion].last_step_ms = Impl::ms(b, Clock::now());
     }
   }

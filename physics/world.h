@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "anatomy/heart/heart_pose.h"
+#include "anatomy/vessel/vessel_tree.h"
 #include "physics/instrument_input.h"
 #include "physics/local_force_model.h"
 #include "physics/world_snapshot.h"
@@ -38,8 +40,9 @@ class World {
   // once per scene). Throws std::invalid_argument naming the bad field when it cannot be built.
   // `contact_geometry`, when given, replaces the SDF the spec would build (benchmarks and tests
   // share one field across worlds); it must describe the same anatomy.
+  // `heart_pose` places the template heart under the tree (the case's; identity for the phantom).
   World(const WorldSpec& spec, const anatomy::VesselTree& tree,
-        std::shared_ptr<const LumenQuery> contact_geometry = nullptr);
+        std::shared_ptr<const LumenQuery> contact_geometry = nullptr, const anatomy::HeartPose& heart_pose = {});
   // the same around the procedural phantom of spec.anatomy.seed (tests and benchmarks)
   explicit World(const WorldSpec& spec);
   World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_geometry);

@@ -12,7 +12,7 @@ PhysicsLoop::PhysicsLoop(const Scene& scene, std::shared_ptr<const anatomy::Case
       case_(std::move(anatomy)),
       state_(state),
       rate_hz_(scene.physics_rate_hz),
-      world_(std::make_unique<physics::World>(spec_, case_->vessels)) {
+      world_(std::make_unique<physics::World>(spec_, case_->vessels, nullptr, case_->heart)) {
   for (const auto& cost : world_->effect_costs()) {
     effects_.push_back(std::make_unique<EffectStats>());
     effects_.back()->name = cost.name;
@@ -67,7 +67,8 @@ void PhysicsLoop::run() {
     state_.physics.mark_wake(wake_ns);
 
     // a reset rebuilds the world between steps (allocation is fine here, not inside step)
-    if (state_.reset_requested.exchange(false)) world_ = std::make_unique<physics::World>(spec_, case_->vessels);
+    if (state_.reset_requested.exchange(false))
+      world_ = std::make_unique<physics::World>(spec_, case_->vessels, nullptr, case_->heart);
     if (!state_.paused.load(std::memory_order_relaxed)) step_once(wake_ns);
 
     const int64_t done_ns = realtime::monotonic_ns();

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "anatomy/heart/heart_pose.h"
 #include "anatomy/mesh/triangle_mesh.h"
 #include "anatomy/vessel/vessel_tree.h"
 #include "anatomy/volume/volume.h"
@@ -25,6 +26,7 @@ struct Case {
   std::optional<Volume> ct;        // CT in HU, mm
   bool ct_lumen_enhanced = false;  // the CT's lumens hold contrast (a CT angiogram) rather than blood
   std::vector<Landmark> landmarks;
+  HeartPose heart;  // where the template heart sits under these vessels (identity: the phantom's)
 };
 
 }  // namespace pcisim::anatomy

@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/LU>
+#include <cmath>
+
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -89,6 +92,16 @@ void write_case(const Case& c, const std::string& dir_name) {
   for (const auto& l : c.landmarks)
     landmarks.push_back({{"name", l.name}, {"position_m", {l.position_m.x(), l.position_m.y(), l.position_m.z()}}});
   doc["landmarks"] = landmarks;
+  // where the template heart sits (docs/anatomy.md); the phantom's is the identity
+  if (!c.heart.is_identity()) {
+    Json rot = Json::array();
+    for (int i = 0; i < 3; ++i) rot.push_back({c.heart.rotation(i, 0), c.heart.rotation(i, 1), c.heart.rotation(i, 2)});
+    const Eigen::Vector3d& t = c.heart.translation_m;
+    doc["heart"] = {{"template", "pcisim-template-heart"},
+                    {"rotation", rot},
+                    {"scale", c.heart.scale},
+                    {"translation_m", {t.x(), t.y(), t.z()}}};
+  }
   // for 3D Slicer: each centerline as a markups curve (the lumen and CT open as they are). The
   // file is named after the branch made safe (never a path out of slicer/), and kept distinct
   // from the others' even on a case-insensitive file system ("a/b" and "a_b": a_b, a_b-2)
@@ -170,6 +183,33 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
       m.position_m = {p[0].get<double>(), p[1].get<double>(), p[2].get<double>()};
       lr.finish();
       c.landmarks.push_back(m);
+    }
+    if (r.has("heart")) {
+      json::JsonReader h = r.child("heart");
+      h.text("template", "", {"pcisim-template-heart"});
+      c.heart.scale = h.number("scale", 1.0, 0.5, 2.0);
+      const auto& rot = h.list("rotation");
+      const auto& t = h.list("translation_m");
+      auto numbers = [](const nlohmann::json& a, size_t n) {
+        if (!a.is_array() || a.size() != n) return false;
+        for (const auto& x : a)
+          if (!x.is_number()) return false;
+        return true;
+      };
+      if (rot.size() != 3 || !numbers(rot[0], 3) || !numbers(rot[1], 3) || !numbers(rot[2], 3))
+        h.fail("rotation", "expected three rows of three numbers");
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) c.heart.rotation(i, j) = rot[i][j].get<double>();
+      // a proper rotation: orthonormal, determinant +1 (to the precision JSON keeps)
+      if ((c.heart.rotation.transpose() * c.heart.rotation - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() >
+              1e-6 ||
+          c.heart.rotation.determinant() < 0)
+        h.fail("rotation", "expected a rotation (orthonormal rows, determinant +1)");
+      if (!numbers(t, 3) || std::abs(t[0].get<double>()) > 10 || std::abs(t[1].get<double>()) > 10 ||
+          std::abs(t[2].get<double>()) > 10)
+        h.fail("translation_m", "expected [x, y, z] in metres, each within 10 m");
+      c.heart.translation_m = {t[0].get<double>(), t[1].get<double>(), t[2].get<double>()};
+      h.finish();
     }
     r.list("slicer_centerlines");  // written for viewers, not needed to simulate
     r.text("overview", "");        // a picture for people

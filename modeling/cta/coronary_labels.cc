@@ -132,15 +132,13 @@ anatomy::VesselTree label_coronary_trees(const std::vector<anatomy::CenterlinePo
     std::vector<ModelBranch> b = tree.branches;
     // the vessel's own line carried back through the aortic wall, to its closest approach to the
     // aortic centre beside the ostium, then to that centre: in front of the first branch
-    const int on_aorta = nearest_aorta_point(tree.aortic_centre_mm);
-    const Vector3d start = ap[on_aorta].position_m * 1e3;
-    const double aortic_r_mm = ap[on_aorta].radius_m * 1e3;
     // the samples next to the aorta: their path bends into the ostium's funnel and their
     // cross-sections see the aortic lumen; they are dropped (no child leaves there) and replaced
     // by the vessel's line and radius from beyond
+    const double aortic_r_near = ap[nearest_aorta_point(tree.aortic_centre_mm)].radius_m * 1e3;
     size_t first_clear = 0;
     while (first_clear + 2 < b[0].points_mm.size() &&
-           (b[0].points_mm[first_clear] - start).norm() < aortic_r_mm + 3.0) {
+           (b[0].points_mm[first_clear] - tree.aortic_centre_mm).norm() < aortic_r_near + 3.0) {
       ++first_clear;
     }
     for (const auto& c : b) {
@@ -158,9 +156,24 @@ anatomy::VesselTree label_coronary_trees(const std::vector<anatomy::CenterlinePo
     for (auto& c : b) {
       if (c.parent == 0) c.parent_point -= static_cast<int>(first_clear);
     }
+    // the vessel's own line, carried back: it enters the aorta where it passes closest to the
+    // aortic centerline (the aorta's ridge is flat along its axis, so "the centre beside the
+    // ostium" alone could lie anywhere along the root)
     const Vector3d p0 = b[0].points_mm.front();
     const Vector3d d0 = direction(b[0].points_mm, 0, o.direction_points);
-    const double back = std::max(0.0, (p0 - start).dot(d0));
+    int on_aorta = 0;
+    double best_gap = 1e300, back = 0;
+    for (size_t i = 0; i < ap.size(); ++i) {
+      const Vector3d a = ap[i].position_m * 1e3;
+      const double t = std::max(0.0, (p0 - a).dot(d0));  // back along the line from p0
+      const double gap_mm = (p0 - t * d0 - a).norm();
+      if (gap_mm < best_gap) {
+        best_gap = gap_mm;
+        on_aorta = static_cast<int>(i);
+        back = t;
+      }
+    }
+    const Vector3d start = ap[on_aorta].position_m * 1e3;
     const Vector3d q = p0 - back * d0;
     std::vector<Vector3d> lead;
     auto walk = [&](const Vector3d& a, const Vector3d& c) {

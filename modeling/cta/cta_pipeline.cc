@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "modeling/cta/modeling_error.h"
+#include "modeling/heart/heart_placement.h"
 
 namespace pcisim::modeling {
 namespace {
@@ -162,6 +163,18 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
     for (const auto& b : m.model.vessels.branches) names += (names.empty() ? "" : " ") + b.name;
     r.notes.push_back("branches: " + names);
     r.figures = {{"branches", double(m.model.vessels.branches.size())}};
+  });
+
+  // (g) the template heart under the tree
+  stage(&m, "heart", progress, [&](StageReport& r) {
+    const HeartPlacement h = place_template_heart(m.model.vessels, o.heart);
+    m.model.heart = h.pose;
+    r.figures = {{"scale", h.pose.scale},
+                 {"rms_mm", h.rms_mm},
+                 {"pairs", double(h.pairs)},
+                 {"iterations", double(h.iterations_run)}};
+    // the template's heart centre is its origin: where the C-arm centres
+    m.model.landmarks.push_back({"heart centre", h.pose.translation_m});
   });
 
   if (o.loft) {

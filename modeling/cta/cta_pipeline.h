@@ -9,6 +9,7 @@
 //   (d) cross_section_radius  2-D level set per sample [eq 2]    modeling/cta/cross_section_radius.h
 //       drop_dark_branches    veins cut away; abrupt ends noted modeling/cta/branch_checks.h
 //   (f) label_coronary_trees  aorta, LM, LAD, LCx, RCA, D, OM    modeling/cta/coronary_labels.h
+//   (g) place_template_heart  the template heart under the tree modeling/heart/heart_placement.h
 //   (e) loft_lumen            closed tubes per branch            anatomy/vessel/lumen_mesh.h
 #include <functional>
 #include <string>
@@ -22,6 +23,7 @@
 #include "modeling/cta/coronary_labels.h"
 #include "modeling/cta/cross_section_radius.h"
 #include "modeling/cta/lumen_segmentation.h"
+#include "modeling/heart/heart_placement.h"
 
 namespace pcisim::modeling {
 
@@ -34,6 +36,7 @@ struct CtaPipelineOptions {
   int radius_median_window = 5;  // samples; a median along the branch removes single bad sections
   BranchCheckOptions checks;
   LabelOptions labels;
+  HeartPlacementOptions heart;
   anatomy::LumenMeshSpec lumen;
   bool loft = true;
   int threads = 0;  // 0: all cores

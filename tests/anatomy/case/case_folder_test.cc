@@ -2,6 +2,8 @@
 // naming the file and the field; the mesh formats users bring read to the same surface.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include <unistd.h>
 
 #include <filesystem>
@@ -167,6 +169,37 @@ TEST_F(CaseFolder, MissingFileIsRefusedNamingTheField) {
 TEST_F(CaseFolder, MissingCaseJsonIsRefused) {
   fs::remove(dir_ / "case.json");
   EXPECT_NE(refusal().find("case.json: missing"), std::string::npos) << refusal();
+}
+
+// a modelled patient's case places the template heart: the pose reads back as written
+TEST_F(CaseFolder, TheHeartPoseReadsBackAsWritten) {
+  Case c = small_case();
+  c.heart.rotation = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  c.heart.scale = 1.07;
+  c.heart.translation_m = Eigen::Vector3d(0.021, -0.14, -0.093);
+  write_case(c, dir_.string());
+  const Case b = read_case(dir_.string());
+  EXPECT_LT((b.heart.rotation - c.heart.rotation).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_DOUBLE_EQ(b.heart.scale, 1.07);
+  EXPECT_LT((b.heart.translation_m - c.heart.translation_m).norm(), 1e-15);
+  // the phantom's (identity) is not written, and reads back as the identity
+  write_case(small_case(), dir_.string());
+  EXPECT_FALSE(case_json().contains("heart"));
+  EXPECT_TRUE(read_case(dir_.string()).heart.is_identity());
+}
+
+TEST_F(CaseFolder, AHeartPoseThatIsNotARotationIsRefused) {
+  Case c = small_case();
+  c.heart.scale = 1.1;
+  write_case(c, dir_.string());
+  auto j = case_json();
+  j["heart"]["rotation"] = {{1, 0, 0}, {0, 1, 0}, {0, 0, -1}};  // a reflection
+  set_case_json(j);
+  EXPECT_NE(refusal().find("heart.rotation"), std::string::npos) << refusal();
+  j["heart"]["rotation"] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  j["heart"]["scale"] = 5;
+  set_case_json(j);
+  EXPECT_NE(refusal().find("heart.scale"), std::string::npos) << refusal();
 }
 
 TEST_F(CaseFolder, WrongUnitsAreRefused) {

@@ -4,7 +4,6 @@
 
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -132,20 +131,13 @@ TEST(LumenScores, OffsetSpheresOfAHundredThousandTriangles) {
   // (Archimedes), so the mean is 0.2 mm and the 95th percentile 0.2 + 0.05 * 0.9 mm; the second
   // order adds at most 0.05^2 / (2 * 3) mm
   const TriangleMesh a = icosphere(3.0, 6), b = icosphere(3.2, 5, {0.05, 0, 0});  // 81920 + 20480
-  const auto t0 = std::chrono::steady_clock::now();
   const LumenScores l = score_lumen(a, b, 0.1 * kMm);
-  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_NEAR(l.mean_mm, 0.2, 1e-3);
   EXPECT_NEAR(l.hausdorff95_mm, 0.245, 1e-3);
   EXPECT_NEAR(l.max_mm, 0.25, 1e-3);
-  // one point per triangle at least (the finer's edges are ~0.05 mm): ~0.2 s in Release, where
-  // brute force would test 10^10 point-triangle pairs. Under ASan (-O1) it measures ASan.
+  // one point per triangle at least (the finer's edges are ~0.05 mm); brute force would test
+  // 10^10 point-triangle pairs (no time is asserted here: speed belongs in benchmarks)
   EXPECT_GE(l.samples, 81920 + 20480);
-#if !defined(__SANITIZE_ADDRESS__)
-  EXPECT_LT(s, 2.0);
-#else
-  (void)s;
-#endif
 }
 
 TEST(LumenScores, RefusesBadInput) {
@@ -178,11 +170,9 @@ TEST(LumenScores, DiceOfCoaxialCylinders) {
 }
 
 TEST(LumenScores, DiceVisitsOnlyVoxelsNearTheTrees) {
-  // half a metre apart at 0.05 mm voxels: a dense grid would hold 10^13 voxels
-  const auto t0 = std::chrono::steady_clock::now();
+  // half a metre apart at 0.05 mm voxels: a dense grid would hold 10^13 voxels (and never end)
   const double dice = dice_of_trees(rod({0, 0, 0}, {10, 0, 0}, 1), rod({0, 500, 0}, {10, 500, 0}, 1), 0.05 * kMm);
   EXPECT_EQ(dice, 0.0);
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 0.5);
   // the aorta is left out by name
   VesselTree with_aorta = rod({0, 0, 0}, {10, 0, 0}, 1);
   with_aorta.branches.insert(with_aorta.branches.begin(), rod({0, 0, -40}, {0, 0, 40}, 12).branches[0]);

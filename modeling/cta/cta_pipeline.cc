@@ -44,8 +44,18 @@ std::vector<double> median_filter(const std::vector<double>& v, int window) {
 
 }  // namespace
 
+double estimated_memory_gb(const anatomy::Volume& ct) {
+  return double(ct.voxel_count()) * (2.0 + 1.0 + 0.25 * 28.0) / 1e9;
+}
+
 CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>& seeds_mm,
                          const CtaPipelineOptions& options, const StageProgress& progress) {
+  if (const double need = estimated_memory_gb(ct); need > options.memory_limit_gb) {
+    throw ModelingError(fmt::format(
+        "the CT's {} x {} x {} voxels would need about {:.2f} GB here (10 bytes a voxel), over the bound of {:.2f} GB: "
+        "crop it to the heart or resample it",
+        ct.dims[0], ct.dims[1], ct.dims[2], need, options.memory_limit_gb));
+  }
   CtaPipelineOptions o = options;
   const int threads = o.threads > 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
   o.segmentation.threads = o.clipping.threads = threads;
@@ -55,6 +65,7 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
   stage(&m, "segmentation", progress, [&](StageReport& r) {
     seg = segment_lumen(ct, seeds_mm, o.segmentation);
     r.figures = {{"seed_hu", seg.seed_hu},
+                 {"noise_hu", seg.noise_hu},
                  {"lower_hu", seg.lower_hu},
                  {"upper_hu", seg.upper_hu},
                  {"region_voxels", double(seg.region_voxels)},

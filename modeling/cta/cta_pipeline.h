@@ -40,6 +40,10 @@ struct CtaPipelineOptions {
   anatomy::LumenMeshSpec lumen;
   bool loft = true;
   int threads = 0;  // 0: all cores
+  // the memory the pipeline may take: a CT whose estimate is over it is refused before any work
+  // (estimate: the CT, a mask of it, and work on a crop of at most a quarter of it at ~28 bytes a
+  // voxel, i.e. 10 bytes a voxel of the CT)
+  double memory_limit_gb = 4.0;
 };
 
 // what one stage did: its time, its counts, and what a person should know
@@ -58,7 +62,11 @@ struct CtaModel {
 // called as each stage starts and ends (for a terminal's progress lines)
 using StageProgress = std::function<void(const StageReport& stage, bool finished)>;
 
-// throws ModelingError with the input at fault named (a seed, a CTA without coronaries)
+// the estimate above, in GB
+double estimated_memory_gb(const anatomy::Volume& ct);
+
+// throws ModelingError with the input at fault named (a seed, a CTA without coronaries, a CT over
+// the memory bound)
 CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Eigen::Vector3d>& seeds_mm,
                          const CtaPipelineOptions& options, const StageProgress& progress = nullptr);
 

@@ -51,6 +51,28 @@ double mean_hu_near(const anatomy::Volume& ct, const Eigen::Vector3d& p_mm, doub
   return n ? sum / n : std::numeric_limits<double>::quiet_NaN();
 }
 
+double noise_hu_near(const anatomy::Volume& ct, const Eigen::Vector3d& p_mm, double radius_mm) {
+  const Eigen::Vector3d c = ct.physical_to_index(p_mm);
+  double sum = 0, sum2 = 0;
+  int n = 0;
+  const Eigen::Vector3d r = Eigen::Vector3d::Constant(radius_mm).cwiseQuotient(ct.spacing_mm);
+  for (int64_t k = std::llround(c.z() - r.z()); k <= std::llround(c.z() + r.z()); ++k) {
+    for (int64_t j = std::llround(c.y() - r.y()); j <= std::llround(c.y() + r.y()); ++j) {
+      for (int64_t i = std::llround(c.x() - r.x()); i <= std::llround(c.x() + r.x()); ++i) {
+        if (i < 0 || j < 0 || k < 0 || i >= ct.dims[0] || j >= ct.dims[1] || k >= ct.dims[2]) continue;
+        if ((Eigen::Vector3d(i, j, k) - c).cwiseProduct(ct.spacing_mm).norm() > radius_mm) continue;
+        const double h = ct.hu(i, j, k);
+        sum += h;
+        sum2 += h * h;
+        ++n;
+      }
+    }
+  }
+  if (n < 2) return 0.0;
+  const double mean = sum / n;
+  return std::sqrt(std::max(0.0, sum2 / n - mean * mean));
+}
+
 LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eigen::Vector3d>& seeds_mm,
                                 const SegmentationOptions& o) {
   if (seeds_mm.empty()) throw ModelingError("no seed: give one point inside the ascending aorta (--seed x,y,z in mm)");
@@ -72,7 +94,11 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
     const Eigen::Vector3d c = ct.physical_to_index(p);
     starts.push_back(ct.linear_index(std::llround(c.x()), std::llround(c.y()), std::llround(c.z())));
   }
-  out.lower_hu = o.tissue_hu + o.lower_fraction * (out.seed_hu - o.tissue_hu);
+  // the noise, from the aorta around the first seed (uniform contrast there): a threshold fewer than
+  // noise_sigmas standard deviations above the tissue lets noise voxels of the myocardium connect
+  // into a region spanning the heart (measured: phantom 2 at 0.8 mm and 40 HU, 247 s, OV 0.02)
+  out.noise_hu = noise_hu_near(ct, seeds_mm[0], 3.0);
+  out.lower_hu = o.tissue_hu + std::max(o.lower_fraction * (out.seed_hu - o.tissue_hu), o.noise_sigmas * out.noise_hu);
   out.upper_hu = std::max(o.calcium_hu, out.lower_hu + 50);
 
   // the region within [lower, upper] connected to the seeds (breadth-first fill)

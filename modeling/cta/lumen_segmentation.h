@@ -18,7 +18,8 @@ namespace pcisim::modeling {
 struct SegmentationOptions {
   double min_seed_hu = 200;           // a seed must sit in contrast: mean HU within 1.5 mm above this
   double tissue_hu = 40;              // unenhanced soft tissue, the dark side of every lumen edge
-  double lower_fraction = 0.3;        // lower threshold = tissue + fraction (seed HU - tissue)
+  double lower_fraction = 0.3;        // lower threshold = tissue + fraction (seed HU - tissue),
+  double noise_sigmas = 3.5;          // and at least this many noise sigmas (measured at the seed) above tissue
   double calcium_hu = 650;            // upper threshold: brighter is calcium or bone, never lumen
   double max_region_fraction = 0.25;  // a region over this share of the volume is a leak (refused)
   int connectivity = 26;              // 6 (faces) or 26 (faces, edges, corners)
@@ -35,10 +36,14 @@ struct LumenSegmentation {
   FloatImage hu;                            // the CT's HU on the crop grid
   std::array<int64_t, 3> crop_lo{0, 0, 0};  // the crop's first voxel in the CT
   double seed_hu = 0;                       // mean HU around the first seed
+  double noise_hu = 0;                      // standard deviation of HU within 3 mm of the first seed
   double lower_hu = 0, upper_hu = 0;
   int64_t region_voxels = 0;  // after the region growing
   int level_set_iterations = 0;
 };
+
+// the standard deviation of HU within radius_mm of p_mm (0 with fewer than 2 voxels)
+double noise_hu_near(const anatomy::Volume& ct, const Eigen::Vector3d& p_mm, double radius_mm);
 
 // the mean HU within radius_mm of p_mm (nearest voxels); NaN when p_mm is outside the volume
 double mean_hu_near(const anatomy::Volume& ct, const Eigen::Vector3d& p_mm, double radius_mm);

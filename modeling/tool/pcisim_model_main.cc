@@ -155,14 +155,7 @@ int main(int argc, char** argv) {
     std::printf("  %lld x %lld x %lld voxels of %.2f x %.2f x %.2f mm (%.1f s)\n", (long long)ct.dims[0],
                 (long long)ct.dims[1], (long long)ct.dims[2], ct.spacing_mm.x(), ct.spacing_mm.y(), ct.spacing_mm.z(),
                 seconds_since(t0));
-    // memory: the CT, a mask of it, and the work on a crop of at most a quarter of it (~28 bytes a voxel)
-    const double need_gb = double(ct.voxel_count()) * (2.0 + 1.0 + 0.25 * 28.0) / 1e9;
-    if (need_gb > memory_gb) {
-      throw modeling::ModelingError(fmt::format(
-          "{}: {} x {} x {} voxels would need about {:.1f} GB here (10 bytes a voxel), over the bound of {:.1f} GB "
-          "(--memory-gb); crop the CT to the heart or resample it",
-          ct_path, ct.dims[0], ct.dims[1], ct.dims[2], need_gb, memory_gb));
-    }
+    o.memory_limit_gb = memory_gb;
     const auto t1 = std::chrono::steady_clock::now();
     modeling::CtaModel m = modeling::build_cta_model(ct, seed_mm, o, [](const modeling::StageReport& r, bool done) {
       if (!done) {

@@ -16,15 +16,22 @@ namespace {
 using Eigen::Vector3d;
 
 // a CTA small enough for a unit test: 0.5 mm voxels over the heart, a 60 % stenosis
-anatomy::PhantomCta small_cta(uint32_t seed, bool with_coronaries = true, double stenosis = 0.6) {
+anatomy::PhantomCta small_cta(uint32_t seed, bool with_coronaries = true, double stenosis = 0.6,
+                              const Eigen::Matrix3d& direction = Eigen::Matrix3d::Identity(),
+                              const Vector3d& spacing_mm = Vector3d(0.5, 0.5, 0.5)) {
   anatomy::PhantomCtaSpec spec;
   spec.seed = seed;
-  spec.dims = {260, 260, 230};
-  spec.spacing_mm = Vector3d(0.5, 0.5, 0.5);
+  for (int a = 0; a < 3; ++a)
+    spec.dims[a] = static_cast<int64_t>(std::lround(Vector3d(130, 130, 115)[a] / spacing_mm[a]));
+  spec.spacing_mm = spacing_mm;
+  spec.direction = direction;
   spec.with_coronaries = with_coronaries;
   spec.stenosis_fraction = stenosis;
   return anatomy::make_phantom_cta(spec);
 }
+
+// the distance (mm) from p_mm to the nearest centerline of the tree, the aorta left out
+double distance_to_tree_mm(const anatomy::VesselTree& t, const Vector3d& p_mm);
 
 // distance from p (m) to a branch's polyline (m)
 double distance_to(const anatomy::VesselBranch& b, const Vector3d& p) {
@@ -33,6 +40,14 @@ double distance_to(const anatomy::VesselBranch& b, const Vector3d& p) {
     const Vector3d a = b.points[i].position_m, ab = b.points[i + 1].position_m - a;
     const double t = std::clamp((p - a).dot(ab) / std::max(ab.squaredNorm(), 1e-18), 0.0, 1.0);
     best = std::min(best, (a + t * ab - p).norm());
+  }
+  return best;
+}
+
+double distance_to_tree_mm(const anatomy::VesselTree& t, const Vector3d& p_mm) {
+  double best = 1e300;
+  for (const auto& b : t.branches) {
+    if (b.name != "aorta") best = std::min(best, distance_to(b, p_mm * 1e-3) * 1e3);
   }
   return best;
 }
@@ -84,6 +99,112 @@ TEST(CtaPipeline, DISABLED_EachMajorVesselIsFollowedPastHalfItsLength) {
     EXPECT_GT(anatomy::branch_length_m(m.model.vessels.branches[mine]),
               0.5 * anatomy::branch_length_m(cta.truth.branches[truth]))
         << name;
+  }
+}
+
+// a 95 % stenosis leaves no channel of contrast: the tree stops there, and the report says where.
+// Known failure, issue #13 open: on this phantom the first diagonal leaves ~4 mm before the
+// stenosis, so the LAD's stub to it is shorter than a branch and is taken for a bump; the report
+// names no stop near the stenosis.
+TEST(CtaPipeline, DISABLED_ATreeStoppedByATightStenosisSaysWhere) {
+  const anatomy::PhantomCta cta = small_cta(2, true, 0.95);
+  const CtaModel m = build_cta_model(cta.ct, {cta.aortic_seed_mm}, CtaPipelineOptions{});
+  const Vector3d at = cta.facts.stenosis_center_mm;
+  bool said = false;
+  for (const auto& st : m.stages) {
+    for (const auto& note : st.notes) {
+      double x, y, z;
+      if (std::sscanf(note.c_str(), "a vessel stops at (%lf, %lf, %lf)", &x, &y, &z) == 3) {
+        std::printf("%s (stenosis at %.1f, %.1f, %.1f)\n", note.c_str(), at.x(), at.y(), at.z());
+        if ((Vector3d(x, y, z) - at).norm() < 6.0) said = true;
+      }
+    }
+  }
+  EXPECT_TRUE(said) << "no note of a vessel stopping within 6 mm of the stenosis on " << cta.facts.stenosis_branch;
+}
+
+// a cardiac vein runs along an artery, touching it: none of it becomes part of the tree
+TEST(CtaPipeline, AVeinTouchingAnArteryIsNotMergedIntoTheTree) {
+  const anatomy::PhantomCta cta = small_cta(2);
+  const CtaModel m = build_cta_model(cta.ct, {cta.aortic_seed_mm}, CtaPipelineOptions{});
+  const auto& vein = cta.facts.vein_points_mm;
+  ASSERT_GT(vein.size(), 10u);
+  // the vein's centre lies (artery radius + vein radius) from the artery's: a tree point on the
+  // vein would be within its radius of it
+  int on_vein = 0;
+  for (size_t i = vein.size() / 5; i < vein.size() * 4 / 5; ++i) {
+    if (distance_to_tree_mm(m.model.vessels, vein[i]) < 0.5 * cta.facts.vein_radius_mm) ++on_vein;
+  }
+  EXPECT_EQ(on_vein, 0) << "of " << vein.size() * 3 / 5 << " vein points beside " << cta.facts.vein_beside;
+}
+
+// a calcified plaque touches the lumen: the model's lumen does not grow into it
+TEST(CtaPipeline, ACalcifiedPlaqueIsNotTakenForLumen) {
+  const anatomy::PhantomCta cta = small_cta(1);
+  ASSERT_FALSE(cta.facts.plaques.empty());
+  const CtaModel m = build_cta_model(cta.ct, {cta.aortic_seed_mm}, CtaPipelineOptions{});
+  for (const auto& plaque : cta.facts.plaques) {
+    // the lumen surface nearest the plaque's centre: centerline distance minus the model's radius
+    double best = 1e300;
+    for (const auto& b : m.model.vessels.branches) {
+      if (b.name == "aorta") continue;
+      for (const auto& p : b.points)
+        best = std::min(best, (p.position_m * 1e3 - plaque.center_mm).norm() - p.radius_m * 1e3);
+    }
+    std::printf(
+        "plaque on %s at %.1f mm: the model's lumen keeps %.2f mm from its centre (semi-axes %.1f/%.1f/%.1f mm)\n",
+        plaque.branch.c_str(), plaque.arc_length_mm, best, plaque.semi_axes_mm.x(), plaque.semi_axes_mm.y(),
+        plaque.semi_axes_mm.z());
+    // the plaque's radial semi-axis is the least: the model's lumen stays outside half of it
+    EXPECT_GT(best, 0.5 * plaque.semi_axes_mm.y()) << plaque.branch;
+  }
+}
+
+// slices stored feet first: the same voxels in another order give the same model, in physical
+// millimetres (every stage works through the CT's grid); and anisotropic voxels
+TEST(CtaPipeline, AFlippedDirectionGivesTheSameTreeAndAnisotropicVoxelsWork) {
+  const Vector3d spacing(0.45, 0.5, 0.6);
+  const anatomy::PhantomCta a = small_cta(2, true, 0.6, Eigen::Matrix3d::Identity(), spacing);
+  const anatomy::PhantomCta b = small_cta(2, true, 0.6, Eigen::Vector3d(1, 1, -1).asDiagonal(), spacing);
+  ASSERT_LT(b.ct.direction(2, 2), 0);
+  const CtaModel ma = build_cta_model(a.ct, {a.aortic_seed_mm}, CtaPipelineOptions{});
+  const CtaModel mb = build_cta_model(b.ct, {b.aortic_seed_mm}, CtaPipelineOptions{});
+  // the same named vessels, on each other (ties between equal-cost voxel paths break in index
+  // order, so small side branches may come and go; the named vessels do not move)
+  for (const char* name : {"LM", "LAD", "LCx", "RCA"}) {
+    const int x = ma.model.vessels.find(name), y = mb.model.vessels.find(name);
+    ASSERT_GE(x, 0) << name;
+    ASSERT_GE(y, 0) << name;
+    double sum = 0;
+    for (const auto& p : mb.model.vessels.branches[y].points) {
+      sum += distance_to(ma.model.vessels.branches[x], p.position_m) * 1e3;
+    }
+    const double mean_mm = sum / mb.model.vessels.branches[y].points.size();
+    std::printf("%s: flipped against stored as acquired, mean distance %.3f mm\n", name, mean_mm);
+    EXPECT_LT(mean_mm, 0.2) << name;
+  }
+  // and the anisotropic model lies on the truth where the named vessels are found
+  const auto& tree = ma.model.vessels;
+  for (const char* name : {"LAD", "RCA"}) {
+    const int mine = tree.find(name), t = a.truth.find(name);
+    ASSERT_GE(mine, 0) << name;
+    double sum = 0;
+    for (const auto& p : tree.branches[mine].points) sum += distance_to(a.truth.branches[t], p.position_m) * 1e3;
+    EXPECT_LT(sum / tree.branches[mine].points.size(), 0.8) << name;
+  }
+}
+
+TEST(CtaPipeline, ACtOverTheMemoryBoundIsRefusedWithTheNumbers) {
+  const anatomy::Volume ct =
+      anatomy::Volume::make({200, 200, 100}, Vector3d::Constant(0.5), Vector3d::Zero(), anatomy::VoxelType::kInt16);
+  CtaPipelineOptions o;
+  o.memory_limit_gb = 0.01;
+  try {
+    build_cta_model(ct, {Vector3d(50, 50, 25)}, o);
+    FAIL() << "no error";
+  } catch (const ModelingError& e) {
+    EXPECT_NE(std::string(e.what()).find("200 x 200 x 100 voxels"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("0.04 GB"), std::string::npos) << e.what();
   }
 }
 

@@ -69,9 +69,18 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
                  {"lower_hu", seg.lower_hu},
                  {"upper_hu", seg.upper_hu},
                  {"region_voxels", double(seg.region_voxels)},
+                 {"bridges", double(seg.bridges.size())},
+                 {"bridging_s", seg.bridging_seconds},
                  {"level_set_iterations", double(seg.level_set_iterations)},
                  {"lumen_voxels", double(seg.mask.count())},
                  {"crop_voxels", double(seg.mask.grid.size())}};
+    for (const Bridge& b : seg.bridges) {
+      r.notes.push_back(fmt::format(
+          "a gap of {:.1f} mm bridged from ({:.1f}, {:.1f}, {:.1f}) to ({:.1f}, {:.1f}, {:.1f}) mm: the lumen narrows "
+          "there below what the CT resolves (a tight stenosis or an occlusion); the vessel goes on {:.0f} mm beyond",
+          b.gap_mm, b.from_mm.x(), b.from_mm.y(), b.from_mm.z(), b.to_mm.x(), b.to_mm.y(), b.to_mm.z(),
+          b.piece_length_mm));
+    }
   });
 
   Clipping clip;

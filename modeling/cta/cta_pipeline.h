@@ -3,6 +3,7 @@
 // and one seed in the ascending aorta in, a case (centerlines with radii and names, the lofted
 // lumen, the CT) out. Stages, each its own object:
 //   (a) segment_lumen         coarse lumen [heart eq 1]          modeling/cta/lumen_segmentation.h
+//       bridge_gaps           vessels past a stenosis joined     modeling/cta/gap_bridging.h
 //   (b) clip_to_coronaries    aorta + coronary trees             modeling/cta/coronary_clipping.h
 //   (c) trace_centerlines     minimal paths with topology        modeling/cta/centerline_tracing.h
 //       fit_and_sample        cubic B-spline per branch          modeling/cta/centerline_spline.h

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <chrono>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -145,6 +147,11 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
   }
   out.region_voxels = static_cast<int64_t>(queue.size());
   std::vector<int64_t>().swap(queue);
+
+  // vessels the region lost at a stenosis too tight to see
+  const auto t0 = std::chrono::steady_clock::now();
+  out.bridges = bridge_gaps(ct, out.lower_hu, out.upper_hu, &region, o.bridging);
+  out.bridging_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   // crop to the region and run the level set there
   std::array<int64_t, 3> dims;

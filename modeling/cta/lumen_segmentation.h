@@ -7,9 +7,12 @@
 // sparse-field level set (with its curvature term) can then refine it (level_set.iterations > 0);
 // it is off by default, having measured to cut thin vessels apart. Thresholds come from the
 // seeds: lower a fraction of the way from the tissue to the seed's HU, upper below calcium.
+// Before cropping, pieces of lumen the region lost at a tight stenosis are bridged to it
+// (gap_bridging.h).
 #include <Eigen/Core>
 #include <vector>
 #include "anatomy/volume/volume.h"
+#include "modeling/cta/gap_bridging.h"
 #include "modeling/image/image3.h"
 #include "modeling/image/itk_filters.h"
 
@@ -24,6 +27,8 @@ struct SegmentationOptions {
   double max_region_fraction = 0.25;  // a region over this share of the volume is a leak (refused)
   int connectivity = 26;              // 6 (faces) or 26 (faces, edges, corners)
   int margin_voxels = 6;              // the crop around the region
+  // vessels beyond a stenosis too tight to see joined to the region before it is cropped
+  GapBridgingOptions bridging;
   // thresholds are filled in from the above. Off by default (iterations 0): on the phantom CTAs
   // at 0.6 mm voxels it cut 2-3 voxel wide vessels apart (the LCx kept 31 of 82 mm, with or
   // without its curvature term), where the 26-connected region keeps them; docs/modeling.md
@@ -39,6 +44,8 @@ struct LumenSegmentation {
   double noise_hu = 0;                      // standard deviation of HU within 3 mm of the first seed
   double lower_hu = 0, upper_hu = 0;
   int64_t region_voxels = 0;  // after the region growing
+  std::vector<Bridge> bridges;
+  double bridging_seconds = 0;
   int level_set_iterations = 0;
 };
 

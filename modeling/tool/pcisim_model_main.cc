@@ -105,6 +105,11 @@ int main(int argc, char** argv) {
                    "weight of the mean-curvature term of that level set (smooths, and thins narrow vessels)")
       ->check(CLI::Range(0.0, 10.0));
   knobs
+      ->add_option("--max-gap-mm", o.segmentation.bridging.max_gap_mm,
+                   "the widest gap in a vessel's contrast (a stenosis too tight to see) bridged to the vessel beyond "
+                   "it (mm); 0 bridges none")
+      ->check(CLI::Range(0.0, 30.0));
+  knobs
       ->add_option("--section-spacing-mm", o.spline.sample_spacing_mm,
                    "distance between cross-sections along each centerline (mm)")
       ->check(CLI::Range(0.1, 5.0));
@@ -128,6 +133,7 @@ int main(int argc, char** argv) {
   ph->add_flag("--origin-frame", origin_frame, "the heart centre at the origin instead of scanner coordinates");
   CLI11_PARSE(app, argc, argv);
   o.threads = threads;
+  o.segmentation.bridging.enabled = o.segmentation.bridging.max_gap_mm > 0;
 
   try {
     if (make_phantom_cta) {

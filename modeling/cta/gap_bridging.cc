@@ -36,19 +36,33 @@ std::vector<Piece> vessel_like_pieces(const anatomy::Volume& ct, double lower_hu
     const float h = ct.type == anatomy::VoxelType::kInt16 ? float(ct.hu_i16[n]) : ct.hu_f32[n];
     return h >= lower_hu && h <= upper_hu;
   };
+  auto hu = [&](int64_t n) { return ct.type == anatomy::VoxelType::kInt16 ? float(ct.hu_i16[n]) : ct.hu_f32[n]; };
   std::vector<Piece> out;
   std::vector<int64_t> queue;
   for (int64_t n0 = 0; n0 < g.size(); ++n0) {
     if (!candidate(n0)) continue;
     queue.assign(1, n0);
     region->v[n0] = kSeen;
+    // its outer neighbours, and how many of them are brighter than lumen (bone's cortex, calcium)
+    // and how many neighbours its voxels have within it (solid lumen: most; noise strung
+    // together through voxel corners: a few)
+    int64_t shell = 0, bright = 0, inner = 0;
     for (size_t head = 0; head < queue.size(); ++head) {
       const auto [i, j, k] = g.ijk(queue[head]);
       for (const auto& d : nb.d) {
         const int64_t a = i + d[0], b = j + d[1], c = k + d[2];
         if (!g.inside(a, b, c)) continue;
         const int64_t m = g.index(a, b, c);
-        if (!candidate(m)) continue;
+        if (region->v[m] == kSeen) {
+          ++inner;
+          continue;
+        }
+        if (!candidate(m)) {
+          ++shell;
+          bright += hu(m) > upper_hu ? 1 : 0;
+          continue;
+        }
+        ++inner;
         region->v[m] = kSeen;
         queue.push_back(m);
       }
@@ -56,6 +70,9 @@ std::vector<Piece> vessel_like_pieces(const anatomy::Volume& ct, double lower_hu
     // too small to be min_length_mm of a vessel 0.5 mm in radius
     const double volume_mm3 = double(queue.size()) * voxel_mm3;
     if (volume_mm3 < M_PI * 0.25 * o.min_length_mm) continue;
+    // marrow inside a bone's cortex, not a vessel in fat (a calcified plaque touches a small part)
+    if (double(bright) > o.max_bright_shell * double(shell)) continue;
+    if (double(inner) < o.min_mean_neighbours * double(queue.size())) continue;
     // its extent along its main axis (principal component of the voxel positions)
     Vector3d mean = Vector3d::Zero();
     for (int64_t n : queue) mean += g.physical_mm(ijk_of(g, n));
@@ -84,8 +101,8 @@ std::vector<Piece> vessel_like_pieces(const anatomy::Volume& ct, double lower_hu
 // the nearest pair (region voxel p, piece voxel q) within max_gap_mm: a search outward from the
 // piece over the 26-neighbour graph (Dijkstra; its path lengths overestimate straight distances
 // by at most ~8 %, so the search runs 10 % farther). False when the region is not that near.
-bool nearest_region_voxel(const Mask& region, const Piece& piece, const Neighbours26& nb, double max_gap_mm,
-                          int64_t* p, int64_t* q) {
+bool nearest_region_voxel(const Mask& region, const Piece& piece, const Neighbours26& nb, double max_gap_mm, int64_t* p,
+                          int64_t* q) {
   const ImageGrid& g = region.grid;
   using Item = std::pair<double, int64_t>;
   std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
@@ -201,8 +218,8 @@ std::vector<Bridge> bridge_gaps(const anatomy::Volume& ct, double lower_hu, doub
       // the region ends at p as a thin vessel, its voxels behind p
       const BallLook at_p = look_around(g, p_ijk, o.end_ball_mm, [&](int64_t n) { return region->v[n] == kRegion; });
       const Vector3d behind = p_mm - at_p.centroid_mm;
-      const bool region_ends = gap_mm <= o.max_gap_mm && at_p.fill <= o.max_end_fill &&
-                               behind.dot(u) >= cos_max * behind.norm();
+      const bool region_ends =
+          gap_mm <= o.max_gap_mm && at_p.fill <= o.max_end_fill && behind.dot(u) >= cos_max * behind.norm();
       // the piece starts at q the same way, its voxels beyond q
       for (int64_t n : piece.voxels) region->v[n] = kThisPiece;
       const BallLook at_q = look_around(g, q_ijk, o.end_ball_mm, [&](int64_t n) { return region->v[n] == kThisPiece; });

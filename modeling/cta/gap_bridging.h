@@ -4,7 +4,11 @@
 // there and the vessel beyond it is lost. Here each piece of contrast HU that the region did not
 // reach is joined to it when
 //  - it is a vessel: at least min_length_mm long along its main axis and no wider than
-//    max_radius_mm (its volume over pi times its length), so chambers and noise are not;
+//    max_radius_mm (its volume over pi times its length), so chambers and noise are not, and
+//    under max_bright_shell of its outer neighbours are brighter than lumen (the marrow of a rib
+//    or a vertebra sits inside cortical bone, a vessel in fat or muscle) and its voxels have on
+//    average at least min_mean_neighbours of their 26 neighbours in it (a lumen is solid; noise
+//    above the threshold in tissue just below it strings together through corners, ~4-5);
 //  - its nearest point lies within max_gap_mm of the region;
 //  - the region ends there, as a thin vessel: within end_ball_mm of that end the region fills
 //    under max_end_fill of the ball (the aorta's or a chamber's wall fills half), and its voxels
@@ -25,6 +29,8 @@ struct GapBridgingOptions {
   double max_gap_mm = 10.0;
   double min_length_mm = 10.0;
   double max_radius_mm = 3.0;
+  double max_bright_shell = 0.1;
+  double min_mean_neighbours = 8;
   double end_ball_mm = 5.0;
   double max_end_fill = 0.3;
   double max_angle_deg = 40.0;

@@ -15,8 +15,8 @@ constexpr double kLumenHu = 300, kTissueHu = 40, kLower = 150, kUpper = 650;
 
 // a 60 mm cube at 0.5 mm voxels, tissue everywhere, lumen where `inside` says
 anatomy::Volume paint(const std::function<bool(const Vector3d&)>& inside) {
-  anatomy::Volume v = anatomy::Volume::make({120, 120, 120}, Vector3d::Constant(0.5), Vector3d::Zero(),
-                                            anatomy::VoxelType::kInt16);
+  anatomy::Volume v =
+      anatomy::Volume::make({120, 120, 120}, Vector3d::Constant(0.5), Vector3d::Zero(), anatomy::VoxelType::kInt16);
   for (int64_t k = 0; k < 120; ++k)
     for (int64_t j = 0; j < 120; ++j)
       for (int64_t i = 0; i < 120; ++i)
@@ -81,6 +81,32 @@ TEST(GapBridging, AChamberNearAVesselEndIsNotJoined) {
   const int64_t before = region.count();
   EXPECT_TRUE(bridge_gaps(v, kLower, kUpper, &region, GapBridgingOptions{}).empty());
   EXPECT_EQ(region.count(), before);
+}
+
+TEST(GapBridging, BoneMarrowOrNoiseAheadOfAVesselEndIsNotJoined) {
+  const Vector3d a(5, 30, 30), b(25, 30, 30), c(32, 30, 30), d(55, 30, 30);
+  // a rib ahead: marrow of lumen HU inside a cortex brighter than lumen
+  {
+    anatomy::Volume v = paint([&](const Vector3d& p) { return in_tube(p, a, b, 1.5) || in_tube(p, c, d, 2.0); });
+    for (int64_t n = 0; n < v.voxel_count(); ++n) {
+      const auto p = v.index_to_physical_mm(Vector3d(n % 120, (n / 120) % 120, n / 14400));
+      if (!in_tube(p, c, d, 2.0) && in_tube(p, c, d, 3.0) && !in_tube(p, a, b, 1.5)) v.hu_i16[n] = 900;
+    }
+    Mask region = region_of(v, a, b, 1.5);
+    EXPECT_TRUE(bridge_gaps(v, kLower, kUpper, &region, GapBridgingOptions{}).empty()) << "rib";
+  }
+  // noise ahead: one voxel in five of a 3 mm tube above the threshold, strung through corners
+  {
+    uint32_t state = 12345;
+    auto coin = [&] {
+      state = state * 1664525u + 1013904223u;
+      return (state >> 8) % 5 == 0;
+    };
+    const anatomy::Volume v =
+        paint([&](const Vector3d& p) { return in_tube(p, a, b, 1.5) || (in_tube(p, c, d, 3.0) && coin()); });
+    Mask region = region_of(v, a, b, 1.5);
+    EXPECT_TRUE(bridge_gaps(v, kLower, kUpper, &region, GapBridgingOptions{}).empty()) << "noise";
+  }
 }
 
 TEST(GapBridging, AVesselBesideTheRegionOrTooFarIsNotJoined) {

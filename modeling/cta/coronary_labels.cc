@@ -138,7 +138,7 @@ anatomy::VesselTree label_coronary_trees(const std::vector<anatomy::CenterlinePo
     const double aortic_r_near = ap[nearest_aorta_point(tree.aortic_centre_mm)].radius_m * 1e3;
     size_t first_clear = 0;
     while (first_clear + 2 < b[0].points_mm.size() &&
-           (b[0].points_mm[first_clear] - tree.aortic_centre_mm).norm() < aortic_r_near + 3.0) {
+           (b[0].points_mm[first_clear] - tree.aortic_centre_mm).norm() < aortic_r_near + o.ostium_clearance_mm) {
       ++first_clear;
     }
     for (const auto& c : b) {
@@ -160,7 +160,11 @@ anatomy::VesselTree label_coronary_trees(const std::vector<anatomy::CenterlinePo
     // aortic centerline (the aorta's ridge is flat along its axis, so "the centre beside the
     // ostium" alone could lie anywhere along the root)
     const Vector3d p0 = b[0].points_mm.front();
-    const Vector3d d0 = direction(b[0].points_mm, 0, o.direction_points);
+    int span = 1;
+    for (double arc = 0; span + 1 < int(b[0].points_mm.size()) && arc < o.ostium_direction_mm; ++span) {
+      arc += (b[0].points_mm[span] - b[0].points_mm[span - 1]).norm();
+    }
+    const Vector3d d0 = direction(b[0].points_mm, 0, span);
     int on_aorta = 0;
     double best_gap = 1e300, back = 0;
     for (size_t i = 0; i < ap.size(); ++i) {

@@ -43,6 +43,11 @@ struct LabelOptions {
   double point_spacing_mm = 0.5;  // of the piece put in front from the aortic centre
   double straighter_by_deg = 10;  // a side branch straighter than the continuation by this takes its place
   int direction_points = 8;       // directions at a branch point are taken over this many points
+  // a tree's first samples within the aortic radius plus this of the aortic centre bend into the
+  // ostium's funnel: they are replaced by the vessel's line, its direction taken over the next
+  // ostium_direction_mm of the vessel
+  double ostium_clearance_mm = 4.5;
+  double ostium_direction_mm = 4;
 };
 
 // the named tree in metres, parents before children, "aorta" first

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <queue>
-#include <unordered_map>
+#include <limits>
 
 namespace pcisim::modeling {
 namespace {
@@ -100,37 +100,64 @@ std::vector<Piece> vessel_like_pieces(const anatomy::Volume& ct, double lower_hu
 
 // the nearest pair (region voxel p, piece voxel q) within max_gap_mm: a search outward from the
 // piece over the 26-neighbour graph (Dijkstra; its path lengths overestimate straight distances
-// by at most ~8 %, so the search runs 10 % farther). False when the region is not that near.
+// by at most ~8 %, so the search runs 10 % farther), on the box around the piece that the search
+// can reach. False when the region is not that near.
 bool nearest_region_voxel(const Mask& region, const Piece& piece, const Neighbours26& nb, double max_gap_mm, int64_t* p,
                           int64_t* q) {
   const ImageGrid& g = region.grid;
-  using Item = std::pair<double, int64_t>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
-  std::unordered_map<int64_t, std::pair<double, int64_t>> best;  // voxel -> (path length, source)
+  const double reach_mm = 1.1 * max_gap_mm;
+  // the box: the piece's voxels' box grown by the reach
+  std::array<int64_t, 3> lo{g.dims[0], g.dims[1], g.dims[2]}, hi{-1, -1, -1};
   for (int64_t n : piece.voxels) {
-    best[n] = {0.0, n};
-    open.push({0.0, n});
+    const auto ijk = g.ijk(n);
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], ijk[a]), hi[a] = std::max(hi[a], ijk[a]);
+  }
+  std::array<int64_t, 3> dims;
+  for (int a = 0; a < 3; ++a) {
+    const int64_t r = static_cast<int64_t>(std::ceil(reach_mm / g.spacing_mm[a]));
+    lo[a] = std::max<int64_t>(0, lo[a] - r);
+    hi[a] = std::min<int64_t>(g.dims[a] - 1, hi[a] + r);
+    dims[a] = hi[a] - lo[a] + 1;
+  }
+  const ImageGrid box = g.crop(lo, dims);
+  auto to_box = [&](int64_t n) {
+    const auto [i, j, k] = g.ijk(n);
+    return box.index(i - lo[0], j - lo[1], k - lo[2]);
+  };
+  auto to_grid = [&](int64_t m) {
+    const auto [i, j, k] = box.ijk(m);
+    return g.index(i + lo[0], j + lo[1], k + lo[2]);
+  };
+  std::vector<float> dist(box.size(), std::numeric_limits<float>::infinity());
+  std::vector<int32_t> source(box.size(), -1);  // the piece voxel (box index) each path starts from
+  using Item = std::pair<float, int32_t>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
+  for (int64_t n : piece.voxels) {
+    const int32_t m = static_cast<int32_t>(to_box(n));
+    dist[m] = 0;
+    source[m] = m;
+    open.push({0.0f, m});
   }
   while (!open.empty()) {
-    const auto [d, n] = open.top();
+    const auto [d, m] = open.top();
     open.pop();
-    if (d > best[n].first) continue;
-    if (d > 1.1 * max_gap_mm) return false;
-    if (region.v[n] == kRegion) {
-      *p = n;
-      *q = best[n].second;
+    if (d > dist[m]) continue;
+    if (d > reach_mm) return false;
+    if (region.v[to_grid(m)] == kRegion) {
+      *p = to_grid(m);
+      *q = to_grid(source[m]);
       return true;
     }
-    const auto [i, j, k] = g.ijk(n);
+    const auto [i, j, k] = box.ijk(m);
     for (int s = 0; s < 26; ++s) {
       const int64_t a = i + nb.d[s][0], b = j + nb.d[s][1], c = k + nb.d[s][2];
-      if (!g.inside(a, b, c)) continue;
-      const int64_t m = g.index(a, b, c);
-      const double dm = d + nb.length_mm[s];
-      auto it = best.find(m);
-      if (it != best.end() && it->second.first <= dm) continue;
-      best[m] = {dm, best[n].second};
-      open.push({dm, m});
+      if (!box.inside(a, b, c)) continue;
+      const int32_t x = static_cast<int32_t>(box.index(a, b, c));
+      const float dx = d + static_cast<float>(nb.length_mm[s]);
+      if (dx >= dist[x]) continue;
+      dist[x] = dx;
+      source[x] = source[m];
+      open.push({dx, x});
     }
   }
   return false;
@@ -166,6 +193,14 @@ BallLook look_around(const ImageGrid& g, const Vector3d& p_ijk, double ball_mm, 
   return out;
 }
 
+// the q-quantile of v (reordered); 0 when empty
+float percentile(std::vector<float>& v, double q) {
+  if (v.empty()) return 0;
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * double(v.size())));
+  std::nth_element(v.begin(), v.begin() + k, v.end());
+  return v[k];
+}
+
 // marks the voxels within radius_mm of the segment a-b (physical mm); returns how many were new
 int64_t fill_cylinder(Mask* mask, const Vector3d& a_mm, const Vector3d& b_mm, double radius_mm) {
   const ImageGrid& g = mask->grid;
@@ -197,6 +232,7 @@ std::vector<Bridge> bridge_gaps(const anatomy::Volume& ct, double lower_hu, doub
   std::vector<Bridge> bridges;
   if (!o.enabled) return bridges;
   const ImageGrid& g = region->grid;
+  auto hu = [&](int64_t n) { return ct.type == anatomy::VoxelType::kInt16 ? float(ct.hu_i16[n]) : ct.hu_f32[n]; };
   const Neighbours26 nb(g.spacing_mm);
   std::vector<Piece> pieces = vessel_like_pieces(ct, lower_hu, upper_hu, region, o);
   const double cos_max = std::cos(o.max_angle_deg * M_PI / 180.0);
@@ -226,7 +262,17 @@ std::vector<Bridge> bridge_gaps(const anatomy::Volume& ct, double lower_hu, doub
       for (int64_t n : piece.voxels) region->v[n] = kSeen;
       const Vector3d beyond = at_q.centroid_mm - q_mm;
       const bool piece_starts = at_q.fill <= o.max_end_fill && beyond.dot(u) >= cos_max * beyond.norm();
-      if (!region_ends || !piece_starts) {
+      // the same contrast on both sides: a vessel beyond a stenosis fills as the vessel before it;
+      // costal cartilage (~150 HU) or a vein does not
+      std::vector<float> end_hu, piece_hu;
+      const Vector3d r = (o.end_ball_mm / g.spacing_mm.array()).ceil().matrix();
+      for (int64_t k = int64_t(p_ijk.z() - r.z()); k <= int64_t(p_ijk.z() + r.z()); ++k)
+        for (int64_t j = int64_t(p_ijk.y() - r.y()); j <= int64_t(p_ijk.y() + r.y()); ++j)
+          for (int64_t i = int64_t(p_ijk.x() - r.x()); i <= int64_t(p_ijk.x() + r.x()); ++i)
+            if (g.inside(i, j, k) && region->v[g.index(i, j, k)] == kRegion) end_hu.push_back(hu(g.index(i, j, k)));
+      for (int64_t n : piece.voxels) piece_hu.push_back(hu(n));
+      const bool same_contrast = percentile(piece_hu, 0.75) >= o.min_contrast_ratio * percentile(end_hu, 0.75);
+      if (!region_ends || !piece_starts || !same_contrast) {
         left.push_back(std::move(piece));
         continue;
       }

@@ -13,7 +13,9 @@
 //  - the region ends there, as a thin vessel: within end_ball_mm of that end the region fills
 //    under max_end_fill of the ball (the aorta's or a chamber's wall fills half), and its voxels
 //    there lie behind the end, within max_angle_deg of the line across the gap; the piece starts
-//    there the same way, on the far side.
+//    there the same way, on the far side;
+//  - it holds the same contrast: the 75th percentile of its HU at least min_contrast_ratio of that
+//    of the region within end_ball_mm of the end (costal cartilage at ~150 HU, a vein, are darker).
 // The gap is filled by a thin cylinder (bridge_radius_mm), the piece is added, and each bridge is
 // reported: a stenosis too tight to see, or an occlusion, at that place. The line across the gap
 // is straight; the radius measured there later (stage d) is the narrow one the CT shows.
@@ -34,6 +36,7 @@ struct GapBridgingOptions {
   double end_ball_mm = 5.0;
   double max_end_fill = 0.3;
   double max_angle_deg = 40.0;
+  double min_contrast_ratio = 0.75;
   double bridge_radius_mm = 0.5;
   int passes = 2;  // a piece joined in one pass may bring the next one within reach
 };

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <string>
 
 #include "anatomy/mesh/mesh_io.h"
 #include "anatomy/phantom/coronary_phantom.h"
@@ -114,6 +115,30 @@ TEST(LumenSurfaceTest, YBifurcationIsOneClosedGenusZeroSurface) {
   EXPECT_EQ(count_components(m), 1);
   EXPECT_EQ(euler_characteristic(m), 2);
   EXPECT_GT(enclosed_volume_m3(m), 0.0);
+}
+
+// a shell of overlapping spheres encloses a void: its inner surface is dropped, the void filled
+TEST(LumenSurfaceTest, AnEnclosedPocketIsDropped) {
+  VesselTree tree;
+  const int n = 200;
+  for (int i = 0; i < n; ++i) {
+    // a Fibonacci sphere of radius 3 mm, spheres of 0.8 mm about 0.75 mm apart
+    const double z = 1.0 - 2.0 * (i + 0.5) / n, rho = std::sqrt(1.0 - z * z);
+    const double a = i * std::numbers::pi * (3.0 - std::sqrt(5.0));
+    VesselBranch b;
+    b.name = "s" + std::to_string(i);
+    b.points.push_back({3e-3 * Eigen::Vector3d(rho * std::cos(a), rho * std::sin(a), z), 0.8e-3});
+    tree.branches.push_back(b);
+  }
+  StitchedLumenStats stats;
+  const TriangleMesh m = stitch_lumen(tree, {}, &stats);
+  EXPECT_EQ(stats.cavities_removed, 1u);
+  EXPECT_EQ(check_closed_manifold(m), "");
+  EXPECT_EQ(count_components(m), 1);
+  EXPECT_EQ(euler_characteristic(m), 2);
+  // the filled ball: close to a sphere of radius 3.8 mm (bumpy, so a little less)
+  const double ball = 4.0 / 3.0 * std::numbers::pi * std::pow(3.8e-3, 3);
+  EXPECT_NEAR(enclosed_volume_m3(m), ball, 0.1 * ball);
 }
 
 TEST(LumenSurfaceTest, CoronaryPhantomIsOneClosedGenusZeroSurface) {

@@ -199,9 +199,21 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
 
   if (o.loft) {
     stage(&m, "loft", progress, [&](StageReport& r) {
-      m.model.lumen = anatomy::loft_lumen(m.model.vessels, o.lumen);
-      r.figures = {{"vertices", double(m.model.lumen.vertices_m.size())},
-                   {"triangles", double(m.model.lumen.triangles.size())}};
+      if (o.stitched) {
+        anatomy::StitchedLumenStats st;
+        m.model.lumen = anatomy::stitch_lumen(m.model.vessels, o.stitched_lumen, &st);
+        r.figures = {{"vertices", double(m.model.lumen.vertices_m.size())},
+                     {"triangles", double(m.model.lumen.triangles.size())},
+                     {"components", double(anatomy::count_components(m.model.lumen))},
+                     {"spacing_mm", st.spacing_m * 1e3},
+                     {"memory_mb", st.memory_bytes / 1e6},
+                     {"cavities_removed", double(st.cavities_removed)}};
+      } else {
+        m.model.lumen = anatomy::loft_lumen(m.model.vessels, o.lumen);
+        r.figures = {{"vertices", double(m.model.lumen.vertices_m.size())},
+                     {"triangles", double(m.model.lumen.triangles.size())},
+                     {"components", double(anatomy::count_components(m.model.lumen))}};
+      }
     });
   }
 

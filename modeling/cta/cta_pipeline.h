@@ -11,12 +11,14 @@
 //       drop_dark_branches    veins cut away; abrupt ends noted modeling/cta/branch_checks.h
 //   (f) label_coronary_trees  aorta, LM, LAD, LCx, RCA, D, OM    modeling/cta/coronary_labels.h
 //   (g) place_template_heart  the template heart under the tree modeling/heart/heart_placement.h
-//   (e) loft_lumen            closed tubes per branch            anatomy/vessel/lumen_mesh.h
+//   (e) stitch_lumen          one closed surface, joined at      anatomy/vessel/lumen_surface.h
+//                             bifurcations (or loft_lumen tubes) anatomy/vessel/lumen_mesh.h
 #include <functional>
 #include <string>
 #include <vector>
 #include "anatomy/case/case.h"
 #include "anatomy/vessel/lumen_mesh.h"
+#include "anatomy/vessel/lumen_surface.h"
 #include "modeling/cta/branch_checks.h"
 #include "modeling/cta/centerline_spline.h"
 #include "modeling/cta/centerline_tracing.h"
@@ -38,7 +40,9 @@ struct CtaPipelineOptions {
   BranchCheckOptions checks;
   LabelOptions labels;
   HeartPlacementOptions heart;
-  anatomy::LumenMeshSpec lumen;
+  anatomy::LumenMeshSpec lumen;               // the tubes, when stitched is false
+  anatomy::StitchedLumenSpec stitched_lumen;  // the one surface, when stitched is true
+  bool stitched = true;                       // stage (e): one stitched surface, else one tube per branch
   bool loft = true;
   int threads = 0;  // 0: all cores
   // the memory the pipeline may take: a CT whose estimate is over it is refused before any work

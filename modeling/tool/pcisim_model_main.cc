@@ -119,6 +119,11 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.5, 50.0));
   knobs->add_option("--radius-iterations", o.radius.iterations, "iterations of each 2-D level set [heart eq 2]")
       ->check(CLI::Range(2, 10000));
+  double lumen_spacing_mm = o.stitched_lumen.spacing_m * 1e3;
+  knobs->add_option("--lumen-spacing-mm", lumen_spacing_mm, "grid spacing of the stitched lumen surface (mm)")
+      ->check(CLI::Range(0.02, 2.0));
+  bool tubes = false;
+  knobs->add_flag("--lumen-tubes", tubes, "lumen.stl as one closed tube per branch instead of one stitched surface");
   auto* ph = app.add_option_group("phantom", "synthetic CTAs with exact truth");
   ph->add_flag("--make-phantom-cta", make_phantom_cta,
                "write a synthetic CTA (ct.nrrd), its true centerlines and radii (truth.json), what was drawn "
@@ -132,6 +137,8 @@ int main(int argc, char** argv) {
   ph->add_flag("--flip-z", flip_z, "slices stored feet-first (direction diag(1, 1, -1))");
   ph->add_flag("--origin-frame", origin_frame, "the heart centre at the origin instead of scanner coordinates");
   CLI11_PARSE(app, argc, argv);
+  o.stitched_lumen.spacing_m = lumen_spacing_mm * 1e-3;
+  o.stitched = !tubes;
   o.threads = threads;
   o.segmentation.bridging.enabled = o.segmentation.bridging.max_gap_mm > 0;
 

@@ -4,9 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
+#include "anatomy/mesh/mesh_io.h"
 #include "anatomy/phantom/phantom_cta.h"
 #include "modeling/cta/modeling_error.h"
 
@@ -83,8 +85,16 @@ TEST(CtaPipeline, OneAorticSeedGivesTheNamedTreeOnTheTruth) {
                 anatomy::branch_length_m(cta.truth.branches[truth]) * 1e3, mean_mm, worst_mm);
     EXPECT_LT(mean_mm, 0.6) << name;  // one voxel
   }
-  // a lumen for the SDF: one closed tube per branch
+  // a lumen for the SDF: one closed surface stitched across the bifurcations (every tree starts
+  // on the aortic centerline, so the aorta and both trees are one piece)
   EXPECT_GT(m.model.lumen.triangles.size(), 1000u);
+  EXPECT_EQ(anatomy::check_closed_manifold(m.model.lumen), "");
+  EXPECT_EQ(anatomy::count_components(m.model.lumen), 1);
+  const auto loft =
+      std::find_if(m.stages.begin(), m.stages.end(), [](const StageReport& r) { return r.name == "loft"; });
+  ASSERT_NE(loft, m.stages.end());
+  EXPECT_EQ(loft->figures[2].first, "components");
+  EXPECT_EQ(loft->figures[2].second, 1.0);
 }
 
 // the major vessels are followed along most of their length (phantom 2 at 0.5 mm, a 60 % stenosis)

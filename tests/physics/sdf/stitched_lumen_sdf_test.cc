@@ -22,13 +22,13 @@ namespace {
 
 constexpr double kSpacingM = 0.2e-3;
 
-// the analytic union of swept spheres (what the stitched surface approximates)
+// the analytic union of the coronaries' swept spheres (what the stitched surface approximates)
 // (skip: a branch left out, or -1)
 double union_distance_m(const anatomy::VesselTree& tree, const Eigen::Vector3d& p,
                         const anatomy::VesselBranch* skip = nullptr) {
   double f = std::numeric_limits<double>::infinity();
   for (const auto& b : tree.branches)
-    if (&b != skip)
+    if (&b != skip && b.name != "aorta")
       for (size_t i = 0; i + 1 < b.points.size(); ++i)
         f = std::min(f, anatomy::swept_sphere_distance_m(p, b.points[i].position_m, b.points[i].radius_m,
                                                          b.points[i + 1].position_m, b.points[i + 1].radius_m));
@@ -42,17 +42,19 @@ Eigen::Vector3d perpendicular(const Eigen::Vector3d& t) {
 
 TEST(StitchedLumenSdfTest, PhantomFieldHasTheRightSignAndMatchesTheTubes) {
   const anatomy::VesselTree tree = anatomy::make_coronary_phantom({.seed = 1});
-  // the pipeline keeps every branch, the aorta included
-  const anatomy::TriangleMesh stitched = anatomy::stitch_lumen(tree, {});
+  // the coronaries (the aorta, a single wide tube, would take 60 % of the triangles and of the
+  // build's time here and join nothing; the pipeline's test keeps it)
+  const anatomy::TriangleMesh stitched = anatomy::stitch_lumen(tree, {.exclude = {"aorta"}});
   const auto t0 = std::chrono::steady_clock::now();
   const SignedDistanceField sdf = SignedDistanceField::build(stitched, kSpacingM, 1e-3);
   const double build_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const SignedDistanceField tubes = build_lumen_sdf(tree, kSpacingM);
+  const SignedDistanceField tubes = build_lumen_sdf(tree, kSpacingM, {.exclude = {"aorta"}});
 
   int inside = 0, outside = 0, near_wall = 0;
   double max_diff_m = 0.0;
   std::string worst;
   for (const auto& b : tree.branches) {
+    if (b.name == "aorta") continue;
     for (size_t i = 1; i + 1 < b.points.size(); i += 4) {
       const Eigen::Vector3d c = b.points[i].position_m;
       const double r = b.points[i].radius_m;

@@ -42,6 +42,7 @@ struct Setting {
   Vector3d voxel_mm{0.4, 0.4, 0.6};
   std::array<int64_t, 3> dims{512, 512, 250};
   modeling::CtaPipelineOptions options;
+  std::vector<uint32_t> phantoms;  // empty: the sweep's phantoms
 };
 
 struct Row {
@@ -178,9 +179,19 @@ int run(const std::vector<std::string>& args) {
     knob("radius level-set iterations", std::to_string(it), [&](auto& o) { o.radius.iterations = it; });
   }
 
+  // phantoms the pipeline's rules were not tuned on (they were tuned on 1, 2, 3), at the target
+  // configuration: how well the rules generalise
+  if (!bo.quick) {
+    Setting s;
+    s.sweep = "held-out phantoms";
+    s.knob = "0.4x0.4x0.6 mm, 25 HU";
+    s.phantoms = {4, 5, 6, 7, 8};
+    settings.push_back(s);
+  }
+
   std::vector<Row> rows;
   for (const Setting& s : settings) {
-    for (uint32_t p : phantoms) {
+    for (uint32_t p : s.phantoms.empty() ? phantoms : s.phantoms) {
       Row r = run_one(s, p);
       std::printf("%-28s %-24s phantom %u: %s  %.1f s\n", s.sweep.c_str(), s.knob.c_str(), p,
                   r.failed ? ("FAILED: " + r.error).c_str()
@@ -239,6 +250,14 @@ int run(const std::vector<std::string>& args) {
        {"level-set iterations", "cross-section spacing mm", "knot spacing mm", "radius level-set iterations"}) {
     md << "## " << k << " (0.4 x 0.4 x 0.6 mm, 25 HU)\n\n";
     table(k);
+  }
+  if (!bo.quick) {
+    md << "## Held-out phantoms (0.4 x 0.4 x 0.6 mm, 25 HU, default knobs)\n\n"
+       << "The rules of docs/modeling.md were shaped on phantoms 1-3. These five were first scored after that; "
+          "4 and 6 failed then and two rules came from them (gap bridging's contrast check: 4's costal cartilage; "
+          "clipping's slenderness: 6's right atrium at the threshold); 8 fails as described in docs/modeling.md "
+          "(its myocardium 1.3 noise sigmas under the lower threshold); 5 and 7 were only scored.\n\n";
+    table("held-out phantoms");
   }
   // per-stage time at the target configuration (the first setting)
   md << "## Stage times at the target configuration (default knobs)\n\n| phantom |";

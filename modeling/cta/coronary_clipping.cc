@@ -146,6 +146,18 @@ Clipping clip_to_coronaries(const LumenSegmentation& seg, const std::vector<Vect
       drop(fmt::format("reaches {:.1f} mm from its contact, under {:.1f} mm", piece.reach_mm, o.min_length_mm));
       continue;
     }
+    // a tree is slender: its volume over its reach is the cross-section of a tube no wider than
+    // max_tree_tube_radius_mm (a chamber whose contrast sits at the threshold is a sponge of
+    // noise, thin everywhere, but fills its space)
+    const double volume_mm3 = double(piece.voxels.size()) * g.spacing_mm.prod();
+    const double tube_r_mm = std::sqrt(volume_mm3 / (M_PI * std::max(piece.reach_mm, 1e-9)));
+    if (!seeded && tube_r_mm > o.max_tree_tube_radius_mm) {
+      drop(
+          fmt::format("{:.0f} mm3 within {:.1f} mm of its contact, as much as a tube {:.1f} mm in radius: a chamber's "
+                      "noisy contrast, not a vessel tree",
+                      volume_mm3, piece.reach_mm, tube_r_mm));
+      continue;
+    }
     if (!seeded && from_seed_mm > o.max_ostium_distance_mm) {
       drop(fmt::format("attached {:.1f} mm from the aortic seed, beyond {:.1f} mm (a chamber, not the aortic root)",
                        from_seed_mm, o.max_ostium_distance_mm));

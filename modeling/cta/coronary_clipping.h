@@ -10,9 +10,12 @@
 //  2. what is left are thin structures; each 26-connected piece of them is a coronary tree when it
 //     touches the large lumen (its ostium), reaches at least min_length_mm from there (trabeculae,
 //     noise and a blurred edge do not), is somewhere at least min_piece_radius_mm from its own
-//     edge (a sheet of edge voxels is not) and its ostium lies within max_ostium_distance_mm of the
-//     aortic seed (the coronary ostia sit in the aortic root; pieces on a ventricle or an atrium are
-//     farther). A piece holding a further seed is kept whatever the rule says.
+//     edge (a sheet of edge voxels is not), is slender (its volume over its reach no more than a
+//     tube of max_tree_tube_radius_mm: a chamber whose contrast sits at the threshold becomes a
+//     sponge of noise, thin everywhere but filling its space, and is not) and its ostium lies
+//     within max_ostium_distance_mm of the aortic seed (the coronary ostia sit in the aortic
+//     root; pieces on a ventricle or an atrium are farther). A piece holding a further seed is
+//     kept whatever the rule says.
 //  3. the aorta's centerline runs from the ostia's level through the seed and up the ascending
 //     aorta along the ridge of the distance map.
 #include <string>
@@ -27,6 +30,7 @@ struct ClippingOptions {
   double rim_mm = 1.0;               // the large lumen also takes this much of its own rough edge
   double min_piece_radius_mm = 0.6;  // a piece nowhere this far from its edge is a rim or a sheet, not a vessel
   double min_length_mm = 15.0;
+  double max_tree_tube_radius_mm = 5.0;
   double max_ostium_distance_mm = 70.0;
   double aorta_above_seed_mm = 30.0;  // how far the aortic centerline goes on past the seed
   int threads = 0;

@@ -44,13 +44,15 @@ int cap_rings_for(double radius_m, const LumenMeshSpec& spec) {
   return n;
 }
 
-TriangleMesh loft_branch(const VesselTree& tree, const VesselBranch& branch, const LumenMeshSpec& spec) {
-  TriangleMesh mesh;
-  std::vector<Vector3d> pts;
-  std::vector<double> radii;
-  // a child that does not start on its parent's centerline is extended back toward it, so its
-  // tube begins inside the parent and the junction has no gap
-  if (branch.parent >= 0 && branch.parent_point >= 0 && !branch.points.empty() &&
+}  // namespace
+
+void branch_sweep_points(const VesselTree& tree, const VesselBranch& branch, bool extend_to_parent,
+                         std::vector<Vector3d>* points_m, std::vector<double>* radii_m) {
+  std::vector<Vector3d>& pts = *points_m;
+  std::vector<double>& radii = *radii_m;
+  pts.clear();
+  radii.clear();
+  if (extend_to_parent && branch.parent >= 0 && branch.parent_point >= 0 && !branch.points.empty() &&
       branch.parent < static_cast<int>(tree.branches.size())) {
     const auto& pp = tree.branches[branch.parent].points;
     if (branch.parent_point < static_cast<int>(pp.size())) {
@@ -63,12 +65,20 @@ TriangleMesh loft_branch(const VesselTree& tree, const VesselBranch& branch, con
       }
     }
   }
-  // drop repeated points: they have no direction
   for (const auto& p : branch.points) {
     if (!pts.empty() && (p.position_m - pts.back()).norm() < 1e-9) continue;
     pts.push_back(p.position_m);
     radii.push_back(p.radius_m);
   }
+}
+
+namespace {
+
+TriangleMesh loft_branch(const VesselTree& tree, const VesselBranch& branch, const LumenMeshSpec& spec) {
+  TriangleMesh mesh;
+  std::vector<Vector3d> pts;
+  std::vector<double> radii;
+  branch_sweep_points(tree, branch, true, &pts, &radii);
   if (pts.size() < 2) return mesh;
   const size_t n = pts.size();
 

@@ -25,6 +25,13 @@ std::vector<TriangleMesh> loft_branch_tubes(const VesselTree& tree, const LumenM
 // all tubes in one mesh (disjoint vertex sets, so each tube stays a connected component)
 TriangleMesh loft_lumen(const VesselTree& tree, const LumenMeshSpec& spec);
 
+// the points a branch's lumen is swept along: a child that does not start on its parent's
+// centerline is first extended back toward it (by at most the parent's radius there), so its lumen
+// begins inside the parent's and the junction has no gap (extend_to_parent false: not extended);
+// repeated points are dropped (they have no direction). Shared by the tubes and the stitched surface.
+void branch_sweep_points(const VesselTree& tree, const VesselBranch& branch, bool extend_to_parent,
+                         std::vector<Eigen::Vector3d>* points_m, std::vector<double>* radii_m);
+
 // appends b to a, re-indexing b's triangles
 void append_mesh(TriangleMesh& a, const TriangleMesh& b);
 

@@ -1,5 +1,7 @@
 #include "anatomy/vessel/lumen_surface.h"
 
+#include "anatomy/vessel/lumen_mesh.h"
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
@@ -73,24 +75,9 @@ void branch_segments(const VesselTree& tree, const VesselBranch& branch, const S
                      std::vector<Segment>& out) {
   std::vector<Vector3d> pts;
   std::vector<double> radii;
-  if (branch.parent >= 0 && branch.parent_point >= 0 && !branch.points.empty() &&
-      branch.parent < static_cast<int>(tree.branches.size()) && !excluded(spec, tree.branches[branch.parent].name)) {
-    const auto& pp = tree.branches[branch.parent].points;
-    if (branch.parent_point < static_cast<int>(pp.size())) {
-      const Vector3d to_parent = pp[branch.parent_point].position_m - branch.points[0].position_m;
-      const double gap_m = to_parent.norm();
-      if (gap_m > 1e-9) {
-        pts.push_back(branch.points[0].position_m +
-                      to_parent / gap_m * std::min(gap_m, pp[branch.parent_point].radius_m));
-        radii.push_back(branch.points[0].radius_m);
-      }
-    }
-  }
-  for (const auto& p : branch.points) {
-    if (!pts.empty() && (p.position_m - pts.back()).norm() < 1e-9) continue;
-    pts.push_back(p.position_m);
-    radii.push_back(p.radius_m);
-  }
+  const bool parent_kept = branch.parent >= 0 && branch.parent < static_cast<int>(tree.branches.size()) &&
+                           !excluded(spec, tree.branches[branch.parent].name);
+  branch_sweep_points(tree, branch, parent_kept, &pts, &radii);
   if (pts.size() == 1) out.push_back(make_segment(pts[0], radii[0], pts[0], radii[0]));
   for (size_t i = 0; i + 1 < pts.size(); ++i) out.push_back(make_segment(pts[i], radii[i], pts[i + 1], radii[i + 1]));
 }

@@ -23,6 +23,7 @@ struct Piece {
 
 // region mask values: the region, candidate voxels already visited, the piece being checked
 constexpr uint8_t kRegion = 1, kSeen = 2, kThisPiece = 3;
+constexpr int kFaces[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
 
 // the 26-connected pieces of contrast HU outside the region that look like vessels (their voxels
 // are left marked kSeen)
@@ -46,9 +47,17 @@ std::vector<Piece> vessel_like_pieces(const anatomy::Volume& ct, double lower_hu
     // its outer neighbours, and how many of them are brighter than lumen (bone's cortex, calcium)
     // and how many neighbours its voxels have within it (solid lumen: most; noise strung
     // together through voxel corners: a few)
-    int64_t shell = 0, bright = 0, inner = 0;
+    int64_t shell = 0, bright = 0, inner = 0, interior = 0;
     for (size_t head = 0; head < queue.size(); ++head) {
       const auto [i, j, k] = g.ijk(queue[head]);
+      // interior: all six face neighbours in the piece (visited, or a candidate the fill will reach)
+      bool all_faces = true;
+      for (const auto& f : kFaces) {
+        const int64_t a = i + f[0], b = j + f[1], c = k + f[2];
+        const int64_t m = g.inside(a, b, c) ? g.index(a, b, c) : -1;
+        if (m < 0 || !(region->v[m] == kSeen || candidate(m))) all_faces = false;
+      }
+      interior += all_faces ? 1 : 0;
       for (const auto& d : nb.d) {
         const int64_t a = i + d[0], b = j + d[1], c = k + d[2];
         if (!g.inside(a, b, c)) continue;
@@ -73,6 +82,7 @@ std::vector<Piece> vessel_like_pieces(const anatomy::Volume& ct, double lower_hu
     // marrow inside a bone's cortex, not a vessel in fat (a calcified plaque touches a small part)
     if (double(bright) > o.max_bright_shell * double(shell)) continue;
     if (double(inner) < o.min_mean_neighbours * double(queue.size())) continue;
+    if (double(interior) < o.min_interior_fraction * double(queue.size())) continue;
     // its extent along its main axis (principal component of the voxel positions)
     Vector3d mean = Vector3d::Zero();
     for (int64_t n : queue) mean += g.physical_mm(ijk_of(g, n));
@@ -264,14 +274,29 @@ std::vector<Bridge> bridge_gaps(const anatomy::Volume& ct, double lower_hu, doub
       const bool piece_starts = at_q.fill <= o.max_end_fill && beyond.dot(u) >= cos_max * beyond.norm();
       // the same contrast on both sides: a vessel beyond a stenosis fills as the vessel before it;
       // costal cartilage (~150 HU) or a vein does not
+      // (the HU of each voxel's 3x3x3 neighbourhood, thresholded nowhere: a piece of voxels picked
+      // by the threshold from tissue just below it has the tissue's mean, a lumen its own)
+      auto local_mean = [&](int64_t n) {
+        const auto [i, j, k] = g.ijk(n);
+        double sum = 0;
+        int count = 0;
+        for (int c = -1; c <= 1; ++c)
+          for (int b = -1; b <= 1; ++b)
+            for (int a = -1; a <= 1; ++a)
+              if (g.inside(i + a, j + b, k + c)) sum += hu(g.index(i + a, j + b, k + c)), ++count;
+        return static_cast<float>(sum / count);
+      };
       std::vector<float> end_hu, piece_hu;
       const Vector3d r = (o.end_ball_mm / g.spacing_mm.array()).ceil().matrix();
       for (int64_t k = int64_t(p_ijk.z() - r.z()); k <= int64_t(p_ijk.z() + r.z()); ++k)
         for (int64_t j = int64_t(p_ijk.y() - r.y()); j <= int64_t(p_ijk.y() + r.y()); ++j)
           for (int64_t i = int64_t(p_ijk.x() - r.x()); i <= int64_t(p_ijk.x() + r.x()); ++i)
-            if (g.inside(i, j, k) && region->v[g.index(i, j, k)] == kRegion) end_hu.push_back(hu(g.index(i, j, k)));
-      for (int64_t n : piece.voxels) piece_hu.push_back(hu(n));
-      const bool same_contrast = percentile(piece_hu, 0.75) >= o.min_contrast_ratio * percentile(end_hu, 0.75);
+            if (g.inside(i, j, k) && region->v[g.index(i, j, k)] == kRegion)
+              end_hu.push_back(local_mean(g.index(i, j, k)));
+      for (int64_t n : piece.voxels) piece_hu.push_back(local_mean(n));
+      const double piece_p90 = percentile(piece_hu, 0.9), end_p90 = percentile(end_hu, 0.9);
+      const bool same_contrast =
+          piece_p90 >= o.min_contrast_ratio * end_p90 && piece_p90 <= end_p90 / o.min_contrast_ratio;
       if (!region_ends || !piece_starts || !same_contrast) {
         left.push_back(std::move(piece));
         continue;

@@ -7,15 +7,18 @@
 //    max_radius_mm (its volume over pi times its length), so chambers and noise are not, and
 //    under max_bright_shell of its outer neighbours are brighter than lumen (the marrow of a rib
 //    or a vertebra sits inside cortical bone, a vessel in fat or muscle) and its voxels have on
-//    average at least min_mean_neighbours of their 26 neighbours in it (a lumen is solid; noise
-//    above the threshold in tissue just below it strings together through corners, ~4-5);
+//    average at least min_mean_neighbours of their 26 neighbours in it and at least
+//    min_interior_fraction of them have all six face neighbours in it (a lumen is solid; noise
+//    above the threshold in tissue just below it strings together through corners and edges);
 //  - its nearest point lies within max_gap_mm of the region;
 //  - the region ends there, as a thin vessel: within end_ball_mm of that end the region fills
 //    under max_end_fill of the ball (the aorta's or a chamber's wall fills half), and its voxels
 //    there lie behind the end, within max_angle_deg of the line across the gap; the piece starts
 //    there the same way, on the far side;
-//  - it holds the same contrast: the 75th percentile of its HU at least min_contrast_ratio of that
-//    of the region within end_ball_mm of the end (costal cartilage at ~150 HU, a vein, are darker).
+//  - it holds the same contrast: the 90th percentile over its voxels of the mean HU of their 3x3x3
+//    neighbourhoods within a factor min_contrast_ratio of that over the region's voxels within
+//    end_ball_mm of the end (costal cartilage at ~150 HU, whose noise crosses the threshold, and a
+//    vein are darker; the blurred rim of a rib beside its cortex is brighter).
 // The gap is filled by a thin cylinder (bridge_radius_mm), the piece is added, and each bridge is
 // reported: a stenosis too tight to see, or an occlusion, at that place. The line across the gap
 // is straight; the radius measured there later (stage d) is the narrow one the CT shows.
@@ -31,8 +34,9 @@ struct GapBridgingOptions {
   double max_gap_mm = 10.0;
   double min_length_mm = 10.0;
   double max_radius_mm = 3.0;
-  double max_bright_shell = 0.1;
+  double max_bright_shell = 0.05;
   double min_mean_neighbours = 8;
+  double min_interior_fraction = 0.05;
   double end_ball_mm = 5.0;
   double max_end_fill = 0.3;
   double max_angle_deg = 40.0;

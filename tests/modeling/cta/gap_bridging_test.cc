@@ -109,6 +109,23 @@ TEST(GapBridging, BoneMarrowOrNoiseAheadOfAVesselEndIsNotJoined) {
   }
 }
 
+TEST(GapBridging, APieceMuchBrighterThanTheVesselEndIsNotJoined) {
+  // the blurred rim of a rib falls under the upper threshold as a sheath far brighter than a distal
+  // vessel: here the piece ahead at 600 HU against the vessel's 300 (a vessel does not brighten
+  // distally); with the contrast window widened to a factor 0.4 the same piece is joined
+  const Vector3d a(5, 30, 30), b(25, 30, 30), c(32, 30, 30), d(55, 30, 30);
+  anatomy::Volume v = paint([&](const Vector3d& p) { return in_tube(p, a, b, 1.5) || in_tube(p, c, d, 1.5); });
+  for (int64_t n = 0; n < v.voxel_count(); ++n) {
+    const auto p = v.index_to_physical_mm(Vector3d(n % 120, (n / 120) % 120, n / 14400));
+    if (in_tube(p, c, d, 1.5)) v.hu_i16[n] = 600;
+  }
+  Mask region = region_of(v, a, b, 1.5);
+  EXPECT_TRUE(bridge_gaps(v, kLower, kUpper, &region, GapBridgingOptions{}).empty());
+  GapBridgingOptions wide;
+  wide.min_contrast_ratio = 0.4;
+  EXPECT_EQ(bridge_gaps(v, kLower, kUpper, &region, wide).size(), 1u);
+}
+
 TEST(GapBridging, AVesselBesideTheRegionOrTooFarIsNotJoined) {
   // side by side: a parallel vessel 4 mm to the side of the region's vessel (a vein along an artery)
   {

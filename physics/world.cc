@@ -99,7 +99,7 @@ World::World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_ge
             std::move(contact_geometry)) {}
 
 World::World(const WorldSpec& spec, const anatomy::VesselTree& tree, std::shared_ptr<const LumenQuery> contact_geometry,
-             const anatomy::HeartPose& heart_pose)
+             const anatomy::HeartPose& heart_pose, const Eigen::Matrix3Xd& heart_rest_m)
     : impl_(std::make_unique<Impl>()) {
   validate(spec);
   Impl& w = *impl_;
@@ -126,14 +126,24 @@ World::World(const WorldSpec& spec, const anatomy::VesselTree& tree, std::shared
     // (the heart is simulated in the template's frame: the case's heart pose places it under the
     // tree, so the fit sees the tree in the template's frame and the skin the heart in the case's)
     anatomy::HeartMesh mesh = anatomy::template_heart_mesh();
-    anatomy::VesselTree tree_in_template = w.tree;
-    for (auto& b : tree_in_template.branches) {
-      for (auto& p : b.points) {
-        p.position_m = heart_pose.to_template(p.position_m);
-        p.radius_m /= heart_pose.scale;
+    if (heart_rest_m.cols() > 0) {
+      // the case's heart, fitted to the patient's CT (modeling/heart/heart_elastic_fit.h): its
+      // epicardium is where the CT shows it, under the vessels the same CT shows, so it is not
+      // dented (the dent measures against the designed template)
+      require(heart_rest_m.cols() == mesh.vertices_m.cols() && heart_rest_m.allFinite(),
+              "anatomy: the case's fitted heart has " + std::to_string(heart_rest_m.cols()) +
+                  " vertices, the template heart " + std::to_string(mesh.vertices_m.cols()));
+      mesh.vertices_m = heart_rest_m;
+    } else {
+      anatomy::VesselTree tree_in_template = w.tree;
+      for (auto& b : tree_in_template.branches) {
+        for (auto& p : b.points) {
+          p.position_m = heart_pose.to_template(p.position_m);
+          p.radius_m /= heart_pose.scale;
+        }
       }
+      w.heart_fit = fit_heart_under_tree(tree_in_template, HeartFitParams{}, &mesh);
     }
-    w.heart_fit = fit_heart_under_tree(tree_in_template, HeartFitParams{}, &mesh);
     w.heart.emplace(*spec.heart_beat, mesh);
     // the tree rides the epicardium; the wire, its contact and the blood are simulated in the
     // vessels' rest frame and carried into the world by the same skin (docs/heart.md)

@@ -40,9 +40,12 @@ class World {
   // once per scene). Throws std::invalid_argument naming the bad field when it cannot be built.
   // `contact_geometry`, when given, replaces the SDF the spec would build (benchmarks and tests
   // share one field across worlds); it must describe the same anatomy.
-  // `heart_pose` places the template heart under the tree (the case's; identity for the phantom).
+  // `heart_pose` places the template heart under the tree (the case's; identity for the phantom);
+  // `heart_rest_m`, when not empty, is the template's rest shape fitted to the patient (the case's
+  // heart_vertices_m, template frame): used instead of the template's own vertices.
   World(const WorldSpec& spec, const anatomy::VesselTree& tree,
-        std::shared_ptr<const LumenQuery> contact_geometry = nullptr, const anatomy::HeartPose& heart_pose = {});
+        std::shared_ptr<const LumenQuery> contact_geometry = nullptr, const anatomy::HeartPose& heart_pose = {},
+        const Eigen::Matrix3Xd& heart_rest_m = {});
   // the same around the procedural phantom of spec.anatomy.seed (tests and benchmarks)
   explicit World(const WorldSpec& spec);
   World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_geometry);

@@ -12,7 +12,7 @@ PhysicsLoop::PhysicsLoop(const Scene& scene, std::shared_ptr<const anatomy::Case
       case_(std::move(anatomy)),
       state_(state),
       rate_hz_(scene.physics_rate_hz),
-      world_(std::make_unique<physics::World>(spec_, case_->vessels, nullptr, case_->heart)) {
+      world_(std::make_unique<physics::World>(spec_, case_->vessels, nullptr, case_->heart, case_->heart_vertices_m)) {
   for (const auto& cost : world_->effect_costs()) {
     effects_.push_back(std::make_unique<EffectStats>());
     effects_.back()->name = cost.name;
@@ -68,7 +68,7 @@ void PhysicsLoop::run() {
 
     // a reset rebuilds the world between steps (allocation is fine here, not inside step)
     if (state_.reset_requested.exchange(false))
-      world_ = std::make_unique<physics::World>(spec_, case_->vessels, nullptr, case_->heart);
+      world_ = std::make_unique<physics::World>(spec_, case_->vessels, nullptr, case_->heart, case_->heart_vertices_m);
     if (!state_.paused.load(std::memory_order_relaxed)) step_once(wake_ns);
 
     const int64_t done_ns = realtime::monotonic_ns();

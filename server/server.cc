@@ -101,6 +101,9 @@ Server::Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images, SessionL
   const int64_t t_world = realtime::monotonic_ns();
   impl_->physics = std::make_unique<PhysicsLoop>(scene, impl_->anatomy, impl_->state);
   spdlog::info("world built in {:.0f} ms", (realtime::monotonic_ns() - t_world) * 1e-6);
+  if (anatomy.heart_vertices_m.cols() > 0)
+    spdlog::info("heart: {}'s own, the template fitted to its CT ({} vertices)", anatomy.name,
+                 anatomy.heart_vertices_m.cols());
   if (const auto& fit = impl_->physics->world().heart_fit(); fit.branches_lifted > 0)
     spdlog::info("heart fitted under {}: {} branch(es) lifted clear, epicardium dented up to {:.1f} mm", anatomy.name,
                  fit.branches_lifted, fit.max_dent_m * 1e3);

@@ -27,6 +27,9 @@ struct Case {
   bool ct_lumen_enhanced = false;  // the CT's lumens hold contrast (a CT angiogram) rather than blood
   std::vector<Landmark> landmarks;
   HeartPose heart;  // where the template heart sits under these vessels (identity: the phantom's)
+  // the template heart's rest vertices fitted to this patient's CT, in the template's frame
+  // (metres, over the template's tets: one column per template vertex); empty: the template's own
+  Eigen::Matrix3Xd heart_vertices_m;
 };
 
 }  // namespace pcisim::anatomy

@@ -14,6 +14,7 @@
 #include "anatomy/case/case_overview.h"
 #endif
 #include "anatomy/case/slicer_markups.h"
+#include "anatomy/heart/heart_mesh.h"
 #include "anatomy/mesh/mesh_io.h"
 #include "anatomy/vessel/vessel_tree_json.h"
 #include "anatomy/volume/io_text.h"
@@ -93,7 +94,7 @@ void write_case(const Case& c, const std::string& dir_name) {
     landmarks.push_back({{"name", l.name}, {"position_m", {l.position_m.x(), l.position_m.y(), l.position_m.z()}}});
   doc["landmarks"] = landmarks;
   // where the template heart sits (docs/anatomy.md); the phantom's is the identity
-  if (!c.heart.is_identity()) {
+  if (!c.heart.is_identity() || c.heart_vertices_m.cols() > 0) {
     Json rot = Json::array();
     for (int i = 0; i < 3; ++i) rot.push_back({c.heart.rotation(i, 0), c.heart.rotation(i, 1), c.heart.rotation(i, 2)});
     const Eigen::Vector3d& t = c.heart.translation_m;
@@ -101,6 +102,13 @@ void write_case(const Case& c, const std::string& dir_name) {
                     {"rotation", rot},
                     {"scale", c.heart.scale},
                     {"translation_m", {t.x(), t.y(), t.z()}}};
+    // the template's rest shape fitted to the patient (template frame, TetGen .node in mm)
+    if (c.heart_vertices_m.cols() > 0) {
+      std::ofstream node(dir / "heart.node");
+      write_tetgen_nodes(c.heart_vertices_m, node);
+      if (!node) throw CaseError((dir / "heart.node").string() + ": cannot write");
+      doc["heart"]["rest_vertices"] = "heart.node";
+    }
   }
   // for 3D Slicer: each centerline as a markups curve (the lumen and CT open as they are). The
   // file is named after the branch made safe (never a path out of slicer/), and kept distinct
@@ -209,6 +217,28 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
           std::abs(t[2].get<double>()) > 10)
         h.fail("translation_m", "expected [x, y, z] in metres, each within 10 m");
       c.heart.translation_m = {t[0].get<double>(), t[1].get<double>(), t[2].get<double>()};
+      if (h.has("rest_vertices")) {
+        // one vertex per template vertex, near the template (a fit moves the surface by
+        // millimetres, never by a heart's size): a file of another mesh or in metres is refused
+        const std::string node_file = member_file(dir, case_json, "heart.rest_vertices", h.text("rest_vertices", ""));
+        try {
+          const std::string text = io::read_file(node_file);
+          c.heart_vertices_m = parse_tetgen_nodes({text, node_file}, 1e-3);
+        } catch (const std::invalid_argument& e) {
+          throw CaseError(e.what());
+        }
+        const Eigen::Matrix3Xd& tv = template_heart_mesh().vertices_m;
+        if (c.heart_vertices_m.cols() != tv.cols())
+          fail(node_file, "nodes",
+               fmt::format("{} vertices, the template heart has {} (a fitted rest shape keeps the template's tets)",
+                           c.heart_vertices_m.cols(), tv.cols()));
+        const double worst_mm = 1e3 * (c.heart_vertices_m - tv).colwise().norm().maxCoeff();
+        if (!(worst_mm <= 40.0))
+          fail(node_file, "nodes",
+               fmt::format("a vertex {:.1f} mm from the template's (more than 40 mm: not a fit of the template heart "
+                           "in its frame, in mm)",
+                           worst_mm));
+      }
       h.finish();
     }
     r.list("slicer_centerlines");  // written for viewers, not needed to simulate

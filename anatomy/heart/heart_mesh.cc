@@ -6,7 +6,9 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <cstdio>
 #include <map>
+#include <ostream>
 #include <sstream>
 #include <stdexcept>
 
@@ -72,30 +74,55 @@ class Lines {
 
 }  // namespace
 
-HeartMesh parse_tetgen_mesh(const TetgenText& node, const TetgenText& ele, const TetgenText& face, double scale_to_m) {
-  HeartMesh m;
-  std::vector<std::string_view> tok;
+namespace {
 
-  // .node: "<count> 3 <attributes> <markers>", then "<index> x y z ..."
+// .node: "<count> 3 <attributes> <markers>", then "<index> x y z ..."; *first_index gets 0 or 1
+Eigen::Matrix3Xd parse_nodes(const TetgenText& node, double scale_to_m, long* first_index) {
+  std::vector<std::string_view> tok;
   Lines nl(node);
   if (!nl.next(&tok)) nl.fail_at_end("no header");
   nl.need(tok, 2, "header");
   const long n_nodes = nl.integer(tok[0], "node count");
   if (n_nodes < 4) nl.fail("node count must be >= 4");
   if (nl.integer(tok[1], "dimension") != 3) nl.fail("dimension must be 3");
-  m.vertices_m.resize(3, n_nodes);
-  long first_index = 0;
+  Eigen::Matrix3Xd v(3, n_nodes);
   for (long i = 0; i < n_nodes; ++i) {
     if (!nl.next(&tok)) nl.fail_at_end("expected " + std::to_string(n_nodes) + " nodes, got " + std::to_string(i));
     nl.need(tok, 4, "node");
     const long index = nl.integer(tok[0], "node index");
     if (i == 0) {
       if (index != 0 && index != 1) nl.fail("the first node index must be 0 or 1");
-      first_index = index;
+      *first_index = index;
     }
-    if (index != first_index + i) nl.fail("node index must be " + std::to_string(first_index + i));
-    for (int k = 0; k < 3; ++k) m.vertices_m(k, i) = scale_to_m * nl.real(tok[1 + k], "node coordinate");
+    if (index != *first_index + i) nl.fail("node index must be " + std::to_string(*first_index + i));
+    for (int k = 0; k < 3; ++k) v(k, i) = scale_to_m * nl.real(tok[1 + k], "node coordinate");
   }
+  return v;
+}
+
+}  // namespace
+
+Eigen::Matrix3Xd parse_tetgen_nodes(const TetgenText& node, double scale_to_m) {
+  long first_index = 0;
+  return parse_nodes(node, scale_to_m, &first_index);
+}
+
+void write_tetgen_nodes(const Eigen::Matrix3Xd& vertices_m, std::ostream& out) {
+  out << vertices_m.cols() << "  3  0  0\n";
+  char line[128];
+  for (Eigen::Index i = 0; i < vertices_m.cols(); ++i) {
+    std::snprintf(line, sizeof line, "%ld %.17g %.17g %.17g\n", static_cast<long>(i), 1e3 * vertices_m(0, i),
+                  1e3 * vertices_m(1, i), 1e3 * vertices_m(2, i));
+    out << line;
+  }
+}
+
+HeartMesh parse_tetgen_mesh(const TetgenText& node, const TetgenText& ele, const TetgenText& face, double scale_to_m) {
+  HeartMesh m;
+  std::vector<std::string_view> tok;
+  long first_index = 0;
+  m.vertices_m = parse_nodes(node, scale_to_m, &first_index);
+  const long n_nodes = m.vertices_m.cols();
 
   auto vertex = [&](const Lines& l, std::string_view token) {
     const long v = l.integer(token, "vertex index") - first_index;

@@ -3,6 +3,7 @@
 // name the file and line. The built-in template comes from scenes/heart/ (embedded at build time).
 #include <Eigen/Core>
 #include <array>
+#include <iosfwd>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -26,6 +27,11 @@ struct TetgenText {
 // Throws std::invalid_argument "<name> line <n>: <what is wrong>". Faces are re-oriented so their
 // normals point away from the tet they bound; a face that bounds no tet is an error.
 HeartMesh parse_tetgen_mesh(const TetgenText& node, const TetgenText& ele, const TetgenText& face, double scale_to_m);
+
+// only the vertices of a .node file (a fitted rest shape over the template's tets, heart_vertices)
+Eigen::Matrix3Xd parse_tetgen_nodes(const TetgenText& node, double scale_to_m);
+// writes vertices (metres) as a .node file in millimetres, indices from 0, full precision
+void write_tetgen_nodes(const Eigen::Matrix3Xd& vertices_m, std::ostream& out);
 
 // reads <stem>.node, <stem>.ele, <stem>.face from disk (millimetres)
 HeartMesh read_tetgen_mesh(const std::string& stem);

@@ -130,8 +130,8 @@ anatomy::VesselTree label_coronary_trees(const std::vector<anatomy::CenterlinePo
   for (const ModelTree& tree : trees) {
     if (tree.branches.empty()) continue;
     std::vector<ModelBranch> b = tree.branches;
-    // the vessel's own line carried back through the aortic wall, to its closest approach to the
-    // aortic centre beside the ostium, then to that centre: in front of the first branch
+    // the vessel's own line carried back through the aortic wall to the aortic centerline point it
+    // passes closest to: in front of the first branch
     // the samples next to the aorta: their path bends into the ostium's funnel and their
     // cross-sections see the aortic lumen; they are dropped (no child leaves there) and replaced
     // by the vessel's line and radius from beyond
@@ -166,7 +166,7 @@ anatomy::VesselTree label_coronary_trees(const std::vector<anatomy::CenterlinePo
     }
     const Vector3d d0 = direction(b[0].points_mm, 0, span);
     int on_aorta = 0;
-    double best_gap = 1e300, back = 0;
+    double best_gap = 1e300;
     for (size_t i = 0; i < ap.size(); ++i) {
       const Vector3d a = ap[i].position_m * 1e3;
       const double t = std::max(0.0, (p0 - a).dot(d0));  // back along the line from p0
@@ -174,18 +174,19 @@ anatomy::VesselTree label_coronary_trees(const std::vector<anatomy::CenterlinePo
       if (gap_mm < best_gap) {
         best_gap = gap_mm;
         on_aorta = static_cast<int>(i);
-        back = t;
       }
     }
+    // one straight line from that centerline point to the vessel: a kink at the centre (from the
+    // centerline point across to the vessel's line, ~2 mm at right angles) would be the first
+    // segment, the direction the guide catheter engages along (anatomy guide_catheter_path): the
+    // wire would leave it 76 degrees off the ostium (phantom 1's model)
     const Vector3d start = ap[on_aorta].position_m * 1e3;
-    const Vector3d q = p0 - back * d0;
     std::vector<Vector3d> lead;
     auto walk = [&](const Vector3d& a, const Vector3d& c) {
       const int n = static_cast<int>((c - a).norm() / o.point_spacing_mm);
       for (int i = 0; i < n; ++i) lead.push_back(a + (c - a) * (double(i) / n));
     };
-    walk(start, q);
-    walk(q, p0);
+    walk(start, p0);
     const int extra = static_cast<int>(lead.size());
     if (extra > 0) {
       b[0].points_mm.insert(b[0].points_mm.begin(), lead.begin(), lead.end());

@@ -196,6 +196,27 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
     // the template's heart centre is its origin: where the C-arm centres
     m.model.landmarks.push_back({"heart centre", h.pose.translation_m});
   });
+  if (o.heart_fit.enabled) {
+    stage(&m, "heart fit", progress, [&](StageReport& r) {
+      const HeartElasticFit f =
+          fit_heart_elastic(ct, m.model.vessels, m.model.heart, anatomy::template_heart_mesh(), o.heart_fit);
+      m.model.heart_vertices_m = f.vertices_m;
+      r.figures = {{"epicardial_vertices", double(f.epicardial_vertices)},
+                   {"targets", double(f.targets)},
+                   {"outliers", double(f.outliers)},
+                   {"outline_before_mean_mm", f.outline_before_mean_mm},
+                   {"outline_before_p95_mm", f.outline_before_p95_mm},
+                   {"outline_after_mean_mm", f.outline_after_mean_mm},
+                   {"outline_after_p95_mm", f.outline_after_p95_mm},
+                   {"move_mean_mm", f.move_mean_mm},
+                   {"move_max_mm", f.move_max_mm},
+                   {"backoff", f.backoff},
+                   {"min_tet_volume_ratio", f.min_tet_volume_ratio},
+                   {"volume_placed_ml", f.volume_placed_ml},
+                   {"volume_fitted_ml", f.volume_fitted_ml}};
+      r.notes = f.notes;
+    });
+  }
 
   if (o.loft) {
     stage(&m, "loft", progress, [&](StageReport& r) {

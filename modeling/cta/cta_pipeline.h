@@ -11,6 +11,7 @@
 //       drop_dark_branches    veins cut away; abrupt ends noted modeling/cta/branch_checks.h
 //   (f) label_coronary_trees  aorta, LM, LAD, LCx, RCA, D, OM    modeling/cta/coronary_labels.h
 //   (g) place_template_heart  the template heart under the tree modeling/heart/heart_placement.h
+//       fit_heart_elastic     its mesh fitted to the CT's heart  modeling/heart/heart_elastic_fit.h
 //   (e) stitch_lumen          one closed surface, joined at      anatomy/vessel/lumen_surface.h
 //                             bifurcations (or loft_lumen tubes) anatomy/vessel/lumen_mesh.h
 #include <functional>
@@ -26,6 +27,7 @@
 #include "modeling/cta/coronary_labels.h"
 #include "modeling/cta/cross_section_radius.h"
 #include "modeling/cta/lumen_segmentation.h"
+#include "modeling/heart/heart_elastic_fit.h"
 #include "modeling/heart/heart_placement.h"
 
 namespace pcisim::modeling {
@@ -40,6 +42,7 @@ struct CtaPipelineOptions {
   BranchCheckOptions checks;
   LabelOptions labels;
   HeartPlacementOptions heart;
+  HeartElasticFitOptions heart_fit;
   anatomy::LumenMeshSpec lumen;               // the tubes, when stitched is false
   anatomy::StitchedLumenSpec stitched_lumen;  // the one surface, when stitched is true
   bool stitched = true;                       // stage (e): one stitched surface, else one tube per branch

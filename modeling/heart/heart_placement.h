@@ -9,9 +9,7 @@
 // also fix the heart's orientation). Start: no rotation, unit scale, the two trees' ostia (or
 // centroids) on each other: CTAs are taken supine and stored in LPS, so a patient's heart is
 // oriented roughly as the template's.
-// Not built yet: the elastic part of (g), the template's tetrahedral mesh registered toward the
-// CT's segmented myocardium; the world dents the placed template where a vessel sinks in
-// (physics/heart/heart_fit.h).
+// The elastic part of (g), the placed mesh fitted to the CT's heart, is heart_elastic_fit.h.
 #include "anatomy/heart/heart_pose.h"
 #include "anatomy/vessel/vessel_tree.h"
 

@@ -14,6 +14,7 @@
 #include "anatomy/volume/volume_io.h"
 #include "modeling/cta/cta_pipeline.h"
 #include "modeling/cta/modeling_error.h"
+#include "modeling/picture/heart_fit_picture.h"
 #include "modeling/picture/model_overview.h"
 #include "modeling/report/model_report.h"
 
@@ -124,6 +125,10 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.02, 2.0));
   bool tubes = false;
   knobs->add_flag("--lumen-tubes", tubes, "lumen.stl as one closed tube per branch instead of one stitched surface");
+  bool no_heart_fit = false;
+  knobs->add_flag("--no-heart-fit", no_heart_fit,
+                  "keep the template heart as placed under the vessels (no elastic fit to the CT's heart, no "
+                  "heart.node, no heart-fit.png)");
   auto* ph = app.add_option_group("phantom", "synthetic CTAs with exact truth");
   ph->add_flag("--make-phantom-cta", make_phantom_cta,
                "write a synthetic CTA (ct.nrrd), its true centerlines and radii (truth.json), what was drawn "
@@ -139,6 +144,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   o.stitched_lumen.spacing_m = lumen_spacing_mm * 1e-3;
   o.stitched = !tubes;
+  o.heart_fit.enabled = !no_heart_fit;
   o.threads = threads;
   o.segmentation.bridging.enabled = o.segmentation.bridging.max_gap_mm > 0;
 
@@ -189,12 +195,16 @@ int main(int argc, char** argv) {
     anatomy::write_case(m.model, out_dir);
     modeling::write_model_overview(*m.model.ct, m.model.vessels, m.model.name + " - MODEL",
                                    (fs::path(out_dir) / "overview.png").string());
+    if (m.model.heart_vertices_m.cols() > 0)
+      modeling::write_heart_fit_picture(*m.model.ct, anatomy::template_heart_mesh(), m.model.heart,
+                                        anatomy::template_heart_mesh().vertices_m, m.model.heart_vertices_m,
+                                        m.model.name + " - HEART", (fs::path(out_dir) / "heart-fit.png").string());
     modeling::write_model_report((fs::path(out_dir) / "model-report.json").string(), ct_path, *m.model.ct, seed_mm, m,
                                  model_s);
     std::printf(
-        "done: %zu branches; case folder, model-report.json and overview.png in %s (%.1f s in all, peak %.0f "
-        "MiB)\n",
-        m.model.vessels.branches.size(), out_dir.c_str(), seconds_since(t0), modeling::peak_memory_mib());
+        "done: %zu branches; case folder, model-report.json, overview.png%s in %s (%.1f s in all, peak %.0f MiB)\n",
+        m.model.vessels.branches.size(), m.model.heart_vertices_m.cols() > 0 ? " and heart-fit.png" : "",
+        out_dir.c_str(), seconds_since(t0), modeling::peak_memory_mib());
     return 0;
   } catch (const CLI::ParseError& e) {
     return app.exit(e);

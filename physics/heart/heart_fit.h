@@ -1,7 +1,8 @@
 #pragma once
 // Fits the template heart under a coronary tree. Where the template does not match the vessels, the
 // heart paper deforms it toward the patient's CTA heart (volumetric registration, its ref. [8]);
-// there is no CTA here, so this is a local stand-in. The template was designed around phantom
+// a case modelled from a CTA carries that fit (modeling/heart/heart_elastic_fit.h, the case's
+// heart_vertices_m) and skips this; without one this is a local stand-in. The template was designed around phantom
 // seed 1; other seeds run their LM or RCA up to ~2.4 mm into it. A branch that sinks deeper than
 // the tolerance is lifted clear: the epicardium under it is dented radially until the vessel
 // touches it, the dent fading along the surface and into the wall. A tree the template already

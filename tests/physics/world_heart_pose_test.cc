@@ -5,7 +5,10 @@
 #include <Eigen/Geometry>
 #include <cstdio>
 
+#include "anatomy/heart/heart_mesh.h"
 #include "anatomy/phantom/coronary_phantom.h"
+#include "physics/heart/beating_heart.h"
+#include "physics/heart/heart_fit.h"
 #include "physics/motion/vessel_skin.h"
 #include "physics/world.h"
 
@@ -52,6 +55,36 @@ TEST(WorldHeartPose, APosedCaseBeatsAsThePhantomMovedRigidly) {
               differ, pa.size(), worst * 1e6);
   EXPECT_LT(differ, static_cast<int>(pa.size() / 50));
   EXPECT_LT(worst, 0.3e-3);
+}
+
+// a modelled patient's heart: the template's rest shape fitted to the CT replaces the template's
+// own (and is not dented: it was fitted under the same CT's vessels); a shape over another mesh is
+// refused with the counts
+TEST(WorldHeartPose, ACaseWithAFittedHeartBeatsOnThatShape) {
+  WorldSpec spec;
+  spec.heart_beat = HeartBeatParams{};
+  spec.vessel_motion = VesselMotionParams{};
+  const anatomy::VesselTree tree = anatomy::make_coronary_phantom({.seed = 3});  // one the template dents
+  const anatomy::HeartMesh& t = anatomy::template_heart_mesh();
+  Eigen::Matrix3Xd fitted = t.vertices_m * 1.02;  // 2 % larger: ~1 mm at the epicardium
+  World plain(spec, tree), w(spec, tree, nullptr, {}, fitted);
+  EXPECT_GT(plain.heart_fit().vertices_moved, 0);
+  EXPECT_EQ(w.heart_fit().vertices_moved, 0);
+  const Eigen::Matrix3Xd& rest = w.heart_state()->rest_positions_m();
+  ASSERT_EQ(rest.cols(), fitted.cols());
+  EXPECT_LT((rest - fitted).cwiseAbs().maxCoeff(), 1e-15);
+  InstrumentInput in;
+  for (int step = 0; step < 10; ++step) w.step(in);
+  EXPECT_TRUE(w.heart_state()->positions_m().allFinite());
+  try {
+    World bad(spec, tree, nullptr, {}, Eigen::Matrix3Xd(fitted.leftCols(10)));
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("fitted heart has 10 vertices, the template heart " +
+                                         std::to_string(t.vertices_m.cols())),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "anatomy/case/case_folder.h"
+#include "anatomy/heart/heart_mesh.h"
 #include "anatomy/case/slicer_markups.h"
 #include "anatomy/mesh/mesh_io.h"
 #include "anatomy/phantom/phantom_case.h"
@@ -186,6 +187,45 @@ TEST_F(CaseFolder, TheHeartPoseReadsBackAsWritten) {
   write_case(small_case(), dir_.string());
   EXPECT_FALSE(case_json().contains("heart"));
   EXPECT_TRUE(read_case(dir_.string()).heart.is_identity());
+}
+
+// a modelled patient's heart: the template's rest shape fitted to the CT, one vertex per template vertex
+TEST_F(CaseFolder, TheFittedHeartReadsBackAsWrittenAndAWrongOneIsRefused) {
+  Case c = small_case();
+  c.heart.scale = 1.05;
+  const Eigen::Matrix3Xd& t = template_heart_mesh().vertices_m;
+  c.heart_vertices_m = t;
+  c.heart_vertices_m.row(0).array() += 0.003 * (t.row(2).array() / 0.05).sin();  // up to 3 mm, every vertex
+  write_case(c, dir_.string());
+  EXPECT_EQ(case_json()["heart"]["rest_vertices"], "heart.node");
+  const Case b = read_case(dir_.string());
+  ASSERT_EQ(b.heart_vertices_m.cols(), t.cols());
+  EXPECT_LT((b.heart_vertices_m - c.heart_vertices_m).cwiseAbs().maxCoeff(), 1e-15);
+  // another mesh's vertices: the count is named against the template's
+  Case other = c;
+  other.heart_vertices_m = t.leftCols(100);
+  write_case(other, dir_.string());
+  EXPECT_NE(refusal().find("heart.node: nodes: 100 vertices, the template heart has " + std::to_string(t.cols())),
+            std::string::npos)
+      << refusal();
+  // a file in metres read as millimetres: every vertex collapses to the centre, ~50 mm off
+  Case metres = c;
+  metres.heart_vertices_m = 1e-3 * t;
+  write_case(metres, dir_.string());
+  EXPECT_NE(refusal().find("mm from the template's"), std::string::npos) << refusal();
+  // a broken line names the file and line
+  write_case(c, dir_.string());
+  {
+    std::ofstream f(dir_ / "heart.node");
+    f << t.cols() << " 3 0 0\n0 1 2 x\n";
+  }
+  EXPECT_NE(refusal().find("heart.node line 2: node coordinate must be a finite number"), std::string::npos)
+      << refusal();
+  // a path out of the folder
+  auto j = case_json();
+  j["heart"]["rest_vertices"] = "../heart.node";
+  set_case_json(j);
+  EXPECT_NE(refusal().find("heart.rest_vertices"), std::string::npos) << refusal();
 }
 
 TEST_F(CaseFolder, AHeartPoseThatIsNotARotationIsRefused) {

@@ -85,6 +85,18 @@ TEST(CtaPipeline, OneAorticSeedGivesTheNamedTreeOnTheTruth) {
                 anatomy::branch_length_m(cta.truth.branches[truth]) * 1e3, mean_mm, worst_mm);
     EXPECT_LT(mean_mm, 0.6) << name;  // one voxel
   }
+  // each tree leaves the aortic centerline in one straight line to its ostium: the guide catheter
+  // engages along the first segment, and the wire must leave it toward the ostium
+  for (const char* name : {"LM", "RCA"}) {
+    const auto& pts = tree.branches[tree.find(name)].points;
+    const auto& aorta = tree.branches[0];
+    size_t out = 1;
+    while (out + 1 < pts.size() && distance_to(aorta, pts[out].position_m) < aorta.points.front().radius_m) ++out;
+    const Vector3d first = pts[1].position_m - pts[0].position_m, chord = pts[out].position_m - pts[0].position_m;
+    const double deg = std::acos(std::clamp(first.normalized().dot(chord.normalized()), -1.0, 1.0)) * 180 / M_PI;
+    std::printf("%s: first segment %.1f deg off the line to its ostium (%.1f mm)\n", name, deg, chord.norm() * 1e3);
+    EXPECT_LT(deg, 5.0) << name;
+  }
   // a lumen for the SDF: one closed surface stitched across the bifurcations (every tree starts
   // on the aortic centerline, so the aorta and both trees are one piece)
   EXPECT_GT(m.model.lumen.triangles.size(), 1000u);

@@ -74,7 +74,8 @@ int main(int argc, char** argv) {
       "pcisim-model: turns a patient's coronary CT angiogram (CTA) into a pcisim case folder: the contrast-filled\n"
       "lumen is segmented from one seed in the ascending aorta, clipped to the aorta and the coronary trees,\n"
       "its centerlines traced with their branches, the radius measured on every cross-section, the lumen lofted\n"
-      "and the branches named (LM, LAD, LCx, RCA, diagonals, marginals). docs/modeling.md describes each stage.\n\n"
+      "and the branches named (LM, LAD, LCx, RCA, diagonals, marginals); the template heart is placed under the\n"
+      "tree and fitted to the CT's heart (heart.node, heart-fit.png). docs/modeling.md describes each stage.\n\n"
       "  pcisim-model --ct ct.nrrd --seed 12.5,-140,-95 --out cases/patient1\n"
       "  pcisim-model --make-phantom-cta --seed 3 --out cta3   (a synthetic CTA with its truth)\n"};
   std::string ct_path, out_dir, voxel, dims;

@@ -36,9 +36,9 @@ double mean(const std::vector<double>& v) {
 
 // the epicardium of a mesh: its vertices (global indices), their rings, its triangles
 struct Epicardium {
-  std::vector<int> vertex;                 // local -> mesh vertex
-  std::vector<int> local;                  // mesh vertex -> local (-1 off the epicardium)
-  std::vector<std::array<int, 3>> faces;   // local indices, counter-clockwise from outside
+  std::vector<int> vertex;                   // local -> mesh vertex
+  std::vector<int> local;                    // mesh vertex -> local (-1 off the epicardium)
+  std::vector<std::array<int, 3>> faces;     // local indices, counter-clockwise from outside
   std::vector<std::vector<int>> neighbours;  // one ring, local
 };
 
@@ -287,8 +287,8 @@ double outline_along_normal_mm(const FloatImage& field, const Vector3d& p_mm, co
   v.resize(2 * (steps + run) + 1);
   for (size_t s = 0; s < v.size(); ++s) {
     const double t = (static_cast<double>(s) - steps - run) * o.step_mm;
-    v[s] = field.at(field.grid.continuous_index(p_mm + t * normal), std::numeric_limits<float>::quiet_NaN()) -
-           o.tissue_hu;
+    v[s] =
+        field.at(field.grid.continuous_index(p_mm + t * normal), std::numeric_limits<float>::quiet_NaN()) - o.tissue_hu;
   }
   // heart (above) for run_mm behind, outside (at or below) for run_mm ahead: a noise dip in the
   // heart or a speck in the fat is no outline
@@ -358,9 +358,10 @@ HeartElasticFit fit_heart_elastic(const anatomy::Volume& ct, const anatomy::Vess
     fit.min_tet_volume_ratio = min_volume_ratio(template_mesh, x0, x);
   }
   if (fit.backoff < 1)
-    fit.notes.push_back(fmt::format("the fit was scaled back to {:.0f} % to keep every tetrahedron above {:.0f} % of "
-                                    "its volume",
-                                    100 * fit.backoff, 100 * o.min_tet_volume_fraction));
+    fit.notes.push_back(
+        fmt::format("the fit was scaled back to {:.0f} % to keep every tetrahedron above {:.0f} % of "
+                    "its volume",
+                    100 * fit.backoff, 100 * o.min_tet_volume_fraction));
 
   const Targets after = find_targets(field, e, x, vertex_normals(e, x), o);
   outline_stats(after, &fit.outline_after_mean_mm, &fit.outline_after_p95_mm);

@@ -35,15 +35,15 @@ struct HeartElasticFitOptions {
   bool enabled = true;
   // heart (myocardium 40..100, blood, enhanced chambers) above, epicardial fat (-100) and lung below
   double tissue_hu = -30;
-  double block_mm = 1.0;    // the CT averaged over blocks of about this size (per axis, whole voxels)
-  double search_mm = 15;    // along each epicardial normal, in and out
-  double step_mm = 0.25;    // sampling step of that search
-  double run_mm = 2.0;      // a crossing counts with heart this far behind it and outside this far ahead
-  double outlier_mm = 8;    // a target this far from its neighbours' median is dropped
-  double smoothing = 2.0;   // weight of the surface's edges against the targets (step 3)
+  double block_mm = 1.0;   // the CT averaged over blocks of about this size (per axis, whole voxels)
+  double search_mm = 15;   // along each epicardial normal, in and out
+  double step_mm = 0.25;   // sampling step of that search
+  double run_mm = 2.0;     // a crossing counts with heart this far behind it and outside this far ahead
+  double outlier_mm = 8;   // a target this far from its neighbours' median is dropped
+  double smoothing = 2.0;  // weight of the surface's edges against the targets (step 3)
   int rounds = 4;
-  double vessel_clearance_mm = 1.0;        // painted out around each coronary lumen (radius + this)
-  double min_tet_volume_fraction = 0.1;    // the backoff's bound (step 5)
+  double vessel_clearance_mm = 1.0;      // painted out around each coronary lumen (radius + this)
+  double min_tet_volume_fraction = 0.1;  // the backoff's bound (step 5)
 };
 
 struct HeartElasticFit {
@@ -56,9 +56,9 @@ struct HeartElasticFit {
   // it: with the template as placed, and fitted (what the fit leaves)
   double outline_before_mean_mm = 0, outline_before_p95_mm = 0;
   double outline_after_mean_mm = 0, outline_after_p95_mm = 0;
-  double move_mean_mm = 0, move_max_mm = 0;  // vertices' displacement, case frame
-  double backoff = 1;                        // fraction of the displacement kept (1: all)
-  double min_tet_volume_ratio = 1;           // smallest fitted / placed tet volume
+  double move_mean_mm = 0, move_max_mm = 0;           // vertices' displacement, case frame
+  double backoff = 1;                                 // fraction of the displacement kept (1: all)
+  double min_tet_volume_ratio = 1;                    // smallest fitted / placed tet volume
   double volume_placed_ml = 0, volume_fitted_ml = 0;  // enclosed by the epicardium, case frame
   std::vector<std::string> notes;
 };

@@ -36,7 +36,8 @@ struct SurfaceError {
 };
 
 // |distance to the true sphere| over the epicardial vertices (template-frame vertices, posed)
-SurfaceError against_truth(const anatomy::PhantomCta& cta, const anatomy::HeartPose& pose, const Eigen::Matrix3Xd& v_m) {
+SurfaceError against_truth(const anatomy::PhantomCta& cta, const anatomy::HeartPose& pose,
+                           const Eigen::Matrix3Xd& v_m) {
   const anatomy::HeartMesh& t = anatomy::template_heart_mesh();
   std::vector<char> epi(t.vertices_m.cols(), 0);
   for (size_t f = 0; f < t.faces.size(); ++f)

@@ -21,7 +21,7 @@ struct CosseratRodParams {
   // rod's frames are so light next to its nodes that Gauss-Seidel hands most of each
   // stretch-shear correction to the frame, which the bend-twist constraint hands back: the
   // nodes hardly feel the bending stiffness and a bent rod stays bent (measured: the default
-  // wire, bent at 10 x the step, still bent after 10 s at scale 1, straight at 300). Static
+  // wire, bent at 10 x the step and unloaded, still bent after 20 s at scale 1; straight at 100). Static
   // answers do not depend on it; bending and twisting waves are slowed. [1, 1e9]
   double rotational_inertia_scale = 100.0;
   double damping_per_s = 0.0;  // velocity damping rate (linear and angular), [0, inf)

@@ -1,11 +1,12 @@
 #pragma once
 // The two constraints of the discrete Cosserat rod (Kugelstadt & Schoemer 2016, "Position and
-// orientation based Cosserat rods", SCA 2016; cited below as [cosserat sec N]): a stretch-shear
+// orientation based Cosserat rods", SCA 2016; cited below as [cosserat, <constraint>]): a stretch-shear
 // constraint per segment couples its two end nodes to its orientation quaternion, a bend-twist
 // constraint per pair of neighbouring segments couples their quaternions. Each is written once
 // as a strain (used by the static solver, rod_statics.h, through the energy) and once as an XPBD
 // projection (used by the dynamic step). The paper's text is not in the shared papers folder:
-// the section names are the paper's, the derivations of the projections below are ours.
+// the constraint names are the paper's; its section and equation numbers are not cited because
+// we could not check them here, and the derivations of the projections below are ours.
 //
 // Energies: stretch-shear 1/2 l Gamma_m^T diag(GA, GA, EA) Gamma_m per segment, bend-twist
 // 1/2 l_b Omega^T diag(EI, EI, GJ) Omega per pair, so the XPBD compliances are the inverses of
@@ -15,13 +16,13 @@
 
 namespace pcisim::physics::rod {
 
-// [cosserat sec 4.1, stretch and shear] Gamma = (p2 - p1) / l - d3(q), d3(q) = q e3 q^-1: zero
+// [cosserat, stretch-shear constraint] Gamma = (p2 - p1) / l - d3(q), d3(q) = q e3 q^-1: zero
 // when the segment has its rest length and the material frame's third director is its
 // tangent. Returned in the material frame of q (shear x, shear y, stretch z).
 Eigen::Vector3d stretch_shear_strain(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, const Eigen::Quaterniond& q,
                                      double rest_length_m);
 
-// [cosserat sec 4.2, bend and twist] Omega = (2 / l_b) Im(conj(q1) q2) - Omega_0, the discrete
+// [cosserat, bend-twist constraint] Omega = (2 / l_b) Im(conj(q1) q2) - Omega_0, the discrete
 // Darboux vector (bend x, bend y, twist z in q1's frame) minus its rest value; of q2 and -q2
 // (the same rotation) the one nearer the rest Darboux vector is taken, as the paper does.
 Eigen::Vector3d bend_twist_strain(const Eigen::Quaterniond& q1, const Eigen::Quaterniond& q2, double dual_length_m,

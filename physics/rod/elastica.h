@@ -1,11 +1,11 @@
 #pragma once
 // Exact planar elastica answers, the analytic reference the rod models are checked against
-// (issue 15). An inextensible, unshearable rod of length L and bending stiffness EI obeys
-// EI theta''(s) = m'(s) terms of the load; each case below is a two-point boundary problem in
-// the arc length s, solved by shooting: RK4 from the free tip (where theta' = 0 and the tip
-// angle is the unknown) back to the clamp, and bisection on the tip angle until theta(0) = 0.
-// Everything is nondimensional (s / L, loads as load parameters), so it holds in any units.
-// Not on any hot path: no allocation, a few milliseconds per answer.
+// (issue 15). An inextensible, unshearable rod of length L and bending stiffness EI, tangent
+// angle theta(s): moment balance gives theta'' as a function of the load; each case below is a
+// two-point boundary problem in the arc length s, solved by shooting: RK4 from the free tip (where theta' = 0 and the
+// tip angle is the unknown) back to the clamp, and bisection on the tip angle until theta(0) = 0. Everything is
+// nondimensional (s / L, loads as load parameters), so it holds in any units. Not on any hot path: no allocation, some
+// tens of milliseconds per answer.
 
 namespace pcisim::physics::rod {
 

@@ -1,0 +1,79 @@
+#include "physics/rod/cosserat_constraints.h"
+
+namespace pcisim::physics::rod {
+namespace {
+
+Eigen::Quaterniond pure(const Eigen::Vector3d& v) {
+  return Eigen::Quaterniond(0.0, v.x(), v.y(), v.z());
+}
+
+void add_scaled(Eigen::Quaterniond& q, double s, const Eigen::Quaterniond& d) {
+  q.coeffs() += s * d.coeffs();
+}
+
+// +1 or -1: the sign of q2 that puts the Darboux vector nearer its rest value
+double darboux_sign(const Eigen::Quaterniond& relative, double dual_length_m, const Eigen::Vector3d& rest) {
+  const Eigen::Vector3d omega = (2.0 / dual_length_m) * relative.vec();
+  return (omega - rest).squaredNorm() <= (omega + rest).squaredNorm() ? 1.0 : -1.0;
+}
+
+}  // namespace
+
+Eigen::Vector3d stretch_shear_strain(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, const Eigen::Quaterniond& q,
+                                     double rest_length_m) {
+  const Eigen::Vector3d gamma_world = (p2 - p1) / rest_length_m - q * Eigen::Vector3d::UnitZ();
+  return q.conjugate() * gamma_world;
+}
+
+Eigen::Vector3d bend_twist_strain(const Eigen::Quaterniond& q1, const Eigen::Quaterniond& q2, double dual_length_m,
+                                  const Eigen::Vector3d& rest_darboux_per_m) {
+  const Eigen::Quaterniond relative = q1.conjugate() * q2;
+  const double s = darboux_sign(relative, dual_length_m, rest_darboux_per_m);
+  return s * (2.0 / dual_length_m) * relative.vec() - rest_darboux_per_m;
+}
+
+void project_stretch_shear(Eigen::Vector3d& p1, double w1, Eigen::Vector3d& p2, double w2, Eigen::Quaterniond& q,
+                           double wq, double rest_length_m, const Eigen::Vector3d& alpha_tilde,
+                           Eigen::Vector3d& lambda) {
+  const double l = rest_length_m;
+  const Eigen::Vector3d gamma = stretch_shear_strain(p1, p2, q, l);  // material frame
+  // shear components (x, y) are taken up by the nodes and the rotation; the stretch component
+  // (z, along d3) by the nodes alone: a unit quaternion cannot lengthen d3 (that gradient,
+  // 2 d3 q e3^* = 2 q, points along q and the normalisation removes it)
+  const double a_nodes = (w1 + w2) / (l * l);
+  Eigen::Vector3d dlambda;
+  for (int k = 0; k < 3; ++k) {
+    const double a = k < 2 ? a_nodes + 4.0 * wq : a_nodes;
+    dlambda[k] = -(gamma[k] + alpha_tilde[k] * lambda[k]) / (a + alpha_tilde[k]);
+  }
+  lambda += dlambda;
+  const Eigen::Vector3d dlambda_world = q * dlambda;
+  p1 -= (w1 / l) * dlambda_world;
+  p2 += (w2 / l) * dlambda_world;
+  // dq = -2 wq (dlambda q e3^*), e3^* = -e3, with the shear part of dlambda only
+  const Eigen::Quaterniond e3_conj(0.0, 0.0, 0.0, -1.0);
+  const Eigen::Vector3d shear_world = q * Eigen::Vector3d(dlambda.x(), dlambda.y(), 0.0);
+  add_scaled(q, -2.0 * wq, pure(shear_world) * q * e3_conj);
+  q.normalize();
+}
+
+void project_bend_twist(Eigen::Quaterniond& q1, double w1, Eigen::Quaterniond& q2, double w2, double dual_length_m,
+                        const Eigen::Vector3d& rest_darboux_per_m, const Eigen::Vector3d& alpha_tilde,
+                        Eigen::Vector3d& lambda) {
+  const double l = dual_length_m;
+  const Eigen::Quaterniond relative = q1.conjugate() * q2;
+  const double s = darboux_sign(relative, l, rest_darboux_per_m);
+  const Eigen::Vector3d omega = s * (2.0 / l) * relative.vec() - rest_darboux_per_m;
+  const double a = 4.0 * (w1 + w2) / (l * l);
+  Eigen::Vector3d dlambda;
+  for (int k = 0; k < 3; ++k) dlambda[k] = -(omega[k] + alpha_tilde[k] * lambda[k]) / (a + alpha_tilde[k]);
+  lambda += dlambda;
+  const Eigen::Quaterniond v = pure(dlambda);
+  const Eigen::Quaterniond q1_old = q1;
+  add_scaled(q1, -w1 * s * 2.0 / l, q2 * v);
+  add_scaled(q2, w2 * s * 2.0 / l, q1_old * v);
+  q1.normalize();
+  q2.normalize();
+}
+
+}  // namespace pcisim::physics::rod

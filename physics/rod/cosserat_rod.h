@@ -1,0 +1,87 @@
+#pragma once
+// A discrete Cosserat rod solved by XPBD (Kugelstadt & Schoemer 2016, "Position and orientation
+// based Cosserat rods"; Macklin et al. 2016, XPBD): positions at N + 1 nodes, one unit
+// quaternion per segment (its material frame; the third director is the tangent), a
+// stretch-shear constraint per segment and a bend-twist constraint per pair of neighbouring
+// segments (cosserat_constraints.h). Node 0 is clamped at the hub: its position and a clamp
+// frame are prescribed. The clamp frame is tied to segment 0 by a bend-twist constraint over
+// half a segment (the clamp sits at s = 0, segment 0's frame at s = l / 2): fixing segment 0's
+// own orientation instead would move the clamp to l / 2 and shorten the free rod by half a
+// segment, a first-order error (about 1.5 / N in the cantilever's tip deflection).
+//
+// Inertia: lumped node masses (mu l inside, mu l / 2 at the tip) and, as in the paper, one
+// scalar rotational inertia per segment, I = mu l (l^2 / 12 + r^2 / 4) (a bar about an axis
+// across it; the axial moment of a thin wire, mu l r^2 / 2, is far smaller and is not used).
+//
+// Everything is allocated at construction; step() allocates nothing.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <span>
+#include <vector>
+
+#include "physics/rod/cosserat_rod_params.h"
+
+namespace pcisim::physics::rod {
+
+class CosseratRod {
+ public:
+  // a straight rod at rest from clamp_position_m along clamp_orientation's third director (e3);
+  // throws std::invalid_argument on bad params
+  explicit CosseratRod(const CosseratRodParams& params,
+                       const Eigen::Vector3d& clamp_position_m = Eigen::Vector3d::Zero(),
+                       const Eigen::Quaterniond& clamp_orientation = Eigen::Quaterniond::Identity());
+
+  // advances dt_s: params.substeps XPBD substeps of params.iterations Gauss-Seidel sweeps
+  void step(double dt_s);
+
+  // a dead force on a node (kept until changed); node 0 is clamped and ignores it
+  void set_node_force_n(int node, const Eigen::Vector3d& force_n);
+  void clear_node_forces();
+  void set_gravity_m_per_s2(const Eigen::Vector3d& gravity) { params_.gravity_m_per_s2 = gravity; }
+  // moves the hub: the clamped node and the clamp frame (insertion and rotation)
+  void set_clamp(const Eigen::Vector3d& position_m, const Eigen::Quaterniond& orientation);
+
+  int segment_count() const { return n_; }
+  int node_count() const { return n_ + 1; }
+  double segment_length_m() const { return l_; }
+  const CosseratRodParams& params() const { return params_; }
+  std::span<const Eigen::Vector3d> nodes_m() const { return x_; }
+  std::span<Eigen::Vector3d> mutable_nodes_m() { return x_; }
+  std::span<const Eigen::Quaterniond> orientations() const { return q_; }
+  std::span<Eigen::Quaterniond> mutable_orientations() { return q_; }
+  std::span<const Eigen::Vector3d> velocities_m_per_s() const { return v_; }
+  const Eigen::Quaterniond& clamp_orientation() const { return clamp_q_; }
+  const Eigen::Vector3d& node_force_n(int node) const { return force_[node]; }
+  double node_mass_kg(int node) const { return mass_[node]; }
+  // stiffness per material component: stretch-shear (GA, GA, EA) of a segment, bend-twist
+  // (EI, EI, GJ) of a pair. Pair 0 joins the clamp frame and segment 0, pair j segments j-1, j.
+  const Eigen::Vector3d& stretch_shear_stiffness(int segment) const { return ss_stiffness_[segment]; }
+  const Eigen::Vector3d& bend_twist_stiffness(int pair) const { return bt_stiffness_[pair]; }
+  double dual_length_m(int pair) const { return pair == 0 ? 0.5 * l_ : l_; }
+  const Eigen::Vector3d& rest_darboux_per_m(int pair) const { return rest_darboux_[pair]; }
+  // the frame before pair j's second segment: the clamp frame for pair 0
+  const Eigen::Quaterniond& pair_first_frame(int pair) const { return pair == 0 ? clamp_q_ : q_[pair - 1]; }
+  // largest node speed, for "came to rest" checks
+  double max_speed_m_per_s() const;
+  bool all_finite() const;
+
+ private:
+  void predict(double h);
+  void solve_constraints(double h);
+  void guard_stretch();
+  void update_velocities(double h);
+
+  CosseratRodParams params_;
+  int n_;
+  double l_;
+  std::vector<Eigen::Vector3d> x_, x_old_, v_, force_;
+  std::vector<double> mass_, inv_mass_;
+  std::vector<Eigen::Quaterniond> q_, q_old_;
+  std::vector<Eigen::Vector3d> omega_;  // angular velocity per segment, material frame
+  std::vector<double> inv_inertia_q_;   // inverse "mass" of the quaternion as a 4-vector, 1 / (4 I)
+  std::vector<Eigen::Vector3d> ss_stiffness_, ss_compliance_, ss_lambda_;
+  std::vector<Eigen::Vector3d> bt_stiffness_, bt_compliance_, bt_lambda_, rest_darboux_;
+  Eigen::Quaterniond clamp_q_;
+};
+
+}  // namespace pcisim::physics::rod

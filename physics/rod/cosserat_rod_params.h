@@ -1,0 +1,45 @@
+#pragma once
+// Parameters of the discrete Cosserat rod (Kugelstadt & Schoemer 2016, "Position and
+// orientation based Cosserat rods"). Stiffnesses are the section products (E I, G J, E A, G A)
+// so a wire's datasheet figures go in directly; the constraints' compliances follow from them
+// and the segment length (cosserat_constraints.h). Defaults: the order of magnitude of a
+// 0.014-inch steel-core coronary wire (core 0.3 mm, E 200 GPa, G 77 GPa), not a cited preset.
+#include <Eigen/Core>
+
+namespace pcisim::physics::rod {
+
+struct CosseratRodParams {
+  double length_m = 0.30;                  // (0, 10]
+  int segments = 50;                       // [1, 10000]
+  double bending_stiffness_nm2 = 8e-5;     // E I, (0, inf)
+  double torsional_stiffness_nm2 = 6e-5;   // G J, (0, inf)
+  double axial_stiffness_n = 1.4e4;        // E A, (0, inf)
+  double shear_stiffness_n = 4.9e3;        // kappa G A, (0, inf)
+  double mass_per_length_kg_per_m = 7e-4;  // (0, inf)
+  double outer_diameter_m = 0.356e-3;      // for the segments' rotational inertia, [0, inf)
+  // rotary inertia scaling (as explicit beam codes do): the frames' inertia times this. A thin
+  // rod's frames are so light next to its nodes that Gauss-Seidel hands most of each
+  // stretch-shear correction to the frame, which the bend-twist constraint hands back: the
+  // nodes hardly feel the bending stiffness and a bent rod stays bent (measured: the default
+  // wire, bent at 10 x the step and unloaded, still bent after 20 s at scale 1; straight at 100). Static
+  // answers do not depend on it; bending and twisting waves are slowed. [1, 1e9]
+  double rotational_inertia_scale = 100.0;
+  double damping_per_s = 0.0;  // velocity damping rate (linear and angular), [0, inf)
+  int substeps = 10;           // XPBD substeps per step, [1, 10000]
+  int iterations = 4;          // Gauss-Seidel sweeps per substep, [1, 10000]
+  // after the sweeps, a segment longer or shorter than (1 +- stretch_guard) l is brought back
+  // to that bound, from the clamp outwards (follow-the-leader, Mueller et al. 2012, "Fast
+  // simulation of inextensible hair and fur"): a safeguard for unconverged sweeps, inactive
+  // when they converge. 0 turns it off. [0, 1]
+  double stretch_guard = 0.01;
+  Eigen::Vector3d gravity_m_per_s2{0, 0, 0};  // finite
+  // a softer distal tip: the last tip_length_m of the rod has its stiffnesses (EI, GJ) times
+  // tip_stiffness_ratio (e.g. 1e-3 for a 1:1000 tip-to-body ratio). [0, length_m], (0, 1e6]
+  double tip_length_m = 0.0;
+  double tip_stiffness_ratio = 1.0;
+};
+
+// throws std::invalid_argument naming the first field out of range
+void validate(const CosseratRodParams& params);
+
+}  // namespace pcisim::physics::rod

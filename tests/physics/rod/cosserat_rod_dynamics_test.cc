@@ -11,7 +11,7 @@
 #include "physics/rod/elastica.h"
 #include "physics/rod/rod_statics.h"
 #include "tests/common/counting_new.h"
-#include "tests/physics/rod/rod_test_support.h"
+#include "physics/rod/unit_cantilever.h"
 
 namespace pcisim::physics::rod {
 namespace {
@@ -20,21 +20,21 @@ constexpr double kDt = 1.0 / 30.0;  // the physics thread's step
 
 // a unit cantilever with a tip load alpha, stepped at 30 Hz for seconds_s with damping
 CosseratRod run_tip_load(int segments, int substeps, int iterations, double alpha, double seconds_s) {
-  CosseratRodParams p = test::unit_cantilever(segments);
+  CosseratRodParams p = unit_cantilever(segments);
   p.substeps = substeps;
   p.iterations = iterations;
   p.damping_per_s = 5.0;
-  CosseratRod rod = test::make_rod(p);
+  CosseratRod rod = make_unit_cantilever(p);
   rod.set_node_force_n(segments, Eigen::Vector3d(0.0, -alpha, 0.0));
   for (int i = 0; i < static_cast<int>(seconds_s / kDt); ++i) rod.step(kDt);
   return rod;
 }
 
 double static_tip_dv(int segments, double alpha) {
-  CosseratRod rod = test::make_rod(test::unit_cantilever(segments));
+  CosseratRod rod = make_unit_cantilever(unit_cantilever(segments));
   rod.set_node_force_n(segments, Eigen::Vector3d(0.0, -alpha, 0.0));
   EXPECT_TRUE(solve_static(rod).converged);
-  return test::tip_of(rod).dv_over_l;
+  return cantilever_tip(rod).dv_over_l;
 }
 
 // every node within reach of the clamp, every segment near its rest length, frames of unit length
@@ -53,7 +53,7 @@ TEST(CosseratRodDynamics, ComesToRestAtTheStaticAnswerWhenTheSweepsConverge) {
   // 20 segments, 20 substeps x 40 sweeps at 30 Hz: 8 s of damped motion
   const CosseratRod rod = run_tip_load(20, 20, 40, 1.0, 8.0);
   const double reference = static_tip_dv(20, 1.0);
-  const double dv = test::tip_of(rod).dv_over_l;
+  const double dv = cantilever_tip(rod).dv_over_l;
   std::printf("XPBD 20 segments, 20 x 40: tip %.6f, static %.6f (%.4f %%)\n", dv, reference,
               100.0 * (dv - reference) / reference);
   EXPECT_NEAR(dv, reference, 1e-3 * reference);
@@ -67,7 +67,7 @@ TEST(CosseratRodDynamics, FortyByTenSweepsAtDefaultResolutionWithinOnePercent) {
   for (double alpha : {1.0, 10.0}) {
     const CosseratRod rod = run_tip_load(50, 40, 10, alpha, 10.0);
     const double exact = cantilever_tip_load(alpha).dv_over_l;
-    const double dv = test::tip_of(rod).dv_over_l;
+    const double dv = cantilever_tip(rod).dv_over_l;
     std::printf("XPBD 50 segments, 40 x 10, alpha %4.1f: tip %.5f, elastica %.5f (%.3f %%)\n", alpha, dv, exact,
                 100.0 * (dv - exact) / exact);
     EXPECT_NEAR(dv, exact, 0.01 * exact) << alpha;
@@ -82,7 +82,7 @@ TEST(CosseratRodDynamics, SagBeyondTheEquilibriumFallsAsSweepsRise) {
   const double reference = static_tip_dv(20, 1.0);
   double previous = 1e9;
   for (int iterations : {4, 16, 64}) {
-    const double dv = test::tip_of(run_tip_load(20, 20, iterations, 1.0, 8.0)).dv_over_l;
+    const double dv = cantilever_tip(run_tip_load(20, 20, iterations, 1.0, 8.0)).dv_over_l;
     const double excess = 100.0 * (dv - reference) / reference;
     std::printf("XPBD 20 segments, 20 substeps x %2d sweeps: tip sags %.3f %% beyond the equilibrium\n", iterations,
                 excess);
@@ -98,7 +98,7 @@ TEST(CosseratRodDynamics, TenTimesTheStepStaysFiniteAndBounded) {
   CosseratRodParams p;
   p.gravity_m_per_s2 = Eigen::Vector3d(0.0, -9.81, 0.0);
   p.damping_per_s = 2.0;
-  CosseratRod rod = test::make_rod(p);
+  CosseratRod rod = make_unit_cantilever(p);
   const double alpha_force_n = 10.0 * p.bending_stiffness_nm2 / (p.length_m * p.length_m);
   rod.set_node_force_n(p.segments, Eigen::Vector3d(0.0, -alpha_force_n, 0.0));
   for (int i = 0; i < 60; ++i) {
@@ -130,12 +130,12 @@ TEST(CosseratRodDynamics, TenTimesTheStepStaysFiniteAndBounded) {
 TEST(CosseratRodDynamics, StiffnessRatioOfOneToAThousandStaysFiniteAndBounded) {
   // the last 10 % of a unit cantilever a thousand times softer than the body, under its own
   // weight (w = 3) and a tip force, at 30 Hz
-  CosseratRodParams p = test::unit_cantilever(50);
+  CosseratRodParams p = unit_cantilever(50);
   p.tip_length_m = 0.1;
   p.tip_stiffness_ratio = 1e-3;
   p.gravity_m_per_s2 = Eigen::Vector3d(0.0, -3.0, 0.0);
   p.damping_per_s = 2.0;
-  CosseratRod rod = test::make_rod(p);
+  CosseratRod rod = make_unit_cantilever(p);
   rod.set_node_force_n(50, Eigen::Vector3d(0.0, -0.5, 0.0));
   for (int i = 0; i < 300; ++i) {
     rod.step(kDt);
@@ -148,12 +148,12 @@ TEST(CosseratRodDynamics, StiffnessRatioOfOneToAThousandStaysFiniteAndBounded) {
 }
 
 TEST(CosseratRodDynamics, HubTurnReachesTheTip) {
-  CosseratRodParams p = test::unit_cantilever(20);
+  CosseratRodParams p = unit_cantilever(20);
   p.substeps = 20;
   p.iterations = 20;
   p.damping_per_s = 5.0;
-  CosseratRod rod = test::make_rod(p);
-  const Eigen::Quaterniond turned = Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitX()) * test::along_x();
+  CosseratRod rod = make_unit_cantilever(p);
+  const Eigen::Quaterniond turned = Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitX()) * along_x();
   rod.set_clamp(Eigen::Vector3d::Zero(), turned);
   for (int i = 0; i < 120; ++i) rod.step(kDt);
   ASSERT_TRUE(rod.all_finite());
@@ -163,7 +163,7 @@ TEST(CosseratRodDynamics, HubTurnReachesTheTip) {
 TEST(CosseratRodDynamics, StepAllocatesNothing) {
   CosseratRodParams p;
   p.gravity_m_per_s2 = Eigen::Vector3d(0.0, 0.0, -9.81);
-  CosseratRod rod = test::make_rod(p);
+  CosseratRod rod = make_unit_cantilever(p);
   rod.step(kDt);
   long allocations = -1;
   {

@@ -8,26 +8,26 @@
 
 #include "physics/rod/elastica.h"
 #include "physics/rod/rod_statics.h"
-#include "tests/physics/rod/rod_test_support.h"
+#include "physics/rod/unit_cantilever.h"
 
 namespace pcisim::physics::rod {
 namespace {
 
-test::Tip static_tip_load(int segments, double alpha) {
-  CosseratRod rod = test::make_rod(test::unit_cantilever(segments));
+CantileverTip static_tip_load(int segments, double alpha) {
+  CosseratRod rod = make_unit_cantilever(unit_cantilever(segments));
   rod.set_node_force_n(segments, Eigen::Vector3d(0.0, -alpha, 0.0));
   const StaticSolveResult r = solve_static(rod);
   EXPECT_TRUE(r.converged) << segments << " segments, alpha " << alpha;
-  return test::tip_of(rod);
+  return cantilever_tip(rod);
 }
 
-test::Tip static_self_weight(int segments, double w) {
-  CosseratRodParams p = test::unit_cantilever(segments);
+CantileverTip static_self_weight(int segments, double w) {
+  CosseratRodParams p = unit_cantilever(segments);
   p.gravity_m_per_s2 = Eigen::Vector3d(0.0, -w, 0.0);  // mu = L = EI = 1: w = mu g L^3 / EI
-  CosseratRod rod = test::make_rod(p);
+  CosseratRod rod = make_unit_cantilever(p);
   const StaticSolveResult r = solve_static(rod);
   EXPECT_TRUE(r.converged) << segments << " segments, w " << w;
-  return test::tip_of(rod);
+  return cantilever_tip(rod);
 }
 
 double percent(double value, double reference) {
@@ -39,7 +39,7 @@ TEST(CosseratRodStatic, TipLoadWithinOnePercentAtDefaultResolution) {
   ASSERT_EQ(segments, 50);
   for (double alpha : {1.0, 2.0, 5.0, 10.0}) {
     const ElasticaTip exact = cantilever_tip_load(alpha);
-    const test::Tip tip = static_tip_load(segments, alpha);
+    const CantileverTip tip = static_tip_load(segments, alpha);
     std::printf("tip load alpha %4.1f: dv %.3f %% dh %.3f %% angle %.3f %%\n", alpha,
                 percent(tip.dv_over_l, exact.dv_over_l), percent(tip.dh_over_l, exact.dh_over_l),
                 percent(tip.angle_rad, exact.angle_rad));
@@ -66,7 +66,7 @@ TEST(CosseratRodStatic, TipLoadErrorFallsWithResolutionAtSecondOrder) {
 TEST(CosseratRodStatic, SelfWeightWithinOnePercentAtDefaultResolution) {
   for (double w : {1.0, 3.0, 10.0, 30.0}) {
     const ElasticaTip exact = cantilever_self_weight(w);
-    const test::Tip tip = static_self_weight(50, w);
+    const CantileverTip tip = static_self_weight(50, w);
     std::printf("self weight w %4.1f: dv %.3f %% dh %.3f %% angle %.3f %%\n", w,
                 percent(tip.dv_over_l, exact.dv_over_l), percent(tip.dh_over_l, exact.dh_over_l),
                 percent(tip.angle_rad, exact.angle_rad));
@@ -77,8 +77,8 @@ TEST(CosseratRodStatic, SelfWeightWithinOnePercentAtDefaultResolution) {
 
 // the clamped-free column under a dead axial load r P_cr: a small lateral push at the tip picks
 // the buckled branch (or shows there is none), then the push is removed and Newton converges
-test::Tip static_column(int segments, double load_ratio) {
-  CosseratRod rod = test::make_rod(test::unit_cantilever(segments));
+CantileverTip static_column(int segments, double load_ratio) {
+  CosseratRod rod = make_unit_cantilever(unit_cantilever(segments));
   const double axial_n = load_ratio * euler_load_n(1.0, 1.0);
   rod.set_node_force_n(segments, Eigen::Vector3d(-axial_n, -0.01, 0.0));
   solve_static(rod);  // through the bifurcation: need not converge to the tolerance
@@ -86,7 +86,7 @@ test::Tip static_column(int segments, double load_ratio) {
   StaticSolveOptions options;
   options.load_steps = 1;
   EXPECT_TRUE(solve_static(rod, options).converged) << load_ratio;
-  return test::tip_of(rod);
+  return cantilever_tip(rod);
 }
 
 TEST(CosseratRodStatic, BuckledColumnWithinOnePercentAtDefaultResolution) {
@@ -94,14 +94,14 @@ TEST(CosseratRodStatic, BuckledColumnWithinOnePercentAtDefaultResolution) {
   // 0.08, 0.07 %)
   for (double r : {1.1, 2.0, 4.0}) {
     const ElasticaTip exact = column_post_buckling(r);
-    const test::Tip tip = static_column(50, r);
+    const CantileverTip tip = static_column(50, r);
     std::printf("column P/P_cr %.1f: dv %.3f %% dh %.3f %%\n", r, percent(tip.dv_over_l, exact.dv_over_l),
                 percent(tip.dh_over_l, exact.dh_over_l));
     EXPECT_LT(percent(tip.dv_over_l, exact.dv_over_l), 0.5) << r;
     EXPECT_LT(percent(tip.dh_over_l, exact.dh_over_l), 0.5) << r;
   }
   // below the Euler load the push is forgotten: the column is straight again
-  const test::Tip below = static_column(50, 0.9);
+  const CantileverTip below = static_column(50, 0.9);
   EXPECT_LT(std::abs(below.dv_over_l), 1e-6);
 }
 
@@ -109,20 +109,20 @@ TEST(CosseratRodStatic, AnswerDoesNotDependOnTheClampsDirection) {
   // the same cantilever clamped along a skew direction, loaded perpendicular to it
   const Eigen::Vector3d axis = Eigen::Vector3d(1.0, 2.0, -0.5).normalized();
   const Eigen::Vector3d down = axis.unitOrthogonal();
-  CosseratRod rod(test::unit_cantilever(20), Eigen::Vector3d(0.3, -0.2, 0.1),
+  CosseratRod rod(unit_cantilever(20), Eigen::Vector3d(0.3, -0.2, 0.1),
                   Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), axis));
   rod.set_node_force_n(20, 5.0 * down);
   ASSERT_TRUE(solve_static(rod).converged);
   const Eigen::Vector3d d = rod.nodes_m().back() - Eigen::Vector3d(0.3, -0.2, 0.1);
-  const test::Tip reference = static_tip_load(20, 5.0);
+  const CantileverTip reference = static_tip_load(20, 5.0);
   EXPECT_NEAR(d.dot(down), reference.dv_over_l, 1e-7);
   EXPECT_NEAR(1.0 - d.dot(axis), reference.dh_over_l, 1e-7);
 }
 
 TEST(CosseratRodStatic, TurningTheClampTwistsTheRodUniformly) {
   // no load: a hub turned by 90 degrees about the tangent turns every frame the same way
-  CosseratRod rod = test::make_rod(test::unit_cantilever(20));
-  const Eigen::Quaterniond turned = Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitX()) * test::along_x();
+  CosseratRod rod = make_unit_cantilever(unit_cantilever(20));
+  const Eigen::Quaterniond turned = Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitX()) * along_x();
   rod.set_clamp(Eigen::Vector3d::Zero(), turned);
   ASSERT_TRUE(solve_static(rod).converged);
   for (const Eigen::Quaterniond& q : rod.orientations()) EXPECT_LT(q.angularDistance(turned), 1e-6);

@@ -1,0 +1,251 @@
+// pcisim-bench rod: what the Cosserat rod's accuracy costs in time (issue #15), against the exact
+// elastica (physics/rod/elastica.h: an analytic reference, not the rod at a finer setting). The
+// unit cantilever (physics/rod/unit_cantilever.h) under a tip load (alpha = P L^2 / EI) or its own
+// weight (w = q L^3 / EI) is stepped at 30 Hz with damping until it rests; its tip deflection is
+// compared with the elastica's, and with the static equilibrium of the same discrete rod (Newton,
+// rod_statics.h: what the sweeps would reach converged). Sweeps segments x (substeps x sweeps);
+// then the time per 30 Hz step of a 300 mm wire at 1 mm segments (the issue's speed target:
+// <= 3 ms at p99 with contact and friction; here without them, an upper bound on what is left).
+//
+//   pcisim-bench rod [--quick] [--no-plot] [--out DIR]          the sweep: rod.md, rod.json, rod.png
+//   pcisim-bench rod --case cantilever_tip|cantilever_weight --load X --segments N
+//                    [--substeps S] [--iterations I] [--model rod|chain_mail]   one run, one JSON line
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "bench/bench_options.h"
+#include "bench/bench_registry.h"
+#include "bench/bench_stats.h"
+#include "bench/machine_info.h"
+#include "physics/rod/cosserat_rod.h"
+#include "physics/rod/elastica.h"
+#include "physics/rod/rod_statics.h"
+#include "physics/rod/unit_cantilever.h"
+
+namespace pcisim::bench {
+namespace {
+
+using physics::rod::CosseratRod;
+using physics::rod::CosseratRodParams;
+
+constexpr double kDt = 1.0 / 30.0;  // the physics thread's step
+
+struct Run {
+  std::string kind;  // cantilever_tip | cantilever_weight
+  double load = 0;
+  int segments = 0, substeps = 0, iterations = 0;
+  double exact_dv = 0, rod_dv = 0, static_dv = 0;
+  double error_pct = 0, static_error_pct = 0;  // against the elastica
+  double ms_p50 = 0, ms_p99 = 0;               // per 30 Hz step
+  double rest_s = 0;                           // simulated time to rest
+  bool at_rest = false;
+};
+
+void load(CosseratRod& rod, const std::string& kind, double value) {
+  if (kind == "cantilever_tip") {
+    rod.set_node_force_n(rod.segment_count(), Eigen::Vector3d(0, -value, 0));
+  } else {
+    rod.set_gravity_m_per_s2(Eigen::Vector3d(0, -value, 0));  // mu = 1 kg/m, L = 1 m, EI = 1: w = g
+  }
+}
+
+double exact_dv(const std::string& kind, double value) {
+  return kind == "cantilever_tip" ? physics::rod::cantilever_tip_load(value).dv_over_l
+                                  : physics::rod::cantilever_self_weight(value).dv_over_l;
+}
+
+Run run_one(const std::string& kind, double value, int segments, int substeps, int iterations) {
+  Run r{kind, value, segments, substeps, iterations};
+  CosseratRodParams p = physics::rod::unit_cantilever(segments);
+  p.substeps = substeps;
+  p.iterations = iterations;
+  p.damping_per_s = 5.0;
+  CosseratRod rod = physics::rod::make_unit_cantilever(p);
+  load(rod, kind, value);
+  // stepped until the tip rests (speed under 1e-5 m/s after the first second), at most 30 s
+  std::vector<double> ms;
+  for (int step = 0; step < static_cast<int>(30.0 / kDt); ++step) {
+    const auto t0 = std::chrono::steady_clock::now();
+    rod.step(kDt);
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    if (step * kDt > 1.0 && rod.max_speed_m_per_s() < 1e-5) {
+      r.at_rest = true;
+      break;
+    }
+  }
+  r.rest_s = ms.size() * kDt;
+  r.ms_p50 = percentile(ms, 0.5);
+  r.ms_p99 = percentile(ms, 0.99);
+  r.exact_dv = exact_dv(kind, value);
+  r.rod_dv = physics::rod::cantilever_tip(rod).dv_over_l;
+  r.error_pct = 100.0 * (r.rod_dv - r.exact_dv) / r.exact_dv;
+  CosseratRod still = physics::rod::make_unit_cantilever(physics::rod::unit_cantilever(segments));
+  load(still, kind, value);
+  physics::rod::solve_static(still);
+  r.static_dv = physics::rod::cantilever_tip(still).dv_over_l;
+  r.static_error_pct = 100.0 * (r.static_dv - r.exact_dv) / r.exact_dv;
+  return r;
+}
+
+std::string json_of(const Run& r) {
+  return fmt::format(
+      "{{\"model\": \"rod\", \"case\": \"{}\", \"load\": {}, \"segments\": {}, \"substeps\": {}, \"iterations\": {}, "
+      "\"exact_dv_over_l\": {:.8f}, \"dv_over_l\": {:.8f}, \"error_pct\": {:.4f}, \"static_dv_over_l\": {:.8f}, "
+      "\"static_error_pct\": {:.4f}, \"ms_p50\": {:.4f}, \"ms_p99\": {:.4f}, \"at_rest\": {}, \"rest_s\": {:.2f}}}",
+      r.kind, r.load, r.segments, r.substeps, r.iterations, r.exact_dv, r.rod_dv, r.error_pct, r.static_dv,
+      r.static_error_pct, r.ms_p50, r.ms_p99, r.at_rest ? "true" : "false", r.rest_s);
+}
+
+constexpr const char* kUsage =
+    "pcisim-bench rod [--quick] [--no-plot] [--out DIR]\n"
+    "  the Cosserat rod's tip deflection against the exact elastica, swept over segments and\n"
+    "  substeps x sweeps, with the time per 30 Hz step; rod.md, rod.json (and rod.png) in DIR\n"
+    "pcisim-bench rod --case cantilever_tip|cantilever_weight --load X --segments N [--substeps S]\n"
+    "                 [--iterations I] [--model rod|chain_mail]\n"
+    "  one run, one JSON line on stdout. The chain-mail wire has no load response (no gravity, no\n"
+    "  tip force): --model chain_mail says so and exits 3\n";
+
+// one run from the command line; -1 when the arguments are the sweep's
+int single(const std::vector<std::string>& args) {
+  std::string kind, model = "rod";
+  double value = NAN;
+  int segments = 50, substeps = 10, iterations = 4;
+  bool any = false;
+  for (size_t i = 0; i + 1 < args.size(); i += 2) {
+    const std::string& k = args[i];
+    const std::string& v = args[i + 1];
+    if (k == "--case") {
+      kind = v;
+    } else if (k == "--load") {
+      value = std::atof(v.c_str());
+    } else if (k == "--segments") {
+      segments = std::atoi(v.c_str());
+    } else if (k == "--substeps") {
+      substeps = std::atoi(v.c_str());
+    } else if (k == "--iterations") {
+      iterations = std::atoi(v.c_str());
+    } else if (k == "--model") {
+      model = v;
+    } else {
+      continue;
+    }
+    any = true;
+  }
+  if (!any) return -1;
+  if (model == "chain_mail") {
+    std::fprintf(stderr,
+                 "pcisim-bench rod: the chain-mail wire has no response to a load (no gravity, no tip force), so no "
+                 "cantilever answer (issue #15)\n");
+    return 3;
+  }
+  if (model != "rod" || (kind != "cantilever_tip" && kind != "cantilever_weight") || !(value >= 0 && value <= 100) ||
+      segments < 1 || segments > 2000 || substeps < 1 || iterations < 1) {
+    std::fprintf(stderr, "pcisim-bench rod: bad arguments\n%s", kUsage);
+    return 2;
+  }
+  std::printf("%s\n", json_of(run_one(kind, value, segments, substeps, iterations)).c_str());
+  return 0;
+}
+
+int run(const std::vector<std::string>& args) {
+  if (const int rc = single(args); rc >= 0) return rc;
+  BenchOptions bo;
+  if (const int rc = parse_bench_options(args, "rod", kUsage, &bo); rc >= 0) return rc;
+
+  struct Solver {
+    int substeps, iterations;
+  };
+  const std::vector<int> segments = bo.quick ? std::vector<int>{10, 50} : std::vector<int>{10, 20, 50, 100};
+  const std::vector<Solver> solvers =
+      bo.quick ? std::vector<Solver>{{10, 4}, {40, 10}} : std::vector<Solver>{{10, 4}, {20, 10}, {40, 10}};
+  const std::vector<std::pair<std::string, double>> cases =
+      bo.quick ? std::vector<std::pair<std::string, double>>{{"cantilever_tip", 10}}
+               : std::vector<std::pair<std::string, double>>{
+                     {"cantilever_tip", 1}, {"cantilever_tip", 10}, {"cantilever_weight", 10}};
+  std::vector<Run> runs;
+  for (const auto& [kind, value] : cases)
+    for (int n : segments)
+      for (const Solver& s : solvers) {
+        runs.push_back(run_one(kind, value, n, s.substeps, s.iterations));
+        const Run& r = runs.back();
+        std::printf("%-17s %5.1f  %3d segments  %2d x %2d: %+9.3f %% (static %+.4f %%)  %.3f / %.3f ms%s\n",
+                    kind.c_str(), value, n, s.substeps, s.iterations, r.error_pct, r.static_error_pct, r.ms_p50,
+                    r.ms_p99, r.at_rest ? "" : "  (not at rest after 30 s)");
+        std::fflush(stdout);
+      }
+
+  // the wire of the scenes: 300 mm at 1 mm segments, the default stiffness, gravity, 300 steps
+  struct Timing {
+    Solver s;
+    double p50, p99;
+  };
+  std::vector<Timing> timings;
+  for (const Solver& s : solvers) {
+    CosseratRodParams p;
+    p.segments = 300;
+    p.substeps = s.substeps;
+    p.iterations = s.iterations;
+    p.gravity_m_per_s2 = Eigen::Vector3d(0, 0, -9.81);
+    CosseratRod rod(p);
+    std::vector<double> ms;
+    for (int step = 0; step < (bo.quick ? 60 : 300); ++step) {
+      const auto t0 = std::chrono::steady_clock::now();
+      rod.step(kDt);
+      ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    }
+    timings.push_back({s, percentile(ms, 0.5), percentile(ms, 0.99)});
+    std::printf("300 mm wire, 300 segments, %2d x %2d: %.2f / %.2f ms per step\n", s.substeps, s.iterations,
+                timings.back().p50, timings.back().p99);
+  }
+
+  std::filesystem::create_directories(bo.out_dir);
+  const std::string md_path = bo.out_dir + "/rod.md", json_path = bo.out_dir + "/rod.json";
+  std::ofstream md(md_path), js(json_path);
+  md << "# Cosserat rod: accuracy against time\n\n"
+     << "Generated by `pcisim-bench rod" << (bo.quick ? " --quick" : "") << "` (bench/rod_bench.cc); " << machine_info()
+     << ".\n\n"
+     << "The XPBD Cosserat rod (physics/rod/cosserat_rod.h, docs/guidewire.md) on the unit cantilever "
+        "(physics/rod/unit_cantilever.h: L = 1 m, EI = 1 N m², clamped along +x), loaded at its tip (alpha = P L² / "
+        "EI) or by its own weight (w = q L³ / EI), stepped at 30 Hz with damping 5/s until its speed is under "
+        "1e-5 m/s (at most 30 s). Error: the tip's deflection against the **exact elastica** (shooting to ~1e-8, "
+        "physics/rod/elastica.h). 'static': the same discrete rod's equilibrium by Newton's method "
+        "(rod_statics.h), what the sweeps reach when they converge: the discretisation's own error. ms: wall time "
+        "per 30 Hz step (median / p99 over the steps to rest), one thread.\n\n"
+     << "| case | load | segments | substeps x sweeps | error % | static error % | ms p50 / p99 | at rest |\n"
+     << "|---|---|---|---|---|---|---|---|\n";
+  for (const Run& r : runs) {
+    md << fmt::format("| {} | {:g} | {} | {} x {} | {:+.3f} | {:+.4f} | {:.3f} / {:.3f} | {} |\n", r.kind, r.load,
+                      r.segments, r.substeps, r.iterations, r.error_pct, r.static_error_pct, r.ms_p50, r.ms_p99,
+                      r.at_rest ? fmt::format("{:.1f} s", r.rest_s) : "no (30 s)");
+  }
+  md << "\n## A 300 mm wire at 1 mm segments (the default wire's stiffness, gravity; no contact)\n\n"
+     << "Issue #15's speed target: <= 3 ms per 30 Hz step at p99 *with* contact and friction.\n\n"
+     << "| substeps x sweeps | ms p50 | ms p99 | target |\n|---|---|---|---|\n";
+  for (const Timing& t : timings)
+    md << fmt::format("| {} x {} | {:.2f} | {:.2f} | {} |\n", t.s.substeps, t.s.iterations, t.p50, t.p99,
+                      t.p99 <= 3.0 ? "met (before contact)" : "**missed**");
+  js << "[\n";
+  for (size_t i = 0; i < runs.size(); ++i) js << "  " << json_of(runs[i]) << (i + 1 < runs.size() ? ",\n" : "\n");
+  js << "]\n";
+  md.close();
+  js.close();
+  if (bo.plot && std::filesystem::exists("docs/benchmarks/rod.py")) {
+    if (run_plot_script("rod", "docs/benchmarks/rod.py " + json_path + " " + bo.out_dir + "/rod.png"))
+      std::ofstream(md_path, std::ios::app) << "\n![error against time](rod.png)\n";
+  }
+  std::printf("wrote %s and %s\n", md_path.c_str(), json_path.c_str());
+  return 0;
+}
+
+const bool registered = add("rod", "Cosserat rod: tip deflection against the exact elastica, and its cost", run);
+
+}  // namespace
+}  // namespace pcisim::bench

@@ -63,20 +63,13 @@ struct Row {
   bool heart_was_fitted = false;
 };
 
-// |distance to the phantom's painted heart| (a sphere of 50 mm x its scale about its centre) over
-// the epicardial vertices of the template mesh with these vertices (template frame) posed
+// distance to the phantom's painted heart over the epicardial vertices of the template mesh with
+// these vertices (template frame) posed: mean, p95, max (mm)
 std::array<double, 3> epicardium_error_mm(const anatomy::PhantomCta& cta, const anatomy::HeartPose& pose,
                                           const Eigen::Matrix3Xd& vertices_m) {
-  const anatomy::HeartMesh& t = anatomy::template_heart_mesh();
-  std::vector<char> epi(t.vertices_m.cols(), 0);
-  for (size_t f = 0; f < t.faces.size(); ++f)
-    if (t.face_markers[f] == anatomy::kEpicardium)
-      for (int c : t.faces[f]) epi[c] = 1;
   std::vector<double> d;
-  for (int i = 0; i < vertices_m.cols(); ++i)
-    if (epi[i])
-      d.push_back(std::abs((1e3 * pose.to_case(vertices_m.col(i)) - cta.facts.heart_center_mm).norm() -
-                           50.0 * cta.facts.heart_scale));
+  for (int i : anatomy::marked_surface_vertices(anatomy::template_heart_mesh(), anatomy::kEpicardium))
+    d.push_back(anatomy::distance_to_painted_heart_mm(cta.facts, 1e3 * pose.to_case(vertices_m.col(i))));
   std::sort(d.begin(), d.end());
   double mean = 0;
   for (double x : d) mean += x / double(d.size());

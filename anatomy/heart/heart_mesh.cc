@@ -183,6 +183,17 @@ HeartMesh parse_tetgen_mesh(const TetgenText& node, const TetgenText& ele, const
   return m;
 }
 
+std::vector<int> marked_surface_vertices(const HeartMesh& mesh, int marker) {
+  std::vector<char> on(mesh.vertices_m.cols(), 0);
+  for (size_t f = 0; f < mesh.faces.size(); ++f)
+    if (mesh.face_markers[f] == marker)
+      for (int v : mesh.faces[f]) on[v] = 1;
+  std::vector<int> out;
+  for (size_t v = 0; v < on.size(); ++v)
+    if (on[v]) out.push_back(static_cast<int>(v));
+  return out;
+}
+
 HeartMesh read_tetgen_mesh(const std::string& stem) {
   auto slurp = [](const std::string& path) {
     std::ifstream in(path, std::ios::binary);

@@ -36,6 +36,9 @@ void write_tetgen_nodes(const Eigen::Matrix3Xd& vertices_m, std::ostream& out);
 // reads <stem>.node, <stem>.ele, <stem>.face from disk (millimetres)
 HeartMesh read_tetgen_mesh(const std::string& stem);
 
+// the vertices of the faces carrying `marker` (HeartSurfaceMarker: kEpicardium, ...), ascending
+std::vector<int> marked_surface_vertices(const HeartMesh& mesh, int marker);
+
 // the committed template (scenes/heart/template_heart.*), parsed once
 const HeartMesh& template_heart_mesh();
 

@@ -396,6 +396,10 @@ void validate_spec(const PhantomCtaSpec& s) {
 
 }  // namespace
 
+double distance_to_painted_heart_mm(const PhantomCtaFacts& facts, const Eigen::Vector3d& p_mm) {
+  return std::abs((p_mm - facts.heart_center_mm).norm() - kPhantomHeartRadiusMm * facts.heart_scale);
+}
+
 PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
   validate_spec(spec);
   int axis_of[3], sign_of[3];

@@ -98,6 +98,11 @@ struct PhantomCta {
   PhantomCtaFacts facts;
 };
 
+// how far p_mm (CT frame) lies from the painted heart's outer surface, the myocardium's sphere
+// (thorax_phantom.h kPhantomHeartRadiusMm x heart_scale about heart_center_mm), unsigned: the truth
+// the heart fit is measured against
+double distance_to_painted_heart_mm(const PhantomCtaFacts& facts, const Eigen::Vector3d& p_mm);
+
 // throws std::invalid_argument for a spec it cannot build (non-positive dims or spacing, a
 // direction that is not a signed permutation, negative noise or blur, a fraction >= 1)
 PhantomCta make_phantom_cta(const PhantomCtaSpec& spec);

@@ -193,7 +193,7 @@ Volume make_thorax_phantom(const ThoraxPhantomSpec& spec, const VesselTree& tree
   heart = spec.heart_rotation * heart;
   const double k = spec.heart_scale;
   auto in_heart = [&heart, k](double a, double l, double b) -> Vector3d { return heart * Vector3d(a, l, b) * k; };
-  const double heart_r = 50.0;  // the tree's epicardial shell sits 1.5 mm above this sphere
+  const double heart_r = kPhantomHeartRadiusMm;
   auto blood_or = [&hu](double v) { return std::isnan(v) ? hu.blood : v; };
 
   std::vector<Quadric> q;

@@ -28,6 +28,10 @@ struct ThoraxTissueHu {
   double csf = 10, disc = 80;
 };
 
+// the heart's myocardium is painted as a sphere of this radius (times heart_scale) about the heart
+// centre; the coronary tree's epicardial shell sits 1.5 mm above it (docs/anatomy.md)
+constexpr double kPhantomHeartRadiusMm = 50.0;
+
 struct ThoraxPhantomSpec {
   uint32_t seed = 1;  // also seeds the coronary tree
   std::array<int64_t, 3> dims{512, 512, 256};

@@ -14,6 +14,7 @@
 
 #include "anatomy/heart/template_heart_surface.h"
 #include "anatomy/phantom/phantom_cta.h"
+#include "anatomy/phantom/thorax_phantom.h"
 #include "modeling/heart/heart_placement.h"
 
 namespace pcisim::modeling {
@@ -35,18 +36,12 @@ struct SurfaceError {
   double mean_mm = 0, p95_mm = 0, max_mm = 0;
 };
 
-// |distance to the true sphere| over the epicardial vertices (template-frame vertices, posed)
+// distance to the painted heart over the epicardial vertices (template-frame vertices, posed)
 SurfaceError against_truth(const anatomy::PhantomCta& cta, const anatomy::HeartPose& pose,
                            const Eigen::Matrix3Xd& v_m) {
-  const anatomy::HeartMesh& t = anatomy::template_heart_mesh();
-  std::vector<char> epi(t.vertices_m.cols(), 0);
-  for (size_t f = 0; f < t.faces.size(); ++f)
-    if (t.face_markers[f] == anatomy::kEpicardium)
-      for (int c : t.faces[f]) epi[c] = 1;
-  const double r_mm = 50.0 * cta.facts.heart_scale;
   std::vector<double> d;
-  for (int i = 0; i < v_m.cols(); ++i)
-    if (epi[i]) d.push_back(std::abs((1e3 * pose.to_case(v_m.col(i)) - cta.facts.heart_center_mm).norm() - r_mm));
+  for (int i : anatomy::marked_surface_vertices(anatomy::template_heart_mesh(), anatomy::kEpicardium))
+    d.push_back(anatomy::distance_to_painted_heart_mm(cta.facts, 1e3 * pose.to_case(v_m.col(i))));
   std::sort(d.begin(), d.end());
   SurfaceError e;
   for (double x : d) e.mean_mm += x / double(d.size());
@@ -63,7 +58,8 @@ TEST(HeartElasticFit, TheTemplatePlacedUnderTheVesselsIsFittedToThePaintedHeart)
     const HeartElasticFit fit = fit_heart_elastic(cta.ct, cta.truth, placed.pose, anatomy::template_heart_mesh(), o);
     const SurfaceError before = against_truth(cta, placed.pose, anatomy::template_heart_mesh().vertices_m);
     const SurfaceError after = against_truth(cta, placed.pose, fit.vertices_m);
-    const double true_ml = 4.0 / 3.0 * M_PI * std::pow(50.0 * cta.facts.heart_scale, 3) / 1000.0;
+    const double true_ml =
+        4.0 / 3.0 * M_PI * std::pow(anatomy::kPhantomHeartRadiusMm * cta.facts.heart_scale, 3) / 1000.0;
     std::printf(
         "phantom %u: epicardium to the true heart, placed %.2f / %.2f / %.2f mm (mean / p95 / max), fitted %.2f / "
         "%.2f / %.2f mm; %d of %d vertices found the outline (%d outliers), moved %.2f mm mean, %.1f max; backoff "

@@ -1,0 +1,80 @@
+#pragma once
+// A procedural kidney-like organ as plain data (issue #16 item 1; soft-tissue paper, "Collision and
+// data preparation": the organ the particle model is built from). The shape is star-shaped about
+// its centre: a bean = an ellipsoid whose radius toward the medial side (-x) is pulled in by a
+// Gaussian hilum indentation. Its surface is the radial map of a latitude-longitude sphere (closed
+// and manifold by construction; the marching tetrahedra of vessel/lumen_surface are not needed for
+// a star-shaped body). The CT paints every voxel centre by the same classification, so tests
+// have exact truth. Organ frame = LPS, centre at the origin, long axis along S.
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "anatomy/mesh/triangle_mesh.h"
+#include "anatomy/volume/volume.h"
+
+namespace pcisim::anatomy {
+
+// Tissue HU (typical values; Radiopaedia "Hounsfield unit"; Buzug, "Computed Tomography", 2008,
+// table 1.1): renal cortex ~150 HU is the nephrographic-phase enhanced value; medulla ~30; renal
+// pelvis filled with urine ~10; a solid tumour ~60; fat ~-100; a metal-bright bead 2000 (clamped);
+// the support table is an assumed plastic/carbon top of 200 HU.
+constexpr double kKidneyCortexHu = 150.0;
+constexpr double kKidneyMedullaHu = 30.0;
+constexpr double kKidneyPelvisHu = 10.0;
+constexpr double kKidneyTumourHu = 60.0;
+constexpr double kKidneyFatHu = -100.0;
+constexpr double kKidneyBeadHu = 2000.0;
+constexpr double kKidneyTableHu = 200.0;
+constexpr double kKidneyAirHu = -1000.0;
+
+struct KidneySpec {
+  Eigen::Vector3d semi_axes_mm{30.0, 17.5, 55.0};  // L x P x S: 60 x 35 x 110 mm
+  double hilum_depth = 0.4;                        // fraction of the radius removed at the hilum's centre
+  double hilum_width_rad = 0.45;                   // Gaussian width (angle from -x) of the indentation
+  double medulla_fraction = 0.8;                   // normalised radius s below which medulla starts
+  double pelvis_fraction = 0.4;                    // s below which the renal pelvis is
+  double tumour_radius_mm = 7.5;                   // 15 mm diameter
+  int fiducial_count = 45;
+  double bead_radius_mm = 1.0;
+  double fiducial_min_gap_mm = 7.0;  // beads at least this far apart (spread through the organ)
+  double ct_spacing_mm = 1.0;
+  double ct_margin_mm = 12.0;        // fat around the organ's box
+  double table_gap_mm = 5.0;         // fat between the organ's posterior extent and the table top
+  double table_thickness_mm = 10.0;  // the table is a slab along +y (posterior: patient supine)
+  int surface_rings = 60;            // latitude rings of the surface (poles along S)
+  int surface_segments = 96;         // longitude segments
+  uint64_t seed = 1;                 // varies tumour and bead placement
+};
+
+// what was drawn, exactly
+struct KidneyFacts {
+  Eigen::Vector3d tumour_centre_mm = Eigen::Vector3d::Zero();
+  double tumour_radius_mm = 0.0;
+  std::vector<Eigen::Vector3d> fiducials_mm;  // bead centres, all inside the organ
+  double table_top_y_mm = 0.0;                // table occupies y in [top, top + thickness]
+  double table_bottom_y_mm = 0.0;
+  double implicit_volume_mm3 = 0.0;  // volume of the implicit shape (quadrature of r^3/3 over the sphere)
+};
+
+enum class KidneyTissue { kAir, kFat, kTable, kCortex, kMedulla, kPelvis, kTumour, kBead };
+double kidney_tissue_hu(KidneyTissue t);
+
+struct KidneyPhantom {
+  KidneySpec spec;
+  KidneyFacts facts;
+  TriangleMesh surface;  // metres, LPS, closed, counter-clockwise seen from outside
+  Volume ct;             // HU, int16
+};
+
+// the organ's radius toward unit direction d (mm)
+double kidney_radius_mm(const KidneySpec& spec, const Eigen::Vector3d& d);
+// normalised radius s = |p| / r(p/|p|): s < 1 inside, s > 1 outside
+double kidney_normalised_radius(const KidneySpec& spec, const Eigen::Vector3d& p_mm);
+// what the CT paints at p (organ layers, tumour, beads, table, fat)
+KidneyTissue kidney_tissue_at(const KidneySpec& spec, const KidneyFacts& facts, const Eigen::Vector3d& p_mm);
+
+// throws std::invalid_argument on a spec that cannot be drawn (non-positive sizes, too many beads)
+KidneyPhantom make_kidney_phantom(const KidneySpec& spec = {});
+
+}  // namespace pcisim::anatomy

@@ -1,0 +1,228 @@
+#include "physics/soft_tissue/tissue_model.h"
+
+#include <Eigen/LU>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+
+#include "physics/pbd/grid_clusters.h"
+
+namespace pcisim::physics::soft_tissue {
+
+using Eigen::Matrix3d;
+using Eigen::Matrix3Xd;
+using Eigen::Vector3d;
+
+namespace {
+
+std::string mm(double m) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", m * 1e3);
+  return buf;
+}
+
+// [soft-tissue "Collision and data preparation"] voxelisation of the closed mesh: a voxel is
+// occupied when its centre is inside. Inside = parity of the crossings of the +z ray through the
+// centre's column; the grid is shifted by a small irrational fraction of a voxel so that no column
+// passes exactly through a vertex or an edge of a symmetric mesh.
+Matrix3Xd voxelise(const anatomy::TriangleMesh& mesh, double h) {
+  Vector3d lo = Vector3d::Constant(1e300), hi = Vector3d::Constant(-1e300);
+  for (const Vector3d& v : mesh.vertices_m) {
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+  const Vector3d origin = lo + h * Vector3d(0.5 + 0.0123456789, 0.5 + 0.0314159265, 0.5);
+  const int nx = static_cast<int>(std::ceil((hi.x() - origin.x()) / h)) + 1;
+  const int ny = static_cast<int>(std::ceil((hi.y() - origin.y()) / h)) + 1;
+  std::vector<std::vector<int>> column(static_cast<size_t>(nx) * ny);
+  for (int t = 0; t < static_cast<int>(mesh.triangles.size()); ++t) {
+    Vector3d tlo = Vector3d::Constant(1e300), thi = Vector3d::Constant(-1e300);
+    for (int v : mesh.triangles[t]) {
+      tlo = tlo.cwiseMin(mesh.vertices_m[v]);
+      thi = thi.cwiseMax(mesh.vertices_m[v]);
+    }
+    const int i0 = std::max(0, static_cast<int>(std::ceil((tlo.x() - origin.x()) / h)));
+    const int i1 = std::min(nx - 1, static_cast<int>(std::floor((thi.x() - origin.x()) / h)));
+    const int j0 = std::max(0, static_cast<int>(std::ceil((tlo.y() - origin.y()) / h)));
+    const int j1 = std::min(ny - 1, static_cast<int>(std::floor((thi.y() - origin.y()) / h)));
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i) column[static_cast<size_t>(j) * nx + i].push_back(t);
+  }
+  std::vector<Vector3d> inside;
+  std::vector<double> z;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const double px = origin.x() + i * h, py = origin.y() + j * h;
+      z.clear();
+      for (int t : column[static_cast<size_t>(j) * nx + i]) {
+        const Vector3d& a = mesh.vertices_m[mesh.triangles[t][0]];
+        const Vector3d& b = mesh.vertices_m[mesh.triangles[t][1]];
+        const Vector3d& c = mesh.vertices_m[mesh.triangles[t][2]];
+        // barycentric coordinates of (px, py) in the triangle's xy projection
+        const double d = (b.x() - a.x()) * (c.y() - a.y()) - (c.x() - a.x()) * (b.y() - a.y());
+        if (d == 0.0) continue;
+        const double wb = ((px - a.x()) * (c.y() - a.y()) - (c.x() - a.x()) * (py - a.y())) / d;
+        const double wc = ((b.x() - a.x()) * (py - a.y()) - (px - a.x()) * (b.y() - a.y())) / d;
+        const double wa = 1.0 - wb - wc;
+        if (wa < 0.0 || wb < 0.0 || wc < 0.0) continue;
+        z.push_back(wa * a.z() + wb * b.z() + wc * c.z());
+      }
+      std::sort(z.begin(), z.end());
+      for (size_t q = 0; q + 1 < z.size(); q += 2) {
+        const int k0 = static_cast<int>(std::ceil((z[q] - origin.z()) / h));
+        const int k1 = static_cast<int>(std::floor((z[q + 1] - origin.z()) / h));
+        for (int k = k0; k <= k1; ++k) inside.emplace_back(px, py, origin.z() + k * h);
+      }
+    }
+  Matrix3Xd out(3, static_cast<Eigen::Index>(inside.size()));
+  for (size_t n = 0; n < inside.size(); ++n) out.col(static_cast<Eigen::Index>(n)) = inside[n];
+  return out;
+}
+
+// [soft-tissue "Collision and data preparation"] greedy removal: the samples are visited in
+// voxel order; the first remaining one becomes a particle and every sample closer than the radius
+// to it is removed. Equivalently a sample is kept iff no particle kept before it lies closer than
+// r, so particles are >= r apart and every sample lies within < r of a particle.
+Matrix3Xd greedy_sample(const Matrix3Xd& samples, double r) {
+  auto key = [r](const Vector3d& p, int di, int dj, int dk) {
+    const int64_t i = static_cast<int64_t>(std::floor(p.x() / r)) + di;
+    const int64_t j = static_cast<int64_t>(std::floor(p.y() / r)) + dj;
+    const int64_t k = static_cast<int64_t>(std::floor(p.z() / r)) + dk;
+    return (i & 0x1fffff) | ((j & 0x1fffff) << 21) | ((k & 0x1fffff) << 42);
+  };
+  std::unordered_map<int64_t, std::vector<int>> cells;
+  std::vector<int> kept;
+  const double r2 = r * r;
+  for (Eigen::Index n = 0; n < samples.cols(); ++n) {
+    const Vector3d p = samples.col(n);
+    bool removed = false;
+    for (int dk = -1; dk <= 1 && !removed; ++dk)
+      for (int dj = -1; dj <= 1 && !removed; ++dj)
+        for (int di = -1; di <= 1 && !removed; ++di) {
+          const auto it = cells.find(key(p, di, dj, dk));
+          if (it == cells.end()) continue;
+          for (int q : it->second)
+            if ((samples.col(q) - p).squaredNorm() < r2) {
+              removed = true;
+              break;
+            }
+        }
+    if (removed) continue;
+    kept.push_back(static_cast<int>(n));
+    cells[key(p, 0, 0, 0)].push_back(static_cast<int>(n));
+  }
+  Matrix3Xd out(3, static_cast<Eigen::Index>(kept.size()));
+  for (size_t n = 0; n < kept.size(); ++n) out.col(static_cast<Eigen::Index>(n)) = samples.col(kept[n]);
+  return out;
+}
+
+// [soft-tissue "Weighted matrix blending"] up to four nearest cluster frames (distance from the
+// point to the cluster's rest centre), weights 1/d^2 normalised to sum 1; a point on a centre
+// (d < 1e-12 m) takes that frame alone.
+SkinBinding bind(const Vector3d& p, const Matrix3Xd& centres) {
+  const int n = static_cast<int>(centres.cols());
+  std::vector<std::pair<double, int>> d2(static_cast<size_t>(n));
+  for (int c = 0; c < n; ++c) d2[c] = {(centres.col(c) - p).squaredNorm(), c};
+  const int k = std::min(kMaxSkinClusters, n);
+  std::partial_sort(d2.begin(), d2.begin() + k, d2.end());
+  SkinBinding b;
+  if (d2[0].first < 1e-24) {
+    b.count = 1;
+    b.cluster[0] = d2[0].second;
+    b.weight[0] = 1.0;
+  } else {
+    b.count = k;
+    double sum = 0.0;
+    for (int q = 0; q < k; ++q) {
+      b.cluster[q] = d2[q].second;
+      b.weight[q] = 1.0 / d2[q].first;
+      sum += b.weight[q];
+    }
+    for (int q = 0; q < k; ++q) b.weight[q] /= sum;
+  }
+  for (int q = 0; q < b.count; ++q) b.local_m[q] = p - centres.col(b.cluster[q]);
+  return b;
+}
+
+}  // namespace
+
+TissueModel build_tissue_model(const anatomy::TriangleMesh& surface_m, std::span<const Vector3d> fiducials_m,
+                               const TissueModelSpec& spec) {
+  if (!(spec.particle_radius_m > 0.0) || !(spec.voxel_m > 0.0) || !(spec.cluster_spacing_factor > 0.0))
+    throw std::invalid_argument("build_tissue_model: particle radius " + mm(spec.particle_radius_m) + " mm, voxel " +
+                                mm(spec.voxel_m) + " mm and cluster factor must be positive");
+  if (surface_m.vertices_m.empty() || surface_m.triangles.empty())
+    throw std::invalid_argument("build_tissue_model: the organ surface is empty");
+  Vector3d lo = Vector3d::Constant(1e300), hi = Vector3d::Constant(-1e300);
+  for (const Vector3d& v : surface_m.vertices_m) {
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+  const Vector3d size = hi - lo;
+  if (spec.particle_radius_m > size.minCoeff())
+    throw std::invalid_argument("build_tissue_model: particle radius " + mm(spec.particle_radius_m) +
+                                " mm is larger than the organ (" + mm(size.x()) + " x " + mm(size.y()) + " x " +
+                                mm(size.z()) + " mm)");
+  TissueModel model;
+  model.spec = spec;
+  model.interior_voxels_m = voxelise(surface_m, spec.voxel_m);
+  if (model.interior_voxels_m.cols() == 0)
+    throw std::invalid_argument("build_tissue_model: no voxel of " + mm(spec.voxel_m) +
+                                " mm has its centre inside the organ");
+  model.rest_m = greedy_sample(model.interior_voxels_m, spec.particle_radius_m);
+  // [soft-tissue "Cluster-based deformation"] overlapping cubical clusters
+  model.clusters = pbd::grid_clusters(model.rest_m, spec.cluster_spacing_factor * spec.particle_radius_m,
+                                      spec.cluster_overlap, spec.cluster_min_members);
+  model.cluster_rest_centre_m.resize(3, static_cast<Eigen::Index>(model.clusters.size()));
+  for (size_t c = 0; c < model.clusters.size(); ++c) {
+    Vector3d s = Vector3d::Zero();
+    for (int i : model.clusters[c]) s += model.rest_m.col(i);
+    model.cluster_rest_centre_m.col(static_cast<Eigen::Index>(c)) = s / static_cast<double>(model.clusters[c].size());
+  }
+  model.surface_skin.reserve(surface_m.vertices_m.size());
+  for (const Vector3d& v : surface_m.vertices_m) model.surface_skin.push_back(bind(v, model.cluster_rest_centre_m));
+  model.fiducial_skin.reserve(fiducials_m.size());
+  for (const Vector3d& f : fiducials_m) model.fiducial_skin.push_back(bind(f, model.cluster_rest_centre_m));
+  return model;
+}
+
+ClusterFrames::ClusterFrames(const TissueModel& model)
+    : rotation(model.clusters.size(), Matrix3d::Identity()), centre_m(model.cluster_rest_centre_m) {}
+
+// [soft-tissue "Cluster-based deformation"; heart paper eqs 7-8] shape matching per cluster:
+// c = mean x_i, A = sum (x_i - c)(x0_i - c0)^T, R = U V^T from A's SVD (det fixed to +1)
+void cluster_frames(const TissueModel& model, const Matrix3Xd& x_m, ClusterFrames* frames) {
+  for (size_t c = 0; c < model.clusters.size(); ++c) {
+    const auto& members = model.clusters[c];
+    Vector3d centre = Vector3d::Zero();
+    for (int i : members) centre += x_m.col(i);
+    centre /= static_cast<double>(members.size());
+    const Vector3d c0 = model.cluster_rest_centre_m.col(static_cast<Eigen::Index>(c));
+    Matrix3d a = Matrix3d::Zero();
+    for (int i : members) a += (x_m.col(i) - centre) * (model.rest_m.col(i) - c0).transpose();
+    Eigen::JacobiSVD<Matrix3d> svd(a, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Matrix3d u = svd.matrixU();
+    if ((u * svd.matrixV().transpose()).determinant() < 0.0) u.col(2) = -u.col(2);
+    frames->rotation[c] = u * svd.matrixV().transpose();
+    frames->centre_m.col(static_cast<Eigen::Index>(c)) = centre;
+  }
+}
+
+// [soft-tissue "Weighted matrix blending"] p = sum_k w_k (R_k p_local_k + c_k)
+void skin_points(const ClusterFrames& frames, std::span<const SkinBinding> bindings, Matrix3Xd* out_m) {
+  for (size_t n = 0; n < bindings.size(); ++n) {
+    const SkinBinding& b = bindings[n];
+    Vector3d p = Vector3d::Zero();
+    for (int q = 0; q < b.count; ++q)
+      p += b.weight[q] * (frames.rotation[b.cluster[q]] * b.local_m[q] + frames.centre_m.col(b.cluster[q]));
+    out_m->col(static_cast<Eigen::Index>(n)) = p;
+  }
+}
+
+}  // namespace pcisim::physics::soft_tissue

@@ -150,6 +150,67 @@ SkinBinding bind(const Vector3d& p, const Matrix3Xd& centres) {
   return b;
 }
 
+// barycentric coordinates of p in tetrahedron (a, b, c, d)
+Eigen::Vector4d barycentric(const Vector3d& p, const Vector3d& a, const Vector3d& b, const Vector3d& c,
+                            const Vector3d& d) {
+  Matrix3d m;
+  m << b - a, c - a, d - a;
+  const Vector3d w = m.inverse() * (p - a);
+  return {1.0 - w.sum(), w.x(), w.y(), w.z()};
+}
+
+// [soft-tissue "Weighted matrix blending", last paragraph] a coarse tetrahedral mesh over the
+// particles: cubes of edge h over the particles' box, six tetrahedra per cube around the diagonal
+// 0-7 (corner c = x + 2y + 4z), kept when some particle lies in it
+void build_tets(TissueModel& model, double h) {
+  const Vector3d lo = model.rest_m.rowwise().minCoeff().array() - 0.5 * h;
+  const Vector3d hi = model.rest_m.rowwise().maxCoeff().array() + 0.5 * h;
+  const Eigen::Array3i n = ((hi - lo) / h).array().ceil().cast<int>().max(1);
+  auto vid = [&](int i, int j, int k) { return i + (n.x() + 1) * (j + (n.y() + 1) * k); };
+  auto vpos = [&](int v) {
+    const int i = v % (n.x() + 1), j = (v / (n.x() + 1)) % (n.y() + 1), k = v / ((n.x() + 1) * (n.y() + 1));
+    return Vector3d(lo + h * Vector3d(i, j, k));
+  };
+  static constexpr int kKuhn[6][4] = {{0, 1, 3, 7}, {0, 3, 2, 7}, {0, 2, 6, 7},
+                                      {0, 6, 4, 7}, {0, 4, 5, 7}, {0, 5, 1, 7}};
+  std::vector<std::array<int, 4>> kept;
+  std::vector<char> used(static_cast<size_t>((n.x() + 1) * (n.y() + 1) * (n.z() + 1)), 0);
+  std::vector<std::vector<int>> in_cube(static_cast<size_t>(n.prod()));
+  for (Eigen::Index p = 0; p < model.rest_m.cols(); ++p) {
+    const Eigen::Array3i c = ((model.rest_m.col(p) - lo) / h).array().floor().cast<int>().min(n - 1).max(0);
+    in_cube[c.x() + n.x() * (c.y() + n.y() * c.z())].push_back(static_cast<int>(p));
+  }
+  for (int k = 0; k < n.z(); ++k)
+    for (int j = 0; j < n.y(); ++j)
+      for (int i = 0; i < n.x(); ++i) {
+        const auto& members = in_cube[i + n.x() * (j + n.y() * k)];
+        if (members.empty()) continue;
+        int corner[8];
+        for (int q = 0; q < 8; ++q) corner[q] = vid(i + (q & 1), j + ((q >> 1) & 1), k + ((q >> 2) & 1));
+        for (const auto& t : kKuhn) {
+          const std::array<int, 4> tet{corner[t[0]], corner[t[1]], corner[t[2]], corner[t[3]]};
+          bool holds = false;
+          for (int p : members)
+            holds =
+                holds ||
+                barycentric(model.rest_m.col(p), vpos(tet[0]), vpos(tet[1]), vpos(tet[2]), vpos(tet[3])).minCoeff() >=
+                    -1e-12;
+          if (!holds) continue;
+          kept.push_back(tet);
+          for (int v : tet) used[v] = 1;
+        }
+      }
+  std::vector<int> remap(used.size(), -1);
+  int count = 0;
+  for (size_t v = 0; v < used.size(); ++v)
+    if (used[v]) remap[v] = count++;
+  model.tet_vertices_m.resize(3, count);
+  for (size_t v = 0; v < used.size(); ++v)
+    if (used[v]) model.tet_vertices_m.col(remap[v]) = vpos(static_cast<int>(v));
+  model.tets.clear();
+  for (const auto& t : kept) model.tets.push_back({remap[t[0]], remap[t[1]], remap[t[2]], remap[t[3]]});
+}
+
 }  // namespace
 
 TissueModel build_tissue_model(const anatomy::TriangleMesh& surface_m, std::span<const Vector3d> fiducials_m,
@@ -189,6 +250,10 @@ TissueModel build_tissue_model(const anatomy::TriangleMesh& surface_m, std::span
   for (const Vector3d& v : surface_m.vertices_m) model.surface_skin.push_back(bind(v, model.cluster_rest_centre_m));
   model.fiducial_skin.reserve(fiducials_m.size());
   for (const Vector3d& f : fiducials_m) model.fiducial_skin.push_back(bind(f, model.cluster_rest_centre_m));
+  build_tets(model, spec.tet_spacing_factor * spec.particle_radius_m);
+  model.tet_skin.reserve(static_cast<size_t>(model.tet_vertices_m.cols()));
+  for (Eigen::Index v = 0; v < model.tet_vertices_m.cols(); ++v)
+    model.tet_skin.push_back(bind(model.tet_vertices_m.col(v), model.cluster_rest_centre_m));
   return model;
 }
 

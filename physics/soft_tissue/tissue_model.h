@@ -19,6 +19,7 @@ struct TissueModelSpec {
   double cluster_spacing_factor = 2.0;  // cluster cube edge = factor x particle radius
   double cluster_overlap = 0.5;         // each cube grown by this fraction of its edge per side
   int cluster_min_members = 4;
+  double tet_spacing_factor = 4.0;  // coarse tetrahedral grid: cube edge = factor x particle radius
 };
 
 constexpr int kMaxSkinClusters = 4;
@@ -38,6 +39,11 @@ struct TissueModel {
   Eigen::Matrix3Xd cluster_rest_centre_m;  // equal-mass centre of each cluster at rest
   std::vector<SkinBinding> surface_skin;   // one per surface vertex
   std::vector<SkinBinding> fiducial_skin;  // one per fiducial
+  // the coarse tetrahedral mesh: a regular grid of cubes, each cut into six tetrahedra around its
+  // diagonal (Kuhn), kept where a tetrahedron holds a particle; its vertices skinned like the surface
+  Eigen::Matrix3Xd tet_vertices_m;
+  std::vector<std::array<int, 4>> tets;
+  std::vector<SkinBinding> tet_skin;  // one per tet vertex
   // voxelisation: occupied voxel centres (kept for tests and the tet embedding)
   Eigen::Matrix3Xd interior_voxels_m;
 };

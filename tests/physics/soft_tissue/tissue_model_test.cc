@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <Eigen/LU>
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -119,6 +120,35 @@ TEST(TissueModel, SkinnedPointsReturnAtRestAndMoveRigidly) {
     ASSERT_LE((surface.col(v) - (q * f.phantom.surface.vertices_m[v] + t)).norm(), 1e-12) << v;
   for (size_t b = 0; b < m.fiducial_skin.size(); ++b)
     ASSERT_LE((beads.col(b) - (q * f.fiducials_m[b] + t)).norm(), 1e-12) << b;
+}
+
+TEST(TissueModel, CoarseTetsHoldEveryParticleAndTheirVerticesAreSkinned) {
+  const TissueModel& m = fixture().model;
+  ASSERT_GT(m.tets.size(), 0u);
+  ASSERT_EQ(m.tet_skin.size(), static_cast<size_t>(m.tet_vertices_m.cols()));
+  int outside = 0;
+  for (Eigen::Index p = 0; p < m.rest_m.cols(); ++p) {
+    bool in = false;
+    for (const auto& t : m.tets) {
+      Eigen::Matrix3d a;
+      a << m.tet_vertices_m.col(t[1]) - m.tet_vertices_m.col(t[0]),
+          m.tet_vertices_m.col(t[2]) - m.tet_vertices_m.col(t[0]),
+          m.tet_vertices_m.col(t[3]) - m.tet_vertices_m.col(t[0]);
+      const Vector3d w = a.inverse() * (m.rest_m.col(p) - m.tet_vertices_m.col(t[0]));
+      if (w.minCoeff() >= -1e-9 && w.sum() <= 1.0 + 1e-9) {
+        in = true;
+        break;
+      }
+    }
+    outside += !in;
+  }
+  EXPECT_EQ(outside, 0);
+  std::printf("tets %zu, tet vertices %ld\n", m.tets.size(), static_cast<long>(m.tet_vertices_m.cols()));
+  ClusterFrames frames(m);
+  cluster_frames(m, m.rest_m, &frames);
+  Matrix3Xd v(3, m.tet_skin.size());
+  skin_points(frames, m.tet_skin, &v);
+  EXPECT_LE((v - m.tet_vertices_m).colwise().norm().maxCoeff(), 1e-12);
 }
 
 TEST(TissueModel, ARadiusLargerThanTheOrganIsRefused) {

@@ -1,5 +1,6 @@
 #include "anatomy/vessel/lumen_surface.h"
 
+#include "anatomy/mesh/kuhn_tetrahedra.h"
 #include "anatomy/vessel/lumen_mesh.h"
 
 #include <Eigen/Geometry>
@@ -88,20 +89,13 @@ uint64_t pack(int64_t i, int64_t j, int64_t k) {
   return uint64_t(i) | (uint64_t(j) << 20) | (uint64_t(k) << 40);
 }
 
-// cube corner c = x + 2y + 4z. Six tetrahedra around the diagonal 0-7 (Kuhn): every cube cuts its
-// faces along the same diagonals as its neighbours, so the tetrahedra conform across cubes
+// the cube's six tetrahedra (anatomy/mesh/kuhn_tetrahedra.h) and the even permutations of four
 struct TetTable {
   std::array<std::array<int, 4>, 6> tets{};
   std::array<std::array<int, 4>, 12> even_perms{};
   TetTable() {
-    tets = {{{0, 1, 3, 7}, {0, 1, 5, 7}, {0, 2, 3, 7}, {0, 2, 6, 7}, {0, 4, 5, 7}, {0, 4, 6, 7}}};
-    auto corner = [](int c) { return Vector3d(c & 1, (c >> 1) & 1, (c >> 2) & 1); };
-    // positively oriented: det(v1 - v0, v2 - v0, v3 - v0) > 0
-    for (auto& t : tets) {
-      const Vector3d v0 = corner(t[0]);
-      const double det = (corner(t[1]) - v0).dot((corner(t[2]) - v0).cross(corner(t[3]) - v0));
-      if (det < 0) std::swap(t[1], t[2]);
-    }
+    for (int t = 0; t < 6; ++t)
+      for (int c = 0; c < 4; ++c) tets[t][c] = kKuhnTetrahedra[t][c];
     std::array<int, 4> p = {0, 1, 2, 3};
     int n = 0;
     do {

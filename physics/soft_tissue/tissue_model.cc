@@ -11,6 +11,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "anatomy/mesh/kuhn_tetrahedra.h"
 #include "physics/pbd/grid_clusters.h"
 
 namespace pcisim::physics::soft_tissue {
@@ -171,8 +172,6 @@ void build_tets(TissueModel& model, double h) {
     const int i = v % (n.x() + 1), j = (v / (n.x() + 1)) % (n.y() + 1), k = v / ((n.x() + 1) * (n.y() + 1));
     return Vector3d(lo + h * Vector3d(i, j, k));
   };
-  static constexpr int kKuhn[6][4] = {{0, 1, 3, 7}, {0, 3, 2, 7}, {0, 2, 6, 7},
-                                      {0, 6, 4, 7}, {0, 4, 5, 7}, {0, 5, 1, 7}};
   std::vector<std::array<int, 4>> kept;
   std::vector<char> used(static_cast<size_t>((n.x() + 1) * (n.y() + 1) * (n.z() + 1)), 0);
   std::vector<std::vector<int>> in_cube(static_cast<size_t>(n.prod()));
@@ -187,7 +186,7 @@ void build_tets(TissueModel& model, double h) {
         if (members.empty()) continue;
         int corner[8];
         for (int q = 0; q < 8; ++q) corner[q] = vid(i + (q & 1), j + ((q >> 1) & 1), k + ((q >> 2) & 1));
-        for (const auto& t : kKuhn) {
+        for (const auto& t : anatomy::kKuhnTetrahedra) {
           const std::array<int, 4> tet{corner[t[0]], corner[t[1]], corner[t[2]], corner[t[3]]};
           bool holds = false;
           for (int p : members)

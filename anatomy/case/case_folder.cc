@@ -233,11 +233,11 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
                fmt::format("{} vertices, the template heart has {} (a fitted rest shape keeps the template's tets)",
                            c.heart_vertices_m.cols(), tv.cols()));
         const double worst_mm = 1e3 * (c.heart_vertices_m - tv).colwise().norm().maxCoeff();
-        if (!(worst_mm <= 40.0))
+        if (!(worst_mm <= kMaxFittedHeartMoveMm))
           fail(node_file, "nodes",
-               fmt::format("a vertex {:.1f} mm from the template's (more than 40 mm: not a fit of the template heart "
-                           "in its frame, in mm)",
-                           worst_mm));
+               fmt::format("a vertex {:.1f} mm from the template's (more than {:.0f} mm: not a fit of the template "
+                           "heart in its frame, in mm)",
+                           worst_mm, kMaxFittedHeartMoveMm));
       }
       h.finish();
     }

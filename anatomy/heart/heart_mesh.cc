@@ -85,6 +85,11 @@ Eigen::Matrix3Xd parse_nodes(const TetgenText& node, double scale_to_m, long* fi
   const long n_nodes = nl.integer(tok[0], "node count");
   if (n_nodes < 4) nl.fail("node count must be >= 4");
   if (nl.integer(tok[1], "dimension") != 3) nl.fail("dimension must be 3");
+  // a node takes more than one character of the text: a count the text cannot hold is refused
+  // before anything is allocated for it
+  if (static_cast<size_t>(n_nodes) > node.text.size())
+    nl.fail("node count " + std::to_string(n_nodes) + " is more than the file's " + std::to_string(node.text.size()) +
+            " bytes can hold");
   Eigen::Matrix3Xd v(3, n_nodes);
   for (long i = 0; i < n_nodes; ++i) {
     if (!nl.next(&tok)) nl.fail_at_end("expected " + std::to_string(n_nodes) + " nodes, got " + std::to_string(i));

@@ -28,6 +28,11 @@ struct TetgenText {
 // normals point away from the tet they bound; a face that bounds no tet is an error.
 HeartMesh parse_tetgen_mesh(const TetgenText& node, const TetgenText& ele, const TetgenText& face, double scale_to_m);
 
+// a fitted rest shape (a case's heart.node) keeps every vertex within this distance of the
+// template's, in the template's frame: a fit moves the surface by millimetres, never by a heart's
+// size (the reader refuses more; the CTA pipeline does not write more)
+constexpr double kMaxFittedHeartMoveMm = 40.0;
+
 // only the vertices of a .node file (a fitted rest shape over the template's tets, heart_vertices)
 Eigen::Matrix3Xd parse_tetgen_nodes(const TetgenText& node, double scale_to_m);
 // writes vertices (metres) as a .node file in millimetres, indices from 0, full precision

@@ -198,9 +198,27 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
   });
   if (o.heart_fit.enabled) {
     stage(&m, "heart fit", progress, [&](StageReport& r) {
-      const HeartElasticFit f =
-          fit_heart_elastic(ct, m.model.vessels, m.model.heart, anatomy::template_heart_mesh(), o.heart_fit);
-      m.model.heart_vertices_m = f.vertices_m;
+      // an optional refinement: when it cannot be done the case keeps the template as placed (no
+      // heart.node; the world dents it under the tree as for any case without one)
+      HeartElasticFit f;
+      try {
+        f = fit_heart_elastic(ct, m.model.vessels, m.model.heart, anatomy::template_heart_mesh(), o.heart_fit);
+      } catch (const std::exception& e) {
+        r.notes.push_back(std::string("heart fit not done: ") + e.what() + "; the template is kept as placed");
+        return;
+      }
+      const anatomy::HeartMesh& t = anatomy::template_heart_mesh();
+      const double worst_mm = 1e3 * (f.vertices_m - t.vertices_m).colwise().norm().maxCoeff();
+      if (f.rounds_run == 0) {
+        f.notes.push_back("no fit kept: the template stays as placed");
+      } else if (!(worst_mm <= anatomy::kMaxFittedHeartMoveMm)) {
+        f.notes.push_back(
+            fmt::format("no fit kept: a vertex moved {:.1f} mm (more than {:.0f} mm in the template's "
+                        "frame): the template stays as placed",
+                        worst_mm, anatomy::kMaxFittedHeartMoveMm));
+      } else {
+        m.model.heart_vertices_m = f.vertices_m;
+      }
       r.figures = {{"epicardial_vertices", double(f.epicardial_vertices)},
                    {"targets", double(f.targets)},
                    {"outliers", double(f.outliers)},
@@ -214,7 +232,7 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
                    {"min_tet_volume_ratio", f.min_tet_volume_ratio},
                    {"volume_placed_ml", f.volume_placed_ml},
                    {"volume_fitted_ml", f.volume_fitted_ml}};
-      r.notes = f.notes;
+      r.notes.insert(r.notes.end(), f.notes.begin(), f.notes.end());
     });
   }
 

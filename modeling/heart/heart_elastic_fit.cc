@@ -295,7 +295,6 @@ double outline_along_normal_mm(const FloatImage& field, const Vector3d& p_mm, co
   double best = nan;
   for (int s = run; s + 1 + run < static_cast<int>(v.size()); ++s) {
     if (!(v[s] > 0 && v[s + 1] <= 0)) continue;
-    if (s - run > 2 * steps) break;
     bool clean = true;
     for (int k = 1; k <= run && clean; ++k) clean = v[s - k] > 0 && v[s + 1 + k] <= 0;
     if (!clean) continue;
@@ -357,7 +356,14 @@ HeartElasticFit fit_heart_elastic(const anatomy::Volume& ct, const anatomy::Vess
     x = x0 + fit.backoff * total;
     fit.min_tet_volume_ratio = min_volume_ratio(template_mesh, x0, x);
   }
-  if (fit.backoff < 1)
+  if (fit.min_tet_volume_ratio < o.min_tet_volume_fraction) {
+    // the bound is not met even scaled back to 1 %: the template as placed
+    x = x0;
+    fit.backoff = 0;
+    fit.rounds_run = 0;
+    fit.min_tet_volume_ratio = 1;
+    fit.notes.push_back("the fit would crush a tetrahedron at any scale: the template is left as placed");
+  } else if (fit.backoff < 1)
     fit.notes.push_back(
         fmt::format("the fit was scaled back to {:.0f} % to keep every tetrahedron above {:.0f} % of "
                     "its volume",

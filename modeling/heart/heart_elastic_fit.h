@@ -74,8 +74,10 @@ FloatImage heart_outline_field(const anatomy::Volume& ct, const Eigen::Vector3d&
 double outline_along_normal_mm(const FloatImage& field, const Eigen::Vector3d& p_mm, const Eigen::Vector3d& normal,
                                const HeartElasticFitOptions& o);
 
-// the template mesh (template frame) placed by `pose` and fitted to the CT. Throws
-// std::invalid_argument when the placed heart lies outside the CT
+// the template mesh (template frame) placed by `pose` and fitted to the CT; rounds_run == 0 when
+// nothing was fitted (the outline not found, or every scale crushes a tet: vertices as placed, a
+// note says why). Throws std::invalid_argument when the placed heart lies outside the CT,
+// std::runtime_error when a sparse system is singular
 HeartElasticFit fit_heart_elastic(const anatomy::Volume& ct, const anatomy::VesselTree& tree,
                                   const anatomy::HeartPose& pose, const anatomy::HeartMesh& template_mesh,
                                   const HeartElasticFitOptions& o);

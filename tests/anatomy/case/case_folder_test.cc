@@ -217,10 +217,16 @@ TEST_F(CaseFolder, TheFittedHeartReadsBackAsWrittenAndAWrongOneIsRefused) {
   write_case(c, dir_.string());
   {
     std::ofstream f(dir_ / "heart.node");
-    f << t.cols() << " 3 0 0\n0 1 2 x\n";
+    f << t.cols() << " 3 0 0\n0 1 2 x\n#" << std::string(t.cols(), ' ') << "\n";  // room for the count
   }
   EXPECT_NE(refusal().find("heart.node line 2: node coordinate must be a finite number"), std::string::npos)
       << refusal();
+  // a header claiming more nodes than the file can hold: refused before allocating for them
+  {
+    std::ofstream f(dir_ / "heart.node");
+    f << "1000000000000 3 0 0\n0 1 2 3\n";
+  }
+  EXPECT_NE(refusal().find("node count 1000000000000 is more than the file's"), std::string::npos) << refusal();
   // a path out of the folder
   auto j = case_json();
   j["heart"]["rest_vertices"] = "../heart.node";

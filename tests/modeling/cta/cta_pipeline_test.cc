@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "anatomy/heart/heart_mesh.h"
 #include "anatomy/mesh/mesh_io.h"
 #include "anatomy/phantom/phantom_cta.h"
 #include "modeling/cta/modeling_error.h"
@@ -97,6 +98,8 @@ TEST(CtaPipeline, OneAorticSeedGivesTheNamedTreeOnTheTruth) {
     std::printf("%s: first segment %.1f deg off the line to its ostium (%.1f mm)\n", name, deg, chord.norm() * 1e3);
     EXPECT_LT(deg, 5.0) << name;
   }
+  // the template heart fitted to this CT's heart: the case carries it
+  EXPECT_EQ(m.model.heart_vertices_m.cols(), anatomy::template_heart_mesh().vertices_m.cols());
   // a lumen for the SDF: one closed surface stitched across the bifurcations (every tree starts
   // on the aortic centerline, so the aorta and both trees are one piece)
   EXPECT_GT(m.model.lumen.triangles.size(), 1000u);
@@ -107,6 +110,23 @@ TEST(CtaPipeline, OneAorticSeedGivesTheNamedTreeOnTheTruth) {
   ASSERT_NE(loft, m.stages.end());
   EXPECT_EQ(loft->figures[2].first, "components");
   EXPECT_EQ(loft->figures[2].second, 1.0);
+}
+
+// a heart fit that finds no outline leaves no fitted heart in the case (the world then dents the
+// placed template under the tree) and says why; the model is built all the same
+TEST(CtaPipeline, AHeartFitThatCannotBeDoneLeavesTheTemplateAsPlaced) {
+  const anatomy::PhantomCta cta = small_cta(2);
+  CtaPipelineOptions o;
+  o.heart_fit.tissue_hu = 5000;  // nothing in the CT is heart
+  const CtaModel m = build_cta_model(cta.ct, {cta.aortic_seed_mm}, o);
+  EXPECT_EQ(m.model.heart_vertices_m.cols(), 0);
+  const auto fit =
+      std::find_if(m.stages.begin(), m.stages.end(), [](const StageReport& r) { return r.name == "heart fit"; });
+  ASSERT_NE(fit, m.stages.end());
+  std::string notes;
+  for (const auto& n : fit->notes) notes += n + "\n";
+  EXPECT_NE(notes.find("no fit kept"), std::string::npos) << notes;
+  EXPECT_GE(m.model.vessels.branches.size(), 4u);
 }
 
 // the major vessels are followed along most of their length (phantom 2 at 0.5 mm, a 60 % stenosis)

@@ -88,6 +88,7 @@ TEST(HeartElasticFit, ACtWithoutAHeartLeavesTheTemplateAsPlacedAndSaysSo) {
   const HeartPlacement placed = place_template_heart(cta.truth, HeartPlacementOptions{});
   const HeartElasticFit fit =
       fit_heart_elastic(fat, cta.truth, placed.pose, anatomy::template_heart_mesh(), HeartElasticFitOptions{});
+  EXPECT_EQ(fit.rounds_run, 0);
   ASSERT_EQ(fit.notes.size(), 1u);
   EXPECT_NE(fit.notes[0].find("outline was found from 0 of"), std::string::npos) << fit.notes[0];
   EXPECT_LT((fit.vertices_m - anatomy::template_heart_mesh().vertices_m).cwiseAbs().maxCoeff(), 1e-12);

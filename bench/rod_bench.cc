@@ -35,6 +35,11 @@ namespace {
 
 using physics::rod::CosseratRod;
 using physics::rod::CosseratRodParams;
+using physics::rod::RodSolver;
+
+const char* solver_name(RodSolver s) {
+  return s == RodSolver::kDirect ? "direct" : "gauss_seidel";
+}
 
 constexpr double kDt = 1.0 / 30.0;  // the physics thread's step
 
@@ -42,6 +47,7 @@ struct Run {
   std::string kind;  // cantilever_tip | cantilever_weight
   double load = 0;
   int segments = 0, substeps = 0, iterations = 0;
+  RodSolver solver = RodSolver::kGaussSeidel;
   double exact_dv = 0, rod_dv = 0, static_dv = 0;
   double error_pct = 0, static_error_pct = 0;  // against the elastica
   double ms_p50 = 0, ms_p99 = 0;               // per 30 Hz step
@@ -62,9 +68,10 @@ double exact_dv(const std::string& kind, double value) {
                                   : physics::rod::cantilever_self_weight(value).dv_over_l;
 }
 
-Run run_one(const std::string& kind, double value, int segments, int substeps, int iterations) {
-  Run r{kind, value, segments, substeps, iterations};
+Run run_one(const std::string& kind, double value, int segments, RodSolver solver, int substeps, int iterations) {
+  Run r{kind, value, segments, substeps, iterations, solver};
   CosseratRodParams p = physics::rod::unit_cantilever(segments);
+  p.solver = solver;
   p.substeps = substeps;
   p.iterations = iterations;
   p.damping_per_s = 5.0;
@@ -97,11 +104,12 @@ Run run_one(const std::string& kind, double value, int segments, int substeps, i
 
 std::string json_of(const Run& r) {
   return fmt::format(
-      "{{\"model\": \"rod\", \"case\": \"{}\", \"load\": {}, \"segments\": {}, \"substeps\": {}, \"iterations\": {}, "
+      "{{\"model\": \"rod\", \"solver\": \"{}\", \"case\": \"{}\", \"load\": {}, \"segments\": {}, \"substeps\": {}, "
+      "\"iterations\": {}, "
       "\"exact_dv_over_l\": {:.8f}, \"dv_over_l\": {:.8f}, \"error_pct\": {:.4f}, \"static_dv_over_l\": {:.8f}, "
       "\"static_error_pct\": {:.4f}, \"ms_p50\": {:.4f}, \"ms_p99\": {:.4f}, \"at_rest\": {}, \"rest_s\": {:.2f}}}",
-      r.kind, r.load, r.segments, r.substeps, r.iterations, r.exact_dv, r.rod_dv, r.error_pct, r.static_dv,
-      r.static_error_pct, r.ms_p50, r.ms_p99, r.at_rest ? "true" : "false", r.rest_s);
+      solver_name(r.solver), r.kind, r.load, r.segments, r.substeps, r.iterations, r.exact_dv, r.rod_dv, r.error_pct,
+      r.static_dv, r.static_error_pct, r.ms_p50, r.ms_p99, r.at_rest ? "true" : "false", r.rest_s);
 }
 
 constexpr const char* kUsage =
@@ -109,13 +117,13 @@ constexpr const char* kUsage =
     "  the Cosserat rod's tip deflection against the exact elastica, swept over segments and\n"
     "  substeps x sweeps, with the time per 30 Hz step; rod.md, rod.json (and rod.png) in DIR\n"
     "pcisim-bench rod --case cantilever_tip|cantilever_weight --load X --segments N [--substeps S]\n"
-    "                 [--iterations I] [--model rod|chain_mail]\n"
+    "                 [--iterations I] [--solver gauss_seidel|direct] [--model rod|chain_mail]\n"
     "  one run, one JSON line on stdout. The chain-mail wire has no load response (no gravity, no\n"
     "  tip force): --model chain_mail says so and exits 3\n";
 
 // one run from the command line; -1 when the arguments are the sweep's
 int single(const std::vector<std::string>& args) {
-  std::string kind, model = "rod";
+  std::string kind, model = "rod", solver = "gauss_seidel";
   double value = NAN;
   int segments = 50, substeps = 10, iterations = 4;
   bool any = false;
@@ -134,6 +142,8 @@ int single(const std::vector<std::string>& args) {
       iterations = std::atoi(v.c_str());
     } else if (k == "--model") {
       model = v;
+    } else if (k == "--solver") {
+      solver = v;
     } else {
       continue;
     }
@@ -146,12 +156,16 @@ int single(const std::vector<std::string>& args) {
                  "cantilever answer (issue #15)\n");
     return 3;
   }
-  if (model != "rod" || (kind != "cantilever_tip" && kind != "cantilever_weight") || !(value >= 0 && value <= 100) ||
-      segments < 1 || segments > 2000 || substeps < 1 || iterations < 1) {
+  if (model != "rod" || (solver != "gauss_seidel" && solver != "direct") ||
+      (kind != "cantilever_tip" && kind != "cantilever_weight") || !(value >= 0 && value <= 100) || segments < 1 ||
+      segments > 2000 || substeps < 1 || iterations < 1) {
     std::fprintf(stderr, "pcisim-bench rod: bad arguments\n%s", kUsage);
     return 2;
   }
-  std::printf("%s\n", json_of(run_one(kind, value, segments, substeps, iterations)).c_str());
+  std::printf("%s\n",
+              json_of(run_one(kind, value, segments, solver == "direct" ? RodSolver::kDirect : RodSolver::kGaussSeidel,
+                              substeps, iterations))
+                  .c_str());
   return 0;
 }
 
@@ -161,11 +175,14 @@ int run(const std::vector<std::string>& args) {
   if (const int rc = parse_bench_options(args, "rod", kUsage, &bo); rc >= 0) return rc;
 
   struct Solver {
+    RodSolver solver;
     int substeps, iterations;
   };
+  constexpr RodSolver gs = RodSolver::kGaussSeidel, direct = RodSolver::kDirect;
   const std::vector<int> segments = bo.quick ? std::vector<int>{10, 50} : std::vector<int>{10, 20, 50, 100};
   const std::vector<Solver> solvers =
-      bo.quick ? std::vector<Solver>{{10, 4}, {40, 10}} : std::vector<Solver>{{10, 4}, {20, 10}, {40, 10}};
+      bo.quick ? std::vector<Solver>{{gs, 10, 4}, {direct, 4, 2}}
+               : std::vector<Solver>{{gs, 10, 4}, {gs, 40, 10}, {direct, 2, 1}, {direct, 4, 2}, {direct, 10, 2}};
   const std::vector<std::pair<std::string, double>> cases =
       bo.quick ? std::vector<std::pair<std::string, double>>{{"cantilever_tip", 10}}
                : std::vector<std::pair<std::string, double>>{
@@ -174,11 +191,11 @@ int run(const std::vector<std::string>& args) {
   for (const auto& [kind, value] : cases)
     for (int n : segments)
       for (const Solver& s : solvers) {
-        runs.push_back(run_one(kind, value, n, s.substeps, s.iterations));
+        runs.push_back(run_one(kind, value, n, s.solver, s.substeps, s.iterations));
         const Run& r = runs.back();
-        std::printf("%-17s %5.1f  %3d segments  %2d x %2d: %+9.3f %% (static %+.4f %%)  %.3f / %.3f ms%s\n",
-                    kind.c_str(), value, n, s.substeps, s.iterations, r.error_pct, r.static_error_pct, r.ms_p50,
-                    r.ms_p99, r.at_rest ? "" : "  (not at rest after 30 s)");
+        std::printf("%-17s %5.1f  %3d segments  %-12s %2d x %2d: %+9.3f %% (static %+.4f %%)  %.3f / %.3f ms%s\n",
+                    kind.c_str(), value, n, solver_name(s.solver), s.substeps, s.iterations, r.error_pct,
+                    r.static_error_pct, r.ms_p50, r.ms_p99, r.at_rest ? "" : "  (not at rest after 30 s)");
         std::fflush(stdout);
       }
 
@@ -191,6 +208,7 @@ int run(const std::vector<std::string>& args) {
   for (const Solver& s : solvers) {
     CosseratRodParams p;
     p.segments = 300;
+    p.solver = s.solver;
     p.substeps = s.substeps;
     p.iterations = s.iterations;
     p.gravity_m_per_s2 = Eigen::Vector3d(0, 0, -9.81);
@@ -202,8 +220,8 @@ int run(const std::vector<std::string>& args) {
       ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     }
     timings.push_back({s, percentile(ms, 0.5), percentile(ms, 0.99)});
-    std::printf("300 mm wire, 300 segments, %2d x %2d: %.2f / %.2f ms per step\n", s.substeps, s.iterations,
-                timings.back().p50, timings.back().p99);
+    std::printf("300 mm wire, 300 segments, %-12s %2d x %2d: %.2f / %.2f ms per step\n", solver_name(s.solver),
+                s.substeps, s.iterations, timings.back().p50, timings.back().p99);
   }
 
   std::filesystem::create_directories(bo.out_dir);

@@ -76,4 +76,29 @@ void project_bend_twist(Eigen::Quaterniond& q1, double w1, Eigen::Quaterniond& q
   q2.normalize();
 }
 
+Eigen::Matrix3d stretch_shear_rotation_jacobian(const Eigen::Quaterniond& q) {
+  const Eigen::Vector3d d3 = q * Eigen::Vector3d::UnitZ();
+  Eigen::Matrix3d cross;
+  cross << 0.0, -d3.z(), d3.y(), d3.z(), 0.0, -d3.x(), -d3.y(), d3.x(), 0.0;
+  return cross;
+}
+
+Eigen::Matrix3d bend_twist_jacobian(const Eigen::Quaterniond& q1, const Eigen::Quaterniond& q2, double dual_length_m,
+                                    const Eigen::Vector3d& rest_darboux_per_m, Eigen::Vector3d* strain) {
+  const double l = dual_length_m;
+  const Eigen::Quaterniond relative = q1.conjugate() * q2;
+  const double s = darboux_sign(relative, l, rest_darboux_per_m);
+  *strain = s * (2.0 / l) * relative.vec() - rest_darboux_per_m;
+  // Im((0, a) (w, v)) = w a + a x v = (w I - [v]x) a, with a = R1^T dtheta / 2
+  const Eigen::Vector3d v = relative.vec();
+  Eigen::Matrix3d m = relative.w() * Eigen::Matrix3d::Identity();
+  m(0, 1) += v.z();
+  m(0, 2) -= v.y();
+  m(1, 0) -= v.z();
+  m(1, 2) += v.x();
+  m(2, 0) += v.y();
+  m(2, 1) -= v.x();
+  return (s / l) * m * q1.toRotationMatrix().transpose();
+}
+
 }  // namespace pcisim::physics::rod

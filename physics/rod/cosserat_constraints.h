@@ -52,4 +52,19 @@ void project_bend_twist(Eigen::Quaterniond& q1, double w1, Eigen::Quaterniond& q
                         const Eigen::Vector3d& rest_darboux_per_m, const Eigen::Vector3d& alpha_tilde,
                         Eigen::Vector3d& lambda);
 
+// The constraints' Jacobians for the direct solve (cosserat_rod.h, solver kDirect), with respect
+// to the node positions and a small world-frame rotation dtheta of each frame (q <- q + 1/2
+// (0, dtheta) q). The stretch-shear strain is taken in the world frame there,
+// Gamma_w = (p2 - p1) / l - d3(q) (the same energy: its compliance is rotated with q):
+//   dGamma_w / dp1 = -I / l,  dGamma_w / dp2 = I / l,  dGamma_w / dtheta = [d3]x
+// (d3 <- d3 + dtheta x d3). Returns [d3]x.
+Eigen::Matrix3d stretch_shear_rotation_jacobian(const Eigen::Quaterniond& q);
+
+// The bend-twist strain's Jacobian with respect to q2's rotation, B = dOmega / dtheta2
+// = (s / l_b) (w I - [v]x) R1^T for conj(q1) q2 = (w, v) and s the sign chosen as above; with
+// respect to q1's rotation it is -B (turning both frames together leaves Omega unchanged). The
+// strain itself (as bend_twist_strain) goes to *strain.
+Eigen::Matrix3d bend_twist_jacobian(const Eigen::Quaterniond& q1, const Eigen::Quaterniond& q2, double dual_length_m,
+                                    const Eigen::Vector3d& rest_darboux_per_m, Eigen::Vector3d* strain);
+
 }  // namespace pcisim::physics::rod

@@ -34,6 +34,7 @@ void validate(const CosseratRodParams& p) {
           "rotational_inertia_scale", "[1, 1e9]");
   require(std::isfinite(p.damping_per_s) && p.damping_per_s >= 0.0, "damping_per_s", "[0, inf)");
   require(p.substeps >= 1 && p.substeps <= 10000, "substeps", "[1, 10000]");
+  require(std::isfinite(p.max_substep_s) && p.max_substep_s > 0.0, "max_substep_s", "(0, inf)");
   require(p.iterations >= 1 && p.iterations <= 10000, "iterations", "[1, 10000]");
   require(std::isfinite(p.stretch_guard) && p.stretch_guard >= 0.0 && p.stretch_guard <= 1.0, "stretch_guard",
           "[0, 1]");
@@ -45,7 +46,11 @@ void validate(const CosseratRodParams& p) {
 
 CosseratRod::CosseratRod(const CosseratRodParams& params, const Eigen::Vector3d& clamp_position_m,
                          const Eigen::Quaterniond& clamp_orientation)
-    : params_(params), n_(params.segments), l_(0.0), clamp_q_(clamp_orientation.normalized()) {
+    : params_(params),
+      n_(params.segments),
+      l_(0.0),
+      clamp_q_(clamp_orientation.normalized()),
+      system_(params.solver == RodSolver::kDirect ? std::max(params.segments, 1) : 0) {
   validate(params_);
   l_ = params_.length_m / n_;
   const int nodes = n_ + 1;
@@ -66,6 +71,12 @@ CosseratRod::CosseratRod(const CosseratRodParams& params, const Eigen::Vector3d&
   bt_compliance_.resize(n_);
   bt_lambda_.assign(n_, Eigen::Vector3d::Zero());
   rest_darboux_.assign(n_, Eigen::Vector3d::Zero());  // straight at rest
+  if (params_.solver == RodSolver::kDirect) {
+    rhs_.assign(n_, BlockTridiagonal6::Vector::Zero());
+    dlambda_.assign(n_, BlockTridiagonal6::Vector::Zero());
+    ss_jacobian_.assign(n_, Eigen::Matrix3d::Zero());
+    bt_jacobian_.assign(n_, Eigen::Matrix3d::Zero());
+  }
 
   const Eigen::Vector3d tangent = clamp_q_ * Eigen::Vector3d::UnitZ();
   const double mu = params_.mass_per_length_kg_per_m;
@@ -108,10 +119,14 @@ void CosseratRod::set_clamp(const Eigen::Vector3d& position_m, const Eigen::Quat
 
 void CosseratRod::step(double dt_s) {
   if (!(dt_s > 0.0) || !std::isfinite(dt_s)) return;
-  const double h = dt_s / params_.substeps;
-  for (int sub = 0; sub < params_.substeps; ++sub) {
+  // a longer step than the rod was tuned for takes more substeps (no substep longer than
+  // max_substep_s): one linearised solve from a prediction h^2 a away is only good for small h
+  const int substeps =
+      std::max(params_.substeps, static_cast<int>(std::min(std::ceil(dt_s / params_.max_substep_s - 1e-9), 10000.0)));
+  const double h = dt_s / substeps;
+  for (int sub = 0; sub < substeps; ++sub) {
     predict(h);
-    solve_constraints(h);
+    if (params_.solver != RodSolver::kDirect || !solve_constraints_direct(h)) solve_constraints(h);
     guard_stretch();
     update_velocities(h);
   }
@@ -153,6 +168,77 @@ void CosseratRod::solve_constraints(double h) {
                          bt_compliance_[j] * inv_h2, bt_lambda_[j]);
     }
   }
+}
+
+// The XPBD system of every constraint at once (Macklin et al. 2016, eq 18 for all constraints
+// together; Deul et al. 2018 for rods): per iteration, the linearised update of the multipliers
+//   (J W J^T + alpha~) dlambda = -(C + alpha~ lambda)
+// with J the constraints' Jacobians (cosserat_constraints.h) over the node positions and each
+// frame's world rotation, W the inverse node masses and inverse rotational inertias. Ordered by
+// segment, unit j = (stretch-shear j, bend-twist j), the matrix is block tridiagonal: segment j's
+// constraints share node j + 1 and frame j with segment j + 1's and nothing further. Then
+//   dx = W J^T dlambda,  q <- normalise(q + 1/2 (0, dtheta) q).
+bool CosseratRod::solve_constraints_direct(double h) {
+  const double inv_h2 = 1.0 / (h * h);
+  const double inv_l = 1.0 / l_, inv_l2 = inv_l * inv_l;
+  const Eigen::Matrix3d eye = Eigen::Matrix3d::Identity();
+  for (int j = 0; j < n_; ++j) {
+    ss_lambda_[j].setZero();
+    bt_lambda_[j].setZero();
+  }
+  for (int it = 0; it < params_.iterations; ++it) {
+    // assemble the blocks at the current iterate
+    for (int j = 0; j < n_; ++j) {
+      const Eigen::Matrix3d r = q_[j].toRotationMatrix();
+      const Eigen::Vector3d gamma = (x_[j + 1] - x_[j]) * inv_l - r.col(2);
+      const Eigen::Matrix3d alpha_ss = r * (ss_compliance_[j] * inv_h2).asDiagonal() * r.transpose();
+      const Eigen::Vector3d alpha_bt = bt_compliance_[j] * inv_h2;
+      Eigen::Vector3d omega;
+      const Eigen::Matrix3d& c = ss_jacobian_[j] = stretch_shear_rotation_jacobian(q_[j]);
+      const Eigen::Matrix3d& b = bt_jacobian_[j] =
+          bend_twist_jacobian(pair_first_frame(j), q_[j], dual_length_m(j), rest_darboux_[j], &omega);
+      const double wi = 4.0 * inv_inertia_q_[j];
+      const double wi_prev = j > 0 ? 4.0 * inv_inertia_q_[j - 1] : 0.0;  // the clamp frame does not turn
+      BlockTridiagonal6::Block& d = system_.diagonal(j);
+      d.topLeftCorner<3, 3>() = (inv_mass_[j] + inv_mass_[j + 1]) * inv_l2 * eye + wi * c * c.transpose() + alpha_ss;
+      d.topRightCorner<3, 3>() = wi * c * b.transpose();
+      d.bottomLeftCorner<3, 3>() = d.topRightCorner<3, 3>().transpose();
+      d.bottomRightCorner<3, 3>() = (wi_prev + wi) * b * b.transpose();
+      d.bottomRightCorner<3, 3>().diagonal() += alpha_bt;
+      rhs_[j].head<3>() = -(gamma + alpha_ss * ss_lambda_[j]);
+      rhs_[j].tail<3>() = -(omega + alpha_bt.cwiseProduct(bt_lambda_[j]));
+      if (j > 0) {
+        // segment j - 1 and j share node j (stretch-shear) and frame j - 1 (bend-twist j turns it by -B_j)
+        BlockTridiagonal6::Block& u = system_.upper(j - 1);
+        u.topLeftCorner<3, 3>() = -inv_mass_[j] * inv_l2 * eye;
+        u.topRightCorner<3, 3>() = -wi_prev * ss_jacobian_[j - 1] * b.transpose();
+        u.bottomLeftCorner<3, 3>().setZero();
+        u.bottomRightCorner<3, 3>() = -wi_prev * bt_jacobian_[j - 1] * b.transpose();
+      }
+    }
+    if (!system_.factor()) return false;
+    system_.solve(rhs_, &dlambda_);
+    // dx = W J^T dlambda
+    for (int j = 0; j < n_; ++j) {
+      ss_lambda_[j] += dlambda_[j].head<3>();
+      bt_lambda_[j] += dlambda_[j].tail<3>();
+    }
+    for (int i = 1; i <= n_; ++i) {
+      Eigen::Vector3d g = dlambda_[i - 1].head<3>();
+      if (i < n_) g -= dlambda_[i].head<3>();
+      x_[i] += inv_mass_[i] * inv_l * g;
+    }
+    for (int j = 0; j < n_; ++j) {
+      Eigen::Vector3d g =
+          ss_jacobian_[j].transpose() * dlambda_[j].head<3>() + bt_jacobian_[j].transpose() * dlambda_[j].tail<3>();
+      if (j + 1 < n_) g -= bt_jacobian_[j + 1].transpose() * dlambda_[j + 1].tail<3>();
+      const Eigen::Vector3d dtheta = 4.0 * inv_inertia_q_[j] * g;
+      const Eigen::Quaterniond w(0.0, dtheta.x(), dtheta.y(), dtheta.z());
+      q_[j].coeffs() += 0.5 * (w * q_[j]).coeffs();
+      q_[j].normalize();
+    }
+  }
+  return true;
 }
 
 // follow-the-leader length bound (Mueller et al. 2012): not a constraint of the paper, a

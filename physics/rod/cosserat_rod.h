@@ -19,6 +19,7 @@
 #include <span>
 #include <vector>
 
+#include "physics/rod/block_tridiagonal.h"
 #include "physics/rod/cosserat_rod_params.h"
 
 namespace pcisim::physics::rod {
@@ -68,6 +69,8 @@ class CosseratRod {
  private:
   void predict(double h);
   void solve_constraints(double h);
+  // returns false (and leaves the state as the last good iteration) when the system is singular
+  bool solve_constraints_direct(double h);
   void guard_stretch();
   void update_velocities(double h);
 
@@ -82,6 +85,11 @@ class CosseratRod {
   std::vector<Eigen::Vector3d> ss_stiffness_, ss_compliance_, ss_lambda_;
   std::vector<Eigen::Vector3d> bt_stiffness_, bt_compliance_, bt_lambda_, rest_darboux_;
   Eigen::Quaterniond clamp_q_;
+  // the direct solve's system and per-iteration buffers (one 6-unit per segment: stretch-shear
+  // in the world frame, then bend-twist of the pair ending at that segment)
+  BlockTridiagonal6 system_;
+  std::vector<BlockTridiagonal6::Vector> rhs_, dlambda_;
+  std::vector<Eigen::Matrix3d> ss_jacobian_, bt_jacobian_;
 };
 
 }  // namespace pcisim::physics::rod

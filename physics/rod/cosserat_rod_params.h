@@ -8,6 +8,11 @@
 
 namespace pcisim::physics::rod {
 
+// how each substep's constraints are solved: Gauss-Seidel sweeps of the XPBD projections
+// (cheap, converges slowly on a stiff slender rod), or the XPBD system for every constraint at
+// once by a linear solve along the chain per iteration (Deul et al. 2018; block_tridiagonal.h)
+enum class RodSolver { kGaussSeidel, kDirect };
+
 struct CosseratRodParams {
   double length_m = 0.30;                  // (0, 10]
   int segments = 50;                       // [1, 10000]
@@ -25,8 +30,15 @@ struct CosseratRodParams {
   // answers do not depend on it; bending and twisting waves are slowed. [1, 1e9]
   double rotational_inertia_scale = 100.0;
   double damping_per_s = 0.0;  // velocity damping rate (linear and angular), [0, inf)
-  int substeps = 10;           // XPBD substeps per step, [1, 10000]
-  int iterations = 4;          // Gauss-Seidel sweeps per substep, [1, 10000]
+  // defaults: the direct solve at 2 x 1 is within 0.05 % of the elastica at 50 segments and
+  // 0.01 % at 100 (docs/benchmarks/rod.md); Gauss-Seidel needs about 40 x 10 for 0.1 % at 50
+  RodSolver solver = RodSolver::kDirect;
+  int substeps = 2;  // XPBD substeps per step, [1, 10000]
+  // a step longer than substeps x this takes more substeps: at 10 x the 30 Hz step a single
+  // direct solve per 1/6 s substep started from a prediction h^2 a metres away and did not
+  // settle (the default wire under gravity and a tip load kept moving at 0.2-2 m/s). (0, inf)
+  double max_substep_s = 1.0 / 60.0;
+  int iterations = 1;  // per substep: Gauss-Seidel sweeps, or Newton iterations of the direct solve, [1, 10000]
   // after the sweeps, a segment longer or shorter than (1 +- stretch_guard) l is brought back
   // to that bound, from the clamp outwards (follow-the-leader, Mueller et al. 2012, "Fast
   // simulation of inextensible hair and fur"): a safeguard for unconverged sweeps, inactive

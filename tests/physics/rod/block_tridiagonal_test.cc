@@ -1,0 +1,59 @@
+// The chain solver against a dense Cholesky solve of the same matrix, and its refusal of a
+// singular pivot.
+#include "physics/rod/block_tridiagonal.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <random>
+
+namespace pcisim::physics::rod {
+namespace {
+
+TEST(BlockTridiagonal6, SolvesARandomSpdChainAsADenseSolveDoes) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const int n = 9;
+  BlockTridiagonal6 chain(n);
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(6 * n, 6 * n);
+  for (int j = 0; j < n; ++j) {
+    BlockTridiagonal6::Block m;
+    for (int k = 0; k < 36; ++k) m(k) = u(rng);
+    // diagonally dominant, scaled over decades as a rod's blocks are
+    const double scale = std::pow(10.0, j % 5);
+    chain.diagonal(j) = scale * (m * m.transpose() + 20.0 * BlockTridiagonal6::Block::Identity());
+    dense.block<6, 6>(6 * j, 6 * j) = chain.diagonal(j);
+    if (j + 1 < n) {
+      for (int k = 0; k < 36; ++k) m(k) = u(rng);
+      chain.upper(j) = std::sqrt(scale) * m;
+      dense.block<6, 6>(6 * j, 6 * j + 6) = chain.upper(j);
+      dense.block<6, 6>(6 * j + 6, 6 * j) = chain.upper(j).transpose();
+    }
+  }
+  std::vector<BlockTridiagonal6::Vector> b(n), x(n);
+  Eigen::VectorXd bd(6 * n);
+  for (int j = 0; j < n; ++j) {
+    for (int k = 0; k < 6; ++k) b[j](k) = u(rng);
+    bd.segment<6>(6 * j) = b[j];
+  }
+  ASSERT_TRUE(chain.factor());
+  chain.solve(b, &x);
+  const Eigen::VectorXd xd = dense.llt().solve(bd);
+  for (int j = 0; j < n; ++j) EXPECT_LT((x[j] - xd.segment<6>(6 * j)).norm(), 1e-12 * xd.norm()) << "unit " << j;
+  // and the residual of the dense matrix with the chain's answer
+  Eigen::VectorXd xc(6 * n);
+  for (int j = 0; j < n; ++j) xc.segment<6>(6 * j) = x[j];
+  EXPECT_LT((dense * xc - bd).norm(), 1e-10 * bd.norm());
+}
+
+TEST(BlockTridiagonal6, RefusesASingularPivot) {
+  BlockTridiagonal6 chain(3);
+  for (int j = 0; j < 3; ++j) chain.diagonal(j) = BlockTridiagonal6::Block::Identity();
+  chain.diagonal(1)(4, 4) = 0.0;  // a constraint that nothing can move
+  EXPECT_FALSE(chain.factor());
+  chain.diagonal(1)(4, 4) = std::nan("");
+  EXPECT_FALSE(chain.factor());
+}
+
+}  // namespace
+}  // namespace pcisim::physics::rod

@@ -25,9 +25,10 @@ class BlockTridiagonal6 {
 
   // eliminates down the chain: S_0 = D_0, S_j = D_j - U_{j-1}' S_{j-1}^-1 U_{j-1}. False when a
   // pivot block is not positive definite (a NaN, or a constraint with no mobile body).
-  bool factor();
-  // x = A^-1 b (after factor()); b and x are units() 6-vectors, may be the same array
-  void solve(const std::vector<Vector>& b, std::vector<Vector>* x);
+  // Only units [first, units) take part (the ones before are not solved, their entries unread).
+  bool factor(int first = 0);
+  // x = A^-1 b (after factor(first)) over units [first, units); b and x hold units() 6-vectors
+  void solve(const std::vector<Vector>& b, std::vector<Vector>* x, int first = 0);
 
  private:
   std::vector<Block> diagonal_, upper_;

@@ -11,10 +11,14 @@ void add_scaled(Eigen::Quaterniond& q, double s, const Eigen::Quaterniond& d) {
   q.coeffs() += s * d.coeffs();
 }
 
-// +1 or -1: the sign of q2 that puts the Darboux vector nearer its rest value
-double darboux_sign(const Eigen::Quaterniond& relative, double dual_length_m, const Eigen::Vector3d& rest) {
-  const Eigen::Vector3d omega = (2.0 / dual_length_m) * relative.vec();
-  return (omega - rest).squaredNorm() <= (omega + rest).squaredNorm() ? 1.0 : -1.0;
+// +1 or -1: the sign of q2 that makes the relative rotation the shorter one (w >= 0). The
+// paper's rule (take the sign whose Darboux vector is nearer the rest value) fails for a rod
+// with rest curvature near its rest state: there both signs give small vectors and the rule
+// picks the one pointing along the rest curvature, so the strain is even in the bend and the
+// energy has no gradient there (measured: a unit cantilever with a rest curvature of 1/m stayed
+// straight in the static solve, converged, and its tip oscillated forever in the dynamic one)
+double darboux_sign(const Eigen::Quaterniond& relative, double /*dual_length_m*/, const Eigen::Vector3d& /*rest*/) {
+  return relative.w() >= 0.0 ? 1.0 : -1.0;
 }
 
 }  // namespace

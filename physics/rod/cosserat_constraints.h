@@ -24,7 +24,8 @@ Eigen::Vector3d stretch_shear_strain(const Eigen::Vector3d& p1, const Eigen::Vec
 
 // [cosserat, bend-twist constraint] Omega = (2 / l_b) Im(conj(q1) q2) - Omega_0, the discrete
 // Darboux vector (bend x, bend y, twist z in q1's frame) minus its rest value; of q2 and -q2
-// (the same rotation) the one nearer the rest Darboux vector is taken, as the paper does.
+// (the same rotation) the one giving the shorter relative rotation is taken (the paper takes
+// the one nearer the rest value, which is wrong for a curved rest shape: cosserat_constraints.cc)
 Eigen::Vector3d bend_twist_strain(const Eigen::Quaterniond& q1, const Eigen::Quaterniond& q2, double dual_length_m,
                                   const Eigen::Vector3d& rest_darboux_per_m);
 

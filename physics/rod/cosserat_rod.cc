@@ -117,18 +117,63 @@ void CosseratRod::set_clamp(const Eigen::Vector3d& position_m, const Eigen::Quat
   clamp_q_ = orientation.normalized();
 }
 
-void CosseratRod::step(double dt_s) {
+void CosseratRod::set_hub_node(int hub_node) {
+  if (hub_node < 0 || hub_node >= n_) throw std::out_of_range("rod: hub node out of range");
+  hub_ = hub_node;
+  for (int i = 0; i <= n_; ++i) inv_mass_[i] = i <= hub_ ? 0.0 : 1.0 / mass_[i];
+}
+
+void CosseratRod::set_rest_darboux_per_m(int pair, const Eigen::Vector3d& darboux_per_m) {
+  if (pair < 0 || pair >= n_) throw std::out_of_range("rod: pair index out of range");
+  rest_darboux_[pair] = darboux_per_m;
+}
+
+Eigen::Vector3d CosseratRod::hub_force_n() const {
+  if (params_.solver != RodSolver::kDirect || !(last_h_ > 0.0)) return Eigen::Vector3d::Zero();
+  // segment hub's stretch-shear pulls its first node (the hub) with J_p1^T lambda = -lambda / l
+  return -ss_lambda_[hub_] / (l_ * last_h_ * last_h_);
+}
+
+Eigen::Vector3d CosseratRod::hub_torque_nm() const {
+  if (params_.solver != RodSolver::kDirect || !(last_h_ > 0.0)) return Eigen::Vector3d::Zero();
+  // pair hub's bend-twist turns its first frame (the hub's) with -B^T lambda
+  Eigen::Vector3d omega;
+  const Eigen::Matrix3d b = bend_twist_jacobian(pair_first_frame(hub_), q_[hub_], dual_length_m(hub_),
+                                                rest_darboux_[hub_], &omega);
+  return -b.transpose() * bt_lambda_[hub_] / (last_h_ * last_h_);
+}
+
+Eigen::Vector3d CosseratRod::node_constraint_force_n(int i) const {
+  if (params_.solver != RodSolver::kDirect || !(last_h_ > 0.0) || i <= hub_) return Eigen::Vector3d::Zero();
+  // node i ends segment i - 1 (J = I / l) and starts segment i (J = -I / l)
+  Eigen::Vector3d f = ss_lambda_[i - 1];
+  if (i < n_) f -= ss_lambda_[i];
+  return f / (l_ * last_h_ * last_h_);
+}
+
+Eigen::Vector3d CosseratRod::segment_constraint_torque_nm(int j) const {
+  if (params_.solver != RodSolver::kDirect || !(last_h_ > 0.0) || j < hub_) return Eigen::Vector3d::Zero();
+  // frame j is pair j's second (B_j) and pair j + 1's first (-B_{j+1}); its stretch-shear term
+  // [d3]x^T lambda has no part about d3 and is kept for completeness
+  Eigen::Vector3d t = ss_jacobian_[j].transpose() * ss_lambda_[j] + bt_jacobian_[j].transpose() * bt_lambda_[j];
+  if (j + 1 < n_) t -= bt_jacobian_[j + 1].transpose() * bt_lambda_[j + 1];
+  return t / (last_h_ * last_h_);
+}
+
+void CosseratRod::step(double dt_s, RodContact* contact) {
   if (!(dt_s > 0.0) || !std::isfinite(dt_s)) return;
   // a longer step than the rod was tuned for takes more substeps (no substep longer than
   // max_substep_s): one linearised solve from a prediction h^2 a away is only good for small h
   const int substeps =
       std::max(params_.substeps, static_cast<int>(std::min(std::ceil(dt_s / params_.max_substep_s - 1e-9), 10000.0)));
   const double h = dt_s / substeps;
+  last_h_ = h;
   for (int sub = 0; sub < substeps; ++sub) {
     predict(h);
-    if (params_.solver != RodSolver::kDirect || !solve_constraints_direct(h)) solve_constraints(h);
+    if (params_.solver != RodSolver::kDirect || !solve_constraints_direct(h, contact)) solve_constraints(h, contact);
     guard_stretch();
     update_velocities(h);
+    if (contact) contact->after_substep(*this, h);
   }
 }
 
@@ -142,6 +187,7 @@ void CosseratRod::predict(double h) {
   }
   for (int j = 0; j < n_; ++j) {
     q_old_[j] = q_[j];
+    if (j < hub_) continue;  // kinematic
     // dq/dt = 1/2 q (0, omega) with omega in the material frame (isotropic inertia: no gyroscopic term)
     const Eigen::Quaterniond w(0.0, omega_[j].x(), omega_[j].y(), omega_[j].z());
     q_[j].coeffs() += 0.5 * h * (q_[j] * w).coeffs();
@@ -149,24 +195,27 @@ void CosseratRod::predict(double h) {
   }
 }
 
-void CosseratRod::solve_constraints(double h) {
+void CosseratRod::solve_constraints(double h, RodContact* contact) {
   const double inv_h2 = 1.0 / (h * h);
   for (int j = 0; j < n_; ++j) {
     ss_lambda_[j].setZero();
     bt_lambda_[j].setZero();
   }
+  const int f = hub_;
   for (int it = 0; it < params_.iterations; ++it) {
-    for (int j = 0; j < n_; ++j) {
+    for (int j = f; j < n_; ++j) {
       project_stretch_shear(x_[j], inv_mass_[j], x_[j + 1], inv_mass_[j + 1], q_[j], inv_inertia_q_[j], l_,
                             ss_compliance_[j] * inv_h2, ss_lambda_[j]);
     }
-    // pair 0: the clamp frame (immovable) and segment 0, over half a segment
-    project_bend_twist(clamp_q_, 0.0, q_[0], inv_inertia_q_[0], dual_length_m(0), rest_darboux_[0],
-                       bt_compliance_[0] * inv_h2, bt_lambda_[0]);
-    for (int j = 1; j < n_; ++j) {
+    // pair f: the hub's frame (immovable: the clamp frame at hub 0, over half a segment) and segment f
+    Eigen::Quaterniond hub_frame = pair_first_frame(f);
+    project_bend_twist(hub_frame, 0.0, q_[f], inv_inertia_q_[f], dual_length_m(f), rest_darboux_[f],
+                       bt_compliance_[f] * inv_h2, bt_lambda_[f]);
+    for (int j = f + 1; j < n_; ++j) {
       project_bend_twist(q_[j - 1], inv_inertia_q_[j - 1], q_[j], inv_inertia_q_[j], l_, rest_darboux_[j],
                          bt_compliance_[j] * inv_h2, bt_lambda_[j]);
     }
+    if (contact) contact->project(*this, it, h);
   }
 }
 
@@ -178,7 +227,7 @@ void CosseratRod::solve_constraints(double h) {
 // segment, unit j = (stretch-shear j, bend-twist j), the matrix is block tridiagonal: segment j's
 // constraints share node j + 1 and frame j with segment j + 1's and nothing further. Then
 //   dx = W J^T dlambda,  q <- normalise(q + 1/2 (0, dtheta) q).
-bool CosseratRod::solve_constraints_direct(double h) {
+bool CosseratRod::solve_constraints_direct(double h, RodContact* contact) {
   const double inv_h2 = 1.0 / (h * h);
   const double inv_l = 1.0 / l_, inv_l2 = inv_l * inv_l;
   const Eigen::Matrix3d eye = Eigen::Matrix3d::Identity();
@@ -186,9 +235,10 @@ bool CosseratRod::solve_constraints_direct(double h) {
     ss_lambda_[j].setZero();
     bt_lambda_[j].setZero();
   }
+  const int f = hub_;  // segments before it are kinematic
   for (int it = 0; it < params_.iterations; ++it) {
     // assemble the blocks at the current iterate
-    for (int j = 0; j < n_; ++j) {
+    for (int j = f; j < n_; ++j) {
       const Eigen::Matrix3d r = q_[j].toRotationMatrix();
       const Eigen::Vector3d gamma = (x_[j + 1] - x_[j]) * inv_l - r.col(2);
       const Eigen::Matrix3d alpha_ss = r * (ss_compliance_[j] * inv_h2).asDiagonal() * r.transpose();
@@ -198,7 +248,7 @@ bool CosseratRod::solve_constraints_direct(double h) {
       const Eigen::Matrix3d& b = bt_jacobian_[j] =
           bend_twist_jacobian(pair_first_frame(j), q_[j], dual_length_m(j), rest_darboux_[j], &omega);
       const double wi = 4.0 * inv_inertia_q_[j];
-      const double wi_prev = j > 0 ? 4.0 * inv_inertia_q_[j - 1] : 0.0;  // the clamp frame does not turn
+      const double wi_prev = j > f ? 4.0 * inv_inertia_q_[j - 1] : 0.0;  // the hub's frame does not turn
       BlockTridiagonal6::Block& d = system_.diagonal(j);
       d.topLeftCorner<3, 3>() = (inv_mass_[j] + inv_mass_[j + 1]) * inv_l2 * eye + wi * c * c.transpose() + alpha_ss;
       d.topRightCorner<3, 3>() = wi * c * b.transpose();
@@ -207,7 +257,7 @@ bool CosseratRod::solve_constraints_direct(double h) {
       d.bottomRightCorner<3, 3>().diagonal() += alpha_bt;
       rhs_[j].head<3>() = -(gamma + alpha_ss * ss_lambda_[j]);
       rhs_[j].tail<3>() = -(omega + alpha_bt.cwiseProduct(bt_lambda_[j]));
-      if (j > 0) {
+      if (j > f) {
         // segment j - 1 and j share node j (stretch-shear) and frame j - 1 (bend-twist j turns it by -B_j)
         BlockTridiagonal6::Block& u = system_.upper(j - 1);
         u.topLeftCorner<3, 3>() = -inv_mass_[j] * inv_l2 * eye;
@@ -216,19 +266,19 @@ bool CosseratRod::solve_constraints_direct(double h) {
         u.bottomRightCorner<3, 3>() = -wi_prev * bt_jacobian_[j - 1] * b.transpose();
       }
     }
-    if (!system_.factor()) return false;
-    system_.solve(rhs_, &dlambda_);
+    if (!system_.factor(f)) return false;
+    system_.solve(rhs_, &dlambda_, f);
     // dx = W J^T dlambda
-    for (int j = 0; j < n_; ++j) {
+    for (int j = f; j < n_; ++j) {
       ss_lambda_[j] += dlambda_[j].head<3>();
       bt_lambda_[j] += dlambda_[j].tail<3>();
     }
-    for (int i = 1; i <= n_; ++i) {
+    for (int i = f + 1; i <= n_; ++i) {
       Eigen::Vector3d g = dlambda_[i - 1].head<3>();
       if (i < n_) g -= dlambda_[i].head<3>();
       x_[i] += inv_mass_[i] * inv_l * g;
     }
-    for (int j = 0; j < n_; ++j) {
+    for (int j = f; j < n_; ++j) {
       Eigen::Vector3d g =
           ss_jacobian_[j].transpose() * dlambda_[j].head<3>() + bt_jacobian_[j].transpose() * dlambda_[j].tail<3>();
       if (j + 1 < n_) g -= bt_jacobian_[j + 1].transpose() * dlambda_[j + 1].tail<3>();
@@ -237,6 +287,7 @@ bool CosseratRod::solve_constraints_direct(double h) {
       q_[j].coeffs() += 0.5 * (w * q_[j]).coeffs();
       q_[j].normalize();
     }
+    if (contact) contact->project(*this, it, h);
   }
   return true;
 }
@@ -248,7 +299,7 @@ void CosseratRod::guard_stretch() {
   const double g = params_.stretch_guard;
   if (g <= 0.0) return;
   const double lo = (1.0 - g) * l_, hi = (1.0 + g) * l_;
-  for (int j = 0; j < n_; ++j) {
+  for (int j = hub_; j < n_; ++j) {
     const Eigen::Vector3d d = x_[j + 1] - x_[j];
     const double len = d.norm();
     if (len > hi) {
@@ -263,7 +314,7 @@ void CosseratRod::guard_stretch() {
 
 void CosseratRod::update_velocities(double h) {
   const double keep = 1.0 / (1.0 + params_.damping_per_s * h);  // implicit linear damping
-  for (int i = 1; i <= n_; ++i) v_[i] = keep * (x_[i] - x_old_[i]) / h;
+  for (int i = 0; i <= n_; ++i) v_[i] = (i <= hub_ ? 1.0 : keep) * (x_[i] - x_old_[i]) / h;
   for (int j = 0; j < n_; ++j) {
     Eigen::Quaterniond dq = q_old_[j].conjugate() * q_[j];
     if (dq.w() < 0.0) dq.coeffs() = -dq.coeffs();

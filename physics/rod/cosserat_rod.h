@@ -13,6 +13,10 @@
 // scalar rotational inertia per segment, I = mu l (l^2 / 12 + r^2 / 4) (a bar about an axis
 // across it; the axial moment of a thin wire, mu l r^2 / 2, is far smaller and is not used).
 //
+// The hub: nodes [0, hub] and the segments between them follow the instrument (inside a guide
+// catheter, set by the caller); the rod is solved from segment `hub` on. hub = 0 is the clamp
+// above. A contact hook (RodContact) runs after each solve inside the substeps.
+//
 // Everything is allocated at construction; step() allocates nothing.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -24,6 +28,18 @@
 
 namespace pcisim::physics::rod {
 
+class CosseratRod;
+
+// what the rod asks of its surroundings after each solve of a substep (iteration 0, 1, ...):
+// move the free nodes (from hub_node() + 1 on) out of whatever they touch, and hold or slow them
+class RodContact {
+ public:
+  virtual ~RodContact() = default;
+  virtual void project(CosseratRod& rod, int iteration, double substep_s) = 0;
+  // after the substep's velocities are known (e.g. kinetic friction on them)
+  virtual void after_substep(CosseratRod& /*rod*/, double /*substep_s*/) {}
+};
+
 class CosseratRod {
  public:
   // a straight rod at rest from clamp_position_m along clamp_orientation's third director (e3);
@@ -32,8 +48,9 @@ class CosseratRod {
                        const Eigen::Vector3d& clamp_position_m = Eigen::Vector3d::Zero(),
                        const Eigen::Quaterniond& clamp_orientation = Eigen::Quaterniond::Identity());
 
-  // advances dt_s: params.substeps XPBD substeps of params.iterations Gauss-Seidel sweeps
-  void step(double dt_s);
+  // advances dt_s: params.substeps XPBD substeps (more when dt_s / substeps > max_substep_s) of
+  // params.iterations solves, each followed by contact->project when given
+  void step(double dt_s, RodContact* contact = nullptr);
 
   // a dead force on a node (kept until changed); node 0 is clamped and ignores it
   void set_node_force_n(int node, const Eigen::Vector3d& force_n);
@@ -41,7 +58,26 @@ class CosseratRod {
   void set_gravity_m_per_s2(const Eigen::Vector3d& gravity) { params_.gravity_m_per_s2 = gravity; }
   // moves the hub: the clamped node and the clamp frame (insertion and rotation)
   void set_clamp(const Eigen::Vector3d& position_m, const Eigen::Quaterniond& orientation);
-
+  // nodes [0, hub_node] and segments [0, hub_node) become kinematic: the caller places them
+  // (mutable_nodes_m, mutable_orientations) before each step; the others are free. [0, segments)
+  void set_hub_node(int hub_node);
+  int hub_node() const { return hub_; }
+  // the rest curvature and twist of a pair (e.g. a shaped tip), per metre, in its first frame
+  void set_rest_darboux_per_m(int pair, const Eigen::Vector3d& darboux_per_m);
+  // what the free rod does to the hub over the last substep (direct solver: from the multipliers
+  // of segment `hub`'s constraints, f = J^T lambda / h^2; zero for the Gauss-Seidel solver):
+  // the force on the hub node and the torque on the hub's frame, world frame
+  Eigen::Vector3d hub_force_n() const;
+  Eigen::Vector3d hub_torque_nm() const;
+  // inside a substep, after a direct solve (zero for Gauss-Seidel): the constraints' force on a
+  // free node and their torque on a free segment's frame, J^T lambda / h^2, world frame
+  Eigen::Vector3d node_constraint_force_n(int node) const;
+  Eigen::Vector3d segment_constraint_torque_nm(int segment) const;
+  // where the nodes and frames were when the current substep began
+  std::span<const Eigen::Vector3d> substep_start_nodes_m() const { return x_old_; }
+  std::span<const Eigen::Quaterniond> substep_start_orientations() const { return q_old_; }
+  // the scalar rotational inertia of a segment's frame (params' scaling included)
+  double segment_inertia_kg_m2(int segment) const { return 0.25 / inv_inertia_q_[segment]; }
   int segment_count() const { return n_; }
   int node_count() const { return n_ + 1; }
   double segment_length_m() const { return l_; }
@@ -51,6 +87,9 @@ class CosseratRod {
   std::span<const Eigen::Quaterniond> orientations() const { return q_; }
   std::span<Eigen::Quaterniond> mutable_orientations() { return q_; }
   std::span<const Eigen::Vector3d> velocities_m_per_s() const { return v_; }
+  std::span<Eigen::Vector3d> mutable_velocities_m_per_s() { return v_; }
+  // each segment's angular velocity in its material frame (z: spin about the wire)
+  std::span<Eigen::Vector3d> mutable_angular_velocities_rad_per_s() { return omega_; }
   const Eigen::Quaterniond& clamp_orientation() const { return clamp_q_; }
   const Eigen::Vector3d& node_force_n(int node) const { return force_[node]; }
   double node_mass_kg(int node) const { return mass_[node]; }
@@ -68,9 +107,9 @@ class CosseratRod {
 
  private:
   void predict(double h);
-  void solve_constraints(double h);
+  void solve_constraints(double h, RodContact* contact);
   // returns false (and leaves the state as the last good iteration) when the system is singular
-  bool solve_constraints_direct(double h);
+  bool solve_constraints_direct(double h, RodContact* contact);
   void guard_stretch();
   void update_velocities(double h);
 
@@ -85,6 +124,8 @@ class CosseratRod {
   std::vector<Eigen::Vector3d> ss_stiffness_, ss_compliance_, ss_lambda_;
   std::vector<Eigen::Vector3d> bt_stiffness_, bt_compliance_, bt_lambda_, rest_darboux_;
   Eigen::Quaterniond clamp_q_;
+  int hub_ = 0;
+  double last_h_ = 0.0;  // the last substep, for the hub's force
   // the direct solve's system and per-iteration buffers (one 6-unit per segment: stretch-shear
   // in the world frame, then bend-twist of the pair ending at that segment)
   BlockTridiagonal6 system_;

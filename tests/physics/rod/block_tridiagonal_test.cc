@@ -46,6 +46,40 @@ TEST(BlockTridiagonal6, SolvesARandomSpdChainAsADenseSolveDoes) {
   EXPECT_LT((dense * xc - bd).norm(), 1e-10 * bd.norm());
 }
 
+TEST(BlockTridiagonal6, SolvesTheTailFromAFirstUnit) {
+  // units before `first` are neither read nor written: garbage there changes nothing
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const int n = 7, first = 3;
+  BlockTridiagonal6 chain(n);
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(6 * (n - first), 6 * (n - first));
+  for (int j = 0; j < n; ++j) {
+    BlockTridiagonal6::Block m;
+    for (int k = 0; k < 36; ++k) m(k) = u(rng);
+    chain.diagonal(j) = j < first ? BlockTridiagonal6::Block::Constant(std::nan(""))
+                                  : BlockTridiagonal6::Block(m * m.transpose() + 10.0 * BlockTridiagonal6::Block::Identity());
+    if (j >= first) dense.block<6, 6>(6 * (j - first), 6 * (j - first)) = chain.diagonal(j);
+    if (j + 1 < n) {
+      for (int k = 0; k < 36; ++k) m(k) = u(rng);
+      chain.upper(j) = j < first ? BlockTridiagonal6::Block::Constant(std::nan("")) : m;
+      if (j >= first) {
+        dense.block<6, 6>(6 * (j - first), 6 * (j - first) + 6) = m;
+        dense.block<6, 6>(6 * (j - first) + 6, 6 * (j - first)) = m.transpose();
+      }
+    }
+  }
+  std::vector<BlockTridiagonal6::Vector> b(n, BlockTridiagonal6::Vector::Constant(std::nan(""))), x(n);
+  Eigen::VectorXd bd(6 * (n - first));
+  for (int j = first; j < n; ++j) {
+    for (int k = 0; k < 6; ++k) b[j](k) = u(rng);
+    bd.segment<6>(6 * (j - first)) = b[j];
+  }
+  ASSERT_TRUE(chain.factor(first));
+  chain.solve(b, &x, first);
+  const Eigen::VectorXd xd = dense.llt().solve(bd);
+  for (int j = first; j < n; ++j) EXPECT_LT((x[j] - xd.segment<6>(6 * (j - first))).norm(), 1e-12 * xd.norm()) << j;
+}
+
 TEST(BlockTridiagonal6, RefusesASingularPivot) {
   BlockTridiagonal6 chain(3);
   for (int j = 0; j < 3; ++j) chain.diagonal(j) = BlockTridiagonal6::Block::Identity();

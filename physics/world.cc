@@ -13,6 +13,7 @@
 #include "physics/guidewire/coulomb_friction.h"
 #include "physics/guidewire/input_guard.h"
 #include "physics/guidewire/link_spec.h"
+#include "physics/guidewire/rod_wire.h"
 #include "physics/guidewire/sdf_lumen.h"
 #include "physics/guidewire/wall_contact.h"
 #include "physics/guidewire/wire_feedback.h"
@@ -70,6 +71,7 @@ struct World::Impl {
   anatomy::VesselTree tree;
   std::shared_ptr<const LumenQuery> lumen;
   std::optional<ChainMailWire> wire;
+  std::optional<RodWire> rod;
   std::optional<WallContact> contact;
   std::optional<CoulombFriction> friction;
   std::optional<BloodChainMail> blood;
@@ -155,7 +157,8 @@ World::World(const WorldSpec& spec, const anatomy::VesselTree& tree, std::shared
   if (!spec.guidewire) return;
   auto path = anatomy::guide_catheter_path(w.tree);
   require(path.size() >= 2, "anatomy: the vessel tree has no guide catheter path (branches named aorta and LM needed)");
-  w.wire.emplace(*spec.guidewire, CatheterPath(std::move(path)));
+  const bool rod = spec.guidewire->model == GuidewireModel::kRod;
+  if (!rod) w.wire.emplace(*spec.guidewire, CatheterPath(path));
   if (spec.vessel_contact) {
     // eq 15 against the SDF of the lofted lumen at the scene's spacing
     if (contact_geometry) {
@@ -168,9 +171,14 @@ World::World(const WorldSpec& spec, const anatomy::VesselTree& tree, std::shared
                                     e.what() + ")");
       }
     }
-    w.contact.emplace(*spec.vessel_contact, *w.lumen, w.wire->node_count());
+    if (!rod) w.contact.emplace(*spec.vessel_contact, *w.lumen, w.wire->node_count());
   }
-  if (spec.friction) w.friction.emplace(*spec.friction, w.wire->node_count());
+  if (rod) {
+    // the rod touches the wall and feels friction inside its own substeps
+    w.rod.emplace(*spec.guidewire, CatheterPath(std::move(path)), w.lumen.get(), spec.vessel_contact, spec.friction);
+  } else if (spec.friction) {
+    w.friction.emplace(*spec.friction, w.wire->node_count());
+  }
   if (spec.blood_flow) {
     BloodFlowParams blood = *spec.blood_flow;
     if (!spec.heart_beat) blood.pulsatility = 0.0;  // no cycle to follow: steady flow
@@ -194,6 +202,23 @@ void World::step(const InstrumentInput& input) {
       w.skin->update(w.heart_in_case_m);
       w.costs[w.cost_motion].last_step_ms = Impl::ms(b, Clock::now());
     }
+  }
+  if (w.rod) {
+    const auto t0 = Clock::now();
+    double c_blood = 0.0;
+    if (w.blood) {
+      w.blood->step(w.spec.step_s, w.heart ? w.heart->phase() : 0.0);
+      w.blood->apply(w.rod->mutable_nodes_m(), w.rod->first_free_node(), w.spec.step_s);
+      c_blood = Impl::ms(t0, Clock::now());
+    }
+    const auto t1 = Clock::now();
+    w.rod->step(w.used.insertion_m, w.used.rotation_rad, w.spec.step_s);
+    w.tip_branch = anatomy::nearest_branch(w.tree, w.rod->nodes_m().back());
+    w.model =
+        to_local_force_model(w.rod->feedback(), w.used, *w.spec.guidewire, w.time_s + w.spec.step_s, w.spec.step_s);
+    // contact and friction run inside the rod's substeps: their time is the guidewire's
+    w.costs[w.cost_wire].last_step_ms = Impl::ms(t1, Clock::now());
+    if (w.cost_blood >= 0) w.costs[w.cost_blood].last_step_ms = c_blood;
   }
   if (w.wire) {
     ChainMailWire& wire = *w.wire;
@@ -271,6 +296,16 @@ void World::write_snapshot(WorldSnapshot& out) const {
   } else {
     out.vessel_points_m.clear();
   }
+  if (w.rod) {
+    const auto nodes = w.rod->nodes_m();
+    out.wire_nodes_m.assign(nodes.begin(), nodes.end());
+    if (w.skin)
+      for (auto& p : out.wire_nodes_m) p = w.skin->to_world(p);
+    const auto t = w.rod->touched();
+    out.wire_contact.assign(t.begin(), t.end());
+    out.tip_m = out.wire_nodes_m.back();
+    return;
+  }
   if (!w.wire) {
     out.wire_nodes_m.clear();
     out.wire_contact.clear();
@@ -305,11 +340,15 @@ int64_t World::rejected_inputs() const {
   return impl_->guard.rejected();
 }
 double World::refused_feed_m() const {
+  if (impl_->rod) return impl_->rod->commanded_feed_m() - impl_->rod->fed_length_m();
   return impl_->wire ? impl_->wire->commanded_feed_m() - impl_->wire->fed_length_m() : 0.0;
 }
 
 const ChainMailWire* World::guidewire_state() const {
   return impl_->wire ? &*impl_->wire : nullptr;
+}
+const RodWire* World::rod_state() const {
+  return impl_->rod ? &*impl_->rod : nullptr;
 }
 const WallContact* World::contact_state() const {
   return impl_->contact ? &*impl_->contact : nullptr;

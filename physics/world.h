@@ -24,6 +24,7 @@ class BeatingHeart;
 struct HeartFitReport;
 class BloodChainMail;
 class ChainMailWire;
+class RodWire;
 class VesselSkin;
 class CoulombFriction;
 class LumenQuery;
@@ -72,7 +73,8 @@ class World {
   // read-only views for tests and benchmarks; null when the effect is not listed. With
   // vessel_motion the wire, contact and blood live in the vessels' rest frame; the snapshot
   // carries them into the world
-  const ChainMailWire* guidewire_state() const;
+  const ChainMailWire* guidewire_state() const;  // guidewire.model chain_mail
+  const RodWire* rod_state() const;              // guidewire.model rod (contact and friction inside it)
   const WallContact* contact_state() const;
   const CoulombFriction* friction_state() const;
   const LumenQuery* lumen() const;                 // the contact geometry (null without vessel_contact)

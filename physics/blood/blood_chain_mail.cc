@@ -199,9 +199,12 @@ Eigen::Vector3d BloodChainMail::linked_velocity(const Eigen::Vector3d& p) const 
 }
 
 void BloodChainMail::apply(ChainMailWire& wire, double dt_s) const {
-  auto nodes = wire.mutable_nodes_m();
+  apply(wire.mutable_nodes_m(), wire.first_free_node(), dt_s);
+}
+
+void BloodChainMail::apply(std::span<Eigen::Vector3d> nodes, int first_free, double dt_s) const {
   const double gain = params_.drift_gain * dt_s;
-  for (int i = wire.first_free_node(); i < wire.node_count(); ++i) nodes[i] += gain * linked_velocity(nodes[i]);
+  for (int i = first_free; i < static_cast<int>(nodes.size()); ++i) nodes[i] += gain * linked_velocity(nodes[i]);
 }
 
 }  // namespace pcisim::physics

@@ -37,6 +37,8 @@ class BloodChainMail {
   void step(double dt_s, double phase);
   // eq 12 on the wire's free nodes: q* = q + gain * sum_i w_i v_i dt, w_i ~ 1 / d_i
   void apply(ChainMailWire& wire, double dt_s) const;
+  // the same drift on any wire's nodes from first_free on (the rod model)
+  void apply(std::span<Eigen::Vector3d> nodes_m, int first_free, double dt_s) const;
 
   // the blended blood velocity a point would take (eq 12's sum), m/s; zero away from the blood
   Eigen::Vector3d linked_velocity(const Eigen::Vector3d& p_m) const;

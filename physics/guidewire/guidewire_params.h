@@ -6,7 +6,12 @@
 
 namespace pcisim::physics {
 
+// which wire model a scene runs (scene key guidewire.model): the chain-mail of the paper, or a
+// discrete Cosserat rod with physical stiffness (physics/guidewire/rod_wire.h, docs/guidewire.md)
+enum class GuidewireModel { kChainMail, kRod };
+
 struct GuidewireParams {
+  GuidewireModel model = GuidewireModel::kChainMail;
   double length_m = 0.30;       // simulated distal length of the wire, (tip_length_m, 2]
   int segment_count = 200;      // chain-mail links, [4, 4000]
   int optimisation_passes = 2;  // physical-optimisation passes per step (eqs 5-10), [0, 64]
@@ -25,6 +30,24 @@ struct GuidewireParams {
   // torsional rigidity GJ of the core, N m^2, [0, 1e-2]; rotational damping N m s/rad, [0, 1]
   double torsional_rigidity_nm2 = 1.2e-5;
   double torsion_damping_nm_s_per_rad = 1e-5;
+
+  // --- the rod model's physical section (model kRod; the chain-mail ignores them) ---
+  // bending stiffness EI of the body and of the tip, N m^2. Default body: a steel core of about
+  // 0.2 mm (E 200 GPa, I = pi d^4 / 64), consistent with the torsional rigidity above (GJ / EI =
+  // 2 G / E = 0.77 for a round isotropic core); tip: Euler's clamped-free buckling of 10 mm of
+  // tip, EI = 4 L^2 P / pi^2, at a 1 gf tip load (docs/guidewire.md: presets with cited figures)
+  double bending_stiffness_nm2 = 1.56e-5;
+  double tip_bending_stiffness_nm2 = 4.0e-7;
+  double mass_per_length_kg_per_m = 7.9e-4;  // a 0.356 mm steel wire (7900 kg/m^3)
+  double outer_diameter_m = 0.356e-3;        // 0.014 inch
+  // viscous drag of blood on the moving wire as a damping rate, 1/s: slender-body drag per
+  // length c = 4 pi mu / ln(L / d) (mu 3.5 mPa s, L / d ~ 1000) over the mass per length, ~8/s
+  double rod_damping_per_s = 8.0;
+  int rod_substeps = 8;    // XPBD substeps per physics step (more when a step is long)
+  int rod_iterations = 1;  // direct solves per substep, each followed by wall contact and friction
+  // the hub lets the wire slip (refuses further feed) while the wire pushes back harder than
+  // this: the grip of a torque device and the guide catheter's support are finite
+  double feed_refuse_force_n = 1.0;
 };
 
 // each field's range, the one source for validate() (link_spec.cc) and the scene loader
@@ -40,6 +63,13 @@ inline constexpr ParamRange kGuidewireAxialStiffnessNPerM{0, 1e5};
 inline constexpr ParamRange kGuidewireAxialDampingNSPerM{0, 100};
 inline constexpr ParamRange kGuidewireTorsionalRigidityNm2{0, 1e-2};
 inline constexpr ParamRange kGuidewireTorsionDampingNmSPerRad{0, 1};
+inline constexpr ParamRange kGuidewireBendingStiffnessNm2{1e-9, 1e-2};
+inline constexpr ParamRange kGuidewireMassPerLengthKgPerM{1e-5, 1e-1};
+inline constexpr ParamRange kGuidewireOuterDiameterM{1e-4, 3e-3};
+inline constexpr ParamRange kGuidewireRodDampingPerS{0, 1000};
+inline constexpr ParamRange kGuidewireRodSubsteps{1, 100};
+inline constexpr ParamRange kGuidewireRodIterations{1, 20};
+inline constexpr ParamRange kGuidewireFeedRefuseForceN{0.01, 100};
 
 struct VesselContactParams {
   double sdf_spacing_m = 0.2e-3;   // SDF grid spacing

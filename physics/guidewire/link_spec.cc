@@ -45,6 +45,17 @@ void validate(const GuidewireParams& p) {
   in_range(p.axial_damping_n_s_per_m, kGuidewireAxialDampingNSPerM, "axial_damping_n_s_per_m");
   in_range(p.torsional_rigidity_nm2, kGuidewireTorsionalRigidityNm2, "torsional_rigidity_nm2");
   in_range(p.torsion_damping_nm_s_per_rad, kGuidewireTorsionDampingNmSPerRad, "torsion_damping_nm_s_per_rad");
+  check(p.model == GuidewireModel::kChainMail || p.model == GuidewireModel::kRod, "model", "chain_mail or rod");
+  in_range(p.bending_stiffness_nm2, kGuidewireBendingStiffnessNm2, "bending_stiffness_nm2");
+  in_range(p.tip_bending_stiffness_nm2, kGuidewireBendingStiffnessNm2, "tip_bending_stiffness_nm2");
+  in_range(p.mass_per_length_kg_per_m, kGuidewireMassPerLengthKgPerM, "mass_per_length_kg_per_m");
+  in_range(p.outer_diameter_m, kGuidewireOuterDiameterM, "outer_diameter_m");
+  in_range(p.rod_damping_per_s, kGuidewireRodDampingPerS, "rod_damping_per_s");
+  in_range(p.rod_substeps, kGuidewireRodSubsteps, "rod_substeps");
+  in_range(p.rod_iterations, kGuidewireRodIterations, "rod_iterations");
+  in_range(p.feed_refuse_force_n, kGuidewireFeedRefuseForceN, "feed_refuse_force_n");
+  if (p.model == GuidewireModel::kRod)
+    check(p.torsional_rigidity_nm2 > 0.0, "torsional_rigidity_nm2", "above 0 for the rod");
 }
 
 std::vector<LinkSpec> make_link_specs(const GuidewireParams& p) {

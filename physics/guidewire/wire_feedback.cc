@@ -81,7 +81,7 @@ LocalForceModel to_local_force_model(const WireFeedback& f, const InstrumentInpu
   m.q0_rad = at.rotation_rad;
   // friction resists the way the hand turns; at rest it holds nothing
   const double w = at.rotation_rate_rad_per_s;
-  m.t0_nm = w > 0.0 ? f.torque_nm : (w < 0.0 ? -f.torque_nm : 0.0);
+  m.t0_nm = (w > 0.0 ? f.torque_nm : (w < 0.0 ? -f.torque_nm : 0.0)) + f.elastic_torque_nm;
   m.kt_nm_per_rad = std::max(f.torsion_stiffness_nm_per_rad, 0.0);
   m.bt_nm_s_per_rad = params.torsion_damping_nm_s_per_rad;
   if (!std::isfinite(m.f0_n) || !std::isfinite(m.k_n_per_m) || !std::isfinite(m.t0_nm) ||

@@ -14,6 +14,9 @@ struct WireFeedback {
   double internal_n = 0.0;  // F_internal, eq 20
   double stiffness_n_per_m = 0.0;
   double torque_nm = 0.0;  // magnitude of the wall friction torque against turning
+  // the wire's elastic torque back on the hub (rod model), signed: positive resists positive
+  // rotation whichever way the hand turns, unlike friction
+  double elastic_torque_nm = 0.0;
   double torsion_stiffness_nm_per_rad = 0.0;
 };
 

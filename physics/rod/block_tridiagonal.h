@@ -1,5 +1,5 @@
 #pragma once
-// A symmetric positive definite block-tridiagonal system with 6 x 6 blocks, solved by block
+// A symmetric positive definite block-tridiagonal system with N x N blocks, solved by block
 // Gaussian elimination along the chain (the block Thomas algorithm) in O(n): the linear solve of
 // a rod's constraints, whose graph is a chain (Deul et al. 2018, "Direct position-based solver
 // for stiff rods", solve a tree the same way). Sized once; factor() and solve() allocate nothing.
@@ -12,12 +12,18 @@
 
 namespace pcisim::physics::rod {
 
-class BlockTridiagonal6 {
+template <int N>
+class BlockTridiagonal {
  public:
-  using Block = Eigen::Matrix<double, 6, 6>;
-  using Vector = Eigen::Matrix<double, 6, 1>;
+  using Block = Eigen::Matrix<double, N, N>;
+  using Vector = Eigen::Matrix<double, N, 1>;
 
-  explicit BlockTridiagonal6(int units);
+  explicit BlockTridiagonal(int units)
+      : diagonal_(units, Block::Zero()),
+        upper_(units > 0 ? units - 1 : 0, Block::Zero()),
+        pivot_(units),
+        reduced_upper_(units > 0 ? units - 1 : 0, Block::Zero()),
+        forward_(units, Vector::Zero()) {}
 
   int units() const { return static_cast<int>(diagonal_.size()); }
   Block& diagonal(int j) { return diagonal_[j]; }
@@ -26,9 +32,34 @@ class BlockTridiagonal6 {
   // eliminates down the chain: S_0 = D_0, S_j = D_j - U_{j-1}' S_{j-1}^-1 U_{j-1}. False when a
   // pivot block is not positive definite (a NaN, or a constraint with no mobile body).
   // Only units [first, units) take part (the ones before are not solved, their entries unread).
-  bool factor(int first = 0);
-  // x = A^-1 b (after factor(first)) over units [first, units); b and x hold units() 6-vectors
-  void solve(const std::vector<Vector>& b, std::vector<Vector>* x, int first = 0);
+  bool factor(int first = 0) {
+    const int n = units();
+    for (int j = first; j < n; ++j) {
+      Block s = diagonal_[j];
+      if (j > first) s.noalias() -= upper_[j - 1].transpose() * reduced_upper_[j - 1];
+      if (!s.allFinite()) return false;  // Eigen's Cholesky passes a NaN pivot
+      pivot_[j].compute(s);
+      if (pivot_[j].info() != Eigen::Success) return false;
+      if (j + 1 < n) reduced_upper_[j] = pivot_[j].solve(upper_[j]);
+    }
+    return true;
+  }
+
+  // x = A^-1 b (after factor(first)) over units [first, units); b and x hold units() vectors
+  void solve(const std::vector<Vector>& b, std::vector<Vector>* x, int first = 0) {
+    const int n = units();
+    if (first >= n) return;
+    // forward: y_j = b_j - U_{j-1}' S_{j-1}^-1 y_{j-1}, kept as z_j = S_j^-1 y_j
+    for (int j = first; j < n; ++j) {
+      Vector y = b[j];
+      if (j > first) y.noalias() -= upper_[j - 1].transpose() * forward_[j - 1];
+      forward_[j] = pivot_[j].solve(y);
+    }
+    // back: x_j = z_j - X_j x_{j+1}
+    std::vector<Vector>& out = *x;
+    out[n - 1] = forward_[n - 1];
+    for (int j = n - 2; j >= first; --j) out[j] = forward_[j] - reduced_upper_[j] * out[j + 1];
+  }
 
  private:
   std::vector<Block> diagonal_, upper_;
@@ -36,5 +67,7 @@ class BlockTridiagonal6 {
   std::vector<Block> reduced_upper_;      // X_j = S_j^-1 U_j
   std::vector<Vector> forward_;           // S_j^-1 y_j
 };
+
+using BlockTridiagonal6 = BlockTridiagonal<6>;
 
 }  // namespace pcisim::physics::rod

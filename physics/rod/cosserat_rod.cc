@@ -138,8 +138,8 @@ Eigen::Vector3d CosseratRod::hub_torque_nm() const {
   if (params_.solver != RodSolver::kDirect || !(last_h_ > 0.0)) return Eigen::Vector3d::Zero();
   // pair hub's bend-twist turns its first frame (the hub's) with -B^T lambda
   Eigen::Vector3d omega;
-  const Eigen::Matrix3d b = bend_twist_jacobian(pair_first_frame(hub_), q_[hub_], dual_length_m(hub_),
-                                                rest_darboux_[hub_], &omega);
+  const Eigen::Matrix3d b =
+      bend_twist_jacobian(pair_first_frame(hub_), q_[hub_], dual_length_m(hub_), rest_darboux_[hub_], &omega);
   return -b.transpose() * bt_lambda_[hub_] / (last_h_ * last_h_);
 }
 

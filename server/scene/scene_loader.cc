@@ -28,6 +28,8 @@ int in_range(json::JsonReader& r, const std::string& key, int fallback, const ph
 
 physics::GuidewireParams read_guidewire(json::JsonReader r) {
   physics::GuidewireParams p;
+  p.model = r.text("model", "chain_mail", {"chain_mail", "rod"}) == "rod" ? physics::GuidewireModel::kRod
+                                                                          : physics::GuidewireModel::kChainMail;
   p.length_m = in_range(r, "length_mm", p.length_m, physics::kGuidewireLengthM, kMm);
   p.segment_count = in_range(r, "segments", p.segment_count, physics::kGuidewireSegments);
   p.optimisation_passes =
@@ -48,6 +50,19 @@ physics::GuidewireParams read_guidewire(json::JsonReader r) {
       in_range(r, "torsional_rigidity_nm2", p.torsional_rigidity_nm2, physics::kGuidewireTorsionalRigidityNm2);
   p.torsion_damping_nm_s_per_rad = in_range(r, "torsion_damping_nm_s_per_rad", p.torsion_damping_nm_s_per_rad,
                                             physics::kGuidewireTorsionDampingNmSPerRad);
+  // the rod model's section (ignored by the chain-mail)
+  p.bending_stiffness_nm2 =
+      in_range(r, "bending_stiffness_nm2", p.bending_stiffness_nm2, physics::kGuidewireBendingStiffnessNm2);
+  p.tip_bending_stiffness_nm2 =
+      in_range(r, "tip_bending_stiffness_nm2", p.tip_bending_stiffness_nm2, physics::kGuidewireBendingStiffnessNm2);
+  p.mass_per_length_kg_per_m =
+      in_range(r, "mass_per_length_kg_per_m", p.mass_per_length_kg_per_m, physics::kGuidewireMassPerLengthKgPerM);
+  p.outer_diameter_m = in_range(r, "outer_diameter_mm", p.outer_diameter_m, physics::kGuidewireOuterDiameterM, kMm);
+  p.rod_damping_per_s = in_range(r, "rod_damping_per_s", p.rod_damping_per_s, physics::kGuidewireRodDampingPerS);
+  p.rod_substeps = in_range(r, "rod_substeps", p.rod_substeps, physics::kGuidewireRodSubsteps);
+  p.rod_iterations = in_range(r, "rod_iterations", p.rod_iterations, physics::kGuidewireRodIterations);
+  p.feed_refuse_force_n =
+      in_range(r, "feed_refuse_force_n", p.feed_refuse_force_n, physics::kGuidewireFeedRefuseForceN);
   r.finish();
   if (p.tip_length_m >= p.length_m) r.fail("tip_length_mm", "expected less than length_mm");
   return p;

@@ -56,8 +56,9 @@ TEST(BlockTridiagonal6, SolvesTheTailFromAFirstUnit) {
   for (int j = 0; j < n; ++j) {
     BlockTridiagonal6::Block m;
     for (int k = 0; k < 36; ++k) m(k) = u(rng);
-    chain.diagonal(j) = j < first ? BlockTridiagonal6::Block::Constant(std::nan(""))
-                                  : BlockTridiagonal6::Block(m * m.transpose() + 10.0 * BlockTridiagonal6::Block::Identity());
+    chain.diagonal(j) = j < first
+                            ? BlockTridiagonal6::Block::Constant(std::nan(""))
+                            : BlockTridiagonal6::Block(m * m.transpose() + 10.0 * BlockTridiagonal6::Block::Identity());
     if (j >= first) dense.block<6, 6>(6 * (j - first), 6 * (j - first)) = chain.diagonal(j);
     if (j + 1 < n) {
       for (int k = 0; k < 36; ++k) m(k) = u(rng);

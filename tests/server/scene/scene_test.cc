@@ -67,12 +67,29 @@ TEST(Scene, CommentsAreAllowedAndUnitsConvert) {
   EXPECT_EQ(s.world.guidewire->segment_count, 50);
 }
 
+TEST(Scene, TheGuidewireModelIsChosenByTheScene) {
+  EXPECT_EQ(parse_scene(R"({"effects": {"guidewire": {}}})", "t").world.guidewire->model,
+            physics::GuidewireModel::kChainMail);
+  const Scene s = parse_scene(
+      R"({"effects": {"guidewire": {"model": "rod", "bending_stiffness_nm2": 2e-5, "outer_diameter_mm": 0.3,
+          "rod_substeps": 6}}})",
+      "t");
+  EXPECT_EQ(s.world.guidewire->model, physics::GuidewireModel::kRod);
+  EXPECT_DOUBLE_EQ(s.world.guidewire->bending_stiffness_nm2, 2e-5);
+  EXPECT_DOUBLE_EQ(s.world.guidewire->outer_diameter_m, 0.3e-3);
+  EXPECT_EQ(s.world.guidewire->rod_substeps, 6);
+}
+
 TEST(Scene, EachBadInputNamesItsJsonPathAndWhatWasExpected) {
   EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"segmnts": 10}}})"),
             "test.json: effects.guidewire.segmnts: unknown key (this object accepts: axial_damping_n_s_per_m, "
-            "axial_stiffness_n_per_m, body_alpha_max, body_alpha_min, body_beta_deg_per_mm, length_mm, "
-            "optimisation_passes, segments, tip_alpha_max, tip_alpha_min, tip_angle_deg, tip_beta_deg_per_mm, "
-            "tip_length_mm, torsion_damping_nm_s_per_rad, torsional_rigidity_nm2)");
+            "axial_stiffness_n_per_m, bending_stiffness_nm2, body_alpha_max, body_alpha_min, body_beta_deg_per_mm, "
+            "feed_refuse_force_n, length_mm, mass_per_length_kg_per_m, model, optimisation_passes, outer_diameter_mm, "
+            "rod_damping_per_s, rod_iterations, rod_substeps, segments, tip_alpha_max, tip_alpha_min, tip_angle_deg, "
+            "tip_bending_stiffness_nm2, tip_beta_deg_per_mm, tip_length_mm, torsion_damping_nm_s_per_rad, "
+            "torsional_rigidity_nm2)");
+  EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"model": "spring"}}})"),
+            "test.json: effects.guidewire.model: expected one of \"chain_mail\", \"rod\", got \"spring\"");
   EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"segments": "many"}}})"),
             "test.json: effects.guidewire.segments: expected an integer in [4, 4000], got \"many\"");
   EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"segments": 2}}})"),

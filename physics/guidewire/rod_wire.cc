@@ -1,0 +1,360 @@
+#include "physics/guidewire/rod_wire.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "physics/guidewire/link_spec.h"
+
+namespace pcisim::physics {
+namespace {
+
+// the most feed one step hands the rod (120 mm/s at 30 Hz): a larger jump of the instrument is
+// taken over the next steps, so nodes leave the catheter a few at a time and meet the wall
+constexpr double kMaxFeedPerStepM = 4e-3;
+// the longest substep (a longer physics step takes more substeps, as the rod itself does)
+constexpr double kMaxSubstepS = 1.0 / 60.0;
+// the free wire may be this much shorter than its length before the hub refuses feed: the wall
+// projection ends each substep, so a wire pressed against a wall crumples where it presses
+// (measured on the trainee script down the LAD: up to 10 mm, released when the tip slips on);
+// one driven into a dead end keeps crumpling, and this bound makes the hub slip instead
+constexpr double kMaxCompressionM = 0.02;
+// axial and shear stiffness of the section, N: a 0.2 mm steel core (E A = 200 GPa x 3.1e-8 m^2;
+// G A with kappa 0.9). Stiff enough that the wire neither stretches nor shears visibly; the
+// direct solve does not mind the ratio to the bending stiffness
+constexpr double kAxialStiffnessN = 6.3e3;
+constexpr double kShearStiffnessN = 2.2e3;
+
+}  // namespace
+
+rod::CosseratRodParams rod_params_of(const GuidewireParams& g) {
+  rod::CosseratRodParams p;
+  p.length_m = g.length_m;
+  p.segments = g.segment_count;
+  p.bending_stiffness_nm2 = g.bending_stiffness_nm2;
+  p.torsional_stiffness_nm2 = g.torsional_rigidity_nm2;
+  p.axial_stiffness_n = kAxialStiffnessN;
+  p.shear_stiffness_n = kShearStiffnessN;
+  p.mass_per_length_kg_per_m = g.mass_per_length_kg_per_m;
+  p.outer_diameter_m = g.outer_diameter_m;
+  p.damping_per_s = g.rod_damping_per_s;
+  p.solver = rod::RodSolver::kDirect;
+  // the follow-the-leader guard is for unconverged Gauss-Seidel sweeps; after the direct solve
+  // and the wall projection it only moved nodes back out of the wall
+  p.stretch_guard = 0.0;
+  // RodWire runs the substeps itself (the hub moves a little before each): one per rod step
+  p.substeps = 1;
+  p.max_substep_s = 1e9;
+  p.iterations = g.rod_iterations;
+  p.tip_length_m = g.tip_length_m;
+  // the tip's bending and torsional stiffness scaled together (a ground core under a coil)
+  p.tip_stiffness_ratio = g.tip_bending_stiffness_nm2 / g.bending_stiffness_nm2;
+  return p;
+}
+
+RodWire::RodWire(const GuidewireParams& params, CatheterPath path, const LumenQuery* lumen,
+                 std::optional<VesselContactParams> contact, std::optional<FrictionParams> friction)
+    : params_((validate(params), params)),
+      path_(std::move(path)),
+      lumen_(lumen),
+      contact_(contact),
+      friction_(friction),
+      rod_(rod_params_of(params), path_.exit_m(),
+           Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), path_.exit_direction())),
+      exit_frame_(Eigen::Quaterniond::Identity()) {
+  if (contact_ && !lumen_) throw std::invalid_argument("guidewire: wall contact needs a lumen");
+  // at rotation 0 the pre-bent tip bends the way the catheter curves, as the chain-mail's does
+  // (chain_mail_wire.cc): the tip's rest curvature about d1 bends d3 towards -d2, so the exit
+  // frame is (t x b, -b, t) with b the catheter's curl at the exit
+  const Eigen::Vector3d t = path_.exit_direction();
+  const Eigen::Vector3d back = path_.point_behind_exit(std::min(0.02, 0.5 * path_.length_m()));
+  const Eigen::Vector3d chord =
+      (path_.exit_m() - back).norm() > 1e-12 ? Eigen::Vector3d((path_.exit_m() - back).normalized()) : t;
+  const Eigen::Vector3d curl = (t - chord) - (t - chord).dot(t) * t;
+  const Eigen::Vector3d b = curl.norm() > 1e-6 ? Eigen::Vector3d(curl.normalized()) : t.unitOrthogonal();
+  Eigen::Matrix3d frame;
+  frame.col(0) = t.cross(b);
+  frame.col(1) = -b;
+  frame.col(2) = t;
+  exit_frame_ = Eigen::Quaterniond(frame);
+  const int n = rod_.segment_count();
+  const double l = rod_.segment_length_m();
+  // the shaped tip: its pre-bend spread evenly over the tip's pairs, a rest curvature about the
+  // material d1 (the chain-mail spreads it over its tip links the same way)
+  const double tip_start_m = params_.length_m - params_.tip_length_m;
+  tip_first_node_ = n + 1;
+  if (params_.tip_length_m > 0.0) {
+    tip_first_node_ = std::min(n, static_cast<int>(std::ceil(tip_start_m / l - 1e-9)));
+    const double kappa = params_.tip_angle_deg * std::numbers::pi / 180.0 / params_.tip_length_m;
+    for (int j = 1; j < n; ++j)
+      if (j * l > tip_start_m + 1e-12) rod_.set_rest_darboux_per_m(j, Eigen::Vector3d(kappa, 0.0, 0.0));
+  }
+  touched_.assign(n + 1, 0);
+  substep_dn_m_.assign(n + 1, 0.0);
+  segment_stuck_.assign(n, 0);
+  node_wall_n_.assign(n + 1, 0.0);
+  normal_.assign(n + 1, Eigen::Vector3d::Zero());
+  stuck_.assign(n + 1, 0);
+  wall_impulse_n_s_.assign(n + 1, 0.0);
+  wall_force_n_.assign(n + 1, 0.0);
+  // start fully inside the catheter, the tip at the exit
+  place_in_catheter(0.0, 1.0);
+  const auto x = rod_.mutable_nodes_m();
+  const auto q = rod_.mutable_orientations();
+  for (int j = rod_.hub_node(); j < n; ++j) q[j] = catheter_frame(path_.exit_direction());
+  x[n] = path_.exit_m();
+}
+
+bool RodWire::node_in_tip(int i) const {
+  return i >= tip_first_node_;
+}
+
+double RodWire::tip_contact_force_n() const {
+  double f = 0.0;
+  for (int i = std::max(tip_first_node_, first_free_node()); i < node_count(); ++i) f += wall_force_n_[i];
+  return f;
+}
+
+// the catheter's material frame bent onto `tangent`, turned by the hub's rotation about the wire
+Eigen::Quaterniond RodWire::catheter_frame(const Eigen::Vector3d& tangent) const {
+  return Eigen::Quaterniond::FromTwoVectors(path_.exit_direction(), tangent) * exit_frame_ *
+         Eigen::Quaterniond(Eigen::AngleAxisd(rotation_rad_, Eigen::Vector3d::UnitZ()));
+}
+
+// nodes still inside the catheter sit on its path; nodes the feed took out this step continue
+// straight out of the exit; the last node inside is the rod's hub
+void RodWire::place_in_catheter(double previous_fed_m, double dt_s) {
+  const int n = rod_.segment_count();
+  const double l = rod_.segment_length_m(), length = params_.length_m;
+  const int old_hub = rod_.hub_node();
+  const int hub = std::clamp(static_cast<int>(std::floor((length - fed_m_) / l + 1e-9)), 0, n - 1);
+  const auto x = rod_.mutable_nodes_m();
+  const auto v = rod_.mutable_velocities_m_per_s();
+  const auto q = rod_.mutable_orientations();
+  const Eigen::Vector3d& exit = path_.exit_m();
+  const Eigen::Vector3d& dir = path_.exit_direction();
+  const Eigen::Vector3d feed_velocity = (fed_m_ - previous_fed_m) / dt_s * dir;
+  for (int i = 0; i <= hub; ++i) x[i] = path_.point_behind_exit(std::max(length - i * l - fed_m_, 0.0));
+  for (int i = hub + 1; i <= old_hub; ++i) {
+    x[i] = exit + std::max(fed_m_ - (length - i * l), 0.0) * dir;
+    v[i] = feed_velocity;
+  }
+  for (int j = 0; j < hub; ++j) {
+    const Eigen::Vector3d d = x[j + 1] - x[j];
+    q[j] = catheter_frame(d.norm() > 1e-12 ? Eigen::Vector3d(d.normalized()) : dir);
+  }
+  for (int j = hub; j < old_hub; ++j) q[j] = catheter_frame(dir);
+  const Eigen::Vector3d d0 = hub > 0 ? Eigen::Vector3d(x[1] - x[0]) : dir;
+  rod_.set_clamp(x[0], catheter_frame(d0.norm() > 1e-12 ? Eigen::Vector3d(d0.normalized()) : dir));
+  rod_.set_hub_node(hub);
+}
+
+void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
+  if (!(dt_s > 0.0) || !std::isfinite(dt_s)) return;
+  if (std::isfinite(insertion_m)) commanded_feed_m_ = std::clamp(insertion_m, 0.0, params_.length_m);
+  if (std::isfinite(rotation_rad)) rotation_rad_ = rotation_rad;  // the target; reached over the substeps
+  const double previous_fed_m = fed_m_, previous_rotation_rad = rotation_before_step_rad_;
+  double target = commanded_feed_m_;
+  // the grip slips while the wire pushes back harder than it holds, or while the free wire is
+  // shorter than what was fed (it has nowhere to go): no further feed
+  if (target > fed_m_ && (hub_axial_n_ > params_.feed_refuse_force_n || compression_m_ > kMaxCompressionM))
+    target = fed_m_;
+  const double fed_target_m = std::clamp(target, fed_m_ - kMaxFeedPerStepM, fed_m_ + kMaxFeedPerStepM);
+  const double rotation_target_rad = rotation_rad_;
+
+  std::fill(touched_.begin(), touched_.end(), 0);
+  std::fill(stuck_.begin(), stuck_.end(), 0);
+  std::fill(wall_impulse_n_s_.begin(), wall_impulse_n_s_.end(), 0.0);
+  // the hub moves to the new feed and turn in equal parts, one before each substep: a whole
+  // step's feed handed to the first substep crumpled the wire against the first bend it met
+  // (measured: 2 substeps, 90 mm fed in a curved tube, the tip stopped 35 mm short)
+  const int substeps =
+      std::max(params_.rod_substeps, static_cast<int>(std::min(std::ceil(dt_s / kMaxSubstepS - 1e-9), 10000.0)));
+  const double h = dt_s / substeps;
+  for (int k = 1; k <= substeps; ++k) {
+    const double before_m = fed_m_;
+    const double a = static_cast<double>(k) / substeps;
+    fed_m_ = previous_fed_m + a * (fed_target_m - previous_fed_m);
+    rotation_rad_ = previous_rotation_rad + a * (rotation_target_rad - previous_rotation_rad);
+    place_in_catheter(before_m, h);
+    rod_.step(h, lumen_ && contact_ ? this : nullptr);
+    if (!rod_.all_finite()) recover();
+  }
+  rotation_before_step_rad_ = rotation_rad_;
+
+  for (int i = 0; i < node_count(); ++i) wall_force_n_[i] = wall_impulse_n_s_[i] / dt_s;
+  // how much shorter the free wire is than the fed length (the wall's projection, not the rod,
+  // has the last word in a substep, so a wire driven into a dead end shortens instead of pushing
+  // back: docs/guidewire.md)
+  {
+    const auto x = rod_.nodes_m();
+    double free_m = 0.0;
+    for (int j = rod_.hub_node(); j < segment_count(); ++j) free_m += (x[j + 1] - x[j]).norm();
+    const double nominal_m = (segment_count() - rod_.hub_node()) * rod_.segment_length_m();
+    compression_m_ = std::max(nominal_m - free_m, 0.0);
+  }
+  const Eigen::Vector3d& dir = path_.exit_direction();
+  const double previous_axial_n = hub_axial_n_;
+  // the rod's force on the hub, against the direction of feed, resists insertion
+  hub_axial_n_ = -rod_.hub_force_n().dot(dir);
+  hub_torque_nm_ = -rod_.hub_torque_nm().dot(dir);
+  if (!std::isfinite(hub_axial_n_)) hub_axial_n_ = 0.0;
+  if (!std::isfinite(hub_torque_nm_)) hub_torque_nm_ = 0.0;
+  // how fast the push-back rose with feed: the local force model's stiffness between steps
+  const double fed_change_m = fed_m_ - previous_fed_m;
+  if (std::abs(fed_change_m) > 1e-6) {
+    const double k = (hub_axial_n_ - previous_axial_n) / fed_change_m;
+    axial_stiffness_n_per_m_ = std::isfinite(k) ? std::clamp(k, 0.0, params_.axial_stiffness_n_per_m) : 0.0;
+  }
+}
+
+// a non-finite state (it should not happen; counted): the free rod laid straight out of the exit
+void RodWire::recover() {
+  ++recoveries_;
+  const int hub = rod_.hub_node();
+  const auto x = rod_.mutable_nodes_m();
+  const auto v = rod_.mutable_velocities_m_per_s();
+  const auto q = rod_.mutable_orientations();
+  const double l = rod_.segment_length_m();
+  const Eigen::Vector3d& dir = path_.exit_direction();
+  for (int i = hub + 1; i < node_count(); ++i) x[i] = x[hub] + (i - hub) * l * dir;
+  for (int i = 0; i < node_count(); ++i) v[i].setZero();
+  for (int j = hub; j < segment_count(); ++j) q[j] = catheter_frame(dir);
+}
+
+// [guidewire eq 15]'s condition (a node stays at least the wall margin inside the lumen) as a
+// projection along the wall normal, then Coulomb friction decided on forces and applied to the
+// motion over the substep (docs/guidewire.md, "Rod: contact and friction"):
+//   wall force        N_i = m_i dn_i / h^2    (dn_i: the normal corrections of the substep)
+//   rod force on i    f_i = J^T lambda / h^2, its part along the wall f_t
+//   stick             |f_t| <= mu_s N_i: the node's motion along the wall this substep is undone
+//   slide             else that motion is shortened by mu_k dn_i (kinetic friction's impulse)
+// and the same about the wire's axis for each touching segment: the constraints' twisting torque
+// against mu_s N r holds the frame's spin this substep, or mu_k N r h^2 / I slows it.
+// The force test matters for a stiff rod: pushing a wire on needs only a tiny displacement of
+// each node, so a displacement test (|dx_t| <= mu_s dn, as for particles) held every touching
+// node for ever and the fed wire folded up behind the first bend.
+void RodWire::project(rod::CosseratRod& rod, int iteration, double h) {
+  const double margin = contact_->wall_margin_m;
+  const auto x = rod.mutable_nodes_m();
+  const auto x_start = rod.substep_start_nodes_m();
+  const int first_free = rod.hub_node() + 1;
+  const double inv_h2 = 1.0 / (h * h);
+  if (iteration == 0) {
+    std::fill(substep_dn_m_.begin(), substep_dn_m_.end(), 0.0);
+    std::fill(segment_stuck_.begin(), segment_stuck_.end(), 0);
+  }
+  for (int i = first_free; i < node_count(); ++i) {
+    // what the solve's wall row left (a curved wall is not its tangent plane): back inside
+    const WallSample s = lumen_->sample(x[i]);
+    const double dn = s.distance_m + margin;
+    if (dn > 0.0) {
+      x[i] -= dn * s.normal;
+      substep_dn_m_[i] += dn;
+    }
+    const double wall_n = rod.node_mass_kg(i) * substep_dn_m_[i] * inv_h2;
+    if (!(wall_n > 0.0)) continue;
+    touched_[i] = 1;
+    normal_[i] = s.normal;
+    node_wall_n_[i] = wall_n;
+    if (!friction_) continue;
+    const double mu_s = node_in_tip(i) ? friction_->tip_static : friction_->body_static;
+    const Eigen::Vector3d f = rod.node_constraint_force_n(i);
+    const Eigen::Vector3d f_t = f - f.dot(s.normal) * s.normal;
+    const Eigen::Vector3d dx = x[i] - x_start[i];
+    const Eigen::Vector3d dx_t = dx - dx.dot(s.normal) * s.normal;
+    if (f_t.norm() <= mu_s * wall_n) {
+      x[i] -= dx_t;
+      stuck_[i] = 1;
+    } else {
+      stuck_[i] = 0;  // sliding: kinetic friction slows its velocity after the substep
+    }
+    // friction moves along the tangent plane, which a curved lumen's wall leaves: back inside
+    const WallSample again = lumen_->sample(x[i]);
+    const double dn2 = again.distance_m + margin;
+    if (dn2 > 0.0) x[i] -= dn2 * again.normal;
+  }
+  if (!friction_) return;
+  // about the wire's axis: a segment touches where either of its nodes does
+  const auto q = rod.mutable_orientations();
+  const auto q_start = rod.substep_start_orientations();
+  const double r = 0.5 * params_.outer_diameter_m;
+  for (int j = rod.hub_node(); j < segment_count(); ++j) {
+    double wall_n = 0.0;
+    for (int i : {j, j + 1})
+      if (i >= first_free && touched_[i]) wall_n += 0.5 * node_wall_n_[i];
+    if (wall_n <= 0.0) continue;
+    const double mu_s = node_in_tip(j + 1) ? friction_->tip_static : friction_->body_static;
+    const Eigen::Vector3d axis = q[j] * Eigen::Vector3d::UnitZ();
+    // the frame's turn about its axis since the substep began (swing-twist: the twist part)
+    Eigen::Quaterniond turn = q[j] * q_start[j].conjugate();
+    if (turn.w() < 0.0) turn.coeffs() = -turn.coeffs();
+    const double spin = 2.0 * std::atan2(turn.vec().dot(axis), turn.w());
+    const double torque = rod.segment_constraint_torque_nm(j).dot(axis);
+    segment_stuck_[j] = std::abs(torque) <= mu_s * wall_n * r;
+    if (segment_stuck_[j]) q[j] = Eigen::Quaterniond(Eigen::AngleAxisd(-spin, axis)) * q[j];
+  }
+}
+
+// kinetic friction on what slides: the wall's friction impulse over the substep, mu_k N h,
+// taken off the velocity along the wall (never reversing it), and mu_k N r h off the spin
+void RodWire::after_substep(rod::CosseratRod& rod, double h) {
+  const int first_free = rod.hub_node() + 1;
+  // the wall's impulse over the substep, for the step's average force
+  for (int i = first_free; i < node_count(); ++i)
+    if (node_wall_n_[i] > 0.0) wall_impulse_n_s_[i] += node_wall_n_[i] * h;
+  if (friction_) {
+    const auto v = rod.mutable_velocities_m_per_s();
+    const auto omega = rod.mutable_angular_velocities_rad_per_s();
+    for (int i = first_free; i < node_count(); ++i) {
+      if (!(node_wall_n_[i] > 0.0) || stuck_[i]) continue;
+      const double mu_k = node_in_tip(i) ? friction_->tip_kinetic : friction_->body_kinetic;
+      const Eigen::Vector3d& n = normal_[i];
+      const Eigen::Vector3d v_t = v[i] - v[i].dot(n) * n;
+      const double speed = v_t.norm();
+      const double slow = mu_k * node_wall_n_[i] * h / rod.node_mass_kg(i);
+      if (speed > 0.0) v[i] -= std::min(1.0, slow / speed) * v_t;
+    }
+    const double r = 0.5 * params_.outer_diameter_m;
+    for (int j = rod.hub_node(); j < segment_count(); ++j) {
+      if (segment_stuck_[j]) {
+        omega[j].z() = 0.0;
+        continue;
+      }
+      double wall_n = 0.0;
+      for (int i : {j, j + 1})
+        if (i >= first_free) wall_n += 0.5 * node_wall_n_[i];
+      if (wall_n <= 0.0) continue;
+      const double mu_k = node_in_tip(j + 1) ? friction_->tip_kinetic : friction_->body_kinetic;
+      const double slow = mu_k * wall_n * r * h / rod.segment_inertia_kg_m2(j);
+      omega[j].z() -= std::copysign(std::min(std::abs(omega[j].z()), slow), omega[j].z());
+    }
+  }
+  std::fill(node_wall_n_.begin(), node_wall_n_.end(), 0.0);
+}
+
+double RodWire::tip_roll_rad() const {
+  // the twist summed over the pairs from the hub to the tip: how far the tip's frame has turned
+  // about the wire relative to the hub's (negative: it lags a positive turn)
+  const auto q = rod_.orientations();
+  double twist = 0.0;
+  for (int j = rod_.hub_node(); j < segment_count(); ++j) {
+    Eigen::Quaterniond rel = rod_.pair_first_frame(j).conjugate() * q[j];
+    if (rel.w() < 0.0) rel.coeffs() = -rel.coeffs();
+    twist += 2.0 * std::atan2(rel.z(), rel.w());
+  }
+  return twist;
+}
+
+WireFeedback RodWire::feedback() const {
+  WireFeedback f;
+  const double refused = commanded_feed_m_ - fed_m_;
+  // the rod's own push-back at the hub, and the grip's spring while feed is refused
+  f.internal_n = hub_axial_n_ + params_.axial_stiffness_n_per_m * std::max(refused, 0.0);
+  f.stiffness_n_per_m = refused > 1e-9 ? params_.axial_stiffness_n_per_m : axial_stiffness_n_per_m_;
+  f.elastic_torque_nm = hub_torque_nm_;
+  f.torsion_stiffness_nm_per_rad = params_.torsional_rigidity_nm2 / std::max(fed_m_, rod_.segment_length_m());
+  return f;
+}
+
+}  // namespace pcisim::physics

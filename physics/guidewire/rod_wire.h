@@ -1,0 +1,113 @@
+#pragma once
+// The guidewire as a discrete Cosserat rod (scene key guidewire.model = "rod"; issue #15): the
+// rod of physics/rod/ with the wire's physical section, fed and turned through the guide
+// catheter, touching the lumen wall with Coulomb friction.
+//
+// Node 0 is proximal, node N the tip. As in the chain-mail, a node whose arc length from the tip
+// exceeds the fed length is inside the catheter: placed on the catheter path (kinematic), its
+// segment's frame the catheter's turned by the hub rotation. The last such node is the rod's hub
+// (CosseratRod::set_hub_node): the free rod is pushed, pulled and twisted through it, so feed
+// reaches the tip through the rod's own axial stiffness and twist through its torsional stiffness
+// (a lag, and a whip when friction lets go).
+//
+// Contact (after every solve of a substep): a free node closer than wall_margin_m to the wall
+// (or outside) is moved back along the wall normal (the condition of [guidewire eq 15]); then
+// Coulomb friction, decided on forces (the rod's constraint force along the wall against mu_s
+// times the wall's) and applied to the node's motion over the substep, and the same about the
+// wire's axis for the touching segments' spin (rod_wire.cc). The tip has its own coefficients,
+// as in the chain-mail. The wall's normal force on a node is its mass times the correction over h^2.
+//
+// Built once; step() allocates nothing.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "physics/guidewire/catheter_path.h"
+#include "physics/guidewire/guidewire_params.h"
+#include "physics/guidewire/lumen_query.h"
+#include "physics/guidewire/wire_feedback.h"
+#include "physics/rod/cosserat_rod.h"
+
+namespace pcisim::physics {
+
+class RodWire final : public rod::RodContact {
+ public:
+  // lumen, contact and friction may be null (no wall, no friction); the lumen must outlive the
+  // wire. Throws std::invalid_argument on bad params.
+  RodWire(const GuidewireParams& params, CatheterPath path, const LumenQuery* lumen = nullptr,
+          std::optional<VesselContactParams> contact = std::nullopt,
+          std::optional<FrictionParams> friction = std::nullopt);
+
+  // one physics step: feed to insertion_m (clamped to [0, length]; refused while the wire pushes
+  // back harder than feed_refuse_force_n), hub turned to rotation_rad, then the rod's substeps
+  void step(double insertion_m, double rotation_rad, double dt_s);
+
+  int node_count() const { return rod_.node_count(); }
+  int segment_count() const { return rod_.segment_count(); }
+  int first_free_node() const { return rod_.hub_node() + 1; }
+  std::span<const Eigen::Vector3d> nodes_m() const { return rod_.nodes_m(); }
+  // free nodes may be moved between steps (blood drift, [guidewire eq 12])
+  std::span<Eigen::Vector3d> mutable_nodes_m() { return rod_.mutable_nodes_m(); }
+  bool node_in_tip(int i) const;
+  std::span<const uint8_t> touched() const { return touched_; }  // per node, at the wall in the last step
+  std::span<const uint8_t> stuck() const { return stuck_; }      // held by static friction in the last step
+  // the wall's normal force on each node over the last step, N
+  std::span<const double> wall_force_n() const { return wall_force_n_; }
+  double tip_contact_force_n() const;  // over the tip's nodes
+  double commanded_feed_m() const { return commanded_feed_m_; }
+  double fed_length_m() const { return fed_m_; }
+  double rotation_rad() const { return rotation_rad_; }
+  // the axial force the wire pushes back on the hub with (positive resists insertion) and the
+  // torque it turns back with (positive resists positive rotation), from the rod's multipliers
+  double hub_axial_force_n() const { return hub_axial_n_; }
+  double hub_torque_nm() const { return hub_torque_nm_; }
+  // how much shorter the free wire is than its rest length (a dead end crumples it), m
+  double compression_m() const { return compression_m_; }
+  // the tip segment's material frame turned about the wire, against the hub's turn: radians of
+  // twist the tip lags behind the hub (its bend direction measured in the catheter's frame)
+  double tip_roll_rad() const;
+  // eq 19's inputs for the local force model, from the rod's forces
+  WireFeedback feedback() const;
+  const rod::CosseratRod& rod() const { return rod_; }
+  const CatheterPath& path() const { return path_; }
+  int64_t recoveries() const { return recoveries_; }
+
+  // RodContact: wall contact and friction of the free nodes
+  void project(rod::CosseratRod& rod, int iteration, double substep_s) override;
+  void after_substep(rod::CosseratRod& rod, double substep_s) override;
+
+ private:
+  void place_in_catheter(double previous_fed_m, double dt_s);
+  Eigen::Quaterniond catheter_frame(const Eigen::Vector3d& tangent) const;
+  void recover();
+
+  GuidewireParams params_;
+  CatheterPath path_;
+  const LumenQuery* lumen_;
+  std::optional<VesselContactParams> contact_;
+  std::optional<FrictionParams> friction_;
+  rod::CosseratRod rod_;
+  Eigen::Quaterniond exit_frame_;  // e3 along the exit, fixed in the world
+  int tip_first_node_ = 0;
+  std::vector<uint8_t> touched_, stuck_;
+  std::vector<double> wall_impulse_n_s_, wall_force_n_;
+  std::vector<double> substep_dn_m_;     // normal corrections so far in this substep
+  std::vector<uint8_t> segment_stuck_;   // held about its axis by static friction this substep
+  std::vector<double> node_wall_n_;      // the wall's force on each node in this substep
+  std::vector<Eigen::Vector3d> normal_;  // the wall normal at the last contact
+  double commanded_feed_m_ = 0.0, fed_m_ = 0.0, rotation_rad_ = 0.0;
+  double rotation_before_step_rad_ = 0.0;
+  double hub_axial_n_ = 0.0, hub_torque_nm_ = 0.0;
+  double compression_m_ = 0.0;            // free wire shorter than its rest length, at the last step's end
+  double axial_stiffness_n_per_m_ = 0.0;  // measured between steps, for the local force model
+  int64_t recoveries_ = 0;
+};
+
+// the rod's section as CosseratRodParams (stiffness, mass, tip, substeps), documented in
+// docs/guidewire.md
+rod::CosseratRodParams rod_params_of(const GuidewireParams& params);
+
+}  // namespace pcisim::physics

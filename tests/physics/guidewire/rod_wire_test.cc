@@ -1,0 +1,350 @@
+// The rod model in the scenes' world (guidewire.model = rod): it follows the trainee's script
+// down the phantom's LAD like the chain-mail, stays inside the wall margin, and the hard cases of
+// DESIGN.md (a dead-end push, a full pull-back, 100 hub turns, ten times the step, NaN input)
+// leave it finite, bounded and recovering. Also: feed and twist reach the tip through the rod
+// (a twist that lags in a curved tube and catches up), and the hub force of a free wire is zero.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstdio>
+#include <limits>
+#include <numbers>
+
+#include "anatomy/phantom/coronary_phantom.h"
+#include "physics/guidewire/rod_wire.h"
+#include "physics/guidewire/tube_lumen.h"
+#include "tests/common/counting_new.h"
+#include "tests/physics/guidewire/wire_test_support.h"
+
+namespace pcisim::physics {
+namespace {
+
+using test::BranchScript;
+
+WorldSpec rod_scene() {
+  WorldSpec s = test::default_scene();
+  s.guidewire->model = GuidewireModel::kRod;
+  s.guidewire->segment_count = 300;  // 1 mm
+  return s;
+}
+
+// free nodes finite and within 150 mm of the phantom's centre; the force model finite
+void expect_sound(const World& world, double t) {
+  const RodWire& w = *world.rod_state();
+  const auto x = w.nodes_m();
+  for (int i = 0; i < w.node_count(); ++i) {
+    ASSERT_TRUE(x[i].allFinite()) << "t " << t << " node " << i;
+    if (i >= w.first_free_node()) ASSERT_LT(x[i].norm(), 0.15) << "t " << t << " node " << i;
+  }
+  ASSERT_EQ(w.recoveries(), 0) << "t " << t;
+  const LocalForceModel m = world.force_model();
+  ASSERT_TRUE(std::isfinite(m.f0_n) && std::isfinite(m.k_n_per_m) && std::isfinite(m.t0_nm)) << "t " << t;
+}
+
+// the largest wall distance over the free nodes (> 0: outside the lumen)
+double worst_wall_m(const World& world) {
+  const RodWire& w = *world.rod_state();
+  double worst = -1.0;
+  for (int i = w.first_free_node(); i < w.node_count(); ++i)
+    worst = std::max(worst, world.lumen()->sample(w.nodes_m()[i]).distance_m);
+  return worst;
+}
+
+bool in_subtree(const anatomy::VesselTree& tree, const std::string& branch, const char* root) {
+  const int r = tree.find(root);
+  for (int b = tree.find(branch.c_str()); b >= 0; b = tree.branches[b].parent)
+    if (b == r) return true;
+  return false;
+}
+
+std::string tip_branch(const World& world) {
+  WorldSnapshot snap;
+  world.write_snapshot(snap);
+  return world.vessel_tree().branches[snap.tip_branch].name;
+}
+
+TEST(RodWireWorld, FollowsTheTraineeScriptIntoTheLad) {
+  World world(rod_scene());
+  BranchScript script;
+  const double dt = rod_scene().step_s;
+  double worst = -1.0;
+  for (double t = 0.0; t <= script.end_s(); t += dt) {
+    world.step(script.at(t));
+    expect_sound(world, t);
+    worst = std::max(worst, worst_wall_m(world));
+  }
+  const RodWire& w = *world.rod_state();
+  std::printf("rod: tip in %s, fed %.1f mm of %.1f, worst wall distance %+.3f mm, tip roll %.1f deg\n",
+              tip_branch(world).c_str(), 1e3 * w.fed_length_m(), 1e3 * w.commanded_feed_m(), 1e3 * worst,
+              w.tip_roll_rad() * 180.0 / std::numbers::pi);
+  EXPECT_TRUE(in_subtree(world.vessel_tree(), tip_branch(world), "LAD")) << tip_branch(world);
+  EXPECT_NEAR(w.fed_length_m(), w.commanded_feed_m(), 1e-9);
+  EXPECT_LT(worst, 0.2e-3);  // the margin is 0.05 mm; a node may end a solve slightly past it
+}
+
+// the trainee script, then `more` seconds of `drive`
+template <class Drive>
+void run_script_then(World& world, double more_s, Drive drive) {
+  BranchScript script;
+  const double dt = rod_scene().step_s;
+  double t = 0.0;
+  for (; t <= script.end_s(); t += dt) world.step(script.at(t));
+  InstrumentInput in = script.at(script.end_s());
+  for (double s = 0.0; s <= more_s; s += dt) {
+    drive(s, in);
+    world.step(in);
+    expect_sound(world, t + s);
+    if (::testing::Test::HasFatalFailure()) return;
+  }
+}
+
+// holds still for 2 s; the free nodes end inside the wall margin and nearly at rest
+void expect_settles(World& world) {
+  InstrumentInput hold;
+  hold.insertion_m = world.rod_state()->commanded_feed_m();
+  hold.rotation_rad = world.rod_state()->rotation_rad();
+  for (double t = 0.0; t < 2.0; t += rod_scene().step_s) world.step(hold);
+  expect_sound(world, -1.0);
+  EXPECT_LE(worst_wall_m(world), 0.0);
+  EXPECT_LT(world.rod_state()->rod().max_speed_m_per_s(), 0.02);
+}
+
+TEST(RodWireWorld, PushingOneHundredMillimetresMoreStaysSound) {
+  // down the LCx, then 100 mm more over 10 s into the phantom's branches: finite, inside, settles
+  World world(rod_scene());
+  BranchScript script;
+  script.turn_deg = -90.0;
+  const double dt = rod_scene().step_s;
+  double t = 0.0;
+  for (; t <= script.end_s(); t += dt) world.step(script.at(t));
+  InstrumentInput in = script.at(script.end_s());
+  const double start_m = in.insertion_m;
+  double force_max = 0.0;
+  for (double s = 0.0; s <= 10.0; s += dt) {
+    in.insertion_m = start_m + 0.1 * std::min(s / 10.0, 1.0);
+    world.step(in);
+    expect_sound(world, t + s);
+    force_max = std::max(force_max, world.force_model().f0_n);
+  }
+  std::printf("100 mm more: push-back at most %.3f N, %.1f mm refused, tip in %s\n", force_max,
+              1e3 * world.refused_feed_m(), tip_branch(world).c_str());
+  expect_settles(world);
+}
+
+TEST(RodWireWorld, FullPullBackAndReinsertion) {
+  World world(rod_scene());
+  double start_m = 0.0;
+  run_script_then(world, 2.0, [&](double s, InstrumentInput& in) {
+    if (s == 0.0) start_m = in.insertion_m;
+    in.insertion_m = start_m * std::max(1.0 - s / 1.9, 0.0);
+  });
+  const RodWire& w = *world.rod_state();
+  EXPECT_EQ(w.fed_length_m(), 0.0);
+  EXPECT_EQ(w.first_free_node(), w.node_count() - 1);  // only the tip node is out, at the exit
+  EXPECT_LT((w.nodes_m().back() - w.path().exit_m()).norm(), 1.5 * w.rod().segment_length_m());
+  // and out again into the left main
+  InstrumentInput in;
+  for (double s = 0.0; s <= 2.0; s += rod_scene().step_s) {
+    in.insertion_m = 0.015 * std::min(s / 1.5, 1.0);
+    world.step(in);
+    expect_sound(world, s);
+  }
+  EXPECT_EQ(tip_branch(world), "LM");
+  expect_settles(world);
+}
+
+TEST(RodWireWorld, OneHundredHubTurnsAgainstFriction) {
+  // 5 turns a second for 20 s with the tip down the LAD: the twist the wire stores stays
+  // bounded (friction lets go, the tip whips round), nothing diverges, the tip stays in the LAD
+  World world(rod_scene());
+  double start_rad = 0.0, worst_lag_rad = 0.0;
+  run_script_then(world, 20.0, [&](double s, InstrumentInput& in) {
+    if (s == 0.0) start_rad = in.rotation_rad;
+    in.rotation_rad = start_rad + 200.0 * std::numbers::pi * std::min(s / 20.0, 1.0);
+    in.rotation_rate_rad_per_s = 10.0 * std::numbers::pi;
+    worst_lag_rad = std::max(worst_lag_rad, std::abs(world.rod_state()->tip_roll_rad()));
+  });
+  std::printf("100 turns: largest twist between hub and tip %.1f deg\n", worst_lag_rad * 180.0 / std::numbers::pi);
+  EXPECT_LT(worst_lag_rad, 2.0 * std::numbers::pi);
+  expect_settles(world);
+  EXPECT_TRUE(in_subtree(world.vessel_tree(), tip_branch(world), "LAD")) << tip_branch(world);
+}
+
+TEST(RodWireWorld, TenTimesTheStep) {
+  WorldSpec spec = rod_scene();
+  spec.step_s *= 10.0;  // 3 Hz: ten times the feed and turn per step
+  World world(spec);
+  BranchScript script;
+  double worst = -1.0;
+  for (double t = 0.0; t <= script.end_s(); t += spec.step_s) {
+    world.step(script.at(t));
+    expect_sound(world, t);
+    worst = std::max(worst, worst_wall_m(world));
+  }
+  std::printf("ten times the step: tip in %s, fed %.1f of %.1f mm, worst wall %+.3f mm\n", tip_branch(world).c_str(),
+              1e3 * world.rod_state()->fed_length_m(), 1e3 * world.rod_state()->commanded_feed_m(), 1e3 * worst);
+  EXPECT_LE(worst, 0.0);
+  EXPECT_TRUE(in_subtree(world.vessel_tree(), tip_branch(world), "LM")) << tip_branch(world);
+}
+
+TEST(RodWireWorld, NonFiniteInputKeepsThePreviousSample) {
+  World world(rod_scene());
+  run_script_then(world, 1.0, [](double s, InstrumentInput& in) {
+    if (s > 0.3 && s < 0.6) {
+      in.insertion_m = std::nan("");
+      in.rotation_rad = std::numeric_limits<double>::infinity();
+    }
+  });
+  EXPECT_GT(world.rejected_inputs(), 0);
+  expect_settles(world);
+}
+
+TEST(RodWireWorld, StepAllocatesNothing) {
+  World world(rod_scene());
+  BranchScript script;
+  const double dt = rod_scene().step_s;
+  double t = 0.0;
+  for (; t < 10.0; t += dt) world.step(script.at(t));
+  WorldSnapshot snap;
+  world.write_snapshot(snap);
+  long allocations = -1;
+  {
+    pcisim::testing::AllocationCount count;
+    for (int i = 0; i < 30; ++i, t += dt) {
+      world.step(script.at(t));
+      world.write_snapshot(snap);
+    }
+    allocations = count.allocations();
+  }
+  EXPECT_EQ(allocations, 0);
+}
+
+// a curved tube: 40 mm straight from the catheter's exit, then a 90 degree bend of 15 mm radius
+// and 60 mm straight, 1.5 mm lumen radius
+anatomy::VesselTree curved_tube() {
+  anatomy::VesselTree tree;
+  anatomy::VesselBranch b;
+  b.name = "tube";
+  b.parent = -1;
+  auto add = [&](const Eigen::Vector3d& p) { b.points.push_back({p, 1.5e-3}); };
+  for (double z = 0.0; z <= 0.04 + 1e-9; z += 1e-3) add({0.0, 0.0, z});
+  for (int k = 1; k <= 24; ++k) {
+    const double a = 0.5 * std::numbers::pi * k / 24.0;
+    add({0.015 * (1.0 - std::cos(a)), 0.0, 0.04 + 0.015 * std::sin(a)});
+  }
+  for (double x = 0.016; x <= 0.075 + 1e-9; x += 1e-3) add({x, 0.0, 0.055});
+  tree.branches.push_back(b);
+  return tree;
+}
+
+// the rod wire in the curved tube with the tube's lumen, fed `fed_m` over 3 s and held 1 s
+struct TubeRig {
+  anatomy::VesselTree tree = curved_tube();
+  TubeLumen lumen{tree};
+  FrictionParams mu;
+  RodWire wire;
+  explicit TubeRig(double fed_m, GuidewireParams g = {})
+      : mu(coefficients()),
+        wire(rod(g), CatheterPath({Eigen::Vector3d(0, 0, -0.2), Eigen::Vector3d(0, 0, 0)}), &lumen,
+             VesselContactParams{}, mu) {
+    for (double t = 0.0; t < 4.0; t += kDt) wire.step(fed_m * std::min(t / 3.0, 1.0), 0.0, kDt);
+  }
+  static constexpr double kDt = 1.0 / 30.0;
+  static FrictionParams coefficients() {
+    FrictionParams f;
+    f.body_static = f.tip_static = 0.3;
+    f.body_kinetic = f.tip_kinetic = 0.2;
+    return f;
+  }
+  static GuidewireParams rod(GuidewireParams g) {
+    g.model = GuidewireModel::kRod;
+    g.segment_count = 300;
+    g.tip_angle_deg = 0.0;
+    return g;
+  }
+  double wall_force_n() const {
+    double n = 0.0;
+    for (int i = wire.first_free_node(); i < wire.node_count(); ++i) n += wire.wall_force_n()[i];
+    return n;
+  }
+};
+
+TEST(RodWireTorsion, TheTipLagsTheHubSlipsAndHoldsWhatStaticFrictionCan) {
+  // 90 mm down the curved tube (round the bend), the hub turned two turns in 2 s and held.
+  // Wall friction holds the tip back: its roll lags the hub's, sticks and slips (the lag falls
+  // by degrees between steps: the whip); after the hub stops the wire keeps the wind-up that
+  // static friction can hold, which quasi-statically is at most mu_s r times the wall's force
+  TubeRig rig(0.09);
+  RodWire& w = rig.wire;
+  ASSERT_GT(w.nodes_m().back().x(), 0.02);  // round the bend
+  double lag_max = 0.0, biggest_slip = 0.0, previous = 0.0;
+  for (double t = 0.0; t < 4.0; t += TubeRig::kDt) {
+    w.step(0.09, 4.0 * std::numbers::pi * std::min(t / 2.0, 1.0), TubeRig::kDt);
+    const double lag = -w.tip_roll_rad();
+    if (t < 2.0 && t > 0.0) biggest_slip = std::max(biggest_slip, previous - lag);
+    lag_max = std::max(lag_max, lag);
+    previous = lag;
+  }
+  const double capacity_nm = rig.mu.body_static * rig.wall_force_n() * 0.5 * GuidewireParams{}.outer_diameter_m;
+  std::printf(
+      "curved tube: tip lag up to %.2f deg, slips of up to %.2f deg; held after the stop %.2f deg, %.2e N m "
+      "(static capacity mu_s r N = %.2e N m)\n",
+      lag_max * 180.0 / std::numbers::pi, biggest_slip * 180.0 / std::numbers::pi, previous * 180.0 / std::numbers::pi,
+      w.hub_torque_nm(), capacity_nm);
+  EXPECT_GT(lag_max, 1.0 * std::numbers::pi / 180.0);
+  EXPECT_GT(biggest_slip, 1.0 * std::numbers::pi / 180.0);
+  EXPECT_GT(w.hub_torque_nm(), 0.0);
+  EXPECT_LT(w.hub_torque_nm(), 2.0 * capacity_nm);
+}
+
+TEST(RodWireDeadEnd, PushingIntoTheTubesEndIsRefusedAndTheHandFeelsIt) {
+  // the tube ends 124 mm along its centerline; the hub feeds 200 mm. The wire crumples against
+  // the end (the wall projection has the last word in each substep, docs/guidewire.md) until
+  // it is 20 mm shorter than fed; then the hub slips: further feed is refused and the refused
+  // feed's spring is what the hand feels, as for the chain-mail
+  TubeRig rig(0.11);
+  RodWire& w = rig.wire;
+  const double before_n = w.feedback().internal_n;
+  double most_n = 0.0;
+  for (double t = 0.0; t < 6.0; t += TubeRig::kDt) {
+    w.step(0.11 + 0.09 * std::min(t / 3.0, 1.0), 0.0, TubeRig::kDt);
+    ASSERT_EQ(w.recoveries(), 0);
+    for (const Eigen::Vector3d& p : w.nodes_m()) ASSERT_TRUE(p.allFinite());
+    most_n = std::max(most_n, w.feedback().internal_n);
+    ASSERT_LT(w.compression_m(), 0.03);
+  }
+  const double refused_m = w.commanded_feed_m() - w.fed_length_m();
+  std::printf(
+      "dead end: push-back %.4f N before, %.3f N at most, %.1f mm of 200 refused, %.1f mm crumpled, tip force "
+      "%.3f N\n",
+      before_n, most_n, 1e3 * refused_m, 1e3 * w.compression_m(), w.tip_contact_force_n());
+  EXPECT_GT(refused_m, 0.02);
+  EXPECT_GT(most_n, GuidewireParams{}.feed_refuse_force_n);
+  EXPECT_GT(most_n, 100.0 * std::max(before_n, 1e-4));
+  double worst = -1.0;
+  for (int i = w.first_free_node(); i < w.node_count(); ++i)
+    worst = std::max(worst, rig.lumen.sample(w.nodes_m()[i]).distance_m);
+  EXPECT_LE(worst, 0.0);
+  // pulled back, it is accepted at once and the crumple lets go
+  for (double t = 0.0; t < 2.0; t += TubeRig::kDt) w.step(0.10, 0.0, TubeRig::kDt);
+  EXPECT_NEAR(w.fed_length_m(), 0.10, 1e-9);
+  EXPECT_LT(w.compression_m(), 0.02);
+}
+
+TEST(RodWireParams, RejectsBadValuesNamingTheField) {
+  GuidewireParams g;
+  g.model = GuidewireModel::kRod;
+  g.bending_stiffness_nm2 = -1.0;
+  std::vector<Eigen::Vector3d> path = {Eigen::Vector3d(0, 0, -0.1), Eigen::Vector3d(0, 0, 0)};
+  try {
+    RodWire w(g, CatheterPath(path));
+    FAIL() << "accepted a negative bending stiffness";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("bending_stiffness_nm2"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace pcisim::physics

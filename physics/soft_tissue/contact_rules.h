@@ -17,8 +17,9 @@ inline double plane_gap_m(const Eigen::Vector3d& x_m, const ContactPlane& plane,
   return plane.normal.dot(x_m) - plane.offset_m - radius_m;
 }
 
-// non-penetration [soft-tissue, Algorithm 1 lines 12 and 19: contact constraints], C(x) >= 0 as
-// an inequality: dx = -min(C, 0) n, all of it to the particle (the other body does not move).
+// non-penetration, the inequality C(x) >= 0 [soft-tissue eq 2] projected by [soft-tissue eqs 4-5]
+// with grad C = n and the other body's inverse mass 0: lambda = -C / w, dx = w lambda n, i.e.
+// dx = -min(C, 0) n, all of it to the particle [soft-tissue, Algorithm 1 lines 12 and 19].
 // Returns the normal correction's length, >= 0.
 inline double non_penetration_m(const ContactPlane& plane, double radius_m, Eigen::Vector3d* x_m) {
   const double c = plane_gap_m(*x_m, plane, radius_m);

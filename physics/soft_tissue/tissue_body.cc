@@ -23,7 +23,8 @@ pbd::PbdParams pbd_params(const TissueParams& p) {
   pbd::PbdParams out;
   out.substeps = p.substeps;
   out.iterations = p.iterations;
-  out.solver = pbd::SolverKind::kGaussSeidel;
+  out.solver = p.solver;
+  out.sor_w = p.sor_w;
   out.gravity_m_per_s2 = p.gravity_m_per_s2;
   out.damping_per_s = p.damping_per_s;
   return out;
@@ -51,6 +52,14 @@ TissueBody::TissueBody(const TissueModel& model, const TissueParams& params, con
 
 // the copy's contacts are its own (PbdSystem is handed them per step, never keeps them)
 TissueBody::TissueBody(const TissueBody& other) = default;
+
+bool TissueBody::set_probe_pose(const ProbePose& pose) {
+  const double q = pose.rotation.norm();
+  if (!pose.position_m.allFinite() || !pose.rotation.coeffs().allFinite() || !(q > 0.0) || !std::isfinite(q))
+    return false;
+  contacts_.set_probe_target({pose.position_m, pose.rotation.normalized()});
+  return true;
+}
 
 void TissueBody::step(double dt_s) {
   contacts_.begin_step();

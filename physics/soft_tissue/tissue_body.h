@@ -24,8 +24,9 @@ class TissueBody {
   TissueBody(const TissueBody& other);
   TissueBody& operator=(const TissueBody&) = delete;
 
-  // where the probe is at the end of the next step
-  void set_probe_pose(const ProbePose& pose) { contacts_.set_probe_target(pose); }
+  // where the probe is at the end of the next step (the rotation is normalised). A non-finite
+  // position or rotation, or a zero quaternion, is ignored (the last target stays): returns false
+  bool set_probe_pose(const ProbePose& pose);
   void step(double dt_s);
 
   const Eigen::Matrix3Xd& positions_m() const { return system_.particles().position_m; }

@@ -129,8 +129,8 @@ void TissueContacts::project(pbd::Particles& particles, double h_s) {
   }
 }
 
-// force on the body = -(the momentum its contacts gave the particles) / h: the particle's
-// correction dx becomes a velocity dx / h, so F = -m dx / h^2 over the substep
+// force on the body = -(the momentum its contacts gave the particles) / h: a correction dx is a
+// velocity change dx / h [soft-tissue eq 6], so F = -sum m dx / h^2 over the substep
 void TissueContacts::end_substep(const pbd::Particles& particles, double h_s) {
   Vector3d probe_n = Vector3d::Zero(), support_n = Vector3d::Zero();
   const double inv_h2 = 1.0 / (h_s * h_s);

@@ -22,6 +22,9 @@ void validate(const TissueParams& p) {
   require(within(p.cluster_compliance_s2, 0.0, 1.0), "cluster_compliance_s2", "[0, 1]");
   require(p.substeps >= 1 && p.substeps <= 100, "substeps", "[1, 100]");
   require(p.iterations >= 1 && p.iterations <= 1000, "iterations", "[1, 1000]");
+  require(p.solver == pbd::SolverKind::kGaussSeidel || p.solver == pbd::SolverKind::kJacobi, "solver",
+          "{kGaussSeidel, kJacobi}");
+  require(within(p.sor_w, 1.0, 2.0), "sor_w", "[1, 2]");
   require(p.stabilisation_iterations >= 0 && p.stabilisation_iterations <= 100, "stabilisation_iterations", "[0, 100]");
   require(within(p.damping_per_s, 0.0, 1000.0), "damping_per_s", "[0, 1000]");
   require(p.gravity_m_per_s2.allFinite(), "gravity_m_per_s2", "finite values");

@@ -4,6 +4,8 @@
 // it gives them; ranges after each field. validate() names the first field out of range.
 #include <Eigen/Core>
 
+#include "physics/pbd/pbd_params.h"
+
 namespace pcisim::physics::soft_tissue {
 
 struct TissueParams {
@@ -14,8 +16,12 @@ struct TissueParams {
   // 0 = rigid clusters. Not calibrated (issue #16 item 6): 2e-5 gives 1.7 N for a 12 mm press of
   // a 20 x 40 mm face at 3.3 mm particles. [0, 1]
   double cluster_compliance_s2 = 2.0e-5;
-  int substeps = 3;                                  // [soft-tissue, Table 1]; [1, 100]
-  int iterations = 9;                                // solver passes per substep [soft-tissue, Table 1]; [1, 1000]
+  int substeps = 3;    // [soft-tissue, Table 1]; [1, 100]
+  int iterations = 9;  // solver passes per substep [soft-tissue, Table 1]; [1, 1000]
+  // Gauss-Seidel, or Jacobi with SOR [soft-tissue eq 7] (the paper: "local" relaxation, factor 1);
+  // the contacts are one more group, applied at once. kJacobiCuda is refused (contacts are CPU only)
+  pbd::SolverKind solver = pbd::SolverKind::kGaussSeidel;
+  double sor_w = 1.0;                                // [1, 2]
   int stabilisation_iterations = 1;                  // Algorithm 1 lines 10-15; [0, 100]
   double damping_per_s = 12.0;                       // velocity drag [soft-tissue, Table 1 "damping factor"]; [0, 1000]
   Eigen::Vector3d gravity_m_per_s2{0.0, 9.81, 0.0};  // LPS: a supine patient's posterior (+y) is down; finite

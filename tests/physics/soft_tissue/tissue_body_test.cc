@@ -94,7 +94,7 @@ void organ_box(const TissueModel& m, double margin_m, Vector3d* lo, Vector3d* hi
 // a transducer-like cuboid: 20 mm (L) x 30 mm tall (P) x 40 mm (S), half extents
 const Vector3d kProbeHalf_m(10e-3, 15e-3, 20e-3);
 
-// the probe with its bottom face (+y) at height y_m above the organ's centre line
+// the probe with its bottom face at y = bottom_y_m (LPS: +y is down, so its bottom is its +y face)
 ProbePose probe_at(double bottom_y_m) {
   ProbePose p;
   p.position_m = Vector3d(0, bottom_y_m - kProbeHalf_m.y(), 0);
@@ -289,6 +289,51 @@ TEST(TissueBody, FrictionAboveTheSlopesTangentHoldsTheOrganAndNoFrictionLetsItSl
   EXPECT_GT(slid_late, 15e-3);
 }
 
+// the probe pressed 6 mm in and slid 10 mm along L: the skin under it is dragged further with
+// friction (slip relative to the moving probe) than without, where only the dent's wall, pushed by
+// the probe's side face, carries it
+double skin_drag_m(double probe_mu) {
+  const Settled& s = settled();
+  const Kidney& k = kidney();
+  TissueParams p;
+  p.probe_mu_static = p.probe_mu_kinetic = probe_mu;
+  TissueBody b(k.model, p, s.support, box_probe(kProbeHalf_m, probe_at(s.top_y_m - 1e-3)));
+  b.system().particles().position_m = s.rest_on_table_m;
+  for (int n = 1; n <= 15; ++n) {
+    b.set_probe_pose(probe_at(s.top_y_m - 1e-3 + 7e-3 * n / 15));
+    b.step(kDt);
+  }
+  // the particles touching the probe's bottom before the slide
+  std::vector<int> skin;
+  for (int i = 0; i < b.particle_count(); ++i) {
+    double d = 0.0;
+    least_penetration_face(b.contacts().probe().faces, b.contacts().probe_pose(), b.positions_m().col(i), &d);
+    if (d < b.contacts().contact_radius_m() + 0.2e-3) skin.push_back(i);
+  }
+  EXPECT_GT(skin.size(), 5u);
+  double x0 = 0.0;
+  for (int i : skin) x0 += b.positions_m()(0, i) / skin.size();
+  for (int n = 1; n <= 15; ++n) {
+    ProbePose pose = probe_at(s.top_y_m + 6e-3);
+    pose.position_m.x() = 10e-3 * n / 15;
+    b.set_probe_pose(pose);
+    b.step(kDt);
+  }
+  double x1 = 0.0;
+  for (int i : skin) x1 += b.positions_m()(0, i) / skin.size();
+  EXPECT_TRUE(b.positions_m().allFinite());
+  EXPECT_LT(deepest_in_probe(b), 0.1e-3);
+  return x1 - x0;
+}
+
+TEST(TissueBody, ProbeFrictionDragsTheSkinFurtherThanNoFriction) {
+  const double dragged = skin_drag_m(0.35), slipped = skin_drag_m(0.0);
+  std::printf("probe slid 10 mm at 6 mm depth: the skin under it moved %.2f mm with mu 0.35, %.2f mm with mu 0\n",
+              1e3 * dragged, 1e3 * slipped);
+  EXPECT_GT(dragged - slipped, 2e-3);
+  EXPECT_LT(dragged, 10.5e-3);  // not further than the probe went
+}
+
 TEST(TissueBody, HugeProbeJumpOf50MmInOneStepStaysFiniteAndRecovers) {
   const Settled& s = settled();
   // from 38 mm above the skin to 12 mm below it in one step
@@ -306,7 +351,7 @@ TEST(TissueBody, TenTimesTheStepStaysFiniteAndRecovers) {
   // a step this long sags the organ further under its weight (h^2 g = 30 mm per substep against 9
   // iterations): its rest at 10 dt, not at dt, is what it must come back to
   TissueBody unprobed = s.body;
-  for (int n = 0; n < 50; ++n) unprobed.step(10 * kDt);
+  for (int n = 0; n < 30; ++n) unprobed.step(10 * kDt);
   const double sag_m = max_distance(unprobed.positions_m(), s.rest_on_table_m);
   const PressResult r = press(s.body, unprobed.positions_m(), s.top_y_m, 1e-3, 12e-3, 10 * kDt, 6);
   std::printf("dt x 10: rest sags %.2f mm further than at dt\n", 1e3 * sag_m);
@@ -324,12 +369,17 @@ TEST(TissueBody, ProbeCentredExactlyOnAParticleTiesIsPushedOutAndRecovers) {
   int target = 0;  // the particle nearest a point 6 mm under the organ's upper centre
   const Vector3d aim(0, s.top_y_m + 6e-3, 0);
   (s.rest_on_table_m.colwise() - aim).colwise().norm().minCoeff(&target);
-  // a cube: all six faces are equally far from its centre, which lands on the particle in one step
+  // a cube centred exactly on the particle, from the start: its six faces are all exactly 4 mm
+  // from it (x - p = 0 in any frame), a six-way tie
   ProbePose at;
   at.position_m = s.rest_on_table_m.col(target);
-  TissueBody with_cube(k.model, TissueParams{}, s.support, box_probe(Vector3d::Constant(4e-3), probe_at(-0.1)));
+  TissueBody with_cube(k.model, TissueParams{}, s.support, box_probe(Vector3d::Constant(4e-3), at));
   with_cube.system().particles().position_m = s.rest_on_table_m;
-  with_cube.set_probe_pose(at);
+  double tie[6];
+  for (int f = 0; f < 6; ++f)
+    tie[f] = world_face(with_cube.contacts().probe().faces[f], at).normal.dot(s.rest_on_table_m.col(target)) -
+             world_face(with_cube.contacts().probe().faces[f], at).offset_m;
+  for (int f = 1; f < 6; ++f) ASSERT_EQ(tie[f], tie[0]);
   with_cube.step(kDt);
   EXPECT_TRUE(with_cube.positions_m().allFinite());
   double d = 0.0;

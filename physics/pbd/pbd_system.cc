@@ -163,9 +163,11 @@ void PbdSystem::quarantine_non_finite_inputs() {
   }
 }
 
-void PbdSystem::step(double dt_s, const PbdParams& params) {
+void PbdSystem::step(double dt_s, const PbdParams& params, ContactProjector* contacts) {
   if (!finalized_) throw std::logic_error("pbd: finalize() before step()");
   if (!(dt_s > 0.0) || !std::isfinite(dt_s)) return;
+  if (contacts && params.solver == SolverKind::kJacobiCuda)
+    throw std::invalid_argument("pbd: contacts are solved on the CPU only; use kGaussSeidel or kJacobi");
   if (params.solver == SolverKind::kJacobiCuda && !cuda_.solver)
     cuda_.solver = std::make_shared<PbdCudaSolver>(*this);  // throws std::invalid_argument without CUDA
   quarantine_non_finite_inputs();
@@ -173,19 +175,20 @@ void PbdSystem::step(double dt_s, const PbdParams& params) {
     // the same substeps as below, on the device (pbd_cuda_solver.h)
     cuda_.solver->run_step(*this, dt_s, params);
   } else {
-    step_on_cpu(dt_s, params);
+    step_on_cpu(dt_s, params, contacts);
   }
   for (int i = 0; i < particle_count(); ++i)
     if (particles_.state[i] != ParticleState::kQuarantined)
       particles_.last_finite_m.col(i) = particles_.position_m.col(i);
 }
 
-void PbdSystem::step_on_cpu(double dt_s, const PbdParams& params) {
+void PbdSystem::step_on_cpu(double dt_s, const PbdParams& params, ContactProjector* contacts) {
   const int substeps = std::max(params.substeps, 1);
   const double h = dt_s / substeps;
   drive_start_m_ = particles_.position_m;  // same size: a copy, no allocation
   for (int s = 0; s < substeps; ++s) {
     predict(h, static_cast<double>(s + 1) / substeps, s + 1 == substeps, params);
+    if (contacts) contacts->begin_substep(particles_, h, static_cast<double>(s + 1) / substeps);
     distance_lambda_.setZero();
     bending_lambda_.setZero();
     cluster_lambda_.setZero();
@@ -199,7 +202,9 @@ void PbdSystem::step_on_cpu(double dt_s, const PbdParams& params) {
       } else {
         solve_gauss_seidel(h);
       }
+      if (contacts) contacts->project(particles_, h);
     }
+    if (contacts) contacts->end_substep(particles_, h);
     update(h);
   }
 }

@@ -7,6 +7,7 @@
 #include <span>
 #include <vector>
 
+#include "physics/pbd/contact_projector.h"
 #include "physics/pbd/dihedral_bending_constraint.h"
 #include "physics/pbd/distance_constraint.h"
 #include "physics/pbd/jacobi_group.h"
@@ -35,7 +36,9 @@ class PbdSystem {
   // where driven particle i is at the end of the next step; substeps move it on the straight
   // line from where it is, so it arrives there exactly
   void set_driven_target(int i, const Eigen::Vector3d& position_m);
-  void step(double dt_s, const PbdParams& params);
+  // contacts (optional, not owned) are called inside each substep (contact_projector.h); CPU
+  // solvers only: with kJacobiCuda they throw std::invalid_argument
+  void step(double dt_s, const PbdParams& params, ContactProjector* contacts = nullptr);
   // quarantined particles return to what they were built as (free, pinned or driven), from where
   // they froze (the provocation is over); a driven one heads for its target again
   void release_quarantine();
@@ -70,7 +73,7 @@ class PbdSystem {
 
   void quarantine(int i, const Eigen::Vector3d& freeze_at_m);
   void quarantine_non_finite_inputs();
-  void step_on_cpu(double dt_s, const PbdParams& params);
+  void step_on_cpu(double dt_s, const PbdParams& params, ContactProjector* contacts);
   void predict(double h_s, double fraction_of_step, bool last_substep, const PbdParams& params);
   void solve_gauss_seidel(double h_s);
   void solve_jacobi(double h_s, double sor_w, JacobiAveraging averaging);

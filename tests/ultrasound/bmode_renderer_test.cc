@@ -103,6 +103,35 @@ TEST(BModeRenderer, SphereEchoesLieAtItsNearAndFarWallLinearAndCurvilinear) {
   }
 }
 
+TEST(BModeRenderer, CurvilinearDisplayIsTheScanConvertedFan) {
+  const UsSettings s = test_settings(ProbeGeometry::kCurvilinear);
+  const ProbePose pose = probe_at_top();
+  // the display map and the beam map name the same world point
+  int inside = 0;
+  for (int r = 0; r < s.height_px; r += 7)
+    for (int c = 0; c < s.width_px; c += 3) {
+      double bc = 0, br = 0;
+      if (!display_to_beam(s, c, r, &bc, &br)) continue;
+      ++inside;
+      EXPECT_NEAR((display_pixel_to_world(s, pose, c, r) - pixel_to_world(s, pose, bc, br)).norm(), 0.0, 1e-9);
+    }
+  EXPECT_GT(inside, 100);
+  double bc = 0, br = 0;
+  EXPECT_FALSE(display_to_beam(s, 0, 0, &bc, &br));  // a corner above the fan's edge
+  // the sphere's near wall is bright in the display image on its central column, the tissue above grey
+  BModeRenderer r(sphere_phantom(), s);
+  const BModeImage& im = r.render(pose, 1);
+  const int c = s.width_px / 2;
+  int wall = -1;
+  double best = 1e9;
+  for (int row = 0; row < s.height_px; ++row) {
+    const double e = std::abs(display_pixel_to_world(s, pose, c, row).y() - (kSphereD - kSphereR));
+    if (e < best) best = e, wall = row;
+  }
+  EXPECT_GT(im.pixels[wall * im.width + c], mean_rows(im, wall - 30, wall - 5, c - 2, c + 3) + 40.0);
+  EXPECT_EQ(im.pixels[0], 0);  // outside the fan: black
+}
+
 TEST(BModeRenderer, UniformMediumDimsWithDepthAndMatchingTgcFlattensIt) {
   const Volume v = make_phantom(1.0, [](const Vector3d&) { return kSoftHu; });
   UsSettings s = test_settings(ProbeGeometry::kLinear);

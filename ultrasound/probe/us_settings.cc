@@ -56,4 +56,38 @@ Eigen::Vector3d pixel_to_world(const UsSettings& s, const ProbePose& p, double c
   return p.origin_mm - rc * b + (rc + d) * (std::cos(theta) * b + std::sin(theta) * l);
 }
 
+namespace {
+
+// the display point in the probe's plane (x lateral, y along the beam), mm
+Eigen::Vector2d display_plane_mm(const UsSettings& s, double col, double row) {
+  if (s.geometry == ProbeGeometry::kLinear)
+    return {((col + 0.5) / s.width_px - 0.5) * s.width_mm, (row + 0.5) / s.height_px * s.depth_mm};
+  const double half = 0.5 * s.fan_angle_deg * std::numbers::pi / 180.0, rc = s.radius_of_curvature_mm;
+  const double x_max = (rc + s.depth_mm) * std::sin(half), y0 = rc * (std::cos(half) - 1.0);
+  return {-x_max + (col + 0.5) / s.width_px * 2.0 * x_max, y0 + (row + 0.5) / s.height_px * (s.depth_mm - y0)};
+}
+
+}  // namespace
+
+Eigen::Vector3d display_pixel_to_world(const UsSettings& s, const ProbePose& p, double col, double row) {
+  const Eigen::Vector3d b = p.beam.normalized();
+  const Eigen::Vector3d l = (p.lateral - p.lateral.dot(b) * b).normalized();
+  const Eigen::Vector2d q = display_plane_mm(s, col, row);
+  return p.origin_mm + q.x() * l + q.y() * b;
+}
+
+bool display_to_beam(const UsSettings& s, double col, double row, double* beam_col, double* beam_row) {
+  const Eigen::Vector2d q = display_plane_mm(s, col, row);
+  if (s.geometry == ProbeGeometry::kLinear) {
+    *beam_col = col;
+    *beam_row = row;
+    return true;
+  }
+  const double rc = s.radius_of_curvature_mm, fan = s.fan_angle_deg * std::numbers::pi / 180.0;
+  const double theta = std::atan2(q.x(), q.y() + rc), d = std::hypot(q.x(), q.y() + rc) - rc;
+  *beam_col = (theta / fan + 0.5) * s.width_px - 0.5;
+  *beam_row = d / s.depth_mm * s.height_px - 0.5;
+  return std::abs(theta) <= 0.5 * fan && d >= 0.0 && d <= s.depth_mm;
+}
+
 }  // namespace pcisim::ultrasound

@@ -1,6 +1,8 @@
 #pragma once
-// What the ultrasound machine is set to and where the probe is (issue #16 item 4). The image is
-// in beam space: column c is one scanline, row r one depth sample (pixel_to_world says where).
+// What the ultrasound machine is set to and where the probe is (issue #16 item 4). The renderer
+// works in beam space (column c = one scanline, row r = one depth sample: pixel_to_world) and
+// shows a display image (display_pixel_to_world): the same for a linear probe, the fan
+// scan-converted into its bounding rectangle for a curvilinear one.
 #include <Eigen/Core>
 
 namespace pcisim::ultrasound {
@@ -44,5 +46,15 @@ void validate(const ProbePose& p);
 //                 x = apex + (Rc + d) * (cos(theta) * beam + sin(theta) * lateral)
 // lateral is first made orthogonal to beam and both are normalised.
 Eigen::Vector3d pixel_to_world(const UsSettings& s, const ProbePose& p, double col, double row);
+
+// Display pixel -> world (mm). Linear: pixel_to_world. Curvilinear: the fan's bounding rectangle,
+// width_px x height_px pixels, in the plane (x along lateral, y along beam from the face's centre):
+//   X = (Rc + depth) sin(fan / 2),  y0 = Rc (cos(fan / 2) - 1),  y1 = depth
+//   x = -X + (c + 0.5) / width_px * 2X,  y = y0 + (r + 0.5) / height_px * (y1 - y0)
+//   world = origin + x * lateral + y * beam
+Eigen::Vector3d display_pixel_to_world(const UsSettings& s, const ProbePose& p, double col, double row);
+// the beam-space (scanline, sample) of a display pixel, fractional; false outside the fan
+// (curvilinear: theta = atan2(x, y + Rc), d = |(x, y + Rc)| - Rc, then pixel_to_world inverted)
+bool display_to_beam(const UsSettings& s, double col, double row, double* beam_col, double* beam_row);
 
 }  // namespace pcisim::ultrasound

@@ -36,9 +36,43 @@ BModeRenderer::BModeRenderer(const anatomy::Volume& ct, const UsSettings& settin
   hu_.resize(n);
   z_.resize(n);
   echo_.resize(n);
-  image_.width = w;
-  image_.height = h;
+  beam_.width = image_.width = w;
+  beam_.height = image_.height = h;
+  beam_.pixels.resize(n);
   image_.pixels.resize(n);
+  if (settings_.geometry == ProbeGeometry::kCurvilinear) {
+    convert_index_.assign(n, -1);
+    convert_fx_.assign(n, 0.0f);
+    convert_fy_.assign(n, 0.0f);
+    for (int r = 0; r < h; ++r)
+      for (int c = 0; c < w; ++c) {
+        double bc = 0, br = 0;
+        if (!display_to_beam(settings_, c, r, &bc, &br)) continue;
+        bc = std::clamp(bc, 0.0, w - 1.0);
+        br = std::clamp(br, 0.0, h - 1.0);
+        const int c0 = std::min(static_cast<int>(bc), w - 2), r0 = std::min(static_cast<int>(br), h - 2);
+        const size_t k = static_cast<size_t>(r) * w + c;
+        convert_index_[k] = r0 * w + c0;
+        convert_fx_[k] = static_cast<float>(bc - c0);
+        convert_fy_[k] = static_cast<float>(br - r0);
+      }
+  }
+}
+
+// curvilinear display: bilinear in the beam-space grey levels, black outside the fan
+void BModeRenderer::scan_convert() {
+  const int w = settings_.width_px;
+  for (size_t k = 0; k < image_.pixels.size(); ++k) {
+    const int i = convert_index_[k];
+    if (i < 0) {
+      image_.pixels[k] = 0;
+      continue;
+    }
+    const float fx = convert_fx_[k], fy = convert_fy_[k];
+    const uint8_t* p = &beam_.pixels[i];
+    const float v = (p[0] * (1 - fx) + p[1] * fx) * (1 - fy) + (p[w] * (1 - fx) + p[w + 1] * fx) * fy;
+    image_.pixels[k] = static_cast<uint8_t>(std::lround(v));
+  }
 }
 
 void BModeRenderer::set_mesh(const TetSnapshot& mesh) {
@@ -88,6 +122,8 @@ const BModeImage& BModeRenderer::render(const ProbePose& pose, uint64_t seed, co
     }
     render_scanline(c, seed);
   }
+  if (settings_.geometry == ProbeGeometry::kLinear) return beam_;
+  scan_convert();
   return image_;
 }
 
@@ -121,8 +157,8 @@ void BModeRenderer::render_scanline(int column, uint64_t seed) {
     const size_t out = static_cast<size_t>(j) * w + column;
     echo_[out] = static_cast<float>(intensity);
     const double depth_cm = (j + 0.5) * dx_cm;
-    image_.pixels[out] = log_compress(brightness_db(intensity, settings_.gain_db, settings_.tgc_db_per_cm, depth_cm),
-                                      settings_.dynamic_range_db);
+    beam_.pixels[out] = log_compress(brightness_db(intensity, settings_.gain_db, settings_.tgc_db_per_cm, depth_cm),
+                                     settings_.dynamic_range_db);
     transmitted *= std::pow(1.0 - refl, step_exponent);
     loss_db += a_db;
   }

@@ -4,8 +4,10 @@
 // is carried to the undeformed CT through the tet holding it (outside every tet the CT is sampled
 // where the sample is: the organ's surroundings are undeformed), its HU give impedance,
 // scattering and attenuation (echo/acoustic_model.h), and each scanline accumulates what is
-// transmitted. The image is in beam space (pixel_to_world in probe/us_settings.h). The
-// constructor and set_mesh() allocate; render() allocates nothing.
+// transmitted. render() returns the display image (display_pixel_to_world in
+// probe/us_settings.h: beam space for a linear probe, the scan-converted fan for a curvilinear
+// one); beam_image() the beam-space one (pixel_to_world). The constructor and set_mesh()
+// allocate; render() allocates nothing.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -17,7 +19,7 @@
 
 namespace pcisim::ultrasound {
 
-// 8-bit grey, row-major, row 0 = the transducer face, column 0 = the -lateral end
+// 8-bit grey, row-major, row 0 nearest the transducer, column 0 at the -lateral end
 struct BModeImage {
   int width = 0;
   int height = 0;
@@ -42,6 +44,8 @@ class BModeRenderer {
   // the last frame's echo intensity per pixel (row-major; relative to a perfect reflector at the
   // face, after attenuation and transmission, before gain, TGC and compression)
   const std::vector<float>& echo_intensity() const { return echo_; }
+  // the last frame in beam space (column = scanline, row = depth sample)
+  const BModeImage& beam_image() const { return beam_; }
   const UsSettings& settings() const { return settings_; }
   // axial window over which the impedance change is taken: max(2 wavelengths, CT voxel)
   double pulse_length_mm() const { return pulse_mm_; }
@@ -49,6 +53,7 @@ class BModeRenderer {
  private:
   double sample_hu(const Eigen::Vector3d& p_mm) const;
   void render_scanline(int column, uint64_t seed);
+  void scan_convert();
 
   const anatomy::Volume& ct_;
   UsSettings settings_;
@@ -59,7 +64,10 @@ class BModeRenderer {
   bool have_mesh_ = false;
   std::vector<double> hu_, z_;  // per pixel, column-major (scanline by scanline)
   std::vector<float> echo_;
-  BModeImage image_;
+  BModeImage beam_, image_;
+  // curvilinear display: per display pixel the beam-space cell (-1 outside the fan) and weights
+  std::vector<int> convert_index_;
+  std::vector<float> convert_fx_, convert_fy_;
 };
 
 }  // namespace pcisim::ultrasound

@@ -30,6 +30,7 @@ const std::map<std::string, std::vector<std::string>>& allowed() {
       {"physics", {"anatomy"}},
       {"haptics", {"physics/local_force_model.h"}},
       {"xray", {"anatomy", "png"}},
+      {"ultrasound", {"anatomy", "png"}},
       {"modeling", {"anatomy", "json", "png"}},
       {"protocol", {"pcisim_lcm"}},
       {"server", {"anatomy", "physics", "haptics", "xray", "protocol", "pcisim_lcm", "realtime", "json", "png"}},

@@ -1,0 +1,306 @@
+// The B-mode renderer's behaviour: echo depths on a known phantom (linear and curvilinear),
+// attenuation and its compensation, shadowing, the deformation mapping, determinism, settings
+// validation, no allocation per frame, and the kidney phantom's cortex echo.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <numeric>
+
+#include "anatomy/mesh/kuhn_tetrahedra.h"
+#include "anatomy/organ/kidney_phantom.h"
+#include "tests/common/counting_new.h"
+#include "ultrasound/echo/acoustic_model.h"
+#include "ultrasound/render/bmode_renderer.h"
+
+namespace pcisim::ultrasound {
+namespace {
+
+using anatomy::Volume;
+using Eigen::Vector3d;
+
+// a box x in [-30, 30], y in [-5, 95], z in [-20, 20] mm of `hu_at` at the voxel centres
+Volume make_phantom(double h, const std::function<double(const Vector3d&)>& hu_at) {
+  const Vector3d lo(-30, -5, -20), hi(30, 95, 20);
+  std::array<int64_t, 3> dims{};
+  for (int k = 0; k < 3; ++k) dims[k] = static_cast<int64_t>(std::round((hi[k] - lo[k]) / h)) + 1;
+  Volume v = Volume::make(dims, Vector3d::Constant(h), lo, anatomy::VoxelType::kFloat32);
+  for (int64_t k = 0; k < dims[2]; ++k)
+    for (int64_t j = 0; j < dims[1]; ++j)
+      for (int64_t i = 0; i < dims[0]; ++i) {
+        const Vector3d p = lo + h * Vector3d(i, j, k);
+        v.hu_f32[v.linear_index(i, j, k)] = static_cast<float>(hu_at(p));
+      }
+  return v;
+}
+
+constexpr double kSoftHu = 40.0;
+constexpr double kSphereR = 8.0, kSphereD = 30.0;  // sphere centre at depth D below the probe at y = 0
+
+const Volume& sphere_phantom() {
+  // partial volume: the voxel's inside fraction taken as linear across one voxel of the surface
+  constexpr double h = 0.25;
+  static const Volume v = make_phantom(h, [](const Vector3d& p) {
+    const double inside = std::clamp(0.5 - ((p - Vector3d(0, kSphereD, 0)).norm() - kSphereR) / h, 0.0, 1.0);
+    return kSoftHu + 300.0 * inside;
+  });
+  return v;
+}
+
+ProbePose probe_at_top() {
+  ProbePose p;
+  p.origin_mm = Vector3d(0, 0, 0);
+  p.beam = Vector3d::UnitY();
+  p.lateral = Vector3d::UnitX();
+  return p;
+}
+
+UsSettings test_settings(ProbeGeometry g) {
+  UsSettings s;
+  s.geometry = g;
+  s.width_px = 65;  // odd: column 32 is the central scanline
+  s.height_px = 256;
+  s.depth_mm = 80.0;
+  return s;
+}
+
+// the depth (mm) of the strongest echo on column c between depths a and b (mm)
+double strongest_echo_depth(const BModeRenderer& r, int c, double a, double b) {
+  const auto& s = r.settings();
+  const double dx = s.depth_mm / s.height_px;
+  int best = -1;
+  for (int j = 0; j < s.height_px; ++j) {
+    const double d = (j + 0.5) * dx;
+    if (d < a || d > b) continue;
+    if (best < 0 || r.echo_intensity()[j * s.width_px + c] > r.echo_intensity()[best * s.width_px + c]) best = j;
+  }
+  return (best + 0.5) * dx;
+}
+
+double mean_rows(const BModeImage& im, int r0, int r1, int c0, int c1) {
+  double s = 0;
+  int n = 0;
+  for (int r = r0; r < r1; ++r)
+    for (int c = c0; c < c1; ++c, ++n) s += im.pixels[r * im.width + c];
+  return s / n;
+}
+
+TEST(BModeRenderer, SphereEchoesLieAtItsNearAndFarWallLinearAndCurvilinear) {
+  for (ProbeGeometry g : {ProbeGeometry::kLinear, ProbeGeometry::kCurvilinear}) {
+    BModeRenderer r(sphere_phantom(), test_settings(g));
+    r.render(probe_at_top(), 1);
+    const double dx = r.settings().depth_mm / r.settings().height_px;
+    const int centre = r.settings().width_px / 2;
+    EXPECT_NEAR(strongest_echo_depth(r, centre, 1.0, 79.0), kSphereD - kSphereR, dx) << static_cast<int>(g);
+    EXPECT_NEAR(strongest_echo_depth(r, centre, kSphereD, 79.0), kSphereD + kSphereR, dx) << static_cast<int>(g);
+    // the central scanline's pixel centres map along the beam
+    EXPECT_NEAR((pixel_to_world(r.settings(), probe_at_top(), centre, 10) - Vector3d(0, 10.5 * dx, 0)).norm(), 0.0,
+                1e-9);
+  }
+}
+
+TEST(BModeRenderer, CurvilinearDisplayIsTheScanConvertedFan) {
+  const UsSettings s = test_settings(ProbeGeometry::kCurvilinear);
+  const ProbePose pose = probe_at_top();
+  // the display map and the beam map name the same world point
+  int inside = 0;
+  for (int r = 0; r < s.height_px; r += 7)
+    for (int c = 0; c < s.width_px; c += 3) {
+      double bc = 0, br = 0;
+      if (!display_to_beam(s, c, r, &bc, &br)) continue;
+      ++inside;
+      EXPECT_NEAR((display_pixel_to_world(s, pose, c, r) - pixel_to_world(s, pose, bc, br)).norm(), 0.0, 1e-9);
+    }
+  EXPECT_GT(inside, 100);
+  double bc = 0, br = 0;
+  EXPECT_FALSE(display_to_beam(s, 0, 0, &bc, &br));  // a corner above the fan's edge
+  // the sphere's near wall is bright in the display image on its central column, the tissue above grey
+  BModeRenderer r(sphere_phantom(), s);
+  const BModeImage& im = r.render(pose, 1);
+  const int c = s.width_px / 2;
+  int wall = -1;
+  double best = 1e9;
+  for (int row = 0; row < s.height_px; ++row) {
+    const double e = std::abs(display_pixel_to_world(s, pose, c, row).y() - (kSphereD - kSphereR));
+    if (e < best) best = e, wall = row;
+  }
+  EXPECT_GT(im.pixels[wall * im.width + c], mean_rows(im, wall - 30, wall - 5, c - 2, c + 3) + 40.0);
+  EXPECT_EQ(im.pixels[0], 0);  // outside the fan: black
+}
+
+TEST(BModeRenderer, UniformMediumDimsWithDepthAndMatchingTgcFlattensIt) {
+  const Volume v = make_phantom(1.0, [](const Vector3d&) { return kSoftHu; });
+  UsSettings s = test_settings(ProbeGeometry::kLinear);
+  s.tgc_db_per_cm = 0.0;
+  s.gain_db = 30.0;  // diffuse soft tissue at ~-42 dB: keep both bands above black
+  BModeRenderer plain(v, s);
+  const BModeImage a = plain.render(probe_at_top(), 3);
+  const double top = mean_rows(a, 16, 64, 0, s.width_px), bottom = mean_rows(a, 192, 240, 0, s.width_px);
+  // 2 alpha f = 5.4 dB/cm over 5.6 cm between the bands: ~30 dB, ~128 grey levels at 60 dB range
+  EXPECT_GT(top - bottom, 90.0);
+  s.tgc_db_per_cm = 2.0 * s.attenuation_db_per_cm_mhz * s.frequency_mhz;
+  BModeRenderer compensated(v, s);
+  const BModeImage& b = compensated.render(probe_at_top(), 3);
+  EXPECT_NEAR(mean_rows(b, 16, 64, 0, s.width_px), mean_rows(b, 192, 240, 0, s.width_px), 3.0);
+}
+
+TEST(BModeRenderer, BoneShadowsWhatLiesBehindIt) {
+  const Volume v = make_phantom(
+      0.5, [](const Vector3d& p) { return std::abs(p.x()) < 5.0 && p.y() > 15.0 && p.y() < 20.0 ? 1000.0 : kSoftHu; });
+  const UsSettings s = test_settings(ProbeGeometry::kLinear);  // 40 mm wide: columns 0-9 are at |x| > 14 mm
+  BModeRenderer r(v, s);
+  const BModeImage& im = r.render(probe_at_top(), 5);
+  const int r0 = 30 * 256 / 80, r1 = 70 * 256 / 80;
+  const double behind = mean_rows(im, r0, r1, 28, 37), beside = mean_rows(im, r0, r1, 0, 9);
+  EXPECT_LT(behind, beside - 50.0) << behind << " vs " << beside;
+}
+
+// Kuhn cubes of edge h over the phantom's box (offset so no grid plane holds the image plane)
+TetSnapshot grid_mesh(double h) {
+  const Vector3d lo(-30.37, -5.37, -20.37);
+  const Eigen::Vector3i n(7, 11, 5);
+  auto id = [&](int i, int j, int k) { return i + (n[0] + 1) * (j + (n[1] + 1) * k); };
+  TetSnapshot m;
+  m.rest_mm.resize(3, (n[0] + 1) * (n[1] + 1) * (n[2] + 1));
+  for (int k = 0; k <= n[2]; ++k)
+    for (int j = 0; j <= n[1]; ++j)
+      for (int i = 0; i <= n[0]; ++i) m.rest_mm.col(id(i, j, k)) = lo + h * Vector3d(i, j, k);
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i)
+        for (const auto& t : anatomy::kKuhnTetrahedra) {
+          std::array<int, 4> tet;
+          for (int v = 0; v < 4; ++v) tet[v] = id(i + (t[v] & 1), j + ((t[v] >> 1) & 1), k + ((t[v] >> 2) & 1));
+          m.tets.push_back(tet);
+        }
+  m.current_mm = m.rest_mm;
+  return m;
+}
+
+TEST(BModeRenderer, TranslatedMeshAndProbeGiveTheUndeformedImage) {
+  const UsSettings s = test_settings(ProbeGeometry::kLinear);
+  BModeRenderer plain(sphere_phantom(), s);
+  const BModeImage reference = plain.render(probe_at_top(), 11);
+  TetSnapshot mesh = grid_mesh(10.0);
+  const Vector3d t(3.1, -2.2, 1.7);
+  mesh.current_mm = mesh.rest_mm.colwise() + t;
+  ProbePose moved = probe_at_top();
+  moved.origin_mm += t;
+  BModeRenderer deformed(sphere_phantom(), s);
+  const BModeImage& im = deformed.render(moved, 11, &mesh);
+  int equal = 0, worst = 0;
+  for (size_t i = 0; i < im.pixels.size(); ++i) {
+    const int d = std::abs(im.pixels[i] - reference.pixels[i]);
+    equal += d == 0;
+    worst = std::max(worst, d);
+  }
+  // the same rest points up to rounding of the barycentric coordinates
+  EXPECT_LE(worst, 1);
+  EXPECT_GE(equal, static_cast<int>(0.99 * im.pixels.size()));
+}
+
+TEST(BModeRenderer, MeshCompressedAlongTheBeamMovesTheEchoDepth) {
+  const UsSettings s = test_settings(ProbeGeometry::kLinear);
+  TetSnapshot mesh = grid_mesh(10.0);
+  const double k = 0.8;  // y -> k y about the probe face (y = 0): affine, so the barycentric map is exact
+  mesh.current_mm.row(1) *= k;
+  BModeRenderer r(sphere_phantom(), s);
+  r.render(probe_at_top(), 2, &mesh);
+  const double dx = s.depth_mm / s.height_px;
+  EXPECT_NEAR(strongest_echo_depth(r, s.width_px / 2, 1.0, 79.0), k * (kSphereD - kSphereR), dx);
+  EXPECT_NEAR(strongest_echo_depth(r, s.width_px / 2, k * kSphereD, 79.0), k * (kSphereD + kSphereR), dx);
+}
+
+TEST(BModeRenderer, SameSeedSameImageAndNothingAllocatedPerFrame) {
+  const UsSettings s = test_settings(ProbeGeometry::kCurvilinear);
+  TetSnapshot mesh = grid_mesh(10.0);
+  BModeRenderer r(sphere_phantom(), s);
+  const BModeImage a = r.render(probe_at_top(), 42, &mesh);
+  mesh.current_mm.row(1) *= 0.9;
+  long allocations = -1;
+  {
+    testing::AllocationCount count;
+    r.render(probe_at_top(), 42, &mesh);
+    mesh.current_mm = mesh.rest_mm;
+    r.render(probe_at_top(), 42, &mesh);
+    allocations = count.allocations();
+  }
+  EXPECT_EQ(allocations, 0);
+  EXPECT_EQ(r.render(probe_at_top(), 42, &mesh).pixels, a.pixels);
+  EXPECT_NE(r.render(probe_at_top(), 43, &mesh).pixels, a.pixels);
+}
+
+TEST(BModeRenderer, BadSettingsThrowNamingTheField) {
+  const auto throws_naming = [](UsSettings s, const std::string& field) {
+    try {
+      validate(s);
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+      return;
+    }
+    ADD_FAILURE() << field << " was accepted";
+  };
+  UsSettings s;
+  s.depth_mm = -1.0;
+  throws_naming(s, "depth_mm");
+  s = {};
+  s.width_px = 3;
+  throws_naming(s, "width_px");
+  s = {};
+  s.frequency_mhz = NAN;
+  throws_naming(s, "frequency_mhz");
+  s = {};
+  s.dynamic_range_db = 0.0;
+  throws_naming(s, "dynamic_range_db");
+  s = {};
+  s.geometry = ProbeGeometry::kCurvilinear;
+  s.fan_angle_deg = 180.0;
+  throws_naming(s, "fan_angle_deg");
+  s = {};
+  s.width_mm = 0.0;
+  throws_naming(s, "width_mm");
+  EXPECT_THROW(BModeRenderer(sphere_phantom(), s), std::invalid_argument);
+  ProbePose p;
+  p.lateral = p.beam;
+  EXPECT_THROW(validate(p), std::invalid_argument);
+}
+
+TEST(AcousticModel, ImpedanceAndReflectionFollowTheirEquations) {
+  EXPECT_NEAR(impedance_mrayl(40.0), 1.04 * 1.540, 1e-12);
+  EXPECT_NEAR(reflection(1.0, 3.0), 0.25, 1e-15);
+  EXPECT_GT(reflection(impedance_mrayl(40.0), impedance_mrayl(-1000.0)), 0.998);  // tissue / air
+  double mean = 0;
+  for (int i = 0; i < 20000; ++i) mean += speckle(9, i % 100, i / 100) / 20000.0;
+  EXPECT_NEAR(mean, 1.0, 0.03);  // E|A|^2 = 1
+}
+
+TEST(BModeRenderer, KidneyCortexEchoWhereThePhantomSaysAndPng) {
+  const anatomy::KidneyPhantom kidney = anatomy::make_kidney_phantom();
+  UsSettings s;
+  BModeRenderer r(kidney.ct, s);
+  ProbePose p;
+  p.origin_mm = Vector3d(0, kidney.ct.origin_mm.y(), 0);
+  p.beam = Vector3d::UnitY();
+  p.lateral = Vector3d::UnitZ();
+  const BModeImage& im = r.render(p, 1);
+  // the anterior surface along -y from the organ's centre
+  const double surface_y = -anatomy::kidney_radius_mm(kidney.spec, -Vector3d::UnitY());
+  const double expected = surface_y - p.origin_mm.y();
+  const int c = s.width_px / 2;
+  const double found = strongest_echo_depth(r, c, 1.0, expected + 3.0);
+  EXPECT_NEAR(found, expected, kidney.ct.spacing_mm.maxCoeff());
+  const int row = static_cast<int>(found / s.depth_mm * s.height_px);
+  EXPECT_GT(im.pixels[row * im.width + c], mean_rows(im, 2, row - 4, 0, im.width) + 40.0);
+  const auto dir = std::filesystem::temp_directory_path() / ("pcisim-us-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  write_png((dir / "kidney.png").string(), im);
+  EXPECT_GT(std::filesystem::file_size(dir / "kidney.png"), 1000u);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace pcisim::ultrasound

@@ -1,0 +1,44 @@
+#pragma once
+// The echo model from CT numbers, one rule per function with its equation (docs/ultrasound.md).
+// Sources (facts only): Schneider, Bortfeld, Schlegel 2000, Phys Med Biol 45:459 (density vs HU
+// close to rho = 1 + HU/1000 g/cm^3 for soft tissue); Duck 1990 "Physical Properties of Tissue"
+// and Szabo 2004 "Diagnostic Ultrasound Imaging", tables 4.1/4.2 (speed of sound: air 343, fat
+// ~1450, water 1480, soft tissue ~1540, bone ~3500 m/s; attenuation: soft tissue 0.5-0.7,
+// bone ~20 dB/cm/MHz); Wagner et al. 1983, IEEE Trans Sonics Ultrason 30:156 (fully developed
+// speckle: Rayleigh amplitude, exponential intensity); Goksel & Salcudean 2009, IEEE TMI 28:1657
+// (echo = reflection at impedance changes + scattering, attenuated with depth).
+#include <cstdint>
+
+namespace pcisim::ultrasound {
+
+// density (g/cm^3): rho = max(1 + HU / 1000, 0.0012)   [Schneider 2000, soft-tissue segment]
+double density_g_cm3(double hu);
+// speed of sound (m/s), piecewise linear through tissue classes (HU, c): air (-1000, 343),
+// fat (-100, 1450), water (0, 1480), soft tissue (40, 1540), dense tissue (300, 1600),
+// bone (1000, 3500), constant beyond   [Duck 1990; Szabo 2004 table 4.1]
+double speed_of_sound_m_s(double hu);
+// acoustic impedance (MRayl): Z = rho c   (rho in g/cm^3, c in km/s)
+double impedance_mrayl(double hu);
+// intensity reflection coefficient at normal incidence: R = ((Z2 - Z1) / (Z2 + Z1))^2
+double reflection(double z1, double z2);
+// attenuation multiplier on the soft-tissue coefficient: 1 up to 300 HU, rising linearly to
+// 20 / 0.54 at 1000 HU (bone ~20 dB/cm/MHz against soft tissue 0.54)   [Szabo 2004 table 4.2]
+double attenuation_factor(double hu);
+// one-way intensity loss (dB) over a path: L = alpha(HU) f dx_cm   (alpha in dB/cm/MHz)
+double attenuation_db(double alpha_db_cm_mhz, double hu, double frequency_mhz, double dx_cm);
+// diffuse backscatter (intensity, relative to a perfect reflector): sigma = 1e-4 s(HU), s
+// piecewise linear: air 0, fat 1.5 (echogenic), fluid 0 HU 0.05 (anechoic), medulla 30 HU 0.5,
+// soft tissue 60 HU 0.8, 150 HU and above 1. An assumption of this model (no CT physics gives
+// it): fat bright, fluid dark, parenchyma grey, as B-mode shows them.
+double backscatter(double hu);
+// multiplicative speckle on the diffuse intensity: |A|^2 with A Rayleigh, E|A|^2 = 1, so
+// s = -ln(U), U uniform in (0, 1], U from a counter-based hash of (seed, column, row)
+// [Wagner 1983]. Deterministic per seed, no state.
+double speckle(uint64_t seed, int column, int row);
+// time-gain compensated, log-compressed brightness (dB): B = 10 log10(I) + gain + tgc d_cm
+double brightness_db(double intensity, double gain_db, double tgc_db_per_cm, double depth_cm);
+// 8-bit grey: g = round(255 (B + DR) / DR), clamped to [0, 255] (0 dB, a perfect reflector at the
+// face, is white; -DR is black)
+uint8_t log_compress(double brightness_db, double dynamic_range_db);
+
+}  // namespace pcisim::ultrasound

@@ -1,0 +1,60 @@
+#pragma once
+// What the ultrasound machine is set to and where the probe is (issue #16 item 4). The renderer
+// works in beam space (column c = one scanline, row r = one depth sample: pixel_to_world) and
+// shows a display image (display_pixel_to_world): the same for a linear probe, the fan
+// scan-converted into its bounding rectangle for a curvilinear one.
+#include <Eigen/Core>
+
+namespace pcisim::ultrasound {
+
+enum class ProbeGeometry { kLinear, kCurvilinear };
+
+struct UsSettings {
+  ProbeGeometry geometry = ProbeGeometry::kLinear;
+  double width_mm = 40.0;                // linear: aperture width, (0, 200]
+  double fan_angle_deg = 60.0;           // curvilinear: total fan angle, (0, 150]
+  double radius_of_curvature_mm = 40.0;  // curvilinear: radius of the transducer face, (0, 200]
+  double depth_mm = 60.0;                // image depth below the transducer face, (0, 300]
+  int width_px = 256;                    // scanlines, [8, 2048]
+  int height_px = 256;                   // samples per scanline, [8, 4096]
+  double gain_db = 0.0;                  // overall gain, [-60, 60]
+  // time-gain compensation per cm of depth, [-20, 40]; 2 x attenuation x frequency (5.4 here)
+  // cancels the soft tissue's round-trip attenuation
+  double tgc_db_per_cm = 5.4;
+  double frequency_mhz = 5.0;               // centre frequency, [1, 20]
+  double attenuation_db_per_cm_mhz = 0.54;  // soft tissue, [0, 5] (Szabo 2004 table 4.1: ~0.5-0.7)
+  double dynamic_range_db = 60.0;           // log-compression window, [10, 120]
+};
+
+// the probe in CT (LPS, mm): origin = centre of the transducer face on the skin, beam = into the
+// body, lateral = along the array (made orthogonal to beam)
+struct ProbePose {
+  Eigen::Vector3d origin_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d beam = Eigen::Vector3d::UnitY();
+  Eigen::Vector3d lateral = Eigen::Vector3d::UnitX();
+};
+
+// throws std::invalid_argument naming the first bad field and its range
+void validate(const UsSettings& s);
+// throws std::invalid_argument when beam or lateral is zero, not finite or they are parallel
+void validate(const ProbePose& p);
+
+// Pixel -> world (mm), for labels. Column c, row r (pixel centres at integers; fractional allowed):
+//   t = (c + 0.5) / width_px - 0.5,  d = (r + 0.5) / height_px * depth_mm
+//   linear:       x = origin + t * width_mm * lateral + d * beam
+//   curvilinear:  theta = t * fan_angle, apex = origin - Rc * beam,
+//                 x = apex + (Rc + d) * (cos(theta) * beam + sin(theta) * lateral)
+// lateral is first made orthogonal to beam and both are normalised.
+Eigen::Vector3d pixel_to_world(const UsSettings& s, const ProbePose& p, double col, double row);
+
+// Display pixel -> world (mm). Linear: pixel_to_world. Curvilinear: the fan's bounding rectangle,
+// width_px x height_px pixels, in the plane (x along lateral, y along beam from the face's centre):
+//   X = (Rc + depth) sin(fan / 2),  y0 = Rc (cos(fan / 2) - 1),  y1 = depth
+//   x = -X + (c + 0.5) / width_px * 2X,  y = y0 + (r + 0.5) / height_px * (y1 - y0)
+//   world = origin + x * lateral + y * beam
+Eigen::Vector3d display_pixel_to_world(const UsSettings& s, const ProbePose& p, double col, double row);
+// the beam-space (scanline, sample) of a display pixel, fractional; false outside the fan
+// (curvilinear: theta = atan2(x, y + Rc), d = |(x, y + Rc)| - Rc, then pixel_to_world inverted)
+bool display_to_beam(const UsSettings& s, double col, double row, double* beam_col, double* beam_row);
+
+}  // namespace pcisim::ultrasound

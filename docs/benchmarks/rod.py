@@ -18,9 +18,16 @@ fig, axes = plt.subplots(1, len(cases), figsize=(5 * len(cases), 4.5), squeeze=F
 for ax, (case, load) in zip(axes[0], cases):
     pts = [r for r in rows if r["case"] == case and r["load"] == load]
     for n in sorted({r["segments"] for r in pts}):
-        s = sorted([r for r in pts if r["segments"] == n], key=lambda r: r["ms_p50"])
-        ax.plot([r["ms_p50"] for r in s], [max(abs(r["error_pct"]), 1e-4) for r in s], "o-", label=f"{n} segments")
-        ax.axhline(max(abs(s[0]["static_error_pct"]), 1e-4), lw=0.6, ls=":", color=ax.lines[-1].get_color())
+        color = None
+        for solver, marker, ls in (("gauss_seidel", "o", "-"), ("direct", "s", "--")):
+            s = sorted([r for r in pts if r["segments"] == n and r.get("solver", "gauss_seidel") == solver],
+                       key=lambda r: r["ms_p50"])
+            if not s:
+                continue
+            line = ax.plot([r["ms_p50"] for r in s], [max(abs(r["error_pct"]), 1e-4) for r in s], marker=marker,
+                           ls=ls, color=color, label=f"{n} segments, {solver.replace('_', '-')}")[0]
+            color = line.get_color()
+        ax.axhline(max(abs(s[0]["static_error_pct"]), 1e-4), lw=0.6, ls=":", color=color)
     ax.axhline(1.0, color="k", lw=0.8, ls="--")
     ax.set_xscale("log")
     ax.set_yscale("log")
@@ -29,6 +36,7 @@ for ax, (case, load) in zip(axes[0], cases):
     ax.set_title(f"{case}, load {load:g}")
     ax.grid(alpha=0.3, which="both")
 axes[0][0].legend(fontsize=7)
-fig.suptitle("Cosserat rod: accuracy against time (dotted: converged equilibrium; dashed: 1 %)")
+fig.suptitle("Cosserat rod: accuracy against time (circles: Gauss-Seidel, squares: direct; dotted: converged "
+             "equilibrium; dashed: 1 %)")
 fig.tight_layout()
 fig.savefig(sys.argv[2], dpi=90)

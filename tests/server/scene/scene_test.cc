@@ -48,6 +48,16 @@ TEST(Scene, BuiltInSceneIsTheRepositoryFileAndListsItsEffects) {
   EXPECT_DOUBLE_EQ(s.world.vessel_contact->sdf_spacing_m, 0.2e-3);
 }
 
+TEST(Scene, TheRodSceneIsTheDefaultWithTheRodWire) {
+  const Scene s = load_scene_file(PCISIM_SOURCE_DIR "/scenes/rod.json");
+  const Scene d = parse_scene(default_scene_text(), "default");
+  EXPECT_EQ(s.effects, d.effects);
+  ASSERT_TRUE(s.world.guidewire.has_value());
+  EXPECT_EQ(s.world.guidewire->model, physics::GuidewireModel::kRod);
+  EXPECT_EQ(s.world.guidewire->segment_count, 300);
+  EXPECT_EQ(s.world.guidewire->rod_substeps, 8);
+}
+
 TEST(Scene, MinimalSceneBuildsOnlyTheWire) {
   const Scene s = load_scene_file(PCISIM_SOURCE_DIR "/scenes/minimal.json");
   EXPECT_EQ(s.effects, std::vector<std::string>{"guidewire"});

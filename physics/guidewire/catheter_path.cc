@@ -1,5 +1,7 @@
 #include "physics/guidewire/catheter_path.h"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <stdexcept>
 
@@ -32,6 +34,15 @@ Eigen::Vector3d CatheterPath::point_behind_exit(double back_m) const {
   const double seg = cumulative_[k] - cumulative_[k - 1];
   const double t = seg > 0.0 ? (s - cumulative_[k - 1]) / seg : 0.0;
   return points_[k - 1] + std::clamp(t, 0.0, 1.0) * (points_[k] - points_[k - 1]);
+}
+
+Eigen::Vector3d CatheterPath::exit_curl() const {
+  const Eigen::Vector3d& t = exit_dir_;
+  const Eigen::Vector3d back = point_behind_exit(std::min(0.02, 0.5 * length_m()));
+  const Eigen::Vector3d d = exit_m() - back;
+  const Eigen::Vector3d chord = d.norm() > 1e-12 ? Eigen::Vector3d(d.normalized()) : t;
+  const Eigen::Vector3d curl = (t - chord) - (t - chord).dot(t) * t;
+  return curl.norm() > 1e-6 ? Eigen::Vector3d(curl.normalized()) : t.unitOrthogonal();
 }
 
 }  // namespace pcisim::physics

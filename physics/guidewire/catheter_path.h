@@ -17,6 +17,10 @@ class CatheterPath {
   Eigen::Vector3d point_behind_exit(double back_m) const;
   const Eigen::Vector3d& exit_m() const { return points_.back(); }
   const Eigen::Vector3d& exit_direction() const { return exit_dir_; }
+  // the way the catheter curves at its exit (unit, across the exit direction): the bend plane a
+  // pre-bent tip resting in it lies in, i.e. both wire models' tip direction at rotation 0; any
+  // direction across the exit when the last 20 mm are straight
+  Eigen::Vector3d exit_curl() const;
   double length_m() const { return cumulative_.back(); }
 
  private:

@@ -112,10 +112,7 @@ ChainMailWire::ChainMailWire(const GuidewireParams& params, CatheterPath path)
   // a pre-bent tip resting in a curved catheter lies in the catheter's bend plane, bending the
   // way the catheter curves: that is the tip's orientation at rotation 0
   const Eigen::Vector3d t = path_.exit_direction();
-  const Eigen::Vector3d back = path_.point_behind_exit(std::min(0.02, 0.5 * path_.length_m()));
-  const Eigen::Vector3d chord = direction(back, path_.exit_m(), t);
-  const Eigen::Vector3d curl = (t - chord) - (t - chord).dot(t) * t;
-  ref_b_ = curl.norm() > 1e-6 ? Eigen::Vector3d(curl.normalized()) : t.unitOrthogonal();
+  ref_b_ = path_.exit_curl();
   nodes_.assign(n_ + 1, Eigen::Vector3d::Zero());
   start_ = nodes_;
   track_.assign(n_ + 2, Eigen::Vector3d::Zero());

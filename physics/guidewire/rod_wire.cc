@@ -63,15 +63,10 @@ RodWire::RodWire(const GuidewireParams& params, CatheterPath path, const LumenQu
            Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), path_.exit_direction())),
       exit_frame_(Eigen::Quaterniond::Identity()) {
   if (contact_ && !lumen_) throw std::invalid_argument("guidewire: wall contact needs a lumen");
-  // at rotation 0 the pre-bent tip bends the way the catheter curves, as the chain-mail's does
-  // (chain_mail_wire.cc): the tip's rest curvature about d1 bends d3 towards -d2, so the exit
-  // frame is (t x b, -b, t) with b the catheter's curl at the exit
+  // at rotation 0 the pre-bent tip bends the way the catheter curves, as the chain-mail's does:
+  // the tip's rest curvature about d1 bends d3 towards -d2, so the exit frame is (t x b, -b, t)
   const Eigen::Vector3d t = path_.exit_direction();
-  const Eigen::Vector3d back = path_.point_behind_exit(std::min(0.02, 0.5 * path_.length_m()));
-  const Eigen::Vector3d chord =
-      (path_.exit_m() - back).norm() > 1e-12 ? Eigen::Vector3d((path_.exit_m() - back).normalized()) : t;
-  const Eigen::Vector3d curl = (t - chord) - (t - chord).dot(t) * t;
-  const Eigen::Vector3d b = curl.norm() > 1e-6 ? Eigen::Vector3d(curl.normalized()) : t.unitOrthogonal();
+  const Eigen::Vector3d b = path_.exit_curl();
   Eigen::Matrix3d frame;
   frame.col(0) = t.cross(b);
   frame.col(1) = -b;

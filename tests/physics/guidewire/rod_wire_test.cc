@@ -36,7 +36,9 @@ void expect_sound(const World& world, double t) {
   const auto x = w.nodes_m();
   for (int i = 0; i < w.node_count(); ++i) {
     ASSERT_TRUE(x[i].allFinite()) << "t " << t << " node " << i;
-    if (i >= w.first_free_node()) ASSERT_LT(x[i].norm(), 0.15) << "t " << t << " node " << i;
+    if (i >= w.first_free_node()) {
+      ASSERT_LT(x[i].norm(), 0.15) << "t " << t << " node " << i;
+    }
   }
   ASSERT_EQ(w.recoveries(), 0) << "t " << t;
   const LocalForceModel m = world.force_model();

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "json/json_reader.h"
+#include "physics/guidewire/wire_presets.h"
 #include "server/scene/scene.h"
 #include "xray/projectors/trilinear_projector.h"
 
@@ -30,6 +31,11 @@ physics::GuidewireParams read_guidewire(json::JsonReader r) {
   physics::GuidewireParams p;
   p.model = r.text("model", "chain_mail", {"chain_mail", "rod"}) == "rod" ? physics::GuidewireModel::kRod
                                                                           : physics::GuidewireModel::kChainMail;
+  // a named wire sets the rod's section first; the keys below still override each field
+  std::vector<std::string> presets = {"none"};
+  for (const auto& w : physics::wire_presets()) presets.emplace_back(w.name);
+  const std::string preset = r.text("preset", "none", presets);
+  if (preset != "none") physics::apply_wire_preset(preset, &p);
   p.length_m = in_range(r, "length_mm", p.length_m, physics::kGuidewireLengthM, kMm);
   p.segment_count = in_range(r, "segments", p.segment_count, physics::kGuidewireSegments);
   p.optimisation_passes =

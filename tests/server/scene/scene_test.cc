@@ -1,3 +1,4 @@
+#include "physics/guidewire/wire_presets.h"
 #include "server/scene/scene.h"
 
 #include <gtest/gtest.h>
@@ -88,16 +89,26 @@ TEST(Scene, TheGuidewireModelIsChosenByTheScene) {
   EXPECT_DOUBLE_EQ(s.world.guidewire->bending_stiffness_nm2, 2e-5);
   EXPECT_DOUBLE_EQ(s.world.guidewire->outer_diameter_m, 0.3e-3);
   EXPECT_EQ(s.world.guidewire->rod_substeps, 6);
+  // a preset sets the section; a key beside it still wins
+  const Scene stiff = parse_scene(
+      R"({"effects": {"guidewire": {"model": "rod", "preset": "stiff_tip", "bending_stiffness_nm2": 3e-5}}})", "t");
+  EXPECT_NEAR(stiff.world.guidewire->tip_bending_stiffness_nm2, physics::tip_stiffness_from_load_nm2(6.0, 0.010),
+              1e-20);
+  EXPECT_DOUBLE_EQ(stiff.world.guidewire->bending_stiffness_nm2, 3e-5);
+  EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"preset": "bmw"}}})"),
+            "test.json: effects.guidewire.preset: expected one of \"none\", \"workhorse\", \"hydrophilic\", "
+            "\"support\", \"stiff_tip\", got \"bmw\"");
 }
 
 TEST(Scene, EachBadInputNamesItsJsonPathAndWhatWasExpected) {
-  EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"segmnts": 10}}})"),
-            "test.json: effects.guidewire.segmnts: unknown key (this object accepts: axial_damping_n_s_per_m, "
-            "axial_stiffness_n_per_m, bending_stiffness_nm2, body_alpha_max, body_alpha_min, body_beta_deg_per_mm, "
-            "feed_refuse_force_n, length_mm, mass_per_length_kg_per_m, model, optimisation_passes, outer_diameter_mm, "
-            "rod_damping_per_s, rod_iterations, rod_substeps, segments, tip_alpha_max, tip_alpha_min, tip_angle_deg, "
-            "tip_bending_stiffness_nm2, tip_beta_deg_per_mm, tip_length_mm, torsion_damping_nm_s_per_rad, "
-            "torsional_rigidity_nm2)");
+  EXPECT_EQ(
+      error_of(R"({"effects": {"guidewire": {"segmnts": 10}}})"),
+      "test.json: effects.guidewire.segmnts: unknown key (this object accepts: axial_damping_n_s_per_m, "
+      "axial_stiffness_n_per_m, bending_stiffness_nm2, body_alpha_max, body_alpha_min, body_beta_deg_per_mm, "
+      "feed_refuse_force_n, length_mm, mass_per_length_kg_per_m, model, optimisation_passes, outer_diameter_mm, "
+      "preset, rod_damping_per_s, rod_iterations, rod_substeps, segments, tip_alpha_max, tip_alpha_min, tip_angle_deg, "
+      "tip_bending_stiffness_nm2, tip_beta_deg_per_mm, tip_length_mm, torsion_damping_nm_s_per_rad, "
+      "torsional_rigidity_nm2)");
   EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"model": "spring"}}})"),
             "test.json: effects.guidewire.model: expected one of \"chain_mail\", \"rod\", got \"spring\"");
   EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"segments": "many"}}})"),

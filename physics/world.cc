@@ -340,7 +340,7 @@ int64_t World::rejected_inputs() const {
   return impl_->guard.rejected();
 }
 double World::refused_feed_m() const {
-  if (impl_->rod) return impl_->rod->commanded_feed_m() - impl_->rod->fed_length_m();
+  if (impl_->rod) return impl_->rod->refused_feed_m();
   return impl_->wire ? impl_->wire->commanded_feed_m() - impl_->wire->fed_length_m() : 0.0;
 }
 

@@ -9,9 +9,10 @@
 namespace pcisim::physics {
 namespace {
 
-// the most feed one step hands the rod (120 mm/s at 30 Hz): a larger jump of the instrument is
-// taken over the next steps, so nodes leave the catheter a few at a time and meet the wall
-constexpr double kMaxFeedPerStepM = 4e-3;
+// the fastest feed the rod is handed: a larger jump of the instrument is taken over the next
+// steps (not refused: the hand feels nothing for it), so nodes leave the catheter a few at a
+// time and meet the wall
+constexpr double kMaxFeedSpeedMPerS = 0.12;
 // the longest substep (a longer physics step takes more substeps, as the rod itself does)
 constexpr double kMaxSubstepS = 1.0 / 60.0;
 // the free wire may be this much shorter than its length before the hub refuses feed: the wall
@@ -80,7 +81,10 @@ RodWire::RodWire(const GuidewireParams& params, CatheterPath path, const LumenQu
   tip_first_node_ = n + 1;
   if (params_.tip_length_m > 0.0) {
     tip_first_node_ = std::min(n, static_cast<int>(std::ceil(tip_start_m / l - 1e-9)));
-    const double kappa = params_.tip_angle_deg * std::numbers::pi / 180.0 / params_.tip_length_m;
+    int pairs = 0;
+    for (int j = 1; j < n; ++j) pairs += j * l > tip_start_m + 1e-12 ? 1 : 0;
+    // the whole angle over the pairs that carry it (as the chain-mail spreads it over its links)
+    const double kappa = pairs > 0 ? params_.tip_angle_deg * std::numbers::pi / 180.0 / (pairs * l) : 0.0;
     for (int j = 1; j < n; ++j)
       if (j * l > tip_start_m + 1e-12) rod_.set_rest_darboux_per_m(j, Eigen::Vector3d(kappa, 0.0, 0.0));
   }
@@ -151,10 +155,12 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
   const double previous_fed_m = fed_m_, previous_rotation_rad = rotation_before_step_rad_;
   double target = commanded_feed_m_;
   // the grip slips while the wire pushes back harder than it holds, or while the free wire is
-  // shorter than what was fed (it has nowhere to go): no further feed
-  if (target > fed_m_ && (hub_axial_n_ > params_.feed_refuse_force_n || compression_m_ > kMaxCompressionM))
-    target = fed_m_;
-  const double fed_target_m = std::clamp(target, fed_m_ - kMaxFeedPerStepM, fed_m_ + kMaxFeedPerStepM);
+  // shorter than what was fed (it has nowhere to go): no further feed, and what is held back is
+  // refused (the hand feels it)
+  refusing_ = target > fed_m_ && (hub_axial_n_ > params_.feed_refuse_force_n || compression_m_ > kMaxCompressionM);
+  if (refusing_) target = fed_m_;
+  const double cap_m = kMaxFeedSpeedMPerS * dt_s;
+  const double fed_target_m = std::clamp(target, fed_m_ - cap_m, fed_m_ + cap_m);
   const double rotation_target_rad = rotation_rad_;
 
   std::fill(touched_.begin(), touched_.end(), 0);
@@ -178,6 +184,7 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
   rotation_before_step_rad_ = rotation_rad_;
 
   for (int i = 0; i < node_count(); ++i) wall_force_n_[i] = wall_impulse_n_s_[i] / dt_s;
+  tip_held_ = segment_stuck_.back() != 0;
   // how much shorter the free wire is than the fed length (the wall's projection, not the rod,
   // has the last word in a substep, so a wire driven into a dead end shortens instead of pushing
   // back: docs/guidewire.md)
@@ -203,18 +210,26 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
   }
 }
 
-// a non-finite state (it should not happen; counted): the free rod laid straight out of the exit
+// a non-finite state (it should not happen; counted): the wire back in the catheter where the
+// feed says, the free rod laid straight out of the exit, everything at rest
 void RodWire::recover() {
   ++recoveries_;
   const int hub = rod_.hub_node();
   const auto x = rod_.mutable_nodes_m();
   const auto v = rod_.mutable_velocities_m_per_s();
+  const auto omega = rod_.mutable_angular_velocities_rad_per_s();
   const auto q = rod_.mutable_orientations();
   const double l = rod_.segment_length_m();
   const Eigen::Vector3d& dir = path_.exit_direction();
+  for (int i = 0; i <= hub; ++i) x[i] = path_.point_behind_exit(std::max(params_.length_m - i * l - fed_m_, 0.0));
   for (int i = hub + 1; i < node_count(); ++i) x[i] = x[hub] + (i - hub) * l * dir;
   for (int i = 0; i < node_count(); ++i) v[i].setZero();
-  for (int j = hub; j < segment_count(); ++j) q[j] = catheter_frame(dir);
+  for (int j = 0; j < segment_count(); ++j) {
+    omega[j].setZero();
+    const Eigen::Vector3d d = x[j + 1] - x[j];
+    q[j] = catheter_frame(j < hub && d.norm() > 1e-12 ? Eigen::Vector3d(d.normalized()) : dir);
+  }
+  rod_.set_clamp(x[0], q[0]);
 }
 
 // [guidewire eq 15]'s condition (a node stays at least the wall margin inside the lumen) as a
@@ -223,9 +238,10 @@ void RodWire::recover() {
 //   wall force        N_i = m_i dn_i / h^2    (dn_i: the normal corrections of the substep)
 //   rod force on i    f_i = J^T lambda / h^2, its part along the wall f_t
 //   stick             |f_t| <= mu_s N_i: the node's motion along the wall this substep is undone
-//   slide             else that motion is shortened by mu_k dn_i (kinetic friction's impulse)
+//   slide             else it moves on, and after the substep kinetic friction takes mu_k N h / m
+//                     off its velocity along the wall (after_substep)
 // and the same about the wire's axis for each touching segment: the constraints' twisting torque
-// against mu_s N r holds the frame's spin this substep, or mu_k N r h^2 / I slows it.
+// against mu_s N r holds the frame's spin this substep, or mu_k N r h / I comes off its spin.
 // The force test matters for a stiff rod: pushing a wire on needs only a tiny displacement of
 // each node, so a displacement test (|dx_t| <= mu_s dn, as for particles) held every touching
 // node for ever and the fed wire folded up behind the first bend.
@@ -238,6 +254,7 @@ void RodWire::project(rod::CosseratRod& rod, int iteration, double h) {
   if (iteration == 0) {
     std::fill(substep_dn_m_.begin(), substep_dn_m_.end(), 0.0);
     std::fill(segment_stuck_.begin(), segment_stuck_.end(), 0);
+    std::fill(stuck_.begin(), stuck_.end(), 0);
   }
   for (int i = first_free; i < node_count(); ++i) {
     // what the solve's wall row left (a curved wall is not its tangent plane): back inside
@@ -341,14 +358,25 @@ double RodWire::tip_roll_rad() const {
   return twist;
 }
 
+double RodWire::refused_feed_m() const {
+  return refusing_ ? std::max(commanded_feed_m_ - fed_m_, 0.0) : 0.0;
+}
+
 WireFeedback RodWire::feedback() const {
   WireFeedback f;
-  const double refused = commanded_feed_m_ - fed_m_;
+  const double refused = refused_feed_m();
   // the rod's own push-back at the hub, and the grip's spring while feed is refused
   f.internal_n = hub_axial_n_ + params_.axial_stiffness_n_per_m * std::max(refused, 0.0);
   f.stiffness_n_per_m = refused > 1e-9 ? params_.axial_stiffness_n_per_m : axial_stiffness_n_per_m_;
   f.elastic_torque_nm = hub_torque_nm_;
-  f.torsion_stiffness_nm_per_rad = params_.torsional_rigidity_nm2 / std::max(fed_m_, rod_.segment_length_m());
+  // while static friction holds the tip, turning the hub winds up the free wire: its torsion
+  // springs in series (the soft tip's included); a free tip spins with no such spring
+  if (tip_held_) {
+    double compliance = 0.0;
+    for (int j = rod_.hub_node(); j < segment_count(); ++j)
+      compliance += rod_.dual_length_m(j) / rod_.bend_twist_stiffness(j).z();
+    if (compliance > 0.0) f.torsion_stiffness_nm_per_rad = 1.0 / compliance;
+  }
   return f;
 }
 

@@ -53,11 +53,14 @@ class RodWire final : public rod::RodContact {
   std::span<Eigen::Vector3d> mutable_nodes_m() { return rod_.mutable_nodes_m(); }
   bool node_in_tip(int i) const;
   std::span<const uint8_t> touched() const { return touched_; }  // per node, at the wall in the last step
-  std::span<const uint8_t> stuck() const { return stuck_; }      // held by static friction in the last step
+  std::span<const uint8_t> stuck() const { return stuck_; }      // held by static friction in the last substep
   // the wall's normal force on each node over the last step, N
   std::span<const double> wall_force_n() const { return wall_force_n_; }
   double tip_contact_force_n() const;  // over the tip's nodes
   double commanded_feed_m() const { return commanded_feed_m_; }
+  // feed held back because the wire pushes back or has nowhere to go (the hand feels it); a feed
+  // faster than the rod is handed (120 mm/s) lags without being refused
+  double refused_feed_m() const;
   double fed_length_m() const { return fed_m_; }
   double rotation_rad() const { return rotation_rad_; }
   // the axial force the wire pushes back on the hub with (positive resists insertion) and the
@@ -102,6 +105,8 @@ class RodWire final : public rod::RodContact {
   double rotation_before_step_rad_ = 0.0;
   double hub_axial_n_ = 0.0, hub_torque_nm_ = 0.0;
   double compression_m_ = 0.0;            // free wire shorter than its rest length, at the last step's end
+  bool refusing_ = false;                 // feed held back this step
+  bool tip_held_ = false;                 // the tip segment held about its axis by static friction
   double axial_stiffness_n_per_m_ = 0.0;  // measured between steps, for the local force model
   int64_t recoveries_ = 0;
 };

@@ -52,13 +52,16 @@ void project_stretch_shear(Eigen::Vector3d& p1, double w1, Eigen::Vector3d& p2, 
   }
   lambda += dlambda;
   const Eigen::Vector3d dlambda_world = q * dlambda;
-  p1 -= (w1 / l) * dlambda_world;
-  p2 += (w2 / l) * dlambda_world;
+  // an immovable body (w = 0) is not touched: 0 x NaN would still poison it
+  if (w1 > 0.0) p1 -= (w1 / l) * dlambda_world;
+  if (w2 > 0.0) p2 += (w2 / l) * dlambda_world;
   // dq = -2 wq (dlambda q e3^*), e3^* = -e3, with the shear part of dlambda only
   const Eigen::Quaterniond e3_conj(0.0, 0.0, 0.0, -1.0);
   const Eigen::Vector3d shear_world = q * Eigen::Vector3d(dlambda.x(), dlambda.y(), 0.0);
-  add_scaled(q, -2.0 * wq, pure(shear_world) * q * e3_conj);
-  q.normalize();
+  if (wq > 0.0) {
+    add_scaled(q, -2.0 * wq, pure(shear_world) * q * e3_conj);
+    q.normalize();
+  }
 }
 
 void project_bend_twist(Eigen::Quaterniond& q1, double w1, Eigen::Quaterniond& q2, double w2, double dual_length_m,
@@ -74,10 +77,14 @@ void project_bend_twist(Eigen::Quaterniond& q1, double w1, Eigen::Quaterniond& q
   lambda += dlambda;
   const Eigen::Quaterniond v = pure(dlambda);
   const Eigen::Quaterniond q1_old = q1;
-  add_scaled(q1, -w1 * s * 2.0 / l, q2 * v);
-  add_scaled(q2, w2 * s * 2.0 / l, q1_old * v);
-  q1.normalize();
-  q2.normalize();
+  if (w1 > 0.0) {
+    add_scaled(q1, -w1 * s * 2.0 / l, q2 * v);
+    q1.normalize();
+  }
+  if (w2 > 0.0) {
+    add_scaled(q2, w2 * s * 2.0 / l, q1_old * v);
+    q2.normalize();
+  }
 }
 
 Eigen::Matrix3d stretch_shear_rotation_jacobian(const Eigen::Quaterniond& q) {

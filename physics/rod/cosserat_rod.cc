@@ -129,22 +129,19 @@ void CosseratRod::set_rest_darboux_per_m(int pair, const Eigen::Vector3d& darbou
 }
 
 Eigen::Vector3d CosseratRod::hub_force_n() const {
-  if (params_.solver != RodSolver::kDirect || !(last_h_ > 0.0)) return Eigen::Vector3d::Zero();
+  if (!direct_ran_ || !(last_h_ > 0.0)) return Eigen::Vector3d::Zero();
   // segment hub's stretch-shear pulls its first node (the hub) with J_p1^T lambda = -lambda / l
   return -ss_lambda_[hub_] / (l_ * last_h_ * last_h_);
 }
 
 Eigen::Vector3d CosseratRod::hub_torque_nm() const {
-  if (params_.solver != RodSolver::kDirect || !(last_h_ > 0.0)) return Eigen::Vector3d::Zero();
-  // pair hub's bend-twist turns its first frame (the hub's) with -B^T lambda
-  Eigen::Vector3d omega;
-  const Eigen::Matrix3d b =
-      bend_twist_jacobian(pair_first_frame(hub_), q_[hub_], dual_length_m(hub_), rest_darboux_[hub_], &omega);
-  return -b.transpose() * bt_lambda_[hub_] / (last_h_ * last_h_);
+  if (!direct_ran_ || !(last_h_ > 0.0)) return Eigen::Vector3d::Zero();
+  // pair hub's bend-twist turns its first frame (the hub's) with -B^T lambda (B as solved with)
+  return -bt_jacobian_[hub_].transpose() * bt_lambda_[hub_] / (last_h_ * last_h_);
 }
 
 Eigen::Vector3d CosseratRod::node_constraint_force_n(int i) const {
-  if (params_.solver != RodSolver::kDirect || !(last_h_ > 0.0) || i <= hub_) return Eigen::Vector3d::Zero();
+  if (!direct_ran_ || !(last_h_ > 0.0) || i <= hub_) return Eigen::Vector3d::Zero();
   // node i ends segment i - 1 (J = I / l) and starts segment i (J = -I / l)
   Eigen::Vector3d f = ss_lambda_[i - 1];
   if (i < n_) f -= ss_lambda_[i];
@@ -152,7 +149,7 @@ Eigen::Vector3d CosseratRod::node_constraint_force_n(int i) const {
 }
 
 Eigen::Vector3d CosseratRod::segment_constraint_torque_nm(int j) const {
-  if (params_.solver != RodSolver::kDirect || !(last_h_ > 0.0) || j < hub_) return Eigen::Vector3d::Zero();
+  if (!direct_ran_ || !(last_h_ > 0.0) || j < hub_) return Eigen::Vector3d::Zero();
   // frame j is pair j's second (B_j) and pair j + 1's first (-B_{j+1}); its stretch-shear term
   // [d3]x^T lambda has no part about d3 and is kept for completeness
   Eigen::Vector3d t = ss_jacobian_[j].transpose() * ss_lambda_[j] + bt_jacobian_[j].transpose() * bt_lambda_[j];
@@ -170,7 +167,10 @@ void CosseratRod::step(double dt_s, RodContact* contact) {
   last_h_ = h;
   for (int sub = 0; sub < substeps; ++sub) {
     predict(h);
-    if (params_.solver != RodSolver::kDirect || !solve_constraints_direct(h, contact)) solve_constraints(h, contact);
+    if (params_.solver != RodSolver::kDirect || !solve_constraints_direct(h, contact)) {
+      direct_ran_ = false;  // the multipliers are Gauss-Seidel's now (material frame)
+      solve_constraints(h, contact);
+    }
     guard_stretch();
     update_velocities(h);
     if (contact) contact->after_substep(*this, h);
@@ -236,6 +236,7 @@ bool CosseratRod::solve_constraints_direct(double h, RodContact* contact) {
     bt_lambda_[j].setZero();
   }
   const int f = hub_;  // segments before it are kinematic
+  direct_ran_ = true;  // for the contact hook's force queries below
   for (int it = 0; it < params_.iterations; ++it) {
     // assemble the blocks at the current iterate
     for (int j = f; j < n_; ++j) {
@@ -335,6 +336,8 @@ bool CosseratRod::all_finite() const {
     if (!q.coeffs().allFinite()) return false;
   for (const Eigen::Vector3d& v : v_)
     if (!v.allFinite()) return false;
+  for (const Eigen::Vector3d& w : omega_)
+    if (!w.allFinite()) return false;
   return true;
 }
 

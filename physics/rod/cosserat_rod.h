@@ -65,7 +65,7 @@ class CosseratRod {
   // the rest curvature and twist of a pair (e.g. a shaped tip), per metre, in its first frame
   void set_rest_darboux_per_m(int pair, const Eigen::Vector3d& darboux_per_m);
   // what the free rod does to the hub over the last substep (direct solver: from the multipliers
-  // of segment `hub`'s constraints, f = J^T lambda / h^2; zero for the Gauss-Seidel solver):
+  // of segment `hub`'s constraints, f = J^T lambda / h^2; zero when Gauss-Seidel solved it):
   // the force on the hub node and the torque on the hub's frame, world frame
   Eigen::Vector3d hub_force_n() const;
   Eigen::Vector3d hub_torque_nm() const;
@@ -125,7 +125,8 @@ class CosseratRod {
   std::vector<Eigen::Vector3d> bt_stiffness_, bt_compliance_, bt_lambda_, rest_darboux_;
   Eigen::Quaterniond clamp_q_;
   int hub_ = 0;
-  double last_h_ = 0.0;  // the last substep, for the hub's force
+  double last_h_ = 0.0;      // the last substep, for the hub's force
+  bool direct_ran_ = false;  // the last substep was solved directly (its multipliers are world-frame)
   // the direct solve's system and per-iteration buffers (one 6-unit per segment: stretch-shear
   // in the world frame, then bend-twist of the pair ending at that segment)
   BlockTridiagonal6 system_;

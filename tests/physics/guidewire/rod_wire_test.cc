@@ -1,8 +1,10 @@
 // The rod model in the scenes' world (guidewire.model = rod): it follows the trainee's script
 // down the phantom's LAD like the chain-mail, stays inside the wall margin, and the hard cases of
 // DESIGN.md (a dead-end push, a full pull-back, 100 hub turns, ten times the step, NaN input)
-// leave it finite, bounded and recovering. Also: feed and twist reach the tip through the rod
-// (a twist that lags in a curved tube and catches up), and the hub force of a free wire is zero.
+// leave it finite, bounded and recovering. Also: twist reaches the tip through the rod (a twist
+// that lags, slips and holds what static friction can in a curved tube), a dead end is refused,
+// and a free wire: no push-back, the whole pre-bend, a fast feed that lags without being felt,
+// a NaN it recovers from.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -323,6 +325,11 @@ TEST(RodWireDeadEnd, PushingIntoTheTubesEndIsRefusedAndTheHandFeelsIt) {
       "%.3f N\n",
       before_n, most_n, 1e3 * refused_m, 1e3 * w.compression_m(), w.tip_contact_force_n());
   EXPECT_GT(refused_m, 0.02);
+  EXPECT_NEAR(w.refused_feed_m(), refused_m, 1e-12);
+  EXPECT_GE(w.compression_m(), 0.02);  // refused because it crumpled (the rod's push-back stays small)
+  // what the hand feels: the rod's push-back plus the refused feed's spring
+  EXPECT_NEAR(w.feedback().internal_n, w.hub_axial_force_n() + GuidewireParams{}.axial_stiffness_n_per_m * refused_m,
+              1e-9);
   EXPECT_GT(most_n, GuidewireParams{}.feed_refuse_force_n);
   EXPECT_GT(most_n, 100.0 * std::max(before_n, 1e-4));
   double worst = -1.0;
@@ -333,6 +340,58 @@ TEST(RodWireDeadEnd, PushingIntoTheTubesEndIsRefusedAndTheHandFeelsIt) {
   for (double t = 0.0; t < 2.0; t += TubeRig::kDt) w.step(0.10, 0.0, TubeRig::kDt);
   EXPECT_NEAR(w.fed_length_m(), 0.10, 1e-9);
   EXPECT_LT(w.compression_m(), 0.02);
+}
+
+// a wire in free space out of a straight catheter along +z, no wall, no friction
+RodWire free_wire(GuidewireParams g = {}) {
+  g.model = GuidewireModel::kRod;
+  g.segment_count = 300;
+  return RodWire(g, CatheterPath({Eigen::Vector3d(0, 0, -0.2), Eigen::Vector3d(0, 0, 0)}));
+}
+
+TEST(RodWireFree, AStraightFreeWirePushesNothingBackAndTheTipTakesItsWholePreBend) {
+  GuidewireParams straight;
+  straight.tip_angle_deg = 0.0;
+  RodWire w = free_wire(straight);
+  for (double t = 0.0; t < 3.0; t += 1.0 / 30.0) w.step(0.05 * std::min(t / 1.0, 1.0), 0.0, 1.0 / 30.0);
+  EXPECT_LT(std::abs(w.hub_axial_force_n()), 1e-6);
+  EXPECT_LT(std::abs(w.hub_torque_nm()), 1e-9);
+  EXPECT_NEAR(w.nodes_m().back().z(), 0.05, 1e-6);  // out along the exit, its length
+  // the shaped tip: its last segment turned by tip_angle_deg from the body's tangent
+  RodWire bent = free_wire();
+  for (double t = 0.0; t < 3.0; t += 1.0 / 30.0) bent.step(0.05 * std::min(t / 1.0, 1.0), 0.0, 1.0 / 30.0);
+  const Eigen::Vector3d tip = bent.rod().orientations().back() * Eigen::Vector3d::UnitZ();
+  const double angle_deg = std::acos(std::clamp(tip.z(), -1.0, 1.0)) * 180.0 / std::numbers::pi;
+  std::printf("free wire: the tip's last segment at %.2f deg from the body (pre-bend 45)\n", angle_deg);
+  EXPECT_NEAR(angle_deg, GuidewireParams{}.tip_angle_deg, 1.0);
+}
+
+TEST(RodWireFree, AFeedFasterThanTheRodIsHandedLagsWithoutBeingFelt) {
+  // 20 mm commanded in one step: the rod takes 120 mm/s (4 mm a step at 30 Hz); nothing pushes
+  // back, so nothing is refused and the hand feels no grip spring
+  RodWire w = free_wire();
+  w.step(0.02, 0.0, 1.0 / 30.0);
+  EXPECT_NEAR(w.fed_length_m(), 0.004, 1e-12);
+  EXPECT_EQ(w.refused_feed_m(), 0.0);
+  EXPECT_LT(std::abs(w.feedback().internal_n), 0.01);
+  for (int k = 0; k < 5; ++k) w.step(0.02, 0.0, 1.0 / 30.0);
+  EXPECT_NEAR(w.fed_length_m(), 0.02, 1e-12);
+  // a tiny step hands on a tiny feed (the cap is a speed)
+  w.step(0.04, 0.0, 1e-6);
+  EXPECT_NEAR(w.fed_length_m(), 0.02 + 0.12e-6, 1e-12);
+  EXPECT_LT(w.rod().max_speed_m_per_s(), 1.0);
+}
+
+TEST(RodWireFree, ANonFiniteNodeIsRecoveredInOneStep) {
+  RodWire w = free_wire();
+  for (double t = 0.0; t < 1.0; t += 1.0 / 30.0) w.step(0.02, 0.0, 1.0 / 30.0);
+  w.mutable_nodes_m()[w.node_count() - 1] = Eigen::Vector3d::Constant(std::nan(""));
+  w.step(0.02, 0.0, 1.0 / 30.0);
+  EXPECT_EQ(w.recoveries(), 1);
+  for (int k = 0; k < 10; ++k) w.step(0.02, 0.0, 1.0 / 30.0);
+  EXPECT_EQ(w.recoveries(), 1);
+  EXPECT_TRUE(w.rod().all_finite());
+  EXPECT_NEAR(w.nodes_m().back().norm(), 0.02, 2e-3);  // out of the exit again, about its fed length
 }
 
 TEST(RodWireParams, RejectsBadValuesNamingTheField) {

@@ -10,8 +10,14 @@ namespace pcisim::physics {
 // discrete Cosserat rod with physical stiffness (physics/guidewire/rod_wire.h, docs/guidewire.md)
 enum class GuidewireModel { kChainMail, kRod };
 
+// the chain-mail's F_internal of [guidewire eq 19]: the feed the wire refused this step times
+// the axial stiffness (today's variant), or [guidewire eq 20] as the paper writes it, k times the
+// change of the first free link's length since the last step (docs/guidewire.md)
+enum class InternalForce { kRefusedFeed, kEq20 };
+
 struct GuidewireParams {
   GuidewireModel model = GuidewireModel::kChainMail;
+  InternalForce internal_force = InternalForce::kRefusedFeed;
   double length_m = 0.30;       // simulated distal length of the wire, (tip_length_m, 2]
   int segment_count = 200;      // chain-mail links, [4, 4000]
   int optimisation_passes = 2;  // physical-optimisation passes per step (eqs 5-10), [0, 64]

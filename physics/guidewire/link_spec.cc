@@ -46,6 +46,8 @@ void validate(const GuidewireParams& p) {
   in_range(p.torsional_rigidity_nm2, kGuidewireTorsionalRigidityNm2, "torsional_rigidity_nm2");
   in_range(p.torsion_damping_nm_s_per_rad, kGuidewireTorsionDampingNmSPerRad, "torsion_damping_nm_s_per_rad");
   check(p.model == GuidewireModel::kChainMail || p.model == GuidewireModel::kRod, "model", "chain_mail or rod");
+  check(p.internal_force == InternalForce::kRefusedFeed || p.internal_force == InternalForce::kEq20, "internal_force",
+        "refused_feed or eq20");
   in_range(p.bending_stiffness_nm2, kGuidewireBendingStiffnessNm2, "bending_stiffness_nm2");
   in_range(p.tip_bending_stiffness_nm2, kGuidewireBendingStiffnessNm2, "tip_bending_stiffness_nm2");
   in_range(p.mass_per_length_kg_per_m, kGuidewireMassPerLengthKgPerM, "mass_per_length_kg_per_m");

@@ -36,7 +36,19 @@ WireFeedback compute_feedback(const ChainMailWire& wire, const GuidewireParams& 
   // that matters to the hand is the first link's compression against the instrument, i.e. the
   // feed the wire refused this step (commanded minus accepted insertion).
   const double refused = wire.commanded_feed_m() - wire.fed_length_m();
-  f.internal_n = params.axial_stiffness_n_per_m * refused;
+  f.internal_refused_feed_n = params.axial_stiffness_n_per_m * refused;
+  // [guidewire eq 20] as written: F_internal = (|P1^t - P2^t| - |P1^(t-1) - P2^(t-1)|) k, P1 and P2
+  // the first two chain-mails (here: the last node in the catheter and the first free one, the
+  // link the hand pushes through). Sign: a link that shortened pushes back, resisting insertion
+  // (positive), so F = -k (change of length) in our convention.
+  const int p2 = wire.first_free_node();
+  if (p2 >= 1 && p2 < wire.node_count()) {
+    const auto now = wire.nodes_m();
+    const auto before = wire.step_start_nodes_m();
+    const double change_m = (now[p2] - now[p2 - 1]).norm() - (before[p2] - before[p2 - 1]).norm();
+    f.internal_eq20_n = -params.axial_stiffness_n_per_m * change_m;
+  }
+  f.internal_n = params.internal_force == InternalForce::kEq20 ? f.internal_eq20_n : f.internal_refused_feed_n;
   if (refused > 1e-9) {
     f.stiffness_n_per_m = params.axial_stiffness_n_per_m;  // blocked: more push is refused 1:1
   } else if (contact) {

@@ -11,7 +11,10 @@ namespace pcisim::physics {
 
 struct WireFeedback {
   double friction_n = 0.0;  // F_friction along insertion (positive resists insertion)
-  double internal_n = 0.0;  // F_internal, eq 20
+  double internal_n = 0.0;  // F_internal of eq 19 as the params choose (refused feed or eq 20)
+  // both variants, whichever is used (the chain-mail; zero for the rod)
+  double internal_refused_feed_n = 0.0;
+  double internal_eq20_n = 0.0;
   double stiffness_n_per_m = 0.0;
   double torque_nm = 0.0;  // magnitude of the wall friction torque against turning
   // the wire's elastic torque back on the hub (rod model), signed: positive resists positive

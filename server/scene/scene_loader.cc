@@ -36,6 +36,9 @@ physics::GuidewireParams read_guidewire(json::JsonReader r) {
   for (const auto& w : physics::wire_presets()) presets.emplace_back(w.name);
   const std::string preset = r.text("preset", "none", presets);
   if (preset != "none") physics::apply_wire_preset(preset, &p);
+  p.internal_force = r.text("internal_force", "refused_feed", {"refused_feed", "eq20"}) == "eq20"
+                         ? physics::InternalForce::kEq20
+                         : physics::InternalForce::kRefusedFeed;
   p.length_m = in_range(r, "length_mm", p.length_m, physics::kGuidewireLengthM, kMm);
   p.segment_count = in_range(r, "segments", p.segment_count, physics::kGuidewireSegments);
   p.optimisation_passes =

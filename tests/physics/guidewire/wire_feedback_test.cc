@@ -75,3 +75,52 @@ TEST(WireFeedback, NonFiniteFeedbackInvalidatesTheModel) {
 
 }  // namespace
 }  // namespace pcisim::physics
+
+namespace pcisim::physics {
+namespace {
+
+TEST(WireFeedback, EqTwentyAsWrittenFollowsTheFirstLinksChangeAndIsZeroAtRest) {
+  // the chain-mail down the LCx, pushed 100 mm further over 10 s (the hard case), then held 2 s.
+  // Both F_internal variants from the same state every step: eq 20 (k times the first free link's
+  // change of length since the last step) moves while the wire is pushed and is zero once it
+  // rests, whatever load it still carries; the figures are docs/guidewire.md's
+  World world(test::default_scene());
+  test::BranchScript script;
+  script.turn_deg = -90.0;
+  const double dt = test::default_scene().step_s;
+  auto feedback = [&world] {
+    return compute_feedback(*world.guidewire_state(), *test::default_scene().guidewire, world.contact_state(),
+                            world.friction_state());
+  };
+  double rms = 0.0, eq20_max = 0.0, refused_max = 0.0;
+  int n = 0;
+  for (double t = 0.0; t <= script.end_s(); t += dt) {
+    world.step(script.at(t));
+    const WireFeedback f = feedback();
+    rms += std::pow(f.internal_eq20_n - f.internal_refused_feed_n, 2);
+    ++n;
+  }
+  InstrumentInput in = script.at(script.end_s());
+  const double start_m = in.insertion_m;
+  for (double s = 0.0; s <= 10.0; s += dt) {
+    in.insertion_m = start_m + 0.1 * std::min(s / 10.0, 1.0);
+    world.step(in);
+    const WireFeedback f = feedback();
+    ASSERT_TRUE(std::isfinite(f.internal_eq20_n));
+    rms += std::pow(f.internal_eq20_n - f.internal_refused_feed_n, 2);
+    ++n;
+    eq20_max = std::max(eq20_max, std::abs(f.internal_eq20_n));
+    refused_max = std::max(refused_max, f.internal_refused_feed_n);
+  }
+  for (double s = 0.0; s <= 2.0; s += dt) world.step(in);
+  const WireFeedback rest = feedback();
+  std::printf(
+      "F_internal over the script and the 100 mm push: rms(eq 20 - refused feed) %.4f N; |eq 20| up to %.4f N, refused "
+      "feed up to %.4f N; at rest eq 20 %.2e N\n",
+      std::sqrt(rms / n), eq20_max, refused_max, rest.internal_eq20_n);
+  EXPECT_GT(eq20_max, 1e-3);
+  EXPECT_LT(std::abs(rest.internal_eq20_n), 1e-6);
+}
+
+}  // namespace
+}  // namespace pcisim::physics

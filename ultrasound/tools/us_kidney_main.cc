@@ -9,6 +9,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -58,15 +60,39 @@ void press(TetSnapshot& m, double push_mm, double a_y) {
   }
 }
 
-}  // namespace
+constexpr const char* kUsage =
+    "usage: pcisim-us-kidney OUT_DIR [FRAMES]\n"
+    "  B-mode images of the procedural kidney (linear and curvilinear probe) through a tet mesh pressed\n"
+    "  by the probe: OUT_DIR/kidney_linear.png and kidney_curvilinear.png (created), and the time per\n"
+    "  frame (median, p95) over FRAMES frames of a pressing motion (default 200, 1..100000).\n"
+    "  The deformation is analytic, not the physics (docs/ultrasound.md).\n";
 
-int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr, "usage: pcisim-us-kidney OUT_DIR [FRAMES]\n");
+int run(int argc, char** argv) {
+  if (argc >= 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
+    std::printf("%s", kUsage);
+    return 0;
+  }
+  if (argc < 2 || argc > 3 || argv[1][0] == '-') {
+    std::fprintf(stderr, "%s", kUsage);
     return 2;
   }
   const std::string out = argv[1];
-  const int frames = argc > 2 ? std::max(1, std::atoi(argv[2])) : 200;
+  int frames = 200;
+  if (argc > 2) {
+    char* end = nullptr;
+    const long n = std::strtol(argv[2], &end, 10);
+    if (end == argv[2] || *end != '\0' || n < 1 || n > 100000) {
+      std::fprintf(stderr, "pcisim-us-kidney: FRAMES must be an integer in [1, 100000], got '%s'\n", argv[2]);
+      return 2;
+    }
+    frames = static_cast<int>(n);
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (ec) {
+    std::fprintf(stderr, "pcisim-us-kidney: cannot create %s: %s\n", out.c_str(), ec.message().c_str());
+    return 1;
+  }
   const auto kidney = pcisim::anatomy::make_kidney_phantom();
   TetSnapshot mesh = kidney_tets(kidney.spec, 11.0);
   pcisim::ultrasound::ProbePose pose;
@@ -99,4 +125,15 @@ int main(int argc, char** argv) {
                 ms[std::min(ms.size() - 1, static_cast<size_t>(0.95 * ms.size()))]);
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pcisim-us-kidney: %s\n", e.what());
+    return 1;
+  }
 }

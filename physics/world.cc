@@ -88,6 +88,22 @@ struct World::Impl {
   double time_s = 0.0;
   int64_t step = 0;
   int tip_branch = -1;
+  // guidewire.beat_coupling kContact: the rod lives in the world, the skin's last update is how
+  // its lumen moves
+  bool rod_in_world = false;
+  struct SkinMotion final : LumenMotion {
+    const VesselSkin* skin = nullptr;
+    Eigen::Vector3d displacement_m(const Eigen::Vector3d& rest_p_m, double a) const override {
+      return skin->displacement_m(rest_p_m, a);
+    }
+  } skin_motion;
+
+  // the rod's nodes between the world and the rest frame (blood drift is described at rest)
+  void rod_to_rest(double sign) {
+    const auto x = rod->mutable_nodes_m();
+    const auto off = rod->wall_offset_m();
+    for (size_t i = 0; i < x.size(); ++i) x[i] -= sign * off[i];
+  }
 
   static double ms(Clock::time_point a, Clock::time_point b) {
     return std::chrono::duration<double, std::milli>(b - a).count();
@@ -176,6 +192,11 @@ World::World(const WorldSpec& spec, const anatomy::VesselTree& tree, std::shared
   if (rod) {
     // the rod touches the wall and feels friction inside its own substeps
     w.rod.emplace(*spec.guidewire, CatheterPath(std::move(path)), w.lumen.get(), spec.vessel_contact, spec.friction);
+    w.rod_in_world = w.skin && spec.guidewire->beat_coupling == BeatCoupling::kContact;
+    if (w.rod_in_world) {
+      w.skin_motion.skin = &*w.skin;
+      w.rod->set_lumen_motion(&w.skin_motion);
+    }
   } else if (spec.friction) {
     w.friction.emplace(*spec.friction, w.wire->node_count());
   }
@@ -208,12 +229,14 @@ void World::step(const InstrumentInput& input) {
     double c_blood = 0.0;
     if (w.blood) {
       w.blood->step(w.spec.step_s, w.heart ? w.heart->phase() : 0.0);
+      if (w.rod_in_world) w.rod_to_rest(1.0);
       w.blood->apply(w.rod->mutable_nodes_m(), w.rod->first_free_node(), w.spec.step_s);
+      if (w.rod_in_world) w.rod_to_rest(-1.0);
       c_blood = Impl::ms(t0, Clock::now());
     }
     const auto t1 = Clock::now();
     w.rod->step(w.used.insertion_m, w.used.rotation_rad, w.spec.step_s);
-    w.tip_branch = anatomy::nearest_branch(w.tree, w.rod->nodes_m().back());
+    w.tip_branch = anatomy::nearest_branch(w.tree, w.rod->nodes_m().back() - w.rod->wall_offset_m().back());
     w.model =
         to_local_force_model(w.rod->feedback(), w.used, *w.spec.guidewire, w.time_s + w.spec.step_s, w.spec.step_s);
     // contact and friction run inside the rod's substeps: their time is the guidewire's
@@ -299,7 +322,8 @@ void World::write_snapshot(WorldSnapshot& out) const {
   if (w.rod) {
     const auto nodes = w.rod->nodes_m();
     out.wire_nodes_m.assign(nodes.begin(), nodes.end());
-    if (w.skin)
+    // in the world already when the wall moves it; else carried there from the rest frame
+    if (w.skin && !w.rod_in_world)
       for (auto& p : out.wire_nodes_m) p = w.skin->to_world(p);
     const auto t = w.rod->touched();
     out.wire_contact.assign(t.begin(), t.end());

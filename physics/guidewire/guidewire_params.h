@@ -15,9 +15,23 @@ enum class GuidewireModel { kChainMail, kRod };
 // change of the first free link's length since the last step (docs/guidewire.md)
 enum class InternalForce { kRefusedFeed, kEq20 };
 
+// how the beating vessels move the wire (scene key guidewire.beat_coupling; docs/guidewire.md):
+// kKinematic solves the wire in the vessels' rest frame and carries the solution into the world
+// by the vessels' skin; kContact lets the wire live in the world, where the moving wall pushes it
+// through contact and friction (rod model only)
+enum class BeatCoupling { kKinematic, kContact };
+
+// where the chain-mail's limits come from: the alpha / beta fields as set, or derived from the
+// rod section's bending stiffness for a nitinol or a stainless-steel core (chain_mail_limits.h)
+enum class ChainMailLimits { kGiven, kNitinolCore, kSteelCore };
+
 struct GuidewireParams {
   GuidewireModel model = GuidewireModel::kChainMail;
   InternalForce internal_force = InternalForce::kRefusedFeed;
+  BeatCoupling beat_coupling = BeatCoupling::kKinematic;  // the scene loader's default is kContact for the rod
+  // the chain-mail's alpha / beta limits as given below, or derived from the section's EI and a
+  // core material (chain_mail_limits.h); scene key guidewire.chain_mail_limits
+  ChainMailLimits chain_mail_limits = ChainMailLimits::kGiven;
   double length_m = 0.30;       // simulated distal length of the wire, (tip_length_m, 2]
   int segment_count = 200;      // chain-mail links, [4, 4000]
   int optimisation_passes = 2;  // physical-optimisation passes per step (eqs 5-10), [0, 64]
@@ -55,6 +69,12 @@ struct GuidewireParams {
   // this: the grip of a torque device and the guide catheter's support are finite
   double feed_refuse_force_n = 1.0;
 };
+
+// axial and shear stiffness of the section, N: a 0.2 mm steel core (E A = 200 GPa x 3.1e-8 m^2;
+// G A with kappa 0.9). The rod uses them; the chain-mail's stretch limits derived from the
+// section (chain_mail_limits.h) read the axial one
+inline constexpr double kWireAxialStiffnessN = 6.3e3;
+inline constexpr double kWireShearStiffnessN = 2.2e3;
 
 // each field's range, the one source for validate() (link_spec.cc) and the scene loader
 inline constexpr ParamRange kGuidewireLengthM{0.02, 2.0};

@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "physics/guidewire/chain_mail_limits.h"
+
 namespace pcisim::physics {
 namespace {
 
@@ -48,6 +50,12 @@ void validate(const GuidewireParams& p) {
   check(p.model == GuidewireModel::kChainMail || p.model == GuidewireModel::kRod, "model", "chain_mail or rod");
   check(p.internal_force == InternalForce::kRefusedFeed || p.internal_force == InternalForce::kEq20, "internal_force",
         "refused_feed or eq20");
+  check(p.chain_mail_limits == ChainMailLimits::kGiven || p.chain_mail_limits == ChainMailLimits::kNitinolCore ||
+            p.chain_mail_limits == ChainMailLimits::kSteelCore,
+        "chain_mail_limits", "given, nitinol_core or steel_core");
+  check(p.beat_coupling == BeatCoupling::kKinematic ||
+            (p.beat_coupling == BeatCoupling::kContact && p.model == GuidewireModel::kRod),
+        "beat_coupling", "kinematic, or contact with the rod model (the chain-mail rides the vessels kinematically)");
   in_range(p.bending_stiffness_nm2, kGuidewireBendingStiffnessNm2, "bending_stiffness_nm2");
   in_range(p.tip_bending_stiffness_nm2, kGuidewireBendingStiffnessNm2, "tip_bending_stiffness_nm2");
   in_range(p.mass_per_length_kg_per_m, kGuidewireMassPerLengthKgPerM, "mass_per_length_kg_per_m");
@@ -60,8 +68,11 @@ void validate(const GuidewireParams& p) {
     check(p.torsional_rigidity_nm2 > 0.0, "torsional_rigidity_nm2", "above 0 for the rod");
 }
 
-std::vector<LinkSpec> make_link_specs(const GuidewireParams& p) {
-  validate(p);
+std::vector<LinkSpec> make_link_specs(const GuidewireParams& given) {
+  validate(given);
+  // the limits as set, or derived from the section (chain_mail_limits.h)
+  GuidewireParams p = given;
+  apply_chain_mail_limits(&p);
   const int n = p.segment_count;
   const double h = p.length_m / n;
   const double shear_mm = std::max(h, kShearLengthM) * 1e3;

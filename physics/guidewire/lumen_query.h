@@ -17,4 +17,14 @@ class LumenQuery {
   virtual WallSample sample(const Eigen::Vector3d& p_m) const = 0;
 };
 
+// how the lumen moves over the current step (effect vessel_motion): the displacement of the
+// wall off the rest frame, where LumenQuery describes it, at a rest-frame point and a fraction
+// a of the step (0: where the last step left it, 1: where this step takes it)
+class LumenMotion {
+ public:
+  virtual ~LumenMotion() = default;
+  // finite for every finite point; allocates nothing
+  virtual Eigen::Vector3d displacement_m(const Eigen::Vector3d& rest_p_m, double a) const = 0;
+};
+
 }  // namespace pcisim::physics

@@ -13,6 +13,11 @@ namespace {
 // steps (not refused: the hand feels nothing for it), so nodes leave the catheter a few at a
 // time and meet the wall
 constexpr double kMaxFeedSpeedMPerS = 0.12;
+// the moving wall: fixed-point steps to a node's rest point, and how far a node may move within
+// a step before its rest point is found again (the offset is a node's own: the vessels' motion
+// differs by millimetres across the LM's ostium, where the aortic root stands still)
+constexpr int kRestPointIterations = 2;
+constexpr double kRestPointRefreshM = 0.5e-3;
 // the longest substep (a longer physics step takes more substeps, as the rod itself does)
 constexpr double kMaxSubstepS = 1.0 / 60.0;
 // the free wire may be this much shorter than its length before the hub refuses feed: the wall
@@ -20,11 +25,6 @@ constexpr double kMaxSubstepS = 1.0 / 60.0;
 // (measured on the trainee script down the LAD: up to 10 mm, released when the tip slips on);
 // one driven into a dead end keeps crumpling, and this bound makes the hub slip instead
 constexpr double kMaxCompressionM = 0.02;
-// axial and shear stiffness of the section, N: a 0.2 mm steel core (E A = 200 GPa x 3.1e-8 m^2;
-// G A with kappa 0.9). Stiff enough that the wire neither stretches nor shears visibly; the
-// direct solve does not mind the ratio to the bending stiffness
-constexpr double kAxialStiffnessN = 6.3e3;
-constexpr double kShearStiffnessN = 2.2e3;
 
 }  // namespace
 
@@ -34,8 +34,10 @@ rod::CosseratRodParams rod_params_of(const GuidewireParams& g) {
   p.segments = g.segment_count;
   p.bending_stiffness_nm2 = g.bending_stiffness_nm2;
   p.torsional_stiffness_nm2 = g.torsional_rigidity_nm2;
-  p.axial_stiffness_n = kAxialStiffnessN;
-  p.shear_stiffness_n = kShearStiffnessN;
+  // stiff enough that the wire neither stretches nor shears visibly; the direct solve does not
+  // mind the ratio to the bending stiffness
+  p.axial_stiffness_n = kWireAxialStiffnessN;
+  p.shear_stiffness_n = kWireShearStiffnessN;
   p.mass_per_length_kg_per_m = g.mass_per_length_kg_per_m;
   p.outer_diameter_m = g.outer_diameter_m;
   p.damping_per_s = g.rod_damping_per_s;
@@ -96,6 +98,8 @@ RodWire::RodWire(const GuidewireParams& params, CatheterPath path, const LumenQu
   stuck_.assign(n + 1, 0);
   wall_impulse_n_s_.assign(n + 1, 0.0);
   wall_force_n_.assign(n + 1, 0.0);
+  for (auto* v : {&rest_point_m_, &anchor_m_, &offset_from_, &offset_to_, &offset_, &wall_substep_m_, &wall_velocity_})
+    v->assign(n + 1, Eigen::Vector3d::Zero());
   // start fully inside the catheter, the tip at the exit
   place_in_catheter(0.0, 1.0);
   const auto x = rod_.mutable_nodes_m();
@@ -133,10 +137,10 @@ void RodWire::place_in_catheter(double previous_fed_m, double dt_s) {
   const Eigen::Vector3d& exit = path_.exit_m();
   const Eigen::Vector3d& dir = path_.exit_direction();
   const Eigen::Vector3d feed_velocity = (fed_m_ - previous_fed_m) / dt_s * dir;
-  for (int i = 0; i <= hub; ++i) x[i] = path_.point_behind_exit(std::max(length - i * l - fed_m_, 0.0));
+  for (int i = 0; i <= hub; ++i) x[i] = path_.point_behind_exit(std::max(length - i * l - fed_m_, 0.0)) + offset_[i];
   for (int i = hub + 1; i <= old_hub; ++i) {
-    x[i] = exit + std::max(fed_m_ - (length - i * l), 0.0) * dir;
-    v[i] = feed_velocity;
+    x[i] = exit + std::max(fed_m_ - (length - i * l), 0.0) * dir + offset_[i];
+    v[i] = feed_velocity + wall_velocity_[i];
   }
   for (int j = 0; j < hub; ++j) {
     const Eigen::Vector3d d = x[j + 1] - x[j];
@@ -146,6 +150,24 @@ void RodWire::place_in_catheter(double previous_fed_m, double dt_s) {
   const Eigen::Vector3d d0 = hub > 0 ? Eigen::Vector3d(x[1] - x[0]) : dir;
   rod_.set_clamp(x[0], catheter_frame(d0.norm() > 1e-12 ? Eigen::Vector3d(d0.normalized()) : dir));
   rod_.set_hub_node(hub);
+}
+
+// node i's rest point r (x = r + d(r, a), a few fixed-point steps from its last offset; the
+// vessels' motion is smooth on the scale of the wire's motion in a substep) and the wall's
+// offset there at the step's start and end
+void RodWire::find_rest_point(int i, double a, double dt_s, int substeps) {
+  const Eigen::Vector3d& x = rod_.nodes_m()[i];
+  Eigen::Vector3d r = x - offset_[i];
+  for (int k = 0; k < kRestPointIterations; ++k) r = x - motion_->displacement_m(r, a);
+  rest_point_m_[i] = r;
+  anchor_m_[i] = x;
+  offset_from_[i] = motion_->displacement_m(r, 0.0);
+  offset_to_[i] = motion_->displacement_m(r, 1.0);
+  if (!offset_from_[i].allFinite() || !offset_to_[i].allFinite())
+    offset_from_[i] = offset_to_[i] = Eigen::Vector3d::Zero();
+  const Eigen::Vector3d move = offset_to_[i] - offset_from_[i];
+  wall_substep_m_[i] = move / substeps;
+  wall_velocity_[i] = move / dt_s;
 }
 
 void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
@@ -172,11 +194,25 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
   const int substeps =
       std::max(params_.rod_substeps, static_cast<int>(std::min(std::ceil(dt_s / kMaxSubstepS - 1e-9), 10000.0)));
   const double h = dt_s / substeps;
+  // the moving wall: every node's rest point at the step's start
+  if (motion_)
+    for (int i = 0; i < node_count(); ++i) find_rest_point(i, 0.0, dt_s, substeps);
   for (int k = 1; k <= substeps; ++k) {
     const double before_m = fed_m_;
     const double a = static_cast<double>(k) / substeps;
     fed_m_ = previous_fed_m + a * (fed_target_m - previous_fed_m);
     rotation_rad_ = previous_rotation_rad + a * (rotation_target_rad - previous_rotation_rad);
+    if (motion_) {
+      // the wall a substep further on; a node that moved far since its rest point was found (a
+      // tip that snaps round, a node fed out) finds it again where it now is
+      const double a0 = static_cast<double>(k - 1) / substeps;
+      const auto x = rod_.nodes_m();
+      for (int i = 0; i < node_count(); ++i) {
+        if ((x[i] - anchor_m_[i]).squaredNorm() > kRestPointRefreshM * kRestPointRefreshM)
+          find_rest_point(i, a0, dt_s, substeps);
+        offset_[i] = offset_from_[i] + a * (offset_to_[i] - offset_from_[i]);
+      }
+    }
     place_in_catheter(before_m, h);
     rod_.step(h, lumen_ && contact_ ? this : nullptr);
     if (!rod_.all_finite()) recover();
@@ -223,7 +259,10 @@ void RodWire::recover() {
   const Eigen::Vector3d& dir = path_.exit_direction();
   for (int i = 0; i <= hub; ++i) x[i] = path_.point_behind_exit(std::max(params_.length_m - i * l - fed_m_, 0.0));
   for (int i = hub + 1; i < node_count(); ++i) x[i] = x[hub] + (i - hub) * l * dir;
-  for (int i = 0; i < node_count(); ++i) v[i].setZero();
+  for (int i = 0; i < node_count(); ++i) {
+    x[i] += offset_[i];
+    v[i] = wall_velocity_[i];
+  }
   for (int j = 0; j < segment_count(); ++j) {
     omega[j].setZero();
     const Eigen::Vector3d d = x[j + 1] - x[j];
@@ -257,8 +296,10 @@ void RodWire::project(rod::CosseratRod& rod, int iteration, double h) {
     std::fill(stuck_.begin(), stuck_.end(), 0);
   }
   for (int i = first_free; i < node_count(); ++i) {
-    // what the solve's wall row left (a curved wall is not its tangent plane): back inside
-    const WallSample s = lumen_->sample(x[i]);
+    // what the solve's wall row left (a curved wall is not its tangent plane): back inside. The
+    // lumen is described at rest: sampled at the node's rest point, its normal carried unturned
+    // (the vessels' motion is a translation over a lumen's width: docs/guidewire.md)
+    const WallSample s = lumen_->sample(x[i] - offset_[i]);
     const double dn = s.distance_m + margin;
     if (dn > 0.0) {
       x[i] -= dn * s.normal;
@@ -273,7 +314,8 @@ void RodWire::project(rod::CosseratRod& rod, int iteration, double h) {
     const double mu_s = node_in_tip(i) ? friction_->tip_static : friction_->body_static;
     const Eigen::Vector3d f = rod.node_constraint_force_n(i);
     const Eigen::Vector3d f_t = f - f.dot(s.normal) * s.normal;
-    const Eigen::Vector3d dx = x[i] - x_start[i];
+    // the node's motion along the wall relative to the wall (which moved wall_substep_m_)
+    const Eigen::Vector3d dx = x[i] - x_start[i] - wall_substep_m_[i];
     const Eigen::Vector3d dx_t = dx - dx.dot(s.normal) * s.normal;
     if (f_t.norm() <= mu_s * wall_n) {
       x[i] -= dx_t;
@@ -282,7 +324,7 @@ void RodWire::project(rod::CosseratRod& rod, int iteration, double h) {
       stuck_[i] = 0;  // sliding: kinetic friction slows its velocity after the substep
     }
     // friction moves along the tangent plane, which a curved lumen's wall leaves: back inside
-    const WallSample again = lumen_->sample(x[i]);
+    const WallSample again = lumen_->sample(x[i] - offset_[i]);
     const double dn2 = again.distance_m + margin;
     if (dn2 > 0.0) x[i] -= dn2 * again.normal;
   }
@@ -322,7 +364,8 @@ void RodWire::after_substep(rod::CosseratRod& rod, double h) {
       if (!(node_wall_n_[i] > 0.0) || stuck_[i]) continue;
       const double mu_k = node_in_tip(i) ? friction_->tip_kinetic : friction_->body_kinetic;
       const Eigen::Vector3d& n = normal_[i];
-      const Eigen::Vector3d v_t = v[i] - v[i].dot(n) * n;
+      const Eigen::Vector3d v_rel = v[i] - wall_velocity_[i];
+      const Eigen::Vector3d v_t = v_rel - v_rel.dot(n) * n;
       const double speed = v_t.norm();
       const double slow = mu_k * node_wall_n_[i] * h / rod.node_mass_kg(i);
       if (speed > 0.0) v[i] -= std::min(1.0, slow / speed) * v_t;

@@ -41,6 +41,16 @@ class RodWire final : public rod::RodContact {
           std::optional<VesselContactParams> contact = std::nullopt,
           std::optional<FrictionParams> friction = std::nullopt);
 
+  // the vessels move (guidewire.beat_coupling "contact"): the lumen and the catheter path are
+  // described at rest, and `motion` says how far the wall stands off that frame through each
+  // step. The wire then lives in the world: each node's rest point is found from its position
+  // (x = r + d(r)), the lumen is sampled at x - d, friction acts on motion relative to the wall,
+  // and the nodes in the catheter ride it. Null (the default): the wall stands still at rest.
+  // `motion` must outlive the wire.
+  void set_lumen_motion(const LumenMotion* motion) { motion_ = motion; }
+  // each node's offset off the rest frame now (zero without a motion)
+  std::span<const Eigen::Vector3d> wall_offset_m() const { return offset_; }
+
   // one physics step: feed to insertion_m (clamped to [0, length]; refused while the wire pushes
   // back harder than feed_refuse_force_n), hub turned to rotation_rad, then the rod's substeps
   void step(double insertion_m, double rotation_rad, double dt_s);
@@ -86,6 +96,7 @@ class RodWire final : public rod::RodContact {
   void place_in_catheter(double previous_fed_m, double dt_s);
   Eigen::Quaterniond catheter_frame(const Eigen::Vector3d& tangent) const;
   void recover();
+  void find_rest_point(int i, double a, double dt_s, int substeps);
 
   GuidewireParams params_;
   CatheterPath path_;
@@ -101,6 +112,12 @@ class RodWire final : public rod::RodContact {
   std::vector<uint8_t> segment_stuck_;   // held about its axis by static friction this substep
   std::vector<double> node_wall_n_;      // the wall's force on each node in this substep
   std::vector<Eigen::Vector3d> normal_;  // the wall normal at the last contact
+  // the moving wall (motion_): per node, its rest point and where the node stood when it was
+  // found, the wall's offset there at the step's start and end and now (per substep), and the
+  // wall's motion per substep and velocity over the step
+  const LumenMotion* motion_ = nullptr;
+  std::vector<Eigen::Vector3d> rest_point_m_, anchor_m_;
+  std::vector<Eigen::Vector3d> offset_from_, offset_to_, offset_, wall_substep_m_, wall_velocity_;
   double commanded_feed_m_ = 0.0, fed_m_ = 0.0, rotation_rad_ = 0.0;
   double rotation_before_step_rad_ = 0.0;
   double hub_axial_n_ = 0.0, hub_torque_nm_ = 0.0;

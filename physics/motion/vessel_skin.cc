@@ -58,6 +58,7 @@ VesselSkin::VesselSkin(const anatomy::VesselTree& rest_tree, const Eigen::Matrix
     offsets_.push_back(static_cast<int>(rest_.size()));
   }
   now_ = rest_;
+  before_ = rest_;
   const int n = point_count();
   binding_.resize(n);
   weight_.assign(n, 0.0);
@@ -118,6 +119,7 @@ Eigen::Vector3d VesselSkin::skinned(const Binding& b, const Eigen::Matrix3Xd& su
 }
 
 void VesselSkin::update(const Eigen::Matrix3Xd& surface_m) {
+  std::copy(now_.begin(), now_.end(), before_.begin());
   for (int i = 0; i < point_count(); ++i) {
     const Binding& b = binding_[i];
     if (b.tri < 0 || weight_[i] <= 0.0) {
@@ -128,7 +130,7 @@ void VesselSkin::update(const Eigen::Matrix3Xd& surface_m) {
   }
 }
 
-Eigen::Vector3d VesselSkin::displacement_m(const Eigen::Vector3d& p) const {
+Eigen::Vector3d VesselSkin::displacement_m(const Eigen::Vector3d& p, double a) const {
   if (cell_points_.empty() || !p.allFinite()) return Eigen::Vector3d::Zero();
   const Eigen::Vector3d g = (p - grid_origin_m_) / cell_m_;
   Eigen::Vector3i c;
@@ -152,7 +154,7 @@ Eigen::Vector3d VesselSkin::displacement_m(const Eigen::Vector3d& p) const {
           if (d2 > r2) continue;
           // fades to zero at the blend radius so the field is continuous as points enter it
           const double w = (1.0 - d2 / r2) / (d2 + soft2);
-          sum += w * (now_[i] - rest_[i]);
+          sum += w * ((1.0 - a) * before_[i] + a * now_[i] - rest_[i]);
           wsum += w;
         }
       }

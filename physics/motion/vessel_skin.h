@@ -37,7 +37,10 @@ class VesselSkin {
 
   // displacement of a rest-frame point now: the blend of the centerline points near it; zero
   // far from every vessel
-  Eigen::Vector3d displacement_m(const Eigen::Vector3d& rest_p_m) const;
+  Eigen::Vector3d displacement_m(const Eigen::Vector3d& rest_p_m) const { return displacement_m(rest_p_m, 1.0); }
+  // the same a fraction a through the last update: the blend of the centerline points moved
+  // linearly from where the update before left them (a = 0) to where they are now (a = 1)
+  Eigen::Vector3d displacement_m(const Eigen::Vector3d& rest_p_m, double a) const;
   Eigen::Vector3d to_world(const Eigen::Vector3d& rest_p_m) const { return rest_p_m + displacement_m(rest_p_m); }
   // the rest-frame point that maps to world_p (fixed-point iteration from the nearest moved
   // centerline point; linear in the tree's size, for tests and benchmarks, not per-node loops)
@@ -55,7 +58,7 @@ class VesselSkin {
 
   VesselMotionParams params_;
   std::vector<std::array<int, 3>> triangles_;
-  std::vector<Eigen::Vector3d> rest_, now_;
+  std::vector<Eigen::Vector3d> rest_, now_, before_;  // before_: now_ before the last update
   std::vector<int> offsets_;
   std::vector<Binding> binding_;
   std::vector<double> weight_;

@@ -39,6 +39,17 @@ physics::GuidewireParams read_guidewire(json::JsonReader r) {
   p.internal_force = r.text("internal_force", "refused_feed", {"refused_feed", "eq20"}) == "eq20"
                          ? physics::InternalForce::kEq20
                          : physics::InternalForce::kRefusedFeed;
+  {
+    const std::string limits = r.text("chain_mail_limits", "given", {"given", "nitinol_core", "steel_core"});
+    p.chain_mail_limits = limits == "nitinol_core" ? physics::ChainMailLimits::kNitinolCore
+                          : limits == "steel_core" ? physics::ChainMailLimits::kSteelCore
+                                                   : physics::ChainMailLimits::kGiven;
+  }
+  // the rod feels the beat through the moving wall unless told otherwise; the chain-mail can only ride it
+  const bool rod = p.model == physics::GuidewireModel::kRod;
+  p.beat_coupling = r.text("beat_coupling", rod ? "contact" : "kinematic", {"contact", "kinematic"}) == "contact"
+                        ? physics::BeatCoupling::kContact
+                        : physics::BeatCoupling::kKinematic;
   p.length_m = in_range(r, "length_mm", p.length_m, physics::kGuidewireLengthM, kMm);
   p.segment_count = in_range(r, "segments", p.segment_count, physics::kGuidewireSegments);
   p.optimisation_passes =

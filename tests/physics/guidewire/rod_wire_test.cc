@@ -13,8 +13,10 @@
 #include <cstdio>
 #include <limits>
 #include <numbers>
+#include <vector>
 
 #include "anatomy/phantom/coronary_phantom.h"
+#include "physics/guidewire/link_spec.h"
 #include "physics/guidewire/rod_wire.h"
 #include "physics/guidewire/tube_lumen.h"
 #include "tests/common/counting_new.h"
@@ -73,16 +75,22 @@ TEST(RodWireWorld, FollowsTheTraineeScriptIntoTheLad) {
   World world(rod_scene());
   BranchScript script;
   const double dt = rod_scene().step_s;
-  double worst = -1.0;
+  double worst = -1.0, tip_n = 0.0, hub_n = 0.0, hub_nm = 0.0;
   for (double t = 0.0; t <= script.end_s(); t += dt) {
     world.step(script.at(t));
     expect_sound(world, t);
     worst = std::max(worst, worst_wall_m(world));
+    // the forces the model gives on the way (docs/guidewire.md compares them with published ones)
+    tip_n = std::max(tip_n, world.rod_state()->tip_contact_force_n());
+    hub_n = std::max(hub_n, std::abs(world.rod_state()->hub_axial_force_n()));
+    hub_nm = std::max(hub_nm, std::abs(world.rod_state()->hub_torque_nm()));
   }
   const RodWire& w = *world.rod_state();
-  std::printf("rod: tip in %s, fed %.1f mm of %.1f, worst wall distance %+.3f mm, tip roll %.1f deg\n",
-              tip_branch(world).c_str(), 1e3 * w.fed_length_m(), 1e3 * w.commanded_feed_m(), 1e3 * worst,
-              w.tip_roll_rad() * 180.0 / std::numbers::pi);
+  std::printf(
+      "rod: tip in %s, fed %.1f mm of %.1f, worst wall distance %+.3f mm, tip roll %.1f deg; at most: tip contact "
+      "%.4f N, hub axial %.4f N, hub torque %.2e N m\n",
+      tip_branch(world).c_str(), 1e3 * w.fed_length_m(), 1e3 * w.commanded_feed_m(), 1e3 * worst,
+      w.tip_roll_rad() * 180.0 / std::numbers::pi, tip_n, hub_n, hub_nm);
   EXPECT_TRUE(in_subtree(world.vessel_tree(), tip_branch(world), "LAD")) << tip_branch(world);
   EXPECT_NEAR(w.fed_length_m(), w.commanded_feed_m(), 1e-9);
   EXPECT_LT(worst, 0.2e-3);  // the margin is 0.05 mm; a node may end a solve slightly past it
@@ -303,6 +311,61 @@ TEST(RodWireTorsion, TheTipLagsTheHubSlipsAndHoldsWhatStaticFrictionCan) {
   EXPECT_LT(w.hub_torque_nm(), 2.0 * capacity_nm);
 }
 
+// the moving wall (guidewire.beat_coupling "contact"): the curved tube carried sideways (along
+// y, out of the tube's plane) by up to 4 mm with a 1 s period, everything with it, catheter
+// included. The wire must go along, pushed by the wall: its nodes stay inside the moved tube
+// and it ends where the tube is; with zero motion it is the wire of a still wall, bit for bit.
+struct SidewaysWall final : LumenMotion {
+  double t_s = 0.0, dt_s = TubeRig::kDt;
+  bool still = false;
+  static double shift_m(double t) { return 0.002 * (1.0 - std::cos(2.0 * std::numbers::pi * t)); }
+  Eigen::Vector3d displacement_m(const Eigen::Vector3d&, double a) const override {
+    return still ? Eigen::Vector3d::Zero() : Eigen::Vector3d(0.0, shift_m(t_s + a * dt_s), 0.0);
+  }
+};
+
+TEST(RodWireMovingWall, AWallMovingSidewaysCarriesTheWireWithIt) {
+  TubeRig rig(0.09);
+  RodWire& w = rig.wire;
+  const int n = w.node_count();
+  std::vector<Eigen::Vector3d> rest(w.nodes_m().begin(), w.nodes_m().end());
+  SidewaysWall wall;
+  w.set_lumen_motion(&wall);
+  double worst_m = -1.0, pushed_n = 0.0, biggest_lag_m = 0.0;
+  for (; wall.t_s < 2.0; wall.t_s += TubeRig::kDt) {
+    w.step(0.09, 0.0, TubeRig::kDt);
+    ASSERT_TRUE(w.rod().all_finite()) << "t " << wall.t_s;
+    const double shift = SidewaysWall::shift_m(wall.t_s + TubeRig::kDt);
+    for (int i = w.first_free_node(); i < n; ++i) {
+      // inside the tube where it now is: the tube's own lumen at the point moved back by the shift
+      worst_m = std::max(worst_m, rig.lumen.sample(w.nodes_m()[i] - Eigen::Vector3d(0.0, shift, 0.0)).distance_m);
+      biggest_lag_m = std::max(biggest_lag_m, std::abs(w.nodes_m()[i].y() - rest[i].y() - shift));
+    }
+    pushed_n = std::max(pushed_n, rig.wall_force_n());
+    EXPECT_NEAR(w.wall_offset_m()[n - 1].y(), shift, 1e-15);
+  }
+  std::printf(
+      "moving tube (4 mm, 1 Hz): worst wall distance %+.3f mm, largest lag behind the tube %.3f mm, wall force up to "
+      "%.3g N\n",
+      1e3 * worst_m, 1e3 * biggest_lag_m, pushed_n);
+  EXPECT_LT(worst_m, 0.2e-3);
+  // it lags the wall by no more than the lumen's clearance (1.5 mm radius), and the wall pushes
+  EXPECT_LT(biggest_lag_m, 1.5e-3);
+  EXPECT_GT(pushed_n, 0.0);
+  EXPECT_EQ(w.recoveries(), 0);
+
+  // a motion of zero changes nothing
+  TubeRig still(0.03), zero(0.03);
+  SidewaysWall none;
+  none.still = true;
+  zero.wire.set_lumen_motion(&none);
+  for (int k = 0; k < 30; ++k) {
+    zero.wire.step(0.05, 0.5, TubeRig::kDt);
+    still.wire.step(0.05, 0.5, TubeRig::kDt);
+  }
+  for (int i = 0; i < n; ++i) ASSERT_EQ(zero.wire.nodes_m()[i], still.wire.nodes_m()[i]) << i;
+}
+
 TEST(RodWireDeadEnd, PushingIntoTheTubesEndIsRefusedAndTheHandFeelsIt) {
   // the tube ends 124 mm along its centerline; the hub feeds 200 mm. The wire crumples against
   // the end (the wall projection has the last word in each substep, docs/guidewire.md) until
@@ -340,6 +403,57 @@ TEST(RodWireDeadEnd, PushingIntoTheTubesEndIsRefusedAndTheHandFeelsIt) {
   for (double t = 0.0; t < 2.0; t += TubeRig::kDt) w.step(0.10, 0.0, TubeRig::kDt);
   EXPECT_NEAR(w.fed_length_m(), 0.10, 1e-9);
   EXPECT_LT(w.compression_m(), 0.02);
+}
+
+TEST(RodWireProlapse, ASoftTipPushedIntoADeadEndFoldsBackAndComesOut) {
+  // a straight tube of 2 mm radius closed 60 mm from the catheter's exit; a very soft tip
+  // (EI 1e-7 N m^2: Euler's 10 mm column buckles at 0.25 gf) meets the end and the hub keeps
+  // feeding 25 mm more: the tip folds back on itself (a prolapse). The distal wire crumples
+  // against the end as it folds (the wall projection ends each substep: docs/guidewire.md), so
+  // this provokes the fold and checks that the rod survives it, not the fold's shape: finite,
+  // inside the wall, no recovery, and pulled back 40 mm it comes out with nothing held
+  anatomy::VesselTree tree;
+  anatomy::VesselBranch b;
+  b.name = "tube";
+  b.parent = -1;
+  for (double z = 0.0; z <= 0.06 + 1e-9; z += 1e-3) b.points.push_back({Eigen::Vector3d(0, 0, z), 2e-3});
+  tree.branches.push_back(b);
+  const TubeLumen lumen(tree);
+  GuidewireParams g;
+  g.model = GuidewireModel::kRod;
+  g.segment_count = 300;
+  g.tip_bending_stiffness_nm2 = 1e-7;
+  RodWire w(g, CatheterPath({Eigen::Vector3d(0, 0, -0.2), Eigen::Vector3d(0, 0, 0)}), &lumen, VesselContactParams{},
+            TubeRig::coefficients());
+  const double dt = TubeRig::kDt;
+  double most_back = 1.0, worst_m = -1.0;
+  for (double t = 0.0; t < 8.0; t += dt) {
+    w.step(0.085 * std::min(t / 6.0, 1.0), 0.0, dt);
+    ASSERT_TRUE(w.rod().all_finite()) << "t " << t;
+    ASSERT_EQ(w.recoveries(), 0) << "t " << t;
+    const Eigen::Vector3d tip = w.rod().orientations().back() * Eigen::Vector3d::UnitZ();
+    most_back = std::min(most_back, tip.z());
+    for (int i = w.first_free_node(); i < w.node_count(); ++i)
+      worst_m = std::max(worst_m, lumen.sample(w.nodes_m()[i]).distance_m);
+  }
+  const Eigen::Vector3d tip_dir = w.rod().orientations().back() * Eigen::Vector3d::UnitZ();
+  std::printf(
+      "prolapse: fed %.1f of %.1f mm, the tip's tangent along the tube %.2f at the end (%.2f at most backwards), tip "
+      "at z %.1f mm, %.1f mm crumpled, push-back %.3f N, worst wall distance %+.3f mm\n",
+      1e3 * w.fed_length_m(), 1e3 * w.commanded_feed_m(), tip_dir.z(), most_back, 1e3 * w.nodes_m().back().z(),
+      1e3 * w.compression_m(), w.feedback().internal_n, 1e3 * worst_m);
+  EXPECT_LT(most_back, 0.0) << "the tip folded back";
+  EXPECT_LT(worst_m, 0.2e-3);
+  // pulled back 40 mm: the fold comes out with it, nothing stays held
+  for (double t = 0.0; t < 4.0; t += dt) {
+    w.step(0.085 - 0.04 * std::min(t / 2.0, 1.0), 0.0, dt);
+    ASSERT_TRUE(w.rod().all_finite()) << "t " << t;
+  }
+  EXPECT_NEAR(w.fed_length_m(), 0.045, 1e-9);
+  EXPECT_EQ(w.refused_feed_m(), 0.0);
+  EXPECT_LT(w.nodes_m().back().z(), 0.05);
+  EXPECT_LT(w.compression_m(), 1e-3);
+  EXPECT_EQ(w.recoveries(), 0);
 }
 
 // a wire in free space out of a straight catheter along +z, no wall, no friction
@@ -404,6 +518,15 @@ TEST(RodWireParams, RejectsBadValuesNamingTheField) {
     FAIL() << "accepted a negative bending stiffness";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("bending_stiffness_nm2"), std::string::npos) << e.what();
+  }
+  // the chain-mail cannot be pushed by a moving wall: it rides the vessels
+  GuidewireParams chain;
+  chain.beat_coupling = BeatCoupling::kContact;
+  try {
+    validate(chain);
+    FAIL() << "accepted beat_coupling contact for the chain-mail";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("guidewire.beat_coupling"), std::string::npos) << e.what();
   }
 }
 

@@ -103,8 +103,10 @@ TEST(Scene, TheGuidewireModelIsChosenByTheScene) {
 TEST(Scene, EachBadInputNamesItsJsonPathAndWhatWasExpected) {
   EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"segmnts": 10}}})"),
             "test.json: effects.guidewire.segmnts: unknown key (this object accepts: axial_damping_n_s_per_m, "
-            "axial_stiffness_n_per_m, bending_stiffness_nm2, body_alpha_max, body_alpha_min, body_beta_deg_per_mm, "
-            "feed_refuse_force_n, internal_force, length_mm, mass_per_length_kg_per_m, model, optimisation_passes, "
+            "axial_stiffness_n_per_m, beat_coupling, bending_stiffness_nm2, body_alpha_max, body_alpha_min, "
+            "body_beta_deg_per_mm, "
+            "chain_mail_limits, feed_refuse_force_n, internal_force, length_mm, mass_per_length_kg_per_m, model, "
+            "optimisation_passes, "
             "outer_diameter_mm, preset, rod_damping_per_s, rod_iterations, rod_substeps, segments, tip_alpha_max, "
             "tip_alpha_min, tip_angle_deg, tip_bending_stiffness_nm2, tip_beta_deg_per_mm, tip_length_mm, "
             "torsion_damping_nm_s_per_rad, torsional_rigidity_nm2)");

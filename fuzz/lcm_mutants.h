@@ -13,6 +13,7 @@
 
 #include "pcisim_lcm/force_command_t.hpp"
 #include "pcisim_lcm/instrument_state_t.hpp"
+#include "pcisim_lcm/probe_state_t.hpp"
 #include "pcisim_lcm/session_command_t.hpp"
 #include "pcisim_lcm/sim_status_t.hpp"
 #include "pcisim_lcm/wire_state_t.hpp"
@@ -110,6 +111,14 @@ inline MessageCase instrument_case() {
   m.utime = 1;
   m.insertion_mm = 10;
   return fixed_size_case("instrument_state_t", m);
+}
+
+inline MessageCase probe_case() {
+  pcisim_lcm::probe_state_t m{};
+  m.utime = 1;
+  m.position_mm[2] = 40;
+  m.orientation_wxyz[0] = 1;
+  return fixed_size_case("probe_state_t", m);
 }
 
 inline MessageCase force_case() {

@@ -8,5 +8,6 @@ inline constexpr const char* kWireChannel = "PCISIM_WIRE";              // serve
 inline constexpr const char* kStatusChannel = "PCISIM_STATUS";          // server, 1 Hz
 inline constexpr const char* kSessionChannel = "PCISIM_SESSION";        // consoles -> server
 inline constexpr const char* kXrayChannel = "PCISIM_XRAY";              // server, pulse rate, own instance
+inline constexpr const char* kProbeChannel = "PCISIM_PROBE";            // bridge -> server, 1 kHz
 
 }  // namespace pcisim::protocol

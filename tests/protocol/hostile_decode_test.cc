@@ -32,6 +32,9 @@ void expect_refused(const MessageCase& c) {
 TEST(HostileDecode, InstrumentState) {
   expect_refused<pcisim_lcm::instrument_state_t>(fuzz::instrument_case());
 }
+TEST(HostileDecode, ProbeState) {
+  expect_refused<pcisim_lcm::probe_state_t>(fuzz::probe_case());
+}
 TEST(HostileDecode, ForceCommand) {
   expect_refused<pcisim_lcm::force_command_t>(fuzz::force_case());
 }

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <limits>
 #include <vector>
 
@@ -64,6 +65,45 @@ TEST(MessageChecks, WrongFingerprintTruncationTrailingBytesAndNanAreRejected) {
     m.rotation_rate_rad_s = bad;
     auto bytes = encode(m);
     EXPECT_FALSE(decode_checked(as_rbuf(bytes), out)) << bad;
+  }
+}
+
+// the probe's pose (the soft-tissue scene's instrument): a good pose decodes; a NaN anywhere, a
+// quaternion that is not a unit one, a position beyond 10 m, a depth or gain out of range do not
+TEST(MessageChecks, ProbePoseIsAFiniteUnitQuaternionAndAPositionInReach) {
+  pcisim_lcm::probe_state_t good{};
+  good.utime = 5;
+  good.position_mm[0] = 12.0;
+  good.position_mm[2] = -80.0;
+  good.orientation_wxyz[0] = std::cos(0.3);
+  good.orientation_wxyz[3] = std::sin(0.3);
+  good.depth_mm = 120.0;
+  good.gain_db = -6.0;
+  pcisim_lcm::probe_state_t out{};
+  auto bytes = encode(good);
+  ASSERT_TRUE(decode_checked(as_rbuf(bytes), out));
+  EXPECT_DOUBLE_EQ(out.position_mm[2], -80.0);
+  EXPECT_DOUBLE_EQ(out.orientation_wxyz[3], std::sin(0.3));
+  struct Bad {
+    const char* what;
+    void (*spoil)(pcisim_lcm::probe_state_t&);
+  };
+  const Bad bad[] = {
+      {"NaN position",
+       [](pcisim_lcm::probe_state_t& m) { m.position_mm[1] = std::numeric_limits<double>::quiet_NaN(); }},
+      {"Inf quaternion",
+       [](pcisim_lcm::probe_state_t& m) { m.orientation_wxyz[2] = std::numeric_limits<double>::infinity(); }},
+      {"zero quaternion", [](pcisim_lcm::probe_state_t& m) { m.orientation_wxyz[0] = m.orientation_wxyz[3] = 0.0; }},
+      {"scaled quaternion", [](pcisim_lcm::probe_state_t& m) { m.orientation_wxyz[0] *= 1.05; }},
+      {"11 m away", [](pcisim_lcm::probe_state_t& m) { m.position_mm[0] = 1.1e4; }},
+      {"negative depth", [](pcisim_lcm::probe_state_t& m) { m.depth_mm = -1.0; }},
+      {"gain 80 dB", [](pcisim_lcm::probe_state_t& m) { m.gain_db = 80.0; }},
+  };
+  for (const Bad& b : bad) {
+    pcisim_lcm::probe_state_t m = good;
+    b.spoil(m);
+    auto spoiled = encode(m);
+    EXPECT_FALSE(decode_checked(as_rbuf(spoiled), out)) << b.what;
   }
 }
 

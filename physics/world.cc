@@ -192,7 +192,9 @@ World::World(const WorldSpec& spec, const anatomy::VesselTree& tree, std::shared
   if (rod) {
     // the rod touches the wall and feels friction inside its own substeps
     w.rod.emplace(*spec.guidewire, CatheterPath(std::move(path)), w.lumen.get(), spec.vessel_contact, spec.friction);
-    w.rod_in_world = w.skin && spec.guidewire->beat_coupling == BeatCoupling::kContact;
+    // the wall is what carries a rod living in the world: without vessel_contact it rides the
+    // vessels kinematically whatever beat_coupling says (docs/guidewire.md)
+    w.rod_in_world = w.skin && spec.vessel_contact && spec.guidewire->beat_coupling == BeatCoupling::kContact;
     if (w.rod_in_world) {
       w.skin_motion.skin = &*w.skin;
       w.rod->set_lumen_motion(&w.skin_motion);

@@ -22,7 +22,8 @@ bool is_well_formed(const pcisim_lcm::wire_state_t& m);
 bool is_well_formed(const pcisim_lcm::sim_status_t& m);
 bool is_well_formed(const pcisim_lcm::xray_frame_t& m);
 // and for the probe: a position within 10 m of the scene's origin, a unit quaternion (norm within
-// 1 %: a pose, not a scaling), a depth of 0-500 mm and a gain within +-60 dB
+// 1 %: a pose, not a scaling; the receiver normalises it), a depth of 0 (the scene's) or 1-500 mm
+// and a gain within +-60 dB
 bool is_well_formed(const pcisim_lcm::probe_state_t& m);
 
 // CMD_CONTRAST: the volume a command may name (0.5-30 ml); outside it, or 0, the scene's volume is

@@ -39,13 +39,17 @@ DerivedChainMailLimits derive_chain_mail_limits(const GuidewireParams& p) {
   if (!(m.youngs_modulus_pa > 0.0))
     throw std::invalid_argument("guidewire.chain_mail_limits: no core material to derive from");
   DerivedChainMailLimits d;
-  // alpha: the axial strain under the largest load the hub passes on (the same EA body and tip)
-  const double strain = p.feed_refuse_force_n / kWireAxialStiffnessN;
-  d.body_alpha_min = d.tip_alpha_min = std::max(1.0 - strain, kGuidewireAlphaMin.min);
-  d.body_alpha_max = d.tip_alpha_max = std::min(1.0 + strain, kGuidewireAlphaMax.max);
-  // beta: the core's elastic bend
   d.body_core_diameter_m = core_diameter_m(p.bending_stiffness_nm2, m.youngs_modulus_pa);
   d.tip_core_diameter_m = core_diameter_m(p.tip_bending_stiffness_nm2, m.youngs_modulus_pa);
+  // alpha: the core's axial strain, F / (E pi d^2 / 4), under the largest load the hub passes on
+  auto strain = [&](double d_m) {
+    return p.feed_refuse_force_n / (m.youngs_modulus_pa * std::numbers::pi * d_m * d_m / 4.0);
+  };
+  d.body_alpha_min = std::max(1.0 - strain(d.body_core_diameter_m), kGuidewireAlphaMin.min);
+  d.body_alpha_max = std::min(1.0 + strain(d.body_core_diameter_m), kGuidewireAlphaMax.max);
+  d.tip_alpha_min = std::max(1.0 - strain(d.tip_core_diameter_m), kGuidewireAlphaMin.min);
+  d.tip_alpha_max = std::min(1.0 + strain(d.tip_core_diameter_m), kGuidewireAlphaMax.max);
+  // beta: the core's elastic bend
   d.body_beta_deg_per_mm = beta_deg_per_mm(d.body_core_diameter_m, m.recoverable_strain);
   d.tip_beta_deg_per_mm = beta_deg_per_mm(d.tip_core_diameter_m, m.recoverable_strain);
   return d;

@@ -3,8 +3,9 @@
 // docs/guidewire.md, "The chain-mail's limits from the section"). The chain-mail has no forces,
 // only limits [guidewire eqs 1-4], so a section maps onto them through what bounds a real wire's
 // shape, not through its load response:
-//   alpha  a link stretches or compresses by at most the wire's axial strain under the largest
-//          axial load the hub hands on (feed_refuse_force_n): alpha = 1 -+ F / EA
+//   alpha  a link stretches or compresses by at most the core's axial strain under the largest
+//          axial load the hub hands on (feed_refuse_force_n): alpha = 1 -+ F / (E pi d^2 / 4),
+//          d the core's diameter below (body and tip each their own)
 //   beta   a link bends by at most what the core takes elastically. The core's diameter follows
 //          from EI = E pi d^4 / 64; its surface strain d kappa / 2 may reach the material's
 //          recoverable strain eps, so kappa_max = 2 eps / d, and beta is kappa_max per millimetre

@@ -71,8 +71,7 @@ struct GuidewireParams {
 };
 
 // axial and shear stiffness of the section, N: a 0.2 mm steel core (E A = 200 GPa x 3.1e-8 m^2;
-// G A with kappa 0.9). The rod uses them; the chain-mail's stretch limits derived from the
-// section (chain_mail_limits.h) read the axial one
+// G A with kappa 0.9): the rod's
 inline constexpr double kWireAxialStiffnessN = 6.3e3;
 inline constexpr double kWireShearStiffnessN = 2.2e3;
 

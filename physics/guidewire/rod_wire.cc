@@ -13,10 +13,12 @@ namespace {
 // steps (not refused: the hand feels nothing for it), so nodes leave the catheter a few at a
 // time and meet the wall
 constexpr double kMaxFeedSpeedMPerS = 0.12;
-// the moving wall: fixed-point steps to a node's rest point, and how far a node may move within
-// a step before its rest point is found again (the offset is a node's own: the vessels' motion
+// the moving wall: at most this many fixed-point steps to a node's rest point, stopping once a
+// step moves it less than the tolerance; and how far a node may move through its vessel within a
+// step before its rest point is found again (the offset is a node's own: the vessels' motion
 // differs by millimetres across the LM's ostium, where the aortic root stands still)
-constexpr int kRestPointIterations = 2;
+constexpr int kRestPointIterations = 4;
+constexpr double kRestPointToleranceM = 1e-6;
 constexpr double kRestPointRefreshM = 0.5e-3;
 // the longest substep (a longer physics step takes more substeps, as the rod itself does)
 constexpr double kMaxSubstepS = 1.0 / 60.0;
@@ -98,7 +100,7 @@ RodWire::RodWire(const GuidewireParams& params, CatheterPath path, const LumenQu
   stuck_.assign(n + 1, 0);
   wall_impulse_n_s_.assign(n + 1, 0.0);
   wall_force_n_.assign(n + 1, 0.0);
-  for (auto* v : {&rest_point_m_, &anchor_m_, &offset_from_, &offset_to_, &offset_, &wall_substep_m_, &wall_velocity_})
+  for (auto* v : {&rest_point_m_, &offset_from_, &offset_to_, &offset_, &wall_substep_m_, &wall_velocity_})
     v->assign(n + 1, Eigen::Vector3d::Zero());
   // start fully inside the catheter, the tip at the exit
   place_in_catheter(0.0, 1.0);
@@ -152,15 +154,27 @@ void RodWire::place_in_catheter(double previous_fed_m, double dt_s) {
   rod_.set_hub_node(hub);
 }
 
+void RodWire::set_lumen_motion(const LumenMotion* motion) {
+  motion_ = motion;
+  if (motion_) return;
+  // no motion: the wall stands at rest again (the nodes follow it through contact)
+  for (auto* v : {&offset_from_, &offset_to_, &offset_, &wall_substep_m_, &wall_velocity_})
+    std::fill(v->begin(), v->end(), Eigen::Vector3d::Zero());
+}
+
 // node i's rest point r (x = r + d(r, a), a few fixed-point steps from its last offset; the
 // vessels' motion is smooth on the scale of the wire's motion in a substep) and the wall's
 // offset there at the step's start and end
 void RodWire::find_rest_point(int i, double a, double dt_s, int substeps) {
   const Eigen::Vector3d& x = rod_.nodes_m()[i];
   Eigen::Vector3d r = x - offset_[i];
-  for (int k = 0; k < kRestPointIterations; ++k) r = x - motion_->displacement_m(r, a);
+  for (int k = 0; k < kRestPointIterations; ++k) {
+    const Eigen::Vector3d next = x - motion_->displacement_m(r, a);
+    const bool settled = (next - r).squaredNorm() < kRestPointToleranceM * kRestPointToleranceM;
+    r = next;
+    if (settled) break;
+  }
   rest_point_m_[i] = r;
-  anchor_m_[i] = x;
   offset_from_[i] = motion_->displacement_m(r, 0.0);
   offset_to_[i] = motion_->displacement_m(r, 1.0);
   if (!offset_from_[i].allFinite() || !offset_to_[i].allFinite())
@@ -208,7 +222,8 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
       const double a0 = static_cast<double>(k - 1) / substeps;
       const auto x = rod_.nodes_m();
       for (int i = 0; i < node_count(); ++i) {
-        if ((x[i] - anchor_m_[i]).squaredNorm() > kRestPointRefreshM * kRestPointRefreshM)
+        // how far the node moved through the vessel (in its rest frame) since its rest point was found
+        if (((x[i] - offset_[i]) - rest_point_m_[i]).squaredNorm() > kRestPointRefreshM * kRestPointRefreshM)
           find_rest_point(i, a0, dt_s, substeps);
         offset_[i] = offset_from_[i] + a * (offset_to_[i] - offset_from_[i]);
       }
@@ -259,6 +274,11 @@ void RodWire::recover() {
   const Eigen::Vector3d& dir = path_.exit_direction();
   for (int i = 0; i <= hub; ++i) x[i] = path_.point_behind_exit(std::max(params_.length_m - i * l - fed_m_, 0.0));
   for (int i = hub + 1; i < node_count(); ++i) x[i] = x[hub] + (i - hub) * l * dir;
+  // the free wire laid out from the hub rides the hub's offset until its rest points are found again
+  for (int i = hub + 1; i < node_count(); ++i) {
+    offset_[i] = offset_[hub];
+    wall_velocity_[i] = wall_velocity_[hub];
+  }
   for (int i = 0; i < node_count(); ++i) {
     x[i] += offset_[i];
     v[i] = wall_velocity_[i];
@@ -354,6 +374,13 @@ void RodWire::project(rod::CosseratRod& rod, int iteration, double h) {
 // taken off the velocity along the wall (never reversing it), and mu_k N r h off the spin
 void RodWire::after_substep(rod::CosseratRod& rod, double h) {
   const int first_free = rod.hub_node() + 1;
+  // the rod's damping is blood's drag, and the blood moves with its vessel: relative to a moving
+  // wall, v = wall + keep (v - wall), where the rod applied v = keep v
+  if (motion_) {
+    const auto v = rod.mutable_velocities_m_per_s();
+    const double pass = 1.0 - 1.0 / (1.0 + params_.rod_damping_per_s * h);
+    for (int i = first_free; i < node_count(); ++i) v[i] += pass * wall_velocity_[i];
+  }
   // the wall's impulse over the substep, for the step's average force
   for (int i = first_free; i < node_count(); ++i)
     if (node_wall_n_[i] > 0.0) wall_impulse_n_s_[i] += node_wall_n_[i] * h;

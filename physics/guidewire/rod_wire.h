@@ -47,7 +47,7 @@ class RodWire final : public rod::RodContact {
   // (x = r + d(r)), the lumen is sampled at x - d, friction acts on motion relative to the wall,
   // and the nodes in the catheter ride it. Null (the default): the wall stands still at rest.
   // `motion` must outlive the wire.
-  void set_lumen_motion(const LumenMotion* motion) { motion_ = motion; }
+  void set_lumen_motion(const LumenMotion* motion);
   // each node's offset off the rest frame now (zero without a motion)
   std::span<const Eigen::Vector3d> wall_offset_m() const { return offset_; }
 
@@ -112,11 +112,10 @@ class RodWire final : public rod::RodContact {
   std::vector<uint8_t> segment_stuck_;   // held about its axis by static friction this substep
   std::vector<double> node_wall_n_;      // the wall's force on each node in this substep
   std::vector<Eigen::Vector3d> normal_;  // the wall normal at the last contact
-  // the moving wall (motion_): per node, its rest point and where the node stood when it was
-  // found, the wall's offset there at the step's start and end and now (per substep), and the
-  // wall's motion per substep and velocity over the step
+  // the moving wall (motion_): per node, its rest point, the wall's offset there at the step's
+  // start and end and now (per substep), and the wall's motion per substep and velocity over the step
   const LumenMotion* motion_ = nullptr;
-  std::vector<Eigen::Vector3d> rest_point_m_, anchor_m_;
+  std::vector<Eigen::Vector3d> rest_point_m_;
   std::vector<Eigen::Vector3d> offset_from_, offset_to_, offset_, wall_substep_m_, wall_velocity_;
   double commanded_feed_m_ = 0.0, fed_m_ = 0.0, rotation_rad_ = 0.0;
   double rotation_before_step_rad_ = 0.0;

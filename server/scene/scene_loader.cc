@@ -50,6 +50,9 @@ physics::GuidewireParams read_guidewire(json::JsonReader r) {
   p.beat_coupling = r.text("beat_coupling", rod ? "contact" : "kinematic", {"contact", "kinematic"}) == "contact"
                         ? physics::BeatCoupling::kContact
                         : physics::BeatCoupling::kKinematic;
+  if (!rod && p.beat_coupling == physics::BeatCoupling::kContact)
+    r.fail("beat_coupling",
+           "\"contact\" needs guidewire.model \"rod\" (the chain-mail rides the vessels: \"kinematic\")");
   p.length_m = in_range(r, "length_mm", p.length_m, physics::kGuidewireLengthM, kMm);
   p.segment_count = in_range(r, "segments", p.segment_count, physics::kGuidewireSegments);
   p.optimisation_passes =

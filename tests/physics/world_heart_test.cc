@@ -239,7 +239,7 @@ HeldRod run_held_rod(BeatCoupling coupling) {
   WorldSnapshot snap;
   InstrumentInput in;
   HeldRod r;
-  const int held_steps = static_cast<int>(std::ceil(2.0 * 60.0 / spec.heart_beat->rate_bpm * 30.0));
+  const int held_steps = static_cast<int>(std::ceil(2.0 * 60.0 / spec.heart_beat->rate_bpm / spec.step_s));
   for (int k = 0; k < 150 + held_steps; ++k) {
     in.insertion_m = std::min(0.008 + 0.0003 * k, 0.045);
     in.rotation_rad = k > 10 ? 1.5708 : 0.0;
@@ -264,9 +264,9 @@ HeldRod run_held_rod(BeatCoupling coupling) {
 
 TEST(WorldHeart, TheBeatingWallPushesTheRod) {
   // beat_coupling contact: the rod lives in the world and the moving wall pushes it; kinematic:
-  // it is solved at rest and carried. Both keep the wire inside the moving lumen (the same
-  // 0.3 mm bound as the chain-mail's), both tips move with the heart, and they differ by how
-  // much the wire slides and lags inside the lumen (docs/guidewire.md reports the figures)
+  // it is solved at rest and carried. Both keep the wire inside the moving lumen, both tips move
+  // with the heart, and they differ by how much the wire slides and lags inside the lumen
+  // (docs/guidewire.md reports the figures)
   const HeldRod contact = run_held_rod(BeatCoupling::kContact);
   const HeldRod kinematic = run_held_rod(BeatCoupling::kKinematic);
   double rms = 0.0, worst = 0.0;
@@ -281,10 +281,15 @@ TEST(WorldHeart, TheBeatingWallPushesTheRod) {
       "max %.2f mm; worst outside the moving lumen %+.3f / %+.3f mm; wall force up to %.3g N (contact)\n",
       1e3 * contact.peak_to_peak_m, 1e3 * kinematic.peak_to_peak_m, 1e3 * rms, 1e3 * worst,
       1e3 * contact.worst_outside_m, 1e3 * kinematic.worst_outside_m, contact.wall_force_n);
-  EXPECT_LT(contact.worst_outside_m, 3e-4);
+  // the rod in the world is kept inside by its own contact (measured -0.007 mm: the margin
+  // holds); the carried rest-frame solution by the skin's blend, within the chain-mail's 0.3 mm
+  EXPECT_LT(contact.worst_outside_m, 0.1e-3);
   EXPECT_LT(kinematic.worst_outside_m, 3e-4);
-  EXPECT_GT(contact.peak_to_peak_m, 0.5 * kinematic.peak_to_peak_m) << "the wall carries the wire";
-  EXPECT_GT(kinematic.peak_to_peak_m, 1e-3);
+  // the wall carries the wire as far as the vessel moves (10 mm here), and the two schemes' tips
+  // stay within a lumen's width of each other (measured 1.4 mm rms)
+  EXPECT_GT(kinematic.peak_to_peak_m, 5e-3);
+  EXPECT_NEAR(contact.peak_to_peak_m, kinematic.peak_to_peak_m, 0.25 * kinematic.peak_to_peak_m);
+  EXPECT_LT(rms, 3e-3);
   EXPECT_GT(contact.wall_force_n, 0.0);
 }
 

@@ -96,7 +96,10 @@ TEST(MessageChecks, ProbePoseIsAFiniteUnitQuaternionAndAPositionInReach) {
       {"zero quaternion", [](pcisim_lcm::probe_state_t& m) { m.orientation_wxyz[0] = m.orientation_wxyz[3] = 0.0; }},
       {"scaled quaternion", [](pcisim_lcm::probe_state_t& m) { m.orientation_wxyz[0] *= 1.05; }},
       {"11 m away", [](pcisim_lcm::probe_state_t& m) { m.position_mm[0] = 1.1e4; }},
+      {"10.4 m away on a diagonal",
+       [](pcisim_lcm::probe_state_t& m) { m.position_mm[0] = m.position_mm[1] = m.position_mm[2] = 6e3; }},
       {"negative depth", [](pcisim_lcm::probe_state_t& m) { m.depth_mm = -1.0; }},
+      {"a depth of 1e-300 mm", [](pcisim_lcm::probe_state_t& m) { m.depth_mm = 1e-300; }},
       {"gain 80 dB", [](pcisim_lcm::probe_state_t& m) { m.gain_db = 80.0; }},
   };
   for (const Bad& b : bad) {

@@ -36,9 +36,9 @@ TEST(ChainMailLimits, ARoundCoreGivesBackItsDiameterAndItsElasticCurvature) {
   EXPECT_NEAR(d.tip_core_diameter_m, 0.06e-3, 1e-12);
   EXPECT_NEAR(d.body_beta_deg_per_mm, 60.0 * kDegPerRad * 1e-3, 1e-9);
   EXPECT_NEAR(d.tip_beta_deg_per_mm, 200.0 * kDegPerRad * 1e-3, 1e-9);
-  // the hub's 1 N over EA = 6.3 kN
-  EXPECT_NEAR(d.body_alpha_max - 1.0, 1.0 / 6.3e3, 1e-12);
-  EXPECT_NEAR(1.0 - d.tip_alpha_min, 1.0 / 6.3e3, 1e-12);
+  // the hub's 1 N over each core's E A: 200 GPa x pi (0.1 mm)^2 = 6.28 kN, and (0.03 mm)^2: 565 N
+  EXPECT_NEAR(d.body_alpha_max - 1.0, 1.0 / (200e9 * std::numbers::pi * 0.1e-3 * 0.1e-3), 1e-12);
+  EXPECT_NEAR(1.0 - d.tip_alpha_min, 1.0 / (200e9 * std::numbers::pi * 0.03e-3 * 0.03e-3), 1e-12);
   // nitinol: a third of steel's modulus, ten times its recoverable strain; the same EI is a
   // thicker core (x (200/60)^(1/4)) that bends 10 / 1.35 = 7.4 times further
   p.chain_mail_limits = ChainMailLimits::kNitinolCore;

@@ -349,8 +349,9 @@ TEST(RodWireMovingWall, AWallMovingSidewaysCarriesTheWireWithIt) {
       "%.3g N\n",
       1e3 * worst_m, 1e3 * biggest_lag_m, pushed_n);
   EXPECT_LT(worst_m, 0.2e-3);
-  // it lags the wall by no more than the lumen's clearance (1.5 mm radius), and the wall pushes
-  EXPECT_LT(biggest_lag_m, 1.5e-3);
+  // the wall and the catheter carry it with them: it lags by a fraction of the lumen's clearance
+  // (1.5 mm radius: a wire left behind in the world would be pushed along only after ~1.4 mm)
+  EXPECT_LT(biggest_lag_m, 0.05e-3);
   EXPECT_GT(pushed_n, 0.0);
   EXPECT_EQ(w.recoveries(), 0);
 

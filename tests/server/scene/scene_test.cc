@@ -98,6 +98,23 @@ TEST(Scene, TheGuidewireModelIsChosenByTheScene) {
   EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"preset": "bmw"}}})"),
             "test.json: effects.guidewire.preset: expected one of \"none\", \"workhorse\", \"hydrophilic\", "
             "\"support\", \"stiff_tip\", got \"bmw\"");
+  // the beat: the rod is pushed by the moving wall unless told otherwise, the chain-mail rides it
+  EXPECT_EQ(s.world.guidewire->beat_coupling, physics::BeatCoupling::kContact);
+  EXPECT_EQ(parse_scene(R"({"effects": {"guidewire": {}}})", "t").world.guidewire->beat_coupling,
+            physics::BeatCoupling::kKinematic);
+  EXPECT_EQ(parse_scene(R"({"effects": {"guidewire": {"model": "rod", "beat_coupling": "kinematic"}}})", "t")
+                .world.guidewire->beat_coupling,
+            physics::BeatCoupling::kKinematic);
+  EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"beat_coupling": "contact"}}})"),
+            "test.json: effects.guidewire.beat_coupling: \"contact\" needs guidewire.model \"rod\" (the chain-mail "
+            "rides the vessels: \"kinematic\")");
+  // the chain-mail's limits as set or from the section
+  EXPECT_EQ(parse_scene(R"({"effects": {"guidewire": {"chain_mail_limits": "nitinol_core"}}})", "t")
+                .world.guidewire->chain_mail_limits,
+            physics::ChainMailLimits::kNitinolCore);
+  EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"chain_mail_limits": "wood"}}})"),
+            "test.json: effects.guidewire.chain_mail_limits: expected one of \"given\", \"nitinol_core\", "
+            "\"steel_core\", got \"wood\"");
 }
 
 TEST(Scene, EachBadInputNamesItsJsonPathAndWhatWasExpected) {

@@ -73,8 +73,8 @@ class World {
   // read-only views for tests and benchmarks; null when the effect is not listed. With
   // vessel_motion the chain-mail, its contact and the blood live in the vessels' rest frame and
   // the snapshot carries them into the world; the rod does too with guidewire.beat_coupling
-  // "kinematic", and with "contact" its nodes are in the world (RodWire::wall_offset_m() maps
-  // them to the rest frame)
+  // "kinematic" or without vessel_contact, and with "contact" its nodes are in the world
+  // (RodWire::wall_offset_m() maps them to the rest frame)
   const ChainMailWire* guidewire_state() const;  // guidewire.model chain_mail
   const RodWire* rod_state() const;              // guidewire.model rod (contact and friction inside it)
   const WallContact* contact_state() const;

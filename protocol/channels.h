@@ -9,5 +9,6 @@ inline constexpr const char* kStatusChannel = "PCISIM_STATUS";          // serve
 inline constexpr const char* kSessionChannel = "PCISIM_SESSION";        // consoles -> server
 inline constexpr const char* kXrayChannel = "PCISIM_XRAY";              // server, pulse rate, own instance
 inline constexpr const char* kProbeChannel = "PCISIM_PROBE";            // bridge -> server, 1 kHz
+inline constexpr const char* kUltrasoundChannel = "PCISIM_ULTRASOUND";  // server, frame rate, image instance
 
 }  // namespace pcisim::protocol

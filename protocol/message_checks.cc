@@ -72,4 +72,20 @@ bool is_well_formed(const pcisim_lcm::probe_state_t& m) {
   return std::abs(norm - 1.0) <= 0.01 && depth_ok && std::abs(m.gain_db) <= 60.0;
 }
 
+bool is_well_formed(const pcisim_lcm::us_frame_t& m) {
+  using F = pcisim_lcm::us_frame_t;
+  if (m.width <= 0 || m.height <= 0 || m.width > 4096 || m.height > 4096) return false;
+  if (m.pixel_format != F::FORMAT_GRAY8 || int64_t{m.width} * m.height != m.num_bytes) return false;
+  if (m.geometry != F::GEOMETRY_LINEAR && m.geometry != F::GEOMETRY_CURVILINEAR) return false;
+  for (int k = 0; k < 3; ++k)
+    if (!finite(m.origin_mm[k], m.beam[k], m.lateral[k], m.probe_force_n[k])) return false;
+  const auto unit = [](const double* v) { return std::abs(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] - 1.0) <= 1e-3; };
+  if (!unit(m.beam) || !unit(m.lateral)) return false;
+  if (!finite(m.depth_mm, m.width_mm, m.fan_angle_deg, m.radius_of_curvature_mm, m.gain_db, m.frequency_mhz,
+              m.sim_time_s))
+    return false;
+  return m.depth_mm > 0.0 && m.depth_mm <= 300.0 && m.width_mm >= 0.0 && m.fan_angle_deg >= 0.0 &&
+         m.radius_of_curvature_mm >= 0.0;
+}
+
 }  // namespace pcisim::protocol

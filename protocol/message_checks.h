@@ -9,6 +9,7 @@
 #include "pcisim_lcm/probe_state_t.hpp"
 #include "pcisim_lcm/session_command_t.hpp"
 #include "pcisim_lcm/sim_status_t.hpp"
+#include "pcisim_lcm/us_frame_t.hpp"
 #include "pcisim_lcm/wire_state_t.hpp"
 #include "pcisim_lcm/xray_frame_t.hpp"
 
@@ -25,6 +26,9 @@ bool is_well_formed(const pcisim_lcm::xray_frame_t& m);
 // 1 %: a pose, not a scaling; the receiver normalises it), a depth of 0 (the scene's) or 1-500 mm
 // and a gain within +-60 dB
 bool is_well_formed(const pcisim_lcm::probe_state_t& m);
+// an ultrasound frame: a known format and geometry, width x height bytes, unit beam and lateral
+// directions, finite sizes and a depth within (0, 300] mm (the renderer's range)
+bool is_well_formed(const pcisim_lcm::us_frame_t& m);
 
 // CMD_CONTRAST: the volume a command may name (0.5-30 ml); outside it, or 0, the scene's volume is
 // injected. One rule for the server, which injects, and the clients that count what was used.

@@ -23,6 +23,7 @@
 #include "physics/motion/vessel_skin.h"
 #include "physics/param_checks.h"
 #include "physics/pbd/pbd_cuda_solver.h"
+#include "physics/soft_tissue/tissue_scene.h"
 #include "anatomy/phantom/coronary_phantom.h"
 #include "anatomy/vessel/vessel_tree.h"
 
@@ -62,6 +63,12 @@ void validate(const WorldSpec& s) {
             "heart_beat.solver: jacobi_cuda needs a CUDA build and a GPU (" + why + ")");
   }
   if (s.vessel_motion) validate(*s.vessel_motion);
+  require(!s.probe_contact || s.soft_tissue, "probe_contact: needs soft_tissue");
+  // the organ scene's anatomy is an organ on a support, not a coronary tree in a heart
+  require(!s.soft_tissue || (!s.guidewire && !s.heart_beat),
+          "soft_tissue: goes with probe_contact and ultrasound only (not guidewire or heart_beat)");
+  if (s.soft_tissue) soft_tissue::validate(*s.soft_tissue);
+  if (s.probe_contact) soft_tissue::validate(*s.probe_contact);
 }
 
 }  // namespace
@@ -78,12 +85,14 @@ struct World::Impl {
   std::optional<BeatingHeart> heart;
   HeartFitReport heart_fit;
   std::optional<VesselSkin> skin;
+  std::optional<soft_tissue::TissueScene> tissue;
   anatomy::HeartPose heart_pose;     // template frame -> the case's
   Eigen::Matrix3Xd heart_in_case_m;  // the heart's particles in the case's frame (skin input)
   InputGuard guard;
   InstrumentInput used;
   std::vector<EffectCost> costs;
-  int cost_wire = -1, cost_blood = -1, cost_contact = -1, cost_friction = -1, cost_heart = -1, cost_motion = -1;
+  int cost_wire = -1, cost_blood = -1, cost_contact = -1, cost_friction = -1, cost_heart = -1, cost_motion = -1,
+      cost_tissue = -1;
   LocalForceModel model;
   double time_s = 0.0;
   int64_t step = 0;
@@ -117,7 +126,7 @@ World::World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_ge
             std::move(contact_geometry)) {}
 
 World::World(const WorldSpec& spec, const anatomy::VesselTree& tree, std::shared_ptr<const LumenQuery> contact_geometry,
-             const anatomy::HeartPose& heart_pose, const Eigen::Matrix3Xd& heart_rest_m)
+             const anatomy::HeartPose& heart_pose, const Eigen::Matrix3Xd& heart_rest_m, const anatomy::Organ* organ)
     : impl_(std::make_unique<Impl>()) {
   validate(spec);
   Impl& w = *impl_;
@@ -135,6 +144,14 @@ World::World(const WorldSpec& spec, const anatomy::VesselTree& tree, std::shared
   w.cost_blood = cost_slot(spec.blood_flow.has_value(), "blood_flow");
   w.cost_contact = cost_slot(spec.vessel_contact.has_value(), "vessel_contact");
   w.cost_friction = cost_slot(spec.friction.has_value(), "friction");
+  // the probe's contacts run inside the tissue's substeps: their time is soft_tissue's
+  w.cost_tissue = cost_slot(spec.soft_tissue.has_value(), "soft_tissue");
+  if (spec.soft_tissue) {
+    require(organ != nullptr, "soft_tissue: the scene's anatomy has no organ (anatomy.organ: \"kidney\")");
+    w.tissue.emplace(*organ, *spec.soft_tissue, spec.probe_contact, spec.step_s);
+    w.model = w.tissue->force_model();
+    return;
+  }
   if (spec.heart_beat && !spec.vessel_motion) w.heart.emplace(*spec.heart_beat);
   if (!spec.guidewire && !spec.vessel_motion) return;  // nothing else needs the anatomy
 
@@ -214,6 +231,16 @@ World::~World() = default;
 void World::step(const InstrumentInput& input) {
   Impl& w = *impl_;
   w.used = w.guard.accept(input);
+  if (w.tissue) {
+    const auto a = Clock::now();
+    const auto& q = w.used.probe_orientation_wxyz;
+    const soft_tissue::ProbePose pose{
+        Eigen::Vector3d(w.used.probe_position_m[0], w.used.probe_position_m[1], w.used.probe_position_m[2]),
+        Eigen::Quaterniond(q[0], q[1], q[2], q[3])};
+    w.tissue->step(w.used.probe_present ? &pose : nullptr);
+    w.model = w.tissue->force_model();
+    w.costs[w.cost_tissue].last_step_ms = Impl::ms(a, Clock::now());
+  }
   if (w.heart) {
     const auto a = Clock::now();
     w.heart->step(w.spec.step_s);
@@ -315,6 +342,7 @@ void World::write_snapshot(WorldSnapshot& out) const {
   out.rotation_rad = w.used.rotation_rad;
   out.heart_phase = w.heart ? w.heart->phase() : 0.0;
   out.tip_branch = w.tip_branch;
+  write_tissue(out);
   if (w.skin) {
     const auto pts = w.skin->points_m();
     out.vessel_points_m.assign(pts.begin(), pts.end());
@@ -351,6 +379,27 @@ void World::write_snapshot(WorldSnapshot& out) const {
     std::fill(out.wire_contact.begin(), out.wire_contact.end(), 0);
   }
   out.tip_m = out.wire_nodes_m.back();
+}
+
+void World::write_tissue(WorldSnapshot& out) const {
+  const Impl& w = *impl_;
+  out.probe_present = w.tissue && w.tissue->has_probe();
+  if (!w.tissue) {
+    out.tissue_tet_vertices_m.clear();
+    out.fiducials_m.clear();
+    return;
+  }
+  const Eigen::Matrix3Xd& tets = w.tissue->tet_vertices_m();
+  out.tissue_tet_vertices_m.resize(tets.cols());
+  for (Eigen::Index i = 0; i < tets.cols(); ++i) out.tissue_tet_vertices_m[i] = tets.col(i);
+  const Eigen::Matrix3Xd& fid = w.tissue->fiducials_m();
+  out.fiducials_m.resize(fid.cols());
+  for (Eigen::Index i = 0; i < fid.cols(); ++i) out.fiducials_m[i] = fid.col(i);
+  out.probe_position_m = w.tissue->probe_pose().position_m;
+  out.probe_rotation = w.tissue->probe_pose().rotation.toRotationMatrix();
+  out.probe_force_n = w.tissue->probe_force_n();
+  out.probe_depth_mm = w.used.probe_depth_mm;
+  out.probe_gain_db = w.used.probe_gain_db;
 }
 
 LocalForceModel World::force_model() const {
@@ -398,6 +447,10 @@ const BeatingHeart* World::heart_state() const {
 const VesselSkin* World::vessel_skin() const {
   return impl_->skin ? &*impl_->skin : nullptr;
 }
+const soft_tissue::TissueScene* World::tissue_state() const {
+  return impl_->tissue ? &*impl_->tissue : nullptr;
+}
+
 const BloodChainMail* World::blood_state() const {
   return impl_->blood ? &*impl_->blood : nullptr;
 }

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "anatomy/heart/heart_pose.h"
+#include "anatomy/organ/organ.h"
 #include "anatomy/vessel/vessel_tree.h"
 #include "physics/instrument_input.h"
 #include "physics/local_force_model.h"
@@ -29,6 +30,9 @@ class VesselSkin;
 class CoulombFriction;
 class LumenQuery;
 class WallContact;
+namespace soft_tissue {
+class TissueScene;
+}  // namespace soft_tissue
 
 struct EffectCost {
   std::string name;           // the scene's effect name
@@ -44,9 +48,11 @@ class World {
   // `heart_pose` places the template heart under the tree (the case's; identity for the phantom);
   // `heart_rest_m`, when not empty, is the template's rest shape fitted to the patient (the case's
   // heart_vertices_m, template frame): used instead of the template's own vertices.
+  // `organ` is the soft-tissue scene's (the case's organ; soft_tissue needs it, the tree is then
+  // unused and may be empty).
   World(const WorldSpec& spec, const anatomy::VesselTree& tree,
         std::shared_ptr<const LumenQuery> contact_geometry = nullptr, const anatomy::HeartPose& heart_pose = {},
-        const Eigen::Matrix3Xd& heart_rest_m = {});
+        const Eigen::Matrix3Xd& heart_rest_m = {}, const anatomy::Organ* organ = nullptr);
   // the same around the procedural phantom of spec.anatomy.seed (tests and benchmarks)
   explicit World(const WorldSpec& spec);
   World(const WorldSpec& spec, std::shared_ptr<const LumenQuery> contact_geometry);
@@ -86,8 +92,10 @@ class World {
   const HeartFitReport& heart_fit() const;
   const VesselSkin* vessel_skin() const;  // the tree now (vessel_motion)
   const BloodChainMail* blood_state() const;
+  const soft_tissue::TissueScene* tissue_state() const;  // soft_tissue
 
  private:
+  void write_tissue(WorldSnapshot& out) const;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

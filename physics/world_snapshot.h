@@ -19,6 +19,18 @@ struct WorldSnapshot {
   // the coronary centerline points where the heart has carried them, in tree order (branch 0's
   // points, then branch 1's, ...); empty without vessel_motion (the tree is at rest)
   std::vector<Eigen::Vector3d> vessel_points_m;
+
+  // the soft-tissue scene (empty / zero without soft_tissue): the coarse tet mesh's vertices and
+  // the fiducials where the tissue has carried them (same order as at rest)
+  std::vector<Eigen::Vector3d> tissue_tet_vertices_m;
+  std::vector<Eigen::Vector3d> fiducials_m;
+  // the probe as the step left it (probe_contact): face centre, rotation probe -> scene (columns:
+  // lateral, elevation, beam), the force the tissue puts on it, and the imaging asked for
+  bool probe_present = false;
+  Eigen::Vector3d probe_position_m = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d probe_rotation = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d probe_force_n = Eigen::Vector3d::Zero();
+  double probe_depth_mm = 0.0, probe_gain_db = 0.0;
 };
 
 }  // namespace pcisim::physics

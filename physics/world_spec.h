@@ -7,6 +7,7 @@
 #include "physics/guidewire/guidewire_params.h"
 #include "physics/heart/heart_params.h"
 #include "physics/motion/vessel_motion_params.h"
+#include "physics/soft_tissue/soft_tissue_spec.h"
 
 namespace pcisim::physics {
 
@@ -23,6 +24,10 @@ struct WorldSpec {
   std::optional<BloodFlowParams> blood_flow;          // needs guidewire; pulsatile with heart_beat
   std::optional<HeartBeatParams> heart_beat;          // the beating heart (stands alone)
   std::optional<VesselMotionParams> vessel_motion;    // the tree rides the heart: needs heart_beat
+  // the soft-tissue scene: the case's organ as clustered shape-matching PBD on its support, and
+  // the probe pressing it (needs soft_tissue); neither goes with the wire's or the heart's effects
+  std::optional<soft_tissue::SoftTissueSpec> soft_tissue;
+  std::optional<soft_tissue::ProbeContactParams> probe_contact;
 };
 
 }  // namespace pcisim::physics

@@ -1,6 +1,7 @@
 #include "server/case_builder.h"
 
 #include "anatomy/case/case_folder.h"
+#include "anatomy/organ/kidney_phantom.h"
 #ifdef PCISIM_HAVE_DICOM
 #include "anatomy/dicom/dicom_series.h"
 #endif
@@ -26,7 +27,21 @@ anatomy::PhantomCaseSpec phantom_case_spec(const Scene& scene) {
   return p;
 }
 
+// the soft-tissue scene's procedural organ: its CT (what the ultrasound images) and the organ
+// physics builds; no vessels
+anatomy::Case kidney_case(const Scene& scene) {
+  anatomy::KidneySpec spec;
+  spec.seed = scene.world.anatomy.seed;
+  anatomy::KidneyPhantom k = anatomy::make_kidney_phantom(spec);
+  anatomy::Case c;
+  c.name = "kidney phantom " + std::to_string(spec.seed);
+  c.organ = anatomy::kidney_organ(k);
+  c.ct = std::move(k.ct);
+  return c;
+}
+
 std::shared_ptr<const anatomy::Case> build_case(const Scene& scene) {
+  if (scene.organ == "kidney") return std::make_shared<const anatomy::Case>(kidney_case(scene));
   if (!scene.case_dir.empty()) return std::make_shared<const anatomy::Case>(read_case_folder(scene.case_dir));
   anatomy::PhantomCaseSpec p = phantom_case_spec(scene);
   p.with_ct = scene.xray.has_value();  // only the X-ray thread needs the CT

@@ -12,14 +12,16 @@
 namespace pcisim::server {
 
 LcmIo::LcmIo(lcm::LCM& lcm, SharedState& state, SessionLimits& limits, double scene_injection_ml, StatusSource status,
-             BranchNamer branch_name)
+             BranchNamer branch_name, Instrument instrument)
     : lcm_(lcm),
       state_(state),
       limits_(limits),
       scene_injection_ml_(scene_injection_ml),
       status_(std::move(status)),
       branch_name_(std::move(branch_name)) {
-  subscriptions_ = {lcm_.subscribe(protocol::kInstrumentChannel, &LcmIo::on_instrument, this),
+  subscriptions_ = {instrument == Instrument::kProbe
+                        ? lcm_.subscribe(protocol::kProbeChannel, &LcmIo::on_probe, this)
+                        : lcm_.subscribe(protocol::kInstrumentChannel, &LcmIo::on_instrument, this),
                     lcm_.subscribe(protocol::kSessionChannel, &LcmIo::on_session, this)};
 }
 
@@ -90,6 +92,49 @@ void LcmIo::on_instrument(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   slot.sample.rotation_rad = m.rotation_rad;
   slot.sample.insertion_rate_m_per_s = m.insertion_rate_mm_s * 1e-3;
   slot.sample.rotation_rate_rad_per_s = m.rotation_rate_rad_s;
+  last_instrument_seq_ = m.seq;
+  state_.instrument_for_haptics.write_slot() = slot;
+  state_.instrument_for_haptics.publish();
+  state_.instrument_for_physics.write_slot() = slot;
+  state_.instrument_for_physics.publish();
+}
+
+// the probe: its pose for physics, and for the haptic loop the face's depth along its own beam
+// (the one axis the force is rendered on) with its rate from the previous sample
+void LcmIo::on_probe(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+  state_.lcm_rx.fetch_add(1, std::memory_order_relaxed);
+  if (!protocol::decode_checked(*rbuf, probe_msg_)) {
+    state_.lcm_dropped_bad.fetch_add(1, std::memory_order_relaxed);
+    state_.instrument_rejected.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  const auto& m = probe_msg_;
+  if (m.status == pcisim_lcm::probe_state_t::STATUS_FAULT) return;  // goes stale; the force fades
+  state_.instrument_heard_ns.store(realtime::monotonic_ns(), std::memory_order_relaxed);
+  InstrumentSlot slot;
+  slot.seq = m.seq;
+  slot.buttons = m.buttons;
+  slot.probe_present = true;
+  const auto& q = m.orientation_wxyz;
+  const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);  // within 1 % of 1 (checked)
+  for (int k = 0; k < 4; ++k) slot.probe_orientation_wxyz[k] = q[k] / n;
+  for (int k = 0; k < 3; ++k) slot.probe_position_m[k] = m.position_mm[k] * 1e-3;
+  slot.probe_depth_mm = m.depth_mm;
+  slot.probe_gain_db = m.gain_db;
+  // beam = R e_z of the unit quaternion (w, x, y, z)
+  const double w = q[0] / n, x = q[1] / n, y = q[2] / n, z = q[3] / n;
+  const double beam[3] = {2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)};
+  const double depth_m =
+      beam[0] * slot.probe_position_m[0] + beam[1] * slot.probe_position_m[1] + beam[2] * slot.probe_position_m[2];
+  const int64_t now_us = realtime::monotonic_us();
+  const int64_t dt_us = now_us - last_probe_us_;
+  slot.sample.received_us = now_us;
+  slot.sample.insertion_m = depth_m;
+  // a rate over a gap of more than 0.1 s (or none) would be a jump, not a velocity
+  slot.sample.insertion_rate_m_per_s =
+      last_probe_us_ > 0 && dt_us > 0 && dt_us < 100'000 ? (depth_m - last_probe_depth_m_) / (dt_us * 1e-6) : 0.0;
+  last_probe_us_ = now_us;
+  last_probe_depth_m_ = depth_m;
   last_instrument_seq_ = m.seq;
   state_.instrument_for_haptics.write_slot() = slot;
   state_.instrument_for_haptics.publish();

@@ -9,6 +9,7 @@
 
 #include "pcisim_lcm/force_command_t.hpp"
 #include "pcisim_lcm/instrument_state_t.hpp"
+#include "pcisim_lcm/probe_state_t.hpp"
 #include "pcisim_lcm/session_command_t.hpp"
 #include "pcisim_lcm/sim_status_t.hpp"
 #include "pcisim_lcm/wire_state_t.hpp"
@@ -22,10 +23,14 @@ class LcmIo {
   using StatusSource = std::function<pcisim_lcm::sim_status_t()>;
   using BranchNamer = std::function<std::string(int)>;
 
+  // the instrument the scene is driven by: the wire's (PCISIM_INSTRUMENT) or the ultrasound
+  // probe (PCISIM_PROBE, the soft-tissue scene); the other channel is not subscribed
+  enum class Instrument { kWire, kProbe };
+
   // `lcm` and `limits` must outlive this object; status() is called once a second from the send
   // thread. `scene_injection_ml` is what an injection that names no volume injects.
   LcmIo(lcm::LCM& lcm, SharedState& state, SessionLimits& limits, double scene_injection_ml, StatusSource status,
-        BranchNamer branch_name);
+        BranchNamer branch_name, Instrument instrument = Instrument::kWire);
   ~LcmIo();
 
   void start();
@@ -35,6 +40,7 @@ class LcmIo {
  private:
   void on_instrument(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void on_session(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void on_probe(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void request_scene(const std::string& path);
   // volume and rate 0: the scene's; a console command may name its own
   void add_injection(double volume_ml = 0.0, double rate_ml_per_s = 0.0);
@@ -55,6 +61,9 @@ class LcmIo {
   // messages reused every time (lcm::LCM::publish still allocates its encode buffer per call; this
   // is the LCM thread, never the 1 kHz haptic loop)
   pcisim_lcm::instrument_state_t instrument_msg_{};
+  pcisim_lcm::probe_state_t probe_msg_{};
+  double last_probe_depth_m_ = 0.0;
+  int64_t last_probe_us_ = 0;
   pcisim_lcm::session_command_t session_msg_{};
   pcisim_lcm::force_command_t force_msg_{};
   pcisim_lcm::wire_state_t wire_msg_{};

@@ -12,11 +12,16 @@ PhysicsLoop::PhysicsLoop(const Scene& scene, std::shared_ptr<const anatomy::Case
       case_(std::move(anatomy)),
       state_(state),
       rate_hz_(scene.physics_rate_hz),
-      world_(std::make_unique<physics::World>(spec_, case_->vessels, nullptr, case_->heart, case_->heart_vertices_m)) {
+      world_(make_world()) {
   for (const auto& cost : world_->effect_costs()) {
     effects_.push_back(std::make_unique<EffectStats>());
     effects_.back()->name = cost.name;
   }
+}
+
+std::unique_ptr<physics::World> PhysicsLoop::make_world() const {
+  return std::make_unique<physics::World>(spec_, case_->vessels, nullptr, case_->heart, case_->heart_vertices_m,
+                                          case_->organ ? &*case_->organ : nullptr);
 }
 
 void PhysicsLoop::step_once(int64_t now_ns) {
@@ -27,6 +32,11 @@ void PhysicsLoop::step_once(int64_t now_ns) {
   input.insertion_rate_m_per_s = instrument_.sample.insertion_rate_m_per_s;
   input.rotation_rate_rad_per_s = instrument_.sample.rotation_rate_rad_per_s;
   input.buttons = static_cast<uint32_t>(instrument_.buttons);
+  input.probe_present = instrument_.probe_present;
+  input.probe_position_m = instrument_.probe_position_m;
+  input.probe_orientation_wxyz = instrument_.probe_orientation_wxyz;
+  input.probe_depth_mm = instrument_.probe_depth_mm;
+  input.probe_gain_db = instrument_.probe_gain_db;
   world_->step(input);
   if (const int64_t stall_us = state_.inject_stall_us.exchange(0)) realtime::sleep_until_ns(now_ns + stall_us * 1000);
 
@@ -43,6 +53,10 @@ void PhysicsLoop::step_once(int64_t now_ns) {
   if (state_.xray_enabled.load(std::memory_order_relaxed)) {
     state_.snapshot_for_xray.write_slot() = snap;  // same sizes every step: no allocation after the first
     state_.snapshot_for_xray.publish();
+  }
+  if (state_.ultrasound_enabled.load(std::memory_order_relaxed)) {
+    state_.snapshot_for_ultrasound.write_slot() = snap;
+    state_.snapshot_for_ultrasound.publish();
   }
 
   // the model is stamped on the haptic thread's clock; two physics periods of validity
@@ -67,8 +81,7 @@ void PhysicsLoop::run() {
     state_.physics.mark_wake(wake_ns);
 
     // a reset rebuilds the world between steps (allocation is fine here, not inside step)
-    if (state_.reset_requested.exchange(false))
-      world_ = std::make_unique<physics::World>(spec_, case_->vessels, nullptr, case_->heart, case_->heart_vertices_m);
+    if (state_.reset_requested.exchange(false)) world_ = make_world();
     if (!state_.paused.load(std::memory_order_relaxed)) step_once(wake_ns);
 
     const int64_t done_ns = realtime::monotonic_ns();

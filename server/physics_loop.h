@@ -31,6 +31,7 @@ class PhysicsLoop {
 
  private:
   void step_once(int64_t now_ns);
+  std::unique_ptr<physics::World> make_world() const;
 
   physics::WorldSpec spec_;
   std::shared_ptr<const anatomy::Case> case_;

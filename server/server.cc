@@ -13,7 +13,9 @@
 #include "server/physics_loop.h"
 #include "realtime/clock.h"
 #include "realtime/realtime_setup.h"
+#include "server/ultrasound_loop.h"
 #include "server/xray_loop.h"
+#include "physics/soft_tissue/tissue_scene.h"
 
 namespace pcisim::server {
 
@@ -26,7 +28,8 @@ struct Server::Impl {
   SessionLimits* limits;
   SharedState state;
   std::unique_ptr<PhysicsLoop> physics;
-  std::unique_ptr<XrayLoop> xray;  // only when the scene lists xray
+  std::unique_ptr<XrayLoop> xray;              // only when the scene lists xray
+  std::unique_ptr<UltrasoundLoop> ultrasound;  // only when the scene lists ultrasound
   int64_t start_ns = 0;
   std::atomic<bool> haptic_fifo{false};
   // status rates are over the last second, not since start
@@ -44,6 +47,8 @@ struct Server::Impl {
     const double on_s = state.xray_on_ns.load() * 1e-9;
     r.xray_fps = on_s > 0 ? r.xray_frames / on_s : 0.0;
     r.xray_render_ms = percentiles(state.xray_render_ns, 1e-6);
+    r.ultrasound_frames = state.ultrasound_frames.load();
+    r.ultrasound_render_ms = percentiles(state.ultrasound_render_ns, 1e-6);
     r.contrast_injections = limits->injections();
     r.contrast_ml = limits->contrast_ml();
     r.resets_refused = limits->resets_refused();
@@ -111,6 +116,20 @@ Server::Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images, SessionL
   std::vector<std::string> names;
   for (const auto& b : anatomy.vessels.branches) names.push_back(b.name);
   branch_namer = [names](int i) { return i >= 0 && i < static_cast<int>(names.size()) ? names[i] : std::string(); };
+  if (const auto* tissue = impl_->physics->world().tissue_state())
+    spdlog::info("{}: {} particles in {} clusters (radius {:.1f} mm), {} tets for the image, {} fiducials; {}",
+                 anatomy.organ->name, tissue->body().particle_count(), tissue->model().clusters.size(),
+                 tissue->model().spec.particle_radius_m * 1e3, tissue->model().tets.size(),
+                 tissue->model().fiducial_skin.size(), tissue->has_probe() ? "probe in contact" : "no probe");
+  if (scene.ultrasound) {
+    const auto* tissue = impl_->physics->world().tissue_state();
+    if (!tissue) throw std::invalid_argument("ultrasound: needs soft_tissue");
+    impl_->ultrasound = std::make_unique<UltrasoundLoop>(scene, anatomy, tissue->model().tet_vertices_m,
+                                                         tissue->model().tets, impl_->state, images);
+    spdlog::info("ultrasound ready ({}x{} px, {} mm deep, {} Hz, frames {})", scene.ultrasound->settings.width_px,
+                 scene.ultrasound->settings.height_px, scene.ultrasound->settings.depth_mm,
+                 scene.ultrasound->frame_rate_hz, images ? "published" : "not published");
+  }
   if (scene.xray) {
     const int64_t t1 = realtime::monotonic_ns();
     impl_->xray = std::make_unique<XrayLoop>(scene, anatomy, impl_->state, images);
@@ -128,7 +147,7 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   const realtime::CpuLatencyRequest latency(cpu_latency_us);
   LcmIo io(
       m.lcm, m.state, *m.limits, m.scene.xray ? m.scene.xray->injection_volume_ml : 0.0, [&m] { return m.status(); },
-      branch_namer);
+      branch_namer, m.scene.world.probe_contact ? LcmIo::Instrument::kProbe : LcmIo::Instrument::kWire);
 
   m.start_ns = m.last_status_ns = realtime::monotonic_ns();
   io.start();
@@ -138,6 +157,8 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   std::thread physics([&] { m.physics->run(); });
   std::thread xray;
   if (m.xray) xray = std::thread([&] { m.xray->run(); });
+  std::thread ultrasound;
+  if (m.ultrasound) ultrasound = std::thread([&] { m.ultrasound->run(); });
   spdlog::info("running: haptic 1000 Hz, physics {} Hz{}{}{}", m.scene.physics_rate_hz, locked ? ", memory locked" : "",
                latency.granted() ? fmt::format(", CPU wake-up latency held at {} us", cpu_latency_us) : "",
                duration_s > 0 ? fmt::format(", for {} s", duration_s) : "");
@@ -165,6 +186,7 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   haptic.join();
   physics.join();
   if (xray.joinable()) xray.join();
+  if (ultrasound.joinable()) ultrasound.join();
   const double elapsed_s = (realtime::monotonic_ns() - m.start_ns) * 1e-9;
   io.stop();
   StatsReport r = m.stats(elapsed_s);

@@ -22,6 +22,12 @@ struct InstrumentSlot {
   haptics::InstrumentSample sample;  // SI, stamped with the monotonic receive time
   int64_t seq = -1;
   int32_t buttons = 0;
+  // the ultrasound probe (PCISIM_PROBE): its pose for physics; sample.insertion_m is then the
+  // face's depth along the beam (m) and the haptic loop renders the force along it
+  bool probe_present = false;
+  std::array<double, 3> probe_position_m{};
+  std::array<double, 4> probe_orientation_wxyz{1.0, 0.0, 0.0, 0.0};
+  double probe_depth_mm = 0.0, probe_gain_db = 0.0;
 };
 
 struct ForceSlot {
@@ -59,6 +65,10 @@ struct SharedState {
   realtime::TripleBuffer<physics::WorldSnapshot> snapshot_for_tx;
   realtime::TripleBuffer<physics::WorldSnapshot> snapshot_for_xray;  // published only when the scene has xray
   std::atomic<bool> xray_enabled{false};
+  realtime::TripleBuffer<physics::WorldSnapshot> snapshot_for_ultrasound;  // only when the scene has ultrasound
+  std::atomic<bool> ultrasound_enabled{false};
+  realtime::LatencyHistogram ultrasound_render_ns;
+  std::atomic<int64_t> ultrasound_frames{0};
   std::atomic<double> sim_time_s{0};
   // haptic -> lcm tx
   realtime::SpscRing<ForceSlot, 1024> forces;

@@ -63,6 +63,7 @@ nlohmann::json to_json(const StatsReport& r) {
         {"effects", effects}}},
       {"effects", r.effects},
       {"xray", {{"frames", r.xray_frames}, {"fps", r.xray_fps}, {"render_ms", pct(r.xray_render_ms, false)}}},
+      {"ultrasound", {{"frames", r.ultrasound_frames}, {"render_ms", pct(r.ultrasound_render_ms, false)}}},
       {"lcm", {{"rx", r.lcm_rx}, {"tx", r.lcm_tx}, {"dropped_bad", r.lcm_dropped_bad}}},
       {"session",
        {{"contrast_injections", r.contrast_injections},
@@ -117,6 +118,7 @@ std::string human_summary(const StatsReport& r) {
       "  physics {:.1f} Hz of {:.0f}  step p50 {:.2f} / p99 {:.2f} / max {:.2f} ms  overruns {}\n"
       "  effects (p50):{}\n"
       "  x-ray   {} frames, {:.1f} fps while the pedal was down, render p50 {:.1f} / p99 {:.1f} ms\n"
+      "  ultrasound {} frames, render p50 {:.1f} / p99 {:.1f} ms\n"
       "  lcm     rx {}  tx {}  dropped (bad) {}\n"
       "  session contrast {} injections, {:.1f} ml; refused: {} resets, {} scene loads, {} scenes, {} injections; "
       "{} C-arm targets coalesced",
@@ -124,9 +126,9 @@ std::string human_summary(const StatsReport& r) {
       r.haptic_period_us.p99, r.haptic_period_us.p999, r.haptic_period_us.max, r.haptic_compute_us.p99,
       r.haptic_overruns, r.physics_rate_hz, r.physics_target_hz, r.physics_step_ms.p50, r.physics_step_ms.p99,
       r.physics_step_ms.max, r.physics_overruns, effects.empty() ? " none" : effects, r.xray_frames, r.xray_fps,
-      r.xray_render_ms.p50, r.xray_render_ms.p99, r.lcm_rx, r.lcm_tx, r.lcm_dropped_bad, r.contrast_injections,
-      r.contrast_ml, r.resets_refused, r.scene_loads_refused, r.scenes_rejected, r.injections_refused,
-      r.carm_moves_coalesced);
+      r.xray_render_ms.p50, r.xray_render_ms.p99, r.ultrasound_frames, r.ultrasound_render_ms.p50,
+      r.ultrasound_render_ms.p99, r.lcm_rx, r.lcm_tx, r.lcm_dropped_bad, r.contrast_injections, r.contrast_ml,
+      r.resets_refused, r.scene_loads_refused, r.scenes_rejected, r.injections_refused, r.carm_moves_coalesced);
 }
 
 }  // namespace pcisim::server

@@ -28,6 +28,8 @@ struct StatsReport {
   int64_t xray_frames = 0;
   double xray_fps = 0;  // frames per second while a pedal was down
   Percentiles xray_render_ms;
+  int64_t ultrasound_frames = 0;  // the soft-tissue scene's B-mode frames
+  Percentiles ultrasound_render_ms;
   std::vector<std::string> effects;  // every effect the scene built (physics and x-ray)
   int64_t lcm_rx = 0, lcm_tx = 0, lcm_dropped_bad = 0;
   // the session so far (across scene reloads): contrast and refused console commands

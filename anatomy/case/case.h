@@ -9,6 +9,7 @@
 
 #include "anatomy/heart/heart_pose.h"
 #include "anatomy/mesh/triangle_mesh.h"
+#include "anatomy/organ/organ.h"
 #include "anatomy/vessel/vessel_tree.h"
 #include "anatomy/volume/volume.h"
 
@@ -30,6 +31,8 @@ struct Case {
   // the template heart's rest vertices fitted to this patient's CT, in the template's frame
   // (metres, over the template's tets: one column per template vertex); empty: the template's own
   Eigen::Matrix3Xd heart_vertices_m;
+  // the soft-tissue scene's organ (the CT above is then the organ's); absent in coronary cases
+  std::optional<Organ> organ;
 };
 
 }  // namespace pcisim::anatomy

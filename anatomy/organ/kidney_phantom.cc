@@ -168,4 +168,19 @@ KidneyPhantom make_kidney_phantom(const KidneySpec& spec) {
   return out;
 }
 
+Organ kidney_organ(const KidneyPhantom& phantom) {
+  Organ organ;
+  organ.name = "kidney";
+  organ.surface = phantom.surface;
+  for (const Eigen::Vector3d& f : phantom.facts.fiducials_mm) organ.fiducials_m.push_back(f * 1e-3);
+  // the organ rests on what lies behind it: the plane touching its posterior surface (the fat
+  // between it and the table taken as firm; the table itself is table_gap_mm further). Resting on
+  // the table would drop it through the fat, and the CT would no longer show it where it lies
+  double posterior_m = -1e30;
+  for (const Eigen::Vector3d& v : organ.surface.vertices_m) posterior_m = std::max(posterior_m, v.y());
+  organ.support_normal = -Eigen::Vector3d::UnitY();
+  organ.support_offset_m = -posterior_m;  // -y . x >= -posterior: y <= posterior
+  return organ;
+}
+
 }  // namespace pcisim::anatomy

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "anatomy/mesh/triangle_mesh.h"
+#include "anatomy/organ/organ.h"
 #include "anatomy/volume/volume.h"
 
 namespace pcisim::anatomy {
@@ -76,5 +77,9 @@ KidneyTissue kidney_tissue_at(const KidneySpec& spec, const KidneyFacts& facts, 
 
 // throws std::invalid_argument on a spec that cannot be drawn (non-positive sizes, too many beads)
 KidneyPhantom make_kidney_phantom(const KidneySpec& spec = {});
+
+// the phantom as the soft-tissue scene's organ: its surface, beads (metres) and its support, the
+// plane touching its posterior surface (supine: posterior is +y, down, so the plane faces -y)
+Organ kidney_organ(const KidneyPhantom& phantom);
 
 }  // namespace pcisim::anatomy

@@ -4,6 +4,7 @@
 // it gives them; ranges after each field. validate() names the first field out of range.
 #include <Eigen/Core>
 
+#include "physics/param_checks.h"
 #include "physics/pbd/pbd_params.h"
 
 namespace pcisim::physics::soft_tissue {
@@ -35,6 +36,18 @@ struct TissueParams {
   double probe_mu_static = 0.35;
   double probe_mu_kinetic = 0.35;
 };
+
+// the ranges above, once: validate() and the scene loader (effects.soft_tissue) both use them
+inline constexpr ParamRange kTissueDensityKgPerM3{1.0, 1e5};
+inline constexpr ParamRange kTissueClusterComplianceS2{0.0, 1.0};
+inline constexpr ParamRange kTissueSubsteps{1, 100};
+inline constexpr ParamRange kTissueIterations{1, 1000};
+inline constexpr ParamRange kTissueSorW{1.0, 2.0};
+inline constexpr ParamRange kTissueStabilisationIterations{0, 100};
+inline constexpr ParamRange kTissueDampingPerS{0.0, 1000.0};
+inline constexpr ParamRange kTissueContactRadiusFactor{0.0, 2.0};
+inline constexpr ParamRange kTissueContactMarginM{0.0, 0.1};
+inline constexpr ParamRange kTissueFriction{0.0, 10.0};
 
 // throws std::invalid_argument naming the first field out of range and its range
 void validate(const TissueParams& params);

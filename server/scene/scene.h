@@ -10,6 +10,7 @@
 #include "haptics/haptic_params.h"
 #include "server/session_limits.h"
 #include "physics/world_spec.h"
+#include "ultrasound/probe/us_settings.h"
 #include "xray/fluoro/fluoroscopy.h"
 
 namespace pcisim::server {
@@ -24,18 +25,29 @@ struct XraySpec {
   double injection_volume_ml = 8.0, injection_duration_s = 2.0;
 };
 
+// the "ultrasound" effect: B-mode frames in the probe's plane through the deformed tissue
+struct UltrasoundSpec {
+  ultrasound::UsSettings settings;  // geometry, depth, gain, frequency, image size
+  double frame_rate_hz = 20.0;      // [1, 60]
+  uint32_t speckle_seed = 1;        // the tissue's speckle pattern
+};
+
 struct Scene {
   std::string name;
   std::string source;  // file path, or "built-in"
   // anatomy: a case folder (resolved against the scene file's folder), or "" for the procedural
   // phantom of world.anatomy.seed (server/case_builder.h builds the one anatomy::Case)
   std::string case_dir;
+  // a procedural organ instead of the coronary phantom ("" or "kidney", seeded by
+  // world.anatomy.seed): the soft-tissue scene's anatomy
+  std::string organ;
   double physics_rate_hz = 30.0;
   physics::WorldSpec world;
   haptics::HapticParams haptics;
-  std::optional<XraySpec> xray;      // present when the scene lists "xray"
-  SessionLimitParams session;        // bounds on console commands
-  std::vector<std::string> effects;  // the listed effects, in step order
+  std::optional<XraySpec> xray;              // present when the scene lists "xray"
+  std::optional<UltrasoundSpec> ultrasound;  // present when the scene lists "ultrasound"
+  SessionLimitParams session;                // bounds on console commands
+  std::vector<std::string> effects;          // the listed effects, in step order
 };
 
 // every effect name a scene may list, in the order the pipeline steps them

@@ -158,6 +158,112 @@ physics::HeartBeatParams read_heart_beat(json::JsonReader r, const std::string& 
   return p;
 }
 
+// effects.soft_tissue: the organ's particle model and its solver (physics/soft_tissue)
+physics::soft_tissue::SoftTissueSpec read_soft_tissue(json::JsonReader r) {
+  namespace st = physics::soft_tissue;
+  st::SoftTissueSpec s;
+  st::TissueModelSpec& m = s.model;
+  m.particle_radius_m = in_range(r, "particle_radius_mm", 3.3e-3, st::kTissueParticleRadiusM, kMm);
+  m.voxel_m = in_range(r, "voxel_mm", m.voxel_m, st::kTissueVoxelM, kMm);
+  if (m.voxel_m > m.particle_radius_m) r.fail("voxel_mm", "expected at most particle_radius_mm");
+  m.cluster_spacing_factor =
+      in_range(r, "cluster_spacing_factor", m.cluster_spacing_factor, st::kTissueClusterSpacingFactor);
+  m.cluster_overlap = in_range(r, "cluster_overlap", m.cluster_overlap, st::kTissueClusterOverlap);
+  m.tet_spacing_factor = in_range(r, "tet_spacing_factor", m.tet_spacing_factor, st::kTissueTetSpacingFactor);
+  s.settle_s = in_range(r, "settle_s", s.settle_s, st::kTissueSettleS);
+  st::TissueParams& p = s.params;
+  p.density_kg_per_m3 = in_range(r, "density_kg_per_m3", p.density_kg_per_m3, st::kTissueDensityKgPerM3);
+  p.cluster_compliance_s2 =
+      in_range(r, "cluster_compliance_s2", p.cluster_compliance_s2, st::kTissueClusterComplianceS2);
+  p.substeps = in_range(r, "substeps", p.substeps, st::kTissueSubsteps);
+  p.iterations = in_range(r, "iterations", p.iterations, st::kTissueIterations);
+  p.solver = r.text("solver", "gauss_seidel", {"gauss_seidel", "jacobi"}) == "jacobi"
+                 ? physics::pbd::SolverKind::kJacobi
+                 : physics::pbd::SolverKind::kGaussSeidel;
+  p.sor_w = in_range(r, "sor_w", p.sor_w, st::kTissueSorW);
+  p.stabilisation_iterations =
+      in_range(r, "stabilisation_iterations", p.stabilisation_iterations, st::kTissueStabilisationIterations);
+  p.damping_per_s = in_range(r, "damping_per_s", p.damping_per_s, st::kTissueDampingPerS);
+  p.contact_radius_factor =
+      in_range(r, "contact_radius_factor", p.contact_radius_factor, st::kTissueContactRadiusFactor);
+  p.support_mu_static = in_range(r, "support_mu_static", p.support_mu_static, st::kTissueFriction);
+  p.support_mu_kinetic = in_range(r, "support_mu_kinetic", p.support_mu_kinetic, st::kTissueFriction);
+  if (p.support_mu_kinetic > p.support_mu_static) r.fail("support_mu_kinetic", "expected at most support_mu_static");
+  p.probe_mu_static = in_range(r, "probe_mu_static", p.probe_mu_static, st::kTissueFriction);
+  p.probe_mu_kinetic = in_range(r, "probe_mu_kinetic", p.probe_mu_kinetic, st::kTissueFriction);
+  if (p.probe_mu_kinetic > p.probe_mu_static) r.fail("probe_mu_kinetic", "expected at most probe_mu_static");
+  r.finish();
+  return s;
+}
+
+// three numbers within +-limit (a probe position, mm)
+Eigen::Vector3d read_vector3(json::JsonReader& r, const std::string& key, const Eigen::Vector3d& fallback,
+                             double limit) {
+  if (!r.has(key)) return fallback;
+  const nlohmann::json& v = r.list(key);
+  Eigen::Vector3d out;
+  if (v.size() != 3) r.fail(key, "expected [x, y, z]");
+  for (int i = 0; i < 3; ++i) {
+    if (!v[i].is_number() || !std::isfinite(v[i].get<double>()) || std::abs(v[i].get<double>()) > limit)
+      r.fail(key, fmt::format("expected [x, y, z], each within +-{}", limit));
+    out[i] = v[i].get<double>();
+  }
+  return out;
+}
+
+// effects.probe_contact: the transducer block and where it waits before the probe's first sample
+physics::soft_tissue::ProbeContactParams read_probe_contact(json::JsonReader r) {
+  namespace st = physics::soft_tissue;
+  st::ProbeContactParams p;
+  p.face_width_m = in_range(r, "face_width_mm", p.face_width_m, st::kProbeFaceWidthM, kMm);
+  p.face_thickness_m = in_range(r, "face_thickness_mm", p.face_thickness_m, st::kProbeFaceThicknessM, kMm);
+  p.height_m = in_range(r, "height_mm", p.height_m, st::kProbeHeightM, kMm);
+  p.start_position_m = read_vector3(r, "start_position_mm", p.start_position_m / kMm, 1e4) * kMm;
+  if (r.has("start_orientation_wxyz")) {
+    const nlohmann::json& v = r.list("start_orientation_wxyz");
+    double q[4];
+    bool ok = v.size() == 4;
+    for (int i = 0; ok && i < 4; ++i) ok = v[i].is_number() && std::isfinite(q[i] = v[i].get<double>());
+    const double norm = ok ? std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]) : 0.0;
+    if (!ok || !(norm > 1e-6)) r.fail("start_orientation_wxyz", "expected a non-zero quaternion [w, x, y, z]");
+    p.start_rotation = Eigen::Quaterniond(q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm);
+  }
+  p.max_stiffness_n_per_m = in_range(r, "max_stiffness_n_per_m", p.max_stiffness_n_per_m, st::kProbeMaxStiffnessNPerM);
+  p.damping_n_s_per_m = in_range(r, "damping_n_s_per_m", p.damping_n_s_per_m, st::kProbeDampingNSPerM);
+  r.finish();
+  return p;
+}
+
+// effects.ultrasound: the machine's settings (ranges: ultrasound::validate, named on failure)
+UltrasoundSpec read_ultrasound(json::JsonReader r) {
+  UltrasoundSpec u;
+  ultrasound::UsSettings& s = u.settings;
+  s.geometry = r.text("geometry", "linear", {"linear", "curvilinear"}) == "curvilinear"
+                   ? ultrasound::ProbeGeometry::kCurvilinear
+                   : ultrasound::ProbeGeometry::kLinear;
+  s.width_mm = r.number("width_mm", s.width_mm, 1e-3, 200);
+  s.fan_angle_deg = r.number("fan_angle_deg", s.fan_angle_deg, 1e-3, 150);
+  s.radius_of_curvature_mm = r.number("radius_of_curvature_mm", s.radius_of_curvature_mm, 1e-3, 200);
+  s.depth_mm = r.number("depth_mm", s.depth_mm, 1, 300);
+  s.width_px = r.integer("width_px", s.width_px, 8, 2048);
+  s.height_px = r.integer("height_px", s.height_px, 8, 4096);
+  s.gain_db = r.number("gain_db", s.gain_db, -60, 60);
+  s.tgc_db_per_cm = r.number("tgc_db_per_cm", s.tgc_db_per_cm, -20, 40);
+  s.frequency_mhz = r.number("frequency_mhz", s.frequency_mhz, 1, 20);
+  s.attenuation_db_per_cm_mhz = r.number("attenuation_db_per_cm_mhz", s.attenuation_db_per_cm_mhz, 0, 5);
+  s.dynamic_range_db = r.number("dynamic_range_db", s.dynamic_range_db, 10, 120);
+  s.speckle_cell_mm = r.number("speckle_cell_mm", s.speckle_cell_mm, 0.02, 2);
+  u.frame_rate_hz = r.number("frame_rate_hz", u.frame_rate_hz, 1, 60);
+  u.speckle_seed = static_cast<uint32_t>(r.integer("speckle_seed", 1, 0, 1 << 30));
+  r.finish();
+  try {
+    ultrasound::validate(s);
+  } catch (const std::invalid_argument& e) {
+    throw json::JsonError(fmt::format("effects.ultrasound: {}", e.what()));
+  }
+  return u;
+}
+
 physics::VesselMotionParams read_vessel_motion(json::JsonReader r) {
   physics::VesselMotionParams p;
   p.attach_distance_m = in_range(r, "attach_mm", p.attach_distance_m, physics::kMotionAttachDistanceM, kMm);
@@ -273,6 +379,10 @@ Scene parse(const nlohmann::json& doc, const std::string& source) {
   // a case folder or a phantom seed, not both
   if (anatomy.has("case") && anatomy.has("phantom_seed"))
     anatomy.fail("case", "give either a case folder or a phantom_seed, not both");
+  // the procedural kidney (soft-tissue scene); a case folder's organ is not read yet
+  s.organ = anatomy.text("organ", "", {"", "kidney"});
+  if (!s.organ.empty() && anatomy.has("case"))
+    anatomy.fail("organ", "a case folder's organ is not supported yet: use the procedural \"kidney\" alone");
   s.world.anatomy.seed = static_cast<uint32_t>(anatomy.integer("phantom_seed", 1, 0, 1 << 30));
   if (anatomy.has("case")) {
     const std::string dir = anatomy.text("case", "");
@@ -302,6 +412,9 @@ Scene parse(const nlohmann::json& doc, const std::string& source) {
     if (name == "heart_beat") s.world.heart_beat = read_heart_beat(r, scene_dir);
     if (name == "vessel_motion") s.world.vessel_motion = read_vessel_motion(r);
     if (name == "xray") s.xray = read_xray(r);
+    if (name == "soft_tissue") s.world.soft_tissue = read_soft_tissue(r);
+    if (name == "probe_contact") s.world.probe_contact = read_probe_contact(r);
+    if (name == "ultrasound") s.ultrasound = read_ultrasound(r);
   }
   // the x-ray's options come after xray itself has been read
   if (s.xray && effects.has("contrast")) read_contrast(effects.child("contrast"), *s.xray);
@@ -312,6 +425,17 @@ Scene parse(const nlohmann::json& doc, const std::string& source) {
   if (s.world.friction) require(s, "friction", "vessel_contact");
   if (s.world.blood_flow) require(s, "blood_flow", "guidewire");
   if (s.world.vessel_motion) require(s, "vessel_motion", "heart_beat");
+  if (s.world.probe_contact) require(s, "probe_contact", "soft_tissue");
+  if (s.ultrasound) require(s, "ultrasound", "probe_contact");
+  if (s.world.soft_tissue) {
+    // the organ scene: an organ on its support, a probe, ultrasound; none of the heart's or wire's
+    for (const char* other : {"guidewire", "heart_beat", "xray"})
+      if (std::find(s.effects.begin(), s.effects.end(), other) != s.effects.end())
+        throw json::JsonError(fmt::format(
+            "effects.soft_tissue: does not go with effect \"{}\" (the soft-tissue scene's anatomy is an organ)",
+            other));
+    if (s.organ.empty()) throw json::JsonError("effects.soft_tissue: needs an organ (anatomy.organ: \"kidney\")");
+  }
   for (const char* option : {"contrast", "detector_noise"})
     if (std::find(s.effects.begin(), s.effects.end(), option) != s.effects.end()) require(s, option, "xray");
   return s;
@@ -320,9 +444,9 @@ Scene parse(const nlohmann::json& doc, const std::string& source) {
 }  // namespace
 
 const std::vector<std::string>& known_effects() {
-  static const std::vector<std::string> names = {"heart_beat", "vessel_motion",  "guidewire",
-                                                 "blood_flow", "vessel_contact", "friction",
-                                                 "xray",       "contrast",       "detector_noise"};
+  static const std::vector<std::string> names = {"heart_beat",     "vessel_motion", "guidewire",     "blood_flow",
+                                                 "vessel_contact", "friction",      "xray",          "contrast",
+                                                 "detector_noise", "soft_tissue",   "probe_contact", "ultrasound"};
   return names;
 }
 

@@ -33,7 +33,8 @@ const std::map<std::string, std::vector<std::string>>& allowed() {
       {"ultrasound", {"anatomy", "png"}},
       {"modeling", {"anatomy", "json", "png"}},
       {"protocol", {"pcisim_lcm"}},
-      {"server", {"anatomy", "physics", "haptics", "xray", "protocol", "pcisim_lcm", "realtime", "json", "png"}},
+      {"server",
+       {"anatomy", "physics", "haptics", "xray", "ultrasound", "protocol", "pcisim_lcm", "realtime", "json", "png"}},
       {"clients", {"protocol", "pcisim_lcm", "realtime", "json", "anatomy", "png"}},
   };
   return rules;

@@ -274,7 +274,7 @@ TEST(AcousticModel, ImpedanceAndReflectionFollowTheirEquations) {
   EXPECT_NEAR(reflection(1.0, 3.0), 0.25, 1e-15);
   EXPECT_GT(reflection(impedance_mrayl(40.0), impedance_mrayl(-1000.0)), 0.998);  // tissue / air
   double mean = 0;
-  for (int i = 0; i < 20000; ++i) mean += speckle(9, i % 100, i / 100) / 20000.0;
+  for (int i = 0; i < 20000; ++i) mean += speckle(9, i % 100, i / 100, -i % 7) / 20000.0;
   EXPECT_NEAR(mean, 1.0, 0.03);  // E|A|^2 = 1
 }
 
@@ -300,6 +300,66 @@ TEST(BModeRenderer, KidneyCortexEchoWhereThePhantomSaysAndPng) {
   write_png((dir / "kidney.png").string(), im);
   EXPECT_GT(std::filesystem::file_size(dir / "kidney.png"), 1000u);
   std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace pcisim::ultrasound
+
+namespace pcisim::ultrasound {
+namespace {
+
+// a cube of tets over [-40, 40] x [-10, 90] x [-30, 30] mm (Kuhn, 4 x 5 x 3 cubes of 20 mm)
+TetSnapshot cube_mesh() {
+  TetSnapshot m;
+  const int nx = 4, ny = 5, nz = 3;
+  m.rest_mm.resize(3, (nx + 1) * (ny + 1) * (nz + 1));
+  auto id = [&](int i, int j, int k) { return i + (nx + 1) * (j + (ny + 1) * k); };
+  for (int k = 0; k <= nz; ++k)
+    for (int j = 0; j <= ny; ++j)
+      for (int i = 0; i <= nx; ++i) m.rest_mm.col(id(i, j, k)) = Vector3d(-40 + 20 * i, -10 + 20 * j, -30 + 20 * k);
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i)
+        for (const auto& t : anatomy::kKuhnTetrahedra) {
+          std::array<int, 4> tet{};
+          for (int v = 0; v < 4; ++v) tet[v] = id(i + (t[v] & 1), j + ((t[v] >> 1) & 1), k + ((t[v] >> 2) & 1));
+          m.tets.push_back(tet);
+        }
+  m.current_mm = m.rest_mm;
+  return m;
+}
+
+double fraction_equal(const BModeImage& a, const BModeImage& b) {
+  size_t same = 0;
+  for (size_t i = 0; i < a.pixels.size(); ++i) same += a.pixels[i] == b.pixels[i];
+  return static_cast<double>(same) / static_cast<double>(a.pixels.size());
+}
+
+// speckle belongs to the tissue: tissue and probe moved together give the same image; the probe
+// moved over still tissue gives another pattern (hashing the pixel, as before, gave the same)
+TEST(BModeRenderer, SpeckleMovesWithTheTissueAndDoesNotFlicker) {
+  const Volume ct = make_phantom(1.0, [](const Vector3d&) { return kSoftHu; });  // speckle only
+  UsSettings s = test_settings(ProbeGeometry::kLinear);
+  s.depth_mm = 60.0;
+  BModeRenderer r(ct, s);
+  TetSnapshot mesh = cube_mesh();
+  r.set_mesh(mesh);
+  const ProbePose p0 = probe_at_top();
+  const BModeImage a = r.render(p0, 3, &mesh);
+  const BModeImage again = r.render(p0, 3, &mesh);
+  EXPECT_EQ(fraction_equal(a, again), 1.0) << "the same tissue, the same frame";
+
+  const Vector3d d(3.1, 1.7, 0.0);  // within the image plane: lateral and deeper
+  TetSnapshot moved = mesh;
+  moved.current_mm.colwise() += d;
+  ProbePose p1 = p0;
+  p1.origin_mm += d;
+  const BModeImage with_tissue = r.render(p1, 3, &moved);
+  const BModeImage over_still = r.render(p1, 3, &mesh);
+  const double carried = fraction_equal(a, with_tissue), slid = fraction_equal(a, over_still);
+  std::printf("pixels equal: probe and tissue moved together %.4f, probe over still tissue %.4f\n", carried, slid);
+  EXPECT_GT(carried, 0.99);
+  EXPECT_LT(slid, 0.5);
 }
 
 }  // namespace

@@ -62,8 +62,10 @@ double backscatter(double hu) {
   return kBackscatterScale * piecewise(kScatter, hu);
 }
 
-double speckle(uint64_t seed, int column, int row) {
-  const uint64_t h = splitmix64(splitmix64(seed) ^ (static_cast<uint64_t>(column) << 32 | static_cast<uint32_t>(row)));
+double speckle(uint64_t seed, int64_t i, int64_t j, int64_t k) {
+  const uint64_t h =
+      splitmix64(splitmix64(splitmix64(splitmix64(seed) ^ static_cast<uint64_t>(i)) ^ static_cast<uint64_t>(j)) ^
+                 static_cast<uint64_t>(k));
   const double u = (static_cast<double>(h >> 11) + 1.0) * 0x1.0p-53;  // (0, 1]
   return -std::log(u);
 }

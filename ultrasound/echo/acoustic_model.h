@@ -32,9 +32,11 @@ double attenuation_db(double alpha_db_cm_mhz, double hu, double frequency_mhz, d
 // it): fat bright, fluid dark, parenchyma grey, as B-mode shows them.
 double backscatter(double hu);
 // multiplicative speckle on the diffuse intensity: |A|^2 with A Rayleigh, E|A|^2 = 1, so
-// s = -ln(U), U uniform in (0, 1], U from a counter-based hash of (seed, column, row)
-// [Wagner 1983]. Deterministic per seed, no state.
-double speckle(uint64_t seed, int column, int row);
+// s = -ln(U), U uniform in (0, 1], U from a counter-based hash of (seed, i, j, k) [Wagner 1983].
+// (i, j, k) is the cell of the sample's point in the undeformed CT (cells of speckle_cell_mm):
+// the pattern belongs to the tissue, moves with it and does not flicker from frame to frame.
+// Deterministic per seed, no state.
+double speckle(uint64_t seed, int64_t i, int64_t j, int64_t k);
 // time-gain compensated, log-compressed brightness (dB): B = 10 log10(I) + gain + tgc d_cm
 double brightness_db(double intensity, double gain_db, double tgc_db_per_cm, double depth_cm);
 // 8-bit grey: g = round(255 (B + DR) / DR), clamped to [0, 255] (0 dB, a perfect reflector at the

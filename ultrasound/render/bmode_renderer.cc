@@ -10,6 +10,9 @@
 #include "ultrasound/echo/acoustic_model.h"
 
 namespace pcisim::ultrasound {
+namespace {
+const Eigen::Vector3d kSpeckleLatticeShift(0.3183098861837907, 0.6180339887498949, 0.4142135623730950);
+}  // namespace
 
 void write_png(const std::string& path, const BModeImage& image) {
   png::write_png_gray8(path, image.width, image.height, image.pixels.data());
@@ -35,6 +38,7 @@ BModeRenderer::BModeRenderer(const anatomy::Volume& ct, const UsSettings& settin
     }
   hu_.resize(n);
   z_.resize(n);
+  speckle_.resize(n);
   echo_.resize(n);
   beam_.width = image_.width = w;
   beam_.height = image_.height = h;
@@ -119,8 +123,13 @@ const BModeImage& BModeRenderer::render(const ProbePose& pose, uint64_t seed, co
       if (mapped && !locator_.to_rest(p, &q)) q = p;
       hu_[n] = sample_hu(q);
       z_[n] = impedance_mrayl(hu_[n]);
+      // the lattice is shifted by irrational fractions of a cell: an image plane at round
+      // coordinates (z = 0) would otherwise lie on cell faces, where rounding picks either side
+      const Eigen::Vector3d cell = (q / settings_.speckle_cell_mm + kSpeckleLatticeShift).array().floor();
+      speckle_[n] =
+          speckle(seed, static_cast<int64_t>(cell[0]), static_cast<int64_t>(cell[1]), static_cast<int64_t>(cell[2]));
     }
-    render_scanline(c, seed);
+    render_scanline(c);
   }
   if (settings_.geometry == ProbeGeometry::kLinear) return beam_;
   scan_convert();
@@ -134,12 +143,13 @@ const BModeImage& BModeRenderer::render(const ProbePose& pose, uint64_t seed, co
 //   L_j = sum_{i<j} a_i dx + a_j dx / 2,  a_i = alpha(HU_i) f          (one-way loss, dB)
 //   I_j = T_j^2 10^(-2 L_j / 10) (R_j + sigma(HU_j) s_j)               (round trip)
 // [Goksel & Salcudean 2009: reflection + scattering, attenuated; shadowing through T]
-void BModeRenderer::render_scanline(int column, uint64_t seed) {
+void BModeRenderer::render_scanline(int column) {
   const int h = settings_.height_px, w = settings_.width_px;
   const double dx_mm = settings_.depth_mm / h, dx_cm = dx_mm / 10.0;
   const double half = 0.5 * pulse_mm_ / dx_mm;  // half window in samples
   const double* z = &z_[static_cast<size_t>(column) * h];
   const double* hu = &hu_[static_cast<size_t>(column) * h];
+  const double* spk = &speckle_[static_cast<size_t>(column) * h];
   auto z_at = [&](double s) {
     s = std::clamp(s, 0.0, static_cast<double>(h - 1));
     const int i = std::min(static_cast<int>(s), h - 2);
@@ -152,8 +162,8 @@ void BModeRenderer::render_scanline(int column, uint64_t seed) {
     const double a_db = attenuation_db(settings_.attenuation_db_per_cm_mhz, hu[j], settings_.frequency_mhz, dx_cm);
     const double to_centre_db = loss_db + 0.5 * a_db;
     const double refl = reflection(z_at(j - half), z_at(j + half));
-    const double intensity = transmitted * transmitted * std::pow(10.0, -2.0 * to_centre_db / 10.0) *
-                             (refl + backscatter(hu[j]) * speckle(seed, column, j));
+    const double intensity =
+        transmitted * transmitted * std::pow(10.0, -2.0 * to_centre_db / 10.0) * (refl + backscatter(hu[j]) * spk[j]);
     const size_t out = static_cast<size_t>(j) * w + column;
     echo_[out] = static_cast<float>(intensity);
     const double depth_cm = (j + 0.5) * dx_cm;

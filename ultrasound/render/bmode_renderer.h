@@ -52,7 +52,7 @@ class BModeRenderer {
 
  private:
   double sample_hu(const Eigen::Vector3d& p_mm) const;
-  void render_scanline(int column, uint64_t seed);
+  void render_scanline(int column);
   void scan_convert();
 
   const anatomy::Volume& ct_;
@@ -62,7 +62,8 @@ class BModeRenderer {
   std::vector<double> offset_lateral_, offset_beam_;  // per pixel, probe frame (mm)
   TetLocator locator_;
   bool have_mesh_ = false;
-  std::vector<double> hu_, z_;  // per pixel, column-major (scanline by scanline)
+  std::vector<double> hu_, z_;   // per pixel, column-major (scanline by scanline)
+  std::vector<double> speckle_;  // per pixel: the speckle of the tissue the sample maps to
   std::vector<float> echo_;
   BModeImage beam_, image_;
   // curvilinear display: per display pixel the beam-space cell (-1 outside the fan) and weights

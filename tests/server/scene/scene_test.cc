@@ -139,7 +139,7 @@ TEST(Scene, EachBadInputNamesItsJsonPathAndWhatWasExpected) {
             "test.json: effects.vessel_contact.sdf_spacing_mm: expected a number in [0.05, 2], got 5");
   EXPECT_EQ(error_of(R"({"effects": {"teleport": {}}})"),
             "test.json: effects.teleport: unknown effect (known: heart_beat, vessel_motion, guidewire, blood_flow, "
-            "vessel_contact, friction, xray, contrast, detector_noise)");
+            "vessel_contact, friction, xray, contrast, detector_noise, soft_tissue, probe_contact, ultrasound)");
   EXPECT_EQ(error_of(R"({"effects": {"vessel_motion": {}}})"),
             "test.json: effects.vessel_motion: needs effect \"heart_beat\" in the same scene");
   EXPECT_EQ(error_of(R"({"effects": {"heart_beat": {"rate_bpm": 400}}})"),
@@ -260,6 +260,55 @@ TEST(Scene, AnOversizedSceneFileIsRefusedUnread) {
     EXPECT_NE(std::string(e.what()).find("over the 1048576 byte limit"), std::string::npos) << e.what();
   }
   std::remove(path.c_str());
+}
+
+}  // namespace
+}  // namespace pcisim::server
+
+namespace pcisim::server {
+namespace {
+
+TEST(Scene, TheKidneySceneListsOnlyTheSoftTissueEffects) {
+  const Scene s = load_scene_file(PCISIM_SOURCE_DIR "/scenes/kidney.json");
+  EXPECT_EQ(s.effects, (std::vector<std::string>{"soft_tissue", "probe_contact", "ultrasound"}));
+  EXPECT_EQ(s.organ, "kidney");
+  EXPECT_FALSE(s.world.guidewire || s.world.heart_beat || s.xray);
+  ASSERT_TRUE(s.world.soft_tissue && s.world.probe_contact && s.ultrasound);
+  EXPECT_DOUBLE_EQ(s.world.soft_tissue->model.particle_radius_m, 3.3e-3);
+  EXPECT_EQ(s.world.soft_tissue->params.substeps, 3);
+  EXPECT_DOUBLE_EQ(s.world.probe_contact->face_width_m, 0.040);
+  EXPECT_NEAR(s.world.probe_contact->start_position_m.y(), -0.030, 1e-15);
+  EXPECT_EQ(s.ultrasound->settings.geometry, ultrasound::ProbeGeometry::kLinear);
+  EXPECT_DOUBLE_EQ(s.ultrasound->settings.depth_mm, 60.0);
+  EXPECT_DOUBLE_EQ(s.ultrasound->frame_rate_hz, 20.0);
+}
+
+TEST(Scene, SoftTissueMistakesNameTheirPath) {
+  const std::string organ = R"("anatomy": {"organ": "kidney"}, )";
+  EXPECT_EQ(error_of("{" + organ + R"("effects": {"soft_tissue": {}, "guidewire": {}}})"),
+            "test.json: effects.soft_tissue: does not go with effect \"guidewire\" (the soft-tissue scene's anatomy "
+            "is an organ)");
+  EXPECT_EQ(error_of(R"({"effects": {"soft_tissue": {}}})"),
+            "test.json: effects.soft_tissue: needs an organ (anatomy.organ: \"kidney\")");
+  EXPECT_EQ(error_of("{" + organ + R"("effects": {"probe_contact": {}}})"),
+            "test.json: effects.probe_contact: needs effect \"soft_tissue\" in the same scene");
+  EXPECT_EQ(error_of("{" + organ + R"("effects": {"soft_tissue": {}, "ultrasound": {}}})"),
+            "test.json: effects.ultrasound: needs effect \"probe_contact\" in the same scene");
+  EXPECT_EQ(error_of("{" + organ + R"("effects": {"soft_tissue": {"particle_radius_mm": 50}}})"),
+            "test.json: effects.soft_tissue.particle_radius_mm: expected a number in [1.5, 20], got 50");
+  EXPECT_EQ(error_of("{" + organ + R"("effects": {"soft_tissue": {"solver": "sor"}}})"),
+            "test.json: effects.soft_tissue.solver: expected one of \"gauss_seidel\", \"jacobi\", got \"sor\"");
+  EXPECT_EQ(error_of("{" + organ +
+                     R"("effects": {"soft_tissue": {}, "probe_contact": {"start_orientation_wxyz": [0,0,0,0]}}})"),
+            "test.json: effects.probe_contact.start_orientation_wxyz: expected a non-zero quaternion [w, x, y, z]");
+  EXPECT_EQ(
+      error_of("{" + organ + R"("effects": {"soft_tissue": {}, "probe_contact": {"start_position_mm": [0, 1]}}})"),
+      "test.json: effects.probe_contact.start_position_mm: expected [x, y, z]");
+  EXPECT_EQ(error_of("{" + organ +
+                     R"("effects": {"soft_tissue": {}, "probe_contact": {}, "ultrasound": {"depth_mm": 400}}})"),
+            "test.json: effects.ultrasound.depth_mm: expected a number in [1, 300], got 400");
+  EXPECT_EQ(error_of(R"({"anatomy": {"organ": "liver"}, "effects": {}})"),
+            "test.json: anatomy.organ: expected one of \"\", \"kidney\", got \"liver\"");
 }
 
 }  // namespace

@@ -16,6 +16,7 @@
 #include "pcisim_lcm/probe_state_t.hpp"
 #include "pcisim_lcm/session_command_t.hpp"
 #include "pcisim_lcm/sim_status_t.hpp"
+#include "pcisim_lcm/us_frame_t.hpp"
 #include "pcisim_lcm/wire_state_t.hpp"
 #include "pcisim_lcm/xray_frame_t.hpp"
 
@@ -183,6 +184,25 @@ inline MessageCase xray_case() {
                              {length_field(good, cat(be32(11), text("BRANCH-LAD"))), "num_contrast_branches"},
                              {length_field(good, text("BRANCH-LAD")), "contrast_branches[0] length"},
                              {length_field(good, {0xde, 0xad, 0xbe, 0xef}), "num_bytes"}})};
+}
+
+inline MessageCase us_frame_case() {
+  using F = pcisim_lcm::us_frame_t;
+  F m{};
+  m.utime = 1;
+  m.width = 2;
+  m.height = 2;
+  m.pixel_format = F::FORMAT_GRAY8;
+  m.geometry = F::GEOMETRY_LINEAR;
+  m.depth_mm = 60;
+  m.width_mm = 40;
+  m.frequency_mhz = 5;
+  m.beam[2] = 1;
+  m.lateral[0] = 1;
+  m.num_bytes = 4;
+  m.data = {0xde, 0xad, 0xbe, 0xef};
+  const Bytes good = encode(m);
+  return {"us_frame_t", good, all_mutants(good, {{length_field(good, {0xde, 0xad, 0xbe, 0xef}), "num_bytes"}})};
 }
 
 }  // namespace pcisim::fuzz

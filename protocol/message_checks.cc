@@ -79,13 +79,22 @@ bool is_well_formed(const pcisim_lcm::us_frame_t& m) {
   if (m.geometry != F::GEOMETRY_LINEAR && m.geometry != F::GEOMETRY_CURVILINEAR) return false;
   for (int k = 0; k < 3; ++k)
     if (!finite(m.origin_mm[k], m.beam[k], m.lateral[k], m.probe_force_n[k])) return false;
-  const auto unit = [](const double* v) { return std::abs(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] - 1.0) <= 1e-3; };
-  if (!unit(m.beam) || !unit(m.lateral)) return false;
+  const auto dot = [](const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
+  // pixel -> world takes beam and lateral as an orthonormal pair: a lateral along the beam has no plane
+  if (std::abs(dot(m.beam, m.beam) - 1.0) > 1e-3 || std::abs(dot(m.lateral, m.lateral) - 1.0) > 1e-3 ||
+      std::abs(dot(m.beam, m.lateral)) > 1e-3)
+    return false;
   if (!finite(m.depth_mm, m.width_mm, m.fan_angle_deg, m.radius_of_curvature_mm, m.gain_db, m.frequency_mhz,
               m.sim_time_s))
     return false;
-  return m.depth_mm > 0.0 && m.depth_mm <= 300.0 && m.width_mm >= 0.0 && m.fan_angle_deg >= 0.0 &&
-         m.radius_of_curvature_mm >= 0.0;
+  // the renderer's ranges (docs/ultrasound.md); the other geometry's fields are not read, only not negative
+  if (!(m.depth_mm > 0.0 && m.depth_mm <= 300.0) || m.width_mm < 0.0 || m.fan_angle_deg < 0.0 ||
+      m.radius_of_curvature_mm < 0.0)
+    return false;
+  if (std::abs(m.gain_db) > 60.0 || m.frequency_mhz < 1.0 || m.frequency_mhz > 20.0) return false;
+  if (m.geometry == F::GEOMETRY_LINEAR) return m.width_mm > 0.0 && m.width_mm <= 200.0;
+  return m.fan_angle_deg > 0.0 && m.fan_angle_deg <= 150.0 && m.radius_of_curvature_mm > 0.0 &&
+         m.radius_of_curvature_mm <= 200.0;
 }
 
 }  // namespace pcisim::protocol

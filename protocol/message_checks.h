@@ -26,8 +26,11 @@ bool is_well_formed(const pcisim_lcm::xray_frame_t& m);
 // 1 %: a pose, not a scaling; the receiver normalises it), a depth of 0 (the scene's) or 1-500 mm
 // and a gain within +-60 dB
 bool is_well_formed(const pcisim_lcm::probe_state_t& m);
-// an ultrasound frame: a known format and geometry, width x height bytes, unit beam and lateral
-// directions, finite sizes and a depth within (0, 300] mm (the renderer's range)
+// an ultrasound frame: a known format and geometry, width x height bytes (at most 4096 x 4096),
+// beam and lateral unit and perpendicular (within 1e-3), finite fields, and the renderer's ranges:
+// depth (0, 300] mm, gain within +-60 dB, frequency 1-20 MHz; linear: width_mm (0, 200];
+// curvilinear: fan angle (0, 150] deg, radius of curvature (0, 200] mm (the other geometry's
+// fields are not read, only kept finite and not negative)
 bool is_well_formed(const pcisim_lcm::us_frame_t& m);
 
 // CMD_CONTRAST: the volume a command may name (0.5-30 ml); outside it, or 0, the scene's volume is

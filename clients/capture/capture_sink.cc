@@ -18,9 +18,25 @@ void CaptureSink::on_frame(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   }
   try {
     const std::string path = writer_.write(frame_);
-    if (writer_.written() % 30 == 1) spdlog::info("capture: {} frames, latest {}", writer_.written(), path);
+    if (writer_.written_xray() % 30 == 1)
+      spdlog::info("capture: {} X-ray frames, latest {}", writer_.written_xray(), path);
   } catch (const std::exception& e) {
     error_ = e.what();  // stop: what is written stays intact
+  }
+}
+
+void CaptureSink::on_ultrasound(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+  if (done()) return;
+  if (!protocol::decode_checked(*rbuf, us_frame_)) {
+    ++bad_ultrasound_;
+    return;
+  }
+  try {
+    const std::string path = writer_.write(us_frame_);
+    if (writer_.written_ultrasound() % 30 == 1)
+      spdlog::info("capture: {} ultrasound frames, latest {}", writer_.written_ultrasound(), path);
+  } catch (const std::exception& e) {
+    error_ = e.what();
   }
 }
 

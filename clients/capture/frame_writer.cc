@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "png/png_gray.h"
+#include "protocol/us_frame_geometry.h"
 
 namespace pcisim::clients {
 namespace fs = std::filesystem;
@@ -30,6 +31,7 @@ nlohmann::json FrameWriter::sidecar(const pcisim_lcm::xray_frame_t& f) {
     wire_px.push_back({f.wire_px[i][0], f.wire_px[i][1]});
   }
   return {
+      {"modality", "xray"},
       {"frame", f.seq},
       {"sim_time_s", f.sim_time_s},
       {"utime", f.utime},
@@ -58,30 +60,89 @@ nlohmann::json FrameWriter::sidecar(const pcisim_lcm::xray_frame_t& f) {
   };
 }
 
+nlohmann::json FrameWriter::sidecar(const pcisim_lcm::us_frame_t& f) {
+  using F = pcisim_lcm::us_frame_t;
+  auto v3 = [](const double* p) { return nlohmann::json::array({p[0], p[1], p[2]}); };
+  const bool linear = f.geometry == F::GEOMETRY_LINEAR;
+  const protocol::UsImagePlane plane = protocol::us_image_plane(f);
+  nlohmann::json j = {
+      {"modality", "ultrasound"},
+      {"frame", f.seq},
+      {"sim_time_s", f.sim_time_s},
+      {"utime", f.utime},
+      {"geometry", linear ? "linear" : "curvilinear"},
+      {"depth_mm", f.depth_mm},
+      {"gain_db", f.gain_db},
+      {"frequency_mhz", f.frequency_mhz},
+      {"origin_mm", v3(f.origin_mm)},
+      {"beam", v3(f.beam)},
+      {"lateral", v3(f.lateral)},
+      {"probe_force_n", v3(f.probe_force_n)},
+      {"image",
+       {{"width", f.width},
+        {"height", f.height},
+        {"x0_mm", plane.x0_mm},
+        {"y0_mm", plane.y0_mm},
+        {"pixel_mm", {plane.pixel_x_mm, plane.pixel_y_mm}},
+        {"pixel_center",
+         "origin_mm + (x0_mm + (c + 0.5) pixel_mm[0]) lateral + (y0_mm + (r + 0.5) pixel_mm[1]) beam"}}},
+  };
+  // only the fields of the frame's own geometry: the other's are not set by the server
+  if (linear) {
+    j["width_mm"] = f.width_mm;
+  } else {
+    j["fan_angle_deg"] = f.fan_angle_deg;
+    j["radius_of_curvature_mm"] = f.radius_of_curvature_mm;
+    j["image"]["outside_fan"] = "black (0)";
+  }
+  return j;
+}
+
 std::string FrameWriter::write(const pcisim_lcm::xray_frame_t& f) {
   if (f.pixel_format != pcisim_lcm::xray_frame_t::FORMAT_GRAY16 ||
       static_cast<int64_t>(f.data.size()) != int64_t{f.width} * f.height * 2)
     throw std::runtime_error(fmt::format("frame {}: not a 16-bit frame of {}x{} pixels", f.seq, f.width, f.height));
+  const std::string leaf = f.cine ? fmt::format("cine_{:03d}", f.cine_run) : std::string("fluoro");
+  const std::string png = write_files(leaf, f.seq, sidecar(f), [&](const std::string& path) {
+    png::write_png_gray16(path, f.width, f.height, reinterpret_cast<const uint16_t*>(f.data.data()));
+  });
+  ++written_xray_;
+  return png;
+}
+
+std::string FrameWriter::write(const pcisim_lcm::us_frame_t& f) {
+  if (f.pixel_format != pcisim_lcm::us_frame_t::FORMAT_GRAY8 || f.width <= 0 || f.height <= 0 ||
+      static_cast<int64_t>(f.data.size()) != int64_t{f.width} * f.height)
+    throw std::runtime_error(
+        fmt::format("ultrasound frame {}: not an 8-bit frame of {}x{} pixels", f.seq, f.width, f.height));
+  const std::string png = write_files("ultrasound", f.seq, sidecar(f), [&](const std::string& path) {
+    png::write_png_gray8(path, f.width, f.height, f.data.data());
+  });
+  ++written_ultrasound_;
+  return png;
+}
+
+std::string FrameWriter::write_files(const std::string& leaf, int64_t seq, const nlohmann::json& sidecar,
+                                     const std::function<void(const std::string&)>& write_png) {
   // a server that restarts its pipeline (a scene reload) numbers its frames from 0 again: a frame
   // whose file exists starts a new restart_NN/ folder, so no frame is ever written over
-  const std::string leaf = f.cine ? fmt::format("cine_{:03d}", f.cine_run) : std::string("fluoro");
   auto folder = [&] {
     return restart_ == 0 ? fs::path(out_dir_) / leaf
                          : fs::path(out_dir_) / fmt::format("restart_{:02d}", restart_) / leaf;
   };
   std::error_code ec;
-  while (fs::exists(folder() / fmt::format("frame_{:06d}.png", f.seq), ec)) ++restart_;
+  while (fs::exists(folder() / fmt::format("frame_{:06d}.png", seq), ec)) ++restart_;
   const fs::path dir = folder();
   fs::create_directories(dir, ec);
   if (ec) throw std::runtime_error(fmt::format("{}: cannot create: {}", dir.string(), ec.message()));
-  const fs::path png = dir / fmt::format("frame_{:06d}.png", f.seq);
-  const fs::path json = dir / fmt::format("frame_{:06d}.json", f.seq);
-  const fs::path png_tmp = dir / fmt::format(".frame_{:06d}.png.tmp", f.seq);
-  const fs::path json_tmp = dir / fmt::format(".frame_{:06d}.json.tmp", f.seq);
+  const fs::path png = dir / fmt::format("frame_{:06d}.png", seq);
+  const fs::path json = dir / fmt::format("frame_{:06d}.json", seq);
+  const fs::path png_tmp = dir / fmt::format(".frame_{:06d}.png.tmp", seq);
+  const fs::path json_tmp = dir / fmt::format(".frame_{:06d}.json.tmp", seq);
   try {
-    png::write_png_gray16(png_tmp.string(), f.width, f.height, reinterpret_cast<const uint16_t*>(f.data.data()));
+    write_png(png_tmp.string());
     std::ofstream out(json_tmp);
-    out << sidecar(f).dump(1) << "\n";
+    out << sidecar.dump(1) << "\n";
     out.flush();
     if (!out)
       throw std::runtime_error(
@@ -95,7 +156,6 @@ std::string FrameWriter::write(const pcisim_lcm::xray_frame_t& f) {
     fs::remove(json_tmp, ec);
     throw;
   }
-  ++written_;
   return png.string();
 }
 

@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <turbojpeg.h>
 
+#include "protocol/us_frame_geometry.h"
+
 namespace pcisim::remote {
 
 FrameEncoder::FrameEncoder(const EncoderOptions& options) : options_(options) {
@@ -95,7 +97,8 @@ std::shared_ptr<const EncodedFrame> FrameEncoder::encode(const pcisim_lcm::xray_
     throw std::runtime_error("frame: size does not match its pixels");
   window(f);
 
-  nlohmann::json h = {{"seq", f.seq},
+  nlohmann::json h = {{"kind", "xray"},
+                      {"seq", f.seq},
                       {"utime", f.utime},
                       {"width", f.width},
                       {"height", f.height},
@@ -107,19 +110,55 @@ std::shared_ptr<const EncodedFrame> FrameEncoder::encode(const pcisim_lcm::xray_
                       {"cine_run", f.cine_run}};
   if (f.num_wire_points > 0 && std::isfinite(f.wire_px.back()[0]))
     h["tip_px"] = {f.wire_px.back()[0], f.wire_px.back()[1]};
-  const std::string header = h.dump();
+  return finish(h, f.seq, f.width, f.height);
+}
 
+std::shared_ptr<const EncodedFrame> FrameEncoder::encode(const pcisim_lcm::us_frame_t& f) {
+  using U = pcisim_lcm::us_frame_t;
+  if (f.pixel_format != U::FORMAT_GRAY8) throw std::runtime_error("ultrasound frame: only GRAY8 frames are shown");
+  if (f.width <= 0 || f.height <= 0 || f.width > 8192 || f.height > 8192 ||
+      static_cast<int64_t>(f.data.size()) != static_cast<int64_t>(f.width) * f.height)
+    throw std::runtime_error("ultrasound frame: size does not match its pixels");
+  gray_.assign(f.data.begin(), f.data.end());  // grey levels as the renderer made them: no window
+
+  const bool linear = f.geometry == U::GEOMETRY_LINEAR;
+  const protocol::UsImagePlane plane = protocol::us_image_plane(f);
+  nlohmann::json h = {{"kind", "ultrasound"},
+                      {"seq", f.seq},
+                      {"utime", f.utime},
+                      {"width", f.width},
+                      {"height", f.height},
+                      {"mime", mime()},
+                      {"sim_time_s", f.sim_time_s},
+                      {"geometry", linear ? "linear" : "curvilinear"},
+                      {"depth_mm", f.depth_mm},
+                      {"gain_db", f.gain_db},
+                      {"frequency_mhz", f.frequency_mhz},
+                      {"probe_force_n", {f.probe_force_n[0], f.probe_force_n[1], f.probe_force_n[2]}},
+                      // the picture's size in the probe's plane: the page keeps its aspect
+                      {"image_mm", {plane.width_mm, plane.height_mm}}};
+  if (linear) {
+    h["width_mm"] = f.width_mm;
+  } else {
+    h["fan_angle_deg"] = f.fan_angle_deg;
+    h["radius_of_curvature_mm"] = f.radius_of_curvature_mm;
+  }
+  return finish(h, f.seq, f.width, f.height);
+}
+
+std::shared_ptr<const EncodedFrame> FrameEncoder::finish(const nlohmann::json& h, int64_t seq, int width, int height) {
+  const std::string header = h.dump();
   auto e = std::make_shared<EncodedFrame>();
-  e->seq = f.seq;
+  e->seq = seq;
   const auto n = static_cast<uint32_t>(header.size());
   e->message.reserve(4 + header.size() + gray_.size() / 4);
   for (int k = 0; k < 4; ++k) e->message += static_cast<char>((n >> (8 * k)) & 0xff);
   e->message += header;
   const size_t before = e->message.size();
   if (options_.format == ImageFormat::kJpeg)
-    encode_jpeg(f.width, f.height, e->message);
+    encode_jpeg(width, height, e->message);
   else
-    encode_png(f.width, f.height, e->message);
+    encode_png(width, height, e->message);
   e->image_bytes = e->message.size() - before;
   return e;
 }

@@ -1,12 +1,16 @@
 #pragma once
-// Turns a 16-bit fluoroscopy frame into what a browser can show: a display window maps 16 bits
-// to 8, then JPEG (small, fast) or PNG (lossless). The result is the whole WebSocket message,
-// encoded once and shared by every connection.
+// Turns a frame into what a browser can show: a 16-bit fluoroscopy frame through a display window
+// to 8 bits, an 8-bit ultrasound frame as it is; then JPEG (small, fast) or PNG (lossless). The
+// result is the whole WebSocket message, encoded once and shared by every connection; its header's
+// `kind` says which modality it is.
 #include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
+#include "pcisim_lcm/us_frame_t.hpp"
 #include "pcisim_lcm/xray_frame_t.hpp"
 
 namespace pcisim::remote {
@@ -35,10 +39,13 @@ class FrameEncoder {
 
   // throws std::runtime_error on a frame it cannot show (bad size or format)
   std::shared_ptr<const EncodedFrame> encode(const pcisim_lcm::xray_frame_t& frame);
+  std::shared_ptr<const EncodedFrame> encode(const pcisim_lcm::us_frame_t& frame);
   const char* mime() const;
 
  private:
   void window(const pcisim_lcm::xray_frame_t& frame);
+  // the message: the header, then gray_ (width x height) as an image file
+  std::shared_ptr<const EncodedFrame> finish(const nlohmann::json& header, int64_t seq, int width, int height);
   void encode_jpeg(int width, int height, std::string& out);
   void encode_png(int width, int height, std::string& out);
 

@@ -39,14 +39,16 @@ Gateway::Gateway(const GatewayOptions& options, lcm::LCM& control, lcm::LCM& ima
                    control_.subscribe(protocol::kStatusChannel, &Gateway::on_status, this),
                    control_.subscribe(protocol::kSessionChannel, &Gateway::on_session, this),
                    control_.subscribe(protocol::kInstrumentChannel, &Gateway::on_instrument, this)};
-  image_sub_ = images_.subscribe(protocol::kXrayChannel, &Gateway::on_xray, this);
+  // the scene sends whichever modality it has; the page shows what comes
+  image_subs_ = {images_.subscribe(protocol::kXrayChannel, &Gateway::on_xray, this),
+                 images_.subscribe(protocol::kUltrasoundChannel, &Gateway::on_ultrasound, this)};
 }
 
 Gateway::~Gateway() {
   stop();
   // the LCM instances outlive us: no handler may point here afterwards
   for (auto* sub : control_subs_) control_.unsubscribe(sub);
-  images_.unsubscribe(image_sub_);
+  for (auto* sub : image_subs_) images_.unsubscribe(sub);
 }
 
 void Gateway::start() {
@@ -121,6 +123,7 @@ void Gateway::tick() {
   const HubStats hs = hub_->stats();
   state["gateway"] = {{"clients", hs.clients},
                       {"frames_received", frames_received_.load()},
+                      {"ultrasound_received", ultrasound_received_.load()},
                       {"frames_encoded", frames_encoded_.load()},
                       {"frames_dropped", hs.frames_dropped},
                       {"encode_ms", encode_ms_last_.load()}};
@@ -138,9 +141,9 @@ void Gateway::tick() {
 
 void Gateway::encode_loop() {
   FrameEncoder encoder(options_.encoder);
-  pcisim_lcm::xray_frame_t frame;
-  while (running_) {
-    if (!slot_.take(frame, 100)) continue;
+  pcisim_lcm::xray_frame_t xray;
+  pcisim_lcm::us_frame_t us;
+  auto encode = [&](const auto& frame) {
     const int64_t t0 = monotonic_ns();
     try {
       auto encoded = encoder.encode(frame);
@@ -150,6 +153,11 @@ void Gateway::encode_loop() {
     } catch (const std::exception& e) {
       if (encode_errors_++ == 0) spdlog::warn("remote: cannot show a frame: {}", e.what());
     }
+  };
+  while (running_) {
+    const int taken = slot_.take(xray, us, 100);
+    if (taken & LatestFrameSlot::kXray) encode(xray);
+    if (taken & LatestFrameSlot::kUltrasound) encode(us);
   }
 }
 
@@ -161,6 +169,15 @@ void Gateway::on_xray(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   ++frames_received_;
   tracker_.on_frame(frame_in_, monotonic_ns());
   slot_.put(frame_in_);
+}
+
+void Gateway::on_ultrasound(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+  if (!protocol::decode_checked(*rbuf, us_frame_in_)) {
+    ++ultrasound_bad_;
+    return;
+  }
+  ++ultrasound_received_;
+  slot_.put(us_frame_in_);
 }
 
 void Gateway::on_wire(const lcm::ReceiveBuffer* rbuf, const std::string&) {
@@ -199,6 +216,8 @@ GatewayCounters Gateway::counters() const {
   c.frames_skipped = slot_.replaced();
   c.encode_errors = encode_errors_;
   c.control_bad = control_bad_;
+  c.ultrasound_received = ultrasound_received_;
+  c.ultrasound_bad = ultrasound_bad_;
   c.encode_ms_last = encode_ms_last_;
   return c;
 }

@@ -36,7 +36,9 @@ struct GatewayOptions {
 };
 
 struct GatewayCounters {
+  // frames_received and frames_bad count X-ray frames; encoded, skipped and errors both kinds
   int64_t frames_received = 0, frames_bad = 0, frames_encoded = 0, frames_skipped = 0, encode_errors = 0;
+  int64_t ultrasound_received = 0, ultrasound_bad = 0;
   int64_t control_bad = 0;
   double encode_ms_last = 0;
 };
@@ -62,6 +64,7 @@ class Gateway {
   void tick();
   void encode_loop();
   void on_xray(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void on_ultrasound(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void on_wire(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void on_status(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void on_session(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
@@ -82,15 +85,17 @@ class Gateway {
   std::thread io_thread_, control_thread_, image_thread_, encoder_thread_;
   LatestFrameSlot slot_;
   std::vector<lcm::Subscription*> control_subs_;
-  lcm::Subscription* image_sub_ = nullptr;
+  std::vector<lcm::Subscription*> image_subs_;
   int64_t last_status_seq_ = -2, ticks_ = 0;
   // lcm receive buffers, one per thread's messages
   pcisim_lcm::xray_frame_t frame_in_;
+  pcisim_lcm::us_frame_t us_frame_in_;
   pcisim_lcm::wire_state_t wire_in_;
   pcisim_lcm::sim_status_t status_in_;
   pcisim_lcm::session_command_t session_in_;
   pcisim_lcm::instrument_state_t instrument_in_;
   std::atomic<int64_t> frames_received_{0}, frames_bad_{0}, frames_encoded_{0}, encode_errors_{0}, control_bad_{0};
+  std::atomic<int64_t> ultrasound_received_{0}, ultrasound_bad_{0};
   std::atomic<double> encode_ms_last_{0};
 };
 

@@ -24,7 +24,8 @@ extern "C" void on_signal(int) {
 int main(int argc, char** argv) {
   using namespace pcisim::remote;
   CLI::App app{
-      "pcisim-remote: a web gateway to a running pcisim-server. It shows the live fluoroscopy, the wire and "
+      "pcisim-remote: a web gateway to a running pcisim-server. It shows the live fluoroscopy (or, in a soft-tissue "
+      "scene, the ultrasound image), the wire and "
       "session state (C-arm angles, fluoroscopy time, contrast used) and the loop health in a browser, and lets a "
       "controller work the pedal, cine, C-arm, contrast, reset and pause, and drive the wire with the arrow keys.\n\n"
       "Access: at start it prints two random tokens, observer (watch only) and controller (watch and control), "
@@ -43,14 +44,16 @@ int main(int argc, char** argv) {
   app.add_option("--token-file", token_file,
                  "also write port=, observer= and controller= lines to this file (mode 0600)");
   app.add_option("--lcm-url", lcm_url, "LCM URL of the server's control traffic")->capture_default_str();
-  app.add_option("--lcm-image-url", image_url, "LCM URL of the fluoroscopy frames")->capture_default_str();
+  app.add_option("--lcm-image-url", image_url, "LCM URL of the X-ray and ultrasound frames")->capture_default_str();
   app.add_option("--format", format, "image format sent to browsers")
       ->check(CLI::IsMember({"jpeg", "png"}))
       ->capture_default_str();
   app.add_option("--jpeg-quality", o.encoder.jpeg_quality, "JPEG quality")
       ->check(CLI::Range(10, 100))
       ->capture_default_str();
-  app.add_option("--window", window, "display window LO HI: 16-bit values mapped to black and white (default 0 65535)")
+  app.add_option("--window", window,
+                 "display window LO HI: 16-bit X-ray values mapped to black and white (default 0 65535; ultrasound "
+                 "frames are 8-bit and shown as they come)")
       ->expected(2)
       ->check(CLI::Range(0, 65535));
   app.add_option("--max-fps", o.hub.max_fps, "most frames per second per connection (a page may ask for fewer)")
@@ -145,9 +148,10 @@ int main(int argc, char** argv) {
   const auto s = gateway.hub_stats();
   const auto c = gateway.counters();
   spdlog::info(
-      "remote: done: {} connections, {} frames received, {} encoded, {} sent, {} dropped for slow pages, "
-      "{} commands forwarded, {} refused, {} rate-limited, {} bad frames, {} bad control messages",
-      s.connections_total, c.frames_received, c.frames_encoded, s.frames_sent, s.frames_dropped, s.commands_forwarded,
-      s.commands_refused, s.rate_limited, c.frames_bad, c.control_bad);
+      "remote: done: {} connections, {} X-ray and {} ultrasound frames received, {} encoded, {} sent, {} dropped for "
+      "slow pages, {} commands forwarded, {} refused, {} rate-limited, {} bad X-ray and {} bad ultrasound frames, {} "
+      "bad control messages",
+      s.connections_total, c.frames_received, c.ultrasound_received, c.frames_encoded, s.frames_sent, s.frames_dropped,
+      s.commands_forwarded, s.commands_refused, s.rate_limited, c.frames_bad, c.ultrasound_bad, c.control_bad);
   return 0;
 }

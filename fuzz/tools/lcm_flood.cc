@@ -55,6 +55,18 @@ std::vector<Bytes> poisoned_messages() {
     w.node_mm = {{static_cast<float>(v), 0, 0}};
     w.contact = {1};
     out.push_back(pcisim::fuzz::encode(w));
+    pcisim_lcm::us_frame_t u{};
+    u.utime = -1;
+    u.width = u.height = 1;
+    u.pixel_format = pcisim_lcm::us_frame_t::FORMAT_GRAY8;
+    u.depth_mm = v;
+    u.width_mm = 40;
+    u.frequency_mhz = 5;
+    u.beam[2] = 1;
+    u.lateral[0] = v;
+    u.num_bytes = 1;
+    u.data = {0};
+    out.push_back(pcisim::fuzz::encode(u));
   }
   // an unknown command and a scene path that is no file
   pcisim_lcm::session_command_t s{};
@@ -78,7 +90,8 @@ int main(int argc, char** argv) {
   double seconds = 10, rate_hz = 200;
   uint32_t seed = 1;
   app.add_option("--lcm-url", lcm_url, "control LCM URL")->capture_default_str();
-  app.add_option("--image-lcm-url", image_url, "image LCM URL (the frames' channel)")->capture_default_str();
+  app.add_option("--image-lcm-url", image_url, "image LCM URL (the X-ray and ultrasound frames' channels)")
+      ->capture_default_str();
   app.add_option("--seconds", seconds, "how long to flood")->check(CLI::Range(0.1, 1e6))->capture_default_str();
   app.add_option("--rate-hz", rate_hz, "messages per second, over all channels")
       ->check(CLI::Range(1.0, 1e5))
@@ -97,13 +110,13 @@ int main(int argc, char** argv) {
 
   // every type's malformed shapes, to go on every channel
   using namespace pcisim::fuzz;
-  const std::vector<MessageCase> cases = {instrument_case(), force_case(), session_case(), status_case(),
-                                          wire_case(),       xray_case(),  probe_case()};
+  const std::vector<MessageCase> cases = {instrument_case(), force_case(), session_case(),  status_case(),
+                                          wire_case(),       xray_case(),  us_frame_case(), probe_case()};
   const std::vector<Bytes> poisoned = poisoned_messages();
-  const std::vector<const char*> channels = {pcisim::protocol::kInstrumentChannel, pcisim::protocol::kForceChannel,
-                                             pcisim::protocol::kWireChannel,       pcisim::protocol::kStatusChannel,
-                                             pcisim::protocol::kSessionChannel,    pcisim::protocol::kXrayChannel,
-                                             pcisim::protocol::kProbeChannel};
+  const std::vector<const char*> channels = {
+      pcisim::protocol::kInstrumentChannel, pcisim::protocol::kForceChannel,     pcisim::protocol::kWireChannel,
+      pcisim::protocol::kStatusChannel,     pcisim::protocol::kSessionChannel,   pcisim::protocol::kXrayChannel,
+      pcisim::protocol::kProbeChannel,      pcisim::protocol::kUltrasoundChannel};
   std::mt19937 rng(seed);
   std::map<std::string, std::map<std::string, int64_t>> sent;  // channel -> kind -> count
   const auto period = std::chrono::duration<double>(1.0 / rate_hz);
@@ -132,7 +145,10 @@ int main(int argc, char** argv) {
         msg = &random_bytes;
         kind = "random bytes";
     }
-    lcm::LCM& bus = channel == pcisim::protocol::kXrayChannel ? images : control;
+    // the frames' channels are on the image instance, as the server sends them
+    const bool image_channel =
+        channel == pcisim::protocol::kXrayChannel || channel == pcisim::protocol::kUltrasoundChannel;
+    lcm::LCM& bus = image_channel ? images : control;
     bus.publish(channel, msg->data(), static_cast<unsigned>(msg->size()));
     ++sent[channel][kind];
     next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(period);

@@ -1,7 +1,7 @@
 // Every client program's LCM handlers under every malformed shape of what they subscribe to: the
-// bridge (force commands), the capture (frames, instrument) and the remote gateway (wire, status,
-// session, instrument, frames). Each malformed message is counted as bad and nothing throws; a
-// good message afterwards is still handled.
+// bridge (force commands), the capture (X-ray and ultrasound frames, instrument) and the remote
+// gateway (wire, status, session, instrument, X-ray and ultrasound frames). Each malformed message is counted as bad
+// and nothing throws; a good message afterwards is still handled.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -58,13 +58,17 @@ TEST(HostileLcm, CaptureCountsEveryMalformedFrameAndSampleAndWritesNone) {
   CaptureSink sink(writer, 0, /*only_while_pedal=*/true);
   lcm::LCM images("memq://"), control("memq://");
   images.subscribe(protocol::kXrayChannel, &CaptureSink::on_frame, &sink);
+  images.subscribe(protocol::kUltrasoundChannel, &CaptureSink::on_ultrasound, &sink);
   control.subscribe(protocol::kInstrumentChannel, &CaptureSink::on_instrument, &sink);
   const auto frames = pcisim::fuzz::xray_case();
+  const auto us_frames = pcisim::fuzz::us_frame_case();
   const auto instrument = pcisim::fuzz::instrument_case();
   const int64_t bad_frames = publish_all(images, protocol::kXrayChannel, frames);
+  const int64_t bad_us_frames = publish_all(images, protocol::kUltrasoundChannel, us_frames);
   const int64_t bad_samples = publish_all(control, protocol::kInstrumentChannel, instrument);
   while (images.handleTimeout(10) > 0 || control.handleTimeout(10) > 0) {}
   EXPECT_EQ(sink.bad(), bad_frames);
+  EXPECT_EQ(sink.bad_ultrasound(), bad_us_frames);
   EXPECT_EQ(sink.bad_instrument(), bad_samples);
   EXPECT_EQ(writer.written(), 0);
   EXPECT_TRUE(sink.error().empty());
@@ -76,6 +80,9 @@ TEST(HostileLcm, CaptureCountsEveryMalformedFrameAndSampleAndWritesNone) {
   images.publish(protocol::kXrayChannel, frames.good.data(), static_cast<unsigned>(frames.good.size()));
   images.handleTimeout(100);
   EXPECT_EQ(writer.written(), 1);
+  images.publish(protocol::kUltrasoundChannel, us_frames.good.data(), static_cast<unsigned>(us_frames.good.size()));
+  images.handleTimeout(100);
+  EXPECT_EQ(writer.written_ultrasound(), 1);
   std::filesystem::remove_all(dir);
 }
 
@@ -89,14 +96,20 @@ TEST(HostileLcm, GatewayCountsEveryMalformedMessageOnEveryChannel) {
   const auto frames = pcisim::fuzz::xray_case();
   const int64_t frames_sent = publish_all(g.images, protocol::kXrayChannel, frames);
   g.images.publish(protocol::kXrayChannel, frames.good.data(), static_cast<unsigned>(frames.good.size()));
+  const auto us_frames = pcisim::fuzz::us_frame_case();
+  const int64_t us_frames_sent = publish_all(g.images, protocol::kUltrasoundChannel, us_frames);
+  g.images.publish(protocol::kUltrasoundChannel, us_frames.good.data(), static_cast<unsigned>(us_frames.good.size()));
   const auto end = std::chrono::steady_clock::now() + 10s;
   while (std::chrono::steady_clock::now() < end &&
-         (g.gateway->counters().control_bad < control_sent || g.gateway->counters().frames_received < 1))
+         (g.gateway->counters().control_bad < control_sent || g.gateway->counters().frames_received < 1 ||
+          g.gateway->counters().ultrasound_received < 1))
     std::this_thread::sleep_for(10ms);
   const auto c = g.gateway->counters();
   EXPECT_EQ(c.control_bad, control_sent);
   EXPECT_EQ(c.frames_bad, frames_sent);
   EXPECT_EQ(c.frames_received, 1) << "the good frame after the flood";
+  EXPECT_EQ(c.ultrasound_bad, us_frames_sent);
+  EXPECT_EQ(c.ultrasound_received, 1) << "the good ultrasound frame after the flood";
 }
 
 }  // namespace

@@ -50,6 +50,9 @@ TEST(HostileDecode, WireState) {
 TEST(HostileDecode, XrayFrame) {
   expect_refused<pcisim_lcm::xray_frame_t>(fuzz::xray_case());
 }
+TEST(HostileDecode, UltrasoundFrame) {
+  expect_refused<pcisim_lcm::us_frame_t>(fuzz::us_frame_case());
+}
 
 // the finding itself: a 66-byte session command whose scene_path length is 0 (it threw
 // std::length_error out of the handler and ended the server)

@@ -2,10 +2,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
+#include <numbers>
 #include <vector>
 
+#include "pcisim_lcm/us_frame_t.hpp"
 #include "pcisim_lcm/xray_frame_t.hpp"
 #include "protocol/channels.h"
 
@@ -151,6 +155,117 @@ TEST(MessageChecks, XrayFrameSizeAndPixelFormatAreChecked) {
   EXPECT_TRUE(is_well_formed(m)) << "compressed: any size";
   m.pixel_format = 7;
   EXPECT_FALSE(is_well_formed(m)) << "no such format: its size cannot be checked, so it is refused";
+}
+
+// an ultrasound frame as the soft-tissue scene sends it: linear, 40 mm wide, 60 mm deep
+pcisim_lcm::us_frame_t us_frame() {
+  using F = pcisim_lcm::us_frame_t;
+  F m{};
+  m.utime = 9;
+  m.seq = 3;
+  m.width = 4;
+  m.height = 3;
+  m.pixel_format = F::FORMAT_GRAY8;
+  m.geometry = F::GEOMETRY_LINEAR;
+  m.depth_mm = 60.0;
+  m.width_mm = 40.0;
+  m.gain_db = -6.0;
+  m.frequency_mhz = 5.0;
+  m.origin_mm[1] = -29.5;
+  m.beam[1] = 1.0;
+  m.lateral[0] = std::cos(0.2);  // in the x-z plane: perpendicular to the beam
+  m.lateral[2] = std::sin(0.2);
+  m.probe_force_n[1] = -2.5;
+  m.sim_time_s = 1.25;
+  m.num_bytes = 12;
+  for (int i = 0; i < 12; ++i) m.data.push_back(static_cast<uint8_t>(20 * i));
+  return m;
+}
+
+// a good frame decodes, linear and curvilinear; each spoiled field is refused: the sizes, the
+// format and geometry, NaN anywhere, directions that are not an orthonormal pair, and the
+// renderer's ranges (depth, gain, frequency and each geometry's own sizes)
+TEST(MessageChecks, UltrasoundFrameGeometryFormatAndSizesAreChecked) {
+  using F = pcisim_lcm::us_frame_t;
+  F out{};
+  auto bytes = encode(us_frame());
+  ASSERT_TRUE(decode_checked(as_rbuf(bytes), out));
+  EXPECT_EQ(out.data, us_frame().data);
+  EXPECT_DOUBLE_EQ(out.lateral[2], std::sin(0.2));
+  EXPECT_DOUBLE_EQ(out.probe_force_n[1], -2.5);
+
+  F curved = us_frame();
+  curved.geometry = F::GEOMETRY_CURVILINEAR;
+  curved.width_mm = 0.0;  // a linear array's length: not read for a fan
+  curved.fan_angle_deg = 60.0;
+  curved.radius_of_curvature_mm = 40.0;
+  auto curved_bytes = encode(curved);
+  EXPECT_TRUE(decode_checked(as_rbuf(curved_bytes), out)) << "curvilinear";
+
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  struct Bad {
+    const char* what;
+    std::function<void(F&)> spoil;
+  };
+  const auto resize = [](F& m, int w, int h) {
+    m.width = w;
+    m.height = h;
+    m.num_bytes = std::max(0, w * h);
+    m.data.assign(static_cast<size_t>(m.num_bytes), 7);
+  };
+  const auto fan = [](F& m) {
+    m.geometry = F::GEOMETRY_CURVILINEAR;
+    m.fan_angle_deg = 60.0;
+    m.radius_of_curvature_mm = 40.0;
+  };
+  const Bad bad[] = {
+      {"NaN origin", [&](F& m) { m.origin_mm[0] = nan; }},
+      {"Inf probe force", [&](F& m) { m.probe_force_n[2] = inf; }},
+      {"NaN sim time", [&](F& m) { m.sim_time_s = nan; }},
+      {"NaN gain", [&](F& m) { m.gain_db = nan; }},
+      {"NaN beam", [&](F& m) { m.beam[1] = nan; }},
+      {"beam of length 1.1", [](F& m) { m.beam[1] = 1.1; }},
+      {"zero beam", [](F& m) { m.beam[1] = 0.0; }},
+      {"lateral of length 0.9", [](F& m) { m.lateral[0] *= 0.9, m.lateral[2] *= 0.9; }},
+      {"lateral along the beam", [](F& m) { m.lateral[0] = m.lateral[2] = 0.0, m.lateral[1] = 1.0; }},
+      {"lateral 1 degree off perpendicular",
+       [](F& m) {
+         const double a = std::numbers::pi / 180.0;
+         m.lateral[0] = std::cos(a), m.lateral[1] = std::sin(a), m.lateral[2] = 0.0;
+       }},
+      {"one byte short of width x height", [](F& m) { m.num_bytes = 11, m.data.resize(11); }},
+      {"one byte over width x height", [](F& m) { m.num_bytes = 13, m.data.push_back(0); }},
+      {"negative width", [](F& m) { m.width = -4; }},
+      {"negative width and height", [&](F& m) { m.width = m.height = -3, m.num_bytes = 9, m.data.resize(9); }},
+      {"empty frame", [&](F& m) { resize(m, 0, 0); }},
+      {"4097 columns", [&](F& m) { resize(m, 4097, 1); }},
+      {"unknown format", [](F& m) { m.pixel_format = 2; }},
+      {"format 0", [](F& m) { m.pixel_format = 0; }},
+      {"unknown geometry", [](F& m) { m.geometry = 2; }},
+      {"negative geometry", [](F& m) { m.geometry = -1; }},
+      {"depth 0 mm", [](F& m) { m.depth_mm = 0.0; }},
+      {"depth 301 mm", [](F& m) { m.depth_mm = 301.0; }},
+      {"negative depth", [](F& m) { m.depth_mm = -60.0; }},
+      {"gain 61 dB", [](F& m) { m.gain_db = 61.0; }},
+      {"gain -61 dB", [](F& m) { m.gain_db = -61.0; }},
+      {"frequency 0 MHz", [](F& m) { m.frequency_mhz = 0.0; }},
+      {"frequency 21 MHz", [](F& m) { m.frequency_mhz = 21.0; }},
+      {"linear of width 0 mm", [](F& m) { m.width_mm = 0.0; }},
+      {"linear of width 201 mm", [](F& m) { m.width_mm = 201.0; }},
+      {"negative width_mm", [](F& m) { m.width_mm = -40.0; }},
+      {"curvilinear of fan 0 deg", [&](F& m) { fan(m), m.fan_angle_deg = 0.0; }},
+      {"curvilinear of fan 151 deg", [&](F& m) { fan(m), m.fan_angle_deg = 151.0; }},
+      {"curvilinear of radius 0 mm", [&](F& m) { fan(m), m.radius_of_curvature_mm = 0.0; }},
+      {"curvilinear of radius 201 mm", [&](F& m) { fan(m), m.radius_of_curvature_mm = 201.0; }},
+      {"curvilinear with a negative width_mm", [&](F& m) { fan(m), m.width_mm = -1.0; }},
+      {"linear with a negative fan angle", [](F& m) { m.fan_angle_deg = -60.0; }},
+  };
+  for (const Bad& b : bad) {
+    F m = us_frame();
+    b.spoil(m);
+    auto spoiled = encode(m);
+    EXPECT_FALSE(decode_checked(as_rbuf(spoiled), out)) << b.what;
+  }
 }
 
 // every type survives an encode/decode over a real in-process LCM (memq)

@@ -5,7 +5,7 @@
 const $ = (id) => document.getElementById(id);
 const view = {
   connected: false, role: null, id: null, frames: 0, lastSeq: -1, lastFrame: null,
-  state: null, status: null, errors: [], acks: 0,
+  modality: null, ultrasoundFrames: 0, state: null, status: null, errors: [], acks: 0,
 };
 window.pcisim = view;  // for tests and the curious: what the page has seen
 
@@ -100,12 +100,42 @@ function onFrame(buf) {
     view.lastSeq = header.seq;
     view.lastFrame = header;
     fpsCount++;
-    $("angles").textContent = angleText(header.primary_deg, header.secondary_deg);
-    $("frame-info").textContent = "frame " + header.seq + "  t=" + header.sim_time_s.toFixed(2) + " s" + (header.cine ? "  CINE run " + header.cine_run : "");
+    if (header.kind === "ultrasound") showUltrasound(header); else showXray(header);
   }).catch((e) => log("cannot decode a frame: " + e, true)).finally(() => {
     decoding = false;
     if (waiting) { const next = waiting; waiting = null; onFrame(next); }
   });
+}
+
+// the screen shows whichever modality the scene sends: X-ray fills it; an ultrasound image keeps
+// its size in mm (its pixels need not be square), row 0 (the probe's face) at the top
+function fitCanvas(aspect) {
+  const side = 512;
+  const w = aspect >= 1 ? side : Math.round(side * aspect), h = aspect >= 1 ? Math.round(side / aspect) : side;
+  canvas.style.width = w + "px";
+  canvas.style.height = h + "px";
+}
+
+function showXray(h) {
+  if (view.modality !== "xray") { view.modality = "xray"; fitCanvas(1); }
+  $("angles").textContent = angleText(h.primary_deg, h.secondary_deg);
+  $("frame-info").textContent = "frame " + h.seq + "  t=" + h.sim_time_s.toFixed(2) + " s" + (h.cine ? "  CINE run " + h.cine_run : "");
+}
+
+function showUltrasound(h) {
+  view.ultrasoundFrames++;
+  if (view.modality !== "ultrasound") {
+    view.modality = "ultrasound";
+    const beam = $("beam");
+    beam.textContent = "US";
+    beam.className = "beam us";
+  }
+  fitCanvas(h.image_mm[0] / h.image_mm[1]);
+  const f = h.probe_force_n, force = Math.hypot(f[0], f[1], f[2]);
+  $("angles").textContent = (h.geometry === "linear" ? "linear " + h.width_mm.toFixed(0) + " mm"
+    : "curvilinear " + h.fan_angle_deg.toFixed(0) + "°, Rc " + h.radius_of_curvature_mm.toFixed(0) + " mm") + ", depth " + h.depth_mm.toFixed(0) + " mm";
+  $("frame-info").textContent = "US frame " + h.seq + "  t=" + h.sim_time_s.toFixed(2) + " s  " + h.frequency_mhz.toFixed(1) + " MHz  gain " +
+    h.gain_db.toFixed(0) + " dB  force " + force.toFixed(2) + " N";
 }
 
 setInterval(() => {
@@ -156,8 +186,10 @@ function showState(m) {
   $("contrast-used").textContent = m.contrast.used_ml.toFixed(1) + " ml";
   $("injections").textContent = m.contrast.injections;
   const beam = $("beam");
-  beam.textContent = f.cine ? "CINE" : f.on ? "FLUORO" : "LIH";
-  beam.className = "beam" + (f.cine ? " cine" : f.on ? " on" : "");
+  if (view.modality !== "ultrasound") {  // the ultrasound scene has no X-ray beam to show
+    beam.textContent = f.cine ? "CINE" : f.on ? "FLUORO" : "LIH";
+    beam.className = "beam" + (f.cine ? " cine" : f.on ? " on" : "");
+  }
   $("pedal").classList.toggle("active", f.pedal_console);
   $("cine").classList.toggle("active", f.cine_console);
   if (m.carm.primary_deg !== null && !view.lastFrame) $("angles").textContent = angleText(m.carm.primary_deg, m.carm.secondary_deg);

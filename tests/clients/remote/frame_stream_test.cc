@@ -1,9 +1,15 @@
 // Frames reach every page, newest first: a page that reads slowly gets fewer frames, never a
 // backlog, and never slows the others. What the gateway holds for pages stays bounded.
 #include <gtest/gtest.h>
+#include <png.h>
 #include <turbojpeg.h>
 
+#include <cmath>
+#include <numbers>
+#include <random>
+
 #include "clients/remote/frame_encoder.h"
+#include "clients/remote/latest_frame_slot.h"
 #include "remote_test_support.h"
 
 namespace pcisim::remote::test {
@@ -21,6 +27,47 @@ std::vector<uint8_t> decode_jpeg(const std::string& jpeg, int& w, int& h) {
   }
   tjDestroy(tj);
   return out;
+}
+
+// decodes a PNG held in memory; empty unless it is 8-bit grey
+std::vector<uint8_t> decode_png8(const std::string& bytes, int& w, int& h) {
+  png_image image{};
+  image.version = PNG_IMAGE_VERSION;
+  std::vector<uint8_t> out;
+  if (!png_image_begin_read_from_memory(&image, bytes.data(), bytes.size())) return out;
+  const bool gray8 = image.format == PNG_FORMAT_GRAY;  // the file's own format, before any conversion
+  w = static_cast<int>(image.width);
+  h = static_cast<int>(image.height);
+  out.resize(PNG_IMAGE_SIZE(image));
+  if (!png_image_finish_read(&image, nullptr, out.data(), 0, nullptr) || !gray8) out.clear();
+  png_image_free(&image);
+  return out;
+}
+
+// a curvilinear B-mode frame: 60 deg, Rc 40 mm, 60 mm deep; speckle-like bytes
+pcisim_lcm::us_frame_t make_us_frame(int64_t seq, int width = 96, int height = 64) {
+  using U = pcisim_lcm::us_frame_t;
+  U f{};
+  f.seq = seq;
+  f.utime = 500 + seq;
+  f.width = width;
+  f.height = height;
+  f.pixel_format = U::FORMAT_GRAY8;
+  f.geometry = U::GEOMETRY_CURVILINEAR;
+  f.depth_mm = 60;
+  f.fan_angle_deg = 60;
+  f.radius_of_curvature_mm = 40;
+  f.gain_db = 6;
+  f.frequency_mhz = 3.5;
+  f.beam[1] = 1;
+  f.lateral[2] = 1;
+  f.probe_force_n[0] = 3;
+  f.probe_force_n[1] = -4;
+  f.sim_time_s = 2.5;
+  f.num_bytes = width * height;
+  std::mt19937 rng(static_cast<unsigned>(seq));
+  for (int i = 0; i < f.num_bytes; ++i) f.data.push_back(static_cast<uint8_t>(rng()));
+  return f;
 }
 
 TEST(RemoteFrames, WindowMaps16BitsTo8) {
@@ -62,6 +109,113 @@ TEST(RemoteFrames, EncodesJpegAndPngThatDecodeToTheWindowedImage) {
   auto bad = frame;
   bad.data.resize(10);
   EXPECT_THROW(jpeg.encode(bad), std::runtime_error);
+}
+
+// an ultrasound frame is shown as the renderer made it (8 bits, no window), tagged with its kind
+// and its geometry; its size in mm lets the page keep its aspect
+TEST(RemoteFrames, UltrasoundFrameKeepsItsGreyLevelsAndCarriesItsGeometry) {
+  const auto frame = make_us_frame(4);
+  EncoderOptions po;
+  po.format = ImageFormat::kPng;
+  po.window_lo = 1000;  // an X-ray window must not touch ultrasound grey levels
+  po.window_hi = 2000;
+  FrameEncoder png(po);
+  const WsMessage m{true, png.encode(frame)->message};
+  const auto h = m.frame_header();
+  EXPECT_EQ(h["kind"], "ultrasound");
+  EXPECT_EQ(h["seq"], 4);
+  EXPECT_EQ(h["width"], 96);
+  EXPECT_EQ(h["height"], 64);
+  EXPECT_EQ(h["geometry"], "curvilinear");
+  EXPECT_DOUBLE_EQ(h["depth_mm"].get<double>(), 60.0);
+  EXPECT_DOUBLE_EQ(h["fan_angle_deg"].get<double>(), 60.0);
+  EXPECT_DOUBLE_EQ(h["radius_of_curvature_mm"].get<double>(), 40.0);
+  EXPECT_DOUBLE_EQ(h["gain_db"].get<double>(), 6.0);
+  EXPECT_DOUBLE_EQ(h["frequency_mhz"].get<double>(), 3.5);
+  EXPECT_DOUBLE_EQ(h["probe_force_n"][1].get<double>(), -4.0);
+  // the fan's bounding box: 2 (Rc + depth) sin 30 deg wide, depth - Rc (cos 30 deg - 1) high
+  EXPECT_NEAR(h["image_mm"][0].get<double>(), 100.0, 1e-9);
+  EXPECT_NEAR(h["image_mm"][1].get<double>(), 60.0 - 40.0 * (std::cos(std::numbers::pi / 6) - 1.0), 1e-9);
+  EXPECT_FALSE(h.contains("primary_deg")) << "no C-arm in an ultrasound frame";
+  int w = 0, hh = 0;
+  EXPECT_EQ(decode_png8(m.image(), w, hh), frame.data) << "PNG: the message's bytes exactly";
+
+  FrameEncoder jpeg({});
+  const WsMessage jm{true, jpeg.encode(frame)->message};
+  EXPECT_EQ(jm.frame_header()["mime"], "image/jpeg");
+  EXPECT_EQ(decode_jpeg(jm.image(), w, hh).size(), 96u * 64u);
+  const WsMessage xm{true, jpeg.encode(make_frame(1, 64))->message};
+  EXPECT_EQ(xm.frame_header()["kind"], "xray");
+
+  auto bad = frame;
+  bad.data.pop_back();
+  EXPECT_THROW(jpeg.encode(bad), std::runtime_error);
+  bad = frame;
+  bad.pixel_format = 3;
+  EXPECT_THROW(jpeg.encode(bad), std::runtime_error);
+}
+
+// one slot per modality: an ultrasound frame never replaces a waiting X-ray frame, nor the reverse
+TEST(RemoteFrames, TheNewestFrameOfEachModalityWaits) {
+  LatestFrameSlot slot;
+  pcisim_lcm::xray_frame_t x = make_frame(1, 8), x_out;
+  pcisim_lcm::us_frame_t u = make_us_frame(7, 8, 8), u_out;
+  slot.put(x);
+  slot.put(u);
+  x = make_frame(2, 8);
+  slot.put(x);
+  EXPECT_EQ(slot.take(x_out, u_out, 0), LatestFrameSlot::kXray | LatestFrameSlot::kUltrasound);
+  EXPECT_EQ(x_out.seq, 2) << "the newer X-ray frame";
+  EXPECT_EQ(u_out.seq, 7);
+  EXPECT_EQ(slot.replaced(), 1);
+  EXPECT_EQ(slot.take(x_out, u_out, 0), LatestFrameSlot::kNone);
+  u = make_us_frame(8, 8, 8);
+  slot.put(u);
+  EXPECT_EQ(slot.take(x_out, u_out, 0), LatestFrameSlot::kUltrasound);
+  EXPECT_EQ(u_out.seq, 8);
+  EXPECT_EQ(x_out.seq, 2) << "untouched";
+}
+
+// the soft-tissue scene's frames on PCISIM_ULTRASOUND (image bus) reach the page, tagged; a bad one is
+// counted as ultrasound's and never shown
+TEST(RemoteFrames, UltrasoundFramesOverLcmReachThePage) {
+  TestGateway g;
+  WsClient c;
+  ASSERT_EQ(c.connect(g.port(), ws_target(kObserverToken)), 101);
+  ASSERT_TRUE(eventually([&] { return g.gateway->hub_stats().clients == 1; }));
+  auto along_beam = make_us_frame(100);  // lateral along the beam: no image plane
+  along_beam.lateral[1] = 1;
+  along_beam.lateral[2] = 0;
+  g.images.publish(protocol::kUltrasoundChannel, &along_beam);
+  for (int i = 0; i < 5; ++i) {
+    auto f = make_us_frame(i);
+    g.images.publish(protocol::kUltrasoundChannel, &f);
+    std::this_thread::sleep_for(50ms);
+  }
+  int n = 0;
+  int64_t last = -1;
+  while (auto m = c.next_frame(1000ms)) {
+    const auto h = m->frame_header();
+    EXPECT_EQ(h["kind"], "ultrasound");
+    EXPECT_NE(h["seq"], 100) << "the bad frame was shown";
+    last = h["seq"];
+    ++n;
+    if (last == 4) break;
+  }
+  EXPECT_EQ(last, 4);
+  EXPECT_GE(n, 3) << "at 20 fps below the cap, most arrive";
+  const auto k = g.gateway->counters();
+  EXPECT_EQ(k.ultrasound_received, 5);
+  EXPECT_EQ(k.ultrasound_bad, 1);
+  EXPECT_EQ(k.frames_received, 0) << "X-ray's counters are X-ray's";
+  EXPECT_EQ(k.frames_bad, 0);
+
+  // the scene changes to X-ray: the same page gets X-ray frames next
+  auto x = make_frame(0, 64);
+  g.images.publish(protocol::kXrayChannel, &x);
+  auto m = c.next_frame(2000ms);
+  ASSERT_TRUE(m);
+  EXPECT_EQ(m->frame_header()["kind"], "xray");
 }
 
 TEST(RemoteFrames, EveryPageGetsTheNewestFrames) {

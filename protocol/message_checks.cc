@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "protocol/probe_ranges.h"
+
 namespace pcisim::protocol {
 namespace {
 
@@ -65,11 +67,10 @@ bool is_well_formed(const pcisim_lcm::probe_state_t& m) {
   const auto& p = m.position_mm;
   const auto& q = m.orientation_wxyz;
   if (!finite(p[0], p[1], p[2], q[0], q[1], q[2], q[3], m.depth_mm, m.gain_db)) return false;
-  if (p[0] * p[0] + p[1] * p[1] + p[2] * p[2] > 1e8) return false;  // 10 m
+  if (!is_probe_position_mm(p[0], p[1], p[2])) return false;
   const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  // depth 0 means the scene's; asked for, at least 1 mm
-  const bool depth_ok = m.depth_mm == 0.0 || (m.depth_mm >= 1.0 && m.depth_mm <= 500.0);
-  return std::abs(norm - 1.0) <= 0.01 && depth_ok && std::abs(m.gain_db) <= 60.0;
+  return std::abs(norm - 1.0) <= kProbeQuaternionNormTolerance && is_probe_depth_mm(m.depth_mm) &&
+         is_probe_gain_db(m.gain_db);
 }
 
 bool is_well_formed(const pcisim_lcm::us_frame_t& m) {

@@ -24,7 +24,7 @@ bool is_well_formed(const pcisim_lcm::sim_status_t& m);
 bool is_well_formed(const pcisim_lcm::xray_frame_t& m);
 // and for the probe: a position within 10 m of the scene's origin, a unit quaternion (norm within
 // 1 %: a pose, not a scaling; the receiver normalises it), a depth of 0 (the scene's) or 1-500 mm
-// and a gain within +-60 dB
+// and a gain within +-60 dB (protocol/probe_ranges.h)
 bool is_well_formed(const pcisim_lcm::probe_state_t& m);
 // an ultrasound frame: a known format and geometry, width x height bytes (at most 4096 x 4096),
 // beam and lateral unit and perpendicular (within 1e-3), finite fields, and the renderer's ranges:

@@ -20,7 +20,19 @@ namespace pcisim::clients {
 using realtime::monotonic_ns;
 
 Bridge::Bridge(lcm::LCM& lcm, InstrumentDevice& device, const BridgeOptions& options)
-    : lcm_(lcm), device_(device), options_(options) {
+    : Bridge(lcm, &device, nullptr, options) {}
+
+Bridge::Bridge(lcm::LCM& lcm, const ProbeScript& probe, const BridgeOptions& options)
+    : Bridge(lcm, nullptr, &probe, options) {}
+
+Bridge::Bridge(lcm::LCM& lcm, InstrumentDevice* device, const ProbeScript* probe, const BridgeOptions& options)
+    : lcm_(lcm),
+      device_(device),
+      probe_(probe),
+      options_(options),
+      channel_(probe ? protocol::kProbeChannel : protocol::kInstrumentChannel) {
+  bytes_.resize(probe ? pcisim_lcm::probe_state_t{}.getEncodedSize()
+                      : pcisim_lcm::instrument_state_t{}.getEncodedSize());
   if (!(options.rate_hz >= 1.0 && options.rate_hz <= 1e4))
     throw std::invalid_argument("bridge: rate_hz must be in [1, 10000], got " + std::to_string(options.rate_hz));
   lcm_.subscribe(protocol::kForceChannel, &Bridge::on_force, this);
@@ -48,14 +60,14 @@ BridgeStats Bridge::run(const std::atomic<bool>& stop) {
     while (!done) lcm_.handleTimeout(20);
   });
 
-  pcisim_lcm::instrument_state_t m{};
-  m.device_id = options_.device_id;
-  InstrumentReading reading, last_good;
+  InstrumentTick instrument;
+  instrument.message.device_id = options_.device_id;
+  pcisim_lcm::probe_state_t probe{};
+  probe.device_id = options_.device_id;
   BridgeStats stats;
   const auto period_ns = static_cast<int64_t>(1e9 / options_.rate_hz);
   int64_t start_ns = monotonic_ns();
   bool waiting = options_.wait_for_server_s > 0;
-  bool was_fault = false;
   realtime::DeadlineSchedule schedule(start_ns, period_ns);
   int64_t next_log_ns = start_ns + 1'000'000'000, first_publish_ns = 0, last_publish_ns = start_ns;
   for (int64_t seq = 0; !stop; ++seq) {
@@ -68,39 +80,19 @@ BridgeStats Bridge::run(const std::atomic<bool>& stop) {
       next_log_ns = now_ns + 1'000'000'000;
     }
     const double t_s = waiting ? 0.0 : (now_ns - start_ns) * 1e-9;
-    if ((options_.duration_s > 0 && t_s >= options_.duration_s) || device_.finished(t_s)) break;
+    if ((options_.duration_s > 0 && t_s >= options_.duration_s) || (device_ && device_->finished(t_s))) break;
 
-    // a device in fault reports no motion: the last good position, rates zero, status fault
-    const bool ok = device_.read(t_s, reading);
-    if (ok) last_good = reading;
-    if (!ok) {
-      ++stats.fault_samples;
-      last_good.insertion_rate_mm_s = last_good.rotation_rate_rad_s = 0;
+    const bool log = options_.log_each_second && !waiting && now_ns >= next_log_ns;
+    if (log) next_log_ns += 1'000'000'000;
+    if (probe_) {
+      publish_probe(t_s, now_ns, seq, log, probe);
+    } else {
+      publish_instrument(t_s, now_ns, seq, log, instrument, stats);
     }
-    if (ok != !was_fault) spdlog::warn(ok ? "bridge: device back" : "bridge: device fault, publishing STATUS_FAULT");
-    was_fault = !ok;
-    const InstrumentReading& r = ok ? reading : last_good;
-    m.utime = now_ns / 1000;
-    m.seq = seq;
-    m.status = ok ? pcisim_lcm::instrument_state_t::STATUS_OK : pcisim_lcm::instrument_state_t::STATUS_FAULT;
-    m.buttons = r.buttons;
-    m.insertion_mm = r.insertion_mm;
-    m.rotation_rad = r.rotation_rad;
-    m.insertion_rate_mm_s = r.insertion_rate_mm_s;
-    m.rotation_rate_rad_s = r.rotation_rate_rad_s;
-    lcm_.publish(protocol::kInstrumentChannel, &m);
     ++stats.published;
     if (!first_publish_ns) first_publish_ns = now_ns;
     last_publish_ns = now_ns;
 
-    if (options_.log_each_second && !waiting && now_ns >= next_log_ns) {
-      next_log_ns += 1'000'000'000;
-      spdlog::info(
-          "bridge: t={:5.1f}s insertion {:6.1f} mm rotation {:6.2f} rad buttons {:#x}{} | renders {:+.3f} N "
-          "{:+.3f} N·mm ({} commands)",
-          t_s, r.insertion_mm, r.rotation_rad, r.buttons, ok ? "" : " FAULT", last_force_n_.load(),
-          last_torque_nmm_.load(), forces_received_.load());
-    }
     realtime::sleep_until_ns(schedule.deadline_ns());
     stats.missed_periods += schedule.complete(monotonic_ns());
   }
@@ -113,6 +105,64 @@ BridgeStats Bridge::run(const std::atomic<bool>& stop) {
   stats.last_force_n = last_force_n_;
   stats.last_torque_nmm = last_torque_nmm_;
   return stats;
+}
+
+template <class Message>
+void Bridge::publish(const Message& message) {
+  const int size = message.getEncodedSize();
+  if (bytes_.size() < static_cast<size_t>(size)) bytes_.resize(size);  // never: the size is fixed
+  message.encode(bytes_.data(), 0, size);
+  lcm_.publish(channel_, bytes_.data(), static_cast<unsigned>(size));
+}
+
+void Bridge::publish_instrument(double t_s, int64_t now_ns, int64_t seq, bool log, InstrumentTick& tick,
+                                BridgeStats& stats) {
+  // a device in fault reports no motion: the last good position, rates zero, status fault
+  const bool ok = device_->read(t_s, tick.reading);
+  if (ok) tick.last_good = tick.reading;
+  if (!ok) {
+    ++stats.fault_samples;
+    tick.last_good.insertion_rate_mm_s = tick.last_good.rotation_rate_rad_s = 0;
+  }
+  if (ok != !tick.was_fault) spdlog::warn(ok ? "bridge: device back" : "bridge: device fault, publishing STATUS_FAULT");
+  tick.was_fault = !ok;
+  const InstrumentReading& r = ok ? tick.reading : tick.last_good;
+  auto& m = tick.message;
+  m.utime = now_ns / 1000;
+  m.seq = seq;
+  m.status = ok ? pcisim_lcm::instrument_state_t::STATUS_OK : pcisim_lcm::instrument_state_t::STATUS_FAULT;
+  m.buttons = r.buttons;
+  m.insertion_mm = r.insertion_mm;
+  m.rotation_rad = r.rotation_rad;
+  m.insertion_rate_mm_s = r.insertion_rate_mm_s;
+  m.rotation_rate_rad_s = r.rotation_rate_rad_s;
+  publish(m);
+  if (log)
+    spdlog::info(
+        "bridge: t={:5.1f}s insertion {:6.1f} mm rotation {:6.2f} rad buttons {:#x}{} | renders {:+.3f} N "
+        "{:+.3f} N·mm ({} commands)",
+        t_s, r.insertion_mm, r.rotation_rad, r.buttons, ok ? "" : " FAULT", last_force_n_.load(),
+        last_torque_nmm_.load(), forces_received_.load());
+}
+
+void Bridge::publish_probe(double t_s, int64_t now_ns, int64_t seq, bool log, pcisim_lcm::probe_state_t& m) {
+  // a script never faults: every tick is STATUS_OK
+  const ProbeReading r = probe_->sample(t_s);
+  m.utime = now_ns / 1000;
+  m.seq = seq;
+  m.status = pcisim_lcm::probe_state_t::STATUS_OK;
+  m.buttons = r.buttons;
+  for (int k = 0; k < 3; ++k) m.position_mm[k] = r.position_mm[k];
+  for (int k = 0; k < 4; ++k) m.orientation_wxyz[k] = r.orientation_wxyz[k];
+  m.depth_mm = r.depth_mm;
+  m.gain_db = r.gain_db;
+  publish(m);
+  if (log)
+    spdlog::info(
+        "bridge: t={:5.1f}s probe at ({:6.1f}, {:6.1f}, {:6.1f}) mm, wxyz ({:+.3f}, {:+.3f}, {:+.3f}, {:+.3f}), "
+        "depth {:.0f} mm, gain {:+.1f} dB, buttons {:#x}",
+        t_s, r.position_mm[0], r.position_mm[1], r.position_mm[2], r.orientation_wxyz[0], r.orientation_wxyz[1],
+        r.orientation_wxyz[2], r.orientation_wxyz[3], r.depth_mm, r.gain_db, r.buttons);
 }
 
 }  // namespace pcisim::clients

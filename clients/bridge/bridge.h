@@ -2,12 +2,18 @@
 // The instrument bridge loop: polls a device at 1 kHz on absolute deadlines, publishes
 // instrument_state_t, and keeps what the server sends back (the force it would render).
 // A device in fault is published as STATUS_FAULT with its last good position: no motion.
+// A probe bridge publishes a probe script's probe_state_t instead, on the same clock.
 #include <atomic>
 #include <cstdint>
 #include <lcm/lcm-cpp.hpp>
+#include <string>
+#include <vector>
 
 #include "clients/bridge/instrument_device.h"
+#include "clients/bridge/probe_script.h"
 #include "pcisim_lcm/force_command_t.hpp"
+#include "pcisim_lcm/instrument_state_t.hpp"
+#include "pcisim_lcm/probe_state_t.hpp"
 
 namespace pcisim::clients {
 
@@ -15,7 +21,7 @@ struct BridgeOptions {
   double rate_hz = 1000.0;
   double duration_s = 0.0;         // 0 = until stop (or a replay's end)
   double wait_for_server_s = 0.0;  // hold the device at t = 0 until the first force command
-  int device_id = 1;
+  int device_id = 1;               // of every message published
   bool log_each_second = true;
   // like the server's haptic loop: real-time priority for the publishing thread while it runs and
   // CPU wake-ups held at this latency (PM QoS; -1 = leave the CPUs alone); quiet when not permitted
@@ -33,16 +39,35 @@ struct BridgeStats {
 
 class Bridge {
  public:
-  // `lcm` must outlive the bridge; the bridge runs its receive loop on its own thread
+  // `lcm` and the device or probe script must outlive the bridge; the bridge runs its receive loop
+  // on its own thread
   Bridge(lcm::LCM& lcm, InstrumentDevice& device, const BridgeOptions& options);
+  // a probe bridge: probe_state_t on PCISIM_PROBE from the script, no instrument_state_t
+  Bridge(lcm::LCM& lcm, const ProbeScript& probe, const BridgeOptions& options);
   BridgeStats run(const std::atomic<bool>& stop);
 
  private:
+  // what one run keeps from tick to tick: the message, filled in place, and the device's fault state
+  struct InstrumentTick {
+    pcisim_lcm::instrument_state_t message{};
+    InstrumentReading reading, last_good;
+    bool was_fault = false;
+  };
+  Bridge(lcm::LCM& lcm, InstrumentDevice* device, const ProbeScript* probe, const BridgeOptions& options);
   void on_force(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  // one tick's message; `log`: the once-a-second line
+  void publish_instrument(double t_s, int64_t now_ns, int64_t seq, bool log, InstrumentTick& tick, BridgeStats& stats);
+  void publish_probe(double t_s, int64_t now_ns, int64_t seq, bool log, pcisim_lcm::probe_state_t& message);
+  // lcm-cpp's publish(message) allocates the bytes, and the channel's std::string, every call
+  template <class Message>
+  void publish(const Message& message);
 
   lcm::LCM& lcm_;
-  InstrumentDevice& device_;
+  InstrumentDevice* device_;  // exactly one of the two
+  const ProbeScript* probe_;
   BridgeOptions options_;
+  const std::string channel_;   // PCISIM_PROBE for a probe bridge, else PCISIM_INSTRUMENT
+  std::vector<uint8_t> bytes_;  // one message encoded, sized at construction (both types are of fixed size)
   pcisim_lcm::force_command_t force_{};
   std::atomic<int64_t> forces_received_{0}, forces_bad_{0};
   std::atomic<double> last_force_n_{0}, last_torque_nmm_{0};

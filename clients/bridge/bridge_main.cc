@@ -1,11 +1,13 @@
 // pcisim-bridge: the instrument bridge. Turns an instrument (a scripted trainee, a recorded
 // session, or an encoder box on a serial port) into instrument_state_t at 1 kHz and logs the
-// force_command_t the server sends back (the force it would render).
+// force_command_t the server sends back (the force it would render); or, with --probe-script, a
+// scripted ultrasound probe into probe_state_t.
 #include <CLI/CLI.hpp>
 #include <csignal>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <optional>
 #include <spdlog/spdlog.h>
 
 #include "clients/bridge/bridge.h"
@@ -28,30 +30,38 @@ int main(int argc, char** argv) {
       "pcisim-bridge: turns an instrument into instrument_state_t at 1 kHz for pcisim-server and logs "
       "the force_command_t it sends back. Devices: scripted (a trainee script, docs/trainee-script.md), "
       "replay (an lcm-logger log of a session, docs/recording.md), serial (an encoder box, "
-      "docs/serial-protocol.md)."};
-  std::string device = "scripted", script_path, log_path, port, lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+      "docs/serial-protocol.md). With --probe-script it publishes a scripted ultrasound probe's "
+      "probe_state_t on PCISIM_PROBE instead (docs/trainee-script.md, \"Probe script\")."};
+  std::string device = "scripted", script_path, probe_script_path, log_path, port;
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   std::string replay_channel = pcisim::protocol::kInstrumentChannel;
   double duration_s = 0, wait_for_server_s = 0, speed = 1.0;
   BridgeOptions options;
   SerialCalibration cal;
   int baud = 115200;
-  bool print_script = false;
-  app.add_option("--device", device, "instrument source")
-      ->check(CLI::IsMember({"scripted", "replay", "serial"}))
-      ->capture_default_str();
-  app.add_option("--script", script_path, "scripted: trainee script (JSON); default: the built-in one");
-  app.add_option("--log", log_path, "replay: lcm-logger file of a recorded session");
+  bool print_script = false, print_probe_script = false;
+  auto* device_opt = app.add_option("--device", device, "instrument source")
+                         ->check(CLI::IsMember({"scripted", "replay", "serial"}))
+                         ->capture_default_str();
+  auto* script_opt =
+      app.add_option("--script", script_path, "scripted: trainee script (JSON); default: the built-in one");
+  auto* log_opt = app.add_option("--log", log_path, "replay: lcm-logger file of a recorded session");
   app.add_option("--speed", speed, "replay: 1 = real time, 2 = twice as fast, 0 = stepped (one sample per tick)")
       ->check(CLI::Range(0.0, 100.0))
       ->capture_default_str();
   app.add_option("--replay-channel", replay_channel, "replay: channel of the recorded instrument")
       ->capture_default_str();
-  app.add_option("--port", port, "serial: the serial port or pseudo-terminal, e.g. /dev/ttyUSB0");
+  auto* port_opt = app.add_option("--port", port, "serial: the serial port or pseudo-terminal, e.g. /dev/ttyUSB0");
   app.add_option("--baud", baud, "serial: baud rate")->capture_default_str();
   app.add_option("--mm-per-count", cal.mm_per_count, "serial: insertion encoder calibration")->capture_default_str();
   app.add_option("--rad-per-count", cal.rad_per_count, "serial: rotation encoder calibration")->capture_default_str();
   app.add_option("--zero-counts", cal.insertion_zero_counts, "serial: insertion counts at 0 mm")->capture_default_str();
   app.add_option("--max-insertion-mm", cal.max_insertion_mm, "serial: insertion limit")->capture_default_str();
+  // a probe bridge has no instrument: the probe replaces the device
+  app.add_option("--probe-script", probe_script_path,
+                 "publish probe_state_t on PCISIM_PROBE from a probe script (JSON, FILE) or 'builtin' (a press on "
+                 "the kidney phantom) instead of an instrument's instrument_state_t")
+      ->excludes(device_opt, script_opt, log_opt, port_opt);
   app.add_option("--lcm-url", lcm_url, "LCM URL shared with the server")->capture_default_str();
   app.add_option("--duration", duration_s, "seconds to run; 0 = until SIGINT/SIGTERM (or the end of a replay)")
       ->check(CLI::Range(0.0, 1e7));
@@ -59,17 +69,23 @@ int main(int argc, char** argv) {
                  "hold the device at t=0 until the server answers (up to S seconds)")
       ->check(CLI::Range(0.0, 600.0));
   app.add_option("--rate-hz", options.rate_hz, "publish rate")->check(CLI::Range(1.0, 10000.0))->capture_default_str();
-  app.add_option("--device-id", options.device_id, "instrument_state_t.device_id")->capture_default_str();
+  app.add_option("--device-id", options.device_id, "device_id of the messages published")->capture_default_str();
   app.add_flag("--print-script", print_script, "print the built-in trainee script and exit");
+  app.add_flag("--print-probe-script", print_probe_script, "print the built-in probe script and exit");
   CLI11_PARSE(app, argc, argv);
 
-  if (print_script) {
-    std::cout << TraineeScript::builtin_text();
+  if (print_script || print_probe_script) {
+    if (print_script) std::cout << TraineeScript::builtin_text();
+    if (print_probe_script) std::cout << ProbeScript::builtin_text();
     return 0;
   }
   std::unique_ptr<InstrumentDevice> dev;
+  std::optional<ProbeScript> probe;
   try {
-    if (device == "scripted") {
+    if (!probe_script_path.empty()) {
+      probe = probe_script_path == "builtin" ? ProbeScript::parse(ProbeScript::builtin_text(), "built-in")
+                                             : ProbeScript::load(probe_script_path);
+    } else if (device == "scripted") {
       dev = std::make_unique<ScriptedDevice>(script_path.empty()
                                                  ? TraineeScript::parse(TraineeScript::builtin_text(), "built-in")
                                                  : TraineeScript::load(script_path));
@@ -93,8 +109,10 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, on_signal);
   options.duration_s = duration_s;
   options.wait_for_server_s = wait_for_server_s;
-  spdlog::info("bridge: {}, publishing at {} Hz on {}", dev->describe(), options.rate_hz, lcm_url);
-  Bridge bridge(lcm, *dev, options);
+  const std::string source =
+      probe ? fmt::format("scripted probe '{}' ({:.1f} s)", probe->name(), probe->duration_s()) : dev->describe();
+  spdlog::info("bridge: {}, publishing at {} Hz on {}", source, options.rate_hz, lcm_url);
+  Bridge bridge = probe ? Bridge(lcm, *probe, options) : Bridge(lcm, *dev, options);
   const BridgeStats s = bridge.run(g_stop);
   std::string extra;
   if (auto* serial = dynamic_cast<SerialDevice*>(dev.get()))

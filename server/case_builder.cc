@@ -41,7 +41,12 @@ anatomy::Case kidney_case(const Scene& scene) {
 }
 
 std::shared_ptr<const anatomy::Case> build_case(const Scene& scene) {
-  if (scene.organ == "kidney") return std::make_shared<const anatomy::Case>(kidney_case(scene));
+  if (scene.organ == "kidney") {
+    if (!scene.case_dir.empty())
+      throw std::invalid_argument("anatomy: a case folder (" + scene.case_dir +
+                                  ") cannot replace the procedural organ of a soft-tissue scene");
+    return std::make_shared<const anatomy::Case>(kidney_case(scene));
+  }
   if (!scene.case_dir.empty()) return std::make_shared<const anatomy::Case>(read_case_folder(scene.case_dir));
   anatomy::PhantomCaseSpec p = phantom_case_spec(scene);
   p.with_ct = scene.xray.has_value();  // only the X-ray thread needs the CT

@@ -121,20 +121,28 @@ void LcmIo::on_probe(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   for (int k = 0; k < 3; ++k) slot.probe_position_m[k] = m.position_mm[k] * 1e-3;
   slot.probe_depth_mm = m.depth_mm;
   slot.probe_gain_db = m.gain_db;
-  // beam = R e_z of the unit quaternion (w, x, y, z)
-  const double w = q[0] / n, x = q[1] / n, y = q[2] / n, z = q[3] / n;
-  const double beam[3] = {2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)};
+  // the depth along the beam the last physics step linearised at (its model's x0 is measured along
+  // the same beam): a probe turned in place keeps its depth
+  const double beam[3] = {state_.probe_beam_x.load(std::memory_order_relaxed),
+                          state_.probe_beam_y.load(std::memory_order_relaxed),
+                          state_.probe_beam_z.load(std::memory_order_relaxed)};
   const double depth_m =
       beam[0] * slot.probe_position_m[0] + beam[1] * slot.probe_position_m[1] + beam[2] * slot.probe_position_m[2];
-  const int64_t now_us = realtime::monotonic_us();
-  const int64_t dt_us = now_us - last_probe_us_;
-  slot.sample.received_us = now_us;
+  slot.sample.received_us = realtime::monotonic_us();
   slot.sample.insertion_m = depth_m;
-  // a rate over a gap of more than 0.1 s (or none) would be a jump, not a velocity
-  slot.sample.insertion_rate_m_per_s =
-      last_probe_us_ > 0 && dt_us > 0 && dt_us < 100'000 ? (depth_m - last_probe_depth_m_) / (dt_us * 1e-6) : 0.0;
-  last_probe_us_ = now_us;
-  last_probe_depth_m_ = depth_m;
+  // the rate over the sender's clock (arrival times bunch when the rx thread drains a backlog);
+  // samples closer than 0.2 ms keep the last rate, a gap over 0.1 s is a jump, not a velocity
+  const int64_t dt_us = m.utime - last_probe_us_;
+  if (last_probe_us_ == 0 || dt_us <= 0 || dt_us > 100'000) {
+    probe_rate_m_per_s_ = 0.0;
+  } else if (dt_us >= 200) {
+    probe_rate_m_per_s_ = (depth_m - last_probe_depth_m_) / (dt_us * 1e-6);
+  }
+  slot.sample.insertion_rate_m_per_s = probe_rate_m_per_s_;
+  if (last_probe_us_ == 0 || dt_us <= 0 || dt_us >= 200) {
+    last_probe_us_ = m.utime;
+    last_probe_depth_m_ = depth_m;
+  }
   last_instrument_seq_ = m.seq;
   state_.instrument_for_haptics.write_slot() = slot;
   state_.instrument_for_haptics.publish();

@@ -62,8 +62,8 @@ class LcmIo {
   // is the LCM thread, never the 1 kHz haptic loop)
   pcisim_lcm::instrument_state_t instrument_msg_{};
   pcisim_lcm::probe_state_t probe_msg_{};
-  double last_probe_depth_m_ = 0.0;
-  int64_t last_probe_us_ = 0;
+  double last_probe_depth_m_ = 0.0, probe_rate_m_per_s_ = 0.0;
+  int64_t last_probe_us_ = 0;  // the sender's utime of the sample the rate is measured from
   pcisim_lcm::session_command_t session_msg_{};
   pcisim_lcm::force_command_t force_msg_{};
   pcisim_lcm::wire_state_t wire_msg_{};

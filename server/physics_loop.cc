@@ -48,6 +48,12 @@ void PhysicsLoop::step_once(int64_t now_ns) {
   int contacts = 0;
   for (uint8_t c : snap.wire_contact) contacts += c;
   state_.wire_contacts.store(contacts, std::memory_order_relaxed);
+  state_.probe_force_n.store(-snap.probe_force_n.dot(snap.probe_rotation.col(2)), std::memory_order_relaxed);
+  if (snap.probe_present) {
+    state_.probe_beam_x.store(snap.probe_rotation(0, 2), std::memory_order_relaxed);
+    state_.probe_beam_y.store(snap.probe_rotation(1, 2), std::memory_order_relaxed);
+    state_.probe_beam_z.store(snap.probe_rotation(2, 2), std::memory_order_relaxed);
+  }
   state_.snapshot_for_tx.publish();
   state_.sim_time_s.store(snap.time_s, std::memory_order_relaxed);
   if (state_.xray_enabled.load(std::memory_order_relaxed)) {

@@ -172,10 +172,18 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
     realtime::sleep_until_ns(std::min(end_ns, realtime::monotonic_ns() + 20'000'000));
     if (realtime::monotonic_ns() >= next_log_ns) {
       next_log_ns += 1'000'000'000;
+      const double t_s = (realtime::monotonic_ns() - m.start_ns) * 1e-9;
+      if (m.scene.world.probe_contact) {
+        spdlog::info(
+            "t={:5.1f}s  probe depth {:6.1f} mm  force {:5.2f} N along the beam  ultrasound {} frames  haptic {} "
+            "ticks",
+            t_s, m.state.wire_insertion_mm.load(), m.state.probe_force_n.load(), m.state.ultrasound_frames.load(),
+            m.state.haptic.iterations.load());
+        continue;
+      }
       const int branch = m.state.wire_tip_branch.load();
       spdlog::info("t={:5.1f}s  insertion {:6.1f} mm  rotation {:6.2f} rad  tip in {}  contacts {:3d}  haptic {} ticks",
-                   (realtime::monotonic_ns() - m.start_ns) * 1e-9, m.state.wire_insertion_mm.load(),
-                   m.state.wire_rotation_rad.load(),
+                   t_s, m.state.wire_insertion_mm.load(), m.state.wire_rotation_rad.load(),
                    branch_namer && branch >= 0 ? branch_namer(branch) : std::string("-"), m.state.wire_contacts.load(),
                    m.state.haptic.iterations.load());
     }

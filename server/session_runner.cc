@@ -19,7 +19,7 @@ StatsReport run_session(Scene scene, lcm::LCM& control, const SessionOptions& op
   for (;;) {
     // --case replaces the anatomy of every scene, the first and each one loaded over LCM
     if (!options.case_dir.empty()) scene.case_dir = options.case_dir;
-    if (scene.xray && !images) {
+    if ((scene.xray || scene.ultrasound) && !images) {
       images = std::make_unique<lcm::LCM>(options.image_url);
       if (!images->good()) throw std::runtime_error("cannot open the image LCM at " + options.image_url);
     }

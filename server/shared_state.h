@@ -119,6 +119,11 @@ struct SharedState {
   // a few figures of the newest step for the once-a-second log line
   std::atomic<double> wire_insertion_mm{0}, wire_rotation_rad{0};
   std::atomic<int> wire_tip_branch{-1}, wire_contacts{0};
+  std::atomic<double> probe_force_n{0};  // the soft-tissue scene: the tissue's push along the probe's beam
+  // the beam the last physics step linearised the probe's force along (physics writes, lcm rx
+  // reads): the rx thread measures each sample's depth along it, so turning the probe in place is
+  // not felt as pressing. A torn read mixes two unit vectors one step apart: harmless
+  std::atomic<double> probe_beam_x{0}, probe_beam_y{0}, probe_beam_z{1};
 };
 
 }  // namespace pcisim::server

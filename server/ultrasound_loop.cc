@@ -27,7 +27,8 @@ UltrasoundLoop::UltrasoundLoop(const Scene& scene, const anatomy::Case& anatomy,
 void UltrasoundLoop::render_and_publish() {
   state_.snapshot_for_ultrasound.refresh();
   const physics::WorldSnapshot& snap = state_.snapshot_for_ultrasound.read_slot();
-  // before physics' first step the snapshot is empty: the mesh stays at rest
+  // before physics' first step there is no probe pose to image from
+  if (snap.step == 0) return;
   if (static_cast<Eigen::Index>(snap.tissue_tet_vertices_m.size()) == mesh_.current_mm.cols())
     for (Eigen::Index i = 0; i < mesh_.current_mm.cols(); ++i)
       mesh_.current_mm.col(i) = snap.tissue_tet_vertices_m[static_cast<size_t>(i)] * 1e3;

@@ -22,7 +22,8 @@ class UltrasoundLoop {
                  const std::vector<std::array<int, 4>>& tets, SharedState& state, lcm::LCM* images);
   void run();  // until state.stop
 
-  // one frame from the newest snapshot (run() calls it at the frame rate; tests call it directly)
+  // one frame from the newest snapshot (run() calls it at the frame rate; tests call it directly);
+  // none before physics' first step
   void render_and_publish();
   const ultrasound::BModeImage& last_image() const { return *image_; }
 

@@ -11,7 +11,7 @@ namespace pcisim::anatomy {
 
 struct Organ {
   std::string name;
-  TriangleMesh surface;                   // metres, closed, counter-clockwise seen from outside
+  TriangleMesh surface;                      // metres, closed, counter-clockwise seen from outside
   std::vector<Eigen::Vector3d> fiducials_m;  // bead centres
   // the support's top plane: free side where support_normal . x >= support_offset_m (normal unit,
   // pointing out of the support toward the organ)

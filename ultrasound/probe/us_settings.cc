@@ -34,7 +34,7 @@ void validate(const UsSettings& s) {
   check(s.frequency_mhz, 1.0, 20.0, "frequency_mhz");
   check(s.attenuation_db_per_cm_mhz, 0.0, 5.0, "attenuation_db_per_cm_mhz");
   check(s.dynamic_range_db, 10.0, 120.0, "dynamic_range_db");
-  check(s.speckle_cell_mm, 0.02, 2.0, "speckle_cell_mm", true);
+  check(s.speckle_cell_mm, 0.02, 2.0, "speckle_cell_mm");
 }
 
 void validate(const ProbePose& p) {

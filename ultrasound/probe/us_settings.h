@@ -24,7 +24,7 @@ struct UsSettings {
   double frequency_mhz = 5.0;               // centre frequency, [1, 20]
   double attenuation_db_per_cm_mhz = 0.54;  // soft tissue, [0, 5] (Szabo 2004 table 4.1: ~0.5-0.7)
   double dynamic_range_db = 60.0;           // log-compression window, [10, 120]
-  // the speckle's grain in the undeformed tissue, (0.02, 2]: finer than the pixels (a 60 mm /
+  // the speckle's grain in the undeformed tissue, [0.02, 2]: finer than the pixels (a 60 mm /
   // 256 px image samples 0.23 mm apart) so neighbouring samples decorrelate as speckle does
   double speckle_cell_mm = 0.2;
 };

@@ -5,6 +5,8 @@
 // JacobiSVD), so it agrees to 1e-12 per entry on full-rank and inverted matrices.
 #include <gtest/gtest.h>
 
+#include <Eigen/SVD>
+
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <cstdio>
@@ -75,6 +77,17 @@ TEST(DeviceTwins, ProjectionsMatchTheEigenOriginals) {
   }
 }
 
+// the reference: Eigen's JacobiSVD of A + s R_prev with the reflection fix on the thinnest axis
+// (what extract_rotation computed before it ran the twin's kernel on the CPU too)
+Eigen::Matrix3d eigen_svd_rotation(const Eigen::Matrix3d& a, const Eigen::Matrix3d& previous, double rest_moment) {
+  const Eigen::Matrix3d m = a + std::max(kRotationRegularisation * rest_moment, 1e-300) * previous;
+  if (!m.allFinite()) return previous;
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d u = svd.matrixU();
+  if ((u * svd.matrixV().transpose()).determinant() < 0.0) u.col(2) = -u.col(2);
+  return u * svd.matrixV().transpose();
+}
+
 TEST(DeviceTwins, RotationMatchesEigenSvdIncludingInvertedClusters) {
   std::mt19937 rng(5);
   std::normal_distribution<double> g(0.0, 1.0);
@@ -87,8 +100,9 @@ TEST(DeviceTwins, RotationMatchesEigenSvdIncludingInvertedClusters) {
       a = Eigen::AngleAxisd(g(rng), Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized()).toRotationMatrix() *
           Eigen::Vector3d(3.0, 2.0, 0.5).asDiagonal();  // a rotated, stretched cluster
     const Eigen::Matrix3d prev = Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    const Eigen::Matrix3d cpu = extract_rotation(a, prev, 5.0);
+    const Eigen::Matrix3d cpu = eigen_svd_rotation(a, prev, 5.0);
     const Eigen::Matrix3d gpu = to_eigen(device::extract_rotation(to_dev(a), to_dev(prev), 5.0));
+    ASSERT_EQ(extract_rotation(a, prev, 5.0), gpu) << "the CPU path runs the same kernel";
     ASSERT_NEAR(gpu.determinant(), 1.0, 1e-12) << "trial " << trial;
     ASSERT_LE((gpu.transpose() * gpu - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(), 1e-12);
     worst = std::max(worst, (cpu - gpu).cwiseAbs().maxCoeff());
@@ -106,7 +120,7 @@ TEST(DeviceTwins, RotationOfDegenerateClustersStaysProperAndNearTheCpu) {
   Eigen::Matrix3d nan = Eigen::Matrix3d::Identity();
   nan(1, 2) = std::nan("");
   for (const Eigen::Matrix3d& a : {planar, line, Eigen::Matrix3d::Zero().eval(), nan}) {
-    const Eigen::Matrix3d cpu = extract_rotation(a, prev, 5.0);
+    const Eigen::Matrix3d cpu = eigen_svd_rotation(a, prev, 5.0);
     const Eigen::Matrix3d gpu = to_eigen(device::extract_rotation(to_dev(a), to_dev(prev), 5.0));
     ASSERT_TRUE(gpu.allFinite());
     EXPECT_NEAR(gpu.determinant(), 1.0, 1e-9);

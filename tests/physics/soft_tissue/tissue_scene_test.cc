@@ -61,8 +61,8 @@ TEST(TissueScene, TheTransducerFaceIsAtTheProbesOrigin) {
       if (f.normal.dot(x) > f.offset_m) return false;
     return true;
   };
-  EXPECT_FALSE(inside(pose.position_m + 1e-3 * beam));  // in front of the face: tissue side
-  EXPECT_TRUE(inside(pose.position_m - 1e-3 * beam));   // behind it: the block
+  EXPECT_FALSE(inside(pose.position_m + 1e-3 * beam));   // in front of the face: tissue side
+  EXPECT_TRUE(inside(pose.position_m - 1e-3 * beam));    // behind it: the block
   EXPECT_FALSE(inside(pose.position_m - 31e-3 * beam));  // beyond its 30 mm height
 }
 
@@ -152,16 +152,16 @@ TEST(TissueScene, TheProbePressesTheKidneyAndItRecovers) {
   EXPECT_LE(peak_model_k, soft_tissue::ProbeContactParams{}.max_stiffness_n_per_m);
   // the skin under the probe went with it (the organ is squeezed against its support), and the
   // coarse tet mesh the image maps through follows it
-  const double deepest_particle_m =
-      (world.tissue_state()->body().positions_m() - particles_at_rest).row(1).maxCoeff();
+  const double deepest_particle_m = (world.tissue_state()->body().positions_m() - particles_at_rest).row(1).maxCoeff();
   EXPECT_GT(deepest_particle_m, 5e-3);
   double deepest_tet_m = 0.0;
   for (size_t v = 0; v < snap.tissue_tet_vertices_m.size(); ++v)
     deepest_tet_m = std::max(deepest_tet_m, snap.tissue_tet_vertices_m[v].y() - rest.tissue_tet_vertices_m[v].y());
   EXPECT_GT(deepest_tet_m, 1e-3);
-  std::printf("8 mm press at 4 mm particles: force %.2f N along the beam (peak %.2f), K %.0f N/m, deepest particle "
-              "move %.1f mm, deepest tet vertex %.1f mm\n",
-              pressed.f0_n, peak_force_n, pressed.k_n_per_m, deepest_particle_m * 1e3, deepest_tet_m * 1e3);
+  std::printf(
+      "8 mm press at 4 mm particles: force %.2f N along the beam (peak %.2f), K %.0f N/m, deepest particle "
+      "move %.1f mm, deepest tet vertex %.1f mm\n",
+      pressed.f0_n, peak_force_n, pressed.k_n_per_m, deepest_particle_m * 1e3, deepest_tet_m * 1e3);
 
   // a NaN pose is ignored: the probe stays where it was
   InstrumentInput bad = probe_at(std::numeric_limits<double>::quiet_NaN());

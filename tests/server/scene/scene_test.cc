@@ -307,6 +307,11 @@ TEST(Scene, SoftTissueMistakesNameTheirPath) {
   EXPECT_EQ(error_of("{" + organ +
                      R"("effects": {"soft_tissue": {}, "probe_contact": {}, "ultrasound": {"depth_mm": 400}}})"),
             "test.json: effects.ultrasound.depth_mm: expected a number in [1, 300], got 400");
+  EXPECT_EQ(error_of(R"({"anatomy": {"organ": "kidney"}, "effects": {"guidewire": {}}})"),
+            "test.json: anatomy.organ: needs effect \"soft_tissue\" (an organ is the soft-tissue scene's anatomy)");
+  EXPECT_EQ(error_of("{" + organ +
+                     R"("effects": {"soft_tissue": {}, "probe_contact": {"start_position_mm": [8000, 8000, 0]}}})"),
+            "test.json: effects.probe_contact.start_position_mm: expected within 10000 mm of the origin");
   EXPECT_EQ(error_of(R"({"anatomy": {"organ": "liver"}, "effects": {}})"),
             "test.json: anatomy.organ: expected one of \"\", \"kidney\", got \"liver\"");
 }

@@ -1,0 +1,146 @@
+#include "physics/soft_tissue/calibration.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "physics/fem/voxel_mesh.h"
+#include "physics/soft_tissue/tissue_scene.h"
+
+namespace pcisim::physics::soft_tissue {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+ProbePose stage_pose(const CalibrationSetup& s, double depth_m) {
+  const Eigen::Quaterniond q = s.probe.start_rotation.normalized();
+  return {s.probe.start_position_m + depth_m * (q * Eigen::Vector3d::UnitZ()), q};
+}
+
+// the transducer at a pose as the FEM's penalty body (the same faces the PBD contacts use)
+fem::FemConvexBody probe_body(const CalibrationSetup& s, const ProbePose& pose) {
+  fem::FemConvexBody body;
+  for (const HalfSpace& f : transducer(s.probe, pose).faces) {
+    const ContactPlane w = world_face(f, pose);
+    body.faces.push_back({w.normal, w.offset_m});
+  }
+  return body;
+}
+
+}  // namespace
+
+CalibrationSetup kidney_calibration_setup(const anatomy::Organ& organ) {
+  CalibrationSetup s;
+  s.organ = organ;
+  // the anterior skin on the beam through the probe's default face centre
+  double skin_y = 0.0;
+  for (const Eigen::Vector3d& v : organ.surface.vertices_m) skin_y = std::min(skin_y, v.y());
+  s.probe.start_position_m = Eigen::Vector3d(0.0, skin_y - 1e-3, 0.0);
+  s.stage_depths_m = {4e-3, 7e-3, 10e-3, 13e-3};  // 3, 6, 9 and 12 mm into the skin
+  return s;
+}
+
+FemReference solve_fem_reference(const CalibrationSetup& s) {
+  const auto t0 = Clock::now();
+  TissueModelSpec voxels;
+  voxels.voxel_m = s.fem_spacing_m;
+  voxels.particle_radius_m = s.fem_spacing_m;
+  const TissueModel grid = build_tissue_model(s.organ.surface, {}, voxels);
+  const fem::StaticFem fem(fem::voxel_tet_mesh(grid.interior_voxels_m, s.fem_spacing_m),
+                           fem::neo_hookean_from_young(s.young_pa, s.poisson));
+  const int n = fem.node_count();
+  std::vector<fem::Embedding> beads;
+  for (const Eigen::Vector3d& f : s.organ.fiducials_m) beads.push_back(fem::embed(fem.mesh(), f));
+
+  // glued to the support: the nodes of the layer nearest it (the stair-stepped organ's base)
+  const Eigen::Vector3d n_support = s.organ.support_normal.normalized();
+  double nearest = std::numeric_limits<double>::infinity();
+  for (int v = 0; v < n; ++v) nearest = std::min(nearest, n_support.dot(fem.mesh().rest_m.col(v)));
+  fem::FemBoundary bc{std::vector<uint8_t>(3 * n, 0), fem.rest_positions()};
+  for (int v = 0; v < n; ++v)
+    if (n_support.dot(fem.mesh().rest_m.col(v)) < nearest + 0.25 * s.fem_spacing_m)
+      bc.fixed[3 * v] = bc.fixed[3 * v + 1] = bc.fixed[3 * v + 2] = 1;
+  fem::FemSolveOptions opt;
+  opt.load_steps = 1;
+  opt.force_tolerance_n = 1e-7;
+  opt.external_force_n.resize(3 * n);
+  const Eigen::VectorXd mass = fem.lumped_masses_kg(s.density_kg_per_m3);
+  for (int v = 0; v < n; ++v) opt.external_force_n.segment<3>(3 * v) = mass[v] * s.gravity_m_per_s2;
+  opt.supports.push_back({n_support, nearest});
+
+  FemReference ref;
+  ref.nodes = n;
+  ref.tets = static_cast<int>(fem.mesh().tets.size());
+  auto record = [&](const Eigen::VectorXd& x, const fem::FemSolveReport& r) {
+    Eigen::Matrix3Xd f(3, static_cast<Eigen::Index>(beads.size()));
+    for (size_t i = 0; i < beads.size(); ++i) f.col(static_cast<Eigen::Index>(i)) = fem::embedded_position(fem.mesh(), x, beads[i]);
+    ref.fiducials_m.push_back(f);
+    ref.solves.push_back(r);
+  };
+  Eigen::VectorXd x = fem.rest_positions();
+  opt.bodies = {probe_body(s, stage_pose(s, 0.0))};
+  record(x, fem.solve(bc, &x, opt));
+  // each stage reached in moves of at most 1 mm (the penalty contact starts shallow each time)
+  double depth = 0.0;
+  for (double target : s.stage_depths_m) {
+    fem::FemSolveReport r;
+    const int moves = std::max(1, static_cast<int>(std::ceil(std::abs(target - depth) / 1e-3)));
+    for (int m = 1; m <= moves; ++m) {
+      opt.bodies = {probe_body(s, stage_pose(s, depth + (target - depth) * m / moves))};
+      const fem::FemSolveReport step = fem.solve(bc, &x, opt);
+      r.newton_iterations += step.newton_iterations;
+      r.residual_n = step.residual_n;
+      r.converged = step.converged;
+    }
+    depth = target;
+    record(x, r);
+  }
+  ref.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+
+  return ref;
+}
+
+PbdRun run_pbd_protocol(const CalibrationSetup& s, const SoftTissueSpec& spec_in, const FemReference& ref) {
+  if (ref.fiducials_m.size() != s.stage_depths_m.size() + 1)
+    throw std::invalid_argument("calibration: the reference does not have one result per stage");
+  SoftTissueSpec spec = spec_in;
+  spec.settle_s = s.warmup_steps * s.step_s;  // the warm-up
+  spec.params.gravity_m_per_s2 = s.gravity_m_per_s2;
+  spec.params.support_mu_static = spec.params.support_mu_kinetic = kTissueFriction.max;  // sticking
+  spec.params.probe_mu_static = spec.params.probe_mu_kinetic = 0.0;                    // frictionless
+  TissueScene tissue(s.organ, spec, s.probe, s.step_s);
+
+  PbdRun run;
+  auto compare = [&](size_t stage, double depth) {
+    const Eigen::Matrix3Xd& truth = ref.fiducials_m[stage];
+    const Eigen::VectorXd err = (tissue.fiducials_m() - truth).colwise().norm();
+    StageError e;
+    e.depth_m = depth;
+    e.mean_m = err.mean();
+    e.std_m = std::sqrt((err.array() - e.mean_m).square().mean());
+    e.max_m = err.maxCoeff();
+    e.mean_displacement_m = (truth - ref.fiducials_m[0]).colwise().norm().mean();
+    run.stages.push_back(e);
+  };
+  compare(0, 0.0);
+  double depth = 0.0;
+  run.step_ms.reserve(s.stage_depths_m.size() * static_cast<size_t>(s.steps_per_stage));
+  for (size_t k = 0; k < s.stage_depths_m.size(); ++k) {
+    const double from = depth, to = s.stage_depths_m[k];
+    for (int i = 1; i <= s.steps_per_stage; ++i) {
+      const ProbePose pose = stage_pose(s, from + (to - from) * i / s.steps_per_stage);
+      const auto a = Clock::now();
+      tissue.step(&pose);
+      run.step_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - a).count());
+    }
+    depth = to;
+    compare(k + 1, depth);
+  }
+  double sum = 0.0;
+  for (size_t k = 1; k < run.stages.size(); ++k) sum += run.stages[k].mean_m;
+  run.mean_over_stages_m = run.stages.size() > 1 ? sum / static_cast<double>(run.stages.size() - 1) : 0.0;
+  return run;
+}
+
+}  // namespace pcisim::physics::soft_tissue

@@ -1,0 +1,62 @@
+#pragma once
+// The paper's calibration protocol (issue #16 item 5; soft-tissue paper, "Calibration"): the
+// probe presses the organ in stages, and the PBD model's fiducials are compared at each stage
+// with the truth. No porcine CT ships with pcisim, so the truth is an independent model: a
+// static neo-Hookean FEM of the same organ (physics/fem) under the same probe, support and
+// gravity, with known material parameters. Both sides: the support glued (sticking friction in
+// PBD, fixed nodes in the FEM: the FEM would otherwise have free rigid motions), the probe
+// frictionless.
+#include <Eigen/Core>
+#include <vector>
+
+#include "anatomy/organ/organ.h"
+#include "physics/fem/static_fem.h"
+#include "physics/soft_tissue/soft_tissue_spec.h"
+
+namespace pcisim::physics::soft_tissue {
+
+struct CalibrationSetup {
+  anatomy::Organ organ;
+  ProbeContactParams probe;            // the transducer; start_position_m: just above the skin
+  std::vector<double> stage_depths_m;  // how far the probe has moved along its beam at each stage
+  // the reference's material (a soft organ's order of magnitude) and mesh
+  double young_pa = 5e3;
+  double poisson = 0.45;
+  double density_kg_per_m3 = 1050.0;
+  double fem_spacing_m = 3e-3;
+  Eigen::Vector3d gravity_m_per_s2{0.0, 9.81, 0.0};
+  // the PBD side, as the paper runs it [soft-tissue, "Calibration"]: 120 steps of warm-up, then
+  // the probe interpolated over 90 steps per stage, 1/60 s steps
+  double step_s = 1.0 / 60.0;
+  int warmup_steps = 120;
+  int steps_per_stage = 90;
+};
+
+// the setup for the kidney phantom's organ: the probe from anterior (its default pose) 1 mm
+// above the skin, stages 3, 6, 9 and 12 mm
+CalibrationSetup kidney_calibration_setup(const anatomy::Organ& organ);
+
+struct FemReference {
+  std::vector<Eigen::Matrix3Xd> fiducials_m;  // [0]: at rest under gravity, then one per stage
+  std::vector<fem::FemSolveReport> solves;
+  int nodes = 0, tets = 0;
+  double seconds = 0.0;
+};
+FemReference solve_fem_reference(const CalibrationSetup& setup);
+
+struct StageError {
+  double depth_m = 0.0;  // the probe's travel at this stage
+  double mean_m = 0.0, std_m = 0.0, max_m = 0.0;
+  double mean_displacement_m = 0.0;  // how far the reference's fiducials moved from rest
+};
+
+struct PbdRun {
+  std::vector<StageError> stages;  // [0]: rest
+  double mean_over_stages_m = 0.0;  // the search's objective: the mean over the pressed stages
+  std::vector<double> step_ms;     // wall time of each step after the warm-up
+};
+
+// the PBD model of `spec` through the protocol; its fiducials against the reference's
+PbdRun run_pbd_protocol(const CalibrationSetup& setup, const SoftTissueSpec& spec, const FemReference& reference);
+
+}  // namespace pcisim::physics::soft_tissue

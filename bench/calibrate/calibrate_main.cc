@@ -120,9 +120,10 @@ int main(int argc, char** argv) {
       const auto t0 = std::chrono::steady_clock::now();
       st::PbdRun run = st::run_pbd_protocol(setup, spec, ref);
       const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      fmt::print("  radius {} mm, compliance {:.0e}: mean fiducial error {:.2f} mm over the stages ({:.1f} s, step "
-                 "p50 {:.1f} ms)\n",
-                 r_mm, c, run.mean_over_stages_m * 1e3, s, percentile(run.step_ms, 0.5));
+      fmt::print(
+          "  radius {} mm, compliance {:.0e}: mean fiducial error {:.2f} mm over the stages ({:.1f} s, step "
+          "p50 {:.1f} ms)\n",
+          r_mm, c, run.mean_over_stages_m * 1e3, s, percentile(run.step_ms, 0.5));
       nlohmann::json stages = nlohmann::json::array();
       for (const auto& e : run.stages)
         stages.push_back({{"travel_mm", e.depth_m * 1e3},

@@ -124,8 +124,7 @@ void StaticFem::stiffness(const Eigen::VectorXd& x, Eigen::SparseMatrix<double>*
         } else {
           dds(dim, a - 1) = 1.0;
         }
-        const Eigen::Matrix3d dh = rest_volume_m3_[i] *
-                                   first_piola_differential(material_, f, dds * rest_inverse_[i]) *
+        const Eigen::Matrix3d dh = rest_volume_m3_[i] * first_piola_differential(material_, f, dds * rest_inverse_[i]) *
                                    rest_inverse_[i].transpose();
         const int col = 3 * t[a] + dim;
         const Eigen::Vector3d d0 = -(dh.col(0) + dh.col(1) + dh.col(2));

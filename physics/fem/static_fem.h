@@ -39,10 +39,10 @@ struct FemConvexBody {
 };
 
 struct FemSolveOptions {
-  int load_steps = 4;            // the prescribed DOFs move from rest to target in this many steps
-  int max_newton_iterations = 60;  // per load step
-  double force_tolerance_n = 1e-9;  // largest free residual force at convergence
-  Eigen::VectorXd external_force_n;  // 3n, or empty: none (gravity: lumped_masses_kg x g)
+  int load_steps = 4;                  // the prescribed DOFs move from rest to target in this many steps
+  int max_newton_iterations = 60;      // per load step
+  double force_tolerance_n = 1e-9;     // largest free residual force at convergence
+  Eigen::VectorXd external_force_n;    // 3n, or empty: none (gravity: lumped_masses_kg x g)
   std::vector<FemHalfSpace> supports;  // the node stays on the free side
   std::vector<FemConvexBody> bodies;   // the node stays outside
   double penalty_n_per_m = 1e4;        // per node; a node pressed with F sits F / k inside

@@ -13,7 +13,7 @@ namespace pcisim::physics::fem {
 FemMesh voxel_tet_mesh(const Eigen::Matrix3Xd& voxel_centres_m, double voxel_m);
 
 struct Embedding {
-  int tet = -1;  // the tet holding the point (or nearest to holding it)
+  int tet = -1;                                       // the tet holding the point (or nearest to holding it)
   Eigen::Vector4d weights = Eigen::Vector4d::Zero();  // barycentric: p = sum w_i x_i
 };
 

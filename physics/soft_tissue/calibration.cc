@@ -74,7 +74,8 @@ FemReference solve_fem_reference(const CalibrationSetup& s) {
   ref.tets = static_cast<int>(fem.mesh().tets.size());
   auto record = [&](const Eigen::VectorXd& x, const fem::FemSolveReport& r) {
     Eigen::Matrix3Xd f(3, static_cast<Eigen::Index>(beads.size()));
-    for (size_t i = 0; i < beads.size(); ++i) f.col(static_cast<Eigen::Index>(i)) = fem::embedded_position(fem.mesh(), x, beads[i]);
+    for (size_t i = 0; i < beads.size(); ++i)
+      f.col(static_cast<Eigen::Index>(i)) = fem::embedded_position(fem.mesh(), x, beads[i]);
     ref.fiducials_m.push_back(f);
     ref.solves.push_back(r);
   };
@@ -108,7 +109,7 @@ PbdRun run_pbd_protocol(const CalibrationSetup& s, const SoftTissueSpec& spec_in
   spec.settle_s = s.warmup_steps * s.step_s;  // the warm-up
   spec.params.gravity_m_per_s2 = s.gravity_m_per_s2;
   spec.params.support_mu_static = spec.params.support_mu_kinetic = kTissueFriction.max;  // sticking
-  spec.params.probe_mu_static = spec.params.probe_mu_kinetic = 0.0;                    // frictionless
+  spec.params.probe_mu_static = spec.params.probe_mu_kinetic = 0.0;                      // frictionless
   TissueScene tissue(s.organ, spec, s.probe, s.step_s);
 
   PbdRun run;

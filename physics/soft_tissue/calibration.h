@@ -51,9 +51,9 @@ struct StageError {
 };
 
 struct PbdRun {
-  std::vector<StageError> stages;  // [0]: rest
+  std::vector<StageError> stages;   // [0]: rest
   double mean_over_stages_m = 0.0;  // the search's objective: the mean over the pressed stages
-  std::vector<double> step_ms;     // wall time of each step after the warm-up
+  std::vector<double> step_ms;      // wall time of each step after the warm-up
 };
 
 // the PBD model of `spec` through the protocol; its fiducials against the reference's

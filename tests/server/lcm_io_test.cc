@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <chrono>
 #include <limits>
 #include <mutex>
@@ -279,6 +280,93 @@ TEST_F(LcmIoTest, CarmTargetsAreWrittenWholeNewestLast) {
   EXPECT_EQ(state.carm_target_seq.load(), 40) << "even: no write in progress";
   EXPECT_DOUBLE_EQ(state.carm_target_primary_deg.load(), 20.0);
   EXPECT_DOUBLE_EQ(state.carm_target_secondary_deg.load(), -20.0);
+}
+
+}  // namespace
+}  // namespace pcisim::server
+
+namespace pcisim::server {
+namespace {
+
+// the soft-tissue scene's receive side: PCISIM_PROBE instead of PCISIM_INSTRUMENT
+class LcmIoProbeTest : public ::testing::Test {
+ protected:
+  lcm::LCM lcm{"memq://"};
+  SharedState state;
+  SessionLimits limits;
+  std::unique_ptr<LcmIo> io;
+
+  void SetUp() override {
+    ASSERT_TRUE(lcm.good());
+    // the beam physics linearised at: scene +y (the probe's default pose)
+    state.probe_beam_x = 0.0, state.probe_beam_y = 1.0, state.probe_beam_z = 0.0;
+    io = std::make_unique<LcmIo>(
+        lcm, state, limits, 8.0, [] { return pcisim_lcm::sim_status_t{}; }, [](int) { return std::string(); },
+        LcmIo::Instrument::kProbe);
+    io->start();
+  }
+  static pcisim_lcm::probe_state_t probe(int64_t utime_us, double y_mm, const double wxyz[4]) {
+    pcisim_lcm::probe_state_t m{};
+    m.utime = utime_us;
+    m.seq = utime_us;
+    m.position_mm[0] = 3.0, m.position_mm[1] = y_mm, m.position_mm[2] = 15.0;
+    for (int k = 0; k < 4; ++k) m.orientation_wxyz[k] = wxyz[k];
+    return m;
+  }
+  InstrumentSlot next_slot() {
+    EXPECT_TRUE(wait_for([&] { return state.instrument_for_haptics.refresh(); }));
+    return state.instrument_for_haptics.read_slot();
+  }
+};
+
+TEST_F(LcmIoProbeTest, ThePoseReachesPhysicsAndTheDepthAlongTheLinearisedBeamTheHapticLoop) {
+  const double down[4] = {0.5, -0.5, -0.5, -0.5};  // beam +y
+  {
+    const auto m = probe(1'000'000, -20.0, down);
+    lcm.publish(protocol::kProbeChannel, &m);
+  }
+  InstrumentSlot a = next_slot();
+  EXPECT_TRUE(a.probe_present);
+  EXPECT_DOUBLE_EQ(a.sample.insertion_m, -0.020);
+  EXPECT_EQ(a.sample.insertion_rate_m_per_s, 0.0) << "no rate from one sample";
+  ASSERT_TRUE(state.instrument_for_physics.refresh());
+  EXPECT_DOUBLE_EQ(state.instrument_for_physics.read_slot().probe_position_m[2], 0.015);
+  EXPECT_DOUBLE_EQ(state.instrument_for_physics.read_slot().probe_orientation_wxyz[0], 0.5);
+
+  // 0.1 mm deeper 1 ms later by the sender's clock: 0.1 m/s, whenever it arrives
+  {
+    const auto m = probe(1'001'000, -19.9, down);
+    lcm.publish(protocol::kProbeChannel, &m);
+  }
+  InstrumentSlot b = next_slot();
+  EXPECT_NEAR(b.sample.insertion_rate_m_per_s, 0.1, 1e-9);
+
+  // turned 20 deg in place about its lateral axis: the depth the haptic loop sees stays
+  const Eigen::Quaterniond q = Eigen::Quaterniond(down[0], down[1], down[2], down[3]) *
+                               Eigen::Quaterniond(Eigen::AngleAxisd(0.35, Eigen::Vector3d::UnitY()));
+  const double turned[4] = {q.w(), q.x(), q.y(), q.z()};
+  {
+    const auto m = probe(1'002'000, -19.9, turned);
+    lcm.publish(protocol::kProbeChannel, &m);
+  }
+  InstrumentSlot c = next_slot();
+  EXPECT_NEAR(c.sample.insertion_m, -0.0199, 1e-12);
+  EXPECT_NEAR(c.sample.insertion_rate_m_per_s, 0.0, 1e-9);
+  EXPECT_EQ(state.lcm_dropped_bad.load(), 0);
+}
+
+TEST_F(LcmIoProbeTest, ANanPoseIsCountedAndDroppedAndTheWireInstrumentIsNotHeard) {
+  const double down[4] = {0.5, -0.5, -0.5, -0.5};
+  pcisim_lcm::probe_state_t bad = probe(1'000'000, -20.0, down);
+  bad.position_mm[1] = std::numeric_limits<double>::quiet_NaN();
+  lcm.publish(protocol::kProbeChannel, &bad);
+  pcisim_lcm::instrument_state_t wire{};
+  wire.insertion_mm = 5.0;
+  lcm.publish(protocol::kInstrumentChannel, &wire);
+  ASSERT_TRUE(wait_for([&] { return state.instrument_rejected.load() == 1; }));
+  EXPECT_EQ(state.lcm_dropped_bad.load(), 1);
+  std::this_thread::sleep_for(50ms);
+  EXPECT_FALSE(state.instrument_for_haptics.refresh()) << "neither the NaN probe nor the wire reached the loop";
 }
 
 }  // namespace

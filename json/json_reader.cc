@@ -145,6 +145,17 @@ const nlohmann::json& JsonReader::list(const std::string& key) {
   return object_.at(key);
 }
 
+bool JsonReader::numbers(const std::string& key, std::span<double> out) {
+  const nlohmann::json& v = list(key);
+  if (v.size() != out.size()) return false;
+  for (size_t i = 0; i < out.size(); ++i) {
+    if (!v[i].is_number()) return false;
+    out[i] = v[i].get<double>();
+    if (!std::isfinite(out[i])) return false;
+  }
+  return true;
+}
+
 void JsonReader::finish() const {
   for (const auto& [key, value] : object_.items()) {
     if (read_.count(key)) continue;

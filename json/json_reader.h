@@ -3,6 +3,7 @@
 // no key was left unread. Every error names the JSON path and what was expected.
 #include <nlohmann/json.hpp>
 #include <set>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -35,6 +36,9 @@ class JsonReader {
   bool has(const std::string& key) const;
   JsonReader child(const std::string& key);            // an object; {} when absent
   const nlohmann::json& list(const std::string& key);  // an array; [] when absent
+  // a list of exactly out.size() finite numbers under `key` into `out`; false (out unspecified)
+  // otherwise, so the caller names what it expected. Fails like list() when it is not a list
+  bool numbers(const std::string& key, std::span<double> out);
 
   // throws if any key was never read, listing the keys this object accepts
   void finish() const;

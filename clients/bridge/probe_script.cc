@@ -59,15 +59,8 @@ template <size_t N>
 std::array<double, N> read_numbers(JsonReader& r, const nlohmann::json& object, const std::string& key,
                                    const std::string& expected) {
   if (!r.has(key)) r.fail(key, expected + " (required)");
-  const auto& list = r.list(key);
   std::array<double, N> out{};
-  const auto bad = [&] { r.fail(key, fmt::format("{}, got {}", expected, json::short_dump(object.at(key)))); };
-  if (list.size() != N) bad();
-  for (size_t k = 0; k < N; ++k) {
-    if (!list[k].is_number()) bad();
-    out[k] = list[k].get<double>();
-    if (!std::isfinite(out[k])) bad();
-  }
+  if (!r.numbers(key, out)) r.fail(key, fmt::format("{}, got {}", expected, json::short_dump(object.at(key))));
   return out;
 }
 

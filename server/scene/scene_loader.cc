@@ -1,4 +1,6 @@
 #include <algorithm>
+#include <array>
+#include <span>
 #include <cmath>
 #include <filesystem>
 #include <fmt/format.h>
@@ -200,14 +202,10 @@ physics::soft_tissue::SoftTissueSpec read_soft_tissue(json::JsonReader r) {
 Eigen::Vector3d read_vector3(json::JsonReader& r, const std::string& key, const Eigen::Vector3d& fallback,
                              double limit) {
   if (!r.has(key)) return fallback;
-  const nlohmann::json& v = r.list(key);
   Eigen::Vector3d out;
-  if (v.size() != 3) r.fail(key, "expected [x, y, z]");
-  for (int i = 0; i < 3; ++i) {
-    if (!v[i].is_number() || !std::isfinite(v[i].get<double>()) || std::abs(v[i].get<double>()) > limit)
-      r.fail(key, fmt::format("expected [x, y, z], each within +-{}", limit));
-    out[i] = v[i].get<double>();
-  }
+  if (!r.numbers(key, std::span<double>(out.data(), 3)) || out.cwiseAbs().maxCoeff() > limit)
+    r.fail(key, r.list(key).size() != 3 ? std::string("expected [x, y, z]")
+                                        : fmt::format("expected [x, y, z], each within +-{}", limit));
   return out;
 }
 
@@ -221,10 +219,8 @@ physics::soft_tissue::ProbeContactParams read_probe_contact(json::JsonReader r) 
   p.start_position_m = read_vector3(r, "start_position_mm", p.start_position_m / kMm, 1e4) * kMm;
   if (p.start_position_m.norm() > 10.0) r.fail("start_position_mm", "expected within 10000 mm of the origin");
   if (r.has("start_orientation_wxyz")) {
-    const nlohmann::json& v = r.list("start_orientation_wxyz");
-    double q[4];
-    bool ok = v.size() == 4;
-    for (int i = 0; ok && i < 4; ++i) ok = v[i].is_number() && std::isfinite(q[i] = v[i].get<double>());
+    std::array<double, 4> q{};
+    const bool ok = r.numbers("start_orientation_wxyz", q);
     const double norm = ok ? std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]) : 0.0;
     if (!ok || !(norm > 1e-6)) r.fail("start_orientation_wxyz", "expected a non-zero quaternion [w, x, y, z]");
     p.start_rotation = Eigen::Quaterniond(q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm);

@@ -4,7 +4,7 @@
 #include "server/session_runner.h"
 
 #include <gtest/gtest.h>
-#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/sinks/base_sink.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -33,19 +33,47 @@ void load_scene_over_lcm(lcm::LCM& lcm, const std::string& path) {
   lcm.publish(protocol::kSessionChannel, &m);
 }
 
-// spdlog's lines while it lives (the server logs each scene and anatomy it builds)
-class CapturedLog {
+// spdlog's lines, readable while the server still writes them
+class TextSink : public spdlog::sinks::base_sink<std::mutex> {
  public:
-  CapturedLog() : previous_(spdlog::default_logger()) {
-    spdlog::set_default_logger(
-        std::make_shared<spdlog::logger>("test", std::make_shared<spdlog::sinks::ostream_sink_mt>(text_)));
+  std::string text() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return text_;
   }
-  ~CapturedLog() { spdlog::set_default_logger(previous_); }
-  std::string text() const { return text_.str(); }
+
+ protected:
+  void sink_it_(const spdlog::details::log_msg& msg) override {
+    spdlog::memory_buf_t line;
+    formatter_->format(msg, line);
+    text_.append(line.data(), line.size());
+  }
+  void flush_() override {}
 
  private:
-  std::ostringstream text_;
+  std::string text_;
+};
+
+// the default logger's lines while it lives (the server logs each scene and anatomy it builds)
+class CapturedLog {
+ public:
+  CapturedLog() : previous_(spdlog::default_logger()), sink_(std::make_shared<TextSink>()) {
+    spdlog::set_default_logger(std::make_shared<spdlog::logger>("test", sink_));
+  }
+  ~CapturedLog() { spdlog::set_default_logger(previous_); }
+  std::string text() const { return sink_->text(); }
+  // waits until a line holds `what` (the server has got that far); false after `timeout`
+  bool wait_for(const std::string& what, std::chrono::milliseconds timeout) const {
+    const auto end = std::chrono::steady_clock::now() + timeout;
+    while (text().find(what) == std::string::npos) {
+      if (std::chrono::steady_clock::now() > end) return false;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return true;
+  }
+
+ private:
   std::shared_ptr<spdlog::logger> previous_;
+  std::shared_ptr<TextSink> sink_;
 };
 
 size_t count(const std::string& text, const std::string& what) {
@@ -84,9 +112,10 @@ TEST_F(SessionRunner, TheCaseOptionAppliesToEveryScene) {
   options.case_dir = (dir_ / "patient").string();
   std::atomic<bool> stop{false};
   CapturedLog log;
+  // memq drops what is published before the server subscribes: send once it runs (under a
+  // sanitizer building the first scene can take longer than any fixed wait)
   std::thread console([&] {
-    std::this_thread::sleep_for(400ms);
-    load_scene_over_lcm(lcm, (dir_ / "reloaded.json").string());
+    if (log.wait_for("running:", 60s)) load_scene_over_lcm(lcm, (dir_ / "reloaded.json").string());
   });
   StatsReport r;
   ASSERT_NO_THROW(
@@ -113,8 +142,9 @@ TEST_F(SessionRunner, AFallbackThatNoLongerBuildsEndsTheSession) {
   options.image_url = "memq://";
   options.case_dir = (dir_ / "patient").string();
   std::atomic<bool> stop{false};
+  CapturedLog log;
   std::thread console([&] {
-    std::this_thread::sleep_for(400ms);
+    if (!log.wait_for("running:", 60s)) return;
     fs::remove(dir_ / "patient" / "vessels.json");  // the running scene's case can no longer be read
     load_scene_over_lcm(lcm, (dir_ / "unbuildable.json").string());
   });

@@ -1,5 +1,6 @@
 #include "server/ultrasound_loop.h"
 
+#include <algorithm>
 #include <cstring>
 #include <stdexcept>
 
@@ -36,6 +37,12 @@ void UltrasoundLoop::render_and_publish() {
   pose.origin_mm = snap.probe_position_m * 1e3;
   pose.lateral = snap.probe_rotation.col(0);
   pose.beam = snap.probe_rotation.col(2);
+  // the probe's knobs: its depth (0: the scene's) and its gain on top of the scene's, within
+  // the scanner's ranges (the decoder allows a deeper ask than the scanner images)
+  const ultrasound::UsSettings& scene = spec_.settings;
+  renderer_->set_imaging(
+      snap.probe_depth_mm > 0.0 ? std::min(snap.probe_depth_mm, ultrasound::kUsMaxDepthMm) : scene.depth_mm,
+      std::clamp(scene.gain_db + snap.probe_gain_db, -ultrasound::kUsMaxGainDb, ultrasound::kUsMaxGainDb));
   const int64_t t0 = realtime::monotonic_ns();
   // one speckle seed for the whole run: the pattern does not flicker from frame to frame
   image_ = &renderer_->render(pose, spec_.speckle_seed, &mesh_);
@@ -43,7 +50,7 @@ void UltrasoundLoop::render_and_publish() {
   state_.ultrasound_frames.fetch_add(1, std::memory_order_relaxed);
   if (!images_) return;
 
-  const ultrasound::UsSettings& s = spec_.settings;
+  const ultrasound::UsSettings& s = renderer_->settings();  // the depth and gain imaged
   auto& m = msg_;
   m.utime = realtime::monotonic_us();
   m.seq = seq_++;

@@ -35,20 +35,23 @@ constexpr double kMinQuaternionNorm = 1e-6;
 // checks it). The tilted keyframe is that pose turned 15 deg about probe y (the axis across the
 // image plane): the beam leans toward +z, (0, cos 15, sin 15).
 const char* kBuiltin =
-    R"json(// built-in probe: from 5 mm above the kidney's anterior skin, press 8 mm in, slide 15 mm toward
-// the head while pressed, rock 15 deg and back, withdraw
+    R"json(// built-in probe: from 5 mm above the kidney's anterior skin, press 8 mm in, image 80 mm deep
+// with 6 dB more gain, slide 15 mm toward the head while pressed, rock 15 deg and back, withdraw
+// with the scene's depth and gain again
 {
   "name": "kidney-press",
   "keyframes": [
     {"t_s": 0.0, "position_mm": [0, -22.5, 0], "orientation_wxyz": [0.5, -0.5, -0.5, -0.5]},
     {"t_s": 0.5, "position_mm": [0, -22.5, 0], "orientation_wxyz": [0.5, -0.5, -0.5, -0.5]},
     {"t_s": 2.5, "position_mm": [0, -9.5, 0], "orientation_wxyz": [0.5, -0.5, -0.5, -0.5]},
-    {"t_s": 3.5, "position_mm": [0, -9.5, 0], "orientation_wxyz": [0.5, -0.5, -0.5, -0.5]},
+    {"t_s": 3.5, "position_mm": [0, -9.5, 0], "orientation_wxyz": [0.5, -0.5, -0.5, -0.5],
+     "depth_mm": 80, "gain_db": 6},
     {"t_s": 5.5, "position_mm": [0, -9.5, 15], "orientation_wxyz": [0.5, -0.5, -0.5, -0.5]},
     {"t_s": 6.5, "position_mm": [0, -9.5, 15],
      "orientation_wxyz": [0.5609855268, -0.4304593346, -0.4304593346, -0.5609855268]},
     {"t_s": 7.5, "position_mm": [0, -9.5, 15], "orientation_wxyz": [0.5, -0.5, -0.5, -0.5]},
-    {"t_s": 9.0, "position_mm": [0, -22.5, 15], "orientation_wxyz": [0.5, -0.5, -0.5, -0.5]},
+    {"t_s": 9.0, "position_mm": [0, -22.5, 15], "orientation_wxyz": [0.5, -0.5, -0.5, -0.5],
+     "depth_mm": 0, "gain_db": 0},
     {"t_s": 10.0, "position_mm": [0, -22.5, 15], "orientation_wxyz": [0.5, -0.5, -0.5, -0.5]}
   ]
 }

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <functional>
 #include <numeric>
+#include <tuple>
 
 #include "anatomy/mesh/kuhn_tetrahedra.h"
 #include "anatomy/organ/kidney_phantom.h"
@@ -232,6 +233,46 @@ TEST(BModeRenderer, SameSeedSameImageAndNothingAllocatedPerFrame) {
   EXPECT_EQ(allocations, 0);
   EXPECT_EQ(r.render(probe_at_top(), 42, &mesh).pixels, a.pixels);
   EXPECT_NE(r.render(probe_at_top(), 43, &mesh).pixels, a.pixels);
+}
+
+// the probe's depth and gain knobs: turned on a running renderer, the frame is the one a renderer
+// built with those settings draws (the sphere's near wall at its depth in either), nothing is
+// allocated, and an out-of-range knob is refused naming it, changing nothing
+TEST(BModeRenderer, DepthAndGainTurnedAtRunTimeGiveTheFrameOfThoseSettings) {
+  for (ProbeGeometry g : {ProbeGeometry::kLinear, ProbeGeometry::kCurvilinear}) {
+    BModeRenderer r(sphere_phantom(), test_settings(g));
+    r.render(probe_at_top(), 7);
+    UsSettings shallow = test_settings(g);
+    shallow.depth_mm = 50.0;
+    shallow.gain_db = 12.0;
+    long allocations = -1;
+    {
+      testing::AllocationCount count;
+      r.set_imaging(shallow.depth_mm, shallow.gain_db);
+      r.render(probe_at_top(), 7);
+      allocations = count.allocations();
+    }
+    EXPECT_EQ(allocations, 0) << static_cast<int>(g);
+    BModeRenderer fresh(sphere_phantom(), shallow);
+    EXPECT_EQ(r.render(probe_at_top(), 7).pixels, fresh.render(probe_at_top(), 7).pixels) << static_cast<int>(g);
+    const double dx = shallow.depth_mm / shallow.height_px;
+    EXPECT_NEAR(strongest_echo_depth(r, shallow.width_px / 2, 1.0, 49.0), kSphereD - kSphereR, dx);
+    // gain brightens: the same depth 12 dB lower is darker on average
+    const double bright = mean_rows(r.beam_image(), 0, shallow.height_px, 0, shallow.width_px);
+    r.set_imaging(shallow.depth_mm, 0.0);
+    EXPECT_LT(mean_rows(r.render(probe_at_top(), 7), 0, shallow.height_px, 0, shallow.width_px) + 1.0, bright);
+    for (auto [depth, gain, field] :
+         {std::tuple{0.0, 0.0, "depth_mm"}, std::tuple{301.0, 0.0, "depth_mm"}, std::tuple{50.0, 61.0, "gain_db"}}) {
+      try {
+        r.set_imaging(depth, gain);
+        ADD_FAILURE() << "accepted depth " << depth << " gain " << gain;
+      } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+      }
+      EXPECT_EQ(r.settings().depth_mm, 50.0);
+      EXPECT_EQ(r.settings().gain_db, 0.0);
+    }
+  }
 }
 
 TEST(BModeRenderer, BadSettingsThrowNamingTheField) {

@@ -26,10 +26,10 @@ void validate(const UsSettings& s) {
     check(s.fan_angle_deg, 0.0, 150.0, "fan_angle_deg", true);
     check(s.radius_of_curvature_mm, 0.0, 200.0, "radius_of_curvature_mm", true);
   }
-  check(s.depth_mm, 0.0, 300.0, "depth_mm", true);
+  check(s.depth_mm, 0.0, kUsMaxDepthMm, "depth_mm", true);
   check(s.width_px, 8, 2048, "width_px");
   check(s.height_px, 8, 4096, "height_px");
-  check(s.gain_db, -60.0, 60.0, "gain_db");
+  check(s.gain_db, -kUsMaxGainDb, kUsMaxGainDb, "gain_db");
   check(s.tgc_db_per_cm, -20.0, 40.0, "tgc_db_per_cm");
   check(s.frequency_mhz, 1.0, 20.0, "frequency_mhz");
   check(s.attenuation_db_per_cm_mhz, 0.0, 5.0, "attenuation_db_per_cm_mhz");

@@ -9,6 +9,10 @@ namespace pcisim::ultrasound {
 
 enum class ProbeGeometry { kLinear, kCurvilinear };
 
+// the scanner's depth and gain ranges (validate() and whoever turns the knobs at run time)
+inline constexpr double kUsMaxDepthMm = 300.0;  // (0, max]
+inline constexpr double kUsMaxGainDb = 60.0;    // [-max, max]
+
 struct UsSettings {
   ProbeGeometry geometry = ProbeGeometry::kLinear;
   double width_mm = 40.0;                // linear: aperture width, (0, 200]

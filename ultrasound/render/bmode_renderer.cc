@@ -25,10 +25,40 @@ BModeRenderer::BModeRenderer(const anatomy::Volume& ct, const UsSettings& settin
   world_to_index_ = (ct.direction * ct.spacing_mm.asDiagonal()).inverse();
   // two wavelengths at the centre frequency in soft tissue (1540 m/s), at least one CT voxel
   pulse_mm_ = std::max(2.0 * 1.540 / settings_.frequency_mhz, ct.spacing_mm.maxCoeff());
-  const int w = settings_.width_px, h = settings_.height_px;
-  const size_t n = static_cast<size_t>(w) * h;
+  const size_t n = static_cast<size_t>(settings_.width_px) * settings_.height_px;
   offset_lateral_.resize(n);
   offset_beam_.resize(n);
+  hu_.resize(n);
+  z_.resize(n);
+  speckle_.resize(n);
+  echo_.resize(n);
+  beam_.width = image_.width = settings_.width_px;
+  beam_.height = image_.height = settings_.height_px;
+  beam_.pixels.resize(n);
+  image_.pixels.resize(n);
+  if (settings_.geometry == ProbeGeometry::kCurvilinear) {
+    convert_index_.resize(n);
+    convert_fx_.resize(n);
+    convert_fy_.resize(n);
+  }
+  build_geometry();
+}
+
+void BModeRenderer::set_imaging(double depth_mm, double gain_db) {
+  if (depth_mm == settings_.depth_mm && gain_db == settings_.gain_db) return;
+  UsSettings next = settings_;
+  next.depth_mm = depth_mm;
+  next.gain_db = gain_db;
+  validate(next);
+  const bool deeper = depth_mm != settings_.depth_mm;
+  settings_ = next;
+  if (deeper) build_geometry();
+}
+
+// each pixel's place in the probe's frame and, for a curvilinear probe, its display pixel's
+// beam-space cell: both depend on the depth (sizes do not: nothing is allocated here)
+void BModeRenderer::build_geometry() {
+  const int w = settings_.width_px, h = settings_.height_px;
   ProbePose unit;  // origin 0, beam y, lateral x
   for (int c = 0; c < w; ++c)
     for (int r = 0; r < h; ++r) {
@@ -36,31 +66,22 @@ BModeRenderer::BModeRenderer(const anatomy::Volume& ct, const UsSettings& settin
       offset_lateral_[static_cast<size_t>(c) * h + r] = p.x();
       offset_beam_[static_cast<size_t>(c) * h + r] = p.y();
     }
-  hu_.resize(n);
-  z_.resize(n);
-  speckle_.resize(n);
-  echo_.resize(n);
-  beam_.width = image_.width = w;
-  beam_.height = image_.height = h;
-  beam_.pixels.resize(n);
-  image_.pixels.resize(n);
-  if (settings_.geometry == ProbeGeometry::kCurvilinear) {
-    convert_index_.assign(n, -1);
-    convert_fx_.assign(n, 0.0f);
-    convert_fy_.assign(n, 0.0f);
-    for (int r = 0; r < h; ++r)
-      for (int c = 0; c < w; ++c) {
-        double bc = 0, br = 0;
-        if (!display_to_beam(settings_, c, r, &bc, &br)) continue;
-        bc = std::clamp(bc, 0.0, w - 1.0);
-        br = std::clamp(br, 0.0, h - 1.0);
-        const int c0 = std::min(static_cast<int>(bc), w - 2), r0 = std::min(static_cast<int>(br), h - 2);
-        const size_t k = static_cast<size_t>(r) * w + c;
-        convert_index_[k] = r0 * w + c0;
-        convert_fx_[k] = static_cast<float>(bc - c0);
-        convert_fy_[k] = static_cast<float>(br - r0);
-      }
-  }
+  if (settings_.geometry != ProbeGeometry::kCurvilinear) return;
+  std::fill(convert_index_.begin(), convert_index_.end(), -1);
+  std::fill(convert_fx_.begin(), convert_fx_.end(), 0.0f);
+  std::fill(convert_fy_.begin(), convert_fy_.end(), 0.0f);
+  for (int r = 0; r < h; ++r)
+    for (int c = 0; c < w; ++c) {
+      double bc = 0, br = 0;
+      if (!display_to_beam(settings_, c, r, &bc, &br)) continue;
+      bc = std::clamp(bc, 0.0, w - 1.0);
+      br = std::clamp(br, 0.0, h - 1.0);
+      const int c0 = std::min(static_cast<int>(bc), w - 2), r0 = std::min(static_cast<int>(br), h - 2);
+      const size_t k = static_cast<size_t>(r) * w + c;
+      convert_index_[k] = r0 * w + c0;
+      convert_fx_[k] = static_cast<float>(bc - c0);
+      convert_fy_[k] = static_cast<float>(br - r0);
+    }
 }
 
 // curvilinear display: bilinear in the beam-space grey levels, black outside the fan

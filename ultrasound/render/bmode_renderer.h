@@ -7,7 +7,7 @@
 // transmitted. render() returns the display image (display_pixel_to_world in
 // probe/us_settings.h: beam space for a linear probe, the scan-converted fan for a curvilinear
 // one); beam_image() the beam-space one (pixel_to_world). The constructor and set_mesh()
-// allocate; render() allocates nothing.
+// allocate; render() and set_imaging() allocate nothing.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -35,6 +35,10 @@ class BModeRenderer {
   // reference to ct, which must outlive the renderer
   BModeRenderer(const anatomy::Volume& ct, const UsSettings& settings);
 
+  // the scanner's depth and overall gain from now on (the probe's knobs); throws
+  // std::invalid_argument naming the field when out of range (us_settings.h), changing nothing
+  void set_imaging(double depth_mm, double gain_db);
+
   // the deformed mesh's topology: builds the tet lookup grid (allocates)
   void set_mesh(const TetSnapshot& mesh);
   // one frame; deformed == nullptr: undeformed CT. A deformed snapshot must have the topology of
@@ -51,6 +55,7 @@ class BModeRenderer {
   double pulse_length_mm() const { return pulse_mm_; }
 
  private:
+  void build_geometry();
   double sample_hu(const Eigen::Vector3d& p_mm) const;
   void render_scanline(int column);
   void scan_convert();

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <tuple>
+
 #include <Eigen/Geometry>
 #include <cmath>
 #include <numbers>
@@ -221,6 +223,12 @@ TEST(ProbeScript, BuiltInPressesTheKidneyFromAnteriorWithTheImageAlongItsLongAxi
     double t_s, x_mm, y_mm, z_mm, tilt_deg;
   };
   // 5 mm above the skin, pressed 8 mm in, slid 15 mm toward S, tilted 15 deg and back, withdrawn
+  // the image deepened and brightened once pressed, the scene's depth and gain back on withdrawal
+  for (auto [t_s, depth_mm, gain_db] :
+       {std::tuple{3.0, 0.0, 0.0}, std::tuple{3.5, 80.0, 6.0}, std::tuple{8.0, 80.0, 6.0}, std::tuple{9.5, 0.0, 0.0}}) {
+    EXPECT_EQ(s.sample(t_s).depth_mm, depth_mm) << t_s;
+    EXPECT_EQ(s.sample(t_s).gain_db, gain_db) << t_s;
+  }
   for (const Expect& e :
        {Expect{0.0, 0, -22.5, 0, 0}, Expect{0.5, 0, -22.5, 0, 0}, Expect{1.5, 0, -16, 0, 0}, Expect{2.5, 0, -9.5, 0, 0},
         Expect{3.5, 0, -9.5, 0, 0}, Expect{4.5, 0, -9.5, 7.5, 0}, Expect{5.5, 0, -9.5, 15, 0},
@@ -236,7 +244,7 @@ TEST(ProbeScript, BuiltInPressesTheKidneyFromAnteriorWithTheImageAlongItsLongAxi
     const Eigen::Vector3d beam = q * Eigen::Vector3d::UnitZ();
     const double a = e.tilt_deg * kDeg;
     EXPECT_NEAR((beam - Eigen::Vector3d(0, std::cos(a), std::sin(a))).norm(), 0, 1e-6) << e.t_s;
-    EXPECT_EQ(r.depth_mm, 0.0);
+    EXPECT_EQ(r.depth_mm, e.t_s >= 3.5 && e.t_s < 9.0 ? 80.0 : 0.0) << e.t_s;
     EXPECT_EQ(r.buttons, 0);
   }
 }

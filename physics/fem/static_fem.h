@@ -2,7 +2,7 @@
 // A static hyperelastic finite-element solve on linear tetrahedra (issue #16 item 5): the
 // independent reference the soft tissue's PBD is calibrated against. Minimises
 //   E(x) = sum_e V_e psi(F_e) - f_ext . x,   F_e = D_s(x) D_m^-1
-// over the free degrees of freedom by Newton's method (sparse LDL^T, shifted toward the identity
+// over the free degrees of freedom by Newton's method (sparse Cholesky, shifted toward the identity
 // when the stiffness is not positive definite, backtracking line search on E), with the
 // prescribed ones stepped from rest to their targets over a few load steps. Not real time: a
 // benchmark and test tool.

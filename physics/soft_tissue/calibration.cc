@@ -41,37 +41,76 @@ CalibrationSetup kidney_calibration_setup(const anatomy::Organ& organ) {
   return s;
 }
 
-FemReference solve_fem_reference(const CalibrationSetup& s) {
-  const auto t0 = Clock::now();
+fem::FemMesh voxel_reference_mesh(const CalibrationSetup& s) {
   TissueModelSpec voxels;
   voxels.voxel_m = s.fem_spacing_m;
   voxels.particle_radius_m = s.fem_spacing_m;
   const TissueModel grid = build_tissue_model(s.organ.surface, {}, voxels);
-  const fem::StaticFem fem(fem::voxel_tet_mesh(grid.interior_voxels_m, s.fem_spacing_m),
-                           fem::neo_hookean_from_young(s.young_pa, s.poisson));
+  return fem::voxel_tet_mesh(grid.interior_voxels_m, s.fem_spacing_m);
+}
+
+FemReference solve_fem_reference(const CalibrationSetup& s) {
+  return solve_fem_reference(s, voxel_reference_mesh(s));
+}
+
+FemReference solve_fem_reference(const CalibrationSetup& s, fem::FemMesh mesh) {
+  const auto t0 = Clock::now();
+  const fem::StaticFem fem(std::move(mesh), fem::neo_hookean_from_young(s.young_pa, s.poisson));
   const int n = fem.node_count();
   std::vector<fem::Embedding> beads;
   for (const Eigen::Vector3d& f : s.organ.fiducials_m) beads.push_back(fem::embed(fem.mesh(), f));
 
-  // glued to the support: the nodes of the layer nearest it (the stair-stepped organ's base)
+  // the support: the organ's own plane, frictionless penalty contact plus sticking (the PBD
+  // side's friction sticks). Nodes within kTouch_m of it at rest, and at least the nearest, start
+  // glued; after each solve the nodes the penalty holds inside it are glued where they are and
+  // the solve repeated, until none is new: the contact patch grows as the organ sags or is
+  // pressed, the same whatever the mesh
+  constexpr double kTouch_m = 0.5e-3;
   const Eigen::Vector3d n_support = s.organ.support_normal.normalized();
-  double nearest = std::numeric_limits<double>::infinity();
-  for (int v = 0; v < n; ++v) nearest = std::min(nearest, n_support.dot(fem.mesh().rest_m.col(v)));
+  const double offset = s.organ.support_offset_m;
   fem::FemBoundary bc{std::vector<uint8_t>(3 * n, 0), fem.rest_positions()};
-  for (int v = 0; v < n; ++v)
-    if (n_support.dot(fem.mesh().rest_m.col(v)) < nearest + 0.25 * s.fem_spacing_m)
-      bc.fixed[3 * v] = bc.fixed[3 * v + 1] = bc.fixed[3 * v + 2] = 1;
+  auto glue = [&](int v, const Eigen::Vector3d& at) {
+    bc.fixed[3 * v] = bc.fixed[3 * v + 1] = bc.fixed[3 * v + 2] = 1;
+    bc.target_m.segment<3>(3 * v) = at;
+  };
+  int nearest = 0;
+  for (int v = 0; v < n; ++v) {
+    const Eigen::Vector3d p = fem.mesh().rest_m.col(v);
+    if (n_support.dot(p) < n_support.dot(fem.mesh().rest_m.col(nearest))) nearest = v;
+    if (n_support.dot(p) < offset + kTouch_m) glue(v, p);
+  }
+  glue(nearest, fem.mesh().rest_m.col(nearest));
   fem::FemSolveOptions opt;
   opt.load_steps = 1;
   opt.force_tolerance_n = 1e-7;
   opt.external_force_n.resize(3 * n);
   const Eigen::VectorXd mass = fem.lumped_masses_kg(s.density_kg_per_m3);
   for (int v = 0; v < n; ++v) opt.external_force_n.segment<3>(3 * v) = mass[v] * s.gravity_m_per_s2;
-  opt.supports.push_back({n_support, nearest});
+  opt.supports.push_back({n_support, offset});
 
   FemReference ref;
   ref.nodes = n;
   ref.tets = static_cast<int>(fem.mesh().tets.size());
+  auto solve_sticking = [&](Eigen::VectorXd* x) {
+    fem::FemSolveReport total;
+    for (int round = 0; round < 20; ++round) {
+      const fem::FemSolveReport r = fem.solve(bc, x, opt);
+      total.newton_iterations += r.newton_iterations;
+      total.residual_n = r.residual_n;
+      total.converged = r.converged;
+      int glued = 0;
+      for (int v = 0; v < n; ++v) {
+        const Eigen::Vector3d p = x->segment<3>(3 * v);
+        const double depth = offset - n_support.dot(p);
+        if (!bc.fixed[3 * v] && depth > 0.0) {
+          glue(v, p + depth * n_support);  // on the plane, where it slid to
+          ++glued;
+        }
+      }
+      if (glued == 0) break;
+    }
+    return total;
+  };
   auto record = [&](const Eigen::VectorXd& x, const fem::FemSolveReport& r) {
     Eigen::Matrix3Xd f(3, static_cast<Eigen::Index>(beads.size()));
     for (size_t i = 0; i < beads.size(); ++i)
@@ -81,7 +120,7 @@ FemReference solve_fem_reference(const CalibrationSetup& s) {
   };
   Eigen::VectorXd x = fem.rest_positions();
   opt.bodies = {probe_body(s, stage_pose(s, 0.0))};
-  record(x, fem.solve(bc, &x, opt));
+  record(x, solve_sticking(&x));
   // each stage reached in moves of at most 1 mm (the penalty contact starts shallow each time)
   double depth = 0.0;
   for (double target : s.stage_depths_m) {
@@ -89,7 +128,7 @@ FemReference solve_fem_reference(const CalibrationSetup& s) {
     const int moves = std::max(1, static_cast<int>(std::ceil(std::abs(target - depth) / 1e-3)));
     for (int m = 1; m <= moves; ++m) {
       opt.bodies = {probe_body(s, stage_pose(s, depth + (target - depth) * m / moves))};
-      const fem::FemSolveReport step = fem.solve(bc, &x, opt);
+      const fem::FemSolveReport step = solve_sticking(&x);
       r.newton_iterations += step.newton_iterations;
       r.residual_n = step.residual_n;
       r.converged = step.converged;
@@ -98,7 +137,6 @@ FemReference solve_fem_reference(const CalibrationSetup& s) {
     record(x, r);
   }
   ref.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-
   return ref;
 }
 

@@ -4,7 +4,7 @@
 // with the truth. No porcine CT ships with pcisim, so the truth is an independent model: a
 // static neo-Hookean FEM of the same organ (physics/fem) under the same probe, support and
 // gravity, with known material parameters. Both sides: the support glued (sticking friction in
-// PBD, fixed nodes in the FEM: the FEM would otherwise have free rigid motions), the probe
+// PBD; in the FEM a node that reaches the support is fixed where it touched), the probe
 // frictionless.
 #include <Eigen/Core>
 #include <vector>
@@ -42,7 +42,11 @@ struct FemReference {
   int nodes = 0, tets = 0;
   double seconds = 0.0;
 };
+// the reference on `mesh` (a tetrahedral mesh of the organ, metres: e.g. TetGen's, body-fitted),
+// or on the voxel mesh of the organ at setup.fem_spacing_m (Kuhn tets, stair-stepped surface)
+FemReference solve_fem_reference(const CalibrationSetup& setup, fem::FemMesh mesh);
 FemReference solve_fem_reference(const CalibrationSetup& setup);
+fem::FemMesh voxel_reference_mesh(const CalibrationSetup& setup);
 
 struct StageError {
   double depth_m = 0.0;  // the probe's travel at this stage

@@ -15,7 +15,8 @@ CalibrationSetup coarse_setup() {
   anatomy::KidneySpec k;
   k.ct_spacing_mm = 4.0;  // the CT is not used
   CalibrationSetup s = kidney_calibration_setup(anatomy::kidney_organ(anatomy::make_kidney_phantom(k)));
-  s.fem_spacing_m = 8e-3;  // a second, not minutes (pcisim-calibrate runs the fine reference)
+  s.fem_spacing_m = 6e-3;  // seconds, not minutes (pcisim-calibrate runs the fine reference; on 8 mm
+                           // voxels the stair-stepped skin lies below the first stage)
   s.warmup_steps = 20;
   s.steps_per_stage = 10;
   return s;

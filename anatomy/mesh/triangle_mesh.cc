@@ -1,8 +1,10 @@
 #include "anatomy/mesh/triangle_mesh.h"
 
+#include <cmath>
 #include <fstream>
 #include <iomanip>
 #include <limits>
+#include <numbers>
 #include <stdexcept>
 
 namespace pcisim::anatomy {
@@ -41,6 +43,20 @@ void write_ply(const TriangleMesh& mesh, const std::string& path) {
   for (const auto& v : mesh.vertices_m) out << v.x() << ' ' << v.y() << ' ' << v.z() << '\n';
   for (const auto& t : mesh.triangles) out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
   finish(out, path);
+}
+
+double winding_number(const TriangleMesh& mesh, const Eigen::Vector3d& p_m) {
+  // tan(omega / 2) = a . (b x c) / (|a||b||c| + (a.b)|c| + (a.c)|b| + (b.c)|a|), a b c the corners
+  // seen from p; atan2 keeps the quadrant, so a triangle seen under more than a hemisphere counts
+  double omega = 0.0;
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3d a = mesh.vertices_m[t[0]] - p_m, b = mesh.vertices_m[t[1]] - p_m,
+                          c = mesh.vertices_m[t[2]] - p_m;
+    const double la = a.norm(), lb = b.norm(), lc = c.norm();
+    const double den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+    omega += 2.0 * std::atan2(a.dot(b.cross(c)), den);
+  }
+  return omega / (4.0 * std::numbers::pi);
 }
 
 }  // namespace pcisim::anatomy

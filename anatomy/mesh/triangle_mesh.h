@@ -16,4 +16,10 @@ struct TriangleMesh {
 void write_obj(const TriangleMesh& mesh, const std::string& path);
 void write_ply(const TriangleMesh& mesh, const std::string& path);
 
+// the winding number of the surface about p: the triangles' signed solid angles seen from p over
+// 4 pi (Van Oosterom and Strackee, IEEE Trans. Biomed. Eng. 1983). For a closed surface wound
+// counter-clockwise seen from outside: 1 inside, 0 outside (exact up to rounding, whatever the
+// shape; undefined on the surface itself)
+double winding_number(const TriangleMesh& mesh, const Eigen::Vector3d& p_m);
+
 }  // namespace pcisim::anatomy

@@ -22,7 +22,10 @@ UltrasoundLoop::UltrasoundLoop(const Scene& scene, const anatomy::Case& anatomy,
   mesh_.tets = tets;
   renderer_->set_mesh(mesh_);
   state_.ultrasound_enabled = true;
-  msg_.data.reserve(static_cast<size_t>(spec_.settings.width_px) * spec_.settings.height_px);
+  // a frame's size is fixed by its pixel count (depth and gain change what is in it)
+  msg_.num_bytes = spec_.settings.width_px * spec_.settings.height_px;
+  msg_.data.resize(static_cast<size_t>(msg_.num_bytes));
+  bytes_.resize(static_cast<size_t>(msg_.getEncodedSize()));
 }
 
 void UltrasoundLoop::render_and_publish() {
@@ -75,7 +78,10 @@ void UltrasoundLoop::render_and_publish() {
   m.num_bytes = static_cast<int32_t>(image_->pixels.size());
   m.data.resize(image_->pixels.size());
   std::memcpy(m.data.data(), image_->pixels.data(), m.data.size());
-  images_->publish(protocol::kUltrasoundChannel, &m);
+  const int size = m.getEncodedSize();
+  if (bytes_.size() < static_cast<size_t>(size)) bytes_.resize(static_cast<size_t>(size));
+  m.encode(bytes_.data(), 0, size);
+  images_->publish(protocol::kUltrasoundChannel, bytes_.data(), static_cast<unsigned>(size));
 }
 
 void UltrasoundLoop::run() {

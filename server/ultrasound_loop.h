@@ -5,6 +5,7 @@
 // when the scene lists "ultrasound".
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <vector>
 
 #include "anatomy/case/case.h"
 #include "pcisim_lcm/us_frame_t.hpp"
@@ -35,6 +36,7 @@ class UltrasoundLoop {
   ultrasound::TetSnapshot mesh_;
   const ultrasound::BModeImage* image_ = nullptr;
   pcisim_lcm::us_frame_t msg_{};
+  std::vector<uint8_t> bytes_;  // msg_ encoded: sized once (lcm-cpp's publish of a message allocates)
   int64_t seq_ = 0;
 };
 

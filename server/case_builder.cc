@@ -1,5 +1,7 @@
 #include "server/case_builder.h"
 
+#include <filesystem>
+
 #include "anatomy/case/case_folder.h"
 #include "anatomy/organ/kidney_phantom.h"
 #ifdef PCISIM_HAVE_DICOM
@@ -27,8 +29,6 @@ anatomy::PhantomCaseSpec phantom_case_spec(const Scene& scene) {
   return p;
 }
 
-// the soft-tissue scene's procedural organ: its CT (what the ultrasound images) and the organ
-// physics builds; no vessels
 anatomy::Case kidney_case(const Scene& scene) {
   anatomy::KidneySpec spec;
   spec.seed = scene.world.anatomy.seed;
@@ -40,17 +40,37 @@ anatomy::Case kidney_case(const Scene& scene) {
   return c;
 }
 
+// a case read for a scene must hold what the scene simulates: the soft-tissue scene an organ,
+// the others (wire, heart, fluoroscopy) a vessel tree
+void check_case_fits(const anatomy::Case& c, const Scene& scene) {
+  const std::string case_json = (std::filesystem::path(scene.case_dir) / "case.json").string();
+  if (scene.world.soft_tissue && !c.organ)
+    throw anatomy::CaseError(case_json +
+                             ": organ: missing (the soft-tissue scene needs a case with an organ; docs/anatomy.md)");
+  if (!scene.world.soft_tissue && c.vessels.branches.empty())
+    throw anatomy::CaseError(case_json + ": vessels: missing (an organ case without vessels: scene '" + scene.name +
+                             "' needs a coronary case)");
+}
+
 std::shared_ptr<const anatomy::Case> build_case(const Scene& scene) {
-  if (scene.organ == "kidney") {
-    if (!scene.case_dir.empty())
-      throw std::invalid_argument("anatomy: a case folder (" + scene.case_dir +
-                                  ") cannot replace the procedural organ of a soft-tissue scene");
-    return std::make_shared<const anatomy::Case>(kidney_case(scene));
+  if (!scene.case_dir.empty()) {
+    // the scene loader refuses both; a Scene put together in code gets the same answer
+    if (!scene.organ.empty())
+      throw std::invalid_argument("anatomy: a case folder (" + scene.case_dir + ") and the procedural organ \"" +
+                                  scene.organ + "\" both given: the case brings its own organ");
+    anatomy::Case c = read_case_folder(scene.case_dir);
+    check_case_fits(c, scene);
+    return std::make_shared<const anatomy::Case>(std::move(c));
   }
-  if (!scene.case_dir.empty()) return std::make_shared<const anatomy::Case>(read_case_folder(scene.case_dir));
+  if (scene.organ == "kidney") return std::make_shared<const anatomy::Case>(kidney_case(scene));
   anatomy::PhantomCaseSpec p = phantom_case_spec(scene);
   p.with_ct = scene.xray.has_value();  // only the X-ray thread needs the CT
   return std::make_shared<const anatomy::Case>(anatomy::make_phantom_case(p));
+}
+
+void use_case_folder(Scene& scene, const std::string& dir) {
+  scene.case_dir = dir;
+  scene.organ.clear();
 }
 
 }  // namespace pcisim::server

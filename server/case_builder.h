@@ -14,8 +14,17 @@ namespace pcisim::server {
 // X-ray background wants it (blood in the lumens: the iodine comes per frame)
 anatomy::PhantomCaseSpec phantom_case_spec(const Scene& scene);
 
-// throws anatomy::CaseError (a case folder that is missing or wrong) naming the file and field
+// the soft-tissue scene's procedural organ (anatomy.organ "kidney", its seed): the organ and its
+// CT, no vessels (what --write-case writes for such a scene)
+anatomy::Case kidney_case(const Scene& scene);
+
+// throws anatomy::CaseError (a case folder that is missing or wrong, or one that does not fit the
+// scene: no organ for a soft-tissue scene, no vessels for the others) naming the file and field
 std::shared_ptr<const anatomy::Case> build_case(const Scene& scene);
+
+// --case: the folder replaces the scene's anatomy, its phantom seed or its procedural organ (a
+// soft-tissue scene then runs on the case's organ)
+void use_case_folder(Scene& scene, const std::string& dir);
 
 // a case folder, its CT possibly a DICOM series (when this build has the DICOM reader)
 anatomy::Case read_case_folder(const std::string& dir);

@@ -52,10 +52,13 @@ int main(int argc, char** argv) {
   std::string write_case_dir, case_dir;
   app.add_option("--write-case", write_case_dir,
                  "write the scene's anatomy (the built-in phantom, or --scene's) as a case folder and exit: "
-                 "case.json, vessels.json, lumen.stl (LPS mm), ct.nrrd and slicer/*.mrk.json (docs/anatomy.md)");
+                 "case.json, vessels.json, lumen.stl (LPS mm), ct.nrrd and slicer/*.mrk.json; for the soft-tissue "
+                 "scene (scenes/kidney.json) its organ: organ.ply, fiducials.json and the CT (docs/anatomy.md)");
   app.add_option("--case", case_dir,
                  "run on this case folder instead of the scene's anatomy (the scene's effects are kept), for "
-                 "every scene of the session: the first and each one loaded over LCM");
+                 "every scene of the session: the first and each one loaded over LCM. It replaces a soft-tissue "
+                 "scene's procedural organ too (the case must then have an organ; a coronary scene needs its "
+                 "vessels)");
   CLI11_PARSE(app, argc, argv);
   // an in-process control bus gets an in-process image bus unless told otherwise
   if (app.count("--lcm-image-url") == 0 && lcm_url.rfind("memq://", 0) == 0) image_url = "memq://";
@@ -79,18 +82,23 @@ int main(int argc, char** argv) {
     std::cerr << "pcisim-server: bad scene: " << e.what() << "\n";
     return 2;
   }
-  if (!case_dir.empty()) scene.case_dir = case_dir;
+  if (!case_dir.empty()) use_case_folder(scene, case_dir);
 
   if (!write_case_dir.empty()) {
     try {
       // the phantom with its CT at the resolution the scene's fluoroscopy projects, so running on
-      // the written case gives the frames the seed gives
-      const pcisim::anatomy::Case c = scene.case_dir.empty()
-                                          ? pcisim::anatomy::make_phantom_case(phantom_case_spec(scene))
-                                          : read_case_folder(scene.case_dir);
+      // the written case gives the frames the seed gives; the soft-tissue scene's organ and its CT
+      const pcisim::anatomy::Case c = !scene.case_dir.empty() ? read_case_folder(scene.case_dir)
+                                      : scene.organ == "kidney"
+                                          ? kidney_case(scene)
+                                          : pcisim::anatomy::make_phantom_case(phantom_case_spec(scene));
       pcisim::anatomy::write_case(c, write_case_dir);
       std::cout << "wrote case '" << c.name << "' to " << write_case_dir << " (" << c.vessels.branches.size()
-                << " branches, " << c.lumen.triangles.size() << " lumen triangles" << (c.ct ? ", CT" : "") << ")\n";
+                << " branches, " << c.lumen.triangles.size() << " lumen triangles"
+                << (c.organ ? ", organ '" + c.organ->name + "' with " + std::to_string(c.organ->fiducials_m.size()) +
+                                  " fiducials"
+                            : std::string())
+                << (c.ct ? ", CT" : "") << ")\n";
       if (!pcisim::anatomy::case_overview_written())
         std::cout << "no overview.png: this pcisim-server was built without libpng\n";
     } catch (const std::exception& e) {

@@ -6,6 +6,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "server/case_builder.h"
 #include "server/server.h"
 
 namespace pcisim::server {
@@ -17,8 +18,9 @@ StatsReport run_session(Scene scene, lcm::LCM& control, const SessionOptions& op
   double ran_s = 0;                  // running time so far (scene builds do not count)
   bool rebuilding_fallback = false;
   for (;;) {
-    // --case replaces the anatomy of every scene, the first and each one loaded over LCM
-    if (!options.case_dir.empty()) scene.case_dir = options.case_dir;
+    // --case replaces the anatomy of every scene, the first and each one loaded over LCM (a
+    // soft-tissue scene's procedural organ too: it runs on the case's organ)
+    if (!options.case_dir.empty()) use_case_folder(scene, options.case_dir);
     if ((scene.xray || scene.ultrasound) && !images) {
       images = std::make_unique<lcm::LCM>(options.image_url);
       if (!images->good()) throw std::runtime_error("cannot open the image LCM at " + options.image_url);

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <cmath>
 
@@ -71,6 +72,140 @@ void check_vessels_inside(const VesselTree& tree, const Volume& ct, const std::s
   }
 }
 
+// every vertex of the organ's surface inside the CT's extent: the ultrasound images the organ
+// from the CT, so a surface in other units or another frame is refused here
+void check_organ_inside(const TriangleMesh& surface, const Volume& ct, const std::string& surface_file,
+                        const std::string& ct_file) {
+  for (size_t v = 0; v < surface.vertices_m.size(); ++v) {
+    const Eigen::Vector3d p_mm = surface.vertices_m[v] * 1e3;
+    const Eigen::Vector3d ijk = ct.physical_to_index(p_mm);
+    bool inside = true;
+    for (int a = 0; a < 3; ++a) inside = inside && ijk[a] >= -0.501 && ijk[a] <= ct.dims[a] - 0.499;
+    if (!inside)
+      fail(surface_file, fmt::format("vertices[{}]", v),
+           fmt::format("at ({:.1f}, {:.1f}, {:.1f}) mm, outside the CT {} (an organ case's CT must hold its organ)",
+                       p_mm.x(), p_mm.y(), p_mm.z(), fs::path(ct_file).filename().string()));
+  }
+}
+
+void write_fiducials(const std::vector<Eigen::Vector3d>& fiducials_m, const std::string& path) {
+  Json centres = Json::array();
+  for (const Eigen::Vector3d& f : fiducials_m) centres.push_back({f.x() * 1e3, f.y() * 1e3, f.z() * 1e3});
+  const Json doc = {{"format", kFiducialsFormat}, {"version", kCaseVersion}, {"centres_mm", centres}};
+  std::ofstream out(path);
+  out << doc.dump(1) << '\n';
+  if (!out) throw CaseError(path + ": cannot write");
+}
+
+// the organ's files and support (case.json "organ"; docs/anatomy.md)
+Json write_organ(const Organ& o, const fs::path& dir) {
+  // a PLY whose millimetres read back to the same doubles, not an STL's floats: the particle
+  // model physics builds is not continuous in the surface's last bits (particles, clusters and
+  // tets lie on a lattice from the bounding box, and points exactly on a cell's edge go one way
+  // or the other), so a written phantom runs as the procedural one only when it is bit for bit
+  write_ply_mm(o.surface, (dir / "organ.ply").string(), "pcisim organ");
+  Json doc = {{"name", o.name}, {"surface", "organ.ply"}};
+  if (!o.fiducials_m.empty()) {
+    write_fiducials(o.fiducials_m, (dir / "fiducials.json").string());
+    doc["fiducials"] = "fiducials.json";
+    // for 3D Slicer: the beads as a point list (written for viewing, not read)
+    write_markups_fiducials(o.name.empty() ? "F" : o.name, o.fiducials_m, (dir / "slicer/fiducials.mrk.json").string());
+    doc["slicer_fiducials"] = "slicer/fiducials.mrk.json";
+  }
+  const Eigen::Vector3d n = o.support_normal.array() + 0.0;  // -0 written as 0
+  doc["support"] = {{"normal", {n.x(), n.y(), n.z()}}, {"offset_mm", o.support_offset_m * 1e3}};
+  return doc;
+}
+
+// the bead centres of fiducials.json, metres; each one inside the organ's surface
+std::vector<Eigen::Vector3d> read_fiducials(const std::string& file, const TriangleMesh& surface,
+                                            const std::string& surface_file) {
+  std::vector<Eigen::Vector3d> fiducials_m;
+  try {
+    const Json doc = json::parse_json_checked(io::read_file(file), file);
+    json::JsonReader r(doc, "");
+    if (r.text("format", "") != kFiducialsFormat) r.fail("format", fmt::format("expected \"{}\"", kFiducialsFormat));
+    r.integer("version", 0, kCaseVersion, kCaseVersion);
+    const Json& centres = r.list("centres_mm");
+    for (size_t i = 0; i < centres.size(); ++i) {
+      const Json& c = centres[i];
+      bool ok = c.is_array() && c.size() == 3;
+      for (size_t a = 0; ok && a < 3; ++a) ok = c[a].is_number() && std::isfinite(c[a].get<double>());
+      if (!ok) r.fail(fmt::format("centres_mm[{}]", i), "expected [x, y, z] in millimetres");
+      fiducials_m.emplace_back(1e-3 * Eigen::Vector3d(c[0].get<double>(), c[1].get<double>(), c[2].get<double>()));
+    }
+    r.finish();
+  } catch (const json::JsonError& e) {
+    throw CaseError(fmt::format("{}: {}", file, e.what()));
+  } catch (const VolumeIoError& e) {
+    throw CaseError(e.what());
+  }
+  // inside = winding number 1 about the bead (the surface is closed and wound outward, checked
+  // before): an exact test, not the bounding box's
+  for (size_t i = 0; i < fiducials_m.size(); ++i) {
+    const double w = winding_number(surface, fiducials_m[i]);
+    if (!(w > 0.5)) {
+      const Eigen::Vector3d p_mm = fiducials_m[i] * 1e3;
+      fail(file, fmt::format("centres_mm[{}]", i),
+           fmt::format("at ({:.1f}, {:.1f}, {:.1f}) mm, outside the organ's surface {} (winding number {:.2f})",
+                       p_mm.x(), p_mm.y(), p_mm.z(), fs::path(surface_file).filename().string(),
+                       std::round(w * 100) / 100 + 0.0));  // + 0.0: never "-0.00"
+    }
+  }
+  return fiducials_m;
+}
+
+// the signed volume of a closed surface (positive when wound counter-clockwise seen from outside)
+double signed_volume_m3(const TriangleMesh& m) {
+  double six_v = 0.0;
+  for (const auto& t : m.triangles) six_v += m.vertices_m[t[0]].dot(m.vertices_m[t[1]].cross(m.vertices_m[t[2]]));
+  return six_v / 6.0;
+}
+
+// case.json "organ": its surface (closed, manifold, wound outward), its beads (inside it) and the
+// support it rests on (a unit normal out of the support, the organ on its free side)
+Organ read_organ(json::JsonReader o, const fs::path& dir, const std::string& case_json, std::string* surface_file) {
+  Organ organ;
+  organ.name = o.text("name", "organ");
+  if (organ.name.empty()) o.fail("name", "expected a non-empty name");
+  *surface_file = member_file(dir, case_json, "organ.surface", o.text("surface", ""));
+  organ.surface = read_mesh(*surface_file, kMillimetre);
+  if (organ.surface.triangles.empty()) fail(*surface_file, "mesh", "no triangles (the organ needs its surface)");
+  if (const std::string why = check_closed_manifold(organ.surface); !why.empty())
+    fail(*surface_file, "mesh", why + " (the organ must be a closed, manifold surface)");
+  if (signed_volume_m3(organ.surface) <= 0.0)
+    fail(*surface_file, "mesh",
+         "wound inside out (its volume is negative: faces must run counter-clockwise seen from outside)");
+  if (o.has("fiducials")) {
+    const std::string file = member_file(dir, case_json, "organ.fiducials", o.text("fiducials", ""));
+    organ.fiducials_m = read_fiducials(file, organ.surface, *surface_file);
+  }
+  if (!o.has("support"))
+    o.fail("support", "missing (the plane the organ rests on: {\"normal\": [x, y, z], \"offset_mm\": d})");
+  json::JsonReader s = o.child("support");
+  Eigen::Vector3d n;
+  if (!s.numbers("normal", {n.data(), 3})) s.fail("normal", "expected [x, y, z], a direction out of the support");
+  if (!(n.norm() > 0.0) || !n.normalized().allFinite())
+    s.fail("normal", "expected a non-zero direction (out of the support, toward the organ)");
+  organ.support_normal = n.normalized();
+  if (!s.has("offset_mm"))
+    s.fail("offset_mm", "missing (the plane's signed distance from the origin along the normal)");
+  organ.support_offset_m = 1e-3 * s.number("offset_mm", 0.0, -1e5, 1e5);
+  s.finish();
+  // a normal the wrong way round puts the organ inside its support
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& v : organ.surface.vertices_m) centre += v;
+  centre /= static_cast<double>(organ.surface.vertices_m.size());
+  const double above_mm = 1e3 * (organ.support_normal.dot(centre) - organ.support_offset_m);
+  if (above_mm < 0.0)
+    o.fail("support", fmt::format("the organ's centre lies {:.1f} mm inside the support (the normal points out of the "
+                                  "support, toward the organ)",
+                                  -above_mm));
+  o.text("slicer_fiducials", "");  // written for viewers, not read
+  o.finish();
+  return organ;
+}
+
 }  // namespace
 
 void write_case(const Case& c, const std::string& dir_name) {
@@ -79,8 +214,11 @@ void write_case(const Case& c, const std::string& dir_name) {
   fs::create_directories(dir / "slicer", ec);
   if (ec) throw CaseError(fmt::format("{}: cannot create the case folder ({})", dir_name, ec.message()));
   Json doc = {{"format", kCaseFormat}, {"version", kCaseVersion}, {"name", c.name}, {"units", "mm"}, {"frame", "LPS"}};
-  write_vessel_tree_json(c.vessels, (dir / "vessels.json").string());
-  doc["vessels"] = "vessels.json";
+  // an organ case may have no vessels (an empty tree is no vessels.json)
+  if (!c.vessels.branches.empty()) {
+    write_vessel_tree_json(c.vessels, (dir / "vessels.json").string());
+    doc["vessels"] = "vessels.json";
+  }
   if (!c.lumen.triangles.empty()) {
     write_stl(c.lumen, (dir / "lumen.stl").string(), "pcisim lumen");
     doc["lumen"] = "lumen.stl";
@@ -89,6 +227,7 @@ void write_case(const Case& c, const std::string& dir_name) {
     write_nrrd(*c.ct, (dir / "ct.nrrd").string(), volume_io_has_gzip());
     doc["ct"] = {{"file", "ct.nrrd"}, {"lumen_enhanced", c.ct_lumen_enhanced}};
   }
+  if (c.organ) doc["organ"] = write_organ(*c.organ, dir);
   Json landmarks = Json::array();
   for (const auto& l : c.landmarks)
     landmarks.push_back({{"name", l.name}, {"position_m", {l.position_m.x(), l.position_m.y(), l.position_m.z()}}});
@@ -143,7 +282,7 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
   if (!fs::is_regular_file(case_json, ec))
     throw CaseError(fmt::format("{}: missing (a case folder needs case.json)", case_json));
   Case c;
-  std::string vessels_file, ct_file, ct_dicom;
+  std::string vessels_file, ct_file, ct_dicom, organ_surface_file;
   try {
     const Json doc = json::parse_json_checked(io::read_file(case_json), case_json);
     json::JsonReader r(doc, "");
@@ -155,7 +294,13 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
     c.name = r.text("name", dir.filename().string());
     r.text("units", "", {"mm"});
     r.text("frame", "", {"LPS"});
-    vessels_file = member_file(dir, case_json, "vessels", r.text("vessels", ""));
+    // a coronary case needs its vessels; an organ case may have none
+    if (!r.has("organ") || r.has("vessels"))
+      vessels_file = member_file(dir, case_json, "vessels", r.text("vessels", ""));
+    if (r.has("organ")) {
+      c.organ = read_organ(r.child("organ"), dir, case_json, &organ_surface_file);
+      if (!r.has("ct")) fail(case_json, "ct", "missing (an organ case needs a CT: the ultrasound images it)");
+    }
     if (r.has("lumen")) {
       const std::string lumen_file = member_file(dir, case_json, "lumen", r.text("lumen", ""));
       c.lumen = read_mesh(lumen_file, kMillimetre);
@@ -252,10 +397,12 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
     if (dynamic_cast<const CaseError*>(&e)) throw;
     throw CaseError(fmt::format("{}: {}", case_json, e.what()));
   }
-  try {
-    c.vessels = read_vessel_tree_json(vessels_file);
-  } catch (const std::runtime_error& e) {
-    throw CaseError(e.what());
+  if (!vessels_file.empty()) {
+    try {
+      c.vessels = read_vessel_tree_json(vessels_file);
+    } catch (const std::runtime_error& e) {
+      throw CaseError(e.what());
+    }
   }
   if (!ct_file.empty()) {
     try {
@@ -273,6 +420,7 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
     ct_file = ct_dicom;
   }
   if (c.ct) check_vessels_inside(c.vessels, *c.ct, vessels_file, ct_file);
+  if (c.organ) check_organ_inside(c.organ->surface, *c.ct, organ_surface_file, ct_file);
   return c;
 }
 

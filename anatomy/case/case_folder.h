@@ -1,10 +1,15 @@
 #pragma once
 // A case on disk (docs/anatomy.md): a folder with case.json naming what is present,
-//   vessels.json   centerlines and radii (the pcisim-vessel-tree format, metres)
+//   vessels.json   centerlines and radii (the pcisim-vessel-tree format, metres); optional in an
+//                  organ case
 //   lumen.stl      the lumen surface, binary STL, millimetres, LPS
-//   ct.nrrd|.mha   optional CT in HU
+//   ct.nrrd|.mha   optional CT in HU (required in an organ case: the ultrasound images it)
+//   organ.ply      the soft-tissue scene's organ surface (optional), millimetres, LPS: written as
+//                  binary PLY of doubles; read from any mesh file read_mesh reads (STL, PLY, OBJ)
+//   fiducials.json the organ's bead centres (millimetres, LPS)
 //   slicer/<branch>.mrk.json   each centerline as a 3D Slicer markups curve (written, not read;
 //                              the name made safe: markups_file_stem)
+//   slicer/fiducials.mrk.json  the organ's beads as a 3D Slicer point list (written, not read)
 //   overview.png   a picture for people (written when built with libpng, not read)
 // Built only with nlohmann-json. Readers throw CaseError "<file>: <field>: <what>".
 #include <functional>
@@ -21,6 +26,7 @@ struct CaseError : std::runtime_error {
 
 inline constexpr const char* kCaseFormat = "pcisim-case";
 inline constexpr int kCaseVersion = 1;
+inline constexpr const char* kFiducialsFormat = "pcisim-fiducials";  // fiducials.json
 
 // writes the case into `dir` (created; files of the same names are replaced)
 void write_case(const Case& c, const std::string& dir);
@@ -41,7 +47,9 @@ constexpr bool case_overview_written() {
 using DicomFolderReader = std::function<Volume(const std::string& folder)>;
 
 // reads and checks a case folder: every named file present and readable, units "mm", frame "LPS",
-// the lumen closed and manifold, the CT with its spacing, every centerline point inside the CT
+// the lumen closed and manifold, the CT with its spacing, every centerline point inside the CT;
+// an organ closed, manifold and wound outward, inside the CT, its beads inside it, its support's
+// normal non-zero (normalised) with the organ on its free side, and a CT beside it
 Case read_case(const std::string& dir, const DicomFolderReader& read_dicom = nullptr);
 
 }  // namespace pcisim::anatomy

@@ -17,7 +17,7 @@ struct Panel {
   double mm_per_px = 1;
   std::vector<double> density;  // mean over the voxels that fell in the pixel
   std::vector<int> count;
-  std::vector<uint8_t> vessel;
+  std::vector<uint8_t> overlay;  // drawn over the CT: vessels, the organ's outline, its beads
 
   bool pixel_of(const Eigen::Vector3d& p_mm, int* col, int* row) const {
     *col = static_cast<int>((p_mm[right] - lo_mm[right]) / mm_per_px);
@@ -25,6 +25,58 @@ struct Panel {
     return *col >= 0 && *col < width && *row >= 0 && *row < height;
   }
 };
+
+// a disc of r_px pixels about p
+void mark_disc(Panel& view, const Eigen::Vector3d& p_mm, int r_px) {
+  int col = 0, row = 0;
+  view.pixel_of(p_mm, &col, &row);
+  for (int dr = -r_px; dr <= r_px; ++dr)
+    for (int dc = -r_px; dc <= r_px; ++dc) {
+      const int cc = col + dc, rr = row + dr;
+      if (dr * dr + dc * dc > r_px * r_px || cc < 0 || cc >= view.width || rr < 0 || rr >= view.height) continue;
+      view.overlay[static_cast<size_t>(rr) * view.width + cc] = 1;
+    }
+}
+
+// the organ's outline (the edge of its projected triangles) and its beads as small discs
+void draw_organ(const Organ& organ, Panel& view) {
+  std::vector<uint8_t> covered(view.overlay.size(), 0);
+  auto to_px = [&view](const Eigen::Vector3d& p_m) {
+    const Eigen::Vector3d p = p_m * 1e3;
+    return Eigen::Vector2d((p[view.right] - view.lo_mm[view.right]) / view.mm_per_px,
+                           view.height - (p.z() - view.lo_mm.z()) / view.mm_per_px);
+  };
+  for (const auto& t : organ.surface.triangles) {
+    const Eigen::Vector2d a = to_px(organ.surface.vertices_m[t[0]]), b = to_px(organ.surface.vertices_m[t[1]]),
+                          d = to_px(organ.surface.vertices_m[t[2]]);
+    const double area = (b - a).x() * (d - a).y() - (d - a).x() * (b - a).y();
+    if (area == 0.0) continue;
+    const int c0 = std::max(0, static_cast<int>(std::floor(std::min({a.x(), b.x(), d.x()}))));
+    const int c1 = std::min(view.width - 1, static_cast<int>(std::ceil(std::max({a.x(), b.x(), d.x()}))));
+    const int r0 = std::max(0, static_cast<int>(std::floor(std::min({a.y(), b.y(), d.y()}))));
+    const int r1 = std::min(view.height - 1, static_cast<int>(std::ceil(std::max({a.y(), b.y(), d.y()}))));
+    for (int r = r0; r <= r1; ++r)
+      for (int col = c0; col <= c1; ++col) {
+        // the pixel's centre inside the projected triangle (either winding)
+        const Eigen::Vector2d q(col + 0.5, r + 0.5);
+        const double wb = ((q - a).x() * (d - a).y() - (d - a).x() * (q - a).y()) / area;
+        const double wd = ((b - a).x() * (q - a).y() - (q - a).x() * (b - a).y()) / area;
+        if (wb >= 0 && wd >= 0 && wb + wd <= 1) covered[static_cast<size_t>(r) * view.width + col] = 1;
+      }
+  }
+  // covered pixels with an uncovered neighbour: a one-pixel outline that leaves the CT visible
+  for (int r = 0; r < view.height; ++r)
+    for (int col = 0; col < view.width; ++col) {
+      if (!covered[static_cast<size_t>(r) * view.width + col]) continue;
+      bool edge = r == 0 || col == 0 || r == view.height - 1 || col == view.width - 1;
+      for (int k = 0; !edge && k < 4; ++k) {
+        const int rr = r + (k == 0) - (k == 1), cc = col + (k == 2) - (k == 3);
+        edge = !covered[static_cast<size_t>(rr) * view.width + cc];
+      }
+      if (edge) view.overlay[static_cast<size_t>(r) * view.width + col] = 1;
+    }
+  for (const auto& f : organ.fiducials_m) mark_disc(view, f * 1e3, 1);
+}
 
 }  // namespace
 
@@ -45,6 +97,11 @@ void write_case_overview(const Case& c, const std::string& png_path) {
         lo = lo.cwiseMin(p.position_m * 1e3);
         hi = hi.cwiseMax(p.position_m * 1e3);
       }
+    if (c.organ)
+      for (const auto& v : c.organ->surface.vertices_m) {
+        lo = lo.cwiseMin(v * 1e3);
+        hi = hi.cwiseMax(v * 1e3);
+      }
     lo -= Eigen::Vector3d::Constant(20);
     hi += Eigen::Vector3d::Constant(20);
   }
@@ -62,7 +119,7 @@ void write_case_overview(const Case& c, const std::string& png_path) {
     p.height = std::max(1, static_cast<int>((hi.z() - lo.z()) / mm_per_px) + 1);
     p.density.assign(static_cast<size_t>(p.width) * p.height, 0.0);
     p.count.assign(p.density.size(), 0);
-    p.vessel.assign(p.density.size(), 0);
+    p.overlay.assign(p.density.size(), 0);
   }
   // the CT: mean density above air along each pixel's line of sight (nearest voxel, one sample
   // per voxel spacing), so no pixel is left without voxels
@@ -92,16 +149,10 @@ void write_case_overview(const Case& c, const std::string& png_path) {
     for (const auto& b : c.vessels.branches)
       for (const auto& pt : b.points) {
         const Eigen::Vector3d p = pt.position_m * 1e3;
-        const int r_px = std::max(1, static_cast<int>(std::lround(pt.radius_m * 1e3 / mm_per_px)));
-        int col = 0, row = 0;
-        view.pixel_of(p, &col, &row);
-        for (int dr = -r_px; dr <= r_px; ++dr)
-          for (int dc = -r_px; dc <= r_px; ++dc) {
-            const int cc = col + dc, rr = row + dr;
-            if (dr * dr + dc * dc > r_px * r_px || cc < 0 || cc >= view.width || rr < 0 || rr >= view.height) continue;
-            view.vessel[static_cast<size_t>(rr) * view.width + cc] = 1;
-          }
+        mark_disc(view, p, std::max(1, static_cast<int>(std::lround(pt.radius_m * 1e3 / mm_per_px))));
       }
+  if (c.organ)
+    for (auto& view : views) draw_organ(*c.organ, view);
   // mean density per pixel (bins of voxels do not all hold the same number)
   for (auto& view : views)
     for (size_t n = 0; n < view.density.size(); ++n)
@@ -119,7 +170,7 @@ void write_case_overview(const Case& c, const std::string& png_path) {
     for (int r = 0; r < view.height; ++r)
       for (int col = 0; col < view.width; ++col) {
         const size_t n = static_cast<size_t>(r) * view.width + col;
-        const double g = view.vessel[n] ? 255.0 : 200.0 * std::min(1.0, view.density[n] / top);
+        const double g = view.overlay[n] ? 255.0 : 200.0 * std::min(1.0, view.density[n] / top);
         image[static_cast<size_t>(r) * width + x0 + col] = static_cast<uint8_t>(g);
       }
     x0 += view.width + gap;

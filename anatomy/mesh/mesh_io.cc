@@ -52,6 +52,27 @@ bool parse_number(std::string_view w, T& out) {
   return r.ec == std::errc() && r.ptr == end;
 }
 
+// a length in file units as metres. Millimetres move the word's decimal exponent by 3 before its
+// one rounding to double: parsing and then x 1e-3 rounds twice, and about 1 value in 7 came back
+// an ulp off, so a surface written in millimetres (write_ply_mm) would not read back bit for bit
+bool parse_length(std::string_view w, double metres_per_unit, double& out_m) {
+  double v = 0;
+  if (!parse_number(w, v)) return false;
+  out_m = v * metres_per_unit;
+  if (metres_per_unit != kMillimetre || !std::isfinite(v)) return true;
+  const size_t e = w.find_first_of("eE");
+  int exponent = 0;
+  if (e != std::string_view::npos && !parse_number(w.substr(e + 1), exponent)) return true;
+  if (exponent < -100000 || exponent > 100000) return true;  // "0e-2147483648": no overflow below
+  const std::string_view mantissa = w.substr(0, e);
+  char buf[64];
+  if (mantissa.size() + 16 > sizeof buf) return true;  // a word that long keeps the rounded product
+  const auto r = fmt::format_to_n(buf, sizeof buf, "{}e{}", mantissa, exponent - 3);
+  double exact = 0;
+  if (parse_number(std::string_view(buf, r.size), exact)) out_m = exact;
+  return true;
+}
+
 // the whitespace-separated words of a file's bytes, read in place (the file is never copied into
 // a stream: a 500 MB ASCII mesh stays 500 MB)
 class Words {
@@ -69,6 +90,10 @@ class Words {
   bool number(T& out) {
     std::string_view w;
     return next(w) && parse_number(w, out);
+  }
+  bool length(double metres_per_unit, double& out_m) {
+    std::string_view w;
+    return next(w) && parse_length(w, metres_per_unit, out_m);
   }
 
  private:
@@ -243,6 +268,15 @@ TriangleMesh read_ply(const std::string& path, std::string_view bytes, double sc
     if (t == "float" || t == "float32") return get(float{});
     return get(double{});
   };
+  // a vertex coordinate in metres (text: through parse_length, exact for millimetres)
+  auto length = [&](const std::string& t) -> double {
+    if (!ascii) return scalar(t) * scale;
+    std::string_view word;
+    double m = 0;
+    if (!text.next(word)) fail(path, "data ends early");
+    if (!parse_length(word, scale, m)) fail(path, fmt::format("data: '{}' is not a number", word.substr(0, 40)));
+    return m;
+  };
   TriangleMesh mesh;
   // every row of every element takes at least one byte of the file: a count the file cannot hold,
   // or rows of no properties (which would loop without reading), is refused before the loop
@@ -284,16 +318,13 @@ TriangleMesh read_ply(const std::string& path, std::string_view bytes, double sc
           }
           continue;
         }
-        const double x = scalar(p.type);
-        if (e.name == "vertex") {
-          if (p.name == "x") v.x() = x;
-          if (p.name == "y") v.y() = x;
-          if (p.name == "z") v.z() = x;
-        }
+        const bool coordinate = e.name == "vertex" && (p.name == "x" || p.name == "y" || p.name == "z");
+        const double x = coordinate ? length(p.type) : scalar(p.type);
+        if (coordinate) v[p.name[0] - 'x'] = x;
       }
       if (e.name == "vertex") {
         check_finite(path, v, mesh.vertices_m.size());
-        mesh.vertices_m.push_back(v * scale);
+        mesh.vertices_m.push_back(v);
       }
     }
   }
@@ -314,9 +345,9 @@ TriangleMesh read_obj(const std::string& path, std::string_view bytes, double sc
     w.next(key);
     if (key == "v") {
       Eigen::Vector3d v;
-      if (!w.number(v.x()) || !w.number(v.y()) || !w.number(v.z()) || !v.allFinite())
+      if (!w.length(scale, v.x()) || !w.length(scale, v.y()) || !w.length(scale, v.z()) || !v.allFinite())
         fail(path, fmt::format("line {}: a vertex needs three finite numbers", line_no));
-      mesh.vertices_m.push_back(v * scale);
+      mesh.vertices_m.push_back(v);
     } else if (key == "f") {
       idx.clear();
       std::string_view corner;
@@ -391,10 +422,50 @@ void write_stl(const TriangleMesh& mesh, const std::string& path, const std::str
   if (!out) throw MeshIoError(path + ": write failed");
 }
 
+namespace {
+
+// a coordinate in metres as millimetre text: the shortest decimal that reads back to the double
+// (to_chars' round-trip guarantee) with its exponent moved by 3, which parse_length reverses
+// before its one rounding
+void write_mm(std::ostream& out, double m) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, m, std::chars_format::scientific);
+  const std::string_view text(buf, static_cast<size_t>(r.ptr - buf));
+  const size_t e = text.find('e');
+  int exponent = 0;
+  parse_number(text.substr(e + 1), exponent);
+  out << text.substr(0, e) << 'e' << exponent + 3;
+}
+
+}  // namespace
+
+void write_ply_mm(const TriangleMesh& mesh, const std::string& path, const std::string& title) {
+  std::ofstream out(path);
+  if (!out) throw MeshIoError(path + ": cannot open for writing");
+  out << "ply\nformat ascii 1.0\ncomment " << title << "\ncomment SPACE=LPS units=mm\n"
+      << "element vertex " << mesh.vertices_m.size() << "\nproperty double x\nproperty double y\nproperty double z\n"
+      << "element face " << mesh.triangles.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
+  for (const Eigen::Vector3d& v : mesh.vertices_m) {
+    for (int k = 0; k < 3; ++k) {
+      if (k > 0) out << ' ';
+      write_mm(out, v[k]);
+    }
+    out << '\n';
+  }
+  for (const auto& t : mesh.triangles) out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
+  out.flush();
+  if (!out) throw MeshIoError(path + ": write failed");
+}
+
 void round_to_float_mm(TriangleMesh& mesh) {
-  // the value read back is float(mm) * 1e-3 computed in double, exactly as read_stl does
+  // the value read back is float(mm) * 1e-3 computed in double, exactly as read_stl does. The
+  // float goes through a volatile: GCC 12.2 (Debian 12) vectorises x and y as a pair and drops
+  // their double -> float -> double round trip (seen at -O2 and -O3: a vertex came back unrounded)
   for (auto& v : mesh.vertices_m)
-    for (int k = 0; k < 3; ++k) v[k] = static_cast<float>(v[k] * 1e3) * kMillimetre;
+    for (int k = 0; k < 3; ++k) {
+      volatile float mm = static_cast<float>(v[k] * 1e3);
+      v[k] = mm * kMillimetre;
+    }
 }
 
 std::string check_closed_manifold(const TriangleMesh& mesh) {

@@ -15,7 +15,9 @@ struct MeshIoError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// metres per file unit: 1e-3 for millimetre files (what users bring, what Slicer writes)
+// metres per file unit: 1e-3 for millimetre files (what users bring, what Slicer writes). A
+// millimetre coordinate in text (PLY, OBJ) becomes metres by moving its decimal exponent, then
+// one rounding to double; binary values are multiplied by 1e-3
 inline constexpr double kMillimetre = 1e-3;
 
 // the largest mesh file read: a lumen of a million triangles is 50 MB as binary STL, ~250 MB as
@@ -34,6 +36,12 @@ TriangleMesh parse_mesh(const std::string& name, const std::string& format, std:
 // it) and "units=mm". Coordinates are float32: write_stl then read_mesh gives the mesh rounded to
 // float, and a mesh already at float precision (round_to_float_mm) comes back bit for bit.
 void write_stl(const TriangleMesh& mesh, const std::string& path, const std::string& title = "pcisim");
+
+// ASCII PLY in millimetres, vertices shared as in the mesh, with a comment "SPACE=LPS" (3D Slicer
+// reads the space from a PLY's comments). Each coordinate is the shortest decimal of its metre
+// value with the exponent moved by 3, and read_mesh (kMillimetre) moves it back before rounding,
+// so write_ply_mm then read_mesh gives the same doubles, bit for bit
+void write_ply_mm(const TriangleMesh& mesh, const std::string& path, const std::string& title = "pcisim");
 
 // every vertex rounded to the float32 millimetre value an STL file stores
 void round_to_float_mm(TriangleMesh& mesh);

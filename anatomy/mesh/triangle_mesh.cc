@@ -1,5 +1,6 @@
 #include "anatomy/mesh/triangle_mesh.h"
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <fstream>
 #include <iomanip>

@@ -39,7 +39,7 @@ struct Scene {
   // phantom of world.anatomy.seed (server/case_builder.h builds the one anatomy::Case)
   std::string case_dir;
   // a procedural organ instead of the coronary phantom ("" or "kidney", seeded by
-  // world.anatomy.seed): the soft-tissue scene's anatomy
+  // world.anatomy.seed): the soft-tissue scene's anatomy; "" with a case_dir (its organ is the case's)
   std::string organ;
   double physics_rate_hz = 30.0;
   physics::WorldSpec world;

@@ -376,10 +376,11 @@ Scene parse(const nlohmann::json& doc, const std::string& source) {
   // a case folder or a phantom seed, not both
   if (anatomy.has("case") && anatomy.has("phantom_seed"))
     anatomy.fail("case", "give either a case folder or a phantom_seed, not both");
-  // the procedural kidney (soft-tissue scene); a case folder's organ is not read yet
+  // the procedural kidney (soft-tissue scene), or a case folder that brings its own organ
   s.organ = anatomy.text("organ", "", {"", "kidney"});
   if (!s.organ.empty() && anatomy.has("case"))
-    anatomy.fail("organ", "a case folder's organ is not supported yet: use the procedural \"kidney\" alone");
+    anatomy.fail("organ",
+                 "give either the procedural \"kidney\" or a case folder (which brings its own organ), not both");
   s.world.anatomy.seed = static_cast<uint32_t>(anatomy.integer("phantom_seed", 1, 0, 1 << 30));
   if (anatomy.has("case")) {
     const std::string dir = anatomy.text("case", "");
@@ -431,7 +432,10 @@ Scene parse(const nlohmann::json& doc, const std::string& source) {
         throw json::JsonError(fmt::format(
             "effects.soft_tissue: does not go with effect \"{}\" (the soft-tissue scene's anatomy is an organ)",
             other));
-    if (s.organ.empty()) throw json::JsonError("effects.soft_tissue: needs an organ (anatomy.organ: \"kidney\")");
+    if (s.organ.empty() && s.case_dir.empty())
+      throw json::JsonError(
+          "effects.soft_tissue: needs an organ (anatomy.organ: \"kidney\", or anatomy.case: a case folder with an "
+          "organ)");
   }
   if (!s.organ.empty() && !s.world.soft_tissue)
     throw json::JsonError("anatomy.organ: needs effect \"soft_tissue\" (an organ is the soft-tissue scene's anatomy)");

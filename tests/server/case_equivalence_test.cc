@@ -1,15 +1,19 @@
 // A scene on `anatomy.case` pointing at the phantom case that --write-case wrote runs the same as
 // the scene on `phantom_seed`: the same wire trajectory step by step and the same fluoroscopy
 // frames, through the pieces the server wires (build_case -> World, background_volume ->
-// FluoroscopyRenderer). And a Server builds on a case folder and names its branches.
+// FluoroscopyRenderer). And a Server builds on a case folder and names its branches. The kidney
+// scene on the organ case --write-case writes for it builds the procedural kidney's tissue, and a
+// case that does not fit its scene (no organ for the kidney, no vessels for the wire) is refused.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
 #include "anatomy/case/case_folder.h"
+#include "physics/soft_tissue/tissue_scene.h"
 #include "physics/world.h"
 #include "server/case_builder.h"
 #include "server/server.h"
@@ -34,6 +38,27 @@ Scene quick_scene(const std::string& anatomy_json, const fs::path& dir) {
   doc["effects"]["xray"]["detector_px"] = 128;
   std::ofstream(file) << doc.dump(1);
   return load_scene_file(file.string());
+}
+
+// scenes/kidney.json with 5 mm particles (quick to build), its anatomy given, as a file beside the case
+Scene kidney_scene(const std::string& anatomy_json, const fs::path& dir) {
+  std::ifstream in(PCISIM_SOURCE_DIR "/scenes/kidney.json");
+  nlohmann::json doc = nlohmann::json::parse(in, nullptr, true, /*ignore_comments=*/true);
+  doc["anatomy"] = nlohmann::json::parse(anatomy_json);
+  doc["effects"]["soft_tissue"]["particle_radius_mm"] = 5;
+  const fs::path file = dir / "kidney-scene.json";
+  std::ofstream(file) << doc.dump(1);
+  return load_scene_file(file.string());
+}
+
+// the CaseError build_case gives, or ""
+std::string refusal(const Scene& s) {
+  try {
+    build_case(s);
+  } catch (const anatomy::CaseError& e) {
+    return e.what();
+  }
+  return "";
 }
 
 class CaseEquivalence : public ::testing::Test {
@@ -130,6 +155,77 @@ TEST_F(CaseEquivalence, ServerBuildsOnACaseAndRefusesABadOne) {
   } catch (const anatomy::CaseError& e) {
     EXPECT_NE(std::string(e.what()).find("vessels: file 'vessels.json' not found"), std::string::npos) << e.what();
   }
+}
+
+// what `pcisim-server --scene scenes/kidney.json --write-case DIR` writes, run by the kidney scene
+// naming it (anatomy.case) or given by --case (which replaces the scene's procedural kidney): the
+// same particles and beads as the procedural kidney, to the STL's float rounding of its surface
+TEST_F(CaseEquivalence, WrittenKidneyCaseBuildsTheProceduralKidneysTissue) {
+  const Scene procedural = kidney_scene(R"({"organ": "kidney", "phantom_seed": 1})", dir_);
+  anatomy::write_case(kidney_case(procedural), (dir_ / "kidney").string());
+  const Scene by_case = kidney_scene(R"({"case": "kidney"})", dir_);
+  EXPECT_EQ(by_case.case_dir, (dir_ / "kidney").string());
+  EXPECT_TRUE(by_case.organ.empty());
+  Scene by_option = procedural;
+  use_case_folder(by_option, (dir_ / "kidney").string());
+
+  const auto a = build_case(procedural);
+  const physics::World wa(procedural.world, a->vessels, nullptr, a->heart, a->heart_vertices_m, &*a->organ);
+  const physics::soft_tissue::TissueScene& ta = *wa.tissue_state();
+  EXPECT_GT(ta.body().particle_count(), 100);
+  for (const Scene* s : {&by_case, static_cast<const Scene*>(&by_option)}) {
+    const auto b = build_case(*s);
+    ASSERT_TRUE(b->organ.has_value());
+    ASSERT_TRUE(b->ct.has_value());
+    EXPECT_EQ(b->ct->hu_i16, a->ct->hu_i16);  // what the ultrasound images
+    EXPECT_EQ(b->ct->origin_mm, a->ct->origin_mm);
+    const physics::World wb(s->world, b->vessels, nullptr, b->heart, b->heart_vertices_m, &*b->organ);
+    const physics::soft_tissue::TissueScene& tb = *wb.tissue_state();
+    // the model: the surface came back bit for bit (organ.ply), so the same particles, clusters
+    // and tets (at 5 mm the particles' spacing ties with the 1 mm voxels: an ulp off in the
+    // surface's bounding box gave 988 particles instead of 982)
+    ASSERT_EQ(tb.body().particle_count(), ta.body().particle_count());
+    EXPECT_EQ(tb.model().rest_m, ta.model().rest_m);
+    EXPECT_EQ(tb.model().clusters, ta.model().clusters);
+    EXPECT_EQ(tb.model().tets, ta.model().tets);
+    // the beads after construction (the organ settled on its support): their centres and the
+    // support's offset went through millimetres in JSON, an ulp or so
+    ASSERT_EQ(tb.fiducials_m().cols(), ta.fiducials_m().cols());
+    ASSERT_EQ(tb.fiducials_m().cols(), 45);
+    const double worst_m = (tb.fiducials_m() - ta.fiducials_m()).cwiseAbs().maxCoeff();
+    std::printf("beads after construction: %.3g m apart at most\n", worst_m);
+    EXPECT_LT(worst_m, 1e-9);
+  }
+}
+
+// a case must hold what its scene simulates; one holding more (a coronary case with an organ)
+// runs the coronary scene as before
+TEST_F(CaseEquivalence, ACaseThatDoesNotFitItsSceneIsRefusedNamingTheFolder) {
+  Scene coronary = quick_scene(R"({"phantom_seed": 1})", dir_);
+  anatomy::write_case(anatomy::make_phantom_case(phantom_case_spec(coronary)), (dir_ / "coronary").string());
+  Scene kidney = kidney_scene(R"({"organ": "kidney"})", dir_);
+  anatomy::write_case(kidney_case(kidney), (dir_ / "kidney").string());
+  // the kidney scene on a coronary case
+  use_case_folder(kidney, (dir_ / "coronary").string());
+  EXPECT_EQ(refusal(kidney),
+            (dir_ / "coronary" / "case.json").string() +
+                ": organ: missing (the soft-tissue scene needs a case with an organ; docs/anatomy.md)");
+  // the coronary scene on the organ case
+  use_case_folder(coronary, (dir_ / "kidney").string());
+  EXPECT_NE(refusal(coronary).find((dir_ / "kidney" / "case.json").string() + ": vessels: missing"), std::string::npos)
+      << refusal(coronary);
+  // a coronary case that also holds an organ: the coronary scene's server builds and names its branches
+  anatomy::Case both = anatomy::make_phantom_case(phantom_case_spec(coronary));
+  both.organ = build_case(kidney_scene(R"({"organ": "kidney"})", dir_))->organ;
+  anatomy::write_case(both, (dir_ / "both").string());
+  use_case_folder(coronary, (dir_ / "both").string());
+  lcm::LCM lcm("memq://");
+  Server server(coronary, lcm);
+  EXPECT_EQ(server.branch_namer(2), "LAD");
+  // a scene put together in code with both the procedural organ and a case folder
+  Scene two = kidney_scene(R"({"organ": "kidney"})", dir_);
+  two.case_dir = (dir_ / "kidney").string();
+  EXPECT_THROW(build_case(two), std::invalid_argument);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // The session runner (server/session_runner.h) with whole pipelines on memq: --case (the
 // session's case_dir) applies to every scene, also one loaded over LCM that names another
-// anatomy; a fallback scene that no longer builds ends the session instead of looping.
+// anatomy, and to the soft-tissue scene, whose procedural organ it replaces by the case's; a
+// fallback scene that no longer builds ends the session instead of looping.
 #include "server/session_runner.h"
 
 #include <gtest/gtest.h>
@@ -18,6 +19,7 @@
 #include "anatomy/phantom/phantom_case.h"
 #include "pcisim_lcm/session_command_t.hpp"
 #include "protocol/channels.h"
+#include "server/case_builder.h"
 #include "server/scene/scene.h"
 
 namespace pcisim::server {
@@ -158,6 +160,41 @@ TEST_F(SessionRunner, AFallbackThatNoLongerBuildsEndsTheSession) {
   console.join();
   EXPECT_EQ(limits.scenes_rejected(), 1);
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 4.0);
+}
+
+// --case with the kidney scene (which names the procedural kidney): the session runs on the
+// case's organ; a case without one is refused naming its case.json
+TEST_F(SessionRunner, TheCaseOptionGivesTheKidneySceneItsOrgan) {
+  std::ofstream(dir_ / "kidney.json") << R"({"name": "kidney-light", "anatomy": {"organ": "kidney"},
+    "effects": {"soft_tissue": {"particle_radius_mm": 5}, "probe_contact": {}}})";
+  const Scene scene = load_scene_file((dir_ / "kidney.json").string());
+  anatomy::write_case(kidney_case(scene), (dir_ / "kidney-case").string());
+  lcm::LCM lcm("memq://");
+  SessionLimits limits;
+  SessionOptions options;
+  options.duration_s = 0.5;
+  options.image_url = "memq://";
+  options.case_dir = (dir_ / "kidney-case").string();
+  std::atomic<bool> stop{false};
+  {
+    CapturedLog log;
+    StatsReport r;
+    ASSERT_NO_THROW(r = run_session(scene, lcm, options, stop, limits));
+    const std::string lines = log.text();
+    EXPECT_EQ(count(lines, "(case " + options.case_dir + ")"), 1u) << lines;
+    EXPECT_EQ(count(lines, "kidney: "), 1u) << "the tissue was built from the case's organ:\n" << lines;
+    EXPECT_GT(r.physics_steps, 0);
+  }
+  // the coronary case has no organ
+  options.case_dir = (dir_ / "patient").string();
+  try {
+    run_session(scene, lcm, options, stop, limits);
+    ADD_FAILURE() << "the kidney scene ran on a case without an organ";
+  } catch (const anatomy::CaseError& e) {
+    EXPECT_NE(std::string(e.what()).find((dir_ / "patient" / "case.json").string() + ": organ: missing"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include "anatomy/heart/heart_mesh.h"
 #include "anatomy/case/slicer_markups.h"
 #include "anatomy/mesh/mesh_io.h"
+#include "anatomy/organ/kidney_phantom.h"
 #include "anatomy/phantom/phantom_case.h"
 #include "anatomy/volume/volume_io.h"
 
@@ -39,13 +40,30 @@ const Case& small_case() {
   return c;
 }
 
+// the soft-tissue scene's case: the kidney phantom's organ and its CT (coarse: 4 mm voxels), no vessels
+const Case& kidney_case() {
+  static const Case c = [] {
+    KidneySpec spec;
+    spec.ct_spacing_mm = 4.0;
+    KidneyPhantom k = make_kidney_phantom(spec);
+    Case kc;
+    kc.name = "kidney phantom";
+    kc.organ = kidney_organ(k);
+    kc.ct = std::move(k.ct);
+    return kc;
+  }();
+  return c;
+}
+
 class CaseFolder : public ::testing::Test {
  protected:
+  virtual const Case& written() const { return small_case(); }
   void SetUp() override {
     dir_ = fs::temp_directory_path() / ("pcisim-case-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->test_suite_name() +
+                                        "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
-    write_case(small_case(), dir_.string());
+    write_case(written(), dir_.string());
   }
   void TearDown() override { fs::remove_all(dir_); }
 
@@ -327,6 +345,209 @@ TEST_F(CaseFolder, ABadVesselFileIsRefusedNamingItsField) {
     {"name": "LM", "parent": -1, "points": [{"position_m": [0, 0, 0], "radius_m": -1},
                                            {"position_m": [0, 0, 0.001], "radius_m": 0.002}]}]})";
   EXPECT_NE(refusal().find("vessels.json: branches[0].points[0].radius_m"), std::string::npos) << refusal();
+}
+
+// ---- a case with an organ (the soft-tissue scene's anatomy) ----
+
+class OrganCaseFolder : public CaseFolder {
+ protected:
+  const Case& written() const override { return kidney_case(); }
+  nlohmann::json fiducials_json() const { return nlohmann::json::parse(std::ifstream(dir_ / "fiducials.json")); }
+  void set_fiducials_json(const nlohmann::json& j) const { std::ofstream(dir_ / "fiducials.json") << j.dump(1); }
+  // the refusal is "<file>: <field>: <what>" with this file and field
+  void expect_refused(const std::string& file, const std::string& field, const std::string& what) const {
+    const std::string why = refusal();
+    EXPECT_NE(why.find((dir_ / file).string() + ": " + field + ": " + what), std::string::npos) << why;
+  }
+};
+
+TEST_F(OrganCaseFolder, WrittenAndReadBackIsTheSameOrgan) {
+  const Case& a = kidney_case();
+  const Case b = read_case(dir_.string());
+  EXPECT_EQ(b.name, a.name);
+  EXPECT_TRUE(b.vessels.branches.empty());
+  EXPECT_FALSE(fs::exists(dir_ / "vessels.json"));
+  EXPECT_FALSE(case_json().contains("vessels"));
+  ASSERT_TRUE(b.organ.has_value());
+  const Organ &x = *a.organ, &y = *b.organ;
+  EXPECT_EQ(y.name, x.name);
+  // the surface: the same vertices and triangles, each coordinate through millimetres and back
+  ASSERT_EQ(y.surface.triangles, x.surface.triangles);
+  ASSERT_EQ(y.surface.vertices_m.size(), x.surface.vertices_m.size());
+  for (size_t v = 0; v < x.surface.vertices_m.size(); ++v)
+    ASSERT_LT((y.surface.vertices_m[v] - x.surface.vertices_m[v]).norm(), 1e-16) << v;
+  EXPECT_EQ(check_closed_manifold(y.surface), "");
+  // beads and support: doubles through millimetres and back
+  ASSERT_EQ(y.fiducials_m.size(), x.fiducials_m.size());
+  ASSERT_EQ(y.fiducials_m.size(), 45u);
+  for (size_t i = 0; i < x.fiducials_m.size(); ++i)
+    EXPECT_LT((y.fiducials_m[i] - x.fiducials_m[i]).norm(), 1e-15) << "bead " << i;
+  EXPECT_EQ(y.support_normal, x.support_normal);
+  EXPECT_NEAR(y.support_offset_m, x.support_offset_m, 1e-15);
+  // the CT: same voxels and geometry
+  ASSERT_TRUE(b.ct.has_value());
+  EXPECT_EQ(b.ct->dims, a.ct->dims);
+  EXPECT_EQ(b.ct->spacing_mm, a.ct->spacing_mm);
+  EXPECT_EQ(b.ct->origin_mm, a.ct->origin_mm);
+  EXPECT_EQ(b.ct->direction, a.ct->direction);
+  EXPECT_EQ(b.ct->hu_i16, a.ct->hu_i16);
+  // case.json says where each piece is
+  const auto organ = case_json().at("organ");
+  EXPECT_EQ(organ.at("surface"), "organ.ply");
+  EXPECT_EQ(organ.at("fiducials"), "fiducials.json");
+  EXPECT_EQ(organ.at("support").at("normal"), nlohmann::json::parse("[0.0, -1.0, 0.0]"));
+  EXPECT_DOUBLE_EQ(organ.at("support").at("offset_mm").get<double>(), x.support_offset_m * 1e3);
+}
+
+TEST_F(OrganCaseFolder, TheBeadsOpenInSlicerAsAPointListAndTheOverviewShowsTheOrgan) {
+  const auto doc = nlohmann::json::parse(std::ifstream(dir_ / "slicer" / "fiducials.mrk.json"));
+  const auto& m = doc.at("markups").at(0);
+  EXPECT_EQ(m.at("type"), "Fiducial");
+  EXPECT_EQ(m.at("coordinateSystem"), "LPS");
+  EXPECT_EQ(m.at("coordinateUnits"), "mm");
+  const auto& beads = kidney_case().organ->fiducials_m;
+  ASSERT_EQ(m.at("controlPoints").size(), beads.size());
+  for (size_t i = 0; i < beads.size(); ++i) {
+    const auto& p = m.at("controlPoints").at(i).at("position");
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(p.at(a).get<double>(), beads[i][a] * 1e3, 1e-9);
+  }
+  EXPECT_EQ(case_json().at("organ").at("slicer_fiducials"), "slicer/fiducials.mrk.json");
+  // the PLY's comment tells Slicer the space
+  std::ifstream ply(dir_ / "organ.ply", std::ios::binary);
+  std::string header(200, '\0');
+  ply.read(header.data(), 200);
+  EXPECT_NE(header.find("\ncomment SPACE=LPS units=mm\n"), std::string::npos) << header;
+  if (case_overview_written()) EXPECT_GT(fs::file_size(dir_ / "overview.png"), 1000u);
+}
+
+// a segmented organ as users bring it: an STL (floats), read to float precision
+TEST_F(OrganCaseFolder, AnStlSurfaceReadsToFloatPrecision) {
+  const TriangleMesh& x = kidney_case().organ->surface;
+  write_stl(x, (dir_ / "organ.stl").string());
+  auto j = case_json();
+  j["organ"]["surface"] = "organ.stl";
+  set_case_json(j);
+  const TriangleMesh y = read_case(dir_.string()).organ->surface;
+  // every triangle's corners where the original's lie rounded to float mm, so within 4e-9 m
+  TriangleMesh rounded = x;
+  round_to_float_mm(rounded);
+  ASSERT_EQ(y.triangles.size(), x.triangles.size());
+  ASSERT_EQ(y.vertices_m.size(), x.vertices_m.size());
+  double worst_m = 0.0;
+  for (size_t t = 0; t < x.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d& p = y.vertices_m[y.triangles[t][k]];
+      ASSERT_EQ(p, rounded.vertices_m[rounded.triangles[t][k]]) << t;
+      worst_m = std::max(worst_m, (p - x.vertices_m[x.triangles[t][k]]).norm());
+    }
+  EXPECT_LT(worst_m, 4e-9);
+}
+
+TEST_F(OrganCaseFolder, AMissingSurfaceOrBeadFileIsRefusedNamingTheField) {
+  fs::remove(dir_ / "fiducials.json");
+  expect_refused("case.json", "organ.fiducials", "file 'fiducials.json' not found");
+  fs::remove(dir_ / "organ.ply");
+  expect_refused("case.json", "organ.surface", "file 'organ.ply' not found");
+}
+
+TEST_F(OrganCaseFolder, AnOpenOrInsideOutSurfaceIsRefused) {
+  TriangleMesh m = kidney_case().organ->surface;
+  m.triangles.pop_back();
+  write_ply_mm(m, (dir_ / "organ.ply").string());
+  expect_refused("organ.ply", "mesh", "open: 3 edges belong to one triangle only");
+  m = kidney_case().organ->surface;
+  for (auto& t : m.triangles) std::swap(t[1], t[2]);
+  write_ply_mm(m, (dir_ / "organ.ply").string());
+  expect_refused("organ.ply", "mesh", "wound inside out");
+}
+
+// inside is the surface's inside, not its bounding box's: a bead in the box's corner is refused
+TEST_F(OrganCaseFolder, ABeadOutsideTheSurfaceIsRefused) {
+  const auto written = fiducials_json();
+  auto j = written;
+  j["centres_mm"][3] = {25.0, 15.0, 50.0};  // inside the 60 x 35 x 110 mm box, outside the bean
+  set_fiducials_json(j);
+  expect_refused("fiducials.json", "centres_mm[3]", "at (25.0, 15.0, 50.0) mm, outside the organ's surface organ.ply");
+  j["centres_mm"][3] = {0.0, 0.0, 80.0};
+  set_fiducials_json(j);
+  expect_refused("fiducials.json", "centres_mm[3]", "at (0.0, 0.0, 80.0) mm, outside the organ's surface");
+  j = written;
+  j["centres_mm"][0] = {1.0, 2.0};
+  set_fiducials_json(j);
+  expect_refused("fiducials.json", "centres_mm[0]", "expected [x, y, z] in millimetres");
+  j = written;
+  j["format"] = "slicer";
+  set_fiducials_json(j);
+  expect_refused("fiducials.json", "format", "expected \"pcisim-fiducials\"");
+}
+
+TEST_F(OrganCaseFolder, TheSupportNormalIsNormalisedAndAZeroOrBackwardOneIsRefused) {
+  const auto written = case_json();
+  auto j = written;
+  j["organ"]["support"]["normal"] = {0.0, -3.0, 0.0};  // a direction: any length
+  set_case_json(j);
+  EXPECT_EQ(read_case(dir_.string()).organ->support_normal, Eigen::Vector3d(0, -1, 0));
+  j["organ"]["support"]["normal"] = {0.0, 0.0, 0.0};
+  set_case_json(j);
+  expect_refused("case.json", "organ.support.normal", "expected a non-zero direction");
+  j["organ"]["support"]["normal"] = {0.0, 1.0};
+  set_case_json(j);
+  expect_refused("case.json", "organ.support.normal", "expected [x, y, z]");
+  // pointing into the organ: the organ would start inside its support
+  j["organ"]["support"]["normal"] = {0.0, 1.0, 0.0};
+  j["organ"]["support"]["offset_mm"] = 17.0;
+  set_case_json(j);
+  expect_refused("case.json", "organ.support", "the organ's centre lies");
+  j = written;
+  j["organ"]["support"].erase("offset_mm");
+  set_case_json(j);
+  expect_refused("case.json", "organ.support.offset_mm", "missing");
+  j = written;
+  j["organ"].erase("support");
+  set_case_json(j);
+  expect_refused("case.json", "organ.support", "missing");
+}
+
+TEST_F(OrganCaseFolder, AnOrganCaseWithoutItsCtOrOutsideItIsRefused) {
+  auto j = case_json();
+  j.erase("ct");
+  set_case_json(j);
+  expect_refused("case.json", "ct", "missing (an organ case needs a CT: the ultrasound images it)");
+  // a CT that holds only the organ's middle: its poles (z = +-55 mm) leave it
+  Volume ct =
+      Volume::make({20, 20, 20}, Eigen::Vector3d::Constant(4.0), Eigen::Vector3d::Constant(-38.0), VoxelType::kInt16);
+  write_nrrd(ct, (dir_ / "ct.nrrd").string());
+  j["ct"] = {{"file", "ct.nrrd"}};
+  set_case_json(j);
+  const std::string why = refusal();
+  EXPECT_NE(why.find("organ.ply: vertices["), std::string::npos) << why;
+  EXPECT_NE(why.find("outside the CT ct.nrrd"), std::string::npos) << why;
+}
+
+TEST_F(OrganCaseFolder, AnUnknownOrganKeyIsRefused) {
+  auto j = case_json();
+  j["organ"]["stiffness"] = 3;
+  set_case_json(j);
+  expect_refused("case.json", "organ.stiffness", "unknown key");
+}
+
+// an organ makes vessels optional only where there is one: a coronary case without its vessels
+// is refused as before, and a case may hold both (each read back)
+TEST_F(CaseFolder, ACoronaryCaseStillNeedsItsVessels) {
+  auto j = case_json();
+  j.erase("vessels");
+  set_case_json(j);
+  EXPECT_NE(refusal().find("case.json: vessels: '' must be a file name inside the case folder"), std::string::npos)
+      << refusal();
+  Case both = small_case();
+  both.organ = kidney_case().organ;
+  write_case(both, dir_.string());
+  const Case b = read_case(dir_.string());
+  EXPECT_EQ(b.vessels.branches.size(), small_case().vessels.branches.size());
+  ASSERT_TRUE(b.organ.has_value());
+  EXPECT_EQ(b.organ->fiducials_m.size(), 45u);
+  fs::remove(dir_ / "vessels.json");
+  EXPECT_NE(refusal().find("case.json: vessels: file 'vessels.json' not found"), std::string::npos) << refusal();
 }
 
 // the same surface from every format a user may bring

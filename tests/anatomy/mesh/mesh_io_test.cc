@@ -1,7 +1,8 @@
 // Mesh files (anatomy/mesh/mesh_io): a file over the mesh size limit is refused unread, naming its
 // size and the limit; text formats are parsed in place (no copy of the file into a stream); the
 // words a text mesh may hold (CRLF, tabs, '+', exponents, a/b/c corners, negative indices) read as
-// before, and a word that is not a number is refused.
+// before, and a word that is not a number is refused; millimetre text becomes metres with one
+// rounding, so a surface written in millimetres (write_ply_mm) reads back bit for bit.
 #include "anatomy/mesh/mesh_io.h"
 
 #include <gtest/gtest.h>
@@ -9,6 +10,8 @@
 #include <unistd.h>
 
 #include <array>
+#include <charconv>
+#include <random>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -135,6 +138,45 @@ TEST_F(MeshIo, TheWordsOfTextMeshesReadAsBefore) {
                          1.0);
             }),
             "t.ply: data: 'zero' is not a number");
+}
+
+// millimetres in text become metres with one rounding (the decimal exponent moved by 3): the
+// nearest double to the decimal metres, where parsing then multiplying by 1e-3 was an ulp off
+// for about one coordinate in seven; so write_ply_mm then read_mesh is the identity
+TEST_F(MeshIo, MillimetreTextReadsToTheNearestMetreAndAWrittenPlyBitForBit) {
+  const std::string ply_head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  auto metres = [](const char* text) {
+    double v = 0;
+    std::from_chars(text, text + std::char_traits<char>::length(text), v);
+    return v;
+  };
+  const TriangleMesh t = parse_mesh("t.ply", ".ply",
+                                    ply_head +
+                                        "30.1 -0.18753614417489281 +1.5E+01\n"
+                                        "0 0 0\n1e-3 0 0\n3 0 1 2\n");
+  EXPECT_EQ(t.vertices_m[0].x(), metres("30.1e-3"));
+  EXPECT_NE(t.vertices_m[0].x(), 30.1 * 1e-3) << "30.1 x 1e-3 rounds twice, an ulp off";
+  EXPECT_EQ(t.vertices_m[0].y(), metres("-0.18753614417489281e-3"));
+  EXPECT_EQ(t.vertices_m[0].z(), 0.015);
+  EXPECT_EQ(t.vertices_m[2].x(), 1e-6);
+  const TriangleMesh o = parse_mesh("t.obj", ".obj", "v 123.456 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\n");
+  EXPECT_EQ(o.vertices_m[0].x(), metres("123.456e-3"));
+  EXPECT_NE(o.vertices_m[0].x(), 123.456 * 1e-3);
+  // any doubles, written and read back
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-0.2, 0.2);
+  TriangleMesh m;
+  for (int i = 0; i < 3000; ++i) m.vertices_m.emplace_back(u(rng), u(rng), i % 7 == 0 ? 0.0 : u(rng) * 1e-6);
+  for (int i = 0; i + 2 < 3000; i += 3) m.triangles.push_back({i, i + 1, i + 2});
+  write_ply_mm(m, path("m.ply"), "pcisim test");
+  const TriangleMesh back = read_mesh(path("m.ply"));
+  EXPECT_EQ(back.vertices_m, m.vertices_m);
+  EXPECT_EQ(back.triangles, m.triangles);
+  std::ifstream in(path("m.ply"));
+  std::string header((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(header.find("\ncomment SPACE=LPS units=mm\n"), std::string::npos);
 }
 
 }  // namespace

@@ -81,5 +81,17 @@ TEST(TriangleMeshTest, UnwritablePathThrowsNamingIt) {
   }
 }
 
+// the winding number tells inside from outside exactly, even beside a sliver of a face (this
+// tetrahedron is 1 mm wide and 333 mm tall) and inside the bounding box's empty corner
+TEST(TriangleMeshTest, WindingNumberIsOneInsideZeroOutsideAndMinusOneWoundInsideOut) {
+  TriangleMesh m = tetrahedron();
+  const Eigen::Vector3d inside(1e-4, 1e-4, 0.2), outside_in_box(0.9e-3, 0.9e-3, 0.2), far(0.5, -0.2, 0.1);
+  EXPECT_NEAR(winding_number(m, inside), 1.0, 1e-9);
+  EXPECT_NEAR(winding_number(m, outside_in_box), 0.0, 1e-9);
+  EXPECT_NEAR(winding_number(m, far), 0.0, 1e-9);
+  for (auto& t : m.triangles) std::swap(t[1], t[2]);
+  EXPECT_NEAR(winding_number(m, inside), -1.0, 1e-9);
+}
+
 }  // namespace
 }  // namespace pcisim::anatomy

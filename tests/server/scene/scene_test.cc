@@ -289,7 +289,8 @@ TEST(Scene, SoftTissueMistakesNameTheirPath) {
             "test.json: effects.soft_tissue: does not go with effect \"guidewire\" (the soft-tissue scene's anatomy "
             "is an organ)");
   EXPECT_EQ(error_of(R"({"effects": {"soft_tissue": {}}})"),
-            "test.json: effects.soft_tissue: needs an organ (anatomy.organ: \"kidney\")");
+            "test.json: effects.soft_tissue: needs an organ (anatomy.organ: \"kidney\", or anatomy.case: a case "
+            "folder with an organ)");
   EXPECT_EQ(error_of("{" + organ + R"("effects": {"probe_contact": {}}})"),
             "test.json: effects.probe_contact: needs effect \"soft_tissue\" in the same scene");
   EXPECT_EQ(error_of("{" + organ + R"("effects": {"soft_tissue": {}, "ultrasound": {}}})"),
@@ -314,6 +315,19 @@ TEST(Scene, SoftTissueMistakesNameTheirPath) {
             "test.json: effects.probe_contact.start_position_mm: expected within 10000 mm of the origin");
   EXPECT_EQ(error_of(R"({"anatomy": {"organ": "liver"}, "effects": {}})"),
             "test.json: anatomy.organ: expected one of \"\", \"kidney\", got \"liver\"");
+}
+
+// the soft-tissue scene's organ from a case folder (checked to hold one when it is read:
+// tests/server/case_equivalence_test.cc); the procedural kidney and a case at once is refused
+TEST(Scene, TheSoftTissueSceneMayTakeItsOrganFromACase) {
+  const Scene s =
+      parse_scene(R"({"anatomy": {"case": "kidney-case"}, "effects": {"soft_tissue": {}}})", "/data/scenes/k.json");
+  EXPECT_EQ(s.case_dir, "/data/scenes/kidney-case");
+  EXPECT_EQ(s.organ, "");
+  ASSERT_TRUE(s.world.soft_tissue.has_value());
+  EXPECT_EQ(error_of(R"({"anatomy": {"organ": "kidney", "case": "k"}, "effects": {"soft_tissue": {}}})"),
+            "test.json: anatomy.organ: give either the procedural \"kidney\" or a case folder (which brings its own "
+            "organ), not both");
 }
 
 }  // namespace

@@ -31,7 +31,8 @@ physics::fem::FemMesh kidney_tetgen_mesh(const anatomy::KidneySpec& spec, double
     std::ofstream off(dir / "organ.off");
     off.precision(17);
     off << "OFF\n" << surface.vertices_m.size() << " " << surface.triangles.size() << " 0\n";
-    for (const Eigen::Vector3d& v : surface.vertices_m) off << v.x() * 1e3 << " " << v.y() * 1e3 << " " << v.z() * 1e3 << "\n";
+    for (const Eigen::Vector3d& v : surface.vertices_m)
+      off << v.x() * 1e3 << " " << v.y() * 1e3 << " " << v.z() * 1e3 << "\n";
     for (const auto& t : surface.triangles) off << "3 " << t[0] << " " << t[1] << " " << t[2] << "\n";
     if (!off) throw std::runtime_error("tetgen: cannot write " + (dir / "organ.off").string());
   }

@@ -43,6 +43,7 @@ class TissueScene {
 
   const TissueModel& model() const { return model_; }
   const TissueBody& body() const { return body_; }
+  TissueBody& body() { return body_; }  // its particles may be edited between steps (tests, tools)
   bool has_probe() const { return probe_.has_value(); }
   const ProbePose& probe_pose() const { return pose_; }
   const Eigen::Matrix3Xd& tet_vertices_m() const { return tet_now_m_; }  // skinned, after the last step

@@ -112,7 +112,7 @@ TEST(TissueHardCases, AnInvertedClusterTurnsBackAndTheOrganRecovers) {
   Vector3d c = Vector3d::Zero();
   for (int i : members) c += rest.col(i);
   c /= static_cast<double>(members.size());
-  Matrix3Xd& x = const_cast<TissueBody&>(t.body()).system().particles().position_m;
+  Matrix3Xd& x = t.body().system().particles().position_m;
   for (int i : members) x(0, i) = 2.0 * c.x() - x(0, i);
   const double start_m = max_distance(x, rest);
   double below_m = 0.0;

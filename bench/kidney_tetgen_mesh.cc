@@ -27,6 +27,13 @@ physics::fem::FemMesh kidney_tetgen_mesh(const anatomy::KidneySpec& spec, double
   // the surface as OFF in millimetres, TetGen run in a folder of its own
   const fs::path dir = fs::temp_directory_path() / fmt::format("pcisim-tetgen-{}", ::getpid());
   fs::create_directories(dir);
+  struct RemoveWhenDone {
+    fs::path dir;
+    ~RemoveWhenDone() {
+      std::error_code ignored;
+      fs::remove_all(dir, ignored);
+    }
+  } cleanup{dir};
   {
     std::ofstream off(dir / "organ.off");
     off.precision(17);
@@ -42,11 +49,9 @@ physics::fem::FemMesh kidney_tetgen_mesh(const anatomy::KidneySpec& spec, double
   if (std::system(cmd.c_str()) != 0) {
     std::ifstream log(dir / "tetgen.log");
     const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
-    fs::remove_all(dir);
     throw std::runtime_error("tetgen failed on the kidney's surface (installed? scripts/setup):\n" + text);
   }
   const anatomy::HeartMesh m = anatomy::read_tetgen_mesh((dir / "organ.1").string());
-  fs::remove_all(dir);
   return {m.vertices_m, m.tets};
 }
 

@@ -13,7 +13,7 @@ namespace pcisim::server {
 UltrasoundLoop::UltrasoundLoop(const Scene& scene, const anatomy::Case& anatomy,
                                const Eigen::Matrix3Xd& rest_tet_vertices_m, const std::vector<std::array<int, 4>>& tets,
                                SharedState& state, lcm::LCM* images)
-    : spec_(*scene.ultrasound), state_(state), images_(images) {
+    : spec_(*scene.ultrasound), state_(state), images_(images), channel_(protocol::kUltrasoundChannel) {
   if (!anatomy.ct) throw std::invalid_argument("ultrasound: the case has no CT to image");
   renderer_ = std::make_unique<ultrasound::BModeRenderer>(*anatomy.ct, spec_.settings);
   // the CT and the physics share the organ's frame (LPS, mm): rest = the model's tet vertices
@@ -80,8 +80,8 @@ void UltrasoundLoop::render_and_publish() {
   std::memcpy(m.data.data(), image_->pixels.data(), m.data.size());
   const int size = m.getEncodedSize();
   if (bytes_.size() < static_cast<size_t>(size)) bytes_.resize(static_cast<size_t>(size));
-  m.encode(bytes_.data(), 0, size);
-  images_->publish(protocol::kUltrasoundChannel, bytes_.data(), static_cast<unsigned>(size));
+  if (m.encode(bytes_.data(), 0, size) != size) return;  // cannot happen: sized above
+  images_->publish(channel_, bytes_.data(), static_cast<unsigned>(size));
 }
 
 void UltrasoundLoop::run() {

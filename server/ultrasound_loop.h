@@ -5,6 +5,7 @@
 // when the scene lists "ultrasound".
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "anatomy/case/case.h"
@@ -36,6 +37,7 @@ class UltrasoundLoop {
   ultrasound::TetSnapshot mesh_;
   const ultrasound::BModeImage* image_ = nullptr;
   pcisim_lcm::us_frame_t msg_{};
+  const std::string channel_;   // a std::string once: publish() takes one (17 chars: no small-string buffer)
   std::vector<uint8_t> bytes_;  // msg_ encoded: sized once (lcm-cpp's publish of a message allocates)
   int64_t seq_ = 0;
 };

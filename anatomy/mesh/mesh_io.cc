@@ -459,8 +459,9 @@ void write_ply_mm(const TriangleMesh& mesh, const std::string& path, const std::
 
 void round_to_float_mm(TriangleMesh& mesh) {
   // the value read back is float(mm) * 1e-3 computed in double, exactly as read_stl does. The
-  // float goes through a volatile: GCC 12.2 (Debian 12) vectorises x and y as a pair and drops
-  // their double -> float -> double round trip (seen at -O2 and -O3: a vertex came back unrounded)
+  // float goes through a volatile: without it one Release build returned a vertex unrounded. The
+  // cause is not pinned down (no -ffast-math here, and the conversions may not be folded away;
+  // a stale object is possible): the volatile makes the rounding explicit whatever it was
   for (auto& v : mesh.vertices_m)
     for (int k = 0; k < 3; ++k) {
       volatile float mm = static_cast<float>(v[k] * 1e3);

@@ -35,9 +35,9 @@ constexpr double kMinQuaternionNorm = 1e-6;
 // checks it). The tilted keyframe is that pose turned 15 deg about probe y (the axis across the
 // image plane): the beam leans toward +z, (0, cos 15, sin 15).
 const char* kBuiltin =
-    R"json(// built-in probe: from 5 mm above the kidney's anterior skin, press 8 mm in, image 80 mm deep
-// with 6 dB more gain, slide 15 mm toward the head while pressed, rock 15 deg and back, withdraw
-// with the scene's depth and gain again
+    R"json(// built-in probe: from 5 mm above the kidney's anterior skin, press 8 mm in, then image 80 mm
+// deep with 6 dB more gain (from 3.5 s until the probe is back up at 9 s), slide 15 mm toward the
+// head while pressed, rock 15 deg and back, withdraw
 {
   "name": "kidney-press",
   "keyframes": [

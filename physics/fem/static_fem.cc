@@ -17,6 +17,7 @@ namespace pcisim::physics::fem {
 // found it (libsuitesparse-dev; ~10x faster on the 3-D meshes here), Eigen's simplicial one
 // elsewhere (the GPU machine). Both fail (info() != Success) on a matrix that is not positive
 // definite, which is what the shift below looks for
+namespace {
 #ifdef PCISIM_HAVE_CHOLMOD
 class Factorisation : public Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> {
  public:
@@ -25,6 +26,7 @@ class Factorisation : public Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<dou
 #else
 using Factorisation = Eigen::SimplicialLLT<Eigen::SparseMatrix<double>>;
 #endif
+}  // namespace
 namespace {
 
 Eigen::Matrix3d shape_matrix(const Eigen::VectorXd& x, const std::array<int, 4>& t) {

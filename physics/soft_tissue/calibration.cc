@@ -107,8 +107,9 @@ FemReference solve_fem_reference(const CalibrationSetup& s, fem::FemMesh mesh) {
           ++glued;
         }
       }
-      if (glued == 0) break;
+      if (glued == 0) return total;
     }
+    total.converged = false;  // still gluing after the last round: the patch did not settle
     return total;
   };
   auto record = [&](const Eigen::VectorXd& x, const fem::FemSolveReport& r) {

@@ -4,7 +4,8 @@
 // with the truth. No porcine CT ships with pcisim, so the truth is an independent model: a
 // static neo-Hookean FEM of the same organ (physics/fem) under the same probe, support and
 // gravity, with known material parameters. Both sides: the support glued (sticking friction in
-// PBD; in the FEM a node that reaches the support is fixed where it touched), the probe
+// PBD; in the FEM a node that reaches the support is fixed where it touched, and stays: unlike
+// friction it would also hold in tension, which a press from above does not ask of it), the probe
 // frictionless.
 #include <Eigen/Core>
 #include <vector>

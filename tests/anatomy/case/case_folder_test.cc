@@ -417,7 +417,9 @@ TEST_F(OrganCaseFolder, TheBeadsOpenInSlicerAsAPointListAndTheOverviewShowsTheOr
   std::string header(200, '\0');
   ply.read(header.data(), 200);
   EXPECT_NE(header.find("\ncomment SPACE=LPS units=mm\n"), std::string::npos) << header;
-  if (case_overview_written()) EXPECT_GT(fs::file_size(dir_ / "overview.png"), 1000u);
+  if (case_overview_written()) {
+    EXPECT_GT(fs::file_size(dir_ / "overview.png"), 1000u);
+  }
 }
 
 // a segmented organ as users bring it: an STL (floats), read to float precision

@@ -39,7 +39,7 @@ int main(int argc, char** argv) {
       "stages, mean fiducial error per stage; a 1-D exhaustive search). Writes OUT.json and OUT.md."};
   std::vector<double> radii_mm{3.3, 4.0, 5.0};
   std::vector<double> compliances{1e-6, 3e-6, 1e-5, 3e-5, 1e-4, 3e-4, 1e-3};
-  double young_kpa = 5.0, poisson = 0.45, fem_mm = 4.0, check_mm = 6.0;
+  double young_kpa = 5.0, poisson = 0.45, fem_mm = 5.0, check_mm = 6.0;
   int seed = 1, warmup = 120, per_stage = 90;
   std::string mesher = "tetgen";
   std::string out = "docs/benchmarks/soft-tissue-calibration";

@@ -68,6 +68,18 @@ constexpr const char* kUsage =
     "  scanlines of SAMPLES samples each (default 256, 8..4096; issue #16's target is 256 x 512).\n"
     "  The deformation is analytic, not the physics (docs/ultrasound.md).\n";
 
+// an integer argument in [lo, hi]; false (and why, on stderr) otherwise
+bool read_count(const char* arg, const char* name, long lo, long hi, int* out) {
+  char* end = nullptr;
+  const long n = std::strtol(arg, &end, 10);
+  if (end == arg || *end != '\0' || n < lo || n > hi) {
+    std::fprintf(stderr, "pcisim-us-kidney: %s must be an integer in [%ld, %ld], got '%s'\n", name, lo, hi, arg);
+    return false;
+  }
+  *out = static_cast<int>(n);
+  return true;
+}
+
 int run(int argc, char** argv) {
   if (argc >= 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
     std::printf("%s", kUsage);
@@ -78,26 +90,10 @@ int run(int argc, char** argv) {
     return 2;
   }
   const std::string out = argv[1];
-  int frames = 200;
-  if (argc > 2) {
-    char* end = nullptr;
-    const long n = std::strtol(argv[2], &end, 10);
-    if (end == argv[2] || *end != '\0' || n < 1 || n > 100000) {
-      std::fprintf(stderr, "pcisim-us-kidney: FRAMES must be an integer in [1, 100000], got '%s'\n", argv[2]);
-      return 2;
-    }
-    frames = static_cast<int>(n);
-  }
-  int samples = 256;
-  if (argc > 3) {
-    char* end = nullptr;
-    const long n = std::strtol(argv[3], &end, 10);
-    if (end == argv[3] || *end != '\0' || n < 8 || n > 4096) {
-      std::fprintf(stderr, "pcisim-us-kidney: SAMPLES must be an integer in [8, 4096], got '%s'\n", argv[3]);
-      return 2;
-    }
-    samples = static_cast<int>(n);
-  }
+  int frames = 200, samples = 256;
+  if ((argc > 2 && !read_count(argv[2], "FRAMES", 1, 100000, &frames)) ||
+      (argc > 3 && !read_count(argv[3], "SAMPLES", 8, 4096, &samples)))
+    return 2;
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
   if (ec) {

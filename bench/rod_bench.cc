@@ -114,6 +114,44 @@ std::string json_of(const Run& r) {
       r.static_dv, r.static_error_pct, r.ms_p50, r.ms_p99, r.at_rest ? "true" : "false", r.rest_s);
 }
 
+// the rod in the scenes' world: the default scene's wire as guidewire.model rod (300 mm, 1 mm
+// segments), the lumen's SDF contact and friction, the trainee's script down the LAD (insert,
+// turn, advance 50 mm, pull back), every World::step timed
+struct WorldTiming {
+  int substeps;
+  double p50, p99, max_ms;
+  std::string tip;
+};
+
+WorldTiming time_world(int substeps) {
+  physics::WorldSpec spec;
+  spec.step_s = kDt;
+  spec.anatomy.seed = 1;
+  spec.guidewire = physics::GuidewireParams{};
+  spec.guidewire->model = physics::GuidewireModel::kRod;
+  spec.guidewire->segment_count = 300;
+  spec.guidewire->rod_substeps = substeps;
+  spec.vessel_contact = physics::VesselContactParams{};
+  spec.friction = physics::FrictionParams{};
+  physics::World world(spec);
+  std::vector<double> ms;
+  for (double t = 0.0; t <= 19.5; t += kDt) {
+    auto ramp = [t](double at, double over, double amount) {
+      return t <= at ? 0.0 : amount * std::min((t - at) / over, 1.0);
+    };
+    physics::InstrumentInput in;
+    in.insertion_m = 1e-3 * (ramp(0.5, 3.0, 8.0) + ramp(7.0, 10.0, 50.0) - ramp(17.5, 1.0, 5.0));
+    in.rotation_rad = ramp(4.0, 2.0, M_PI / 2.0);
+    const auto t0 = std::chrono::steady_clock::now();
+    world.step(in);
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
+  physics::WorldSnapshot snap;
+  world.write_snapshot(snap);
+  return {substeps, percentile(ms, 0.5), percentile(ms, 0.99), *std::max_element(ms.begin(), ms.end()),
+          world.vessel_tree().branches[snap.tip_branch].name};
+}
+
 constexpr const char* kUsage =
     "pcisim-bench rod [--quick] [--no-plot] [--out DIR]\n"
     "  the Cosserat rod's tip deflection against the exact elastica, swept over segments and\n"
@@ -121,10 +159,23 @@ constexpr const char* kUsage =
     "pcisim-bench rod --case cantilever_tip|cantilever_weight --load X --segments N [--substeps S]\n"
     "                 [--iterations I] [--solver gauss_seidel|direct] [--model rod|chain_mail]\n"
     "  one run, one JSON line on stdout. The chain-mail wire has no load response (no gravity, no\n"
-    "  tip force): --model chain_mail says so and exits 3\n";
+    "  tip force): --model chain_mail says so and exits 3\n"
+    "pcisim-bench rod --world SUBSTEPS\n"
+    "  the rod in the default scene's world on the trainee's script, every step timed; one JSON line\n";
 
 // one run from the command line; -1 when the arguments are the sweep's
 int single(const std::vector<std::string>& args) {
+  if (args.size() == 2 && args[0] == "--world") {
+    const int substeps = std::atoi(args[1].c_str());
+    if (substeps < 1 || substeps > 256) {
+      std::fprintf(stderr, "pcisim-bench rod: --world takes substeps in [1, 256], got '%s'\n", args[1].c_str());
+      return 2;
+    }
+    const WorldTiming t = time_world(substeps);
+    std::printf("{\"substeps\": %d, \"ms_p50\": %.4f, \"ms_p99\": %.4f, \"ms_max\": %.4f, \"tip_branch\": \"%s\"}\n",
+                t.substeps, t.p50, t.p99, t.max_ms, t.tip.c_str());
+    return 0;
+  }
   std::string kind, model = "rod", solver = "gauss_seidel";
   double value = NAN;
   int segments = 50, substeps = 10, iterations = 4;
@@ -226,43 +277,9 @@ int run(const std::vector<std::string>& args) {
                 s.substeps, s.iterations, timings.back().p50, timings.back().p99);
   }
 
-  // the rod in the scenes' world: the default scene's wire as guidewire.model rod (300 mm, 1 mm
-  // segments, 8 substeps), the lumen's SDF contact and friction, the trainee's script down the LAD
-  // (insert, turn, advance 50 mm, pull back), every step timed
-  struct WorldTiming {
-    int substeps;
-    double p50, p99, max_ms;
-    std::string tip;
-  };
   std::vector<WorldTiming> world_timings;
   for (int substeps : bo.quick ? std::vector<int>{8} : std::vector<int>{4, 8, 16}) {
-    physics::WorldSpec spec;
-    spec.step_s = kDt;
-    spec.anatomy.seed = 1;
-    spec.guidewire = physics::GuidewireParams{};
-    spec.guidewire->model = physics::GuidewireModel::kRod;
-    spec.guidewire->segment_count = 300;
-    spec.guidewire->rod_substeps = substeps;
-    spec.vessel_contact = physics::VesselContactParams{};
-    spec.friction = physics::FrictionParams{};
-    physics::World world(spec);
-    std::vector<double> ms;
-    for (double t = 0.0; t <= 19.5; t += kDt) {
-      auto ramp = [t](double at, double over, double amount) {
-        return t <= at ? 0.0 : amount * std::min((t - at) / over, 1.0);
-      };
-      physics::InstrumentInput in;
-      in.insertion_m = 1e-3 * (ramp(0.5, 3.0, 8.0) + ramp(7.0, 10.0, 50.0) - ramp(17.5, 1.0, 5.0));
-      in.rotation_rad = ramp(4.0, 2.0, M_PI / 2.0);
-      const auto t0 = std::chrono::steady_clock::now();
-      world.step(in);
-      ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-    }
-    physics::WorldSnapshot snap;
-    world.write_snapshot(snap);
-    world_timings.push_back({substeps, percentile(ms, 0.5), percentile(ms, 0.99),
-                             *std::max_element(ms.begin(), ms.end()),
-                             world.vessel_tree().branches[snap.tip_branch].name});
+    world_timings.push_back(time_world(substeps));
     std::printf("rod in the world, %2d substeps: %.2f / %.2f ms per step (max %.2f), tip in %s\n", substeps,
                 world_timings.back().p50, world_timings.back().p99, world_timings.back().max_ms,
                 world_timings.back().tip.c_str());

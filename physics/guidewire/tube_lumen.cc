@@ -7,6 +7,11 @@
 
 namespace pcisim::physics {
 
+namespace {
+constexpr int kLeafSegments = 4;
+constexpr int kMaxTreeDepth = 64;  // a median split halves a node: depth ~ log2(segments / 4)
+}  // namespace
+
 TubeLumen::TubeLumen(const anatomy::VesselTree& tree, double bin_m, double band_m) : bin_m_(bin_m) {
   for (const auto& branch : tree.branches) {
     const auto& pts = branch.points;
@@ -48,6 +53,42 @@ TubeLumen::TubeLumen(const anatomy::VesselTree& tree, double bin_m, double band_
   for (size_t b = 0; b < bins; ++b) bin_start_[b + 1] = bin_start_[b] + static_cast<int>(lists[b].size());
   bin_items_.reserve(bin_start_.back());
   for (const auto& l : lists) bin_items_.insert(bin_items_.end(), l.begin(), l.end());
+
+  order_.resize(segments_.size());
+  for (size_t i = 0; i < order_.size(); ++i) order_[i] = static_cast<int>(i);
+  tree_.reserve(2 * segments_.size() / kLeafSegments + 2);
+  build_tree(0, static_cast<int>(segments_.size()));
+}
+
+// one node over order_[first, first + count): split at the median of the segments' midpoints
+// along the box's longest side until a leaf holds kLeafSegments
+int TubeLumen::build_tree(int first, int count) {
+  const int at = static_cast<int>(tree_.size());
+  tree_.push_back({});
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (int i = first; i < first + count; ++i) {
+    const Segment& s = segments_[order_[i]];
+    const double r = std::max(s.ra, s.rb);
+    lo = lo.cwiseMin(s.a.cwiseMin(s.b) - Eigen::Vector3d::Constant(r));
+    hi = hi.cwiseMax(s.a.cwiseMax(s.b) + Eigen::Vector3d::Constant(r));
+  }
+  tree_[at].lo = lo;
+  tree_[at].hi = hi;
+  tree_[at].first = first;
+  tree_[at].count = count;
+  if (count <= kLeafSegments) return at;
+  int axis = 0;
+  (hi - lo).maxCoeff(&axis);
+  const int half = count / 2;
+  std::nth_element(order_.begin() + first, order_.begin() + first + half, order_.begin() + first + count,
+                   [&](int u, int v) {
+                     return segments_[u].a[axis] + segments_[u].b[axis] < segments_[v].a[axis] + segments_[v].b[axis];
+                   });
+  const int left = build_tree(first, half);
+  const int right = build_tree(first + half, count - half);
+  tree_[at].left = left;
+  tree_[at].right = right;
+  return at;
 }
 
 void TubeLumen::consider(const Segment& s, const Eigen::Vector3d& p, WallSample& best) const {
@@ -68,8 +109,33 @@ void TubeLumen::consider(const Segment& s, const Eigen::Vector3d& p, WallSample&
   }
 }
 
+// the nearest capsule below the tree's nodes, nearer child first; a node is skipped when the
+// query is farther from its box than the best distance so far (its capsules lie inside the box,
+// so none of them is nearer)
+void TubeLumen::nearest_by_tree(const Eigen::Vector3d& p, WallSample& best) const {
+  int stack[kMaxTreeDepth + 1];
+  int top = 0;
+  stack[top++] = 0;
+  auto box_distance = [&](int n) {
+    const Eigen::Vector3d out = (tree_[n].lo - p).cwiseMax(p - tree_[n].hi).cwiseMax(0.0);
+    return out.norm();
+  };
+  while (top > 0) {
+    const BoxNode& n = tree_[stack[--top]];
+    if (box_distance(static_cast<int>(&n - tree_.data())) >= best.distance_m) continue;
+    if (n.left < 0) {
+      for (int i = n.first; i < n.first + n.count; ++i) consider(segments_[order_[i]], p, best);
+      continue;
+    }
+    // the nearer child is popped first
+    const bool left_first = box_distance(n.left) <= box_distance(n.right);
+    stack[top++] = left_first ? n.right : n.left;
+    stack[top++] = left_first ? n.left : n.right;
+  }
+}
+
 WallSample TubeLumen::sample(const Eigen::Vector3d& p) const {
-  // union of capsules: the smallest signed distance wins
+  // union of capsules: the smallest signed distance among the query's bin's tubes
   WallSample best;
   best.distance_m = std::numeric_limits<double>::infinity();
   bool binned = false;
@@ -82,10 +148,8 @@ WallSample TubeLumen::sample(const Eigen::Vector3d& p) const {
       binned = bin_start_[b + 1] > bin_start_[b];
     }
   }
-  if (!binned) {
-    // far from every tube (rare): look at all of them
-    for (const auto& s : segments_) consider(s, p, best);
-  }
+  // far from every tube: the nearest of all of them
+  if (!binned && !tree_.empty() && p.allFinite()) nearest_by_tree(p, best);
   if (!std::isfinite(best.distance_m)) {
     best.distance_m = 1.0;  // empty tree or non-finite query: everything is wall
     best.normal = Eigen::Vector3d::UnitX();

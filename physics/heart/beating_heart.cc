@@ -11,8 +11,8 @@
 
 #include "anatomy/heart/heart_frame.h"
 #include "anatomy/heart/heart_mesh.h"
-#include "physics/heart/heart_motion.h"
-#include "physics/heart/synthetic_heart_motion.h"
+#include "anatomy/heart/heart_motion.h"
+#include "anatomy/heart/synthetic_heart_motion.h"
 #include "anatomy/heart/template_heart_surface.h"
 #include "physics/pbd/grid_clusters.h"
 
@@ -49,10 +49,10 @@ void validate(const HeartBeatParams& p) {
   if (p.cluster_size_m != 0.0) check(kHeartClusterSizeM, p.cluster_size_m, "cluster_size_m");
 }
 
-HeartMotion load_motion(const HeartBeatParams& p) {
-  if (p.motion_file.empty()) return make_synthetic_heart_motion();
+anatomy::HeartMotion load_motion(const HeartBeatParams& p) {
+  if (p.motion_file.empty()) return anatomy::make_synthetic_heart_motion();
   try {
-    return HeartMotion::read(p.motion_file);
+    return anatomy::HeartMotion::read(p.motion_file);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string("heart_beat.motion_file: ") + e.what());
   }
@@ -62,7 +62,7 @@ HeartMotion load_motion(const HeartBeatParams& p) {
 
 struct BeatingHeart::Impl {
   HeartBeatParams params;
-  HeartMotion motion;
+  anatomy::HeartMotion motion;
   pbd::PbdParams pbd;
   pbd::PbdSystem system;
   Eigen::Matrix3Xd rest_m;
@@ -256,7 +256,7 @@ void BeatingHeart::step(double dt_s) {
   m.phase += dt_s * m.params.rate_bpm / 60.0;
   m.phase -= std::floor(m.phase);
   if (m.phase >= 1.0) m.phase = 0.0;
-  const HeartMotion::FrameWeights w = m.motion.frame_weights(m.phase);
+  const anatomy::HeartMotion::FrameWeights w = m.motion.frame_weights(m.phase);
   const int nd = static_cast<int>(m.driven.size());
   for (int k = 0; k < nd; ++k) {
     const int i = m.driven[k];
@@ -299,7 +299,7 @@ std::span<const std::array<int, 4>> BeatingHeart::tets() const {
 std::span<const std::array<int, 3>> BeatingHeart::lv_endocardium() const {
   return impl_->lv_endocardium;
 }
-const HeartMotion& BeatingHeart::motion() const {
+const anatomy::HeartMotion& BeatingHeart::motion() const {
   return impl_->motion;
 }
 Eigen::Vector3d BeatingHeart::driven_position_m(int i, double phase) const {

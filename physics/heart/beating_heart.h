@@ -15,11 +15,10 @@
 
 namespace pcisim::anatomy {
 struct HeartMesh;
+class HeartMotion;
 }  // namespace pcisim::anatomy
 
 namespace pcisim::physics {
-
-class HeartMotion;
 
 // build-time material variation by rest position (hard-case tests, studies): a particle's mass is
 // scaled by mass_scale, a spring's compliance by the larger compliance_scale of its particles
@@ -66,7 +65,7 @@ class BeatingHeart {
   std::span<const std::array<int, 4>> tets() const;
   // LV endocardium triangles, normals into the cavity (for volumes and ejection fraction)
   std::span<const std::array<int, 3>> lv_endocardium() const;
-  const HeartMotion& motion() const;
+  const anatomy::HeartMotion& motion() const;
   // where driven particle i is at phase: rest + the sequence's displacement
   Eigen::Vector3d driven_position_m(int i, double phase) const;
 

@@ -10,8 +10,8 @@
 
 #include "physics/heart/beating_heart.h"
 #include "anatomy/heart/heart_frame.h"
-#include "physics/heart/heart_motion.h"
-#include "physics/heart/synthetic_heart_motion.h"
+#include "anatomy/heart/heart_motion.h"
+#include "anatomy/heart/synthetic_heart_motion.h"
 #include "tests/common/counting_new.h"
 #include "tests/physics/heart/heart_health.h"
 
@@ -187,14 +187,14 @@ TEST(HeartBeating, StepAllocatesNothing) {
 
 TEST(HeartBeating, ReadsAMotionFile) {
   const auto path = std::filesystem::temp_directory_path() / "pcisim_beating_heart_test.motion";
-  SyntheticMotionSpec spec;
+  anatomy::SyntheticMotionSpec spec;
   spec.twist_deg = 0;  // a different sequence from the built-in one
-  make_synthetic_heart_motion(spec).write(path.string());
+  anatomy::make_synthetic_heart_motion(spec).write(path.string());
   HeartBeatParams p;
   p.motion_file = path.string();
   BeatingHeart from_file(p);
   std::filesystem::remove(path);
-  const HeartMotion want = make_synthetic_heart_motion(spec);
+  const anatomy::HeartMotion want = anatomy::make_synthetic_heart_motion(spec);
   for (int k = 0; k < 10; ++k) from_file.step(1.0 / 30);
   double worst = 0;
   for (int i : from_file.driven()) {

@@ -1,4 +1,4 @@
-#include "physics/heart/synthetic_heart_motion.h"
+#include "anatomy/heart/synthetic_heart_motion.h"
 
 #include <Eigen/Geometry>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include "anatomy/heart/heart_mesh.h"
 #include "anatomy/heart/template_heart_surface.h"
 
-namespace pcisim::physics {
+namespace pcisim::anatomy {
 namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kApexZMm = -50.0;  // heart frame; the apex holds still (base descends toward it)
@@ -66,4 +66,4 @@ HeartMotion make_synthetic_heart_motion(const SyntheticMotionSpec& spec) {
   return HeartMotion(grid, spec.frames, spec.cycle_s, std::move(data));
 }
 
-}  // namespace pcisim::physics
+}  // namespace pcisim::anatomy

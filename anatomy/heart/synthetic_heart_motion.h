@@ -1,9 +1,9 @@
 #pragma once
 // The built-in motion sequence: a kinematic left-ventricle-centred contraction of the template
 // heart (docs/heart.md). End-diastole at phase 0; systole, then rapid filling, then diastasis.
-#include "physics/heart/heart_motion.h"
+#include "anatomy/heart/heart_motion.h"
 
-namespace pcisim::physics {
+namespace pcisim::anatomy {
 
 struct SyntheticMotionSpec {
   int frames = 20;
@@ -27,4 +27,4 @@ Eigen::Vector3d synthetic_displacement_m(const Eigen::Vector3d& rest_m, double s
 // sampled on a grid covering the template heart
 HeartMotion make_synthetic_heart_motion(const SyntheticMotionSpec& spec = {});
 
-}  // namespace pcisim::physics
+}  // namespace pcisim::anatomy

@@ -12,11 +12,11 @@
 
 #include "anatomy/heart/heart_frame.h"
 #include "anatomy/heart/heart_mesh.h"
-#include "physics/heart/heart_motion.h"
-#include "physics/heart/synthetic_heart_motion.h"
+#include "anatomy/heart/heart_motion.h"
+#include "anatomy/heart/synthetic_heart_motion.h"
 #include "anatomy/heart/template_heart_surface.h"
 
-namespace pcisim::physics {
+namespace pcisim::anatomy {
 namespace {
 
 using Eigen::Vector3d;
@@ -248,4 +248,4 @@ TEST(HeartSyntheticMotion, EpicardialDisplacementIsAFewMillimetres) {
 }
 
 }  // namespace
-}  // namespace pcisim::physics
+}  // namespace pcisim::anatomy

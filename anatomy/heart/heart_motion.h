@@ -8,7 +8,7 @@
 #include <string_view>
 #include <vector>
 
-namespace pcisim::physics {
+namespace pcisim::anatomy {
 
 struct MotionGrid {
   Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();   // node (0, 0, 0), patient LPS
@@ -53,4 +53,4 @@ class HeartMotion {
   std::vector<float> data_m_;
 };
 
-}  // namespace pcisim::physics
+}  // namespace pcisim::anatomy

@@ -1,4 +1,4 @@
-#include "physics/heart/heart_motion.h"
+#include "anatomy/heart/heart_motion.h"
 
 #include <algorithm>
 #include <bit>
@@ -10,7 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace pcisim::physics {
+namespace pcisim::anatomy {
 namespace {
 
 constexpr std::string_view kMagic = "pcisim-heart-motion 1";
@@ -195,4 +195,4 @@ void HeartMotion::write(const std::string& path) const {
   if (!out) fail(path, "cannot write");
 }
 
-}  // namespace pcisim::physics
+}  // namespace pcisim::anatomy

@@ -44,14 +44,19 @@ Eigen::Vector3d synthetic_displacement_m(const Eigen::Vector3d& rest_m, double s
   return to_patient * (x_new - x) * 1e-3;
 }
 
-HeartMotion make_synthetic_heart_motion(const SyntheticMotionSpec& spec) {
+MotionGrid template_motion_grid(double h) {
   const Eigen::Matrix3Xd& v = anatomy::template_heart_mesh().vertices_m;
   MotionGrid grid;
-  const double h = spec.grid_spacing_m;
   const Eigen::Vector3d lo = v.rowwise().minCoeff().array() - h, hi = v.rowwise().maxCoeff().array() + h;
   grid.origin_m = lo;
   grid.spacing_m = Eigen::Vector3d::Constant(h);
   for (int a = 0; a < 3; ++a) grid.dims[a] = static_cast<int>(std::ceil((hi[a] - lo[a]) / h)) + 1;
+  return grid;
+}
+
+HeartMotion make_synthetic_heart_motion(const SyntheticMotionSpec& spec) {
+  const MotionGrid grid = template_motion_grid(spec.grid_spacing_m);
+  const double h = spec.grid_spacing_m;
   std::vector<float> data;
   data.reserve(static_cast<size_t>(spec.frames) * grid.node_count() * 3);
   for (int f = 0; f < spec.frames; ++f) {

@@ -24,7 +24,11 @@ double contraction(double phase, const SyntheticMotionSpec& spec);
 // the displacement (m) of the tissue resting at rest_m (patient LPS) at contraction s in [0, 1]
 Eigen::Vector3d synthetic_displacement_m(const Eigen::Vector3d& rest_m, double s, const SyntheticMotionSpec& spec);
 
-// sampled on a grid covering the template heart
+// a grid of spacing_m covering the template heart's mesh with one spacing to spare on each side
+// (the grid the built-in sequence, and motion recovered from images, are sampled on)
+MotionGrid template_motion_grid(double spacing_m);
+
+// sampled on template_motion_grid(spec.grid_spacing_m)
 HeartMotion make_synthetic_heart_motion(const SyntheticMotionSpec& spec = {});
 
 }  // namespace pcisim::anatomy

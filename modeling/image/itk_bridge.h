@@ -28,4 +28,19 @@ struct LevelSetParams {
 int threshold_level_set(const Grid& grid, const float* feature, const uint8_t* initial, const LevelSetParams& p,
                         uint8_t* out);
 
+// diffeomorphic demons (Vercauteren et al. 2007; ITK's DiffeomorphicDemonsRegistrationFilter,
+// symmetric gradient) in a multi-resolution pyramid (MultiResolutionPDEDeformableRegistration),
+// coarsest level first. Fixed and moving share `grid`. The displacement u, 3 floats per voxel
+// (x fastest; mm along the physical axes), satisfies fixed(x) ~ moving(x + u(x)). Returns the
+// demons metric (mean squared intensity difference) of the finest level's last iteration.
+struct DemonsParams {
+  int levels = 3;
+  int iterations[8] = {};  // per level, coarsest first
+  double field_sigma_vox;  // Gaussian smoothing of the displacement field, voxels of the level
+  double max_step_vox;     // the largest update per iteration, voxels (0: no limit)
+  int threads;             // 0: ITK's default
+};
+double diffeomorphic_demons(const Grid& grid, const float* fixed, const float* moving, const DemonsParams& p,
+                            float* field_mm);
+
 }  // namespace pcisim::modeling::itk_bridge

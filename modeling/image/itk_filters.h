@@ -1,6 +1,8 @@
 #pragma once
 // The ITK filters the pipeline uses, behind plain types: including this header costs nothing of
 // ITK (only itk_filters.cc includes ITK's headers, which take seconds per translation unit).
+#include <string>
+
 #include "modeling/image/image3.h"
 
 namespace pcisim::modeling {
@@ -25,5 +27,27 @@ struct LevelSetOptions {
 };
 Mask threshold_level_set(const FloatImage& hu, const Mask& initial, const LevelSetOptions& options,
                          int* iterations_done = nullptr);
+
+// diffeomorphic demons in a multi-resolution pyramid (itk_bridge.h): the displacement u with
+// fixed(x) ~ moving(x + u(x)), one FloatImage per physical axis, mm
+struct DemonsOptions {
+  int levels = 3;                // pyramid levels (each halves the grid), 1-8
+  int iterations = 40;           // per level
+  double field_sigma_vox = 1.5;  // smoothing of the displacement field, voxels of each level
+  double max_step_vox = 2.0;     // largest update per iteration, voxels
+  int threads = 0;               // 0: ITK's default
+};
+// "" or what is wrong, naming the field
+std::string validate(const DemonsOptions& o);
+
+struct DisplacementImage {
+  FloatImage x, y, z;
+  // trilinear; a point beyond the grid takes the nearest boundary value
+  Eigen::Vector3d at_mm(const Eigen::Vector3d& p_mm) const;
+};
+// throws std::invalid_argument when the options are bad or the grids differ; metric: the demons'
+// mean squared intensity difference at the end
+DisplacementImage diffeomorphic_demons(const FloatImage& fixed, const FloatImage& moving, const DemonsOptions& o,
+                                       double* metric = nullptr);
 
 }  // namespace pcisim::modeling

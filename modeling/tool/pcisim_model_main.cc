@@ -3,17 +3,21 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include "anatomy/case/case_folder.h"
+#include "anatomy/heart/synthetic_heart_motion.h"
 #include "anatomy/dicom/dicom_series.h"
 #include "anatomy/phantom/phantom_cta.h"
 #include "anatomy/volume/volume_io.h"
 #include "modeling/cta/cta_pipeline.h"
 #include "modeling/cta/modeling_error.h"
+#include "modeling/motion/demons_motion.h"
 #include "modeling/picture/heart_fit_picture.h"
 #include "modeling/picture/model_overview.h"
 #include "modeling/report/model_report.h"
@@ -67,9 +71,100 @@ int make_phantom(uint32_t seed, const std::string& out, const std::string& voxel
   return 0;
 }
 
+// pcisim-model motion: heart motion from a 4-D image sequence (issue #14, heart paper section 4)
+int motion_main(int argc, char** argv) {
+  CLI::App app{
+      "pcisim-model motion: the heart's motion from a 4-D image sequence covering one cardiac cycle (cine MRI or\n"
+      "4-D CT). Frame 0 (end-diastole) is registered to every other frame by diffeomorphic demons in a\n"
+      "multi-resolution pyramid; each displacement field is sampled on a grid over the template heart and\n"
+      "written as the motion file the beating heart reads (scene key heart_beat.motion_file; format in\n"
+      "docs/heart.md). Frame f of F is at phase f / F. docs/heart.md, 'Motion from images'.\n\n"
+      "  pcisim-model motion --sequence cine/ --out patient.motion\n"
+      "  pcisim-model motion --frames f00.nrrd f01.nrrd ... --heart cases/patient1 --out "
+      "cases/patient1/heart.motion\n"};
+  app.name("pcisim-model motion");
+  std::vector<std::string> frame_paths;
+  std::string sequence_dir, out_path, case_dir;
+  double cycle_s = 60.0 / 72.0, grid_mm = 5.0;
+  modeling::DemonsOptions o;
+  auto* in = app.add_option_group("input", "the frames, in phase order");
+  in->add_option("--frames", frame_paths, "volume files (.nrrd, .nhdr, .mha, .mhd), one per phase, frame 0 first");
+  in->add_option("--sequence", sequence_dir, "a folder of volume files, taken in name order");
+  in->require_option(1);
+  app.add_option("--out", out_path, "the motion file to write; a report (.json) is written beside it")->required();
+  app.add_option("--heart", case_dir,
+                 "a case folder whose heart the images show (its heart pose maps the template onto the images); "
+                 "without it the images are in the template's frame");
+  app.add_option("--cycle-s", cycle_s, "the recorded cycle's length (s)")->check(CLI::Range(0.2, 3.0));
+  app.add_option("--grid-mm", grid_mm, "the motion grid's spacing over the template heart (mm)")
+      ->check(CLI::Range(1.0, 20.0));
+  auto* knobs = app.add_option_group("accuracy knobs", "what accuracy costs in time: docs/benchmarks/motion.md");
+  knobs->add_option("--levels", o.levels, "pyramid levels, each halving the grid")->check(CLI::Range(1, 8));
+  knobs->add_option("--iterations", o.iterations, "demons iterations per level")->check(CLI::Range(1, 10000));
+  knobs->add_option("--field-sigma", o.field_sigma_vox, "Gaussian smoothing of the displacement field (voxels)")
+      ->check(CLI::Range(0.0, 20.0));
+  knobs->add_option("--max-step", o.max_step_vox, "largest update per iteration (voxels)")
+      ->check(CLI::Range(0.0, 20.0));
+  knobs->add_option("--threads", o.threads, "worker threads; 0 = all cores")->check(CLI::Range(0, 256));
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (!sequence_dir.empty()) {
+      if (!fs::is_directory(sequence_dir))
+        throw std::runtime_error("--sequence: '" + sequence_dir + "' is not a folder");
+      for (const auto& e : fs::directory_iterator(sequence_dir)) {
+        const std::string ext = e.path().extension().string();
+        if (e.is_regular_file() && (ext == ".nrrd" || ext == ".nhdr" || ext == ".mha" || ext == ".mhd"))
+          frame_paths.push_back(e.path().string());
+      }
+      std::sort(frame_paths.begin(), frame_paths.end());
+      if (frame_paths.size() < 2)
+        throw std::runtime_error(fmt::format("--sequence: '{}' holds {} volume files; a cycle needs at least 2",
+                                             sequence_dir, frame_paths.size()));
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    std::vector<anatomy::Volume> frames;
+    for (const std::string& path : frame_paths) frames.push_back(anatomy::read_volume(path, true));
+    anatomy::HeartPose pose;
+    if (!case_dir.empty()) pose = anatomy::read_case(case_dir).heart;
+    const anatomy::MotionGrid grid = anatomy::template_motion_grid(grid_mm * 1e-3);
+    std::printf("%zu frames of %lld x %lld x %lld voxels; demons %d levels x %d iterations, field sigma %.2f voxels\n",
+                frames.size(), (long long)frames[0].dims[0], (long long)frames[0].dims[1], (long long)frames[0].dims[2],
+                o.levels, o.iterations, o.field_sigma_vox);
+    std::fflush(stdout);
+    std::vector<modeling::MotionFrameReport> reports;
+    const anatomy::HeartMotion motion = modeling::recover_heart_motion(
+        frames, cycle_s, grid, pose, o, &reports, [&](const modeling::MotionFrameReport& r) {
+          std::printf("  frame %d/%zu: %.1f s, RMS difference to frame 0 %.4g -> %.4g\n", r.frame, frames.size() - 1,
+                      r.seconds, r.rms_before, r.rms_after);
+          std::fflush(stdout);
+        });
+    motion.write(out_path);
+    std::ofstream report(out_path + ".json");
+    report << "{\n  \"frames\": " << frames.size() << ",\n  \"cycle_s\": " << cycle_s << ",\n  \"levels\": " << o.levels
+           << ",\n  \"iterations\": " << o.iterations << ",\n  \"field_sigma_vox\": " << o.field_sigma_vox
+           << ",\n  \"per_frame\": [";
+    for (size_t i = 0; i < reports.size(); ++i)
+      report << (i ? ",\n" : "\n")
+             << fmt::format(
+                    "    {{\"frame\": {}, \"seconds\": {:.3f}, \"metric\": {:.6g}, "
+                    "\"rms_before\": {:.6g}, \"rms_after\": {:.6g}}}",
+                    reports[i].frame, reports[i].seconds, reports[i].metric, reports[i].rms_before,
+                    reports[i].rms_after);
+    report << "\n  ]\n}\n";
+    if (!report) throw std::runtime_error("cannot write " + out_path + ".json");
+    std::printf("done in %.1f s: %s (%d x %d x %d grid, %.1f mm), %s.json\n", seconds_since(t0), out_path.c_str(),
+                grid.dims.x(), grid.dims.y(), grid.dims.z(), grid_mm, out_path.c_str());
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pcisim-model motion: %s\n", e.what());
+    return 1;
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc > 1 && std::string(argv[1]) == "motion") return motion_main(argc - 1, argv + 1);
   CLI::App app{
       "pcisim-model: turns a patient's coronary CT angiogram (CTA) into a pcisim case folder: the contrast-filled\n"
       "lumen is segmented from one seed in the ascending aorta, clipped to the aorta and the coronary trees,\n"
@@ -77,7 +172,8 @@ int main(int argc, char** argv) {
       "and the branches named (LM, LAD, LCx, RCA, diagonals, marginals); the template heart is placed under the\n"
       "tree and fitted to the CT's heart (heart.node, heart-fit.png). docs/modeling.md describes each stage.\n\n"
       "  pcisim-model --ct ct.nrrd --seed 12.5,-140,-95 --out cases/patient1\n"
-      "  pcisim-model --make-phantom-cta --seed 3 --out cta3   (a synthetic CTA with its truth)\n"};
+      "  pcisim-model --make-phantom-cta --seed 3 --out cta3   (a synthetic CTA with its truth)\n"
+      "  pcisim-model motion --help   (the heart's motion from a 4-D image sequence)\n"};
   std::string ct_path, out_dir, voxel, dims;
   std::vector<std::string> seeds;
   bool make_phantom_cta = false, no_coronaries = false, flip_z = false, origin_frame = false;

@@ -1,0 +1,98 @@
+#include "modeling/motion/demons_motion.h"
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace pcisim::modeling {
+namespace {
+
+std::string dims_text(const ImageGrid& g) {
+  return std::to_string(g.dims[0]) + " x " + std::to_string(g.dims[1]) + " x " + std::to_string(g.dims[2]);
+}
+
+FloatImage float_image(const anatomy::Volume& v) {
+  FloatImage f{ImageGrid::of(v), std::vector<float>(static_cast<size_t>(v.voxel_count()))};
+  for (int64_t n = 0; n < v.voxel_count(); ++n)
+    f.v[n] = v.type == anatomy::VoxelType::kFloat32 ? v.hu_f32[n] : static_cast<float>(v.hu_i16[n]);
+  return f;
+}
+
+}  // namespace
+
+std::vector<FloatImage> sequence_images(const std::vector<anatomy::Volume>& frames) {
+  if (frames.size() < 2) throw std::invalid_argument("motion: a sequence needs at least 2 frames, got " +
+                                                     std::to_string(frames.size()));
+  std::vector<FloatImage> out;
+  out.reserve(frames.size());
+  for (size_t f = 0; f < frames.size(); ++f) {
+    if (const std::string bad = anatomy::validate(frames[f]); !bad.empty())
+      throw std::invalid_argument("motion: frame " + std::to_string(f) + ": " + bad);
+    out.push_back(float_image(frames[f]));
+    const ImageGrid& g = out.front().grid;
+    const ImageGrid& h = out.back().grid;
+    const std::string frame = "motion: frame " + std::to_string(f) + ": ";
+    if (h.dims != g.dims) throw std::invalid_argument(frame + "dims " + dims_text(h) + " differ from frame 0's " + dims_text(g));
+    if (!h.spacing_mm.isApprox(g.spacing_mm, 1e-6))
+      throw std::invalid_argument(frame + "spacing differs from frame 0's");
+    if ((h.origin_mm - g.origin_mm).norm() > 1e-6 * g.spacing_mm.minCoeff())
+      throw std::invalid_argument(frame + "origin differs from frame 0's");
+    if (!h.direction.isApprox(g.direction, 1e-6)) throw std::invalid_argument(frame + "direction differs from frame 0's");
+  }
+  return out;
+}
+
+double residual_rms(const FloatImage& fixed, const FloatImage& moving, const DisplacementImage* u) {
+  const ImageGrid& g = fixed.grid;
+  double sum = 0.0;
+  for (int64_t k = 0; k < g.dims[2]; ++k)
+    for (int64_t j = 0; j < g.dims[1]; ++j)
+      for (int64_t i = 0; i < g.dims[0]; ++i) {
+        const int64_t n = g.index(i, j, k);
+        float m = moving.v[n];
+        if (u) {
+          Eigen::Vector3d c = moving.grid.continuous_index(g.physical_mm(Eigen::Vector3d(i, j, k)) +
+                                                           Eigen::Vector3d(u->x.v[n], u->y.v[n], u->z.v[n]));
+          for (int a = 0; a < 3; ++a) c[a] = std::clamp(c[a], 0.0, static_cast<double>(moving.grid.dims[a] - 1));
+          m = moving.at(c, 0.0f);
+        }
+        const double d = double(fixed.v[n]) - m;
+        sum += d * d;
+      }
+  return std::sqrt(sum / static_cast<double>(g.size()));
+}
+
+anatomy::HeartMotion recover_heart_motion(const std::vector<anatomy::Volume>& frames, double cycle_s,
+                                          const anatomy::MotionGrid& grid, const anatomy::HeartPose& pose,
+                                          const DemonsOptions& options, std::vector<MotionFrameReport>* reports,
+                                          const std::function<void(const MotionFrameReport&)>& progress) {
+  if (const std::string bad = validate(options); !bad.empty()) throw std::invalid_argument("motion: demons " + bad);
+  const std::vector<FloatImage> images = sequence_images(frames);
+  const long nodes = grid.node_count();
+  std::vector<float> data(images.size() * static_cast<size_t>(nodes) * 3, 0.0f);  // frame 0: no motion
+  const Eigen::Matrix3d back = pose.rotation.transpose() / pose.scale;           // case -> template, per length
+  for (size_t f = 1; f < images.size(); ++f) {
+    MotionFrameReport r;
+    r.frame = static_cast<int>(f);
+    const auto t0 = std::chrono::steady_clock::now();
+    const DisplacementImage u = diffeomorphic_demons(images[0], images[f], options, &r.metric);
+    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    r.rms_before = residual_rms(images[0], images[f], nullptr);
+    r.rms_after = residual_rms(images[0], images[f], &u);
+    // each grid node: where its rest point lies in the images, the field there, back to the template
+    float* out = data.data() + f * static_cast<size_t>(nodes) * 3;
+    for (int k = 0; k < grid.dims.z(); ++k)
+      for (int j = 0; j < grid.dims.y(); ++j)
+        for (int i = 0; i < grid.dims.x(); ++i) {
+          const Eigen::Vector3d rest_m = grid.origin_m + grid.spacing_m.cwiseProduct(Eigen::Vector3d(i, j, k));
+          const Eigen::Vector3d d_m = back * (1e-3 * u.at_mm(1e3 * pose.to_case(rest_m)));
+          for (int a = 0; a < 3; ++a) *out++ = static_cast<float>(d_m[a]);
+        }
+    if (reports) reports->push_back(r);
+    if (progress) progress(r);
+  }
+  return anatomy::HeartMotion(grid, static_cast<int>(images.size()), cycle_s, std::move(data));
+}
+
+}  // namespace pcisim::modeling

@@ -16,4 +16,12 @@ Eigen::Matrix3d heart_to_patient() {
   return m;
 }
 
+std::vector<int> ventricular_points(const Eigen::Matrix3Xd& rest_m) {
+  const Eigen::Matrix3d to_heart = heart_to_patient().transpose();
+  std::vector<int> out;
+  for (Eigen::Index i = 0; i < rest_m.cols(); ++i)
+    if ((to_heart * rest_m.col(i)).z() < kAvPlaneZM) out.push_back(static_cast<int>(i));
+  return out;
+}
+
 }  // namespace pcisim::anatomy

@@ -1,9 +1,15 @@
 #include "modeling/motion/demons_motion.h"
 
+#include <fmt/format.h>
+
+#include <cctype>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
+
+#include "anatomy/heart/heart_mesh.h"
 
 namespace pcisim::modeling {
 namespace {
@@ -22,8 +28,8 @@ FloatImage float_image(const anatomy::Volume& v) {
 }  // namespace
 
 std::vector<FloatImage> sequence_images(const std::vector<anatomy::Volume>& frames) {
-  if (frames.size() < 2) throw std::invalid_argument("motion: a sequence needs at least 2 frames, got " +
-                                                     std::to_string(frames.size()));
+  if (frames.size() < 2)
+    throw std::invalid_argument("motion: a sequence needs at least 2 frames, got " + std::to_string(frames.size()));
   std::vector<FloatImage> out;
   out.reserve(frames.size());
   for (size_t f = 0; f < frames.size(); ++f) {
@@ -33,12 +39,14 @@ std::vector<FloatImage> sequence_images(const std::vector<anatomy::Volume>& fram
     const ImageGrid& g = out.front().grid;
     const ImageGrid& h = out.back().grid;
     const std::string frame = "motion: frame " + std::to_string(f) + ": ";
-    if (h.dims != g.dims) throw std::invalid_argument(frame + "dims " + dims_text(h) + " differ from frame 0's " + dims_text(g));
+    if (h.dims != g.dims)
+      throw std::invalid_argument(frame + "dims " + dims_text(h) + " differ from frame 0's " + dims_text(g));
     if (!h.spacing_mm.isApprox(g.spacing_mm, 1e-6))
       throw std::invalid_argument(frame + "spacing differs from frame 0's");
     if ((h.origin_mm - g.origin_mm).norm() > 1e-6 * g.spacing_mm.minCoeff())
       throw std::invalid_argument(frame + "origin differs from frame 0's");
-    if (!h.direction.isApprox(g.direction, 1e-6)) throw std::invalid_argument(frame + "direction differs from frame 0's");
+    if (!h.direction.isApprox(g.direction, 1e-6))
+      throw std::invalid_argument(frame + "direction differs from frame 0's");
   }
   return out;
 }
@@ -63,15 +71,53 @@ double residual_rms(const FloatImage& fixed, const FloatImage& moving, const Dis
   return std::sqrt(sum / static_cast<double>(g.size()));
 }
 
+double heart_overlap(const ImageGrid& g, const anatomy::HeartPose& pose) {
+  const Eigen::Matrix3Xd& v = anatomy::template_heart_mesh().vertices_m;
+  long inside = 0;
+  for (Eigen::Index c = 0; c < v.cols(); ++c) {
+    const Eigen::Vector3d ijk = g.continuous_index(1e3 * pose.to_case(v.col(c)));
+    bool in = true;
+    for (int a = 0; a < 3; ++a) in = in && ijk[a] >= -0.5 && ijk[a] <= g.dims[a] - 0.5;
+    inside += in;
+  }
+  return v.cols() ? double(inside) / double(v.cols()) : 0.0;
+}
+
+void check_frame_numbers(const std::vector<std::string>& paths) {
+  std::vector<long> numbers;
+  for (const std::string& p : paths) {
+    const std::string stem = std::filesystem::path(p).stem().string();
+    size_t k = stem.size();
+    while (k > 0 && std::isdigit(static_cast<unsigned char>(stem[k - 1]))) --k;
+    if (k == stem.size() || stem.size() - k > 9) return;  // a name without a number: order by name only
+    numbers.push_back(std::stol(stem.substr(k)));
+  }
+  for (size_t i = 1; i < numbers.size(); ++i) {
+    if (numbers[i] != numbers[i - 1] + 1) {
+      throw std::invalid_argument(fmt::format(
+          "motion: frame number {} is missing ({} is followed by {}): a lost phase would put every later frame at "
+          "the wrong phase; supply it or renumber the sequence",
+          numbers[i - 1] + 1, std::filesystem::path(paths[i - 1]).filename().string(),
+          std::filesystem::path(paths[i]).filename().string()));
+    }
+  }
+}
+
 anatomy::HeartMotion recover_heart_motion(const std::vector<anatomy::Volume>& frames, double cycle_s,
                                           const anatomy::MotionGrid& grid, const anatomy::HeartPose& pose,
                                           const DemonsOptions& options, std::vector<MotionFrameReport>* reports,
                                           const std::function<void(const MotionFrameReport&)>& progress) {
   if (const std::string bad = validate(options); !bad.empty()) throw std::invalid_argument("motion: demons " + bad);
   const std::vector<FloatImage> images = sequence_images(frames);
+  if (const double share = heart_overlap(images[0].grid, pose); share < kMinHeartOverlap) {
+    throw std::invalid_argument(fmt::format(
+        "motion: only {:.0f} % of the heart lies inside the images (at least {:.0f} % needed): the sequence does not "
+        "show this case's heart (check --heart, or the images' origin and direction)",
+        100.0 * share, 100.0 * kMinHeartOverlap));
+  }
   const long nodes = grid.node_count();
   std::vector<float> data(images.size() * static_cast<size_t>(nodes) * 3, 0.0f);  // frame 0: no motion
-  const Eigen::Matrix3d back = pose.rotation.transpose() / pose.scale;           // case -> template, per length
+  const Eigen::Matrix3d back = pose.rotation.transpose() / pose.scale;            // case -> template, per length
   for (size_t f = 1; f < images.size(); ++f) {
     MotionFrameReport r;
     r.frame = static_cast<int>(f);

@@ -31,13 +31,25 @@ std::vector<FloatImage> sequence_images(const std::vector<anatomy::Volume>& fram
 // RMS of fixed(x) - moving(x + u(x)) over fixed's voxels (moving trilinear, clamped at its edge)
 double residual_rms(const FloatImage& fixed, const FloatImage& moving, const DisplacementImage* u);
 
+// the share (0-1) of the template heart's mesh vertices, placed by the pose, that lie inside the
+// image grid: the images must show the heart whose motion they give
+double heart_overlap(const ImageGrid& images, const anatomy::HeartPose& pose);
+constexpr double kMinHeartOverlap = 0.9;
+
+// the frame numbers a sequence folder's names end with, in order; throws std::invalid_argument
+// naming the first missing number when every name ends with one and they are not consecutive
+// (a phase would be lost and the later frames' phases would be wrong). Names without numbers pass.
+void check_frame_numbers(const std::vector<std::string>& sorted_paths);
+
 // registers frame 0 to each frame and samples the fields on `grid` (template frame, metres): a
 // grid node r is looked up at pose.to_case(r) in the images (case frame, mm) and the displacement
-// brought back to the template frame. Frame 0's field is zero. progress (if given) is called after
+// brought back to the template frame. Refused (std::invalid_argument, with the figure) when less
+// than kMinHeartOverlap of the heart lies in the images. Frame 0's field is zero. progress (if given) is called after
 // each frame; reports (if given) receives one report per frame from 1 on.
 anatomy::HeartMotion recover_heart_motion(const std::vector<anatomy::Volume>& frames, double cycle_s,
                                           const anatomy::MotionGrid& grid, const anatomy::HeartPose& pose,
-                                          const DemonsOptions& options, std::vector<MotionFrameReport>* reports = nullptr,
+                                          const DemonsOptions& options,
+                                          std::vector<MotionFrameReport>* reports = nullptr,
                                           const std::function<void(const MotionFrameReport&)>& progress = {});
 
 }  // namespace pcisim::modeling

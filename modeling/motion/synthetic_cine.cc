@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <numbers>
 #include <cstdio>
 #include <filesystem>
 #include <random>
@@ -105,6 +106,9 @@ std::string validate(const CineSpec& s) {
   if (!(s.fat_mm >= 0.0 && s.fat_mm <= 50.0)) return bad("fat_mm", "must be 0..50", s.fat_mm);
   if (!(s.noise_sigma >= 0.0 && s.noise_sigma <= 1.0)) return bad("noise_sigma", "must be 0..1", s.noise_sigma);
   if (s.supersample < 1 || s.supersample > 8) return bad("supersample", "must be 1..8", s.supersample);
+  if (!(s.tag_amplitude >= 0.0 && s.tag_amplitude <= 1.0)) return bad("tag_amplitude", "must be 0..1", s.tag_amplitude);
+  if (!(s.tag_wavelength_mm >= 1.0 && s.tag_wavelength_mm <= 100.0))
+    return bad("tag_wavelength_mm", "must be 1..100", s.tag_wavelength_mm);
   return "";
 }
 
@@ -169,7 +173,13 @@ anatomy::Volume render_synthetic_cine_frame(const anatomy::HeartMotion& truth, c
             for (double dy : off_y)
               for (double dx : off_x) {
                 const Vector3d x_m = (centre_mm + Vector3d(dx, dy, dz)) * 1e-3;
-                sum += cine_intensity(template_tissue(cine_rest_point_m(truth, x_m, phase), spec.fat_mm));
+                const Vector3d r_m = cine_rest_point_m(truth, x_m, phase);
+                double value = cine_intensity(template_tissue(r_m, spec.fat_mm));
+                if (spec.tag_amplitude > 0.0) {
+                  const Vector3d a = r_m * (1e3 * 2.0 * std::numbers::pi / spec.tag_wavelength_mm);
+                  value *= 1.0 + spec.tag_amplitude * std::sin(a.x()) * std::sin(a.y()) * std::sin(a.z());
+                }
+                sum += value;
               }
           vol.hu_f32[vol.linear_index(i, j, k)] = static_cast<float>(sum * inv_samples);
         }

@@ -31,6 +31,11 @@ struct CineSpec {
   double noise_sigma = 0.03;                // gaussian, added to every voxel
   uint64_t seed = 1;                        // with the frame index, seeds that frame's noise
   int supersample = 2;                      // samples per axis in a voxel (partial volume)
+  // a pattern carried by the tissue, like myocardial tagging: intensity * (1 + tag_amplitude *
+  // sin(x / w) sin(y / w) sin(z / w)) of the rest point, w = tag_wavelength_mm / 2 pi. 0: plain cine,
+  // whose uniform tissue hides motion along its edges (the aperture problem); the tags show it
+  double tag_amplitude = 0.0;
+  double tag_wavelength_mm = 8.0;
 };
 
 // "" when usable, else a message naming the field, e.g. "frames: must be 2..200, got 1"

@@ -117,6 +117,7 @@ int motion_main(int argc, char** argv) {
           frame_paths.push_back(e.path().string());
       }
       std::sort(frame_paths.begin(), frame_paths.end());
+      modeling::check_frame_numbers(frame_paths);
       if (frame_paths.size() < 2)
         throw std::runtime_error(fmt::format("--sequence: '{}' holds {} volume files; a cycle needs at least 2",
                                              sequence_dir, frame_paths.size()));

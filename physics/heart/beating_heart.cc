@@ -20,9 +20,6 @@ namespace pcisim::physics {
 namespace {
 
 constexpr double kDensityKgPerM3 = 1050.0;  // myocardium
-// heart frame height (m) of the atrioventricular plane: the coronary phantom's AV groove runs at
-// polar angles 50-60 deg on the 50 mm sphere; tissue above it (atria, aortic root) is not driven
-constexpr double kAvPlaneZM = 0.030;
 
 // no strings unless it fails: set_rate_bpm runs between steps and must not allocate
 void check(const ParamRange& range, double value, const char* field) {
@@ -125,10 +122,10 @@ struct BeatingHeart::Impl {
     for (int i = 0; i < n; ++i) system.add_particle(rest_m.col(i), mass_kg[i]);
 
     // the ventricles' myocardium is driven (heart paper section 4, fig 6); the rest is free
-    const Eigen::Matrix3d to_heart = anatomy::heart_to_patient().transpose();
+    // (below the AV plane: anatomy::ventricular_points, the points motion from images is measured at)
     std::vector<bool> is_driven(n, false);
+    for (int i : anatomy::ventricular_points(rest_m)) is_driven[i] = true;
     for (int i = 0; i < n; ++i) {
-      is_driven[i] = (to_heart * rest_m.col(i)).z() < kAvPlaneZM;
       if (is_driven[i]) {
         system.drive(i);
         driven.push_back(i);

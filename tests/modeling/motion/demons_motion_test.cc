@@ -3,6 +3,7 @@
 // identical to frame 0 gives no motion, and frames that do not match frame 0 are refused by name.
 #include "modeling/motion/demons_motion.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -17,7 +18,8 @@ constexpr int kN = 40;  // voxels per axis
 
 // a smooth texture with structure at several scales (demons needs gradients everywhere)
 double texture(const Eigen::Vector3d& p_mm) {
-  return 0.5 + 0.2 * std::sin(p_mm.x() / 6.0) * std::cos(p_mm.y() / 7.0) + 0.15 * std::sin(p_mm.z() / 5.0 + 0.3 * p_mm.x() / 9.0) +
+  return 0.5 + 0.2 * std::sin(p_mm.x() / 6.0) * std::cos(p_mm.y() / 7.0) +
+         0.15 * std::sin(p_mm.z() / 5.0 + 0.3 * p_mm.x() / 9.0) +
          0.1 * std::cos((p_mm.x() + p_mm.y() - p_mm.z()) / 8.0);
 }
 
@@ -29,8 +31,8 @@ Eigen::Vector3d truth_mm(const Eigen::Vector3d& p_mm, double a_mm) {
 }
 
 anatomy::Volume frame(double a_mm) {
-  anatomy::Volume v = anatomy::Volume::make({kN, kN, kN}, Eigen::Vector3d::Constant(kSpacingMm), Eigen::Vector3d::Zero(),
-                                            anatomy::VoxelType::kFloat32);
+  anatomy::Volume v = anatomy::Volume::make({kN, kN, kN}, Eigen::Vector3d::Constant(kSpacingMm),
+                                            Eigen::Vector3d::Zero(), anatomy::VoxelType::kFloat32);
   for (int k = 0; k < kN; ++k)
     for (int j = 0; j < kN; ++j)
       for (int i = 0; i < kN; ++i) {
@@ -43,11 +45,21 @@ anatomy::Volume frame(double a_mm) {
   return v;
 }
 
+// the template heart shrunk into the 78 mm volume (the recovery refuses images that miss the
+// heart): template frame -> case frame = 0.6 r + 39 mm
+anatomy::HeartPose pose_in_volume() {
+  anatomy::HeartPose p;
+  p.scale = 0.6;
+  p.translation_m = Eigen::Vector3d::Constant(39e-3);
+  return p;
+}
+
+// motion grid nodes in the template frame: -30 .. 25 mm, 21 .. 54 mm in the volume
 anatomy::MotionGrid grid_over_volume() {
   anatomy::MotionGrid g;
-  g.origin_m = Eigen::Vector3d::Constant(10e-3);
+  g.origin_m = Eigen::Vector3d::Constant(-30e-3);
   g.spacing_m = Eigen::Vector3d::Constant(5e-3);
-  g.dims = Eigen::Vector3i::Constant(12);  // 10 .. 65 mm, inside the 78 mm volume
+  g.dims = Eigen::Vector3i::Constant(12);
   return g;
 }
 
@@ -58,7 +70,8 @@ TEST(DemonsMotion, RecoversAKnownDisplacementOfATexturedVolume) {
   o.levels = 2;
   o.iterations = 60;
   std::vector<MotionFrameReport> reports;
-  const anatomy::HeartMotion m = recover_heart_motion(frames, 1.0, grid_over_volume(), {}, o, &reports);
+  const anatomy::HeartPose pose = pose_in_volume();
+  const anatomy::HeartMotion m = recover_heart_motion(frames, 1.0, grid_over_volume(), pose, o, &reports);
   ASSERT_EQ(reports.size(), 1u);
   double sum = 0.0, worst = 0.0, moved = 0.0;
   int n = 0;
@@ -66,8 +79,10 @@ TEST(DemonsMotion, RecoversAKnownDisplacementOfATexturedVolume) {
   for (int k = 0; k < g.dims.z(); ++k)
     for (int j = 0; j < g.dims.y(); ++j)
       for (int i = 0; i < g.dims.x(); ++i) {
-        const Eigen::Vector3d r_mm = 1e3 * (g.origin_m + g.spacing_m.cwiseProduct(Eigen::Vector3d(i, j, k)));
-        const Eigen::Vector3d got_mm = 1e3 * m.node_displacement_m(1, i, j, k);
+        // in the volume's (case) frame: the template's displacement times the pose's scale
+        const Eigen::Vector3d r_mm =
+            1e3 * pose.to_case(g.origin_m + g.spacing_m.cwiseProduct(Eigen::Vector3d(i, j, k)));
+        const Eigen::Vector3d got_mm = 1e3 * pose.scale * m.node_displacement_m(1, i, j, k);
         const double e = (got_mm - truth_mm(r_mm, a_mm)).norm();
         sum += e;
         worst = std::max(worst, e);
@@ -75,10 +90,11 @@ TEST(DemonsMotion, RecoversAKnownDisplacementOfATexturedVolume) {
         ++n;
         EXPECT_EQ(m.node_displacement_m(0, i, j, k), Eigen::Vector3d::Zero());
       }
-  std::printf("demons, %d nodes: truth up to %.2f mm, error mean %.3f mm, worst %.3f mm; residual %.4f -> %.4f, %.2f s\n",
-              n, moved, sum / n, worst, reports[0].rms_before, reports[0].rms_after, reports[0].seconds);
+  std::printf(
+      "demons, %d nodes: truth up to %.2f mm, error mean %.3f mm, worst %.3f mm; residual %.4f -> %.4f, %.2f s\n", n,
+      moved, sum / n, worst, reports[0].rms_before, reports[0].rms_after, reports[0].seconds);
   EXPECT_GT(moved, 5.0);
-  EXPECT_LT(sum / n, 0.5);
+  EXPECT_LT(sum / n, 0.6);
   EXPECT_LT(worst, 1.5);
   EXPECT_LT(reports[0].rms_after, 0.25 * reports[0].rms_before);
 }
@@ -88,7 +104,7 @@ TEST(DemonsMotion, AFrameIdenticalToFrameZeroGivesNoMotion) {
   DemonsOptions o;
   o.levels = 2;
   o.iterations = 20;
-  const anatomy::HeartMotion m = recover_heart_motion({f0, f0}, 1.0, grid_over_volume(), {}, o);
+  const anatomy::HeartMotion m = recover_heart_motion({f0, f0}, 1.0, grid_over_volume(), pose_in_volume(), o);
   const anatomy::MotionGrid& g = m.grid();
   double worst = 0.0;
   for (int k = 0; k < g.dims.z(); ++k)
@@ -119,8 +135,37 @@ TEST(DemonsMotion, FramesThatDoNotMatchFrameZeroAreRefusedByName) {
   EXPECT_EQ(message({f0}), "motion: a sequence needs at least 2 frames, got 1");
   DemonsOptions bad;
   bad.levels = 0;
-  EXPECT_THROW(recover_heart_motion({f0, f0}, 1.0, grid_over_volume(), {}, bad), std::invalid_argument);
+  EXPECT_THROW(recover_heart_motion({f0, f0}, 1.0, grid_over_volume(), pose_in_volume(), bad), std::invalid_argument);
   EXPECT_EQ(validate(bad), "levels: must be 1-8, got 0");
+}
+
+TEST(DemonsMotion, ImagesThatMissTheCasesHeartAreRefusedWithTheOverlap) {
+  // the template heart unscaled at the origin: only its corner near the volume lies inside it
+  const anatomy::Volume f0 = frame(0.0);
+  const std::vector<FloatImage> images = sequence_images({f0, f0});
+  const double share = heart_overlap(images[0].grid, {});
+  EXPECT_LT(share, 0.3);
+  EXPECT_GT(heart_overlap(images[0].grid, pose_in_volume()), 0.999);
+  try {
+    recover_heart_motion({f0, f0}, 1.0, grid_over_volume(), {}, DemonsOptions{});
+    ADD_FAILURE() << "accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(fmt::format("only {:.0f} % of the heart", 100.0 * share)), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(DemonsMotion, ASequenceWithAMissingFrameNumberIsRefusedNamingIt) {
+  EXPECT_NO_THROW(check_frame_numbers({"d/frame_000.nrrd", "d/frame_001.nrrd", "d/frame_002.nrrd"}));
+  EXPECT_NO_THROW(check_frame_numbers({"d/ed.nrrd", "d/es.nrrd"}));  // no numbers: name order
+  try {
+    check_frame_numbers({"d/frame_007.nrrd", "d/frame_008.nrrd", "d/frame_010.nrrd", "d/frame_011.nrrd"});
+    ADD_FAILURE() << "accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("frame number 9 is missing (frame_008.nrrd is followed by frame_010.nrrd)"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

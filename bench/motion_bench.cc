@@ -90,8 +90,8 @@ Run run_one(const Case& c, int levels, int iterations, double sigma) {
   o.iterations = iterations;
   o.field_sigma_vox = sigma;
   std::vector<modeling::MotionFrameReport> reports;
-  const anatomy::HeartMotion got = modeling::recover_heart_motion(c.frames, c.truth.cycle_s(),
-                                                                  anatomy::template_motion_grid(2.5e-3), {}, o, &reports);
+  const anatomy::HeartMotion got = modeling::recover_heart_motion(
+      c.frames, c.truth.cycle_s(), anatomy::template_motion_grid(2.5e-3), {}, o, &reports);
   const Eigen::Matrix3Xd& rest = anatomy::template_heart_mesh().vertices_m;
   std::vector<double> all, endo, epi, inner;
   Run r;
@@ -139,13 +139,20 @@ int single(const std::vector<std::string>& args) {
   for (size_t i = 0; i + 1 < args.size(); i += 2) {
     const std::string& k = args[i];
     const double v = std::atof(args[i + 1].c_str());
-    if (k == "--levels") levels = int(v);
-    else if (k == "--iterations") iterations = int(v);
-    else if (k == "--sigma") sigma = v;
-    else if (k == "--voxel-mm") voxel = v;
-    else if (k == "--slice-mm") slice = v;
-    else if (k == "--tags") tags = v;
-    else continue;
+    if (k == "--levels")
+      levels = int(v);
+    else if (k == "--iterations")
+      iterations = int(v);
+    else if (k == "--sigma")
+      sigma = v;
+    else if (k == "--voxel-mm")
+      voxel = v;
+    else if (k == "--slice-mm")
+      slice = v;
+    else if (k == "--tags")
+      tags = v;
+    else
+      continue;
     any = true;
   }
   if (!any) return -1;
@@ -164,8 +171,9 @@ int run(const std::vector<std::string>& args) {
   if (const int rc = parse_bench_options(args, "motion", kUsage, &bo); rc >= 0) return rc;
   const double voxel_mm = 2.5;
   const Case c = make_case(voxel_mm, 0.0, 0.0);
-  std::printf("motion: cine frames %lld x %lld x %lld of %.1f mm, %.1f s each to render\n", (long long)c.frames[0].dims[0],
-              (long long)c.frames[0].dims[1], (long long)c.frames[0].dims[2], voxel_mm, c.render_s);
+  std::printf("motion: cine frames %lld x %lld x %lld of %.1f mm, %.1f s each to render\n",
+              (long long)c.frames[0].dims[0], (long long)c.frames[0].dims[1], (long long)c.frames[0].dims[2], voxel_mm,
+              c.render_s);
   const std::vector<int> levels = bo.quick ? std::vector<int>{3} : std::vector<int>{2, 3, 4};
   // the same registration on tagged images (a pattern carried by the tissue): what the plain cine's
   // uniform tissue hides
@@ -192,9 +200,11 @@ int run(const std::vector<std::string>& args) {
      << machine_info() << ".\n\n"
      << fmt::format(
             "Truth: the built-in synthetic contraction (docs/heart.md), rendered as a cine sequence "
-            "(modeling/motion/synthetic_cine.h: bright blood, dark myocardium, epicardial fat, noise 0.03) at {:.1f} mm "
+            "(modeling/motion/synthetic_cine.h: bright blood, dark myocardium, epicardial fat, noise 0.03) at {:.1f} "
+            "mm "
             "isotropic voxels ({} x {} x {}); end-diastole registered to end-systole (phase 0.35, the truth moves the "
-            "ventricular points up to {:.1f} mm) by diffeomorphic demons in a pyramid (modeling/motion/demons_motion.h). "
+            "ventricular points up to {:.1f} mm) by diffeomorphic demons in a pyramid "
+            "(modeling/motion/demons_motion.h). "
             "Error: the recovered displacement against the truth at the template heart's {} ventricular points (the "
             "points the beating heart drives): all, endocardial and epicardial surface points, and the points inside "
             "the wall. Seconds: one frame's registration, wall clock, 2 threads; a 20-frame cycle is 19 of them.\n\n",
@@ -206,22 +216,25 @@ int run(const std::vector<std::string>& args) {
   js << "[\n";
   for (size_t i = 0; i < runs.size(); ++i) {
     const Run& r = runs[i];
-    md << fmt::format("| {} | {} | {:.1f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.4f} -> {:.4f} |\n",
-                      r.levels, r.iterations, r.sigma, r.seconds, r.all.mean, r.all.p95, r.all.worst, r.endo.mean,
-                      r.epi.mean, r.inner.mean, r.residual_before, r.residual_after);
+    md << fmt::format(
+        "| {} | {} | {:.1f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.4f} -> {:.4f} |\n",
+        r.levels, r.iterations, r.sigma, r.seconds, r.all.mean, r.all.p95, r.all.worst, r.endo.mean, r.epi.mean,
+        r.inner.mean, r.residual_before, r.residual_after);
     js << "  " << json_of(r) << (i + 1 < runs.size() ? ",\n" : "\n");
   }
   md << "\nThe same images with a pattern carried by the tissue (`CineSpec::tag_amplitude` 0.5, 8 mm wavelength, "
         "like myocardial tagging), 3 levels, sigma 1.5:\n\n"
-     << "| iterations | s per frame | mean mm | p95 mm | worst mm | endocardium mean | epicardium mean | inside the wall "
+     << "| iterations | s per frame | mean mm | p95 mm | worst mm | endocardium mean | epicardium mean | inside the "
+        "wall "
         "mean |\n|---|---|---|---|---|---|---|---|\n";
   for (const Run& r : tagged_runs)
-    md << fmt::format("| {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} |\n", r.iterations, r.seconds,
-                      r.all.mean, r.all.p95, r.all.worst, r.endo.mean, r.epi.mean, r.inner.mean);
+    md << fmt::format("| {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} |\n", r.iterations,
+                      r.seconds, r.all.mean, r.all.p95, r.all.worst, r.endo.mean, r.epi.mean, r.inner.mean);
   for (const Run& r : tagged_runs) js << "  ,{\"tagged\": true, \"run\": " << json_of(r) << "}\n";
   js << "]\n";
   // the targets of issue #14 (mean <= 0.5 mm, p95 <= 1.5 mm at peak systole; a 20-frame cycle in <= 2 min)
-  const auto best = std::min_element(runs.begin(), runs.end(), [](const Run& a, const Run& b) { return a.all.mean < b.all.mean; });
+  const auto best =
+      std::min_element(runs.begin(), runs.end(), [](const Run& a, const Run& b) { return a.all.mean < b.all.mean; });
   md << fmt::format(
       "\nTargets (issue #14): mean <= 0.5 mm and p95 <= 1.5 mm at peak systole; a 20-frame cycle in <= 120 s. "
       "Best mean here: {:.2f} mm (p95 {:.2f} mm) at {} levels x {} iterations, sigma {:.1f}, {:.1f} s per frame "
@@ -232,7 +245,8 @@ int run(const std::vector<std::string>& args) {
   return 0;
 }
 
-const bool registered = add("motion", "heart motion from a cine sequence by demons: error at the ventricles against time", run);
+const bool registered =
+    add("motion", "heart motion from a cine sequence by demons: error at the ventricles against time", run);
 
 }  // namespace
 }  // namespace pcisim::bench

@@ -102,4 +102,15 @@ Neighbours26::Neighbours26(const Eigen::Vector3d& s) {
   }
 }
 
+std::string grid_difference(const ImageGrid& b, const ImageGrid& a) {
+  auto dims = [](const ImageGrid& g) {
+    return std::to_string(g.dims[0]) + " x " + std::to_string(g.dims[1]) + " x " + std::to_string(g.dims[2]);
+  };
+  if (b.dims != a.dims) return "dims " + dims(b) + " differ from " + dims(a);
+  if (!b.spacing_mm.isApprox(a.spacing_mm, 1e-6)) return "spacing differs";
+  if ((b.origin_mm - a.origin_mm).norm() > 1e-6 * a.spacing_mm.minCoeff()) return "origin differs";
+  if ((b.direction - a.direction).cwiseAbs().maxCoeff() > 1e-6) return "direction differs";
+  return "";
+}
+
 }  // namespace pcisim::modeling

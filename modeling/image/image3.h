@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 #include "anatomy/volume/volume.h"
 
@@ -30,6 +31,10 @@ struct ImageGrid {
   // the sub-grid [lo, lo + dims) of this one, in the same physical frame
   ImageGrid crop(const std::array<int64_t, 3>& lo, const std::array<int64_t, 3>& dims) const;
 };
+
+// "" when b lies on a's grid (same dims and direction, spacing to 1e-6 relative, origin to 1e-6
+// of a voxel), else what differs: "dims 40 x 40 x 39 differ from 40 x 40 x 40", "spacing differs", ...
+std::string grid_difference(const ImageGrid& b, const ImageGrid& a);
 
 struct Mask {
   ImageGrid grid;

@@ -3,6 +3,7 @@
 #include <itkDiffeomorphicDemonsRegistrationFilter.h>
 #include <itkImage.h>
 #include <itkMultiResolutionPDEDeformableRegistration.h>
+#include <itkMultiThreaderBase.h>
 
 #include <algorithm>
 #include <cstring>
@@ -40,19 +41,34 @@ RealImage::Pointer real_image(const Grid& g, const float* data) {
   return img;
 }
 
+// ITK's filters take their thread count from a process-wide default when they are made: set
+// while this registration's filters are made and run, restored after (not for concurrent callers)
+class ThreadCap {
+ public:
+  explicit ThreadCap(int threads) : before_(itk::MultiThreaderBase::GetGlobalDefaultNumberOfThreads()) {
+    if (threads > 0) itk::MultiThreaderBase::SetGlobalDefaultNumberOfThreads(static_cast<itk::ThreadIdType>(threads));
+  }
+  ~ThreadCap() { itk::MultiThreaderBase::SetGlobalDefaultNumberOfThreads(before_); }
+  ThreadCap(const ThreadCap&) = delete;
+  ThreadCap& operator=(const ThreadCap&) = delete;
+
+ private:
+  itk::ThreadIdType before_;
+};
+
 }  // namespace
 
 double diffeomorphic_demons(const Grid& grid, const float* fixed, const float* moving, const DemonsParams& p,
                             float* field_mm) {
   using Demons = itk::DiffeomorphicDemonsRegistrationFilter<RealImage, RealImage, Field>;
   using Pyramid = itk::MultiResolutionPDEDeformableRegistration<RealImage, RealImage, Field, float>;
+  const ThreadCap cap(p.threads);
   auto demons = Demons::New();
   demons->SetUseGradientType(Demons::GradientType::Symmetric);
   demons->SetSmoothDisplacementField(true);
   demons->SetStandardDeviations(p.field_sigma_vox);
   demons->SetSmoothUpdateField(false);
   demons->SetMaximumUpdateStepLength(p.max_step_vox);
-  if (p.threads > 0) demons->SetNumberOfWorkUnits(p.threads);
 
   auto pyramid = Pyramid::New();
   pyramid->SetRegistrationFilter(demons);
@@ -61,7 +77,6 @@ double diffeomorphic_demons(const Grid& grid, const float* fixed, const float* m
   pyramid->SetNumberOfIterations(iterations.data());
   pyramid->SetFixedImage(real_image(grid, fixed));
   pyramid->SetMovingImage(real_image(grid, moving));
-  if (p.threads > 0) pyramid->SetNumberOfWorkUnits(p.threads);
   pyramid->Update();
 
   const Field* out = pyramid->GetOutput();

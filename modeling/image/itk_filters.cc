@@ -60,11 +60,8 @@ DisplacementImage diffeomorphic_demons(const FloatImage& fixed, const FloatImage
                                        double* metric) {
   if (const std::string bad = validate(o); !bad.empty()) throw std::invalid_argument("demons: " + bad);
   const ImageGrid& g = fixed.grid;
-  const ImageGrid& h = moving.grid;
-  if (g.dims != h.dims || !g.spacing_mm.isApprox(h.spacing_mm, 1e-9) || !g.origin_mm.isApprox(h.origin_mm, 1e-9) ||
-      !g.direction.isApprox(h.direction, 1e-9)) {
-    throw std::invalid_argument("demons: the fixed and moving images lie on different grids");
-  }
+  if (const std::string d = grid_difference(moving.grid, g); !d.empty())
+    throw std::invalid_argument("demons: the moving image's " + d + " (the fixed image's grid)");
   itk_bridge::DemonsParams p;
   p.levels = o.levels;
   for (int l = 0; l < o.levels; ++l) p.iterations[l] = o.iterations;

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -13,10 +14,6 @@
 
 namespace pcisim::modeling {
 namespace {
-
-std::string dims_text(const ImageGrid& g) {
-  return std::to_string(g.dims[0]) + " x " + std::to_string(g.dims[1]) + " x " + std::to_string(g.dims[2]);
-}
 
 FloatImage float_image(const anatomy::Volume& v) {
   FloatImage f{ImageGrid::of(v), std::vector<float>(static_cast<size_t>(v.voxel_count()))};
@@ -36,17 +33,8 @@ std::vector<FloatImage> sequence_images(const std::vector<anatomy::Volume>& fram
     if (const std::string bad = anatomy::validate(frames[f]); !bad.empty())
       throw std::invalid_argument("motion: frame " + std::to_string(f) + ": " + bad);
     out.push_back(float_image(frames[f]));
-    const ImageGrid& g = out.front().grid;
-    const ImageGrid& h = out.back().grid;
-    const std::string frame = "motion: frame " + std::to_string(f) + ": ";
-    if (h.dims != g.dims)
-      throw std::invalid_argument(frame + "dims " + dims_text(h) + " differ from frame 0's " + dims_text(g));
-    if (!h.spacing_mm.isApprox(g.spacing_mm, 1e-6))
-      throw std::invalid_argument(frame + "spacing differs from frame 0's");
-    if ((h.origin_mm - g.origin_mm).norm() > 1e-6 * g.spacing_mm.minCoeff())
-      throw std::invalid_argument(frame + "origin differs from frame 0's");
-    if (!h.direction.isApprox(g.direction, 1e-6))
-      throw std::invalid_argument(frame + "direction differs from frame 0's");
+    if (const std::string d = grid_difference(out.back().grid, out.front().grid); !d.empty())
+      throw std::invalid_argument("motion: frame " + std::to_string(f) + ": " + d + " (frame 0's grid)");
   }
   return out;
 }
@@ -83,24 +71,51 @@ double heart_overlap(const ImageGrid& g, const anatomy::HeartPose& pose) {
   return v.cols() ? double(inside) / double(v.cols()) : 0.0;
 }
 
-void check_frame_numbers(const std::vector<std::string>& paths) {
-  std::vector<long> numbers;
+std::vector<std::string> order_frame_files(std::vector<std::string> paths) {
+  struct Named {
+    std::string path, prefix, name;
+    long number = -1;  // -1: no number
+  };
+  std::vector<Named> files;
   for (const std::string& p : paths) {
+    Named n{p, "", std::filesystem::path(p).filename().string()};
     const std::string stem = std::filesystem::path(p).stem().string();
     size_t k = stem.size();
     while (k > 0 && std::isdigit(static_cast<unsigned char>(stem[k - 1]))) --k;
-    if (k == stem.size() || stem.size() - k > 9) return;  // a name without a number: order by name only
-    numbers.push_back(std::stol(stem.substr(k)));
+    if (k < stem.size() && stem.size() - k <= 9) {
+      n.prefix = stem.substr(0, k);
+      n.number = std::stol(stem.substr(k));
+    }
+    files.push_back(n);
   }
-  for (size_t i = 1; i < numbers.size(); ++i) {
-    if (numbers[i] != numbers[i - 1] + 1) {
+  const auto numbered = std::count_if(files.begin(), files.end(), [](const Named& n) { return n.number >= 0; });
+  if (numbered == 0) {
+    std::sort(paths.begin(), paths.end());
+    return paths;
+  }
+  for (const Named& n : files) {
+    if (n.number < 0)
+      throw std::invalid_argument(fmt::format(
+          "motion: '{}' has no frame number while the other files do: a sequence folder holds its frames only",
+          n.name));
+    if (n.prefix != files.front().prefix)
+      throw std::invalid_argument(
+          fmt::format("motion: '{}' and '{}' name two sequences: a folder holds one", files.front().name, n.name));
+  }
+  std::sort(files.begin(), files.end(), [](const Named& a, const Named& b) { return a.number < b.number; });
+  for (size_t i = 1; i < files.size(); ++i) {
+    if (files[i].number == files[i - 1].number)
+      throw std::invalid_argument(fmt::format("motion: frame number {} appears twice ({} and {})", files[i].number,
+                                              files[i - 1].name, files[i].name));
+    if (files[i].number != files[i - 1].number + 1)
       throw std::invalid_argument(fmt::format(
           "motion: frame number {} is missing ({} is followed by {}): a lost phase would put every later frame at "
           "the wrong phase; supply it or renumber the sequence",
-          numbers[i - 1] + 1, std::filesystem::path(paths[i - 1]).filename().string(),
-          std::filesystem::path(paths[i]).filename().string()));
-    }
+          files[i - 1].number + 1, files[i - 1].name, files[i].name));
   }
+  std::vector<std::string> out;
+  for (const Named& n : files) out.push_back(n.path);
+  return out;
 }
 
 anatomy::HeartMotion recover_heart_motion(const std::vector<anatomy::Volume>& frames, double cycle_s,

@@ -36,10 +36,12 @@ double residual_rms(const FloatImage& fixed, const FloatImage& moving, const Dis
 double heart_overlap(const ImageGrid& images, const anatomy::HeartPose& pose);
 constexpr double kMinHeartOverlap = 0.9;
 
-// the frame numbers a sequence folder's names end with, in order; throws std::invalid_argument
-// naming the first missing number when every name ends with one and they are not consecutive
-// (a phase would be lost and the later frames' phases would be wrong). Names without numbers pass.
-void check_frame_numbers(const std::vector<std::string>& sorted_paths);
+// a sequence folder's volume files in phase order. Names ending in a number (frame_7, frame_007)
+// are ordered by that number, which must run without a gap or a repeat and after one common
+// prefix; names without numbers are ordered by name. Throws std::invalid_argument naming the file
+// for a missing or repeated number (every later frame would sit at the wrong phase), a file
+// without a number among numbered ones, or a second prefix (another sequence in the folder).
+std::vector<std::string> order_frame_files(std::vector<std::string> paths);
 
 // registers frame 0 to each frame and samples the fields on `grid` (template frame, metres): a
 // grid node r is looked up at pose.to_case(r) in the images (case frame, mm) and the displacement

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -117,8 +118,7 @@ int motion_main(int argc, char** argv) {
         if (e.is_regular_file() && (ext == ".nrrd" || ext == ".nhdr" || ext == ".mha" || ext == ".mhd"))
           frame_paths.push_back(e.path().string());
       }
-      std::sort(frame_paths.begin(), frame_paths.end());
-      modeling::check_frame_numbers(frame_paths);
+      frame_paths = modeling::order_frame_files(frame_paths);
       if (frame_paths.size() < 2)
         throw std::runtime_error(fmt::format("--sequence: '{}' holds {} volume files; a cycle needs at least 2",
                                              sequence_dir, frame_paths.size()));
@@ -141,18 +141,33 @@ int motion_main(int argc, char** argv) {
           std::fflush(stdout);
         });
     motion.write(out_path);
+    // the report: what was asked and what each frame took; a non-finite figure is null (not JSON otherwise)
+    auto number = [](double v) { return std::isfinite(v) ? fmt::format("{:.6g}", v) : std::string("null"); };
+    auto quoted = [](const std::string& t) {
+      std::string q = "\"";
+      for (char ch : t) {
+        if (ch == '"' || ch == '\\') q += '\\';
+        if (static_cast<unsigned char>(ch) >= 0x20) q += ch;
+      }
+      return q + "\"";
+    };
     std::ofstream report(out_path + ".json");
-    report << "{\n  \"frames\": " << frames.size() << ",\n  \"cycle_s\": " << cycle_s << ",\n  \"levels\": " << o.levels
-           << ",\n  \"iterations\": " << o.iterations << ",\n  \"field_sigma_vox\": " << o.field_sigma_vox
+    report << "{\n  \"frames\": [";
+    for (size_t i = 0; i < frame_paths.size(); ++i) report << (i ? ", " : "") << quoted(frame_paths[i]);
+    report << "],\n  \"heart_case\": " << (case_dir.empty() ? std::string("null") : quoted(case_dir))
+           << ",\n  \"cycle_s\": " << number(cycle_s) << ",\n  \"grid_mm\": " << number(grid_mm)
+           << ",\n  \"levels\": " << o.levels << ",\n  \"iterations\": " << o.iterations
+           << ",\n  \"field_sigma_vox\": " << number(o.field_sigma_vox)
+           << ",\n  \"max_step_vox\": " << number(o.max_step_vox) << ",\n  \"threads\": " << o.threads
            << ",\n  \"per_frame\": [";
     for (size_t i = 0; i < reports.size(); ++i)
       report << (i ? ",\n" : "\n")
              << fmt::format(
-                    "    {{\"frame\": {}, \"seconds\": {:.3f}, \"metric\": {:.6g}, "
-                    "\"rms_before\": {:.6g}, \"rms_after\": {:.6g}}}",
-                    reports[i].frame, reports[i].seconds, reports[i].metric, reports[i].rms_before,
-                    reports[i].rms_after);
+                    "    {{\"frame\": {}, \"seconds\": {}, \"metric\": {}, \"rms_before\": {}, \"rms_after\": {}}}",
+                    reports[i].frame, number(reports[i].seconds), number(reports[i].metric),
+                    number(reports[i].rms_before), number(reports[i].rms_after));
     report << "\n  ]\n}\n";
+    report.close();
     if (!report) throw std::runtime_error("cannot write " + out_path + ".json");
     std::printf("done in %.1f s: %s (%d x %d x %d grid, %.1f mm), %s.json\n", seconds_since(t0), out_path.c_str(),
                 grid.dims.x(), grid.dims.y(), grid.dims.z(), grid_mm, out_path.c_str());
@@ -190,6 +205,15 @@ int cine_main(int argc, char** argv) {
     anatomy::SyntheticMotionSpec truth_spec;
     truth_spec.frames = spec.frames;
     const anatomy::HeartMotion truth = anatomy::make_synthetic_heart_motion(truth_spec);
+    if (fs::exists(out_dir)) {
+      for (const auto& e : fs::directory_iterator(out_dir)) {
+        const std::string ext = e.path().extension().string();
+        if (ext == ".nrrd" || ext == ".nhdr" || ext == ".mha" || ext == ".mhd")
+          throw std::runtime_error("--out: '" + out_dir + "' already holds volume files (" +
+                                   e.path().filename().string() +
+                                   "); a sequence read back from it would mix two runs: choose an empty folder");
+      }
+    }
     const auto t0 = std::chrono::steady_clock::now();
     fs::create_directories(out_dir);
     for (int f = 0; f < spec.frames; ++f) {

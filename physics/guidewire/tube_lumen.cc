@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 namespace pcisim::physics {
 
@@ -111,7 +112,9 @@ void TubeLumen::consider(const Segment& s, const Eigen::Vector3d& p, WallSample&
 
 // the nearest capsule below the tree's nodes, nearer child first; a node is skipped when the
 // query is farther from its box than the best distance so far (its capsules lie inside the box,
-// so none of them is nearer)
+// so none of them is nearer). The box distance bounds a capsule's signed distance from below only
+// outside it; the walk runs for queries in a bin of no tube, which lie outside every capsule by
+// at least the band, so it holds there
 void TubeLumen::nearest_by_tree(const Eigen::Vector3d& p, WallSample& best) const {
   int stack[kMaxTreeDepth + 1];
   int top = 0;

@@ -3,8 +3,8 @@
 // along a segment). Segments are binned on a coarse grid so a query looks at a few of them: the
 // nearest of its bin's tubes, which within the band of a wall is the nearest of all; a query in a
 // bin of no tube walks a bounding-volume tree to the nearest of all. Farther out than the band, a
-// bin's nearest tube is a nearby one, not always the nearest: docs/guidewire.md ("Rod: contact
-// and friction") says why the rod's contact keeps it so. Used by tests, as the contact geometry
+// bin's nearest tube is a nearby one, not always the nearest: docs/guidewire.md ("Measured
+// errors", the far-field fix) says why the rod's contact keeps it so. Used by tests, as the contact geometry
 // while no SDF is given, and as the SDF's answer beyond its band.
 #include <vector>
 
@@ -15,7 +15,8 @@ namespace pcisim::physics {
 
 class TubeLumen final : public LumenQuery {
  public:
-  // bin_m: edge of the binning cells; band_m: how far outside the wall distances stay exact
+  // bin_m: edge of the binning cells (> 0); band_m: how far outside the wall distances stay exact
+  // (>= 0). Throws std::invalid_argument otherwise
   explicit TubeLumen(const anatomy::VesselTree& tree, double bin_m = 3e-3, double band_m = 1e-3);
   WallSample sample(const Eigen::Vector3d& p_m) const override;
 
@@ -27,7 +28,7 @@ class TubeLumen final : public LumenQuery {
   // a box around the capsules below it (the axis' box grown by the radius); a leaf (left < 0)
   // holds the segments order_[first, first + count)
   struct BoxNode {
-    Eigen::Vector3d lo, hi;
+    Eigen::Vector3d lo = Eigen::Vector3d::Zero(), hi = Eigen::Vector3d::Zero();
     int first = 0, count = 0, left = -1, right = -1;
   };
   void consider(const Segment& s, const Eigen::Vector3d& p, WallSample& best) const;

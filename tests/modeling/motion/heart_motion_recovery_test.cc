@@ -1,7 +1,8 @@
 // Motion from images against exact truth: the built-in synthetic contraction rendered as a cine
 // sequence (synthetic_cine.h), end-diastole registered to end-systole by demons, and the recovered
 // displacement compared with the truth at every ventricular point of the template heart (the
-// points the beating heart drives). Also: the recovered motion file is one the beating heart reads.
+// points the beating heart drives). Also: the recovered motion survives the motion file's round trip
+// (the main job driven by such a file: docs/heart.md, by hand).
 #include <gtest/gtest.h>
 
 #include <algorithm>

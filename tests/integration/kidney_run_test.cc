@@ -26,9 +26,9 @@ const char* kScene = R"({
   "anatomy": {"organ": "kidney"},
   "physics_rate_hz": 30,
   "effects": {
-    "soft_tissue": {"particle_radius_mm": 4},
+    "soft_tissue": {"particle_radius_mm": 5},
     "probe_contact": {"start_position_mm": [0, -22.5, 0], "start_orientation_wxyz": [0.5, -0.5, -0.5, -0.5]},
-    "ultrasound": {"width_px": 96, "height_px": 128, "depth_mm": 60, "frame_rate_hz": 10}
+    "ultrasound": {"width_px": 64, "height_px": 96, "depth_mm": 60, "frame_rate_hz": 10}
   }
 })";
 
@@ -97,17 +97,19 @@ TEST(KidneyRun, AProbeOverLcmPressesTheKidneyFeelsItAndImagesIt) {
   EXPECT_EQ(r.effects, (std::vector<std::string>{"soft_tissue", "probe_contact", "ultrasound"}));
   EXPECT_GT(r.haptic_ticks, 3000);
   {
-    // the force resists the press once pressed (the last second), and is zero before. A loaded
+    // the force resists the press once pressed (from 2.3 s on), and is zero before. A loaded
     // machine may make a physics step late: its model goes stale and the force fades (the safety
     // layer doing its job), so the held force is judged on the ticks that were neither faded,
-    // stale nor ramping in
+    // stale nor ramping in. (CI's Release run, two tests at once beside other work, once left no
+    // clean tick in the last second at 4 mm particles: the scene is lighter since, and the window
+    // is the whole hold)
     using F = pcisim_lcm::force_command_t;
     std::lock_guard lock(forces.mutex);
     ASSERT_GT(forces.axial_n.size(), 3000u);
     const size_t n = forces.axial_n.size();
     double held_sum = 0;
     int held = 0;
-    for (size_t i = n - 1000; i < n - 50; ++i) {
+    for (size_t i = n - 1700; i < n - 50; ++i) {
       constexpr int32_t kNotClean = int32_t{F::FLAG_FADED} | F::FLAG_STALE | F::FLAG_RAMPING | F::FLAG_FAULT;
       if (forces.flags[i] & kNotClean) continue;
       held_sum += forces.axial_n[i];
@@ -120,7 +122,7 @@ TEST(KidneyRun, AProbeOverLcmPressesTheKidneyFeelsItAndImagesIt) {
     double early_max = 0;
     for (size_t i = 200; i < 800; ++i) early_max = std::max(early_max, std::abs(forces.axial_n[i]));
     EXPECT_LT(early_max, 0.01) << "nothing while the probe is in the air";
-    std::printf("force along the probe: %.2f N pressed (%d clean ticks of the last second), %.4f N before\n", held_mean,
+    std::printf("force along the probe: %.2f N pressed (%d clean ticks of the hold), %.4f N before\n", held_mean,
                 held, early_max);
   }
   std::lock_guard lock(rec.mutex);
@@ -131,8 +133,8 @@ TEST(KidneyRun, AProbeOverLcmPressesTheKidneyFeelsItAndImagesIt) {
   EXPECT_GE(r.ultrasound_frames, static_cast<int64_t>(rec.frames.size()));
   const auto& first = rec.frames.front();
   const auto& last = rec.frames.back();
-  EXPECT_EQ(first.width, 96);
-  EXPECT_EQ(first.height, 128);
+  EXPECT_EQ(first.width, 64);
+  EXPECT_EQ(first.height, 96);
   EXPECT_EQ(first.geometry, pcisim_lcm::us_frame_t::GEOMETRY_LINEAR);
   // the geometry follows the probe: beam +y, lateral +z, the face where the probe was put
   EXPECT_NEAR(last.beam[1], 1.0, 1e-9);

@@ -122,8 +122,8 @@ TEST(KidneyRun, AProbeOverLcmPressesTheKidneyFeelsItAndImagesIt) {
     double early_max = 0;
     for (size_t i = 200; i < 800; ++i) early_max = std::max(early_max, std::abs(forces.axial_n[i]));
     EXPECT_LT(early_max, 0.01) << "nothing while the probe is in the air";
-    std::printf("force along the probe: %.2f N pressed (%d clean ticks of the hold), %.4f N before\n", held_mean,
-                held, early_max);
+    std::printf("force along the probe: %.2f N pressed (%d clean ticks of the hold), %.4f N before\n", held_mean, held,
+                early_max);
   }
   std::lock_guard lock(rec.mutex);
   // 10 Hz for 4 s (a busy machine may miss some)

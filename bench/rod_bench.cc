@@ -25,6 +25,7 @@
 #include "bench/bench_registry.h"
 #include "bench/bench_stats.h"
 #include "bench/machine_info.h"
+#include "bench/trainee_session.h"
 #include "physics/rod/cosserat_rod.h"
 #include "physics/rod/elastica.h"
 #include "physics/rod/rod_statics.h"
@@ -135,15 +136,9 @@ WorldTiming time_world(int substeps) {
   spec.friction = physics::FrictionParams{};
   physics::World world(spec);
   std::vector<double> ms;
-  for (double t = 0.0; t <= 19.5; t += kDt) {
-    auto ramp = [t](double at, double over, double amount) {
-      return t <= at ? 0.0 : amount * std::min((t - at) / over, 1.0);
-    };
-    physics::InstrumentInput in;
-    in.insertion_m = 1e-3 * (ramp(0.5, 3.0, 8.0) + ramp(7.0, 10.0, 50.0) - ramp(17.5, 1.0, 5.0));
-    in.rotation_rad = ramp(4.0, 2.0, M_PI / 2.0);
+  for (double t = 0.0; t <= kSessionS; t += kDt) {
     const auto t0 = std::chrono::steady_clock::now();
-    world.step(in);
+    world.step(session_at(t));
     ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   }
   physics::WorldSnapshot snap;
@@ -314,20 +309,13 @@ int run(const std::vector<std::string>& args) {
     std::vector<double> ms, wire_ms;
     const double held_s = 2.0 * 60.0 / spec.heart_beat->rate_bpm;
     physics::WorldSnapshot snap;
-    for (double t = 0.0; t <= 19.5 + held_s; t += kDt) {
-      const double ts = std::min(t, 19.5);
-      auto ramp = [ts](double at, double over, double amount) {
-        return ts <= at ? 0.0 : amount * std::min((ts - at) / over, 1.0);
-      };
-      physics::InstrumentInput in;
-      in.insertion_m = 1e-3 * (ramp(0.5, 3.0, 8.0) + ramp(7.0, 10.0, 50.0) - ramp(17.5, 1.0, 5.0));
-      in.rotation_rad = ramp(4.0, 2.0, M_PI / 2.0);
+    for (double t = 0.0; t <= kSessionS + held_s; t += kDt) {
       const auto t0 = std::chrono::steady_clock::now();
-      world.step(in);
+      world.step(session_at(std::min(t, kSessionS)));
       ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
       for (const auto& c : world.effect_costs())
         if (c.name == "guidewire") wire_ms.push_back(c.last_step_ms);
-      if (t > 19.5) {
+      if (t > kSessionS) {
         world.write_snapshot(snap);
         r.held_tip_m.push_back(snap.tip_m);
       }

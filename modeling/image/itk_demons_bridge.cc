@@ -5,41 +5,14 @@
 #include <itkMultiResolutionPDEDeformableRegistration.h>
 #include <itkMultiThreaderBase.h>
 
-#include <algorithm>
-#include <cstring>
-
 #include "modeling/image/itk_bridge.h"
+#include "modeling/image/itk_bridge_image.h"
 
 namespace pcisim::modeling::itk_bridge {
 namespace {
 
 using RealImage = itk::Image<float, 3>;
 using Field = itk::Image<itk::Vector<float, 3>, 3>;
-
-RealImage::Pointer real_image(const Grid& g, const float* data) {
-  auto img = RealImage::New();
-  RealImage::SizeType size;
-  RealImage::SpacingType sp;
-  RealImage::PointType origin;
-  RealImage::DirectionType dir;
-  size_t n = 1;
-  for (int a = 0; a < 3; ++a) {
-    size[a] = static_cast<itk::SizeValueType>(g.dims[a]);
-    n *= static_cast<size_t>(g.dims[a]);
-    sp[a] = g.spacing_mm[a];
-    origin[a] = g.origin_mm[a];
-    for (int b = 0; b < 3; ++b) dir[a][b] = g.direction[3 * a + b];
-  }
-  RealImage::RegionType region;
-  region.SetSize(size);
-  img->SetRegions(region);
-  img->SetSpacing(sp);
-  img->SetOrigin(origin);
-  img->SetDirection(dir);
-  img->Allocate();
-  std::memcpy(img->GetBufferPointer(), data, n * sizeof(float));
-  return img;
-}
 
 // ITK's filters take their thread count from a process-wide default when they are made: set
 // while this registration's filters are made and run, restored after (not for concurrent callers)
@@ -75,12 +48,12 @@ double diffeomorphic_demons(const Grid& grid, const float* fixed, const float* m
   pyramid->SetNumberOfLevels(static_cast<unsigned>(p.levels));
   std::vector<unsigned> iterations(p.iterations, p.iterations + p.levels);
   pyramid->SetNumberOfIterations(iterations.data());
-  pyramid->SetFixedImage(real_image(grid, fixed));
-  pyramid->SetMovingImage(real_image(grid, moving));
+  pyramid->SetFixedImage(to_itk<float>(grid, fixed));
+  pyramid->SetMovingImage(to_itk<float>(grid, moving));
   pyramid->Update();
 
   const Field* out = pyramid->GetOutput();
-  const size_t n = static_cast<size_t>(grid.dims[0] * grid.dims[1] * grid.dims[2]);
+  const size_t n = voxels(grid);
   const itk::Vector<float, 3>* u = out->GetBufferPointer();
   for (size_t i = 0; i < n; ++i)
     for (int a = 0; a < 3; ++a) field_mm[3 * i + a] = u[i][a];

@@ -13,17 +13,6 @@
 #include "anatomy/heart/heart_mesh.h"
 
 namespace pcisim::modeling {
-namespace {
-
-FloatImage float_image(const anatomy::Volume& v) {
-  FloatImage f{ImageGrid::of(v), std::vector<float>(static_cast<size_t>(v.voxel_count()))};
-  for (int64_t n = 0; n < v.voxel_count(); ++n)
-    f.v[n] = v.type == anatomy::VoxelType::kFloat32 ? v.hu_f32[n] : static_cast<float>(v.hu_i16[n]);
-  return f;
-}
-
-}  // namespace
-
 std::vector<FloatImage> sequence_images(const std::vector<anatomy::Volume>& frames) {
   if (frames.size() < 2)
     throw std::invalid_argument("motion: a sequence needs at least 2 frames, got " + std::to_string(frames.size()));
@@ -32,7 +21,7 @@ std::vector<FloatImage> sequence_images(const std::vector<anatomy::Volume>& fram
   for (size_t f = 0; f < frames.size(); ++f) {
     if (const std::string bad = anatomy::validate(frames[f]); !bad.empty())
       throw std::invalid_argument("motion: frame " + std::to_string(f) + ": " + bad);
-    out.push_back(float_image(frames[f]));
+    out.push_back(crop_hu(frames[f], {0, 0, 0}, frames[f].dims));  // the whole frame
     if (const std::string d = grid_difference(out.back().grid, out.front().grid); !d.empty())
       throw std::invalid_argument("motion: frame " + std::to_string(f) + ": " + d + " (frame 0's grid)");
   }

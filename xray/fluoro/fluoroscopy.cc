@@ -30,6 +30,7 @@ struct FluoroscopyRenderer::Impl {
   int64_t background_renders = 0;
   uint64_t frames = 0;
   std::vector<float> window_scratch;
+  std::unique_ptr<BeatingBackground> beat;
   std::vector<Eigen::Vector3d> wire_mm;
   WireSpec wire;
 
@@ -75,9 +76,14 @@ void FluoroscopyRenderer::render(const FluoroInput& in, FluoroFrame& out) {
     double lo = 0, hi = 1;
     display_window_for(m.compression_tmp, &m.window_scratch, &lo, &hi);
     m.chain.set_window(lo, hi);  // fixed per pose, so contrast never shifts the brightness
+    if (m.beat) m.beat->set_pose(g, m.background);
   }
   if (m.line.width != g.width || m.line.height != g.height) m.line.resize(g.width, g.height);
-  std::copy(m.background.pixels.begin(), m.background.pixels.end(), m.line.pixels.begin());
+  if (m.beat && std::isfinite(in.heart_phase)) {
+    m.beat->at_phase(in.heart_phase, &m.line);  // the heart where the physics left it
+  } else {
+    std::copy(m.background.pixels.begin(), m.background.pixels.end(), m.line.pixels.begin());
+  }
 
   // 2. iodine: mu x opacity x chord through each lumen segment holding contrast
   if (!in.vessel_points_m.empty()) m.bolus.move(in.vessel_points_m);
@@ -128,6 +134,8 @@ void FluoroscopyRenderer::render(const FluoroInput& in, FluoroFrame& out) {
     ++k;
   }
   out.contrast_branches.resize(k);
+  // the pose's other phase bins, a few per frame, until it has them all
+  if (m.beat) m.beat->fill_ahead();
 }
 
 int64_t FluoroscopyRenderer::background_renders() const {
@@ -135,6 +143,13 @@ int64_t FluoroscopyRenderer::background_renders() const {
 }
 void FluoroscopyRenderer::invalidate_background() {
   impl_->background_valid = false;
+}
+void FluoroscopyRenderer::set_beat(const BeatSamples& samples, const BeatingBackgroundOptions& options) {
+  impl_->beat = std::make_unique<BeatingBackground>(impl_->drr.attenuation(), samples, options);
+  impl_->background_valid = false;
+}
+const BeatingBackground* FluoroscopyRenderer::beat() const {
+  return impl_->beat.get();
 }
 void FluoroscopyRenderer::set_c_arm(const CArmSpec& c_arm) {
   impl_->spec.c_arm = c_arm;

@@ -7,12 +7,14 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "anatomy/vessel/vessel_tree.h"
+#include "xray/fluoro/beating_background.h"
 #include "xray/fluoro/contrast_bolus.h"
 #include "xray/fluoro/detector_chain.h"
 #include "xray/geometry/c_arm.h"
@@ -64,6 +66,9 @@ struct FluoroInput {
   // the coronary centerline points where the beating heart has carried them (metres, tree order,
   // as physics' VesselSkin gives them); empty: the tree at rest
   std::span<const Eigen::Vector3d> vessel_points_m = {};
+  // the cardiac phase [0, 1) the physics step left (snapshot heart_phase); the beating
+  // background (set_beat) draws the heart there. NaN: the background at rest
+  double heart_phase = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct FluoroFrame {
@@ -92,6 +97,12 @@ class FluoroscopyRenderer {
   int64_t background_renders() const;
   // the next frame re-projects the background (heart motion, a changed volume)
   void invalidate_background();
+  // from now on the background beats: the CT warped by one cycle of the heart's motion (samples
+  // in the CT's frame, mm), projected per phase bin for each pose and blended per frame at the
+  // input's heart_phase; the next frame re-projects. Throws std::invalid_argument when the
+  // samples or options are bad (naming the field)
+  void set_beat(const BeatSamples& samples, const BeatingBackgroundOptions& options = {});
+  const BeatingBackground* beat() const;  // null while the background stands still
   // a new detector or SID/SAD; the next frame re-projects the background if the geometry changed
   void set_c_arm(const CArmSpec& c_arm);
 

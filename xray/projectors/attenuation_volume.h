@@ -22,6 +22,9 @@ struct AttenuationParams {
 class AttenuationVolume {
  public:
   AttenuationVolume(const anatomy::Volume& volume, const AttenuationParams& params = {});
+  // a volume whose voxel values are mu per mm already, of either sign (a difference of two
+  // attenuations: the beating background's per-phase change); bricks skip where |mu| is 0
+  static AttenuationVolume from_mu(const anatomy::Volume& mu_per_mm, const AttenuationParams& params = {});
 
   double mu_of_hu(double hu) const {
     return hu < params_.air_below_hu ? 0.0 : params_.mu_water_per_mm * (1.0 + hu / 1000.0);
@@ -43,12 +46,19 @@ class AttenuationVolume {
   const Eigen::Vector3d& index_offset() const { return index_offset_; }
 
   // brick (I, J, K) covers padded coordinates [I B, (I+1) B) per axis; its value is the largest
-  // mu of padded voxels [I B, (I+1) B] (inclusive: a trilinear read there touches them)
+  // |mu| of padded voxels [I B, (I+1) B] (inclusive: a trilinear read there touches them)
   int brick_voxels() const { return params_.brick_voxels; }
   const std::array<int, 3>& brick_dims() const { return brick_dims_; }
   const std::vector<float>& brick_max() const { return brick_max_; }
 
+  // writing mu in place (the beating background reuses one change volume for every phase): the
+  // border must stay zero, and rebuild_bricks() must run before the next projection
+  float* mutable_padded_mu() { return mu_.get(); }
+  void rebuild_bricks();
+
  private:
+  AttenuationVolume(const anatomy::Volume& volume, const AttenuationParams& params, bool values_are_mu);
+
   AttenuationParams params_;
   std::array<int, 3> dims_{}, padded_{}, brick_dims_{};
   // 2 MiB aligned, so the kernel may back it with transparent huge pages where THP is "always"

@@ -16,11 +16,11 @@ void TrilinearProjector::set_options(const TrilinearOptions& options) {
   options_ = options;
 }
 
-void TrilinearProjector::project(const DetectorGeometry& g, Image* image) {
+void TrilinearProjector::project(const AttenuationVolume& volume, const DetectorGeometry& g, Image* image) {
   if (image->width != g.width || image->height != g.height) {
     throw std::invalid_argument("TrilinearProjector: image size differs from the detector's");
   }
-  const ray::GridView grid = grid_view(volume_);
+  const ray::GridView grid = grid_view(volume);
   const ray::DetectorView det = detector_view(g);
   const float step = static_cast<float>(options_.step_voxels);
   const bool skip = options_.skip_empty;

@@ -28,7 +28,10 @@ class TrilinearProjector {
   const TrilinearOptions& options() const { return options_; }
 
   // line integrals from the source to each pixel centre into image (already sized to g)
-  void project(const DetectorGeometry& g, Image* image);
+  void project(const DetectorGeometry& g, Image* image) { project(volume_, g, image); }
+  // the same through another volume on this projector's threads (the beating background's
+  // per-phase differences)
+  void project(const AttenuationVolume& volume, const DetectorGeometry& g, Image* image);
 
  private:
   const AttenuationVolume& volume_;

@@ -1,0 +1,101 @@
+#include "xray/fluoro/beating_background.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace pcisim::xray {
+
+std::string validate(const BeatingBackgroundOptions& o) {
+  if (std::string bad = validate(o.warp); !bad.empty()) return "warp." + bad;
+  if (o.fill_per_frame < 0 || o.fill_per_frame > 64) return "fill_per_frame must be in [0, 64]";
+  if (!(o.projector.step_voxels > 0)) return "projector.step_voxels must be > 0";
+  return {};
+}
+
+namespace {
+
+const BeatingBackgroundOptions& checked(const BeatingBackgroundOptions& o) {
+  if (std::string bad = validate(o); !bad.empty()) throw std::invalid_argument("BeatingBackground: " + bad);
+  return o;
+}
+
+}  // namespace
+
+BeatingBackground::BeatingBackground(const AttenuationVolume& ct, const BeatSamples& samples,
+                                     const BeatingBackgroundOptions& options)
+    : options_(checked(options)),
+      warp_(ct, samples, options.warp),
+      change_(warp_.make_change_volume()),
+      projector_(change_, options.projector),
+      bin_images_(warp_.bins()),
+      filled_(warp_.bins(), 0) {}
+
+BeatingBackground::~BeatingBackground() = default;
+
+void BeatingBackground::set_pose(const DetectorGeometry& g, const Image& static_projection) {
+  if (static_projection.width != g.width || static_projection.height != g.height)
+    throw std::invalid_argument(
+        "BeatingBackground::set_pose: the static projection's size differs from the detector's");
+  geometry_ = g;
+  for (Image& im : bin_images_) {
+    if (im.width != g.width || im.height != g.height) im.resize(g.width, g.height);
+    std::copy(static_projection.pixels.begin(), static_projection.pixels.end(), im.pixels.begin());
+  }
+  if (scratch_.width != g.width || scratch_.height != g.height) scratch_.resize(g.width, g.height);
+  std::fill(filled_.begin(), filled_.end(), 0);
+}
+
+// bin image = static projection (already there) + the projection of the bin's change
+void BeatingBackground::fill(int bin) {
+  warp_.write_change(bin, &change_);
+  projector_.project(change_, geometry_, &scratch_);
+  std::vector<float>& p = bin_images_[bin].pixels;
+  for (size_t i = 0; i < p.size(); ++i) p[i] += scratch_.pixels[i];
+  filled_[bin] = 1;
+  ++bin_projections_;
+}
+
+void BeatingBackground::at_phase(double phase, Image* out) {
+  if (bin_images_.empty() || bin_images_[0].width != geometry_.width || geometry_.width == 0)
+    throw std::logic_error("BeatingBackground::at_phase before set_pose");
+  const int n = bins();
+  double f = phase - std::floor(phase);
+  if (!std::isfinite(f)) f = 0;
+  const double x = f * n;
+  int a = static_cast<int>(std::floor(x)) % n;
+  const int b = (a + 1) % n;
+  double t = x - std::floor(x);
+  if (!options_.interpolate) {
+    if (t >= 0.5) a = b;
+    t = 0;
+  }
+  if (!filled_[a]) fill(a);
+  if (out->width != geometry_.width || out->height != geometry_.height) out->resize(geometry_.width, geometry_.height);
+  const std::vector<float>& pa = bin_images_[a].pixels;
+  if (t == 0) {
+    std::copy(pa.begin(), pa.end(), out->pixels.begin());
+    return;
+  }
+  if (!filled_[b]) fill(b);
+  const std::vector<float>& pb = bin_images_[b].pixels;
+  const float wb = static_cast<float>(t), wa = 1.0f - wb;
+  for (size_t i = 0; i < pa.size(); ++i) out->pixels[i] = wa * pa[i] + wb * pb[i];
+}
+
+int BeatingBackground::fill_ahead() {
+  int done = 0;
+  for (int bin = 0; bin < bins() && done < options_.fill_per_frame; ++bin) {
+    if (filled_[bin]) continue;
+    fill(bin);
+    ++done;
+  }
+  return done;
+}
+
+int BeatingBackground::filled_bins() const {
+  int k = 0;
+  for (const char f : filled_) k += f ? 1 : 0;
+  return k;
+}
+
+}  // namespace pcisim::xray

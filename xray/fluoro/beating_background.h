@@ -1,0 +1,66 @@
+#pragma once
+// The fluoroscopy background that beats: per C-arm pose, the static CT's projection plus, per
+// phase bin, the projection of that bin's change of attenuation (heart_warp.h) over the box
+// around the heart only. Line integrals are linear in mu, so
+//   P(warped CT) = P(static CT) + P(mu(x - v_b(x)) - mu(x)),
+// and the second term walks only the rays through the heart's box. A frame takes the two bins
+// around its phase and blends them linearly (or the nearer one). Bins are projected when a frame
+// first needs them, plus a few more per frame until the pose has all of them.
+#include <memory>
+#include <vector>
+
+#include "xray/fluoro/heart_warp.h"
+#include "xray/geometry/detector_geometry.h"
+#include "xray/projectors/image.h"
+#include "xray/projectors/trilinear_projector.h"
+
+namespace pcisim::xray {
+
+struct BeatingBackgroundOptions {
+  HeartWarpParams warp;
+  bool interpolate = true;                         // blend the two bins around the phase; false: the nearer bin
+  int fill_per_frame = 1;                          // bins projected ahead per frame until the pose has every bin
+  TrilinearOptions projector{.step_voxels = 1.0};  // for the changes (CPU)
+};
+
+// empty when usable, otherwise the field and its range
+std::string validate(const BeatingBackgroundOptions& options);
+
+class BeatingBackground {
+ public:
+  // keeps a reference to ct (the static attenuation the renderer projects); builds the warp
+  BeatingBackground(const AttenuationVolume& ct, const BeatSamples& samples, const BeatingBackgroundOptions& options);
+  ~BeatingBackground();
+
+  int bins() const { return warp_.bins(); }
+  const HeartWarp& warp() const { return warp_; }
+
+  // a new pose: `static_projection` is the static CT's line integrals for g (copied); every bin
+  // is projected again when needed
+  void set_pose(const DetectorGeometry& g, const Image& static_projection);
+
+  // the background's line integrals at `phase` (any real; taken mod 1) into out (sized like the
+  // pose's image); projects the bins it needs that the pose lacks. Allocates nothing once every
+  // bin of the first pose is filled.
+  void at_phase(double phase, Image* out);
+  // projects up to fill_per_frame bins the pose still lacks; returns how many it projected
+  int fill_ahead();
+
+  int filled_bins() const;
+  int64_t bin_projections() const { return bin_projections_; }
+
+ private:
+  void fill(int bin);
+
+  BeatingBackgroundOptions options_;
+  HeartWarp warp_;
+  AttenuationVolume change_;
+  TrilinearProjector projector_;
+  DetectorGeometry geometry_;
+  std::vector<Image> bin_images_;  // static + change, per bin
+  std::vector<char> filled_;
+  Image scratch_;
+  int64_t bin_projections_ = 0;
+};
+
+}  // namespace pcisim::xray

@@ -83,6 +83,7 @@ struct World::Impl {
   std::optional<CoulombFriction> friction;
   std::optional<BloodChainMail> blood;
   std::optional<BeatingHeart> heart;
+  anatomy::HeartMesh heart_mesh;  // the one the heart was built on (vessel_motion): sample_beat_cycle's copy
   HeartFitReport heart_fit;
   std::optional<VesselSkin> skin;
   std::optional<soft_tissue::TissueScene> tissue;
@@ -180,6 +181,7 @@ World::World(const WorldSpec& spec, const anatomy::VesselTree& tree, std::shared
       w.heart_fit = fit_heart_under_tree(tree_in_template, HeartFitParams{}, &mesh);
     }
     w.heart.emplace(*spec.heart_beat, mesh);
+    w.heart_mesh = std::move(mesh);
     // the tree rides the epicardium; the wire, its contact and the blood are simulated in the
     // vessels' rest frame and carried into the world by the same skin (docs/heart.md)
     w.heart_in_case_m.resize(3, w.heart->rest_positions_m().cols());
@@ -227,6 +229,65 @@ World::World(const WorldSpec& spec, const anatomy::VesselTree& tree, std::shared
 }
 
 World::~World() = default;
+
+BeatCycle World::sample_beat_cycle(int bins) const {
+  if (bins < 2) throw std::invalid_argument("sample_beat_cycle: bins must be at least 2, got " + std::to_string(bins));
+  const Impl& w = *impl_;
+  BeatCycle out;
+  if (!w.spec.heart_beat || !w.spec.vessel_motion || !w.skin) return out;
+  // a private copy: the live heart and skin keep their state
+  BeatingHeart heart(*w.spec.heart_beat, w.heart_mesh);
+  const Eigen::Matrix3d linear = w.heart_pose.scale * w.heart_pose.rotation;
+  Eigen::Matrix3Xd heart_in_case = linear * heart.rest_positions_m();
+  heart_in_case.colwise() += w.heart_pose.translation_m;
+  VesselSkin skin(w.tree, heart_in_case, heart.epicardium(), *w.spec.vessel_motion);
+  const Eigen::Index nh = heart_in_case.cols();
+  const Eigen::Index nv = skin.point_count();
+  auto gather = [&](const Eigen::Matrix3Xd& heart_m, std::span<const Eigen::Vector3d> vessels_m) {
+    Eigen::Matrix3Xd all(3, nh + nv);
+    all.leftCols(nh) = heart_m;
+    for (Eigen::Index i = 0; i < nv; ++i) all.col(nh + i) = vessels_m[i];
+    return all;
+  };
+  out.heart_points = static_cast<int>(nh);
+  out.rest_m = gather(heart_in_case, skin.rest_points_m());
+
+  const double dt = w.spec.step_s;
+  auto advance = [&] {
+    const double before = heart.phase();
+    heart.step(dt);
+    heart_in_case.noalias() = linear * heart.positions_m();
+    heart_in_case.colwise() += w.heart_pose.translation_m;
+    skin.update(heart_in_case);
+    double d = heart.phase() - before;
+    if (d <= 0.0) d += 1.0;  // wrapped
+    return d;
+  };
+  // settling: the first cycle from rest, up to the first step after the wrap
+  while (true) {
+    const double before = heart.phase();
+    advance();
+    if (heart.phase() <= before) break;
+  }
+  // sampled: unwrapped phases from that step until a whole cycle past it is covered
+  std::vector<double> u{heart.phase()};
+  std::vector<Eigen::Matrix3Xd> x{gather(heart_in_case, skin.points_m())};
+  while (u.back() < u.front() + 1.0) {
+    u.push_back(u.back() + advance());
+    x.push_back(gather(heart_in_case, skin.points_m()));
+  }
+  out.at_bin_m.reserve(bins);
+  for (int b = 0; b < bins; ++b) {
+    const double phase = static_cast<double>(b) / bins;
+    // phases before the first sampled step are reached at the end of the cycle (across the wrap)
+    const double t = phase >= u.front() ? phase : phase + 1.0;
+    const auto hi = std::clamp<size_t>(std::upper_bound(u.begin(), u.end(), t) - u.begin(), 1, u.size() - 1);
+    const size_t lo = hi - 1;
+    const double a = std::clamp((t - u[lo]) / (u[hi] - u[lo]), 0.0, 1.0);
+    out.at_bin_m.push_back((1.0 - a) * x[lo] + a * x[hi]);
+  }
+  return out;
+}
 
 void World::step(const InstrumentInput& input) {
   Impl& w = *impl_;

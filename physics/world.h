@@ -1,6 +1,7 @@
 #pragma once
 // The physics pipeline a scene asks for: it builds only the listed effects and steps them in a
 // fixed order. Plain data in (instrument input), plain data out (snapshot, local force model).
+#include <Eigen/Core>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -33,6 +34,16 @@ class WallContact;
 namespace soft_tissue {
 class TissueScene;
 }  // namespace soft_tissue
+
+// one cardiac cycle sampled at `bins` evenly spaced phases (b / bins, b = 0..bins-1), for the
+// x-ray background that beats (xray/fluoro/beating_background.h): the heart's particles and the
+// coronary centerline points, in the case's frame (metres). Column order: heart particles, then
+// the vessel skin's centerline points (tree order)
+struct BeatCycle {
+  Eigen::Matrix3Xd rest_m;                 // every point at rest
+  std::vector<Eigen::Matrix3Xd> at_bin_m;  // bins entries, same columns as rest_m
+  int heart_points = 0;                    // the first heart_points columns are heart particles
+};
 
 struct EffectCost {
   std::string name;           // the scene's effect name
@@ -70,6 +81,13 @@ class World {
   // effects in step order, with their cost in the last step
   std::span<const EffectCost> effect_costs() const;
   double time_s() const;
+
+  // one settling cycle, then one sampled cycle, of a private copy of the heart (same params, mesh
+  // and pose) and of the skin, at the scene's step; a bin's positions are interpolated linearly
+  // between the two steps around its phase (bin 0: the cycle's last step and the first after the
+  // wrap). Empty (rest_m.cols() == 0) without heart_beat or vessel_motion. Allocates; called once
+  // at scene start. Throws std::invalid_argument when bins < 2.
+  BeatCycle sample_beat_cycle(int bins) const;
 
   // instrument samples refused (NaN, Inf, absurd) since construction; the previous one was kept
   int64_t rejected_inputs() const;

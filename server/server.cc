@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
@@ -14,6 +15,7 @@
 #include "realtime/clock.h"
 #include "realtime/realtime_setup.h"
 #include "server/ultrasound_loop.h"
+#include "server/beat_samples.h"
 #include "server/xray_loop.h"
 #include "physics/soft_tissue/tissue_scene.h"
 
@@ -132,10 +134,17 @@ Server::Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images, SessionL
   }
   if (scene.xray) {
     const int64_t t1 = realtime::monotonic_ns();
-    impl_->xray = std::make_unique<XrayLoop>(scene, anatomy, impl_->state, images);
-    spdlog::info("fluoroscopy ready in {:.0f} ms ({}x{} detector, {} fps, frames {})",
+    // the background beats with the heart the tree rides (one cycle sampled now, warped per bin)
+    std::optional<xray::BeatSamples> beat;
+    if (scene.world.vessel_motion && scene.xray->heart_phase_bins > 0)
+      beat = beat_samples_mm(impl_->physics->world().sample_beat_cycle(scene.xray->heart_phase_bins));
+    impl_->xray = std::make_unique<XrayLoop>(scene, anatomy, impl_->state, images, beat ? &*beat : nullptr);
+    spdlog::info("fluoroscopy ready in {:.0f} ms ({}x{} detector, {} fps, frames {}, background {})",
                  (realtime::monotonic_ns() - t1) * 1e-6, scene.xray->fluoro.c_arm.width,
-                 scene.xray->fluoro.c_arm.height, scene.xray->pulse_rate_fps, images ? "published" : "not published");
+                 scene.xray->fluoro.c_arm.height, scene.xray->pulse_rate_fps, images ? "published" : "not published",
+                 beat ? fmt::format("beating, {} phase bins {}", scene.xray->heart_phase_bins,
+                                    scene.xray->heart_phase_blend ? "blended" : "nearest")
+                      : std::string("still"));
   }
 }
 

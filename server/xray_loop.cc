@@ -11,13 +11,20 @@
 
 namespace pcisim::server {
 
-XrayLoop::XrayLoop(const Scene& scene, const anatomy::Case& anatomy, SharedState& state, lcm::LCM* images)
+XrayLoop::XrayLoop(const Scene& scene, const anatomy::Case& anatomy, SharedState& state, lcm::LCM* images,
+                   const xray::BeatSamples* beat)
     : spec_(*scene.xray), state_(state), images_(images) {
   // the table brings the case's heart to the isocentre (a patient's CT is in scanner coordinates)
   spec_.initial_pose.isocenter_mm = anatomy::heart_center_mm(anatomy);
   // the case physics runs on: its vessels for the contrast, its CT (or the thorax) behind them
   renderer_ = std::make_unique<xray::FluoroscopyRenderer>(anatomy.vessels,
                                                           xray::background_volume(anatomy, spec_.fluoro), spec_.fluoro);
+  if (beat) {
+    xray::BeatingBackgroundOptions o;
+    o.interpolate = spec_.heart_phase_blend;
+    o.projector = spec_.fluoro.projector.trilinear;
+    renderer_->set_beat(*beat, o);
+  }
   injections_.reserve(SharedState::kMaxInjections);
   state_.carm_primary_deg = state_.carm_target_primary_deg = spec_.initial_pose.primary_deg;
   state_.carm_secondary_deg = state_.carm_target_secondary_deg = spec_.initial_pose.secondary_deg;
@@ -27,7 +34,11 @@ XrayLoop::XrayLoop(const Scene& scene, const anatomy::Case& anatomy, SharedState
   // first press of the pedal gets frames at once
   xray::FluoroInput warm_up;
   warm_up.pose = spec_.initial_pose;
+  warm_up.heart_phase = beat ? 0.0 : NAN;
   renderer_->render(warm_up, frame_);
+  if (beat) {
+    while (renderer_->fill_beat_ahead() > 0) {}
+  }
 }
 
 // a move re-projects the whole background (a fraction of a second of CPU): a flood of targets
@@ -66,6 +77,7 @@ void XrayLoop::render_and_publish(bool cine) {
   in.pose.secondary_deg = state_.carm_secondary_deg.load();
   in.wire_m = snap.wire_nodes_m;
   in.vessel_points_m = snap.vessel_points_m;
+  if (renderer_->beat()) in.heart_phase = snap.heart_phase;
   if (spec_.contrast) in.injections = injections_;
   const int64_t t0 = realtime::monotonic_ns();
   renderer_->render(in, frame_);

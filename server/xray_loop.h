@@ -18,7 +18,10 @@ class XrayLoop {
  public:
   // prepares the projector over the case's CT (or the thorax phantom around its vessels when the
   // case has none); may take a second or two
-  XrayLoop(const Scene& scene, const anatomy::Case& anatomy, SharedState& state, lcm::LCM* images);
+  // `beat`, when given (vessel_motion with xray.heart_phase_bins > 0), makes the background beat:
+  // every phase bin of the initial pose is projected here, before the first pedal press
+  XrayLoop(const Scene& scene, const anatomy::Case& anatomy, SharedState& state, lcm::LCM* images,
+           const xray::BeatSamples* beat = nullptr);
   void run();  // until state.stop
 
  private:

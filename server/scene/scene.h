@@ -23,6 +23,11 @@ struct XraySpec {
   xray::CArmPose initial_pose;   // until a session command moves the C-arm
   bool contrast = false;         // the scene lists "contrast"
   double injection_volume_ml = 8.0, injection_duration_s = 2.0;
+  // the background beats with the heart (with vessel_motion only): phase bins per cycle, each
+  // projected once per C-arm pose (0: the background stands still), blended per frame or not
+  // (docs/benchmarks/xray-beating.md has the error and cost of each choice)
+  int heart_phase_bins = 16;
+  bool heart_phase_blend = true;
 };
 
 // the "ultrasound" effect: B-mode frames in the probe's plane through the deformed tissue

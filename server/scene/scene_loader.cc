@@ -327,6 +327,9 @@ XraySpec read_xray(json::JsonReader r) {
                                         x.pulse_rate_fps, x.cine_rate_fps));
   x.initial_pose.primary_deg = r.number("primary_deg", -30, -180, 180);
   x.initial_pose.secondary_deg = r.number("secondary_deg", 30, -90, 90);
+  x.heart_phase_bins = static_cast<int>(r.integer("heart_phase_bins", x.heart_phase_bins, 0, 64));
+  if (x.heart_phase_bins == 1) r.fail("heart_phase_bins", "expected 0 (a still background) or 2-64, got 1");
+  x.heart_phase_blend = r.boolean("heart_phase_blend", x.heart_phase_blend);
   r.finish();
   return x;
 }

@@ -151,6 +151,9 @@ void FluoroscopyRenderer::set_beat(const BeatSamples& samples, const BeatingBack
 const BeatingBackground* FluoroscopyRenderer::beat() const {
   return impl_->beat.get();
 }
+int FluoroscopyRenderer::fill_beat_ahead() {
+  return impl_->beat && impl_->background_valid ? impl_->beat->fill_ahead() : 0;
+}
 void FluoroscopyRenderer::set_c_arm(const CArmSpec& c_arm) {
   impl_->spec.c_arm = c_arm;
 }

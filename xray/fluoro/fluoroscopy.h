@@ -103,6 +103,9 @@ class FluoroscopyRenderer {
   // samples or options are bad (naming the field)
   void set_beat(const BeatSamples& samples, const BeatingBackgroundOptions& options = {});
   const BeatingBackground* beat() const;  // null while the background stands still
+  // projects up to the beat's fill_per_frame phase bins the current pose still lacks (render()
+  // does this after each frame); how many it projected, 0 when none is missing or no beat
+  int fill_beat_ahead();
   // a new detector or SID/SAD; the next frame re-projects the background if the geometry changed
   void set_c_arm(const CArmSpec& c_arm);
 

@@ -1,0 +1,12 @@
+#pragma once
+// One cardiac cycle as the x-ray background needs it: physics samples the heart and the coronary
+// centerline at each phase bin (metres, the case's frame), xray warps the CT with them (mm, the
+// same frame: the CT's physical frame is the physics frame scaled by 1000).
+#include "physics/world.h"
+#include "xray/fluoro/heart_warp.h"
+
+namespace pcisim::server {
+
+xray::BeatSamples beat_samples_mm(const physics::BeatCycle& cycle);
+
+}  // namespace pcisim::server

@@ -76,6 +76,7 @@ struct Row {
   std::string scheme;
   int bins = 0;
   bool blend = false;
+  int stride = 1;                              // the change's detector: every stride-th pixel, upsampled
   Errors mean, worst_phase;                    // mean over the test phases; the worst phase's
   double fill_ms_median = 0, fill_ms_p99 = 0;  // one bin's change projected (per pose)
   double frame_ms_median = 0;                  // the background per frame (blend or copy)
@@ -131,6 +132,13 @@ int run(const std::vector<std::string>& args) {
   const std::array<int, 3> lo = fine_warp.box_lo(), hi = fine_warp.box_hi();
   std::vector<int> test_bins;
   for (int m = 0; m < kFine / 2; m += opt.quick ? 8 : 4) test_bins.push_back(2 * m + 1);
+  // what a bin's change costs to write (the warp of the box), apart from its projection
+  std::vector<double> write_change_ms;
+  for (int b = 0; b < kFine; b += 8) {
+    const auto w0 = Clock::now();
+    fine_warp.write_change(b, &change);
+    write_change_ms.push_back(ms_since(w0));
+  }
   std::vector<Image> truth(test_bins.size());
   std::vector<double> reproject_ms;
   for (size_t t = 0; t < test_bins.size(); ++t) {
@@ -164,10 +172,20 @@ int run(const std::vector<std::string>& args) {
     }
     rows.push_back(r);
   }
-  for (const int bins : {8, 16, 32}) {
-    for (const bool blend : {false, true}) {
+  struct Variant {
+    int bins;
+    bool blend;
+    int stride;
+  };
+  const std::vector<Variant> variants = {{8, false, 1}, {8, true, 1},  {16, false, 1}, {16, true, 1}, {32, false, 1},
+                                         {32, true, 1}, {16, true, 2}, {16, true, 4},  {32, true, 2}};
+  for (const Variant& v : variants) {
+    {
+      const int bins = v.bins;
+      const bool blend = v.blend;
       BeatingBackgroundOptions o;
       o.interpolate = blend;
+      o.change_stride = v.stride;
       o.projector = spec.projector.trilinear;
       BeatingBackground beat(mu0, every_kth_bin(fine, kFine / bins), o);
       beat.set_pose(g, still);
@@ -177,7 +195,7 @@ int run(const std::vector<std::string>& args) {
         beat.fill_ahead();
         fill.push_back(ms_since(f0));
       }
-      Row r{.scheme = "cache", .bins = bins, .blend = blend};
+      Row r{.scheme = "cache", .bins = bins, .blend = blend, .stride = v.stride};
       r.fill_ms_median = percentile(fill, 0.5);
       r.fill_ms_p99 = percentile(fill, 0.99);
       Image got;
@@ -264,28 +282,34 @@ int run(const std::vector<std::string>& args) {
   md << fmt::format(
       "Reference: at each of {} test phases ((2m + 1) / 64, bins of no cache), the CT warped by that phase's field and "
       "projected whole, as re-projecting every frame would: {:.0f} ms median, {:.0f} ms p99 per frame (warp of the "
-      "box, bricks, projection). Errors are the line integrals' difference from it, relative to the largest static "
+      "box, bricks, projection). Writing one bin's change over the box (the warp alone, one thread) takes {:.0f} ms "
+      "median; the rest of a bin's cost below is its projection. Errors are the line integrals' difference from it, "
+      "relative to the largest static "
       "line integral: RMSE over the frame, RMSE over the pixels the motion changes (|reference - still| > 1e-4 of the "
       "largest), worst pixel; the mean over the test phases and the worst phase's RMSE.\n\n",
-      test_bins.size(), percentile(reproject_ms, 0.5), percentile(reproject_ms, 0.99));
-  md << "| scheme | bins | per frame | RMSE % | RMSE over the moving pixels % | worst pixel % | worst phase RMSE % | "
+      test_bins.size(), percentile(reproject_ms, 0.5), percentile(reproject_ms, 0.99),
+      percentile(write_change_ms, 0.5));
+  md << "| scheme | bins | per frame | change detector | RMSE % | RMSE over the moving pixels % | worst pixel % | "
+        "worst phase RMSE % | "
         "one bin projected (ms, median / p99) | background per frame (ms) |\n";
-  md << "|---|---|---|---|---|---|---|---|---|\n";
+  md << "|---|---|---|---|---|---|---|---|---|---|\n";
   js << "{\n  \"machine\": \"" << machine_info() << "\",\n  \"rows\": [\n";
   for (size_t i = 0; i < rows.size(); ++i) {
     const Row& r = rows[i];
     const std::string per = r.scheme == "still" ? "-" : (r.blend ? "blend" : "nearest");
-    md << fmt::format("| {} | {} | {} | {:.4f} | {:.3f} | {:.3f} | {:.4f} | {} | {} |\n", r.scheme,
-                      r.bins ? std::to_string(r.bins) : "-", per, 100 * r.mean.rmse, 100 * r.mean.rmse_moving,
-                      100 * r.mean.worst, 100 * r.worst_phase.rmse,
+    md << fmt::format("| {} | {} | {} | {} | {:.4f} | {:.3f} | {:.3f} | {:.4f} | {} | {} |\n", r.scheme,
+                      r.bins ? std::to_string(r.bins) : "-", per,
+                      r.bins ? (r.stride == 1 ? std::string("full") : fmt::format("1/{} per axis", r.stride)) : "-",
+                      100 * r.mean.rmse, 100 * r.mean.rmse_moving, 100 * r.mean.worst, 100 * r.worst_phase.rmse,
                       r.bins ? fmt::format("{:.1f} / {:.1f}", r.fill_ms_median, r.fill_ms_p99) : "-",
                       r.bins ? fmt::format("{:.2f}", r.frame_ms_median) : "-");
     js << fmt::format(
-        "    {{\"scheme\": \"{}\", \"bins\": {}, \"blend\": {}, \"rmse_rel\": {:.6g}, \"rmse_moving_rel\": {:.6g}, "
+        "    {{\"scheme\": \"{}\", \"bins\": {}, \"blend\": {}, \"stride\": {}, \"rmse_rel\": {:.6g}, "
+        "\"rmse_moving_rel\": {:.6g}, "
         "\"worst_rel\": {:.6g}, \"worst_phase_rmse_rel\": {:.6g}, \"fill_ms_median\": {:.4g}, \"fill_ms_p99\": {:.4g}, "
         "\"frame_ms_median\": {:.4g}}}{}\n",
-        r.scheme, r.bins, r.blend ? "true" : "false", r.mean.rmse, r.mean.rmse_moving, r.mean.worst, r.worst_phase.rmse,
-        r.fill_ms_median, r.fill_ms_p99, r.frame_ms_median, i + 1 < rows.size() ? "," : "");
+        r.scheme, r.bins, r.blend ? "true" : "false", r.stride, r.mean.rmse, r.mean.rmse_moving, r.mean.worst,
+        r.worst_phase.rmse, r.fill_ms_median, r.fill_ms_p99, r.frame_ms_median, i + 1 < rows.size() ? "," : "");
   }
   js << fmt::format(
       "  ],\n  \"reproject_ms_median\": {:.4g},\n  \"first_frame_ms_median\": {:.4g},\n"

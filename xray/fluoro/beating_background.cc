@@ -1,5 +1,6 @@
 #include "xray/fluoro/beating_background.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -9,6 +10,7 @@ std::string validate(const BeatingBackgroundOptions& o) {
   if (std::string bad = validate(o.warp); !bad.empty()) return "warp." + bad;
   if (o.fill_per_frame < 0 || o.fill_per_frame > 64) return "fill_per_frame must be in [0, 64]";
   if (!(o.projector.step_voxels > 0)) return "projector.step_voxels must be > 0";
+  if (o.change_stride != 1 && o.change_stride != 2 && o.change_stride != 4) return "change_stride must be 1, 2 or 4";
   return {};
 }
 
@@ -42,15 +44,46 @@ void BeatingBackground::set_pose(const DetectorGeometry& g, const Image& static_
     std::copy(static_projection.pixels.begin(), static_projection.pixels.end(), im.pixels.begin());
   }
   if (scratch_.width != g.width || scratch_.height != g.height) scratch_.resize(g.width, g.height);
+  // the coarse detector: pixel (C, R) centred on fine pixel (s C + (s - 1) / 2, s R + (s - 1) / 2)
+  const int s = options_.change_stride;
+  coarse_geometry_ = g;
+  coarse_geometry_.width = (g.width + s - 1) / s;
+  coarse_geometry_.height = (g.height + s - 1) / s;
+  coarse_geometry_.pixel_mm = g.pixel_mm * s;
+  const double dc = 0.5 * (coarse_geometry_.width - 1) * s + 0.5 * (s - 1) - 0.5 * (g.width - 1);
+  const double dr = 0.5 * (coarse_geometry_.height - 1) * s + 0.5 * (s - 1) - 0.5 * (g.height - 1);
+  coarse_geometry_.center_mm = g.center_mm + (dc * g.pixel_mm) * g.u + (dr * g.pixel_mm) * g.v;
+  if (coarse_.width != coarse_geometry_.width || coarse_.height != coarse_geometry_.height)
+    coarse_.resize(coarse_geometry_.width, coarse_geometry_.height);
   std::fill(filled_.begin(), filled_.end(), 0);
 }
 
 // bin image = static projection (already there) + the projection of the bin's change
 void BeatingBackground::fill(int bin) {
   warp_.write_change(bin, &change_);
-  projector_.project(change_, geometry_, &scratch_);
   std::vector<float>& p = bin_images_[bin].pixels;
-  for (size_t i = 0; i < p.size(); ++i) p[i] += scratch_.pixels[i];
+  const int s = options_.change_stride;
+  if (s == 1) {
+    projector_.project(change_, geometry_, &scratch_);
+    for (size_t i = 0; i < p.size(); ++i) p[i] += scratch_.pixels[i];
+  } else {
+    // bilinear from the coarse detector: fine pixel c sits at coarse coordinate (c - (s - 1) / 2) / s
+    projector_.project(change_, coarse_geometry_, &coarse_);
+    const int cw = coarse_.width, ch = coarse_.height;
+    for (int r = 0; r < geometry_.height; ++r) {
+      const float y = std::clamp((r - 0.5f * (s - 1)) / s, 0.0f, float(ch - 1));
+      const int y0 = std::min(static_cast<int>(y), std::max(ch - 2, 0)), y1 = std::min(y0 + 1, ch - 1);
+      const float fy = y - y0;
+      for (int c = 0; c < geometry_.width; ++c) {
+        const float x = std::clamp((c - 0.5f * (s - 1)) / s, 0.0f, float(cw - 1));
+        const int x0 = std::min(static_cast<int>(x), std::max(cw - 2, 0)), x1 = std::min(x0 + 1, cw - 1);
+        const float fx = x - x0;
+        const float a = coarse_.at(x0, y0) + fx * (coarse_.at(x1, y0) - coarse_.at(x0, y0));
+        const float b = coarse_.at(x0, y1) + fx * (coarse_.at(x1, y1) - coarse_.at(x0, y1));
+        p[size_t(r) * geometry_.width + c] += a + fy * (b - a);
+      }
+    }
+  }
   filled_[bin] = 1;
   ++bin_projections_;
 }

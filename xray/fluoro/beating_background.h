@@ -18,8 +18,11 @@ namespace pcisim::xray {
 
 struct BeatingBackgroundOptions {
   HeartWarpParams warp;
-  bool interpolate = true;                         // blend the two bins around the phase; false: the nearer bin
-  int fill_per_frame = 1;                          // bins projected ahead per frame until the pose has every bin
+  bool interpolate = true;  // blend the two bins around the phase; false: the nearer bin
+  int fill_per_frame = 1;   // bins projected ahead per frame until the pose has every bin
+  // the change is projected on a detector of every change_stride-th pixel (1, 2 or 4) and
+  // upsampled bilinearly: about change_stride^2 times cheaper; the moving edges blur a little
+  int change_stride = 1;
   TrilinearOptions projector{.step_voxels = 1.0};  // for the changes (CPU)
 };
 
@@ -59,7 +62,8 @@ class BeatingBackground {
   DetectorGeometry geometry_;
   std::vector<Image> bin_images_;  // static + change, per bin
   std::vector<char> filled_;
-  Image scratch_;
+  Image scratch_, coarse_;
+  DetectorGeometry coarse_geometry_;
   int64_t bin_projections_ = 0;
 };
 

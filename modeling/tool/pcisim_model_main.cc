@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -82,16 +83,21 @@ int motion_main(int argc, char** argv) {
       "written as the motion file the beating heart reads (scene key heart_beat.motion_file; format in\n"
       "docs/heart.md). Frame f of F is at phase f / F. docs/heart.md, 'Motion from images'.\n\n"
       "  pcisim-model motion --sequence cine/ --out patient.motion\n"
+      "  pcisim-model motion --sequence cine.nrrd --cycle-s 0.8 --out patient.motion   (one 4-D NRRD)\n"
       "  pcisim-model motion --frames f00.nrrd f01.nrrd ... --heart cases/patient1 --out "
       "cases/patient1/heart.motion\n"};
   app.name("pcisim-model motion");
   std::vector<std::string> frame_paths;
-  std::string sequence_dir, out_path, case_dir;
+  std::string sequence, out_path, case_dir;
   double cycle_s = 60.0 / 72.0, grid_mm = 5.0;
   modeling::DemonsOptions o;
   auto* in = app.add_option_group("input", "the frames, in phase order");
   in->add_option("--frames", frame_paths, "volume files (.nrrd, .nhdr, .mha, .mhd), one per phase, frame 0 first");
-  in->add_option("--sequence", sequence_dir, "a folder of volume files, taken in name order");
+  in->add_option(
+      "--sequence", sequence,
+      "a folder of volume files in phase order (by their numbers: frame_000.nrrd, frame_001.nrrd, ...), or one "
+      "4-D NRRD (.nrrd, .nhdr: sizes x y z time, the time axis's space direction none) whose time index is the "
+      "frame");
   in->require_option(1);
   app.add_option("--out", out_path, "the motion file to write; a report (.json) is written beside it")->required();
   app.add_option("--heart", case_dir,
@@ -110,22 +116,36 @@ int motion_main(int argc, char** argv) {
   knobs->add_option("--threads", o.threads, "worker threads; 0 = all cores")->check(CLI::Range(0, 256));
   CLI11_PARSE(app, argc, argv);
   try {
-    if (!sequence_dir.empty()) {
-      if (!fs::is_directory(sequence_dir))
-        throw std::runtime_error("--sequence: '" + sequence_dir + "' is not a folder");
-      for (const auto& e : fs::directory_iterator(sequence_dir)) {
-        const std::string ext = e.path().extension().string();
-        if (e.is_regular_file() && (ext == ".nrrd" || ext == ".nhdr" || ext == ".mha" || ext == ".mhd"))
-          frame_paths.push_back(e.path().string());
-      }
-      frame_paths = modeling::order_frame_files(frame_paths);
-      if (frame_paths.size() < 2)
-        throw std::runtime_error(fmt::format("--sequence: '{}' holds {} volume files; a cycle needs at least 2",
-                                             sequence_dir, frame_paths.size()));
+    // a 4-D NRRD gives every frame at once; the report names them "<file>[t]"
+    std::vector<anatomy::Volume> frames;
+    bool sequence_file = false;
+    if (!sequence.empty() && !fs::is_directory(sequence)) {
+      std::string ext = fs::path(sequence).extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+      if (!fs::exists(sequence)) throw std::runtime_error("--sequence: '" + sequence + "' does not exist");
+      if (ext != ".nrrd" && ext != ".nhdr")
+        throw std::runtime_error("--sequence: '" + sequence +
+                                 "' is neither a folder of frames nor a 4-D NRRD (.nrrd, .nhdr) holding them");
+      sequence_file = true;
     }
     const auto t0 = std::chrono::steady_clock::now();
-    std::vector<anatomy::Volume> frames;
-    for (const std::string& path : frame_paths) frames.push_back(anatomy::read_volume(path, true));
+    if (sequence_file) {
+      frames = anatomy::read_nrrd_sequence(sequence, true);
+      for (size_t t = 0; t < frames.size(); ++t) frame_paths.push_back(fmt::format("{}[{}]", sequence, t));
+    } else {
+      if (!sequence.empty()) {
+        for (const auto& e : fs::directory_iterator(sequence)) {
+          const std::string ext = e.path().extension().string();
+          if (e.is_regular_file() && (ext == ".nrrd" || ext == ".nhdr" || ext == ".mha" || ext == ".mhd"))
+            frame_paths.push_back(e.path().string());
+        }
+        frame_paths = modeling::order_frame_files(frame_paths);
+        if (frame_paths.size() < 2)
+          throw std::runtime_error(fmt::format("--sequence: '{}' holds {} volume files; a cycle needs at least 2",
+                                               sequence, frame_paths.size()));
+      }
+      for (const std::string& path : frame_paths) frames.push_back(anatomy::read_volume(path, true));
+    }
     anatomy::HeartPose pose;
     if (!case_dir.empty()) pose = anatomy::read_case(case_dir).heart;
     const anatomy::MotionGrid grid = anatomy::template_motion_grid(grid_mm * 1e-3);
@@ -183,10 +203,13 @@ int cine_main(int argc, char** argv) {
   CLI::App app{
       "pcisim-model cine: writes a synthetic cine sequence of the template heart moving by the built-in contraction\n"
       "(docs/heart.md): bright blood, dark myocardium, epicardial fat, partial volume and noise, one float NRRD per\n"
-      "phase (frame_000.nrrd ...), and the exact motion beside it (truth.motion), to test `pcisim-model motion`.\n\n"
-      "  pcisim-model cine --out out/cine && pcisim-model motion --sequence out/cine --out out/recovered.motion\n"};
+      "phase (frame_000.nrrd ...), and the exact motion beside it (truth.motion), to test `pcisim-model motion`;\n"
+      "with --nrrd4d also the whole sequence as one 4-D NRRD (x y z time).\n\n"
+      "  pcisim-model cine --out out/cine && pcisim-model motion --sequence out/cine --out out/recovered.motion\n"
+      "  pcisim-model cine --out out/cine --nrrd4d out/cine.nrrd && pcisim-model motion --sequence out/cine.nrrd "
+      "--out out/recovered.motion\n"};
   app.name("pcisim-model cine");
-  std::string out_dir;
+  std::string out_dir, nrrd4d;
   modeling::CineSpec spec;
   double voxel_mm = spec.voxel_mm.x();
   app.add_option("--out", out_dir, "the folder to write (created)")->required();
@@ -198,6 +221,9 @@ int cine_main(int argc, char** argv) {
   app.add_option("--tags", spec.tag_amplitude, "amplitude of a tag pattern carried by the tissue (0: plain cine)")
       ->check(CLI::Range(0.0, 1.0));
   app.add_option("--seed", spec.seed, "noise seed");
+  app.add_option("--nrrd4d", nrrd4d,
+                 "also write the frames as one 4-D NRRD (.nrrd, float, sizes x y z time), outside --out's folder "
+                 "(which `pcisim-model motion --sequence` reads as frames)");
   CLI11_PARSE(app, argc, argv);
   spec.voxel_mm = Eigen::Vector3d::Constant(voxel_mm);
   if (spec.slice_thickness_mm > 0) spec.voxel_mm.z() = std::max(voxel_mm, spec.slice_thickness_mm);
@@ -214,16 +240,36 @@ int cine_main(int argc, char** argv) {
                                    "); a sequence read back from it would mix two runs: choose an empty folder");
       }
     }
+    if (!nrrd4d.empty()) {
+      std::string ext = fs::path(nrrd4d).extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+      if (ext != ".nrrd") throw std::runtime_error("--nrrd4d: '" + nrrd4d + "' must end in .nrrd");
+      // in the frames' folder it would be read as one more frame (and refused: it has no number)
+      auto folder = [](const fs::path& p) {
+        const fs::path c = fs::weakly_canonical(fs::absolute(p));
+        return c.has_filename() ? c : c.parent_path();  // "out/cine/" is "out/cine"
+      };
+      if (folder(nrrd4d).parent_path() == folder(out_dir))
+        throw std::runtime_error("--nrrd4d: '" + nrrd4d + "' lies in --out's folder, which holds the frames only: " +
+                                 "write it beside the folder");
+    }
     const auto t0 = std::chrono::steady_clock::now();
     fs::create_directories(out_dir);
+    std::vector<anatomy::Volume> all;  // kept for --nrrd4d only
     for (int f = 0; f < spec.frames; ++f) {
-      const anatomy::Volume v = modeling::render_synthetic_cine_frame(truth, spec, f);
+      anatomy::Volume v = modeling::render_synthetic_cine_frame(truth, spec, f);
       anatomy::write_nrrd(v, (fs::path(out_dir) / fmt::format("frame_{:03d}.nrrd", f)).string());
       std::printf("  frame %d/%d written (%.1f s)\n", f + 1, spec.frames, seconds_since(t0));
       std::fflush(stdout);
+      if (!nrrd4d.empty()) all.push_back(std::move(v));
     }
     truth.write((fs::path(out_dir) / "truth.motion").string());
-    std::printf("done in %.1f s: %d frames and truth.motion in %s\n", seconds_since(t0), spec.frames, out_dir.c_str());
+    if (!nrrd4d.empty()) {
+      if (fs::path(nrrd4d).has_parent_path()) fs::create_directories(fs::path(nrrd4d).parent_path());
+      anatomy::write_nrrd_sequence(all, nrrd4d);
+    }
+    std::printf("done in %.1f s: %d frames and truth.motion in %s%s\n", seconds_since(t0), spec.frames, out_dir.c_str(),
+                nrrd4d.empty() ? "" : (", the 4-D sequence in " + nrrd4d).c_str());
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pcisim-model cine: %s\n", e.what());

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <thread>
 
 namespace pcisim::xray {
 
@@ -11,6 +12,7 @@ std::string validate(const BeatingBackgroundOptions& o) {
   if (o.fill_per_frame < 0 || o.fill_per_frame > 64) return "fill_per_frame must be in [0, 64]";
   if (!(o.projector.step_voxels > 0)) return "projector.step_voxels must be > 0";
   if (o.change_stride != 1 && o.change_stride != 2 && o.change_stride != 4) return "change_stride must be 1, 2 or 4";
+  if (!(o.change_cache_mib >= 0 && o.change_cache_mib <= 1 << 20)) return "change_cache_mib must be in [0, 2^20]";
   return {};
 }
 
@@ -30,7 +32,25 @@ BeatingBackground::BeatingBackground(const AttenuationVolume& ct, const BeatSamp
       change_(warp_.make_change_volume()),
       projector_(change_, options.projector),
       bin_images_(warp_.bins()),
-      filled_(warp_.bins(), 0) {}
+      filled_(warp_.bins(), 0) {
+  const double mib = double(change_.padded_count()) * sizeof(float) * bins() / (1 << 20);
+  if (mib > options_.change_cache_mib) return;
+  // every bin's change now, bins split over two threads (each writes its own volume)
+  changes_.reserve(bins());
+  for (int b = 0; b < bins(); ++b) changes_.push_back(warp_.make_change_volume());
+  auto write = [this](int first) {
+    for (int b = first; b < bins(); b += 2) warp_.write_change(b, &changes_[b]);
+  };
+  std::thread other(write, 1);
+  write(0);
+  other.join();
+}
+
+const AttenuationVolume& BeatingBackground::change(int bin) {
+  if (!changes_.empty()) return changes_[bin];
+  warp_.write_change(bin, &change_);
+  return change_;
+}
 
 BeatingBackground::~BeatingBackground() = default;
 
@@ -60,15 +80,15 @@ void BeatingBackground::set_pose(const DetectorGeometry& g, const Image& static_
 
 // bin image = static projection (already there) + the projection of the bin's change
 void BeatingBackground::fill(int bin) {
-  warp_.write_change(bin, &change_);
+  const AttenuationVolume& dmu = change(bin);
   std::vector<float>& p = bin_images_[bin].pixels;
   const int s = options_.change_stride;
   if (s == 1) {
-    projector_.project(change_, geometry_, &scratch_);
+    projector_.project(dmu, geometry_, &scratch_);
     for (size_t i = 0; i < p.size(); ++i) p[i] += scratch_.pixels[i];
   } else {
     // bilinear from the coarse detector: fine pixel c sits at coarse coordinate (c - (s - 1) / 2) / s
-    projector_.project(change_, coarse_geometry_, &coarse_);
+    projector_.project(dmu, coarse_geometry_, &coarse_);
     const int cw = coarse_.width, ch = coarse_.height;
     for (int r = 0; r < geometry_.height; ++r) {
       const float y = std::clamp((r - 0.5f * (s - 1)) / s, 0.0f, float(ch - 1));

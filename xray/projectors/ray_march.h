@@ -124,62 +124,92 @@ PCISIM_XRAY_HD float sum_samples(const GridView& g, const float x0[3], const flo
   return acc;
 }
 
+// one pixel's ray in padded voxel coordinates: x(t) = x0 + t dx, t in [0, 1] from the source to
+// the pixel centre, clipped to [t0, t1] inside the grid; samples t_k = t0 + (k + 1/2) dt for
+// k in [0, k_end), dt = step_voxels along the ray; len_mm turns a sum of samples times dt into mm
+struct RaySetup {
+  float x0[3], dx[3];
+  float t0, t1, dt, len_mm;
+  int k_end;
+};
+
+// the first sample index k with t_k >= t
+PCISIM_XRAY_HD int first_sample_at_or_after(const RaySetup& s, float t) {
+  return static_cast<int>(ceilf((t - s.t0) / s.dt - 0.5f));
+}
+
+// false (and k_end 0) when the ray misses the grid
+PCISIM_XRAY_HD bool setup_ray(const GridView& g, const DetectorView& d, int c, int r, float step_voxels, RaySetup* s) {
+  s->k_end = 0;
+  const float oc = (c - 0.5f * (d.width - 1)) * d.pixel_mm, orow = (r - 0.5f * (d.height - 1)) * d.pixel_mm;
+  float pix[3], x1[3];
+  for (int a = 0; a < 3; ++a) pix[a] = d.center[a] + oc * d.u[a] + orow * d.v[a];
+  s->len_mm = sqrtf((pix[0] - d.src[0]) * (pix[0] - d.src[0]) + (pix[1] - d.src[1]) * (pix[1] - d.src[1]) +
+                    (pix[2] - d.src[2]) * (pix[2] - d.src[2]));
+  for (int a = 0; a < 3; ++a) {
+    s->x0[a] = g.m[4 * a] * d.src[0] + g.m[4 * a + 1] * d.src[1] + g.m[4 * a + 2] * d.src[2] + g.m[4 * a + 3];
+    x1[a] = g.m[4 * a] * pix[0] + g.m[4 * a + 1] * pix[1] + g.m[4 * a + 2] * pix[2] + g.m[4 * a + 3];
+    s->dx[a] = x1[a] - s->x0[a];
+  }
+  const float len_vox = sqrtf(s->dx[0] * s->dx[0] + s->dx[1] * s->dx[1] + s->dx[2] * s->dx[2]);
+  if (!(len_vox > 0.f)) return false;
+  // mu is non-zero only strictly inside padded [0, n-1]
+  const float box[3] = {float(g.nx - 1), float(g.ny - 1), float(g.nz - 1)};
+  s->t0 = 0.f;
+  s->t1 = 1.f;
+  if (!clip_to_box(s->x0, s->dx, box, &s->t0, &s->t1)) return false;
+  s->dt = step_voxels / len_vox;
+  s->k_end = first_sample_at_or_after(*s, s->t1);
+  return true;
+}
+
+// calls run(k_lo, k_hi) for the sample ranges to sum, in order: [0, k_end) whole, or with
+// skip_empty the runs of bricks holding some mu (walking the brick grid; the same samples' sum)
+template <class Run>
+PCISIM_XRAY_HD void for_each_run(const GridView& g, const RaySetup& s, bool skip_empty, Run& run) {
+  if (s.k_end <= 0) return;
+  if (!skip_empty) {
+    run(0, s.k_end);
+    return;
+  }
+  // walk the bricks; merge runs of non-empty ones
+  const float inv_b = 1.0f / g.brick;
+  const float q0[3] = {s.x0[0] * inv_b, s.x0[1] * inv_b, s.x0[2] * inv_b};
+  const float dq[3] = {s.dx[0] * inv_b, s.dx[1] * inv_b, s.dx[2] * inv_b};
+  const int nb[3] = {g.bnx, g.bny, g.bnz};
+  float run_start = -1.f, run_end = -1.f;
+  auto flush = [&]() {
+    if (run_start >= 0.f) {
+      const int lo = first_sample_at_or_after(s, run_start);
+      const int hi = first_sample_at_or_after(s, run_end);
+      run(lo > 0 ? lo : 0, hi < s.k_end ? hi : s.k_end);
+      run_start = -1.f;
+    }
+  };
+  auto visit = [&](int i, int j, int k, float ta, float tb) {
+    if (g.brick_max[i + g.bnx * (j + int64_t(g.bny) * k)] > 0.f) {
+      if (run_start < 0.f) run_start = ta;
+      run_end = tb;
+    } else {
+      flush();
+    }
+    return true;
+  };
+  traverse_cells(q0, dq, s.t0, s.t1, nb, visit);
+  flush();
+}
+
 // the line integral (mu in 1/mm times mm) from the source to pixel (c, r) by trilinear ray
 // marching every step_voxels (in voxel units along the ray); skip_empty walks the brick grid
 // and samples only inside bricks holding some mu, which gives the same samples' sum
 PCISIM_XRAY_HD float trilinear_ray(const GridView& g, const DetectorView& d, int c, int r, float step_voxels,
                                    bool skip_empty) {
-  const float oc = (c - 0.5f * (d.width - 1)) * d.pixel_mm, orow = (r - 0.5f * (d.height - 1)) * d.pixel_mm;
-  float pix[3], x0[3], x1[3], dx[3];
-  for (int a = 0; a < 3; ++a) pix[a] = d.center[a] + oc * d.u[a] + orow * d.v[a];
-  const float len_mm = sqrtf((pix[0] - d.src[0]) * (pix[0] - d.src[0]) + (pix[1] - d.src[1]) * (pix[1] - d.src[1]) +
-                             (pix[2] - d.src[2]) * (pix[2] - d.src[2]));
-  for (int a = 0; a < 3; ++a) {
-    x0[a] = g.m[4 * a] * d.src[0] + g.m[4 * a + 1] * d.src[1] + g.m[4 * a + 2] * d.src[2] + g.m[4 * a + 3];
-    x1[a] = g.m[4 * a] * pix[0] + g.m[4 * a + 1] * pix[1] + g.m[4 * a + 2] * pix[2] + g.m[4 * a + 3];
-    dx[a] = x1[a] - x0[a];
-  }
-  const float len_vox = sqrtf(dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2]);
-  if (!(len_vox > 0.f)) return 0.f;
-  // mu is non-zero only strictly inside padded [0, n-1]
-  const float box[3] = {float(g.nx - 1), float(g.ny - 1), float(g.nz - 1)};
-  float t0 = 0.f, t1 = 1.f;
-  if (!clip_to_box(x0, dx, box, &t0, &t1)) return 0.f;
-  const float dt = step_voxels / len_vox;
-  // samples t_k = t0 + (k + 1/2) dt < t1
-  auto first_at_or_after = [&](float t) { return static_cast<int>(ceilf((t - t0) / dt - 0.5f)); };
-  const int k_end = first_at_or_after(t1);
+  RaySetup s;
+  if (!setup_ray(g, d, c, r, step_voxels, &s)) return 0.f;
   float acc = 0.f;
-  if (!skip_empty) {
-    acc = sum_samples(g, x0, dx, t0, dt, 0, k_end);
-  } else {
-    // walk the bricks; merge runs of non-empty ones and sum their samples
-    const float inv_b = 1.0f / g.brick;
-    const float q0[3] = {x0[0] * inv_b, x0[1] * inv_b, x0[2] * inv_b};
-    const float dq[3] = {dx[0] * inv_b, dx[1] * inv_b, dx[2] * inv_b};
-    const int nb[3] = {g.bnx, g.bny, g.bnz};
-    float run_start = -1.f, run_end = -1.f;
-    auto flush = [&]() {
-      if (run_start >= 0.f) {
-        const int lo = first_at_or_after(run_start);
-        const int hi = first_at_or_after(run_end);
-        acc += sum_samples(g, x0, dx, t0, dt, lo > 0 ? lo : 0, hi < k_end ? hi : k_end);
-        run_start = -1.f;
-      }
-    };
-    auto visit = [&](int i, int j, int k, float ta, float tb) {
-      if (g.brick_max[i + g.bnx * (j + int64_t(g.bny) * k)] > 0.f) {
-        if (run_start < 0.f) run_start = ta;
-        run_end = tb;
-      } else {
-        flush();
-      }
-      return true;
-    };
-    traverse_cells(q0, dq, t0, t1, nb, visit);
-    flush();
-  }
-  return acc * dt * len_mm;
+  auto run = [&](int lo, int hi) { acc += sum_samples(g, s.x0, s.dx, s.t0, s.dt, lo, hi); };
+  for_each_run(g, s, skip_empty, run);
+  return acc * s.dt * s.len_mm;
 }
 
 }  // namespace pcisim::xray::ray

@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "xray/projectors/ray_packet.h"
 #include "xray/projectors/views.h"
 
 namespace pcisim::xray {
@@ -24,9 +25,11 @@ void TrilinearProjector::project(const AttenuationVolume& volume, const Detector
   const ray::DetectorView det = detector_view(g);
   const float step = static_cast<float>(options_.step_voxels);
   const bool skip = options_.skip_empty;
+  const int packed = options_.packets && ray::packet_supported() ? g.width / 8 * 8 : 0;
   auto row = [&](int r) {
     float* out = image->pixels.data() + static_cast<size_t>(r) * g.width;
-    for (int c = 0; c < g.width; ++c) out[c] = ray::trilinear_ray(grid, det, c, r, step, skip);
+    for (int c = 0; c < packed; c += 8) ray::trilinear_rays_x8(grid, det, c, r, step, skip, out + c);
+    for (int c = packed; c < g.width; ++c) out[c] = ray::trilinear_ray(grid, det, c, r, step, skip);
   };
   pool_.for_each_row(g.height, row);
 }

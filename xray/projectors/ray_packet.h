@@ -1,0 +1,22 @@
+#pragma once
+// Eight rays at once on the CPU (AVX2): the pixels (c0 .. c0 + 7, r) marched in lockstep, each
+// with its own samples exactly as ray::trilinear_ray takes them (setup_ray, for_each_run), the
+// eight trilinear reads of a step gathered side by side. Neighbouring rays read neighbouring
+// voxels, so a step's gathers mostly hit the lines the previous rays brought in. Positions are
+// stepped as x(k) = x(t0 + dt/2) + k dt dx, so sums differ from trilinear_ray's in the last bits.
+// CPU only; the CUDA kernel runs trilinear_ray per pixel.
+#include "xray/projectors/ray_march.h"
+
+namespace pcisim::xray::ray {
+
+// the most samples a packet's rays may take; a packet with more goes back to trilinear_ray
+inline constexpr int kPacketMaxSamples = 8192;
+
+// true when this CPU runs the AVX2 path
+bool packet_supported();
+
+// line integrals of pixels (c0 + i, r), i < 8, into out[i]; all eight must lie on the detector
+void trilinear_rays_x8(const GridView& g, const DetectorView& d, int c0, int r, float step_voxels, bool skip_empty,
+                       float out[8]);
+
+}  // namespace pcisim::xray::ray

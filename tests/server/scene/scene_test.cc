@@ -246,6 +246,23 @@ TEST(Scene, AFluoroscopyStepFinerThanAQuarterVoxelIsRefused) {
             "test.json: effects.xray.step_voxels: expected a number in [0.25, 4], got 0.05");
 }
 
+TEST(Scene, TheBeatingBackgroundIsOnByDefaultAndItsBinsAreChecked) {
+  const Scene d = default_scene();
+  ASSERT_TRUE(d.xray && d.world.vessel_motion);
+  EXPECT_EQ(d.xray->heart_phase_bins, 16);
+  EXPECT_TRUE(d.xray->heart_phase_blend);
+  const Scene still =
+      parse_scene(R"({"effects": {"xray": {"heart_phase_bins": 0, "heart_phase_blend": false}}})", "test.json");
+  EXPECT_EQ(still.xray->heart_phase_bins, 0);
+  EXPECT_FALSE(still.xray->heart_phase_blend);
+  EXPECT_EQ(error_of(R"({"effects": {"xray": {"heart_phase_bins": 1}}})"),
+            "test.json: effects.xray.heart_phase_bins: expected 0 (a still background) or 2-64, got 1");
+  EXPECT_NE(error_of(R"({"effects": {"xray": {"heart_phase_bins": 65}}})").find("effects.xray.heart_phase_bins"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"effects": {"xray": {"heart_phase_blend": 3}}})").find("effects.xray.heart_phase_blend"),
+            std::string::npos);
+}
+
 // a 1 GB scene once held the LCM thread for 10 s and locked 2.3 GB: refused before it is read
 TEST(Scene, AnOversizedSceneFileIsRefusedUnread) {
   const std::string path = ::testing::TempDir() + "/huge-scene.json";

@@ -2,6 +2,8 @@
 // (tests/common/counting_new.h counts this thread's allocations).
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "tests/common/counting_new.h"
 #include "tests/xray/fluoro/fluoro_test_util.h"
 
@@ -32,6 +34,43 @@ TEST(FluoroscopyNoAllocation, SecondAndLaterFramesAllocateNothing) {
   EXPECT_EQ(allocations, 0);
   EXPECT_EQ(fr.background_renders(), 1);
   EXPECT_FALSE(f.contrast_branches.empty());
+}
+
+// with the background beating: once the pose has every bin, frames at any phase allocate nothing
+TEST(FluoroscopyNoAllocation, BeatingFramesAllocateNothingOnceThePoseHasEveryBin) {
+  const anatomy::VesselTree tree = anatomy::make_coronary_phantom({.seed = 1});
+  FluoroSpec s = testing::small_fluoro_spec();
+  FluoroscopyRenderer fr(tree, s);
+  // a cycle of 8 bins: the points within 40 mm of the heart centre swing by up to 5 mm
+  BeatSamples beat;
+  for (double x = -40; x <= 40; x += 8)
+    for (double y = -40; y <= 40; y += 8)
+      for (double z = -40; z <= 40; z += 8)
+        if (Eigen::Vector3d(x, y, z).norm() <= 40) beat.rest_mm.emplace_back(x, y, z);
+  for (int b = 0; b < 8; ++b) {
+    beat.at_bin_mm.emplace_back();
+    for (const auto& p : beat.rest_mm)
+      beat.at_bin_mm.back().push_back(p + Eigen::Vector3d(5 * std::sin(b * 0.785), 0, 2 * std::cos(b * 0.785)));
+  }
+  fr.set_beat(beat, {.projector = {.step_voxels = 1.0, .threads = 1}});
+  FluoroFrame f;
+  FluoroInput in{.time_s = 0, .pose = testing::lao30_cra20()};
+  in.heart_phase = 0.1;
+  fr.render(in, f);
+  while (fr.fill_beat_ahead() > 0) {}
+  ASSERT_EQ(fr.beat()->filled_bins(), 8);
+  long allocations = -1;
+  {
+    pcisim::testing::AllocationCount count;
+    for (int i = 1; i <= 6; ++i) {
+      in.time_s = 0.1 * i;
+      in.heart_phase = 0.17 * i;
+      fr.render(in, f);
+    }
+    allocations = count.allocations();
+  }
+  EXPECT_EQ(allocations, 0);
+  EXPECT_EQ(fr.beat()->bin_projections(), 8);  // each bin projected once for the pose
 }
 
 }  // namespace

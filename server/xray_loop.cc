@@ -23,6 +23,10 @@ XrayLoop::XrayLoop(const Scene& scene, const anatomy::Case& anatomy, SharedState
     xray::BeatingBackgroundOptions o;
     o.interpolate = spec_.heart_phase_blend;
     o.projector = spec_.fluoro.projector.trilinear;
+    if (spec_.fluoro.projector.projector == xray::ProjectorKind::kCudaTrilinear) {
+      o.gpu = true;  // the changes on the GPU too, at full resolution (well under a ms a bin)
+      o.change_stride = 1;
+    }
     renderer_->set_beat(*beat, o);
   }
   injections_.reserve(SharedState::kMaxInjections);
@@ -83,7 +87,10 @@ void XrayLoop::render_and_publish(bool cine) {
   renderer_->render(in, frame_);
   state_.xray_render_ns.record(realtime::monotonic_ns() - t0);
   state_.xray_frames.fetch_add(1, std::memory_order_relaxed);
-  if (!images_) return;
+  if (!images_) {
+    renderer_->fill_beat_ahead();
+    return;
+  }
 
   // the frame with its geometry and ground truth
   auto& m = msg_;
@@ -125,6 +132,8 @@ void XrayLoop::render_and_publish(bool cine) {
   m.data.resize(static_cast<size_t>(m.num_bytes));
   std::memcpy(m.data.data(), frame_.pixels.data(), m.data.size());  // little-endian uint16
   images_->publish(protocol::kXrayChannel, &m);
+  // after the frame is out: one more of the pose's phase bins, until it has them all
+  renderer_->fill_beat_ahead();
 }
 
 void XrayLoop::run() {

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <vector>
 
@@ -26,6 +27,7 @@ struct Slice {
   double row_spacing_mm = 0, column_spacing_mm = 0;  // PixelSpacing (0028,0030)
   int64_t rows = 0, columns = 0;                     // Rows (0028,0010), Columns (0028,0011)
   int64_t frames = 1;                                // NumberOfFrames (0028,0008), 1 when absent
+  std::string temporal_position, trigger_time;       // (0020,0100) and (0018,1060) as written, "" when absent
   double along_normal_mm = 0;
 };
 
@@ -43,7 +45,8 @@ bool parse_backslashed(const std::string& text, int n, double* out) {
 Slice read_slice_header(const std::string& file) {
   std::vector<std::string> tags;
   try {
-    tags = itk_io::read_tags(file, {"0020|0032", "0020|0037", "0028|0030", "0028|0010", "0028|0011", "0028|0008"});
+    tags = itk_io::read_tags(
+        file, {"0020|0032", "0020|0037", "0028|0030", "0028|0010", "0028|0011", "0028|0008", "0020|0100", "0018|1060"});
   } catch (const std::runtime_error& e) {
     throw DicomError(file + ": " + e.what());
   }
@@ -66,6 +69,8 @@ Slice read_slice_header(const std::string& file) {
   s.rows = static_cast<int64_t>(size[0]);
   s.columns = static_cast<int64_t>(size[1]);
   s.frames = static_cast<int64_t>(frames);
+  s.temporal_position = tags[6];
+  s.trigger_time = tags[7];
   s.position_mm = {p[0], p[1], p[2]};
   s.row_dir = Eigen::Vector3d(o[0], o[1], o[2]).normalized();
   s.column_dir = Eigen::Vector3d(o[3], o[4], o[5]).normalized();
@@ -80,7 +85,7 @@ std::string name_of(const std::string& file) {
 
 // the series' voxel count from the headers, refused over the volume readers' cap before ITK
 // allocates anything (a header may claim 65535 x 65535 pixels)
-void check_size(const std::vector<Slice>& slices, const std::string& folder) {
+void check_size(const std::vector<Slice>& slices, const std::string& where) {
   const Slice& first = slices.front();
   int64_t frames = 0;
   for (const auto& s : slices) {
@@ -91,12 +96,14 @@ void check_size(const std::vector<Slice>& slices, const std::string& folder) {
   }
   const int64_t plane = first.rows * first.columns;  // at most 65535^2
   if (frames > io::kMaxVoxels / plane)
-    throw DicomError(fmt::format("{}: {} rows x {} columns x {} slices = {} voxels, over the {} voxel limit", folder,
+    throw DicomError(fmt::format("{}: {} rows x {} columns x {} slices = {} voxels, over the {} voxel limit", where,
                                  first.rows, first.columns, frames, plane * frames, io::kMaxVoxels));
 }
 
-// every slice like the first, stacked along its normal at one spacing; returns that spacing
-double check_stack(std::vector<Slice>& slices, const std::string& folder) {
+// every slice like the first, stacked along its normal at one spacing; sorts them along the normal
+// and returns that spacing. `where` names the stack in messages about it as a whole (the folder,
+// or the folder and a cine's temporal position); a slice's own problem names its file
+double check_stack(std::vector<Slice>& slices, const std::string& where) {
   const Slice& first = slices.front();
   const Eigen::Vector3d normal = first.row_dir.cross(first.column_dir);
   if (std::abs(first.row_dir.dot(first.column_dir)) > 1e-3 || normal.norm() < 0.99)
@@ -118,7 +125,7 @@ double check_stack(std::vector<Slice>& slices, const std::string& folder) {
   std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
   const double spacing = sorted[sorted.size() / 2];
   if (!(spacing > 1e-3))
-    throw DicomError(folder + ": slices share positions (spacing " + fmt::format("{:.3f}", spacing) + " mm)");
+    throw DicomError(where + ": slices share positions (spacing " + fmt::format("{:.3f}", spacing) + " mm)");
   const double tolerance = std::max(0.01 * spacing, 0.01);
   for (size_t i = 0; i < gaps.size(); ++i) {
     if (std::abs(gaps[i] - spacing) > tolerance)
@@ -134,71 +141,195 @@ double check_stack(std::vector<Slice>& slices, const std::string& folder) {
   return spacing;
 }
 
-}  // namespace
+// the grid of a sorted, checked stack (check_stack), without voxels
+Volume grid_of(const std::vector<Slice>& sorted, double slice_spacing_mm) {
+  const Slice& first = sorted.front();
+  Volume v;
+  v.dims = {first.columns, first.rows, int64_t(sorted.size())};
+  v.spacing_mm = {first.column_spacing_mm, first.row_spacing_mm, slice_spacing_mm};
+  v.origin_mm = first.position_mm;
+  v.direction.col(0) = first.row_dir;
+  v.direction.col(1) = first.column_dir;
+  v.direction.col(2) = first.row_dir.cross(first.column_dir);
+  return v;
+}
 
-Volume read_dicom_series(const std::string& folder, const std::string& series_uid) {
-  std::error_code ec;
-  if (!fs::is_directory(folder, ec)) throw DicomError(folder + ": not a folder");
-  try {
-    // the series in the folder, by SeriesInstanceUID
-    const std::vector<std::string> uids = itk_io::series_uids(folder);
-    if (uids.empty()) throw DicomError(folder + ": no DICOM series found");
-    std::string uid = series_uid;
-    if (uid.empty()) {
-      if (uids.size() > 1)
-        throw DicomError(fmt::format("{}: {} series found ({}): name one", folder, uids.size(), fmt::join(uids, ", ")));
-      uid = uids.front();
-    } else if (std::find(uids.begin(), uids.end(), uid) == uids.end()) {
-      throw DicomError(fmt::format("{}: no series {} (found: {})", folder, uid, fmt::join(uids, ", ")));
+// the voxels of a sorted, checked stack into `v` (from grid_of), rescale slope and intercept
+// applied by the IO; int16 when every value fits, else float32
+void read_stack_voxels(const std::vector<Slice>& sorted, const std::string& where, Volume& v) {
+  std::vector<std::string> ordered;
+  for (const auto& s : sorted) ordered.push_back(s.file);
+  const Slice& first = sorted.front();
+  // converted straight from ITK's image: at most ITK's floats and the volume's voxels at once
+  itk_io::read_voxels(ordered, [&](const std::array<int64_t, 3>& dims, const float* px) {
+    if (dims[2] != int64_t(sorted.size()))
+      throw DicomError(fmt::format("{}: {} slices read from {} files (multi-frame files are not supported)", where,
+                                   dims[2], sorted.size()));
+    if (dims[0] != first.columns || dims[1] != first.rows)
+      throw DicomError(fmt::format("{}: {} x {} pixels read, the headers say {} columns x {} rows", where, dims[0],
+                                   dims[1], first.columns, first.rows));
+    v.dims = dims;
+    const int64_t n = v.voxel_count();
+    bool fits_int16 = true;
+    for (int64_t i = 0; i < n && fits_int16; ++i)
+      fits_int16 = px[i] == std::round(px[i]) && px[i] >= -32768.f && px[i] <= 32767.f;
+    v.type = fits_int16 ? VoxelType::kInt16 : VoxelType::kFloat32;
+    if (fits_int16) {
+      v.hu_i16.resize(n);
+      for (int64_t i = 0; i < n; ++i) v.hu_i16[i] = static_cast<int16_t>(px[i]);
+    } else {
+      v.hu_f32.assign(px, px + n);
     }
-    const std::vector<std::string> files = itk_io::series_files(folder, uid);
-    if (files.size() < 2)
-      throw DicomError(fmt::format("{}: series {} has {} slice(s), a CT needs at least 2", folder, uid, files.size()));
+  });
+  if (const std::string why = validate(v); !why.empty()) throw DicomError(where + ": " + why);
+}
 
-    // geometry first, from every file's own tags
-    std::vector<Slice> slices;
-    for (const auto& f : files) slices.push_back(read_slice_header(f));
-    check_size(slices, folder);
-    const double slice_spacing_mm = check_stack(slices, folder);
-
-    // then the voxels, in that order (rescale slope and intercept applied by the IO)
-    std::vector<std::string> ordered;
-    for (const auto& s : slices) ordered.push_back(s.file);
-    const Slice& first = slices.front();
-    Volume v;
-    v.spacing_mm = {first.column_spacing_mm, first.row_spacing_mm, slice_spacing_mm};
-    v.origin_mm = first.position_mm;
-    v.direction.col(0) = first.row_dir;
-    v.direction.col(1) = first.column_dir;
-    v.direction.col(2) = first.row_dir.cross(first.column_dir);
-    // converted straight from ITK's image: at most ITK's floats and the volume's voxels at once
-    itk_io::read_voxels(ordered, [&](const std::array<int64_t, 3>& dims, const float* px) {
-      if (dims[2] != int64_t(slices.size()))
-        throw DicomError(fmt::format("{}: {} slices read from {} files (multi-frame files are not supported)", folder,
-                                     dims[2], slices.size()));
-      if (dims[0] != first.columns || dims[1] != first.rows)
-        throw DicomError(fmt::format("{}: {} x {} pixels read, the headers say {} columns x {} rows", folder, dims[0],
-                                     dims[1], first.columns, first.rows));
-      v.dims = dims;
-      const int64_t n = v.voxel_count();
-      bool fits_int16 = true;
-      for (int64_t i = 0; i < n && fits_int16; ++i)
-        fits_int16 = px[i] == std::round(px[i]) && px[i] >= -32768.f && px[i] <= 32767.f;
-      v.type = fits_int16 ? VoxelType::kInt16 : VoxelType::kFloat32;
-      if (fits_int16) {
-        v.hu_i16.resize(n);
-        for (int64_t i = 0; i < n; ++i) v.hu_i16[i] = static_cast<int16_t>(px[i]);
-      } else {
-        v.hu_f32.assign(px, px + n);
-      }
-    });
-    if (const std::string why = validate(v); !why.empty()) throw DicomError(folder + ": " + why);
-    return v;
+// runs `f`, ITK's errors (runtime_error) becoming DicomError "<folder>: <what>"
+template <class F>
+auto naming_folder(const std::string& folder, F&& f) {
+  try {
+    return f();
   } catch (const DicomError&) {
     throw;
   } catch (const std::runtime_error& e) {
     throw DicomError(folder + ": " + e.what());
   }
+}
+
+// the files of the one series in `folder` (or of series_uid), in ITK's order; `uid_out` gets its UID
+std::vector<std::string> series_files_of(const std::string& folder, const std::string& series_uid,
+                                         std::string& uid_out) {
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec)) throw DicomError(folder + ": not a folder");
+  // the series in the folder, by SeriesInstanceUID
+  const std::vector<std::string> uids = itk_io::series_uids(folder);
+  if (uids.empty()) throw DicomError(folder + ": no DICOM series found");
+  std::string uid = series_uid;
+  if (uid.empty()) {
+    if (uids.size() > 1)
+      throw DicomError(fmt::format("{}: {} series found ({}): name one", folder, uids.size(), fmt::join(uids, ", ")));
+    uid = uids.front();
+  } else if (std::find(uids.begin(), uids.end(), uid) == uids.end()) {
+    throw DicomError(fmt::format("{}: no series {} (found: {})", folder, uid, fmt::join(uids, ", ")));
+  }
+  uid_out = uid;
+  return itk_io::series_files(folder, uid);
+}
+
+// geometry first, from every file's own tags
+std::vector<Slice> headers_of(const std::vector<std::string>& files) {
+  std::vector<Slice> slices;
+  for (const auto& f : files) slices.push_back(read_slice_header(f));
+  return slices;
+}
+
+std::string point_text(const Eigen::Vector3d& p) {
+  return fmt::format("({:.3f}, {:.3f}, {:.3f})", p.x(), p.y(), p.z());
+}
+
+}  // namespace
+
+Volume read_dicom_series(const std::string& folder, const std::string& series_uid) {
+  return naming_folder(folder, [&] {
+    std::string uid;
+    const std::vector<std::string> files = series_files_of(folder, series_uid, uid);
+    if (files.size() < 2)
+      throw DicomError(fmt::format("{}: series {} has {} slice(s), a CT needs at least 2", folder, uid, files.size()));
+    std::vector<Slice> slices = headers_of(files);
+    check_size(slices, folder);
+    const double slice_spacing_mm = check_stack(slices, folder);
+    // then the voxels, in that order
+    Volume v = grid_of(slices, slice_spacing_mm);
+    read_stack_voxels(slices, folder, v);
+    return v;
+  });
+}
+
+std::vector<Volume> read_dicom_cine(const std::string& folder, const std::string& series_uid) {
+  return naming_folder(folder, [&] {
+    std::string uid;
+    const std::vector<std::string> files = series_files_of(folder, series_uid, uid);
+    if (files.empty()) throw DicomError(fmt::format("{}: series {} has no images", folder, uid));
+    std::vector<Slice> slices = headers_of(files);
+    // every image the same size, the whole sequence under the volume readers' cap
+    check_size(slices, folder);
+
+    // the time key: Temporal Position Identifier when the files give it, else Trigger Time; a
+    // key some files give and others lack is refused naming a file without it
+    const bool by_position =
+        std::any_of(slices.begin(), slices.end(), [](const Slice& s) { return !s.temporal_position.empty(); });
+    const bool by_trigger = !by_position && std::any_of(slices.begin(), slices.end(),
+                                                        [](const Slice& s) { return !s.trigger_time.empty(); });
+    if (!by_position && !by_trigger)
+      throw DicomError(folder +
+                       ": one time point: a 3-D series, not a cine (no file gives a Temporal Position Identifier "
+                       "(0020,0100) or Trigger Time (0018,1060))");
+    const char* tag_name = by_position ? "Temporal Position Identifier (0020,0100)" : "Trigger Time (0018,1060)";
+    std::map<double, std::vector<Slice>> groups;
+    for (auto& s : slices) {
+      const std::string& text = by_position ? s.temporal_position : s.trigger_time;
+      double key = 0;
+      if (text.empty())
+        throw DicomError(fmt::format("{}: no {}, which other files of the series give", s.file, tag_name));
+      if (!parse_backslashed(text, 1, &key))
+        throw DicomError(fmt::format("{}: {} '{}' is not a number", s.file, tag_name, text));
+      groups[key].push_back(std::move(s));
+    }
+    auto label = [&](double key) {
+      return by_position ? fmt::format("temporal position {:g}", key) : fmt::format("trigger time {:g} ms", key);
+    };
+    if (groups.size() < 2)
+      throw DicomError(fmt::format("{}: one time point: a 3-D series, not a cine (every file has {} {})", folder,
+                                   tag_name, groups.begin()->first));
+
+    // each time point's stack, checked, and its grid against the first's before any voxel is read
+    const double key0 = groups.begin()->first;
+    std::vector<Slice>& first_stack = groups.begin()->second;
+    if (first_stack.size() < 2)
+      throw DicomError(fmt::format("{}: {}: {} slice: a 2-D cine, a frame of 3-D + time needs at least 2", folder,
+                                   label(key0), first_stack.size()));
+    std::vector<Volume> frames;
+    for (auto& [key, stack] : groups) {
+      const std::string where = folder + ": " + label(key);
+      if (stack.size() != first_stack.size())
+        throw DicomError(fmt::format("{}: {} slices, {} has {} (a missing or extra slice)", where, stack.size(),
+                                     label(key0), first_stack.size()));
+      const double slice_spacing_mm = check_stack(stack, where);
+      Volume grid = grid_of(stack, slice_spacing_mm);
+      if (!frames.empty()) {
+        const Volume& g0 = frames.front();
+        const Slice &s0 = first_stack.front(), &s = stack.front();
+        if ((grid.direction - g0.direction).norm() > 1e-4)
+          throw DicomError(fmt::format("{}: ImageOrientationPatient ({}) differs from {}'s ({})", where,
+                                       name_of(s.file), label(key0), name_of(s0.file)));
+        if ((grid.spacing_mm.head<2>() - g0.spacing_mm.head<2>()).norm() > 1e-4 * g0.spacing_mm.head<2>().norm())
+          throw DicomError(fmt::format("{}: PixelSpacing {:g} x {:g} mm ({}) differs from {}'s {:g} x {:g} mm", where,
+                                       s.row_spacing_mm, s.column_spacing_mm, name_of(s.file), label(key0),
+                                       s0.row_spacing_mm, s0.column_spacing_mm));
+        if (std::abs(grid.spacing_mm.z() - g0.spacing_mm.z()) > 1e-4 * g0.spacing_mm.z())
+          throw DicomError(fmt::format("{}: slice spacing {:.3f} mm differs from {}'s {:.3f} mm", where,
+                                       grid.spacing_mm.z(), label(key0), g0.spacing_mm.z()));
+        if ((grid.origin_mm - g0.origin_mm).norm() > std::max(0.01 * g0.spacing_mm.z(), 0.01))
+          throw DicomError(fmt::format(
+              "{}: ImagePositionPatient of its first slice ({}) is {} mm, {}'s ({}) is {} mm (the slices moved)", where,
+              name_of(s.file), point_text(grid.origin_mm), label(key0), name_of(s0.file), point_text(g0.origin_mm)));
+      }
+      frames.push_back(std::move(grid));
+    }
+
+    // then the voxels, frame by frame in time order
+    size_t f = 0;
+    for (auto& [key, stack] : groups) read_stack_voxels(stack, folder + ": " + label(key), frames[f++]);
+    // one voxel type for the whole sequence: float32 if any frame needs it
+    if (std::any_of(frames.begin(), frames.end(), [](const Volume& v) { return v.type == VoxelType::kFloat32; }))
+      for (auto& v : frames)
+        if (v.type == VoxelType::kInt16) {
+          v.hu_f32.assign(v.hu_i16.begin(), v.hu_i16.end());
+          v.hu_i16 = {};
+          v.type = VoxelType::kFloat32;
+        }
+    return frames;
+  });
 }
 
 }  // namespace pcisim::anatomy

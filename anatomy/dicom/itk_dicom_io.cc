@@ -6,6 +6,8 @@
 #include <itkImageSeriesReader.h>
 #include <itkMetaDataObject.h>
 
+#include <iostream>
+#include <streambuf>
 #include <stdexcept>
 
 namespace pcisim::anatomy::itk_io {
@@ -20,6 +22,24 @@ auto itk_call(F&& f) {
   }
 }
 
+// std::cerr muted while `f` runs. Listing a cine's files, GDCM's own ordering by position fails
+// (each position repeats once a time point) and GDCM prints "position is not unique" to std::cerr
+// for every image before falling back to instance numbers; the callers sort the files themselves
+// and say what is wrong in their exceptions. (GDCM's trace switch, gdcm::Trace, would need GDCM's
+// headers and libraries, which ITK's targets do not pass on.)
+template <class F>
+auto cerr_muted(F&& f) {
+  struct Null : std::streambuf {
+    int overflow(int c) override { return traits_type::not_eof(c); }
+  };
+  static Null null;
+  struct Restore {
+    std::streambuf* was = std::cerr.rdbuf(&null);
+    ~Restore() { std::cerr.rdbuf(was); }
+  } restore;
+  return f();
+}
+
 itk::GDCMSeriesFileNames::Pointer names_in(const std::string& folder) {
   auto names = itk::GDCMSeriesFileNames::New();
   names->SetUseSeriesDetails(false);
@@ -30,11 +50,11 @@ itk::GDCMSeriesFileNames::Pointer names_in(const std::string& folder) {
 }  // namespace
 
 std::vector<std::string> series_uids(const std::string& folder) {
-  return itk_call([&] { return names_in(folder)->GetSeriesUIDs(); });
+  return itk_call([&] { return cerr_muted([&] { return names_in(folder)->GetSeriesUIDs(); }); });
 }
 
 std::vector<std::string> series_files(const std::string& folder, const std::string& uid) {
-  return itk_call([&] { return names_in(folder)->GetFileNames(uid); });
+  return itk_call([&] { return cerr_muted([&] { return names_in(folder)->GetFileNames(uid); }); });
 }
 
 std::vector<std::string> read_tags(const std::string& file, const std::vector<std::string>& tags) {

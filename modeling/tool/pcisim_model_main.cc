@@ -84,6 +84,7 @@ int motion_main(int argc, char** argv) {
       "docs/heart.md). Frame f of F is at phase f / F. docs/heart.md, 'Motion from images'.\n\n"
       "  pcisim-model motion --sequence cine/ --out patient.motion\n"
       "  pcisim-model motion --sequence cine.nrrd --cycle-s 0.8 --out patient.motion   (one 4-D NRRD)\n"
+      "  pcisim-model motion --sequence cine_dicom/ --out patient.motion   (one DICOM cine series, 3-D + time)\n"
       "  pcisim-model motion --frames f00.nrrd f01.nrrd ... --heart cases/patient1 --out "
       "cases/patient1/heart.motion\n"};
   app.name("pcisim-model motion");
@@ -95,7 +96,9 @@ int motion_main(int argc, char** argv) {
   in->add_option("--frames", frame_paths, "volume files (.nrrd, .nhdr, .mha, .mhd), one per phase, frame 0 first");
   in->add_option(
       "--sequence", sequence,
-      "a folder of volume files in phase order (by their numbers: frame_000.nrrd, frame_001.nrrd, ...), or one "
+      "a folder of volume files in phase order (by their numbers: frame_000.nrrd, frame_001.nrrd, ...); or a "
+      "folder holding one DICOM cine series (no volume files in it): 3-D + time, its images grouped into frames by "
+      "Temporal Position Identifier (0020,0100), else Trigger Time (0018,1060), in that value's order; or one "
       "4-D NRRD (.nrrd, .nhdr: sizes x y z time, the time axis's space direction none) whose time index is the "
       "frame");
   in->require_option(1);
@@ -116,7 +119,7 @@ int motion_main(int argc, char** argv) {
   knobs->add_option("--threads", o.threads, "worker threads; 0 = all cores")->check(CLI::Range(0, 256));
   CLI11_PARSE(app, argc, argv);
   try {
-    // a 4-D NRRD gives every frame at once; the report names them "<file>[t]"
+    // a 4-D NRRD or a DICOM cine gives every frame at once; the report names them "<file or folder>[t]"
     std::vector<anatomy::Volume> frames;
     bool sequence_file = false;
     if (!sequence.empty() && !fs::is_directory(sequence)) {
@@ -133,18 +136,33 @@ int motion_main(int argc, char** argv) {
       frames = anatomy::read_nrrd_sequence(sequence, true);
       for (size_t t = 0; t < frames.size(); ++t) frame_paths.push_back(fmt::format("{}[{}]", sequence, t));
     } else {
+      bool dicom_cine = false;
       if (!sequence.empty()) {
         for (const auto& e : fs::directory_iterator(sequence)) {
           const std::string ext = e.path().extension().string();
           if (e.is_regular_file() && (ext == ".nrrd" || ext == ".nhdr" || ext == ".mha" || ext == ".mhd"))
             frame_paths.push_back(e.path().string());
         }
-        frame_paths = modeling::order_frame_files(frame_paths);
-        if (frame_paths.size() < 2)
-          throw std::runtime_error(fmt::format("--sequence: '{}' holds {} volume files; a cycle needs at least 2",
-                                               sequence, frame_paths.size()));
+        // a folder without volume files is a DICOM folder, as --ct's folder is: one cine series
+        dicom_cine = frame_paths.empty();
+        if (dicom_cine) {
+          try {
+            frames = anatomy::read_dicom_cine(sequence);
+          } catch (const anatomy::DicomError& e) {
+            throw std::runtime_error(fmt::format(
+                "--sequence: '{}' holds no volume files (.nrrd, .nhdr, .mha, .mhd), so it was read as a DICOM cine: {}",
+                sequence, e.what()));
+          }
+          for (size_t t = 0; t < frames.size(); ++t) frame_paths.push_back(fmt::format("{}[{}]", sequence, t));
+        } else {
+          frame_paths = modeling::order_frame_files(frame_paths);
+          if (frame_paths.size() < 2)
+            throw std::runtime_error(fmt::format("--sequence: '{}' holds {} volume files; a cycle needs at least 2",
+                                                 sequence, frame_paths.size()));
+        }
       }
-      for (const std::string& path : frame_paths) frames.push_back(anatomy::read_volume(path, true));
+      if (!dicom_cine)
+        for (const std::string& path : frame_paths) frames.push_back(anatomy::read_volume(path, true));
     }
     anatomy::HeartPose pose;
     if (!case_dir.empty()) pose = anatomy::read_case(case_dir).heart;

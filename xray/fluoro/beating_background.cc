@@ -2,10 +2,21 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <stdexcept>
 #include <thread>
 
+#ifdef PCISIM_HAVE_CUDA
+#include "xray/projectors/cuda_projector.h"
+#endif
+
 namespace pcisim::xray {
+
+struct BeatingBackground::Gpu {
+#ifdef PCISIM_HAVE_CUDA
+  std::vector<std::unique_ptr<CudaTrilinearProjector>> bins;
+#endif
+};
 
 std::string validate(const BeatingBackgroundOptions& o) {
   if (std::string bad = validate(o.warp); !bad.empty()) return "warp." + bad;
@@ -38,12 +49,29 @@ BeatingBackground::BeatingBackground(const AttenuationVolume& ct, const BeatSamp
   // every bin's change now, bins split over two threads (each writes its own volume)
   changes_.reserve(bins());
   for (int b = 0; b < bins(); ++b) changes_.push_back(warp_.make_change_volume());
-  auto write = [this](int first) {
-    for (int b = first; b < bins(); b += 2) warp_.write_change(b, &changes_[b]);
+  std::exception_ptr failed[2];
+  auto write = [this, &failed](int first) {
+    try {
+      for (int b = first; b < bins(); b += 2) warp_.write_change(b, &changes_[b]);
+    } catch (...) {
+      failed[first] = std::current_exception();
+    }
   };
   std::thread other(write, 1);
   write(0);
   other.join();
+  for (const auto& e : failed)
+    if (e) std::rethrow_exception(e);
+  if (!options_.gpu) return;
+#ifdef PCISIM_HAVE_CUDA
+  std::string why;
+  if (!CudaTrilinearProjector::available(&why)) throw std::runtime_error("BeatingBackground: no GPU: " + why);
+  gpu_ = std::make_unique<Gpu>();
+  for (const AttenuationVolume& c : changes_)
+    gpu_->bins.push_back(std::make_unique<CudaTrilinearProjector>(c, options_.projector));
+#else
+  throw std::runtime_error("BeatingBackground: the GPU needs a build with CUDA");
+#endif
 }
 
 const AttenuationVolume& BeatingBackground::change(int bin) {
@@ -83,12 +111,22 @@ void BeatingBackground::fill(int bin) {
   const AttenuationVolume& dmu = change(bin);
   std::vector<float>& p = bin_images_[bin].pixels;
   const int s = options_.change_stride;
+  // project the change: the GPU's copy of it, or this projector on the CPU
+  auto project = [&](const DetectorGeometry& g, Image* out) {
+#ifdef PCISIM_HAVE_CUDA
+    if (gpu_) {
+      gpu_->bins[bin]->project(g, out);
+      return;
+    }
+#endif
+    projector_.project(dmu, g, out);
+  };
   if (s == 1) {
-    projector_.project(dmu, geometry_, &scratch_);
+    project(geometry_, &scratch_);
     for (size_t i = 0; i < p.size(); ++i) p[i] += scratch_.pixels[i];
   } else {
     // bilinear from the coarse detector: fine pixel c sits at coarse coordinate (c - (s - 1) / 2) / s
-    projector_.project(dmu, coarse_geometry_, &coarse_);
+    project(coarse_geometry_, &coarse_);
     const int cw = coarse_.width, ch = coarse_.height;
     for (int r = 0; r < geometry_.height; ++r) {
       const float y = std::clamp((r - 0.5f * (s - 1)) / s, 0.0f, float(ch - 1));
@@ -131,8 +169,9 @@ void BeatingBackground::at_phase(double phase, Image* out) {
   }
   if (!filled_[b]) fill(b);
   const std::vector<float>& pb = bin_images_[b].pixels;
-  const float wb = static_cast<float>(t), wa = 1.0f - wb;
-  for (size_t i = 0; i < pa.size(); ++i) out->pixels[i] = wa * pa[i] + wb * pb[i];
+  // a + t (b - a): exactly a wherever the two bins agree (off the heart's box, bit for bit)
+  const float wb = static_cast<float>(t);
+  for (size_t i = 0; i < pa.size(); ++i) out->pixels[i] = pa[i] + wb * (pb[i] - pa[i]);
 }
 
 int BeatingBackground::fill_ahead() {

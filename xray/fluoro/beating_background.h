@@ -22,12 +22,17 @@ struct BeatingBackgroundOptions {
   int fill_per_frame = 1;   // bins projected ahead per frame until the pose has every bin
   // the change is projected on a detector of every change_stride-th pixel (1, 2 or 4) and
   // upsampled bilinearly: about change_stride^2 times cheaper; the moving edges blur a little
-  // (2: 0.019 against 0.018 % RMSE at 16 bins, in half the time: docs/benchmarks/xray-beating.md)
+  // (2: 0.0175 against 0.0163 % RMSE at 16 bins, a third of the projection time:
+  // docs/benchmarks/xray-beating.md)
   int change_stride = 2;
   // every bin's change is written once, at construction, when they all fit in this many MiB
   // (a pose change then only projects them); otherwise each is written when projected
   double change_cache_mib = 512;
   TrilinearOptions projector{.step_voxels = 1.0};  // for the changes (CPU)
+  // project the changes on the GPU (a CUDA build with a device; each bin's change is uploaded
+  // once; only when the changes are cached, else the CPU projects them); throws at construction
+  // when asked for and no device is there
+  bool gpu = false;
 };
 
 // empty when usable, otherwise the field and its range
@@ -55,6 +60,7 @@ class BeatingBackground {
 
   int filled_bins() const;
   bool changes_cached() const { return !changes_.empty(); }
+  bool on_gpu() const { return gpu_ != nullptr; }
   int64_t bin_projections() const { return bin_projections_; }
 
  private:
@@ -65,6 +71,8 @@ class BeatingBackground {
   HeartWarp warp_;
   AttenuationVolume change_;                // scratch when the changes are not cached
   std::vector<AttenuationVolume> changes_;  // per bin, when cached
+  struct Gpu;                               // per bin, the change uploaded (CUDA builds)
+  std::unique_ptr<Gpu> gpu_;
   TrilinearProjector projector_;
   DetectorGeometry geometry_;
   std::vector<Image> bin_images_;  // static + change, per bin

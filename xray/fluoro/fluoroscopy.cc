@@ -134,8 +134,6 @@ void FluoroscopyRenderer::render(const FluoroInput& in, FluoroFrame& out) {
     ++k;
   }
   out.contrast_branches.resize(k);
-  // the pose's other phase bins, a few per frame, until it has them all
-  if (m.beat) m.beat->fill_ahead();
 }
 
 int64_t FluoroscopyRenderer::background_renders() const {

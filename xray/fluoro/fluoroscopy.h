@@ -103,8 +103,10 @@ class FluoroscopyRenderer {
   // samples or options are bad (naming the field)
   void set_beat(const BeatSamples& samples, const BeatingBackgroundOptions& options = {});
   const BeatingBackground* beat() const;  // null while the background stands still
-  // projects up to the beat's fill_per_frame phase bins the current pose still lacks (render()
-  // does this after each frame); how many it projected, 0 when none is missing or no beat
+  // projects up to the beat's fill_per_frame phase bins the current pose still lacks; the caller
+  // does this after publishing a frame (render() projects only the bins its own frame needs), so
+  // a frame after a C-arm move is not held up by bins it does not show. How many it projected,
+  // 0 when none is missing or there is no beat
   int fill_beat_ahead();
   // a new detector or SID/SAD; the next frame re-projects the background if the geometry changed
   void set_c_arm(const CArmSpec& c_arm);

@@ -14,16 +14,31 @@ namespace pcisim::xray {
 std::string validate(const BeatSamples& s) {
   if (s.bins() < 2) return "beat samples: " + std::to_string(s.bins()) + " phase bins, at least 2 needed";
   if (s.rest_mm.empty()) return "beat samples: no points";
+  // finite, and within a kilometre: the casts to voxel and bucket indices stay defined
+  auto sane = [](const Eigen::Vector3d& p) { return p.allFinite() && p.cwiseAbs().maxCoeff() < 1e6; };
   for (const auto& p : s.rest_mm)
-    if (!p.allFinite()) return "beat samples: a rest point is not finite";
+    if (!sane(p)) return "beat samples: a rest point is not finite or lies over 1 km away";
   for (int b = 0; b < s.bins(); ++b) {
     if (s.at_bin_mm[b].size() != s.rest_mm.size())
       return "beat samples: bin " + std::to_string(b) + " has " + std::to_string(s.at_bin_mm[b].size()) +
              " points, rest has " + std::to_string(s.rest_mm.size());
     for (const auto& p : s.at_bin_mm[b])
-      if (!p.allFinite()) return "beat samples: a point of bin " + std::to_string(b) + " is not finite";
+      if (!sane(p))
+        return "beat samples: a point of bin " + std::to_string(b) + " is not finite or lies over 1 km away";
   }
   return {};
+}
+
+BeatSamples beat_samples_from_m(const Eigen::Matrix3Xd& rest_m, const std::vector<Eigen::Matrix3Xd>& at_bin_m) {
+  BeatSamples s;
+  s.rest_mm.reserve(rest_m.cols());
+  for (Eigen::Index i = 0; i < rest_m.cols(); ++i) s.rest_mm.push_back(1000.0 * rest_m.col(i));
+  for (const Eigen::Matrix3Xd& bin : at_bin_m) {
+    s.at_bin_mm.emplace_back();
+    s.at_bin_mm.back().reserve(bin.cols());
+    for (Eigen::Index i = 0; i < bin.cols(); ++i) s.at_bin_mm.back().push_back(1000.0 * bin.col(i));
+  }
+  return s;
 }
 
 BeatSamples every_kth_bin(const BeatSamples& s, int k) {
@@ -38,7 +53,7 @@ BeatSamples every_kth_bin(const BeatSamples& s, int k) {
 
 std::string validate(const HeartWarpParams& p) {
   if (!(p.kernel_mm > 0 && p.kernel_mm <= 50)) return "kernel_mm must be in (0, 50]";
-  if (!(p.reach_mm >= p.kernel_mm && p.reach_mm <= 100)) return "reach_mm must be in [kernel_mm, 100]";
+  if (!(p.reach_mm > p.kernel_mm && p.reach_mm <= 100)) return "reach_mm must be in (kernel_mm, 100]";
   if (!(p.grid_mm > 0 && p.grid_mm <= 20)) return "grid_mm must be in (0, 20]";
   if (p.inverse_iterations < 0 || p.inverse_iterations > 20) return "inverse_iterations must be in [0, 20]";
   return {};
@@ -76,16 +91,16 @@ HeartWarp::HeartWarp(const AttenuationVolume& ct, const BeatSamples& samples, co
     grow(samples.rest_mm[i]);
     for (int bin = 0; bin < bins_; ++bin) grow(samples.at_bin_mm[bin][i]);
   }
-  double spacing_min = 1e300;
-  for (int c = 0; c < 3; ++c) spacing_min = std::min(spacing_min, physical_from_index.col(c).norm());
   for (int c = 0; c < 3; ++c) {
     const double margin = params.reach_mm / physical_from_index.col(c).norm() + 1;
     box_lo_[c] = std::max(0, static_cast<int>(std::floor(lo[c] - margin)));
     box_hi_[c] = std::min(ct.dims()[c], static_cast<int>(std::ceil(hi[c] + margin)) + 1);
     if (box_lo_[c] >= box_hi_[c]) throw std::invalid_argument("HeartWarp: the heart's samples lie outside the CT");
   }
-  stride_ = std::max(1, static_cast<int>(std::lround(params.grid_mm / spacing_min)));
-  for (int c = 0; c < 3; ++c) nodes_[c] = (box_hi_[c] - 1 - box_lo_[c]) / stride_ + 2;
+  for (int c = 0; c < 3; ++c) {
+    stride_[c] = std::max(1, static_cast<int>(std::lround(params.grid_mm / physical_from_index.col(c).norm())));
+    nodes_[c] = (box_hi_[c] - 1 - box_lo_[c]) / stride_[c] + 2;
+  }
   const size_t node_count = size_t(nodes_[0]) * nodes_[1] * nodes_[2];
 
   // samples bucketed by rest position in cells of the reach (mm)
@@ -114,7 +129,8 @@ HeartWarp::HeartWarp(const AttenuationVolume& ct, const BeatSamples& samples, co
   for (int k = 0; k < nodes_[2]; ++k) {
     for (int j = 0; j < nodes_[1]; ++j) {
       for (int i = 0; i < nodes_[0]; ++i) {
-        const Eigen::Vector3d ijk(box_lo_[0] + stride_ * i, box_lo_[1] + stride_ * j, box_lo_[2] + stride_ * k);
+        const Eigen::Vector3d ijk(box_lo_[0] + stride_[0] * i, box_lo_[1] + stride_[1] * j,
+                                  box_lo_[2] + stride_[2] * k);
         const Eigen::Vector3d x = origin_mm + physical_from_index * ijk;
         std::fill(acc.begin(), acc.end(), Eigen::Vector3d::Zero());
         double w_sum = 0, r2_min = reach2;
@@ -143,6 +159,7 @@ HeartWarp::HeartWarp(const AttenuationVolume& ct, const BeatSamples& samples, co
 
   // inverse by fixed point: v(x) = u(x - v(x)), starting from v = u(x)
   inverse_ = forward_;
+  const Eigen::Vector3f lattice_step(stride_[0], stride_[1], stride_[2]);  // voxels per lattice step
   for (int bin = 0; bin < bins_; ++bin) {
     std::vector<Eigen::Vector3f>& v = inverse_[bin];
     for (int it = 0; it < params.inverse_iterations; ++it) {
@@ -150,7 +167,7 @@ HeartWarp::HeartWarp(const AttenuationVolume& ct, const BeatSamples& samples, co
         for (int j = 0; j < nodes_[1]; ++j)
           for (int i = 0; i < nodes_[0]; ++i) {
             const size_t node = i + size_t(nodes_[0]) * (j + size_t(nodes_[1]) * k);
-            const Eigen::Vector3f at = Eigen::Vector3f(i, j, k) - v[node] / float(stride_);
+            const Eigen::Vector3f at = Eigen::Vector3f(i, j, k) - v[node].cwiseQuotient(lattice_step);
             v[node] = field_at(forward_[bin], at);
           }
     }
@@ -180,7 +197,9 @@ Eigen::Vector3d HeartWarp::displacement_mm(int bin, const Eigen::Vector3d& rest_
   const Eigen::Vector3d ijk = index_from_physical_ * rest_mm + ct_.index_offset();
   for (int c = 0; c < 3; ++c)
     if (!(ijk[c] >= box_lo_[c] && ijk[c] <= box_hi_[c] - 1)) return Eigen::Vector3d::Zero();
-  const Eigen::Vector3f node = ((ijk - Eigen::Vector3d(box_lo_[0], box_lo_[1], box_lo_[2])) / stride_).cast<float>();
+  const Eigen::Vector3f node = (ijk - Eigen::Vector3d(box_lo_[0], box_lo_[1], box_lo_[2]))
+                                   .cwiseQuotient(Eigen::Vector3d(stride_[0], stride_[1], stride_[2]))
+                                   .cast<float>();
   const Eigen::Vector3d u_voxels = field_at(forward_.at(bin), node).cast<double>();
   return index_from_physical_.inverse() * u_voxels;
 }
@@ -205,13 +224,13 @@ void HeartWarp::write_change(int bin, AttenuationVolume* change) const {
   const ray::GridView g = grid_view(ct_);
   const std::vector<Eigen::Vector3f>& v = inverse_.at(bin);
   float* out = change->mutable_padded_mu();
-  const float inv_stride = 1.0f / stride_;
+  const Eigen::Vector3f inv_stride(1.0f / stride_[0], 1.0f / stride_[1], 1.0f / stride_[2]);
   for (int k = box_lo_[2]; k < box_hi_[2]; ++k) {
     for (int j = box_lo_[1]; j < box_hi_[1]; ++j) {
       float* row = out + 1 + pd[0] * ((j - box_lo_[1] + 1) + int64_t(pd[1]) * (k - box_lo_[2] + 1));
       for (int i = box_lo_[0]; i < box_hi_[0]; ++i) {
-        const Eigen::Vector3f node((i - box_lo_[0]) * inv_stride, (j - box_lo_[1]) * inv_stride,
-                                   (k - box_lo_[2]) * inv_stride);
+        const Eigen::Vector3f node((i - box_lo_[0]) * inv_stride[0], (j - box_lo_[1]) * inv_stride[1],
+                                   (k - box_lo_[2]) * inv_stride[2]);
         const Eigen::Vector3f s = field_at(v, node);
         // padded coordinates are volume index + 1
         const float moved = ray::trilinear(g, i + 1 - s[0], j + 1 - s[1], k + 1 - s[2]);

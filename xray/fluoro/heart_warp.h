@@ -26,6 +26,9 @@ struct BeatSamples {
 // empty when usable (>= 2 bins, >= 1 point, equal lengths, finite), otherwise what is wrong
 std::string validate(const BeatSamples& samples);
 
+// samples from columns in metres (physics::World::sample_beat_cycle's rest_m and at_bin_m), in mm
+BeatSamples beat_samples_from_m(const Eigen::Matrix3Xd& rest_m, const std::vector<Eigen::Matrix3Xd>& at_bin_m);
+
 // every second (or k-th) bin: the same cycle at fewer phases; bins must be a multiple of k
 BeatSamples every_kth_bin(const BeatSamples& samples, int k);
 
@@ -66,8 +69,8 @@ class HeartWarp {
   HeartWarpParams params_;
   int bins_ = 0;
   std::array<int, 3> box_lo_{}, box_hi_{};
-  int stride_ = 1;              // lattice spacing in voxels
-  std::array<int, 3> nodes_{};  // lattice nodes per axis, node n at voxel box_lo + stride n
+  std::array<int, 3> stride_{1, 1, 1};  // lattice spacing in voxels, per axis (~grid_mm each)
+  std::array<int, 3> nodes_{};          // lattice nodes per axis, node n at voxel box_lo + stride n
   // per bin, per node: forward u (rest -> moved) and inverse v, both in voxel index units
   std::vector<std::vector<Eigen::Vector3f>> forward_, inverse_;
   Eigen::Matrix3d index_from_physical_;

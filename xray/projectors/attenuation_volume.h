@@ -52,7 +52,8 @@ class AttenuationVolume {
   const std::vector<float>& brick_max() const { return brick_max_; }
 
   // writing mu in place (the beating background reuses one change volume for every phase): the
-  // border must stay zero, and rebuild_bricks() must run before the next projection
+  // border must stay zero, and rebuild_bricks() must run before the next projection; a GPU
+  // projector's uploaded copy is not updated
   float* mutable_padded_mu() { return mu_.get(); }
   void rebuild_bricks();
 

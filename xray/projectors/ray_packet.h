@@ -15,7 +15,8 @@ inline constexpr int kPacketMaxSamples = 8192;
 // true when this CPU runs the AVX2 path
 bool packet_supported();
 
-// line integrals of pixels (c0 + i, r), i < 8, into out[i]; all eight must lie on the detector
+// line integrals of pixels (c0 + i, r), i < 8, into out[i]; all eight must lie on the detector,
+// and the padded grid must hold fewer than 2^31 - 1 voxels (32-bit gather indices)
 void trilinear_rays_x8(const GridView& g, const DetectorView& d, int c0, int r, float step_voxels, bool skip_empty,
                        float out[8]);
 

@@ -25,7 +25,9 @@ void TrilinearProjector::project(const AttenuationVolume& volume, const Detector
   const ray::DetectorView det = detector_view(g);
   const float step = static_cast<float>(options_.step_voxels);
   const bool skip = options_.skip_empty;
-  const int packed = options_.packets && ray::packet_supported() ? g.width / 8 * 8 : 0;
+  // the packets gather with 32-bit indices: grids past 2^31 voxels go one ray at a time
+  const bool small_enough = volume.padded_count() < (size_t(1) << 31) - 1;
+  const int packed = options_.packets && small_enough && ray::packet_supported() ? g.width / 8 * 8 : 0;
   auto row = [&](int r) {
     float* out = image->pixels.data() + static_cast<size_t>(r) * g.width;
     for (int c = 0; c < packed; c += 8) ray::trilinear_rays_x8(grid, det, c, r, step, skip, out + c);

@@ -47,6 +47,10 @@ void write_dicom_slice(const DicomSlice& s, int columns, int rows, const std::ve
   itk::EncapsulateMetaData<std::string>(dict, "0020|0013", std::to_string(s.instance));
   itk::EncapsulateMetaData<std::string>(dict, "0028|1052", fmt::format("{}", s.rescale_intercept));
   itk::EncapsulateMetaData<std::string>(dict, "0028|1053", "1");
+  if (s.temporal_position >= 0)
+    itk::EncapsulateMetaData<std::string>(dict, "0020|0100", std::to_string(s.temporal_position));
+  if (s.trigger_time_ms >= 0)
+    itk::EncapsulateMetaData<std::string>(dict, "0018|1060", fmt::format("{}", s.trigger_time_ms));
 
   auto io = itk::GDCMImageIO::New();
   io->KeepOriginalUIDOn();

@@ -17,6 +17,10 @@ struct DicomSlice {
   std::array<double, 2> pixel_spacing_mm{};  // PixelSpacing: between rows, between columns
   double slice_thickness_mm = 1.0;
   double rescale_intercept = -1024;  // stored = HU - intercept (slope 1)
+  // a cine's time tags, left out when negative: TemporalPositionIdentifier (0020,0100) and
+  // TriggerTime (0018,1060, ms)
+  int temporal_position = -1;
+  double trigger_time_ms = -1;
 };
 
 // hu: columns x rows, row-major (column index fastest)

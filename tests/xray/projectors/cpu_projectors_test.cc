@@ -232,8 +232,10 @@ TEST(TrilinearProjector, EightRaysAtOnceTakeTheSameSamplesAsOneAtATime) {
     AttenuationParams params;
     params.brick_voxels = 2 + trial;  // many empty bricks, runs that start and stop
     const AttenuationVolume a(v, params);
-    // 37 columns: four packets of eight and five rays one at a time in every row
-    const DetectorGeometry g = random_geometry(rng, v, 37, 11);
+    // 37 columns: four packets of eight and five rays one at a time in every row; trials 2 and 3
+    // widen the pixels so the detector overhangs the volume and packets hold rays that miss it
+    DetectorGeometry g = random_geometry(rng, v, 37, 11);
+    if (trial >= 2) g.pixel_mm *= 2.5;
     for (const double step : {0.3, 1.0}) {
       for (const bool skip : {true, false}) {
         Image packed, single;

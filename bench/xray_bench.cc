@@ -376,7 +376,8 @@ void run_beating_gpu() {
   const BeatSamples samples = beat_samples_from_m(cycle.rest_m, cycle.at_bin_m);
   const FluoroSpec spec;
   const anatomy::VesselTree tree = anatomy::make_coronary_phantom({.seed = ws.anatomy.seed});
-  const AttenuationVolume mu(thorax_background(tree, spec));
+  const anatomy::Volume ct = thorax_background(tree, spec);
+  const AttenuationVolume mu(ct);
   CudaTrilinearProjector still_projector(mu, {.step_voxels = 1.0});
   for (const bool on_gpu : {true, false}) {
     BeatingBackgroundOptions o;
@@ -404,6 +405,30 @@ void run_beating_gpu() {
         beat.on_gpu() ? "GPU" : "CPU", on_gpu ? "full" : "half", percentile(all_ms, 0.5), percentile(all_ms, 0.99),
         all_ms.size(), build_ms);
   }
+  // what the cache replaces, on the GPU: every frame the CT warped at its phase (the box, on the
+  // CPU), uploaded whole and projected
+  const HeartWarp warp(mu, samples);
+  AttenuationVolume work(ct);
+  const DetectorGeometry g = c_arm_geometry(spec.c_arm, CArmPose{30, 20, Eigen::Vector3d::Zero()});
+  Image img;
+  img.resize(g.width, g.height);
+  std::vector<double> warp_ms, upload_project_ms;
+  for (int b = 0; b < 8; ++b) {
+    const auto t0 = std::chrono::steady_clock::now();
+    warp.write_warped(b, &work);
+    const auto t1 = std::chrono::steady_clock::now();
+    CudaTrilinearProjector per_frame(work, {.step_voxels = 1.0});
+    per_frame.project(g, &img);
+    const auto t2 = std::chrono::steady_clock::now();
+    if (b == 0) continue;  // warm-up
+    warp_ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    upload_project_ms.push_back(std::chrono::duration<double, std::milli>(t2 - t1).count());
+  }
+  std::printf(
+      "xray: per-frame re-projection on the GPU: warp of the box (CPU, one thread) median %.1f ms, upload and "
+      "projection median %.1f ms (p99 %.1f); %zu frames\n",
+      percentile(warp_ms, 0.5), percentile(upload_project_ms, 0.5), percentile(upload_project_ms, 0.99),
+      warp_ms.size());
 }
 #endif
 

@@ -145,18 +145,7 @@ int run(const std::vector<std::string>& args) {
   std::vector<double> reproject_ms;
   for (size_t t = 0; t < test_bins.size(); ++t) {
     const auto r0 = Clock::now();
-    fine_warp.write_change(test_bins[t], &change);
-    float* w = work.mutable_padded_mu();
-    const auto& pd = work.padded_dims();
-    const auto& cd = change.padded_dims();
-    for (int k = lo[2]; k < hi[2]; ++k)
-      for (int j = lo[1]; j < hi[1]; ++j)
-        for (int i = lo[0]; i < hi[0]; ++i)
-          w[(i + 1) + pd[0] * ((j + 1) + int64_t(pd[1]) * (k + 1))] =
-              mu0.mu(i, j, k) +
-              change
-                  .mutable_padded_mu()[(i - lo[0] + 1) + cd[0] * ((j - lo[1] + 1) + int64_t(cd[1]) * (k - lo[2] + 1))];
-    work.rebuild_bricks();
+    fine_warp.write_warped(test_bins[t], &work);
     truth[t].resize(g.width, g.height);
     projector.project(work, g, &truth[t]);
     reproject_ms.push_back(ms_since(r0));

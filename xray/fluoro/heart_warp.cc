@@ -216,29 +216,44 @@ AttenuationVolume HeartWarp::make_change_volume() const {
   return AttenuationVolume::from_mu(v, ct_.params());
 }
 
-void HeartWarp::write_change(int bin, AttenuationVolume* change) const {
-  const std::array<int, 3>& pd = change->padded_dims();
-  if (pd[0] != box_hi_[0] - box_lo_[0] + 2 || pd[1] != box_hi_[1] - box_lo_[1] + 2 ||
-      pd[2] != box_hi_[2] - box_lo_[2] + 2)
-    throw std::invalid_argument("HeartWarp::write_change: the change volume is not this warp's box");
+// mu(x - v_b(x)) over the box into `out`: the change volume (minus the static mu; box voxel
+// (i, j, k) at padded (i - lo + 1, ...)) or a copy of the whole CT (at padded (i + 1, ...))
+void HeartWarp::write_box(int bin, AttenuationVolume* out, bool minus_static) const {
+  const std::array<int, 3>& pd = out->padded_dims();
   const ray::GridView g = grid_view(ct_);
   const std::vector<Eigen::Vector3f>& v = inverse_.at(bin);
-  float* out = change->mutable_padded_mu();
+  float* mu = out->mutable_padded_mu();
   const Eigen::Vector3f inv_stride(1.0f / stride_[0], 1.0f / stride_[1], 1.0f / stride_[2]);
   for (int k = box_lo_[2]; k < box_hi_[2]; ++k) {
     for (int j = box_lo_[1]; j < box_hi_[1]; ++j) {
-      float* row = out + 1 + pd[0] * ((j - box_lo_[1] + 1) + int64_t(pd[1]) * (k - box_lo_[2] + 1));
+      const int64_t row_j = minus_static ? (j - box_lo_[1] + 1) : (j + 1);
+      const int64_t row_k = minus_static ? (k - box_lo_[2] + 1) : (k + 1);
+      float* row = mu + pd[0] * (row_j + int64_t(pd[1]) * row_k) + (minus_static ? 1 - box_lo_[0] : 1);
       for (int i = box_lo_[0]; i < box_hi_[0]; ++i) {
         const Eigen::Vector3f node((i - box_lo_[0]) * inv_stride[0], (j - box_lo_[1]) * inv_stride[1],
                                    (k - box_lo_[2]) * inv_stride[2]);
         const Eigen::Vector3f s = field_at(v, node);
         // padded coordinates are volume index + 1
         const float moved = ray::trilinear(g, i + 1 - s[0], j + 1 - s[1], k + 1 - s[2]);
-        row[i - box_lo_[0]] = moved - ct_.mu(i, j, k);
+        row[i] = minus_static ? moved - ct_.mu(i, j, k) : moved;
       }
     }
   }
-  change->rebuild_bricks();
+  out->rebuild_bricks();
+}
+
+void HeartWarp::write_change(int bin, AttenuationVolume* change) const {
+  const std::array<int, 3>& pd = change->padded_dims();
+  if (pd[0] != box_hi_[0] - box_lo_[0] + 2 || pd[1] != box_hi_[1] - box_lo_[1] + 2 ||
+      pd[2] != box_hi_[2] - box_lo_[2] + 2)
+    throw std::invalid_argument("HeartWarp::write_change: the change volume is not this warp's box");
+  write_box(bin, change, true);
+}
+
+void HeartWarp::write_warped(int bin, AttenuationVolume* ct_copy) const {
+  if (ct_copy->dims() != ct_.dims())
+    throw std::invalid_argument("HeartWarp::write_warped: the volume is not the size of this warp's CT");
+  write_box(bin, ct_copy, false);
 }
 
 }  // namespace pcisim::xray

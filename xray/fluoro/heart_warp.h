@@ -61,8 +61,13 @@ class HeartWarp {
   // bin b's change of attenuation over the box into `change` (from make_change_volume); the
   // bricks are rebuilt; allocates nothing
   void write_change(int bin, AttenuationVolume* change) const;
+  // bin b's warped attenuation, mu(x - v_b(x)), over the box of `ct_copy`: a volume the size of
+  // the CT holding the static mu (outside the box it is left as it is); the bricks are rebuilt.
+  // Re-projecting it whole is what the phase-bin cache is measured against.
+  void write_warped(int bin, AttenuationVolume* ct_copy) const;
 
  private:
+  void write_box(int bin, AttenuationVolume* out, bool minus_static) const;
   Eigen::Vector3f field_at(const std::vector<Eigen::Vector3f>& field, const Eigen::Vector3f& node) const;
 
   const AttenuationVolume& ct_;

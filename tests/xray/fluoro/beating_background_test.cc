@@ -77,6 +77,15 @@ TEST(HeartWarp, MovesTheHeartAndLeavesWhatIsFarStill) {
         worst = std::max(worst, double(std::abs(got - moved.mu(i, j, k))));
       }
   EXPECT_LT(worst, 1e-4 * mu.mu_of_hu(40));
+  // the whole warped CT (what per-frame re-projection projects): the moved ball everywhere
+  AttenuationVolume whole(ct(Eigen::Vector3d::Zero()));
+  warp.write_warped(1, &whole);
+  double worst_whole = 0;
+  for (int k = 0; k < 64; ++k)
+    for (int j = 0; j < 64; ++j)
+      for (int i = 0; i < 64; ++i)
+        worst_whole = std::max(worst_whole, double(std::abs(whole.mu(i, j, k) - moved.mu(i, j, k))));
+  EXPECT_LT(worst_whole, 1e-4 * mu.mu_of_hu(40));
 }
 
 TEST(BeatingBackground, MatchesProjectingTheMovedHeartAndTheSpineStaysBitIdentical) {

@@ -511,32 +511,25 @@ int run(const std::vector<std::string>& args) {
       std::printf("xray: %4d^2 exact          %9.1f ms (p99 %.1f, cpu %.1f)\n", n, r.median_ms, r.p99_ms, r.cpu_ms);
     }
     const bool cpu_here = !o.quick || n == 512;
+    // one CPU trilinear row: the marcher with `options`, timed, compared with exact
+    auto cpu_row = [&](const char* name, const TrilinearOptions& options) {
+      cpu.set_options(options);
+      Row r{name, n, options.step_voxels};
+      const auto ms = time_frames(1, cpu_frames, &r.cpu_ms, [&] { cpu.project(g, &img); });
+      r.median_ms = percentile(ms, 0.5);
+      r.p99_ms = percentile(ms, 0.99);
+      r.frames = cpu_frames;
+      errors(img, ref, &r);
+      rows.push_back(r);
+      std::printf("xray: %4d^2 %-8s step %.2f %9.1f ms (p99 %.1f, cpu %.1f)  rmse %.4f %%  max %.4f %%\n", n, name,
+                  options.step_voxels, r.median_ms, r.p99_ms, r.cpu_ms, 100 * r.rmse_rel, 100 * r.max_rel);
+    };
     for (const double step : cpu_steps) {
       if (!cpu_here) break;
-      cpu.set_options({.step_voxels = step, .skip_empty = true});
-      Row r{"cpu", n, step};
-      const auto ms = time_frames(1, cpu_frames, &r.cpu_ms, [&] { cpu.project(g, &img); });
-      r.median_ms = percentile(ms, 0.5);
-      r.p99_ms = percentile(ms, 0.99);
-      r.frames = cpu_frames;
-      errors(img, ref, &r);
-      rows.push_back(r);
-      std::printf("xray: %4d^2 cpu  step %.2f %9.1f ms (p99 %.1f, cpu %.1f)  rmse %.4f %%  max %.4f %%\n", n, step,
-                  r.median_ms, r.p99_ms, r.cpu_ms, 100 * r.rmse_rel, 100 * r.max_rel);
+      cpu_row("cpu", {.step_voxels = step, .skip_empty = true});
     }
     // the same marcher one ray at a time (no AVX2 packets), at 1 voxel: the packets' gain in this run
-    if (cpu_here) {
-      cpu.set_options({.step_voxels = 1.0, .skip_empty = true, .packets = false});
-      Row r{"cpu-1ray", n, 1.0};
-      const auto ms = time_frames(1, cpu_frames, &r.cpu_ms, [&] { cpu.project(g, &img); });
-      r.median_ms = percentile(ms, 0.5);
-      r.p99_ms = percentile(ms, 0.99);
-      r.frames = cpu_frames;
-      errors(img, ref, &r);
-      rows.push_back(r);
-      std::printf("xray: %4d^2 cpu one ray at a time, step 1 %9.1f ms (p99 %.1f, cpu %.1f)\n", n, r.median_ms, r.p99_ms,
-                  r.cpu_ms);
-    }
+    if (cpu_here) cpu_row("cpu-1ray", {.step_voxels = 1.0, .skip_empty = true, .packets = false});
 #ifdef PCISIM_HAVE_OSMESA
     // the OSMesa GL projector (software GL here: Mesa llvmpipe), same steps as the CPU marcher
     for (const double step : cpu_steps) {

@@ -56,6 +56,15 @@ DetectorGeometry ap() {
   return c_arm_geometry(spec, CArmPose{0, 0, Eigen::Vector3d::Zero()});
 }
 
+// the still CT's projection for g, trilinear at `step` voxels, one thread
+Image still_projection(const AttenuationVolume& mu, const DetectorGeometry& g, double step) {
+  TrilinearProjector projector(mu, {.step_voxels = step, .threads = 1});
+  Image still;
+  still.resize(g.width, g.height);
+  projector.project(g, &still);
+  return still;
+}
+
 TEST(HeartWarp, MovesTheHeartAndLeavesWhatIsFarStill) {
   const AttenuationVolume mu(ct(Eigen::Vector3d::Zero()));
   const HeartWarp warp(mu, rigid_beat(4));
@@ -91,10 +100,7 @@ TEST(HeartWarp, MovesTheHeartAndLeavesWhatIsFarStill) {
 TEST(BeatingBackground, MatchesProjectingTheMovedHeartAndTheSpineStaysBitIdentical) {
   const AttenuationVolume mu(ct(Eigen::Vector3d::Zero()));
   const DetectorGeometry g = ap();
-  TrilinearProjector projector(mu, {.step_voxels = 0.5, .threads = 1});
-  Image still;
-  still.resize(g.width, g.height);
-  projector.project(g, &still);
+  const Image still = still_projection(mu, g, 0.5);
   BeatingBackground beat(mu, rigid_beat(4), {.projector = {.step_voxels = 0.5, .threads = 1}});
   beat.set_pose(g, still);
   float top = 0;
@@ -102,12 +108,9 @@ TEST(BeatingBackground, MatchesProjectingTheMovedHeartAndTheSpineStaysBitIdentic
 
   // every quarter phase against the exact truth: the CT with the heart moved, projected whole
   for (int b = 0; b < 4; ++b) {
-    Image got, truth;
+    Image got;
     beat.at_phase(b / 4.0, &got);
-    const AttenuationVolume moved(ct(shift_mm(b / 4.0)));
-    TrilinearProjector truth_projector(moved, {.step_voxels = 0.5, .threads = 1});
-    truth.resize(g.width, g.height);
-    truth_projector.project(g, &truth);
+    const Image truth = still_projection(AttenuationVolume(ct(shift_mm(b / 4.0))), g, 0.5);
     double se = 0;
     for (size_t i = 0; i < got.pixels.size(); ++i) se += std::pow(got.pixels[i] - truth.pixels[i], 2);
     EXPECT_LT(std::sqrt(se / got.pixels.size()), 0.005 * top) << "phase " << b / 4.0;
@@ -139,10 +142,7 @@ TEST(BeatingBackground, MatchesProjectingTheMovedHeartAndTheSpineStaysBitIdentic
 TEST(BeatingBackground, ACoarserChangeDetectorStaysCloseToTheFullOne) {
   const AttenuationVolume mu(ct(Eigen::Vector3d::Zero()));
   const DetectorGeometry g = ap();
-  TrilinearProjector projector(mu, {.step_voxels = 1.0, .threads = 1});
-  Image still;
-  still.resize(g.width, g.height);
-  projector.project(g, &still);
+  const Image still = still_projection(mu, g, 1.0);
   float top = 0;
   for (const float p : still.pixels) top = std::max(top, p);
   Image full, coarse;
@@ -167,10 +167,7 @@ TEST(BeatingBackground, ACoarserChangeDetectorStaysCloseToTheFullOne) {
 TEST(BeatingBackground, BetweenBinsTheSpineStaysBitIdenticalAndTheUncachedPathMatches) {
   const AttenuationVolume mu(ct(Eigen::Vector3d::Zero()));
   const DetectorGeometry g = ap();
-  TrilinearProjector projector(mu, {.step_voxels = 1.0, .threads = 1});
-  Image still;
-  still.resize(g.width, g.height);
-  projector.project(g, &still);
+  const Image still = still_projection(mu, g, 1.0);
   BeatingBackground cached(mu, rigid_beat(4), {.projector = {.step_voxels = 1.0, .threads = 1}});
   BeatingBackground uncached(mu, rigid_beat(4),
                              {.change_cache_mib = 0, .projector = {.step_voxels = 1.0, .threads = 1}});
@@ -198,10 +195,8 @@ TEST(BeatingBackground, TheCoarseDetectorIsCentredForAnyWidth) {
     spec.height = width == 3 ? 5 : 150;
     spec.pixel_mm = width == 3 ? 20.0 : 1.0;
     const DetectorGeometry g = c_arm_geometry(spec, CArmPose{0, 0, Eigen::Vector3d::Zero()});
-    TrilinearProjector projector(mu, {.step_voxels = 1.0, .threads = 1});
-    Image still, full, coarse;
-    still.resize(g.width, g.height);
-    projector.project(g, &still);
+    const Image still = still_projection(mu, g, 1.0);
+    Image full, coarse;
     BeatingBackground a(mu, rigid_beat(4), {.change_stride = 1, .projector = {.step_voxels = 1.0, .threads = 1}});
     BeatingBackground b(mu, rigid_beat(4), {.change_stride = 2, .projector = {.step_voxels = 1.0, .threads = 1}});
     a.set_pose(g, still);
@@ -223,10 +218,7 @@ TEST(BeatingBackground, TheCoarseDetectorIsCentredForAnyWidth) {
 TEST(BeatingBackground, BlendsTheTwoBinsAroundThePhaseOrTakesTheNearer) {
   const AttenuationVolume mu(ct(Eigen::Vector3d::Zero()));
   const DetectorGeometry g = ap();
-  TrilinearProjector projector(mu, {.step_voxels = 1.0, .threads = 1});
-  Image still;
-  still.resize(g.width, g.height);
-  projector.project(g, &still);
+  const Image still = still_projection(mu, g, 1.0);
   BeatingBackground blend(mu, rigid_beat(4), {.projector = {.step_voxels = 1.0, .threads = 1}});
   BeatingBackground nearest(mu, rigid_beat(4), {.interpolate = false, .projector = {.step_voxels = 1.0, .threads = 1}});
   blend.set_pose(g, still);

@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
+#include <string>
 
 #include "anatomy/case/heart_center.h"
 #include "xray/fluoro/case_background.h"
@@ -27,7 +29,12 @@ XrayLoop::XrayLoop(const Scene& scene, const anatomy::Case& anatomy, SharedState
       o.gpu = true;  // the changes on the GPU too, at full resolution (well under a ms a bin)
       o.change_stride = 1;
     }
-    renderer_->set_beat(*beat, o);
+    try {
+      renderer_->set_beat(*beat, o);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string("xray.heart_phase_bins: the beating background cannot be built (") +
+                                  e.what() + "); 0 keeps the background still");
+    }
   }
   injections_.reserve(SharedState::kMaxInjections);
   state_.carm_primary_deg = state_.carm_target_primary_deg = spec_.initial_pose.primary_deg;

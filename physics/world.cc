@@ -30,6 +30,13 @@
 namespace pcisim::physics {
 namespace {
 
+// the heart's particles (template frame) placed in the case's frame by its pose; `out` keeps its
+// size, so a step allocates nothing
+void place_heart(const anatomy::HeartPose& pose, const Eigen::Matrix3Xd& template_m, Eigen::Matrix3Xd* out) {
+  out->noalias() = (pose.scale * pose.rotation) * template_m;
+  out->colwise() += pose.translation_m;
+}
+
 using Clock = std::chrono::steady_clock;
 
 void validate(const WorldSpec& s) {
@@ -185,8 +192,7 @@ World::World(const WorldSpec& spec, const anatomy::VesselTree& tree, std::shared
     // the tree rides the epicardium; the wire, its contact and the blood are simulated in the
     // vessels' rest frame and carried into the world by the same skin (docs/heart.md)
     w.heart_in_case_m.resize(3, w.heart->rest_positions_m().cols());
-    w.heart_in_case_m = (heart_pose.scale * heart_pose.rotation) * w.heart->rest_positions_m();
-    w.heart_in_case_m.colwise() += heart_pose.translation_m;
+    place_heart(heart_pose, w.heart->rest_positions_m(), &w.heart_in_case_m);
     w.skin.emplace(w.tree, w.heart_in_case_m, w.heart->epicardium(), *spec.vessel_motion);
   }
   if (!spec.guidewire) return;
@@ -237,9 +243,8 @@ BeatCycle World::sample_beat_cycle(int bins) const {
   if (!w.spec.heart_beat || !w.spec.vessel_motion || !w.skin) return out;
   // a private copy: the live heart and skin keep their state
   BeatingHeart heart(*w.spec.heart_beat, w.heart_mesh);
-  const Eigen::Matrix3d linear = w.heart_pose.scale * w.heart_pose.rotation;
-  Eigen::Matrix3Xd heart_in_case = linear * heart.rest_positions_m();
-  heart_in_case.colwise() += w.heart_pose.translation_m;
+  Eigen::Matrix3Xd heart_in_case(3, heart.rest_positions_m().cols());
+  place_heart(w.heart_pose, heart.rest_positions_m(), &heart_in_case);
   VesselSkin skin(w.tree, heart_in_case, heart.epicardium(), *w.spec.vessel_motion);
   const Eigen::Index nh = heart_in_case.cols();
   const Eigen::Index nv = skin.point_count();
@@ -256,8 +261,7 @@ BeatCycle World::sample_beat_cycle(int bins) const {
   auto advance = [&] {
     const double before = heart.phase();
     heart.step(dt);
-    heart_in_case.noalias() = linear * heart.positions_m();
-    heart_in_case.colwise() += w.heart_pose.translation_m;
+    place_heart(w.heart_pose, heart.positions_m(), &heart_in_case);
     skin.update(heart_in_case);
     double d = heart.phase() - before;
     if (d <= 0.0) d += 1.0;  // wrapped
@@ -308,8 +312,7 @@ void World::step(const InstrumentInput& input) {
     const auto b = Clock::now();
     w.costs[w.cost_heart].last_step_ms = Impl::ms(a, b);
     if (w.skin) {
-      w.heart_in_case_m.noalias() = (w.heart_pose.scale * w.heart_pose.rotation) * w.heart->positions_m();
-      w.heart_in_case_m.colwise() += w.heart_pose.translation_m;
+      place_heart(w.heart_pose, w.heart->positions_m(), &w.heart_in_case_m);
       w.skin->update(w.heart_in_case_m);
       w.costs[w.cost_motion].last_step_ms = Impl::ms(b, Clock::now());
     }

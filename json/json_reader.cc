@@ -145,6 +145,11 @@ const nlohmann::json& JsonReader::list(const std::string& key) {
   return object_.at(key);
 }
 
+const nlohmann::json* JsonReader::value(const std::string& key) {
+  read_.insert(key);
+  return has(key) ? &object_.at(key) : nullptr;
+}
+
 bool JsonReader::numbers(const std::string& key, std::span<double> out) {
   const nlohmann::json& v = list(key);
   if (v.size() != out.size()) return false;

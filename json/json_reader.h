@@ -36,6 +36,7 @@ class JsonReader {
   bool has(const std::string& key) const;
   JsonReader child(const std::string& key);            // an object; {} when absent
   const nlohmann::json& list(const std::string& key);  // an array; [] when absent
+  const nlohmann::json* value(const std::string& key);  // any value, unchecked; null when absent
   // a list of exactly out.size() finite numbers under `key` into `out`; false (out unspecified)
   // otherwise, so the caller names what it expected. Fails like list() when it is not a list
   bool numbers(const std::string& key, std::span<double> out);

@@ -43,7 +43,48 @@ void write_image(const std::string& path, int width, int height, int channels, i
     throw std::runtime_error(fmt::format("{}: writing the PNG failed: {}", path, std::strerror(saved ? saved : EIO)));
 }
 
+// rows of a grey PNG of `bits` per sample, as stored (16-bit big-endian)
+std::vector<uint8_t> read_image(const std::string& path, int bits, int* width, int* height) {
+  FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throw std::runtime_error(fmt::format("{}: cannot read: {}", path, std::strerror(errno)));
+  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png ? png_create_info_struct(png) : nullptr;
+  std::vector<uint8_t> data;
+  std::string error;
+  if (!png || !info || setjmp(png_jmpbuf(png))) {
+    error = "not a readable PNG";
+  } else {
+    png_init_io(png, f);
+    png_read_info(png, info);
+    const int w = static_cast<int>(png_get_image_width(png, info)), h = static_cast<int>(png_get_image_height(png, info));
+    if (png_get_color_type(png, info) != PNG_COLOR_TYPE_GRAY || png_get_bit_depth(png, info) != bits ||
+        png_get_interlace_type(png, info) != PNG_INTERLACE_NONE) {
+      error = fmt::format("expected a {}-bit grey PNG", bits);
+    } else {
+      const size_t row = static_cast<size_t>(w) * bits / 8;
+      data.resize(row * h);
+      for (int r = 0; r < h; ++r) png_read_row(png, data.data() + row * r, nullptr);
+      *width = w;
+      *height = h;
+    }
+  }
+  png_destroy_read_struct(&png, &info, nullptr);
+  std::fclose(f);
+  if (!error.empty()) throw std::runtime_error(fmt::format("{}: {}", path, error));
+  return data;
+}
+
 }  // namespace
+
+void read_png_gray16(const std::string& path, int* width, int* height, std::vector<uint16_t>* pixels) {
+  const std::vector<uint8_t> raw = read_image(path, 16, width, height);
+  pixels->resize(raw.size() / 2);
+  for (size_t i = 0; i < pixels->size(); ++i) (*pixels)[i] = static_cast<uint16_t>(raw[2 * i] << 8 | raw[2 * i + 1]);
+}
+
+void read_png_gray8(const std::string& path, int* width, int* height, std::vector<uint8_t>* pixels) {
+  *pixels = read_image(path, 8, width, height);
+}
 
 void write_png_gray16(const std::string& path, int width, int height, const uint16_t* pixels, bool fast) {
   // png stores 16-bit samples big-endian

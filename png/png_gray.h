@@ -4,6 +4,7 @@
 // case overviews use it.
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace pcisim::png {
 
@@ -12,6 +13,10 @@ namespace pcisim::png {
 void write_png_gray16(const std::string& path, int width, int height, const uint16_t* pixels, bool fast = true);
 void write_png_gray8(const std::string& path, int width, int height, const uint8_t* pixels);
 // colour pictures for people: 3 bytes (R, G, B) per pixel, row-major
+// reads a grey PNG of exactly that depth (what the writers above make), for tests and tools.
+// Throws std::runtime_error naming the path and the reason (missing, not PNG, other format)
+void read_png_gray16(const std::string& path, int* width, int* height, std::vector<uint16_t>* pixels);
+void read_png_gray8(const std::string& path, int* width, int* height, std::vector<uint8_t>* pixels);
 void write_png_rgb8(const std::string& path, int width, int height, const uint8_t* rgb);
 
 }  // namespace pcisim::png

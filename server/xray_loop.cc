@@ -6,6 +6,7 @@
 #include <string>
 
 #include "anatomy/case/heart_center.h"
+#include "server/beat_samples.h"
 #include "xray/fluoro/case_background.h"
 #include "protocol/channels.h"
 #include "realtime/clock.h"
@@ -22,15 +23,8 @@ XrayLoop::XrayLoop(const Scene& scene, const anatomy::Case& anatomy, SharedState
   renderer_ = std::make_unique<xray::FluoroscopyRenderer>(anatomy.vessels,
                                                           xray::background_volume(anatomy, spec_.fluoro), spec_.fluoro);
   if (beat) {
-    xray::BeatingBackgroundOptions o;
-    o.interpolate = spec_.heart_phase_blend;
-    o.projector = spec_.fluoro.projector.trilinear;
-    if (spec_.fluoro.projector.projector == xray::ProjectorKind::kCudaTrilinear) {
-      o.gpu = true;  // the changes on the GPU too, at full resolution (well under a ms a bin)
-      o.change_stride = 1;
-    }
     try {
-      renderer_->set_beat(*beat, o);
+      renderer_->set_beat(*beat, beat_options(spec_));
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(std::string("xray.heart_phase_bins: the beating background cannot be built (") +
                                   e.what() + "); 0 keeps the background still");

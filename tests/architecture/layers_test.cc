@@ -36,6 +36,10 @@ const std::map<std::string, std::vector<std::string>>& allowed() {
       {"server",
        {"anatomy", "physics", "haptics", "xray", "ultrasound", "protocol", "pcisim_lcm", "realtime", "json", "png"}},
       {"clients", {"protocol", "pcisim_lcm", "realtime", "json", "anatomy", "png"}},
+      // the dataset maker runs scenes headless: the server's scene library, not its threads
+      {"dataset",
+       {"server/scene/scene.h", "server/case_builder.h", "server/beat_samples.h", "anatomy", "physics", "xray", "json",
+        "png", "clients/bridge/trainee_script.h"}},
   };
   return rules;
 }
@@ -119,7 +123,10 @@ std::vector<Violation> check_links(const fs::path& targets_file, int* targets_se
       if (it == layer_of.end()) continue;  // a third-party library
       // a target whose layer is one header (the local force model) is an edge to that header
       const std::string edge = it->second.ends_with(".h") ? it->second : it->second + "/";
-      if (!edge_allowed(layer, edge)) out.push_back({target, layer + " links " + dep + " (" + it->second + ")"});
+      // a layer allowed some headers of another links that other's library to get them
+      bool via_header = false;
+      for (const auto& a : allowed().at(layer)) via_header |= a.ends_with(".h") && a.starts_with(edge);
+      if (!via_header && !edge_allowed(layer, edge)) out.push_back({target, layer + " links " + dep + " (" + it->second + ")"});
     }
   }
   return out;

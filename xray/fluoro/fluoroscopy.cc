@@ -1,6 +1,7 @@
 #include "xray/fluoro/fluoroscopy.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
@@ -11,6 +12,10 @@
 namespace pcisim::xray {
 namespace {
 
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
 bool same_geometry(const DetectorGeometry& a, const DetectorGeometry& b) {
   return a.source_mm == b.source_mm && a.center_mm == b.center_mm && a.u == b.u && a.v == b.v &&
          a.pixel_mm == b.pixel_mm && a.width == b.width && a.height == b.height;
@@ -19,6 +24,7 @@ bool same_geometry(const DetectorGeometry& a, const DetectorGeometry& b) {
 }  // namespace
 
 struct FluoroscopyRenderer::Impl {
+  anatomy::VesselTree tree;  // the bolus is rebuilt from it on restart()
   FluoroSpec spec;
   ContrastBolus bolus;
   DrrRenderer drr;
@@ -33,10 +39,12 @@ struct FluoroscopyRenderer::Impl {
   std::unique_ptr<BeatingBackground> beat;
   std::vector<Eigen::Vector3d> wire_mm;
   WireSpec wire;
+  FluoroFrameCost cost;
 
-  Impl(const anatomy::VesselTree& tree, anatomy::Volume background, const FluoroSpec& s)
-      : spec(s),
-        bolus(tree, s.contrast),
+  Impl(const anatomy::VesselTree& t, anatomy::Volume background, const FluoroSpec& s)
+      : tree(t),
+        spec(s),
+        bolus(t, s.contrast),
         drr(std::move(background), s.projector),
         chain({.photons_per_pixel = s.photons_per_pixel, .blur_sigma_px = s.blur_sigma_px}),
         wire{.radius_mm = s.wire_radius_mm, .mu_per_mm = s.wire_mu_per_mm} {}
@@ -60,6 +68,8 @@ void FluoroscopyRenderer::render(const FluoroInput& in, FluoroFrame& out) {
   }
   // a non-finite pose keeps the last one (the x-ray thread must not stop on one bad sample)
   const DetectorGeometry g = pose_ok ? c_arm_geometry(m.spec.c_arm, in.pose) : m.background_geometry;
+  auto t0 = std::chrono::steady_clock::now();
+  m.cost = {};
   // 1. the static anatomy, re-projected only for a new geometry (or when invalidated)
   if (!m.background_valid || !same_geometry(g, m.background_geometry)) {
     m.drr.render(g, &m.background);
@@ -77,7 +87,9 @@ void FluoroscopyRenderer::render(const FluoroInput& in, FluoroFrame& out) {
     display_window_for(m.compression_tmp, &m.window_scratch, &lo, &hi);
     m.chain.set_window(lo, hi);  // fixed per pose, so contrast never shifts the brightness
     if (m.beat) m.beat->set_pose(g, m.background);
+    m.cost.background_ms = ms_since(t0);
   }
+  t0 = std::chrono::steady_clock::now();
   if (m.line.width != g.width || m.line.height != g.height) m.line.resize(g.width, g.height);
   if (m.beat && std::isfinite(in.heart_phase)) {
     m.beat->at_phase(in.heart_phase, &m.line);  // the heart where the physics left it
@@ -85,6 +97,8 @@ void FluoroscopyRenderer::render(const FluoroInput& in, FluoroFrame& out) {
     std::copy(m.background.pixels.begin(), m.background.pixels.end(), m.line.pixels.begin());
   }
 
+  m.cost.beat_ms = ms_since(t0);
+  t0 = std::chrono::steady_clock::now();
   // 2. iodine: mu x opacity x chord through each lumen segment holding contrast
   if (!in.vessel_points_m.empty()) m.bolus.move(in.vessel_points_m);
   m.bolus.update(in.time_s, in.injections);
@@ -110,9 +124,12 @@ void FluoroscopyRenderer::render(const FluoroInput& in, FluoroFrame& out) {
   }
   project_polyline(g, m.wire_mm, &out.wire_px);
 
+  m.cost.overlay_ms = ms_since(t0);
+  t0 = std::chrono::steady_clock::now();
   // 4. quanta, noise, blur, log, window; the noise differs per frame, same for a seed
   const uint64_t key = (static_cast<uint64_t>(m.spec.seed) << 32) ^ m.frames++;
   m.chain.apply(m.line, key, &m.counts, &out.pixels);
+  m.cost.detector_ms = ms_since(t0);
 
   out.width = g.width;
   out.height = g.height;
@@ -154,6 +171,34 @@ int FluoroscopyRenderer::fill_beat_ahead() {
 }
 void FluoroscopyRenderer::set_c_arm(const CArmSpec& c_arm) {
   impl_->spec.c_arm = c_arm;
+}
+void FluoroscopyRenderer::restart(const FluoroSpec& spec) {
+  Impl& m = *impl_;
+  const FluoroSpec& old = m.spec;
+  if (spec.volume_dims != old.volume_dims || spec.volume_spacing_mm != old.volume_spacing_mm ||
+      spec.projector.projector != old.projector.projector ||
+      spec.projector.trilinear.step_voxels != old.projector.trilinear.step_voxels)
+    throw std::invalid_argument("FluoroscopyRenderer::restart: another background volume or projector needs a new renderer");
+  // the pose's projection, its range compression and window stay valid when none of their inputs moved
+  const bool keep = old.c_arm.width == spec.c_arm.width && old.c_arm.height == spec.c_arm.height &&
+                    old.c_arm.pixel_mm == spec.c_arm.pixel_mm &&
+                    old.c_arm.source_to_image_mm == spec.c_arm.source_to_image_mm &&
+                    old.c_arm.source_to_axis_mm == spec.c_arm.source_to_axis_mm &&
+                    old.range_compression == spec.range_compression &&
+                    old.range_compression_mm == spec.range_compression_mm;
+  const double lo = m.chain.window_lo(), hi = m.chain.window_hi();
+  m.spec = spec;
+  m.bolus = ContrastBolus(m.tree, spec.contrast);
+  m.chain = DetectorChain({.photons_per_pixel = spec.photons_per_pixel, .blur_sigma_px = spec.blur_sigma_px});
+  m.chain.set_window(lo, hi);
+  if (m.background_valid) m.chain.set_offset(&m.compression);
+  m.wire = {.radius_mm = spec.wire_radius_mm, .mu_per_mm = spec.wire_mu_per_mm};
+  m.frames = 0;
+  m.beat.reset();
+  if (!keep) m.background_valid = false;
+}
+const FluoroFrameCost& FluoroscopyRenderer::last_frame_cost() const {
+  return impl_->cost;
 }
 const Image& FluoroscopyRenderer::line_integrals() const {
   return impl_->line;

@@ -81,6 +81,14 @@ struct FluoroFrame {
   std::vector<std::string> contrast_branches;  // branches holding visible contrast
 };
 
+// what the last render() spent, ms of wall time (the dataset benchmark's stages)
+struct FluoroFrameCost {
+  double background_ms = 0;  // the static projection (0 when the pose's was reused)
+  double beat_ms = 0;        // the beating background at the frame's phase (its bins projected if missing)
+  double overlay_ms = 0;     // iodine and wire, analytic
+  double detector_ms = 0;    // quanta, noise, blur, log, window
+};
+
 class FluoroscopyRenderer {
  public:
   // builds the thorax phantom around `tree` and prepares the projector (seconds at most)
@@ -110,6 +118,12 @@ class FluoroscopyRenderer {
   int fill_beat_ahead();
   // a new detector or SID/SAD; the next frame re-projects the background if the geometry changed
   void set_c_arm(const CArmSpec& c_arm);
+  // a fresh run over the same background volume and projector (a dataset's next sample): every
+  // other field of `spec` takes effect, the noise starts again at frame 0 of spec.seed, the beat
+  // is dropped, and the pose's background is kept only when nothing it depends on changed. Throws
+  // std::invalid_argument when spec asks for another volume or projector (build a new renderer)
+  void restart(const FluoroSpec& spec);
+  const FluoroFrameCost& last_frame_cost() const;
 
   // the last frame's pieces, for tests and ground truth: noiseless line integrals (background +
   // contrast + wire), detector counts after noise and blur, and the contrast model's state

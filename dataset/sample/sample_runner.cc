@@ -1,0 +1,207 @@
+#include "dataset/sample/sample_runner.h"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+
+#include "anatomy/case/heart_center.h"
+#include "dataset/sample/coco.h"
+#include "dataset/sample/frame_labels.h"
+#include "dataset/sample/instrument_driver.h"
+#include "physics/guidewire/sdf_lumen.h"
+#include "physics/world.h"
+#include "server/beat_samples.h"
+#include "server/case_builder.h"
+#include "xray/fluoro/case_background.h"
+
+namespace pcisim::dataset {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// anatomies kept between samples (a phantom case with its CT and contact field is ~100 MB)
+constexpr size_t kCachedAnatomies = 3;
+
+}  // namespace
+
+struct SampleRunner::Anatomy {
+  std::string key;
+  std::shared_ptr<const anatomy::Case> c;
+  std::map<double, std::shared_ptr<const physics::LumenQuery>> lumen;  // by SDF spacing, m
+  std::unique_ptr<xray::FluoroscopyRenderer> renderer;
+  std::string renderer_key;
+  std::vector<Eigen::Vector3d> rest_points_m;  // the centerline at rest, tree order
+  std::vector<std::string> branch_names;
+};
+
+SampleRunner::SampleRunner(const DatasetSpec& spec) : spec_(spec), labeler_(spec.labels.mask_min_line_integral) {}
+SampleRunner::~SampleRunner() = default;
+
+SampleRunner::Anatomy& SampleRunner::anatomy_for(const SamplePlan& plan) {
+  // a phantom's CT is generated at the scene's X-ray volume settings: they are part of the key
+  const auto& f = plan.scene.xray->fluoro;
+  const std::string key = fmt::format("{}|{}x{}x{}|{}", plan.anatomy, f.volume_dims[0], f.volume_dims[1],
+                                      f.volume_dims[2], f.volume_spacing_mm);
+  for (size_t i = 0; i < cache_.size(); ++i) {
+    if (cache_[i]->key != key) continue;
+    std::rotate(cache_.begin() + static_cast<std::ptrdiff_t>(i), cache_.begin() + static_cast<std::ptrdiff_t>(i) + 1,
+                cache_.end());
+    return *cache_.back();
+  }
+  auto a = std::make_unique<Anatomy>();
+  a->key = key;
+  a->c = server::build_case(plan.scene);
+  for (const auto& b : a->c->vessels.branches) {
+    a->branch_names.push_back(b.name);
+    for (const auto& p : b.points) a->rest_points_m.push_back(p.position_m);
+  }
+  if (cache_.size() >= kCachedAnatomies) cache_.erase(cache_.begin());
+  cache_.push_back(std::move(a));
+  return *cache_.back();
+}
+
+nlohmann::json SampleRunner::run(const SamplePlan& plan, FrameSink& sink) {
+  auto t0 = Clock::now();
+  const server::Scene& scene = plan.scene;
+  const server::XraySpec& xs = *scene.xray;
+  Anatomy& a = anatomy_for(plan);
+  const anatomy::Case& c = *a.c;
+
+  // physics: the scene's effects around the case, its contact field shared between samples
+  std::shared_ptr<const physics::LumenQuery> lumen;
+  if (scene.world.vessel_contact && scene.world.guidewire) {
+    const double h = scene.world.vessel_contact->sdf_spacing_m;
+    auto& slot = a.lumen[h];
+    if (!slot) slot = std::make_shared<const physics::SdfLumen>(c.vessels, h);
+    lumen = slot;
+  }
+  physics::World world(scene.world, c.vessels, lumen, c.heart, c.heart_vertices_m, c.organ ? &*c.organ : nullptr);
+
+  // the renderer over the case's CT, restarted for this sample (or built when none fits)
+  xray::CArmPose pose = xs.initial_pose;
+  pose.isocenter_mm = anatomy::heart_center_mm(c);
+  const auto& f = xs.fluoro;
+  const std::string renderer_key =
+      fmt::format("{}|{}", static_cast<int>(f.projector.projector), f.projector.trilinear.step_voxels);
+  if (!a.renderer || a.renderer_key != renderer_key) {
+    // built with the scene's seed (the thorax phantom's), restarted at once with the sample's
+    // noise seed, as every later sample on this anatomy is
+    a.renderer.reset();
+    a.renderer = std::make_unique<xray::FluoroscopyRenderer>(c.vessels, xray::background_volume(c, f), f);
+    a.renderer_key = renderer_key;
+  }
+  xray::FluoroSpec noise_spec = f;
+  noise_spec.seed = static_cast<uint32_t>(plan.seed);
+  a.renderer->restart(noise_spec);
+  xray::FluoroscopyRenderer& renderer = *a.renderer;
+  const bool beating = scene.world.vessel_motion && xs.heart_phase_bins > 0;
+  if (beating) renderer.set_beat(server::beat_samples_mm(world.sample_beat_cycle(xs.heart_phase_bins)), server::beat_options(xs));
+
+  InstrumentDriver driver(spec_.driver, SampleRng::for_sample(spec_.seed, static_cast<uint64_t>(plan.index), kDriverStream),
+                          plan.script);
+  std::vector<xray::ContrastInjection> injections;
+  if (plan.injection && xs.contrast) {
+    xray::ContrastInjection inj;
+    inj.start_s = plan.injection_start_s;
+    inj.duration_s = xs.injection_duration_s;
+    inj.volume_ml = xs.injection_volume_ml;
+    injections.push_back(inj);
+  }
+  times_.setup_s += seconds_since(t0);
+
+  physics::WorldSnapshot snap;
+  std::vector<Eigen::Vector3d> wire_mm, vessel_mm;
+  const double step_s = scene.world.step_s;
+  for (int k = 0; k < spec_.frames_per_sample; ++k) {
+    // physics up to the frame's pulse
+    t0 = Clock::now();
+    const double t_frame = plan.warmup_s + k / xs.pulse_rate_fps;
+    while (world.time_s() + 0.5 * step_s < t_frame) world.step(driver.at(world.time_s() + step_s));
+    world.write_snapshot(snap);
+    times_.physics_s += seconds_since(t0);
+
+    xray::FluoroInput in;
+    in.time_s = snap.time_s;
+    in.pose = pose;
+    in.wire_m = snap.wire_nodes_m;
+    in.injections = injections;
+    // an empty list would leave the bolus where an earlier sample's heart carried it
+    in.vessel_points_m = snap.vessel_points_m.empty() ? std::span<const Eigen::Vector3d>(a.rest_points_m)
+                                                      : std::span<const Eigen::Vector3d>(snap.vessel_points_m);
+    if (beating) in.heart_phase = snap.heart_phase;
+    renderer.render(in, frame_);
+    const xray::FluoroFrameCost& cost = renderer.last_frame_cost();
+    times_.projection_s += 1e-3 * (cost.background_ms + cost.beat_ms);
+    times_.overlay_s += 1e-3 * cost.overlay_ms;
+    times_.noise_s += 1e-3 * cost.detector_ms;
+
+    // labels: the vessel images, then the geometry of everything the frame shows
+    t0 = Clock::now();
+    labeler_.label(frame_.geometry, renderer.contrast(), f.iodine_mu_per_mm);
+    wire_mm.resize(snap.wire_nodes_m.size());
+    for (size_t i = 0; i < wire_mm.size(); ++i) wire_mm[i] = 1e3 * snap.wire_nodes_m[i];
+    vessel_mm.resize(snap.vessel_points_m.size());
+    for (size_t i = 0; i < vessel_mm.size(); ++i) vessel_mm[i] = 1e3 * snap.vessel_points_m[i];
+    const std::vector<Eigen::Vector3d> keys =
+        wire_keypoints(frame_.geometry, wire_mm, spec_.labels.wire_keypoints, spec_.labels.wire_keypoint_span_mm);
+    FrameTruth truth;
+    truth.frame = k;
+    truth.time_s = snap.time_s;
+    truth.heart_phase = snap.heart_phase;
+    truth.geometry = frame_.geometry;
+    truth.pose = frame_.pose;
+    truth.sid_mm = f.c_arm.source_to_image_mm;
+    truth.sad_mm = f.c_arm.source_to_axis_mm;
+    truth.wire_mm = wire_mm;
+    truth.wire_px = frame_.wire_px;
+    truth.keypoints = keys;
+    if (snap.tip_branch >= 0 && static_cast<size_t>(snap.tip_branch) < a.branch_names.size())
+      truth.tip_branch = a.branch_names[static_cast<size_t>(snap.tip_branch)];
+    truth.tree = &c.vessels;
+    truth.vessel_points_mm = vessel_mm;
+    truth.branch_opacity = renderer.contrast().branch_opacity();
+    truth.visible_opacity = f.contrast.visible_opacity;
+    truth.mask_pixels = labeler_.mask_pixels();
+    const nlohmann::json labels = frame_labels(truth);
+    const nlohmann::json coco =
+        coco_frame_annotations(keys, labeler_.branch_ids(), frame_.width, frame_.height, a.branch_names);
+    times_.labels_s += seconds_since(t0);
+
+    t0 = Clock::now();
+    sink.frame({.frame = k, .image = &frame_, .vessels = &labeler_, .labels = &labels, .coco = &coco});
+    times_.write_s += seconds_since(t0);
+    ++times_.frames;
+  }
+  ++times_.samples;
+
+  nlohmann::json injection = nullptr;
+  if (!injections.empty())
+    injection = {{"start_s", injections[0].start_s},
+                 {"duration_s", injections[0].duration_s},
+                 {"volume_ml", injections[0].volume_ml},
+                 {"ostium", "left"}};
+  return {
+      {"sample", plan.index},
+      {"seed", plan.seed},
+      {"anatomy", plan.anatomy},
+      {"drawn", plan.drawn.is_null() ? nlohmann::json::object() : plan.drawn},
+      {"frames", spec_.frames_per_sample},
+      {"first_frame_s", plan.warmup_s},
+      {"pulse_rate_fps", xs.pulse_rate_fps},
+      {"physics_rate_hz", scene.physics_rate_hz},
+      {"projector", xray::projector_name(f.projector.projector)},
+      {"beating_background", beating ? xs.heart_phase_bins : 0},
+      {"photons_per_pixel", f.photons_per_pixel},
+      {"blur_sigma_px", f.blur_sigma_px},
+      {"injection", injection},
+      {"driver", spec_.driver.kind == DriverSpec::Kind::kScript ? "script" : "random_walk"},
+      {"effects", scene.effects},
+      {"scene", plan.scene_doc},
+  };
+}
+
+}  // namespace pcisim::dataset

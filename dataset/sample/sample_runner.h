@@ -1,0 +1,69 @@
+#pragma once
+// Runs one sample headless and as fast as the machine goes: the drawn scene's physics stepped
+// from t = 0 under the instrument driver, then frames_per_sample fluoroscopy frames at the
+// scene's pulse rate, each handed with its labels to a sink. The same plan gives the same bytes:
+// everything is seeded by the sample, and what is cached between samples (the case, its contact
+// field, the renderer over its CT) is rebuilt or restarted so no sample sees another's state.
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "anatomy/case/case.h"
+#include "dataset/sample/sample_plan.h"
+#include "dataset/sample/vessel_labeler.h"
+#include "physics/guidewire/lumen_query.h"
+#include "xray/fluoro/fluoroscopy.h"
+
+namespace pcisim::dataset {
+
+struct FrameOutput {
+  int frame = 0;
+  const xray::FluoroFrame* image = nullptr;  // 16-bit display frame, dark = radiopaque
+  const VesselLabeler* vessels = nullptr;    // the mask and the branch label image
+  const nlohmann::json* labels = nullptr;    // frame_labels()
+  const nlohmann::json* coco = nullptr;      // coco_frame_annotations()
+};
+
+class FrameSink {
+ public:
+  virtual ~FrameSink() = default;
+  virtual void frame(const FrameOutput& out) = 0;
+};
+
+// wall time by stage, summed over every sample this runner ran
+struct StageTimes {
+  double setup_s = 0;       // case, contact field, renderer, world, beating background
+  double physics_s = 0;     // world steps
+  double projection_s = 0;  // the background (static and beating) projected
+  double overlay_s = 0;     // iodine and wire
+  double noise_s = 0;       // the detector chain: quanta, noise, blur, log, window
+  double labels_s = 0;      // masks, centerlines, keypoints, JSON
+  double write_s = 0;       // the sink (PNG and JSON files)
+  int64_t frames = 0, samples = 0;
+};
+
+class SampleRunner {
+ public:
+  explicit SampleRunner(const DatasetSpec& spec);
+  ~SampleRunner();
+
+  // the sample's frames to `sink`; returns what the sample was (sample.json): its seed, anatomy,
+  // drawn values and the scene's effective settings. Throws on any failure (the caller records it)
+  nlohmann::json run(const SamplePlan& plan, FrameSink& sink);
+  const StageTimes& times() const { return times_; }
+
+ private:
+  struct Anatomy;
+  Anatomy& anatomy_for(const SamplePlan& plan);
+
+  const DatasetSpec& spec_;
+  std::vector<std::unique_ptr<Anatomy>> cache_;  // the most recently used last
+  VesselLabeler labeler_;
+  xray::FluoroFrame frame_;
+  StageTimes times_;
+};
+
+}  // namespace pcisim::dataset

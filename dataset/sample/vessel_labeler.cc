@@ -1,0 +1,61 @@
+#include "dataset/sample/vessel_labeler.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "xray/overlay/tube_overlay.h"
+
+namespace pcisim::dataset {
+
+// segments under this opacity are left out of the frame too (xray/fluoro/fluoroscopy.cc)
+constexpr double kMinOpacity = 1e-3;
+
+void VesselLabeler::label(const xray::DetectorGeometry& g, const xray::ContrastBolus& bolus, double iodine_mu_per_mm) {
+  const size_t n = static_cast<size_t>(g.width) * g.height;
+  if (total_.width != g.width || total_.height != g.height) {
+    total_.resize(g.width, g.height);
+    one_.resize(g.width, g.height);
+    best_.resize(g.width, g.height);
+    mask_.assign(n, 0);
+    branch_ids_.assign(n, 0);
+  }
+  const auto& segs = bolus.segments();
+  const auto& op = bolus.segment_opacity();
+  const size_t branches = bolus.branch_opacity().size();
+  if (branches > 254) throw std::length_error("VesselLabeler: more than 254 branches do not fit an 8-bit label image");
+  std::fill(total_.pixels.begin(), total_.pixels.end(), 0.0f);
+  std::fill(best_.pixels.begin(), best_.pixels.end(), 0.0f);
+  std::fill(branch_ids_.begin(), branch_ids_.end(), 0);
+  // branch by branch: its own line integral, added to the total, and the largest wins the pixel
+  for (size_t b = 0; b < branches; ++b) {
+    if (bolus.branch_opacity()[b] < kMinOpacity) continue;
+    std::fill(one_.pixels.begin(), one_.pixels.end(), 0.0f);
+    bool any = false;
+    for (size_t i = 0; i < segs.size(); ++i) {
+      if (segs[i].branch != static_cast<int>(b) || op[i] < kMinOpacity) continue;
+      xray::add_cone_segment(g, segs[i].a_mm, segs[i].b_mm, segs[i].ra_mm, segs[i].rb_mm, iodine_mu_per_mm * op[i],
+                             &one_);
+      any = true;
+    }
+    if (!any) continue;
+    const auto id = static_cast<uint8_t>(b + 1);
+    for (size_t p = 0; p < n; ++p) {
+      const float x = one_.pixels[p];
+      if (x <= 0.0f) continue;
+      total_.pixels[p] += x;
+      if (x > best_.pixels[p]) {
+        best_.pixels[p] = x;
+        branch_ids_[p] = id;
+      }
+    }
+  }
+  mask_pixels_ = 0;
+  for (size_t p = 0; p < n; ++p) {
+    const bool in = total_.pixels[p] >= min_line_integral_;
+    mask_[p] = in ? 255 : 0;
+    if (!in) branch_ids_[p] = 0;
+    mask_pixels_ += in;
+  }
+}
+
+}  // namespace pcisim::dataset

@@ -11,7 +11,8 @@ namespace pcisim::png {
 // pixels row-major, row 0 first. Throws std::runtime_error naming the path and the reason.
 // fast: zlib level 1 (frames arrive at up to 30 per second)
 void write_png_gray16(const std::string& path, int width, int height, const uint16_t* pixels, bool fast = true);
-void write_png_gray8(const std::string& path, int width, int height, const uint8_t* pixels);
+// fast: for label images, mostly runs of one value (run-length coding, level 1)
+void write_png_gray8(const std::string& path, int width, int height, const uint8_t* pixels, bool fast = false);
 // colour pictures for people: 3 bytes (R, G, B) per pixel, row-major
 // reads a grey PNG of exactly that depth (what the writers above make), for tests and tools.
 // Throws std::runtime_error naming the path and the reason (missing, not PNG, other format)

@@ -2,8 +2,14 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <vector>
 
 #include "dataset/run/sample_writer.h"
 #include "dataset/sample/sample_plan.h"
@@ -26,17 +32,24 @@ std::string duration_text(double s) {
 RunReport run_dataset(const DatasetSpec& spec, const RunOptions& o, std::ostream& progress) {
   RunReport r;
   DatasetFolder folder(o.out_dir, spec.text, o.shard);
+  // this run's list: the shard's samples not made or failed yet, at most max_samples of them
+  std::vector<int64_t> todo;
   int64_t owned = 0;
-  for (int64_t i = o.shard.index; i < spec.samples; i += o.shard.count) ++owned;
-  r.resumed = static_cast<int64_t>(folder.done().size() + folder.failed().size());
-  int64_t todo = owned - r.resumed;
-  if (o.max_samples >= 0) todo = std::min(todo, o.max_samples);
+  for (int64_t i = o.shard.index; i < spec.samples; i += o.shard.count) {
+    ++owned;
+    if (!folder.done().contains(i) && !folder.failed().contains(i)) todo.push_back(i);
+  }
+  r.resumed = owned - static_cast<int64_t>(todo.size());
+  if (o.max_samples >= 0 && static_cast<int64_t>(todo.size()) > o.max_samples) todo.resize(static_cast<size_t>(o.max_samples));
+  const auto total = static_cast<int64_t>(todo.size());
   const std::string who = o.shard.count > 1 ? fmt::format("shard {}/{}: ", o.shard.index, o.shard.count) : "";
   if (r.resumed > 0)
     progress << fmt::format("pcisim-dataset: {}resuming: {} of {} samples already made or failed\n", who, r.resumed,
                             owned);
 
-  SampleRunner runner(spec);
+  std::mutex mutex;  // guards the folder's lists, the report and the progress stream
+  std::atomic<size_t> next{0};
+  std::atomic<bool> halt{false};
   const auto t_start = Clock::now();
   auto last_print = t_start - std::chrono::seconds(10);
   int64_t printed_at = -1;  // samples finished at the last line
@@ -47,52 +60,73 @@ RunReport run_dataset(const DatasetSpec& spec, const RunOptions& o, std::ostream
     last_print = now;
     const double wall = std::chrono::duration<double>(now - t_start).count();
     const int64_t finished = r.made + r.failed;
-    const double eta = finished > 0 ? wall / finished * static_cast<double>(todo - finished) : NAN;
+    const double eta = finished > 0 ? wall / finished * static_cast<double>(total - finished) : NAN;
     progress << fmt::format("pcisim-dataset: {}{}/{} samples ({} failed), {} frames, {:.1f} frames/s, ETA {}\n", who,
-                            finished, todo, r.failed, r.frames, wall > 0 ? r.frames / wall : 0.0,
-                            finished >= todo ? "done" : duration_text(eta));
+                            finished, total, r.failed, r.frames, wall > 0 ? r.frames / wall : 0.0,
+                            finished >= total ? "done" : duration_text(eta));
     progress.flush();
   };
 
-  for (int64_t i = o.shard.index; i < spec.samples && r.made + r.failed < todo; i += o.shard.count) {
-    if (folder.done().contains(i) || folder.failed().contains(i)) continue;
-    if (o.stop && o.stop->load()) {
-      r.interrupted = true;
-      break;
-    }
-    uint64_t seed = 0;
-    try {
-      const SamplePlan plan = plan_sample(spec, i);
-      seed = plan.seed;
-      SampleWriter writer(folder.begin_sample(i));
-      const int64_t frames_before = runner.times().frames;
-      const nlohmann::json sample = runner.run(plan, writer);
-      writer.finish(sample);
-      folder.commit_sample(i, {{"seed", plan.seed}, {"frames", spec.frames_per_sample}, {"anatomy", plan.anatomy}});
-      r.frames += runner.times().frames - frames_before;
-      ++r.made;
-    } catch (const DiskFull& e) {
-      folder.abandon_sample(i);
-      r.disk_full = true;
-      r.disk_full_what = e.what();
-      break;
-    } catch (const std::exception& e) {
-      folder.abandon_sample(i);
+  // each worker takes the next sample of the list until it is empty or the run must stop
+  auto work = [&](SampleRunner& runner) {
+    while (true) {
+      if (halt.load() || (o.stop && o.stop->load())) return;
+      const size_t k = next.fetch_add(1);
+      if (k >= todo.size()) return;
+      const int64_t i = todo[k];
+      uint64_t seed = 0;
       try {
-        folder.record_failure(i, seed, e.what());
-      } catch (const DiskFull& full) {
+        const SamplePlan plan = plan_sample(spec, i);
+        seed = plan.seed;
+        std::string dir;
+        {
+          std::lock_guard lock(mutex);
+          dir = folder.begin_sample(i);
+        }
+        SampleWriter writer(dir);
+        const nlohmann::json sample = runner.run(plan, writer);
+        writer.finish(sample);
+        std::lock_guard lock(mutex);
+        folder.commit_sample(i, {{"seed", plan.seed}, {"frames", spec.frames_per_sample}, {"anatomy", plan.anatomy}});
+        r.frames += spec.frames_per_sample;
+        ++r.made;
+        print(false);
+      } catch (const DiskFull& e) {
+        std::lock_guard lock(mutex);
+        folder.abandon_sample(i);
+        if (!r.disk_full) r.disk_full_what = e.what();
         r.disk_full = true;
-        r.disk_full_what = full.what();
-        break;
+        halt.store(true);
+        return;
+      } catch (const std::exception& e) {
+        std::lock_guard lock(mutex);
+        folder.abandon_sample(i);
+        try {
+          folder.record_failure(i, seed, e.what());
+        } catch (const DiskFull& full) {
+          if (!r.disk_full) r.disk_full_what = full.what();
+          r.disk_full = true;
+          halt.store(true);
+          return;
+        }
+        progress << fmt::format("pcisim-dataset: {}sample {} (seed {}) failed: {}\n", who, i, seed, e.what());
+        ++r.failed;
+        print(false);
       }
-      progress << fmt::format("pcisim-dataset: {}sample {} (seed {}) failed: {}\n", who, i, seed, e.what());
-      ++r.failed;
     }
-    print(false);
-  }
+  };
+  const int jobs = std::max(1, std::min<int>(o.jobs, static_cast<int>(std::max<int64_t>(1, total))));
+  std::vector<std::unique_ptr<SampleRunner>> runners;
+  for (int j = 0; j < jobs; ++j) runners.push_back(std::make_unique<SampleRunner>(spec));
+  std::vector<std::thread> threads;
+  for (int j = 1; j < jobs; ++j) threads.emplace_back(work, std::ref(*runners[j]));
+  work(*runners[0]);
+  for (auto& t : threads) t.join();
+  r.interrupted = !r.disk_full && o.stop && o.stop->load() && next.load() < todo.size();
+
   print(true);
   r.wall_s = std::chrono::duration<double>(Clock::now() - t_start).count();
-  r.times = runner.times();
+  for (const auto& runner : runners) r.times += runner->times();
   r.remaining = owned - static_cast<int64_t>(folder.done().size() + folder.failed().size());
   return r;
 }

@@ -3,7 +3,8 @@
 // recorded as failed, in order, with a progress line (samples, frames/s, ETA) at most once a
 // second. A failing sample is recorded (seed, error) and the run goes on; a full disk stops the
 // run (the sample in progress removed) and says so; SIGINT/SIGTERM finish the current sample and
-// stop. Any of these resumes with the same command.
+// stop. Any of these resumes with the same command. With jobs > 1 samples are made in parallel and
+// listed in the order they finish (the merge sorts them).
 #include <atomic>
 #include <cstdint>
 #include <ostream>
@@ -19,6 +20,9 @@ struct RunOptions {
   std::string out_dir;
   Shard shard;
   int64_t max_samples = -1;                  // stop after making this many (-1: all the shard owns)
+  // samples made at once, each by its own runner on its own thread (the same bytes whatever the
+  // count: a sample depends on its plan alone); each keeps its own anatomy cache
+  int jobs = 1;
   const std::atomic<bool>* stop = nullptr;   // set (by a signal handler) to stop after the sample in progress
 };
 

@@ -41,9 +41,9 @@ void SampleWriter::frame(const FrameOutput& out) {
   png("frame_" + stem + ".png",
       [&](const std::string& p) { png::write_png_gray16(p, im.width, im.height, im.pixels.data()); });
   png("mask_" + stem + ".png",
-      [&](const std::string& p) { png::write_png_gray8(p, im.width, im.height, out.vessels->mask().data()); });
+      [&](const std::string& p) { png::write_png_gray8(p, im.width, im.height, out.vessels->mask().data(), true); });
   png("branches_" + stem + ".png",
-      [&](const std::string& p) { png::write_png_gray8(p, im.width, im.height, out.vessels->branch_ids().data()); });
+      [&](const std::string& p) { png::write_png_gray8(p, im.width, im.height, out.vessels->branch_ids().data(), true); });
   write_text_file(dir_ + "/frame_" + stem + ".json", out.labels->dump() + "\n");
 
   images_.push_back({{"id", out.frame + 1},

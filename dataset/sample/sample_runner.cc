@@ -33,7 +33,7 @@ struct SampleRunner::Anatomy {
   std::shared_ptr<const anatomy::Case> c;
   std::map<double, std::shared_ptr<const physics::LumenQuery>> lumen;  // by SDF spacing, m
   std::unique_ptr<xray::FluoroscopyRenderer> renderer;
-  std::string renderer_key;
+  std::string renderer_key, beat_key;  // what the renderer and its beating background were built for
   std::vector<Eigen::Vector3d> rest_points_m;  // the centerline at rest, tree order
   std::vector<std::string> branch_names;
 };
@@ -79,7 +79,11 @@ nlohmann::json SampleRunner::run(const SamplePlan& plan, FrameSink& sink) {
     if (!slot) slot = std::make_shared<const physics::SdfLumen>(c.vessels, h);
     lumen = slot;
   }
+  times_.anatomy_s += seconds_since(t0);
+  t0 = Clock::now();
   physics::World world(scene.world, c.vessels, lumen, c.heart, c.heart_vertices_m, c.organ ? &*c.organ : nullptr);
+  times_.world_s += seconds_since(t0);
+  t0 = Clock::now();
 
   // the renderer over the case's CT, restarted for this sample (or built when none fits)
   xray::CArmPose pose = xs.initial_pose;
@@ -94,12 +98,27 @@ nlohmann::json SampleRunner::run(const SamplePlan& plan, FrameSink& sink) {
     a.renderer = std::make_unique<xray::FluoroscopyRenderer>(c.vessels, xray::background_volume(c, f), f);
     a.renderer_key = renderer_key;
   }
+  // the beating background depends on the heart alone: kept (with its bins projected so far)
+  // while the next sample's heart is the same
+  const bool beating = scene.world.vessel_motion && xs.heart_phase_bins > 0;
+  const auto& effects = plan.scene_doc.at("effects");
+  const std::string beat_key =
+      beating ? fmt::format("{}|{}|{}|{}|{}", effects.value("heart_beat", nlohmann::json()).dump(),
+                            effects.value("vessel_motion", nlohmann::json()).dump(), scene.physics_rate_hz,
+                            xs.heart_phase_bins, xs.heart_phase_blend)
+              : "";
+  const bool keep_beat = beating && a.renderer->beat() && a.beat_key == beat_key;
   xray::FluoroSpec noise_spec = f;
   noise_spec.seed = static_cast<uint32_t>(plan.seed);
-  a.renderer->restart(noise_spec);
+  a.renderer->restart(noise_spec, keep_beat);
   xray::FluoroscopyRenderer& renderer = *a.renderer;
-  const bool beating = scene.world.vessel_motion && xs.heart_phase_bins > 0;
-  if (beating) renderer.set_beat(server::beat_samples_mm(world.sample_beat_cycle(xs.heart_phase_bins)), server::beat_options(xs));
+  times_.anatomy_s += seconds_since(t0);
+  t0 = Clock::now();
+  if (beating && !keep_beat)
+    renderer.set_beat(server::beat_samples_mm(world.sample_beat_cycle(xs.heart_phase_bins)), server::beat_options(xs));
+  a.beat_key = beat_key;
+  times_.beat_s += seconds_since(t0);
+  t0 = Clock::now();
 
   InstrumentDriver driver(spec_.driver, SampleRng::for_sample(spec_.seed, static_cast<uint64_t>(plan.index), kDriverStream),
                           plan.script);
@@ -111,7 +130,7 @@ nlohmann::json SampleRunner::run(const SamplePlan& plan, FrameSink& sink) {
     inj.volume_ml = xs.injection_volume_ml;
     injections.push_back(inj);
   }
-  times_.setup_s += seconds_since(t0);
+  times_.world_s += seconds_since(t0);
 
   physics::WorldSnapshot snap;
   std::vector<Eigen::Vector3d> wire_mm, vessel_mm;

@@ -35,7 +35,9 @@ class FrameSink {
 
 // wall time by stage, summed over every sample this runner ran
 struct StageTimes {
-  double setup_s = 0;       // case, contact field, renderer, world, beating background
+  double anatomy_s = 0;     // case, contact field and renderer built (once per anatomy kept), restarted
+  double world_s = 0;       // the scene's physics built
+  double beat_s = 0;        // one heart cycle sampled and the CT's warp built (beating background)
   double physics_s = 0;     // world steps
   double projection_s = 0;  // the background (static and beating) projected
   double overlay_s = 0;     // iodine and wire
@@ -43,6 +45,13 @@ struct StageTimes {
   double labels_s = 0;      // masks, centerlines, keypoints, JSON
   double write_s = 0;       // the sink (PNG and JSON files)
   int64_t frames = 0, samples = 0;
+
+  StageTimes& operator+=(const StageTimes& o) {
+    anatomy_s += o.anatomy_s, world_s += o.world_s, beat_s += o.beat_s, physics_s += o.physics_s;
+    projection_s += o.projection_s, overlay_s += o.overlay_s, noise_s += o.noise_s, labels_s += o.labels_s;
+    write_s += o.write_s, frames += o.frames, samples += o.samples;
+    return *this;
+  }
 };
 
 class SampleRunner {

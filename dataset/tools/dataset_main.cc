@@ -20,7 +20,7 @@ using namespace pcisim::dataset;
 
 constexpr const char* kHelp = R"(pcisim-dataset: labelled fluoroscopy datasets from randomised simulations.
 
-  pcisim-dataset --spec FILE --out DIR [--shard I/N] [--max-samples K]
+  pcisim-dataset --spec FILE --out DIR [--shard I/N] [--jobs J] [--max-samples K]
   pcisim-dataset --merge --spec FILE --out DIR
   pcisim-dataset --check --spec FILE
   pcisim-dataset --print-spec
@@ -36,6 +36,9 @@ every key of the spec and the labels' exact definitions are in docs/dataset.md.
   --out DIR        the dataset folder: created, or resumed when it holds the same spec
   --shard I/N      make only samples i with i % N == I (0 <= I < N), for parallel jobs; merge
                    with --merge once every shard has finished (scripts/dataset-slurm does both)
+  --jobs J         make J samples at once, each on its own thread (default 1; the same files
+                   whatever J: a sample depends on its number alone). On a machine whose
+                   projector is the GPU, one job per CPU core keeps it busy
   --max-samples K  stop after making K samples (a later run resumes)
   --merge          write DIR/manifest.json and DIR/coco.json from every shard's lists
   --check          check the spec (every key, every varied value at its extremes) and exit
@@ -89,6 +92,7 @@ struct Args {
   Shard shard;
   bool shard_given = false, merge = false, check = false;
   int64_t max_samples = -1;
+  int jobs = 1;
 };
 
 [[noreturn]] void usage(const std::string& what) {
@@ -126,6 +130,14 @@ Args parse(int argc, char** argv) {
         usage("--max-samples: expected a whole number, got \"" + v + "\"");
       }
       if (a.max_samples < 0) usage("--max-samples: expected 0 or more");
+    } else if (k == "--jobs") {
+      const std::string v = value();
+      try {
+        a.jobs = std::stoi(v);
+      } catch (...) {
+        usage("--jobs: expected a whole number, got \"" + v + "\"");
+      }
+      if (a.jobs < 1 || a.jobs > 256) usage("--jobs: expected 1 to 256");
     } else if (k == "--shard") {
       const std::string v = value();
       const size_t slash = v.find('/');
@@ -154,13 +166,13 @@ Args parse(int argc, char** argv) {
 
 // where the time went, as shares of the stages' sum
 void print_stages(const StageTimes& t) {
-  const double sum = t.setup_s + t.physics_s + t.projection_s + t.overlay_s + t.noise_s + t.labels_s + t.write_s;
+  const double sum = t.anatomy_s + t.world_s + t.beat_s + t.physics_s + t.projection_s + t.overlay_s + t.noise_s + t.labels_s + t.write_s;
   if (sum <= 0) return;
   auto pct = [&](double x) { return 100.0 * x / sum; };
   std::fprintf(stderr,
-               "pcisim-dataset: stages: setup %.0f %%, physics %.0f %%, projection %.0f %%, overlays %.0f %%, "
-               "noise %.0f %%, labels %.0f %%, writing %.0f %%\n",
-               pct(t.setup_s), pct(t.physics_s), pct(t.projection_s), pct(t.overlay_s), pct(t.noise_s),
+               "pcisim-dataset: stages: anatomy %.0f %%, world %.0f %%, beat %.0f %%, physics %.0f %%, projection "
+               "%.0f %%, overlays %.0f %%, noise %.0f %%, labels %.0f %%, writing %.0f %%\n",
+               pct(t.anatomy_s), pct(t.world_s), pct(t.beat_s), pct(t.physics_s), pct(t.projection_s), pct(t.overlay_s), pct(t.noise_s),
                pct(t.labels_s), pct(t.write_s));
 }
 
@@ -196,6 +208,7 @@ int main(int argc, char** argv) {
     o.out_dir = a.out;
     o.shard = a.shard;
     o.max_samples = a.max_samples;
+    o.jobs = a.jobs;
     o.stop = &g_stop;
     const RunReport r = run_dataset(spec, o, std::cerr);
     print_stages(r.times);

@@ -27,7 +27,8 @@ namespace fs = std::filesystem;
 
 constexpr const char* kUsage = R"(pcisim-bench dataset [--quick] [--jobs J] [--out DIR]
 
-Makes small datasets with pcisim-dataset's run loop (the built-in scene: 512^2 detector, the
+Makes small datasets with pcisim-dataset's run loop (max(10, 4 J) samples, --quick max(4, 2 J);
+the built-in scene: 512^2 detector, the
 phantoms of seeds 1 and 2, a new C-arm pose, dose and heart rate every sample, 30 frames a
 sample, contrast in 70 % of them) and reports labelled frames per second, with each stage's share:
   beating   the background beats (16 phase bins projected per pose)
@@ -74,7 +75,8 @@ int run(const std::vector<std::string>& args) {
     }
   }
   if (const int rc = parse_bench_options(rest, "dataset", kUsage, &bo); rc >= 0) return rc;
-  const int samples = bo.quick ? 4 : 10;
+  // enough samples that every job has several (the anatomies are built once and shared)
+  const int samples = bo.quick ? std::max(4, 2 * jobs) : std::max(10, 4 * jobs);
   const std::vector<Variant> variants = {{"beating", ""}, {"still", R"(, "effects.xray.heart_phase_bins": 0)"}};
   const fs::path tmp = fs::temp_directory_path() / fmt::format("pcisim-bench-dataset-{}", getpid());
   std::vector<Row> rows;

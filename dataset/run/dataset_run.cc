@@ -19,6 +19,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// anatomies kept besides one per job (sample_runner.cc keeps as many renderers per job)
+constexpr size_t kCachedAnatomies = 3;
+
 std::string duration_text(double s) {
   if (!std::isfinite(s) || s < 0) return "?";
   const auto t = static_cast<int64_t>(std::llround(s));
@@ -116,8 +119,9 @@ RunReport run_dataset(const DatasetSpec& spec, const RunOptions& o, std::ostream
     }
   };
   const int jobs = std::max(1, std::min<int>(o.jobs, static_cast<int>(std::max<int64_t>(1, total))));
+  auto anatomies = std::make_shared<AnatomyCache>(kCachedAnatomies + static_cast<size_t>(jobs));
   std::vector<std::unique_ptr<SampleRunner>> runners;
-  for (int j = 0; j < jobs; ++j) runners.push_back(std::make_unique<SampleRunner>(spec));
+  for (int j = 0; j < jobs; ++j) runners.push_back(std::make_unique<SampleRunner>(spec, anatomies));
   std::vector<std::thread> threads;
   for (int j = 1; j < jobs; ++j) threads.emplace_back(work, std::ref(*runners[j]));
   work(*runners[0]);

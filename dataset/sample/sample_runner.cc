@@ -9,10 +9,8 @@
 #include "dataset/sample/coco.h"
 #include "dataset/sample/frame_labels.h"
 #include "dataset/sample/instrument_driver.h"
-#include "physics/guidewire/sdf_lumen.h"
 #include "physics/world.h"
 #include "server/beat_samples.h"
-#include "server/case_builder.h"
 #include "xray/fluoro/case_background.h"
 
 namespace pcisim::dataset {
@@ -23,62 +21,36 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-// anatomies kept between samples (a phantom case with its CT and contact field is ~100 MB)
-constexpr size_t kCachedAnatomies = 3;
+// renderers kept per job, one per recent anatomy (each holds its CT's projector)
+constexpr size_t kCachedRenderers = 3;
 
 }  // namespace
 
-struct SampleRunner::Anatomy {
-  std::string key;
-  std::shared_ptr<const anatomy::Case> c;
-  std::map<double, std::shared_ptr<const physics::LumenQuery>> lumen;  // by SDF spacing, m
-  std::unique_ptr<xray::FluoroscopyRenderer> renderer;
-  std::string renderer_key, beat_key;  // what the renderer and its beating background were built for
-  std::vector<Eigen::Vector3d> rest_points_m;  // the centerline at rest, tree order
-  std::vector<std::string> branch_names;
-};
-
-SampleRunner::SampleRunner(const DatasetSpec& spec) : spec_(spec), labeler_(spec.labels.mask_min_line_integral) {}
+SampleRunner::SampleRunner(const DatasetSpec& spec, std::shared_ptr<AnatomyCache> anatomies)
+    : spec_(spec), anatomies_(std::move(anatomies)), labeler_(spec.labels.mask_min_line_integral) {}
 SampleRunner::~SampleRunner() = default;
 
-SampleRunner::Anatomy& SampleRunner::anatomy_for(const SamplePlan& plan) {
-  // a phantom's CT is generated at the scene's X-ray volume settings: they are part of the key
-  const auto& f = plan.scene.xray->fluoro;
-  const std::string key = fmt::format("{}|{}x{}x{}|{}", plan.anatomy, f.volume_dims[0], f.volume_dims[1],
-                                      f.volume_dims[2], f.volume_spacing_mm);
-  for (size_t i = 0; i < cache_.size(); ++i) {
-    if (cache_[i]->key != key) continue;
-    std::rotate(cache_.begin() + static_cast<std::ptrdiff_t>(i), cache_.begin() + static_cast<std::ptrdiff_t>(i) + 1,
-                cache_.end());
-    return *cache_.back();
+SampleRunner::Renderer& SampleRunner::renderer_for(std::shared_ptr<const BuiltAnatomy> anatomy) {
+  for (size_t i = 0; i < renderers_.size(); ++i) {
+    if (renderers_[i]->anatomy->key != anatomy->key) continue;
+    std::rotate(renderers_.begin() + static_cast<std::ptrdiff_t>(i),
+                renderers_.begin() + static_cast<std::ptrdiff_t>(i) + 1, renderers_.end());
+    return *renderers_.back();
   }
-  auto a = std::make_unique<Anatomy>();
-  a->key = key;
-  a->c = server::build_case(plan.scene);
-  for (const auto& b : a->c->vessels.branches) {
-    a->branch_names.push_back(b.name);
-    for (const auto& p : b.points) a->rest_points_m.push_back(p.position_m);
-  }
-  if (cache_.size() >= kCachedAnatomies) cache_.erase(cache_.begin());
-  cache_.push_back(std::move(a));
-  return *cache_.back();
+  if (renderers_.size() >= kCachedRenderers) renderers_.erase(renderers_.begin());
+  renderers_.push_back(std::make_unique<Renderer>());
+  renderers_.back()->anatomy = std::move(anatomy);
+  return *renderers_.back();
 }
 
 nlohmann::json SampleRunner::run(const SamplePlan& plan, FrameSink& sink) {
   auto t0 = Clock::now();
   const server::Scene& scene = plan.scene;
   const server::XraySpec& xs = *scene.xray;
-  Anatomy& a = anatomy_for(plan);
-  const anatomy::Case& c = *a.c;
-
-  // physics: the scene's effects around the case, its contact field shared between samples
-  std::shared_ptr<const physics::LumenQuery> lumen;
-  if (scene.world.vessel_contact && scene.world.guidewire) {
-    const double h = scene.world.vessel_contact->sdf_spacing_m;
-    auto& slot = a.lumen[h];
-    if (!slot) slot = std::make_shared<const physics::SdfLumen>(c.vessels, h);
-    lumen = slot;
-  }
+  const std::shared_ptr<const BuiltAnatomy> built = anatomies_->get(plan);
+  Renderer& a = renderer_for(built);
+  const anatomy::Case& c = *built->c;
+  const std::shared_ptr<const physics::LumenQuery>& lumen = built->lumen;
   times_.anatomy_s += seconds_since(t0);
   t0 = Clock::now();
   physics::World world(scene.world, c.vessels, lumen, c.heart, c.heart_vertices_m, c.organ ? &*c.organ : nullptr);
@@ -149,7 +121,7 @@ nlohmann::json SampleRunner::run(const SamplePlan& plan, FrameSink& sink) {
     in.wire_m = snap.wire_nodes_m;
     in.injections = injections;
     // an empty list would leave the bolus where an earlier sample's heart carried it
-    in.vessel_points_m = snap.vessel_points_m.empty() ? std::span<const Eigen::Vector3d>(a.rest_points_m)
+    in.vessel_points_m = snap.vessel_points_m.empty() ? std::span<const Eigen::Vector3d>(built->rest_points_m)
                                                       : std::span<const Eigen::Vector3d>(snap.vessel_points_m);
     if (beating) in.heart_phase = snap.heart_phase;
     renderer.render(in, frame_);
@@ -178,8 +150,8 @@ nlohmann::json SampleRunner::run(const SamplePlan& plan, FrameSink& sink) {
     truth.wire_mm = wire_mm;
     truth.wire_px = frame_.wire_px;
     truth.keypoints = keys;
-    if (snap.tip_branch >= 0 && static_cast<size_t>(snap.tip_branch) < a.branch_names.size())
-      truth.tip_branch = a.branch_names[static_cast<size_t>(snap.tip_branch)];
+    if (snap.tip_branch >= 0 && static_cast<size_t>(snap.tip_branch) < built->branch_names.size())
+      truth.tip_branch = built->branch_names[static_cast<size_t>(snap.tip_branch)];
     truth.tree = &c.vessels;
     truth.vessel_points_mm = vessel_mm;
     truth.branch_opacity = renderer.contrast().branch_opacity();
@@ -187,7 +159,7 @@ nlohmann::json SampleRunner::run(const SamplePlan& plan, FrameSink& sink) {
     truth.mask_pixels = labeler_.mask_pixels();
     const nlohmann::json labels = frame_labels(truth);
     const nlohmann::json coco =
-        coco_frame_annotations(keys, labeler_.branch_ids(), frame_.width, frame_.height, a.branch_names);
+        coco_frame_annotations(keys, labeler_.branch_ids(), frame_.width, frame_.height, built->branch_names);
     times_.labels_s += seconds_since(t0);
 
     t0 = Clock::now();

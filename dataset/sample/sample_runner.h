@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "anatomy/case/case.h"
+#include "dataset/sample/anatomy_cache.h"
 #include "dataset/sample/sample_plan.h"
 #include "dataset/sample/vessel_labeler.h"
 #include "physics/guidewire/lumen_query.h"
@@ -56,7 +57,8 @@ struct StageTimes {
 
 class SampleRunner {
  public:
-  explicit SampleRunner(const DatasetSpec& spec);
+  // `anatomies` may be shared by several runners (one per job)
+  SampleRunner(const DatasetSpec& spec, std::shared_ptr<AnatomyCache> anatomies);
   ~SampleRunner();
 
   // the sample's frames to `sink`; returns what the sample was (sample.json): its seed, anatomy,
@@ -65,11 +67,17 @@ class SampleRunner {
   const StageTimes& times() const { return times_; }
 
  private:
-  struct Anatomy;
-  Anatomy& anatomy_for(const SamplePlan& plan);
+  // this runner's renderer over one anatomy's CT, and the beating background it holds
+  struct Renderer {
+    std::shared_ptr<const BuiltAnatomy> anatomy;
+    std::unique_ptr<xray::FluoroscopyRenderer> renderer;
+    std::string renderer_key, beat_key;  // what the renderer and its beating background were built for
+  };
+  Renderer& renderer_for(std::shared_ptr<const BuiltAnatomy> anatomy);
 
   const DatasetSpec& spec_;
-  std::vector<std::unique_ptr<Anatomy>> cache_;  // the most recently used last
+  std::shared_ptr<AnatomyCache> anatomies_;
+  std::vector<std::unique_ptr<Renderer>> renderers_;  // the most recently used last
   VesselLabeler labeler_;
   xray::FluoroFrame frame_;
   StageTimes times_;

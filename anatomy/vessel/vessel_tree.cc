@@ -26,6 +26,27 @@ double segment_distance_sq(const Eigen::Vector3d& p, const Eigen::Vector3d& a, c
 
 }  // namespace
 
+int innermost_branch(const VesselTree& tree, const Eigen::Vector3d& p_m, double* depth_m) {
+  int best = -1;
+  double best_depth = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < tree.branches.size(); ++i) {
+    const auto& pts = tree.branches[i].points;
+    for (size_t k = 0; k < pts.size(); ++k) {
+      // the segment k-1 .. k (or the lone point), its radius interpolated at the closest point
+      const CenterlinePoint& a = pts[k == 0 ? 0 : k - 1];
+      const CenterlinePoint& b = pts[k];
+      if (k == 0 && pts.size() > 1) continue;
+      const Eigen::Vector3d ab = b.position_m - a.position_m;
+      const double len_sq = ab.squaredNorm();
+      const double t = len_sq > 0.0 ? std::clamp((p_m - a.position_m).dot(ab) / len_sq, 0.0, 1.0) : 0.0;
+      const double d = (a.position_m + t * ab - p_m).norm() - (a.radius_m + t * (b.radius_m - a.radius_m));
+      if (d < best_depth) best_depth = d, best = static_cast<int>(i);
+    }
+  }
+  if (depth_m) *depth_m = best_depth;
+  return best;
+}
+
 int nearest_branch(const VesselTree& tree, const Eigen::Vector3d& p_m, double* distance_to_centerline_m) {
   int best = -1;
   double best_sq = std::numeric_limits<double>::infinity();

@@ -33,6 +33,12 @@ struct VesselTree {
 // that point reports the parent). A NaN point returns -1 and an infinite distance.
 int nearest_branch(const VesselTree& tree, const Eigen::Vector3d& p_m, double* distance_to_centerline_m = nullptr);
 
+// the branch whose lumen holds p_m most deeply: the smallest (distance to its centerline minus the
+// radius there), negative inside. Unlike nearest_branch, a point at the aorta's wall next to the
+// left main's first points (which run inside the aorta) is in the aorta. -1 for an empty tree or
+// a NaN point; `depth_m` gets that smallest value
+int innermost_branch(const VesselTree& tree, const Eigen::Vector3d& p_m, double* depth_m = nullptr);
+
 // arc length of a branch's centerline polyline
 double branch_length_m(const VesselBranch& branch);
 

@@ -95,8 +95,9 @@ nlohmann::json frame_labels(const FrameTruth& t) {
     const bool moved = !t.vessel_points_mm.empty();
     for (size_t b = 0; b < t.tree->branches.size(); ++b) {
       const auto& br = t.tree->branches[b];
-      nlohmann::json pts = nlohmann::json::array(), pix = nlohmann::json::array();
+      nlohmann::json pts = nlohmann::json::array(), pix = nlohmann::json::array(), ops = nlohmann::json::array();
       for (const auto& cp : br.points) {
+        ops.push_back(flat < t.point_opacity.size() ? std::round(t.point_opacity[flat] * 1e3) / 1e3 : 0.0);
         const Eigen::Vector3d x = moved && flat < t.vessel_points_mm.size() ? t.vessel_points_mm[flat]
                                                                             : Eigen::Vector3d(1e3 * cp.position_m);
         ++flat;
@@ -111,7 +112,8 @@ nlohmann::json frame_labels(const FrameTruth& t) {
                          {"opacity", opacity},
                          {"contrast_visible", opacity > t.visible_opacity},
                          {"points_mm", pts},
-                         {"points_px", pix}});
+                         {"points_px", pix},
+                         {"points_opacity", ops}});
     }
   }
   return {

@@ -38,6 +38,7 @@ struct FrameTruth {
   const anatomy::VesselTree* tree = nullptr;
   std::span<const Eigen::Vector3d> vessel_points_mm;  // tree order; empty: the tree at rest
   std::span<const double> branch_opacity;             // by tree index (the bolus's)
+  std::span<const double> point_opacity;              // by centerline point, tree order (0..1)
   double visible_opacity = 0.05;                      // a branch holds visible contrast above this
   int64_t mask_pixels = 0;
 };

@@ -24,6 +24,18 @@ double seconds_since(Clock::time_point t0) {
 // renderers kept per job, one per recent anatomy (each holds its CT's projector)
 constexpr size_t kCachedRenderers = 3;
 
+// the branch holding the tip, in the tree where `points_m` (tree order; empty: at rest) put it
+int tip_branch(const anatomy::VesselTree& rest, const std::vector<Eigen::Vector3d>& points_m,
+               const Eigen::Vector3d& tip_m, anatomy::VesselTree* scratch) {
+  if (points_m.empty()) return anatomy::innermost_branch(rest, tip_m);
+  *scratch = rest;
+  size_t k = 0;
+  for (auto& b : scratch->branches)
+    for (auto& p : b.points)
+      if (k < points_m.size()) p.position_m = points_m[k++];
+  return anatomy::innermost_branch(*scratch, tip_m);
+}
+
 }  // namespace
 
 SampleRunner::SampleRunner(const DatasetSpec& spec, std::shared_ptr<AnatomyCache> anatomies)
@@ -150,11 +162,24 @@ nlohmann::json SampleRunner::run(const SamplePlan& plan, FrameSink& sink) {
     truth.wire_mm = wire_mm;
     truth.wire_px = frame_.wire_px;
     truth.keypoints = keys;
-    if (snap.tip_branch >= 0 && static_cast<size_t>(snap.tip_branch) < built->branch_names.size())
-      truth.tip_branch = built->branch_names[static_cast<size_t>(snap.tip_branch)];
+    // the tip's branch: the lumen holding it most deeply, in the tree as the heart has moved it
+    if (!snap.wire_nodes_m.empty()) {
+      const int b = tip_branch(c.vessels, snap.vessel_points_m, snap.wire_nodes_m.back(), &moved_tree_);
+      if (b >= 0) truth.tip_branch = built->branch_names[static_cast<size_t>(b)];
+    }
     truth.tree = &c.vessels;
     truth.vessel_points_mm = vessel_mm;
     truth.branch_opacity = renderer.contrast().branch_opacity();
+    // each centerline point's contrast: the largest of the lumen segments ending on it
+    point_opacity_.assign(built->rest_points_m.size(), 0.0);
+    const auto& segs = renderer.contrast().segments();
+    const auto& seg_op = renderer.contrast().segment_opacity();
+    for (size_t i = 0; i < segs.size(); ++i) {
+      for (int p : {segs[i].point_a, segs[i].point_b})
+        if (p >= 0 && static_cast<size_t>(p) < point_opacity_.size())
+          point_opacity_[static_cast<size_t>(p)] = std::max(point_opacity_[static_cast<size_t>(p)], seg_op[i]);
+    }
+    truth.point_opacity = point_opacity_;
     truth.visible_opacity = f.contrast.visible_opacity;
     truth.mask_pixels = labeler_.mask_pixels();
     const nlohmann::json labels = frame_labels(truth);

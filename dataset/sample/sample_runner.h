@@ -79,6 +79,8 @@ class SampleRunner {
   std::shared_ptr<AnatomyCache> anatomies_;
   std::vector<std::unique_ptr<Renderer>> renderers_;  // the most recently used last
   VesselLabeler labeler_;
+  anatomy::VesselTree moved_tree_;  // the tree where the heart has carried it (the tip's branch)
+  std::vector<double> point_opacity_;
   xray::FluoroFrame frame_;
   StageTimes times_;
 };

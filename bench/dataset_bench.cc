@@ -34,7 +34,8 @@ sample, contrast in 70 % of them) and reports labelled frames per second, with e
   beating   the background beats (16 phase bins projected per pose)
   still     xray.heart_phase_bins 0: the heart's silhouette does not move
 each with one job and with J jobs (default: the machine's cores). The projector is the GPU's
-where one answers. Writes DIR/dataset.md (default docs/benchmarks).
+where one answers. Writes DIR/dataset.md, or DIR/dataset-gpu.md on a GPU (default DIR:
+docs/benchmarks).
 )";
 
 struct Variant {
@@ -105,7 +106,7 @@ int run(const std::vector<std::string>& args) {
 
   const bool gpu = dataset::gpu_projector_available();
   fs::create_directories(bo.out_dir);
-  const std::string md_path = bo.out_dir + "/dataset.md";
+  const std::string md_path = bo.out_dir + (gpu ? "/dataset-gpu.md" : "/dataset.md");
   std::ofstream md(md_path);
   md << "# Dataset generation: labelled frames per second\n\n"
      << "`pcisim-bench dataset" << (bo.quick ? " --quick" : "") << "` (bench/dataset_bench.cc), on " << machine_info()
@@ -129,7 +130,8 @@ int run(const std::vector<std::string>& args) {
                       pct(t.labels_s), pct(t.write_s));
   }
   md << "\nStage shares are of the summed stage times of every job (with several jobs they overlap in wall time). "
-        "anatomy: the case, its contact field and the CT's projector, built once per anatomy and job; world: the "
+        "anatomy: the case, its contact field and its background CT, built once per anatomy and shared by the jobs, "
+        "and each job's projector over that CT; world: the "
         "scene's physics built per sample; beat: one heart cycle sampled and the CT's warp built (kept while the next "
         "sample's heart is the same); projection: the background's static and phase-bin projections (per pose); "
         "noise: quanta, Poisson noise, blur, log and window.\n\n";

@@ -4,6 +4,7 @@
 
 #include "physics/guidewire/sdf_lumen.h"
 #include "server/case_builder.h"
+#include "xray/fluoro/case_background.h"
 
 namespace pcisim::dataset {
 namespace {
@@ -15,6 +16,7 @@ std::shared_ptr<const BuiltAnatomy> build(const SamplePlan& plan, const std::str
   const auto& w = plan.scene.world;
   if (w.vessel_contact && w.guidewire)
     a->lumen = std::make_shared<const physics::SdfLumen>(a->c->vessels, w.vessel_contact->sdf_spacing_m);
+  a->background = xray::background_volume(*a->c, plan.scene.xray->fluoro);
   for (const auto& b : a->c->vessels.branches) {
     a->branch_names.push_back(b.name);
     for (const auto& p : b.points) a->rest_points_m.push_back(p.position_m);

@@ -1,6 +1,6 @@
 #pragma once
 // The anatomies a dataset's samples run on, built once and shared by every job: the case (its
-// CT, vessels and heart) and the wall-contact field around its vessels. Both are read-only once
+// CT, vessels and heart), the wall-contact field around its vessels and the X-ray background CT. Both are read-only once
 // built. A job asking for one another job is building waits for it. The most recently used few
 // are kept (a phantom case with its field is ~100 MB).
 #include <Eigen/Core>
@@ -23,6 +23,9 @@ struct BuiltAnatomy {
   std::shared_ptr<const physics::LumenQuery> lumen;  // null without vessel_contact
   std::vector<Eigen::Vector3d> rest_points_m;        // the centerline at rest, tree order
   std::vector<std::string> branch_names;
+  // the CT the fluoroscopy projects (the case's, or the thorax phantom around its vessels); each
+  // job's renderer takes a copy: generating the phantom costs far more than copying it
+  anatomy::Volume background;
 };
 
 class AnatomyCache {

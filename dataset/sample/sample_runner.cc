@@ -11,7 +11,6 @@
 #include "dataset/sample/instrument_driver.h"
 #include "physics/world.h"
 #include "server/beat_samples.h"
-#include "xray/fluoro/case_background.h"
 
 namespace pcisim::dataset {
 namespace {
@@ -79,7 +78,7 @@ nlohmann::json SampleRunner::run(const SamplePlan& plan, FrameSink& sink) {
     // built with the scene's seed (the thorax phantom's), restarted at once with the sample's
     // noise seed, as every later sample on this anatomy is
     a.renderer.reset();
-    a.renderer = std::make_unique<xray::FluoroscopyRenderer>(c.vessels, xray::background_volume(c, f), f);
+    a.renderer = std::make_unique<xray::FluoroscopyRenderer>(c.vessels, anatomy::Volume(built->background), f);
     a.renderer_key = renderer_key;
   }
   // the beating background depends on the heart alone: kept (with its bins projected so far)

@@ -124,10 +124,10 @@ int run(const std::vector<std::string>& args) {
     const double sum = t.anatomy_s + t.world_s + t.beat_s + t.physics_s + t.projection_s + t.overlay_s + t.noise_s +
                        t.labels_s + t.write_s;
     auto pct = [&](double x) { return fmt::format("{:.0f} %", 100 * x / sum); };
-    md << fmt::format("| {} | {} | {} | {:.1f} | **{:.1f}** | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n", r.variant,
-                      r.jobs, r.report.frames, r.report.wall_s, r.frames_per_s, pct(t.anatomy_s), pct(t.world_s),
-                      pct(t.beat_s), pct(t.physics_s), pct(t.projection_s), pct(t.overlay_s), pct(t.noise_s),
-                      pct(t.labels_s), pct(t.write_s));
+    md << fmt::format("| {} | {} | {} | {:.1f} | **{:.1f}** | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                      r.variant, r.jobs, r.report.frames, r.report.wall_s, r.frames_per_s, pct(t.anatomy_s),
+                      pct(t.world_s), pct(t.beat_s), pct(t.physics_s), pct(t.projection_s), pct(t.overlay_s),
+                      pct(t.noise_s), pct(t.labels_s), pct(t.write_s));
   }
   md << "\nStage shares are of the summed stage times of every job (with several jobs they overlap in wall time). "
         "anatomy: the case, its contact field and its background CT, built once per anatomy and shared by the jobs, "
@@ -138,14 +138,15 @@ int run(const std::vector<std::string>& args) {
   double best = 0;
   for (const auto& r : rows) best = std::max(best, r.frames_per_s);
   const double target = gpu ? 200 : 20;
-  md << fmt::format("Target ({}): >= {:.0f} frames/s. Best here: {:.1f} frames/s: **{}**.\n", gpu ? "one H100/H200" : "2 CPU cores",
-                    target, best, best >= target ? "met" : "missed");
+  md << fmt::format("Target ({}): >= {:.0f} frames/s. Best here: {:.1f} frames/s: **{}**.\n",
+                    gpu ? "one H100/H200" : "2 CPU cores", target, best, best >= target ? "met" : "missed");
   md.close();
   std::printf("wrote %s\n", md_path.c_str());
   return 0;
 }
 
-const bool registered = add("dataset", "labelled 512^2 frames per second of pcisim-dataset, and each stage's share", run);
+const bool registered =
+    add("dataset", "labelled 512^2 frames per second of pcisim-dataset, and each stage's share", run);
 
 }  // namespace
 }  // namespace pcisim::bench

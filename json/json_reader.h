@@ -34,8 +34,8 @@ class JsonReader {
   bool boolean(const std::string& key, bool fallback);
   std::string text(const std::string& key, const std::string& fallback, const std::vector<std::string>& allowed = {});
   bool has(const std::string& key) const;
-  JsonReader child(const std::string& key);            // an object; {} when absent
-  const nlohmann::json& list(const std::string& key);  // an array; [] when absent
+  JsonReader child(const std::string& key);             // an object; {} when absent
+  const nlohmann::json& list(const std::string& key);   // an array; [] when absent
   const nlohmann::json* value(const std::string& key);  // any value, unchecked; null when absent
   // a list of exactly out.size() finite numbers under `key` into `out`; false (out unspecified)
   // otherwise, so the caller names what it expected. Fails like list() when it is not a list

@@ -67,7 +67,8 @@ std::vector<uint8_t> read_image(const std::string& path, int bits, int* width, i
   } else {
     png_init_io(png, f);
     png_read_info(png, info);
-    const int w = static_cast<int>(png_get_image_width(png, info)), h = static_cast<int>(png_get_image_height(png, info));
+    const int w = static_cast<int>(png_get_image_width(png, info)),
+              h = static_cast<int>(png_get_image_height(png, info));
     if (png_get_color_type(png, info) != PNG_COLOR_TYPE_GRAY || png_get_bit_depth(png, info) != bits ||
         png_get_interlace_type(png, info) != PNG_INTERLACE_NONE) {
       error = fmt::format("expected a {}-bit grey PNG", bits);

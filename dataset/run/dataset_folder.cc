@@ -140,7 +140,8 @@ DatasetFolder::DatasetFolder(const std::string& out_dir, const std::string& spec
     }
   }
   if (dropped) write_file_atomic(manifest, kept);
-  for (const auto& line : read_lines(fs::path(root_) / "shards" / fmt::format("failed-{}-of-{}.jsonl", shard.index, shard.count)))
+  for (const auto& line :
+       read_lines(fs::path(root_) / "shards" / fmt::format("failed-{}-of-{}.jsonl", shard.index, shard.count)))
     if (line.contains("sample")) failed_[line["sample"].get<int64_t>()] = line;
 
   // partial folders (a kill mid-sample) and whole ones never listed (a kill before the listing)
@@ -262,8 +263,9 @@ nlohmann::json merge_dataset(const std::string& out_dir, const DatasetSpec& spec
   if (!missing.empty()) {
     std::string first;
     for (size_t i = 0; i < missing.size() && i < 8; ++i) first += (i ? ", " : "") + std::to_string(missing[i]);
-    throw std::runtime_error(fmt::format("{}: {} of {} samples are not made yet (sample {}{}): a shard has not finished",
-                                         out_dir, missing.size(), spec.samples, first, missing.size() > 8 ? ", ..." : ""));
+    throw std::runtime_error(
+        fmt::format("{}: {} of {} samples are not made yet (sample {}{}): a shard has not finished", out_dir,
+                    missing.size(), spec.samples, first, missing.size() > 8 ? ", ..." : ""));
   }
 
   // the manifest: every sample in order, the failures apart; a sample both made and failed

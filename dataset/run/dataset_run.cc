@@ -43,7 +43,8 @@ RunReport run_dataset(const DatasetSpec& spec, const RunOptions& o, std::ostream
     if (!folder.done().contains(i) && !folder.failed().contains(i)) todo.push_back(i);
   }
   r.resumed = owned - static_cast<int64_t>(todo.size());
-  if (o.max_samples >= 0 && static_cast<int64_t>(todo.size()) > o.max_samples) todo.resize(static_cast<size_t>(o.max_samples));
+  if (o.max_samples >= 0 && static_cast<int64_t>(todo.size()) > o.max_samples)
+    todo.resize(static_cast<size_t>(o.max_samples));
   const auto total = static_cast<int64_t>(todo.size());
   const std::string who = o.shard.count > 1 ? fmt::format("shard {}/{}: ", o.shard.index, o.shard.count) : "";
   if (r.resumed > 0)

@@ -19,11 +19,11 @@ namespace pcisim::dataset {
 struct RunOptions {
   std::string out_dir;
   Shard shard;
-  int64_t max_samples = -1;                  // stop after making this many (-1: all the shard owns)
+  int64_t max_samples = -1;  // stop after making this many (-1: all the shard owns)
   // samples made at once, each by its own runner on its own thread (the same bytes whatever the
   // count: a sample depends on its plan alone); each keeps its own anatomy cache
   int jobs = 1;
-  const std::atomic<bool>* stop = nullptr;   // set (by a signal handler) to stop after the sample in progress
+  const std::atomic<bool>* stop = nullptr;  // set (by a signal handler) to stop after the sample in progress
 };
 
 struct RunReport {

@@ -42,8 +42,9 @@ void SampleWriter::frame(const FrameOutput& out) {
       [&](const std::string& p) { png::write_png_gray16(p, im.width, im.height, im.pixels.data()); });
   png("mask_" + stem + ".png",
       [&](const std::string& p) { png::write_png_gray8(p, im.width, im.height, out.vessels->mask().data(), true); });
-  png("branches_" + stem + ".png",
-      [&](const std::string& p) { png::write_png_gray8(p, im.width, im.height, out.vessels->branch_ids().data(), true); });
+  png("branches_" + stem + ".png", [&](const std::string& p) {
+    png::write_png_gray8(p, im.width, im.height, out.vessels->branch_ids().data(), true);
+  });
   write_text_file(dir_ + "/frame_" + stem + ".json", out.labels->dump() + "\n");
 
   images_.push_back({{"id", out.frame + 1},
@@ -64,7 +65,8 @@ void SampleWriter::frame(const FrameOutput& out) {
 
 void SampleWriter::finish(const nlohmann::json& sample) {
   write_text_file(dir_ + "/sample.json", sample.dump(1) + "\n");
-  write_text_file(dir_ + "/coco.json", nlohmann::json{{"images", images_}, {"annotations", annotations_}}.dump() + "\n");
+  write_text_file(dir_ + "/coco.json",
+                  nlohmann::json{{"images", images_}, {"annotations", annotations_}}.dump() + "\n");
 }
 
 }  // namespace pcisim::dataset

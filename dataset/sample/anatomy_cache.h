@@ -1,8 +1,8 @@
 #pragma once
 // The anatomies a dataset's samples run on, built once and shared by every job: the case (its
-// CT, vessels and heart), the wall-contact field around its vessels and the X-ray background CT. Both are read-only once
-// built. A job asking for one another job is building waits for it. The most recently used few
-// are kept (a phantom case with its field is ~100 MB).
+// CT, vessels and heart), the wall-contact field around its vessels and the X-ray background CT. Both are read-only
+// once built. A job asking for one another job is building waits for it. The most recently used few are kept (a phantom
+// case with its field is ~100 MB).
 #include <Eigen/Core>
 #include <future>
 #include <list>

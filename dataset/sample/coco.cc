@@ -10,7 +10,8 @@ namespace pcisim::dataset {
 
 nlohmann::json coco_categories(int keypoints) {
   nlohmann::json names = nlohmann::json::array(), skeleton = nlohmann::json::array();
-  for (int k = 0; k < keypoints; ++k) names.push_back(k + 1 == keypoints ? std::string("tip") : fmt::format("k{:02d}", k));
+  for (int k = 0; k < keypoints; ++k)
+    names.push_back(k + 1 == keypoints ? std::string("tip") : fmt::format("k{:02d}", k));
   for (int k = 1; k < keypoints; ++k) skeleton.push_back({k, k + 1});  // 1-based, consecutive points
   return nlohmann::json::array({
       {{"id", 1}, {"name", "guidewire"}, {"supercategory", "device"}, {"keypoints", names}, {"skeleton", skeleton}},

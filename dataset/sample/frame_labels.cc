@@ -84,9 +84,9 @@ nlohmann::json frame_labels(const FrameTruth& t) {
   nlohmann::json wire_mm = nlohmann::json::array(), wire_px = nlohmann::json::array(), keys = nlohmann::json::array();
   for (const auto& w : t.wire_mm) wire_mm.push_back(v3(w));
   for (const auto& w : t.wire_px) wire_px.push_back(px(w));
-  for (const auto& k : t.keypoints) keys.push_back({std::isfinite(k.x()) ? nlohmann::json(r3(k.x())) : nlohmann::json(),
-                                                    std::isfinite(k.y()) ? nlohmann::json(r3(k.y())) : nlohmann::json(),
-                                                    static_cast<int>(k.z())});
+  for (const auto& k : t.keypoints)
+    keys.push_back({std::isfinite(k.x()) ? nlohmann::json(r3(k.x())) : nlohmann::json(),
+                    std::isfinite(k.y()) ? nlohmann::json(r3(k.y())) : nlohmann::json(), static_cast<int>(k.z())});
 
   // every branch's centerline, where the heart has carried it, and its projection
   nlohmann::json vessels = nlohmann::json::array();
@@ -98,22 +98,23 @@ nlohmann::json frame_labels(const FrameTruth& t) {
       nlohmann::json pts = nlohmann::json::array(), pix = nlohmann::json::array(), ops = nlohmann::json::array();
       for (const auto& cp : br.points) {
         ops.push_back(flat < t.point_opacity.size() ? std::round(t.point_opacity[flat] * 1e3) / 1e3 : 0.0);
-        const Eigen::Vector3d x = moved && flat < t.vessel_points_mm.size() ? t.vessel_points_mm[flat]
-                                                                            : Eigen::Vector3d(1e3 * cp.position_m);
+        const Eigen::Vector3d x =
+            moved && flat < t.vessel_points_mm.size() ? t.vessel_points_mm[flat] : Eigen::Vector3d(1e3 * cp.position_m);
         ++flat;
         pts.push_back({r3(x.x()), r3(x.y()), r3(x.z()), r3(1e3 * cp.radius_m)});
         Eigen::Vector2d cr;
         pix.push_back(g.project(x, &cr) ? px(cr) : nlohmann::json());
       }
       const double opacity = b < t.branch_opacity.size() ? t.branch_opacity[b] : 0.0;
-      vessels.push_back({{"branch", br.name},
-                         {"label", static_cast<int>(b) + 1},
-                         {"parent", br.parent >= 0 ? nlohmann::json(t.tree->branches[br.parent].name) : nlohmann::json()},
-                         {"opacity", opacity},
-                         {"contrast_visible", opacity > t.visible_opacity},
-                         {"points_mm", pts},
-                         {"points_px", pix},
-                         {"points_opacity", ops}});
+      vessels.push_back(
+          {{"branch", br.name},
+           {"label", static_cast<int>(b) + 1},
+           {"parent", br.parent >= 0 ? nlohmann::json(t.tree->branches[br.parent].name) : nlohmann::json()},
+           {"opacity", opacity},
+           {"contrast_visible", opacity > t.visible_opacity},
+           {"points_mm", pts},
+           {"points_px", pix},
+           {"points_opacity", ops}});
     }
   }
   return {

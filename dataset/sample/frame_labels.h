@@ -31,8 +31,8 @@ struct FrameTruth {
   xray::DetectorGeometry geometry;
   xray::CArmPose pose;
   double sid_mm = 0, sad_mm = 0;
-  std::span<const Eigen::Vector3d> wire_mm;   // proximal to distal
-  std::span<const Eigen::Vector2d> wire_px;   // as the renderer projected them
+  std::span<const Eigen::Vector3d> wire_mm;    // proximal to distal
+  std::span<const Eigen::Vector2d> wire_px;    // as the renderer projected them
   std::span<const Eigen::Vector3d> keypoints;  // wire_keypoints()
   std::string tip_branch;                      // "" when unknown
   const anatomy::VesselTree* tree = nullptr;

@@ -55,7 +55,8 @@ SamplePlan plan_sample(const DatasetSpec& spec, int64_t index) {
   p.injection_start_s = p.warmup_s + start_after_first_frame_s;
   if (p.injection) p.drawn["contrast_start_s"] = start_after_first_frame_s;
   if (spec.driver.kind == DriverSpec::Kind::kScript) {
-    p.script = spec.driver.scripts[static_cast<size_t>(rng.integer(0, static_cast<int64_t>(spec.driver.scripts.size()) - 1))];
+    p.script =
+        spec.driver.scripts[static_cast<size_t>(rng.integer(0, static_cast<int64_t>(spec.driver.scripts.size()) - 1))];
     p.drawn["script"] = p.script;
   }
 

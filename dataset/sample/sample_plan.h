@@ -14,13 +14,13 @@ namespace pcisim::dataset {
 
 struct SamplePlan {
   int64_t index = 0;
-  uint64_t seed = 0;           // the sample's seed (its detector noise), printed with failures
-  server::Scene scene;         // the base scene with this sample's values
-  nlohmann::json scene_doc;    // the same as JSON (written beside the sample: it reruns it)
-  std::string anatomy;         // "phantom_seed N" or the case folder: what the sample runs on
-  nlohmann::json drawn;        // every drawn value by its spec key, for the labels
-  double warmup_s = 0;         // simulated before the first frame
-  bool injection = false;      // one contrast injection, starting at injection_start_s (simulation time)
+  uint64_t seed = 0;         // the sample's seed (its detector noise), printed with failures
+  server::Scene scene;       // the base scene with this sample's values
+  nlohmann::json scene_doc;  // the same as JSON (written beside the sample: it reruns it)
+  std::string anatomy;       // "phantom_seed N" or the case folder: what the sample runs on
+  nlohmann::json drawn;      // every drawn value by its spec key, for the labels
+  double warmup_s = 0;       // simulated before the first frame
+  bool injection = false;    // one contrast injection, starting at injection_start_s (simulation time)
   double injection_start_s = 0;
   std::string script;          // the trainee script drawn (driver kind script): "builtin" or a path
   bool gpu_projector = false;  // the background is projected by CUDA

@@ -85,11 +85,11 @@ nlohmann::json SampleRunner::run(const SamplePlan& plan, FrameSink& sink) {
   // while the next sample's heart is the same
   const bool beating = scene.world.vessel_motion && xs.heart_phase_bins > 0;
   const auto& effects = plan.scene_doc.at("effects");
-  const std::string beat_key =
-      beating ? fmt::format("{}|{}|{}|{}|{}", effects.value("heart_beat", nlohmann::json()).dump(),
-                            effects.value("vessel_motion", nlohmann::json()).dump(), scene.physics_rate_hz,
-                            xs.heart_phase_bins, xs.heart_phase_blend)
-              : "";
+  const std::string beat_key = beating
+                                   ? fmt::format("{}|{}|{}|{}|{}", effects.value("heart_beat", nlohmann::json()).dump(),
+                                                 effects.value("vessel_motion", nlohmann::json()).dump(),
+                                                 scene.physics_rate_hz, xs.heart_phase_bins, xs.heart_phase_blend)
+                                   : "";
   const bool keep_beat = beating && a.renderer->beat() && a.beat_key == beat_key;
   xray::FluoroSpec noise_spec = f;
   noise_spec.seed = static_cast<uint32_t>(plan.seed);
@@ -103,8 +103,8 @@ nlohmann::json SampleRunner::run(const SamplePlan& plan, FrameSink& sink) {
   times_.beat_s += seconds_since(t0);
   t0 = Clock::now();
 
-  InstrumentDriver driver(spec_.driver, SampleRng::for_sample(spec_.seed, static_cast<uint64_t>(plan.index), kDriverStream),
-                          plan.script);
+  InstrumentDriver driver(
+      spec_.driver, SampleRng::for_sample(spec_.seed, static_cast<uint64_t>(plan.index), kDriverStream), plan.script);
   std::vector<xray::ContrastInjection> injections;
   if (plan.injection && xs.contrast) {
     xray::ContrastInjection inj;

@@ -196,7 +196,8 @@ DatasetSpec parse_dataset_spec(const std::string& text, const std::string& sourc
   };
   check({}, "scene");
   for (const auto& v : s.vary)
-    for (const auto& x : v.distribution.extremes()) check({{v.path, x}}, "vary." + v.path + " = " + json::short_dump(x));
+    for (const auto& x : v.distribution.extremes())
+      check({{v.path, x}}, "vary." + v.path + " = " + json::short_dump(x));
   return s;
 }
 

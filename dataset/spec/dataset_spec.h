@@ -40,8 +40,8 @@ struct LabelSpec {
   // a pixel is in the vessel mask when the iodine's line integral through it, sum of
   // mu_iodine x opacity x chord, is at least this (0.05: the contrast takes >= 4.9 % of the beam)
   double mask_min_line_integral = 0.05;
-  int wire_keypoints = 16;              // COCO keypoints along the wire's distal span, tip last
-  double wire_keypoint_span_mm = 120;   // that span, measured back from the tip along the wire
+  int wire_keypoints = 16;             // COCO keypoints along the wire's distal span, tip last
+  double wire_keypoint_span_mm = 120;  // that span, measured back from the tip along the wire
 };
 
 struct AnatomyDraw {
@@ -84,6 +84,7 @@ DatasetSpec load_dataset_spec(const std::string& path);
 
 // the base scene as JSON with `overrides` (JSON path -> value) set, ready for server::parse_scene;
 // throws json::JsonError when a path runs through a value that is not an object
-nlohmann::json scene_document(const DatasetSpec& spec, const std::vector<std::pair<std::string, nlohmann::json>>& overrides);
+nlohmann::json scene_document(const DatasetSpec& spec,
+                              const std::vector<std::pair<std::string, nlohmann::json>>& overrides);
 
 }  // namespace pcisim::dataset

@@ -36,8 +36,9 @@ Distribution Distribution::parse(const nlohmann::json& value, const std::string&
   // an object with one of the four keys is a distribution; anything else is a fixed value
   if (!value.is_object()) return fixed(value);
   if (value.size() != 1)
-    fail(path, "expected one of {\"uniform\": [a, b]}, {\"log_uniform\": [a, b]}, {\"integers\": [a, b]}, "
-               "{\"choice\": [...]} or a plain value");
+    fail(path,
+         "expected one of {\"uniform\": [a, b]}, {\"log_uniform\": [a, b]}, {\"integers\": [a, b]}, "
+         "{\"choice\": [...]} or a plain value");
   Distribution d;
   const std::string key = value.begin().key();
   const nlohmann::json& arg = value.begin().value();

@@ -15,7 +15,8 @@ class SampleRng {
   // uses within a sample (parameters, instrument driver, noise) so adding a draw to one does not
   // move the others
   static SampleRng for_sample(uint64_t spec_seed, uint64_t index, uint64_t stream) {
-    SampleRng r(spec_seed * 0x9E3779B97F4A7C15ull ^ (index + 1) * 0xBF58476D1CE4E5B9ull ^ (stream + 1) * 0x94D049BB133111EBull);
+    SampleRng r(spec_seed * 0x9E3779B97F4A7C15ull ^ (index + 1) * 0xBF58476D1CE4E5B9ull ^
+                (stream + 1) * 0x94D049BB133111EBull);
     r.next();
     return r;
   }

@@ -166,14 +166,15 @@ Args parse(int argc, char** argv) {
 
 // where the time went, as shares of the stages' sum
 void print_stages(const StageTimes& t) {
-  const double sum = t.anatomy_s + t.world_s + t.beat_s + t.physics_s + t.projection_s + t.overlay_s + t.noise_s + t.labels_s + t.write_s;
+  const double sum = t.anatomy_s + t.world_s + t.beat_s + t.physics_s + t.projection_s + t.overlay_s + t.noise_s +
+                     t.labels_s + t.write_s;
   if (sum <= 0) return;
   auto pct = [&](double x) { return 100.0 * x / sum; };
   std::fprintf(stderr,
                "pcisim-dataset: stages: anatomy %.0f %%, world %.0f %%, beat %.0f %%, physics %.0f %%, projection "
                "%.0f %%, overlays %.0f %%, noise %.0f %%, labels %.0f %%, writing %.0f %%\n",
-               pct(t.anatomy_s), pct(t.world_s), pct(t.beat_s), pct(t.physics_s), pct(t.projection_s), pct(t.overlay_s), pct(t.noise_s),
-               pct(t.labels_s), pct(t.write_s));
+               pct(t.anatomy_s), pct(t.world_s), pct(t.beat_s), pct(t.physics_s), pct(t.projection_s), pct(t.overlay_s),
+               pct(t.noise_s), pct(t.labels_s), pct(t.write_s));
 }
 
 }  // namespace

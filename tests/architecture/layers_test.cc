@@ -126,7 +126,8 @@ std::vector<Violation> check_links(const fs::path& targets_file, int* targets_se
       // a layer allowed some headers of another links that other's library to get them
       bool via_header = false;
       for (const auto& a : allowed().at(layer)) via_header |= a.ends_with(".h") && a.starts_with(edge);
-      if (!via_header && !edge_allowed(layer, edge)) out.push_back({target, layer + " links " + dep + " (" + it->second + ")"});
+      if (!via_header && !edge_allowed(layer, edge))
+        out.push_back({target, layer + " links " + dep + " (" + it->second + ")"});
     }
   }
   return out;

@@ -44,9 +44,8 @@ std::string scene_text(bool beating, bool noise) {
 class DatasetRun : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("pcisim-dataset-test-" + std::to_string(getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() / ("pcisim-dataset-test-" + std::to_string(getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -115,7 +114,8 @@ TEST_F(DatasetRun, TheSameSpecGivesTheSameBytesWhateverTheJobs) {
 TEST_F(DatasetRun, LabelsLandWhereTheDocumentedProjectionPutsThem) {
   const std::string spec = write_spec("labels", R"("samples": 1, "frames_per_sample": 1, "seed": 2,
       "warmup_s": 3, "driver": {"insert_rate_mm_s": 8, "rotate_rate_deg_s": 0},
-      "contrast": {"probability": 1.0, "start_s": -1.5})", /*beating=*/false, /*noise=*/false);
+      "contrast": {"probability": 1.0, "start_s": -1.5})",
+                                      /*beating=*/false, /*noise=*/false);
   std::string log;
   ASSERT_EQ(run("--spec " + spec + " --out " + (dir_ / "d").string(), &log), 0) << log;
   const fs::path s = dir_ / "d" / "samples" / "0000000";
@@ -152,7 +152,8 @@ TEST_F(DatasetRun, LabelsLandWhereTheDocumentedProjectionPutsThem) {
   double on = 0, off = 0;
   int count = 0;
   for (const auto& px : labels["wire"]["nodes_px"]) {
-    const int c = static_cast<int>(std::lround(px[0].get<double>())), r = static_cast<int>(std::lround(px[1].get<double>()));
+    const int c = static_cast<int>(std::lround(px[0].get<double>())),
+              r = static_cast<int>(std::lround(px[1].get<double>()));
     if (c < 4 || r < 4 || c >= w - 4 || r >= h - 4) continue;
     if (mask[static_cast<size_t>(r) * w + c]) continue;  // not where the contrast darkens too
     on += at(c, r);
@@ -167,7 +168,8 @@ TEST_F(DatasetRun, LabelsLandWhereTheDocumentedProjectionPutsThem) {
     for (int c = 3; c < w - 3; ++c) {
       const bool m = mask[static_cast<size_t>(r) * w + c] != 0;
       bool near = false;
-      for (int d = -3; d <= 3 && !near; ++d) near = mask[static_cast<size_t>(r + d) * w + c] || mask[static_cast<size_t>(r) * w + c + d];
+      for (int d = -3; d <= 3 && !near; ++d)
+        near = mask[static_cast<size_t>(r + d) * w + c] || mask[static_cast<size_t>(r) * w + c + d];
       if (m) in_mask += at(c, r), ++n_in;
       if (!m && near) ring += at(c, r), ++n_ring;
     }
@@ -239,8 +241,8 @@ TEST_F(DatasetRun, AFullDiskIsReportedAndNothingHalfWrittenIsListed) {
   // a 1 MiB tmpfs holds a few samples of 128-pixel frames, not forty
   const std::string cmd = "unshare -m sh -c 'mount -t tmpfs -o size=1m tmpfs " + out.string() + " && " + kTool +
                           " --spec " + spec + " --out " + out.string() + "; echo rc=$?; ls -a " + out.string() +
-                          "/samples; cat " + out.string() + "/shards/shard-0-of-1.jsonl' > " + (dir_ / "full.log").string() +
-                          " 2>&1";
+                          "/samples; cat " + out.string() + "/shards/shard-0-of-1.jsonl' > " +
+                          (dir_ / "full.log").string() + " 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0);
   const std::string log = read_bytes(dir_ / "full.log");
   EXPECT_NE(log.find("rc=4"), std::string::npos) << log;

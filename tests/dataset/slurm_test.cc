@@ -42,8 +42,8 @@ TEST(DatasetSlurm, AThreeShardArrayEqualsOneLocalRun) {
   const fs::path dir(tmpl);
   const fs::path cluster = dir / "c";
   const std::string start_log = (dir / "start.log").string();
-  const int started = sh(src + "/scripts/slurm-local start " + cluster.string() + " > " + (dir / "env").string() +
-                         " 2> " + start_log);
+  const int started =
+      sh(src + "/scripts/slurm-local start " + cluster.string() + " > " + (dir / "env").string() + " 2> " + start_log);
   if (started == 3) {
     const std::string why = slurp(start_log);
     fs::remove_all(dir);
@@ -62,9 +62,9 @@ TEST(DatasetSlurm, AThreeShardArrayEqualsOneLocalRun) {
       "vary": {"effects.xray.primary_deg": {"uniform": [-40, 40]}}})";
   const std::string spec = (dir / "spec.json").string();
   const std::string env = ". " + (dir / "env").string() + " && ";
-  const int submitted = sh(env + src + "/scripts/dataset-slurm --spec " + spec + " --out " + (dir / "array").string() +
-                           " --shards 3 --cpus 1 --tool " + tool + " --wait > " + (dir / "submit.log").string() +
-                           " 2>&1");
+  const int submitted =
+      sh(env + src + "/scripts/dataset-slurm --spec " + spec + " --out " + (dir / "array").string() +
+         " --shards 3 --cpus 1 --tool " + tool + " --wait > " + (dir / "submit.log").string() + " 2>&1");
   const int local = sh(tool + " --spec " + spec + " --out " + (dir / "local").string() + " > " +
                        (dir / "local.log").string() + " 2>&1");
   sh(src + "/scripts/slurm-local stop " + cluster.string() + " > /dev/null 2>&1");
@@ -77,7 +77,8 @@ TEST(DatasetSlurm, AThreeShardArrayEqualsOneLocalRun) {
   std::multiset<int64_t> seen;
   for (const auto& s : merged["samples"]) seen.insert(s["sample"].get<int64_t>());
   EXPECT_EQ(seen, (std::multiset<int64_t>{0, 1, 2, 3, 4, 5, 6}));
-  for (int k = 0; k < 3; ++k) EXPECT_TRUE(fs::exists(dir / "array" / "shards" / ("shard-" + std::to_string(k) + "-of-3.jsonl")));
+  for (int k = 0; k < 3; ++k)
+    EXPECT_TRUE(fs::exists(dir / "array" / "shards" / ("shard-" + std::to_string(k) + "-of-3.jsonl")));
   // the same set: every file of every sample, and the merged COCO file
   EXPECT_EQ(merged["samples"], single["samples"]);
   EXPECT_EQ(slurp(dir / "array" / "coco.json"), slurp(dir / "local" / "coco.json"));

@@ -52,7 +52,8 @@ TEST(DatasetSpec, AVariedValueIsCheckedByTheSceneAtItsExtremes) {
   const std::string range = refusal(R"({"samples": 2, "vary": {"effects.xray.primary_deg": {"uniform": [-200, 0]}}})");
   EXPECT_NE(range.find("vary.effects.xray.primary_deg = -200"), std::string::npos) << range;
   EXPECT_NE(range.find("primary_deg"), std::string::npos);
-  const std::string choice = refusal(R"({"samples": 2, "vary": {"effects.xray.pulse_rate_fps": {"choice": [15, 25]}}})");
+  const std::string choice =
+      refusal(R"({"samples": 2, "vary": {"effects.xray.pulse_rate_fps": {"choice": [15, 25]}}})");
   EXPECT_NE(choice.find("pulse_rate_fps = 25"), std::string::npos) << choice;
   // the anatomy is drawn by its own key, and a dataset needs fluoroscopy
   EXPECT_NE(refusal(R"({"samples": 2, "vary": {"anatomy.phantom_seed": 3}})").find("vary.anatomy"), std::string::npos);

@@ -172,20 +172,20 @@ int FluoroscopyRenderer::fill_beat_ahead() {
 void FluoroscopyRenderer::set_c_arm(const CArmSpec& c_arm) {
   impl_->spec.c_arm = c_arm;
 }
-void FluoroscopyRenderer::restart(const FluoroSpec& spec) {
+void FluoroscopyRenderer::restart(const FluoroSpec& spec, bool keep_beat) {
   Impl& m = *impl_;
   const FluoroSpec& old = m.spec;
   if (spec.volume_dims != old.volume_dims || spec.volume_spacing_mm != old.volume_spacing_mm ||
       spec.projector.projector != old.projector.projector ||
       spec.projector.trilinear.step_voxels != old.projector.trilinear.step_voxels)
-    throw std::invalid_argument("FluoroscopyRenderer::restart: another background volume or projector needs a new renderer");
+    throw std::invalid_argument(
+        "FluoroscopyRenderer::restart: another background volume or projector needs a new renderer");
   // the pose's projection, its range compression and window stay valid when none of their inputs moved
-  const bool keep = old.c_arm.width == spec.c_arm.width && old.c_arm.height == spec.c_arm.height &&
-                    old.c_arm.pixel_mm == spec.c_arm.pixel_mm &&
-                    old.c_arm.source_to_image_mm == spec.c_arm.source_to_image_mm &&
-                    old.c_arm.source_to_axis_mm == spec.c_arm.source_to_axis_mm &&
-                    old.range_compression == spec.range_compression &&
-                    old.range_compression_mm == spec.range_compression_mm;
+  const bool keep =
+      old.c_arm.width == spec.c_arm.width && old.c_arm.height == spec.c_arm.height &&
+      old.c_arm.pixel_mm == spec.c_arm.pixel_mm && old.c_arm.source_to_image_mm == spec.c_arm.source_to_image_mm &&
+      old.c_arm.source_to_axis_mm == spec.c_arm.source_to_axis_mm && old.range_compression == spec.range_compression &&
+      old.range_compression_mm == spec.range_compression_mm;
   const double lo = m.chain.window_lo(), hi = m.chain.window_hi();
   m.spec = spec;
   m.bolus = ContrastBolus(m.tree, spec.contrast);
@@ -194,7 +194,7 @@ void FluoroscopyRenderer::restart(const FluoroSpec& spec) {
   if (m.background_valid) m.chain.set_offset(&m.compression);
   m.wire = {.radius_mm = spec.wire_radius_mm, .mu_per_mm = spec.wire_mu_per_mm};
   m.frames = 0;
-  m.beat.reset();
+  if (!keep_beat) m.beat.reset();
   if (!keep) m.background_valid = false;
 }
 const FluoroFrameCost& FluoroscopyRenderer::last_frame_cost() const {

@@ -120,9 +120,10 @@ class FluoroscopyRenderer {
   void set_c_arm(const CArmSpec& c_arm);
   // a fresh run over the same background volume and projector (a dataset's next sample): every
   // other field of `spec` takes effect, the noise starts again at frame 0 of spec.seed, the beat
-  // is dropped, and the pose's background is kept only when nothing it depends on changed. Throws
+  // is dropped unless `keep_beat` (the same heart: its phase bins stay cached per pose), and the
+  // pose's background is kept only when nothing it depends on changed. Throws
   // std::invalid_argument when spec asks for another volume or projector (build a new renderer)
-  void restart(const FluoroSpec& spec);
+  void restart(const FluoroSpec& spec, bool keep_beat = false);
   const FluoroFrameCost& last_frame_cost() const;
 
   // the last frame's pieces, for tests and ground truth: noiseless line integrals (background +

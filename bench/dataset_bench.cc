@@ -116,7 +116,7 @@ int run(const std::vector<std::string>& args) {
      << "built-in scene (beating heart, wire with contact and friction, blood flow, contrast, quantum noise), the "
      << "phantoms of seeds 1 and 2, a new C-arm pose (LAO/RAO +-45, CRA/CAU +-30), dose and heart rate (60, 72 or 90 "
      << "bpm) every sample, contrast in 70 % of them. Wall time from start to the last file, including building each "
-     << "anatomy (case, contact field, CT projector) once per job.\n\n"
+     << "anatomy (case, contact field, background CT) once, shared by the jobs.\n\n"
      << "| background | jobs | frames | wall s | frames/s | anatomy | world | beat | physics | projection | overlays "
         "| noise | labels | writing |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& r : rows) {

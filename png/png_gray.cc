@@ -47,9 +47,11 @@ void write_image(const std::string& path, int width, int height, int channels, i
     png_write_end(png, nullptr);
   }
   png_destroy_write_struct(&png, &info);
+  // the error of whichever step failed first: on NFS a full quota shows only at close
   const bool flushed = std::fflush(f) == 0 && !std::ferror(f);
-  const int saved = errno;
+  int saved = flushed ? 0 : errno;
   const bool closed = std::fclose(f) == 0;
+  if (!closed && saved == 0) saved = errno;
   if (!ok || !flushed || !closed)
     throw std::runtime_error(fmt::format("{}: writing the PNG failed: {}", path, std::strerror(saved ? saved : EIO)));
 }

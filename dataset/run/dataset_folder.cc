@@ -1,6 +1,7 @@
 #include "dataset/run/dataset_folder.h"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <fmt/format.h>
 #include <unistd.h>
 
@@ -27,35 +28,45 @@ std::string read_file(const fs::path& p) {
   return s.str();
 }
 
-// written whole under a temporary name, then renamed over the target
+// written whole under a temporary name, synced, then renamed over the target
 void write_file_atomic(const fs::path& p, const std::string& text) {
   const fs::path tmp = p.string() + fmt::format(".tmp{}", getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    out << text;
-    out.flush();
-    const int saved = errno;
-    if (!out) {
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      const std::string what = fmt::format("{}: cannot write: {}", p.string(), std::strerror(saved ? saved : EIO));
-      if (disk_full(what, saved)) throw DiskFull(what);
-      throw std::runtime_error(what);
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  int saved = errno;
+  bool ok = fd >= 0;
+  if (ok) {
+    size_t done = 0;
+    while (ok && done < text.size()) {
+      const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+      ok = n > 0;
+      if (ok) done += static_cast<size_t>(n);
+      saved = errno;
     }
+    if (ok && ::fsync(fd) != 0) ok = false, saved = errno;
+    if (::close(fd) != 0 && ok) ok = false, saved = errno;
   }
-  fs::rename(tmp, p);
+  std::error_code ec;
+  if (ok) fs::rename(tmp, p, ec);
+  if (!ok || ec) {
+    fs::remove(tmp, ec);
+    const std::string what =
+        fmt::format("{}: cannot write: {}", p.string(), std::strerror(!ok ? (saved ? saved : EIO) : ec.value()));
+    if (disk_full(what, saved)) throw DiskFull(what);
+    throw WriteError(what);
+  }
 }
 
-// the lines of a JSON-lines file; a torn last line (no newline: a kill mid-append) is cut off the
-// file. A whole line that is not JSON is an error naming the file and line
-std::vector<nlohmann::json> read_lines(const fs::path& p) {
+// the lines of a JSON-lines file; a torn last line (no newline: a kill mid-append) is ignored, and
+// cut off the file when `cut_torn` (the shard's own process only: a merge reading beside a running
+// shard must not cut a line being appended). A whole line that is not JSON is an error naming it
+std::vector<nlohmann::json> read_lines(const fs::path& p, bool cut_torn) {
   std::vector<nlohmann::json> out;
   std::error_code ec;
   if (!fs::exists(p, ec)) return out;
   const std::string text = read_file(p);
   const size_t end = text.rfind('\n');
   const size_t whole = end == std::string::npos ? 0 : end + 1;
-  if (whole < text.size()) fs::resize_file(p, whole);
+  if (cut_torn && whole < text.size()) fs::resize_file(p, whole);
   size_t from = 0;
   int line = 0;
   while (from < whole) {
@@ -105,6 +116,18 @@ DatasetFolder::DatasetFolder(const std::string& out_dir, const std::string& spec
   if (access(root_.c_str(), W_OK) != 0)
     throw std::runtime_error(fmt::format("{}: cannot write into the dataset folder: {}", root_, std::strerror(errno)));
 
+  // one process per shard: a second one would remove the first's partial samples
+  const fs::path lock = fs::path(root_) / "shards" / (shard.name() + ".lock");
+  lock_fd_ = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (lock_fd_ < 0)
+    throw WriteError(fmt::format("{}: cannot create the shard's lock: {}", lock.string(), std::strerror(errno)));
+  if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+    ::close(lock_fd_);
+    lock_fd_ = -1;
+    throw std::runtime_error(
+        fmt::format("{}: {} is being made by another process (its lock is held)", root_, shard.name()));
+  }
+
   // one spec per folder: a resume or another shard must be the same dataset
   const fs::path spec_path = fs::path(root_) / "spec.json";
   if (fs::exists(spec_path, ec)) {
@@ -116,7 +139,7 @@ DatasetFolder::DatasetFolder(const std::string& out_dir, const std::string& spec
     write_file_atomic(spec_path, spec_text);
   }
   // one shard count per folder: sample i belongs to shard i % N
-  static const std::regex shard_file(R"((shard|failed)-(\d+)-of-(\d+)\.jsonl)");
+  static const std::regex shard_file(R"((shard|failed)-(\d+)-of-(\d+)\.(jsonl|lock))");
   for (const auto& e : fs::directory_iterator(fs::path(root_) / "shards")) {
     std::smatch m;
     const std::string name = e.path().filename().string();
@@ -129,7 +152,7 @@ DatasetFolder::DatasetFolder(const std::string& out_dir, const std::string& spec
   const fs::path manifest = fs::path(root_) / "shards" / (shard.name() + ".jsonl");
   bool dropped = false;
   std::string kept;
-  for (const auto& line : read_lines(manifest)) {
+  for (const auto& line : read_lines(manifest, true)) {
     const int64_t s = line.value("sample", int64_t{-1});
     if (s >= 0 && shard.owns(s) && !done_.contains(s) &&
         fs::is_directory(fs::path(root_) / "samples" / sample_dir_name(s), ec)) {
@@ -141,7 +164,7 @@ DatasetFolder::DatasetFolder(const std::string& out_dir, const std::string& spec
   }
   if (dropped) write_file_atomic(manifest, kept);
   for (const auto& line :
-       read_lines(fs::path(root_) / "shards" / fmt::format("failed-{}-of-{}.jsonl", shard.index, shard.count)))
+       read_lines(fs::path(root_) / "shards" / fmt::format("failed-{}-of-{}.jsonl", shard.index, shard.count), true))
     if (line.contains("sample")) failed_[line["sample"].get<int64_t>()] = line;
 
   // partial folders (a kill mid-sample) and whole ones never listed (a kill before the listing)
@@ -156,6 +179,10 @@ DatasetFolder::DatasetFolder(const std::string& out_dir, const std::string& spec
   }
 }
 
+DatasetFolder::~DatasetFolder() {
+  if (lock_fd_ >= 0) ::close(lock_fd_);  // releases the flock
+}
+
 std::string DatasetFolder::begin_sample(int64_t sample) {
   const fs::path dir = fs::path(root_) / "samples" / (".partial-" + sample_dir_name(sample));
   std::error_code ec;
@@ -164,7 +191,7 @@ std::string DatasetFolder::begin_sample(int64_t sample) {
   if (ec) {
     const std::string what = fmt::format("{}: cannot create: {}", dir.string(), ec.message());
     if (disk_full(what, ec.value())) throw DiskFull(what);
-    throw std::runtime_error(what);
+    throw WriteError(what);
   }
   return dir.string();
 }
@@ -178,7 +205,8 @@ void DatasetFolder::commit_sample(int64_t sample, const nlohmann::json& entry) {
   line["digest"] = folder_digest(partial.string());
   std::error_code ec;
   fs::remove_all(whole, ec);
-  fs::rename(partial, whole);
+  fs::rename(partial, whole, ec);
+  if (ec) throw WriteError(fmt::format("{}: cannot rename into place: {}", whole.string(), ec.message()));
   append_line((fs::path(root_) / "shards" / (shard_.name() + ".jsonl")).string(), line);
   done_.insert(sample);
 }
@@ -219,7 +247,7 @@ void DatasetFolder::append_line(const std::string& file, const nlohmann::json& l
     }
     const std::string what = fmt::format("{}: cannot append: {}", file, std::strerror(saved ? saved : EIO));
     if (disk_full(what, saved)) throw DiskFull(what);
-    throw std::runtime_error(what);
+    throw WriteError(what);
   }
 }
 
@@ -248,7 +276,7 @@ nlohmann::json merge_dataset(const std::string& out_dir, const DatasetSpec& spec
     const std::string name = e.path().filename().string();
     if (!name.ends_with(".jsonl")) continue;
     const bool fail_list = name.starts_with("failed-");
-    for (auto& line : read_lines(e.path())) {
+    for (auto& line : read_lines(e.path(), false)) {
       const int64_t s = line.value("sample", int64_t{-1});
       auto& into = fail_list ? failed : done;
       if (into.contains(s))

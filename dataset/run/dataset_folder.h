@@ -16,10 +16,17 @@
 
 namespace pcisim::dataset {
 
-// the disk (or quota) is full: the run stops, saying so, and a later run resumes
-class DiskFull : public std::runtime_error {
+// the dataset folder cannot be written (read-only, gone, I/O error): not the sample's fault, so
+// the run stops, saying so, rather than recording every later sample as failed
+class WriteError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
+};
+
+// the disk (or quota) is full: the run stops, saying so, and a later run resumes
+class DiskFull : public WriteError {
+ public:
+  using WriteError::WriteError;
 };
 
 // true when `what` failed because the disk or quota is full (errno ENOSPC / EDQUOT, or their text)
@@ -35,11 +42,15 @@ std::string sample_dir_name(int64_t sample);  // "0000123"
 
 class DatasetFolder {
  public:
-  // opens (creating) OUT for `shard`: writes spec.json the first time, refuses a folder made
+  // opens (creating) OUT for `shard`: takes the shard's lock (another process making the same
+  // shard is refused), writes spec.json the first time, refuses a folder made
   // from another spec or with another shard count (naming it), reads the shard's manifest and
   // failure list (a torn last line from a kill is cut off), and removes this shard's partial and
   // unlisted sample folders. Throws std::runtime_error naming the path
   DatasetFolder(const std::string& out_dir, const std::string& spec_text, const Shard& shard);
+  ~DatasetFolder();
+  DatasetFolder(const DatasetFolder&) = delete;
+  DatasetFolder& operator=(const DatasetFolder&) = delete;
 
   const std::set<int64_t>& done() const { return done_; }
   const std::map<int64_t, nlohmann::json>& failed() const { return failed_; }
@@ -61,6 +72,7 @@ class DatasetFolder {
   void append_line(const std::string& file, const nlohmann::json& line);
   std::string root_;
   Shard shard_;
+  int lock_fd_ = -1;  // flock on shards/shard-I-of-N.lock while this folder is open
   std::set<int64_t> done_;
   std::map<int64_t, nlohmann::json> failed_;
 };

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <exception>
+#include <new>
 #include <cmath>
 #include <memory>
 #include <mutex>
@@ -71,6 +73,22 @@ RunReport run_dataset(const DatasetSpec& spec, const RunOptions& o, std::ostream
     progress.flush();
   };
 
+  // the run stops for what is not a sample's fault: a full disk, a folder it cannot write, no memory
+  std::exception_ptr unexpected;
+  auto stop_locked = [&](const std::exception& e) {
+    if (r.stop_error.empty()) {
+      r.disk_full = dynamic_cast<const DiskFull*>(&e) != nullptr;
+      r.stop_error = dynamic_cast<const std::bad_alloc*>(&e) ? std::string("out of memory") : std::string(e.what());
+      if (r.disk_full) r.disk_full_what = r.stop_error;
+    }
+    halt.store(true);
+  };
+  auto stop = [&](int64_t i, const std::exception& e, std::nullptr_t) {
+    std::lock_guard lock(mutex);
+    folder.abandon_sample(i);
+    stop_locked(e);
+  };
+
   // each worker takes the next sample of the list until it is empty or the run must stop
   auto work = [&](SampleRunner& runner) {
     while (true) {
@@ -95,27 +113,32 @@ RunReport run_dataset(const DatasetSpec& spec, const RunOptions& o, std::ostream
         r.frames += spec.frames_per_sample;
         ++r.made;
         print(false);
-      } catch (const DiskFull& e) {
-        std::lock_guard lock(mutex);
-        folder.abandon_sample(i);
-        if (!r.disk_full) r.disk_full_what = e.what();
-        r.disk_full = true;
-        halt.store(true);
+      } catch (const WriteError& e) {
+        // the folder cannot be written: not this sample's fault, the run stops
+        stop(i, e, nullptr);
+        return;
+      } catch (const std::bad_alloc& e) {
+        stop(i, e, nullptr);
         return;
       } catch (const std::exception& e) {
+        // the sample itself failed (a scene its draws break, a solver's refusal): recorded, go on
         std::lock_guard lock(mutex);
         folder.abandon_sample(i);
         try {
           folder.record_failure(i, seed, e.what());
-        } catch (const DiskFull& full) {
-          if (!r.disk_full) r.disk_full_what = full.what();
-          r.disk_full = true;
-          halt.store(true);
+        } catch (const std::exception& write) {
+          stop_locked(write);
           return;
         }
         progress << fmt::format("pcisim-dataset: {}sample {} (seed {}) failed: {}\n", who, i, seed, e.what());
         ++r.failed;
         print(false);
+      } catch (...) {
+        std::lock_guard lock(mutex);
+        folder.abandon_sample(i);
+        if (!unexpected) unexpected = std::current_exception();
+        halt.store(true);
+        return;
       }
     }
   };
@@ -127,7 +150,8 @@ RunReport run_dataset(const DatasetSpec& spec, const RunOptions& o, std::ostream
   for (int j = 1; j < jobs; ++j) threads.emplace_back(work, std::ref(*runners[j]));
   work(*runners[0]);
   for (auto& t : threads) t.join();
-  r.interrupted = !r.disk_full && o.stop && o.stop->load() && next.load() < todo.size();
+  if (unexpected) std::rethrow_exception(unexpected);
+  r.interrupted = r.stop_error.empty() && o.stop && o.stop->load() && next.load() < todo.size();
 
   print(true);
   r.wall_s = std::chrono::duration<double>(Clock::now() - t_start).count();

@@ -20,7 +20,7 @@ void write_text_file(const std::string& path, const std::string& text) {
     const int saved = errno;
     const std::string what = fmt::format("{}: cannot write: {}", path, std::strerror(saved ? saved : EIO));
     if (disk_full(what, saved)) throw DiskFull(what);
-    throw std::runtime_error(what);
+    throw WriteError(what);
   }
 }
 
@@ -35,7 +35,7 @@ void SampleWriter::frame(const FrameOutput& out) {
       write(dir_ + "/" + name);
     } catch (const std::runtime_error& e) {
       if (disk_full(e.what(), errno)) throw DiskFull(e.what());
-      throw;
+      throw WriteError(e.what());
     }
   };
   png("frame_" + stem + ".png",

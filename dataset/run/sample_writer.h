@@ -3,7 +3,7 @@
 // frame_FFFF.png (16-bit, the display frame), mask_FFFF.png (8-bit, 255 = contrast-filled vessel),
 // branches_FFFF.png (8-bit, 1 + the branch's tree index), frame_FFFF.json (the labels), and at
 // the end sample.json (what the sample was) and coco.json (its images and annotations, numbered
-// within the sample). Throws DiskFull when the disk is full, std::runtime_error otherwise.
+// within the sample). Throws DiskFull when the disk is full, WriteError otherwise.
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -24,7 +24,7 @@ class SampleWriter final : public FrameSink {
   int64_t annotation_id_ = 0;
 };
 
-// text to a file, or DiskFull / std::runtime_error naming it
+// text to a file, or DiskFull / WriteError naming it
 void write_text_file(const std::string& path, const std::string& text);
 
 }  // namespace pcisim::dataset

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "dataset/run/dataset_folder.h"
 #include "dataset/run/dataset_run.h"
 #include "dataset/sample/sample_plan.h"
 #include "json/json_reader.h"
@@ -24,6 +25,7 @@ constexpr const char* kHelp = R"(pcisim-dataset: labelled fluoroscopy datasets f
   pcisim-dataset --merge --spec FILE --out DIR
   pcisim-dataset --check --spec FILE
   pcisim-dataset --print-spec
+  pcisim-dataset --digest SAMPLE_DIR   (the digest its manifest line records)
 
 Each sample draws its anatomy, C-arm, dose, contrast, heart rate, wire and instrument motion
 from the spec's distributions (seeded by the spec's seed and the sample's number), runs the
@@ -39,7 +41,7 @@ every key of the spec and the labels' exact definitions are in docs/dataset.md.
   --jobs J         make J samples at once, each on its own thread (default 1; the same files
                    whatever J: a sample depends on its number alone). On a machine whose
                    projector is the GPU, one job per CPU core keeps it busy
-  --max-samples K  stop after making K samples (a later run resumes)
+  --max-samples K  stop after K samples (made or failed; a later run resumes)
   --merge          write DIR/manifest.json and DIR/coco.json from every shard's lists
   --check          check the spec (every key, every varied value at its extremes) and exit
 
@@ -48,9 +50,12 @@ Without --shard the run merges by itself when it has made every sample. Interrup
 redoing or duplicating a sample. A sample that fails is recorded with its seed and error in
 DIR/shards/failed-*.jsonl and the run goes on.
 
+A run stops (the sample in progress removed, nothing half-written listed) when the folder
+cannot be written or memory runs out; a second process on the same shard is refused.
+
 Exit status: 0 done (failed samples included, and counted), 2 bad arguments or spec, 3 merge
 asked before every sample is made, 4 the disk is full (resume when there is space),
-5 interrupted, 1 any other error.
+5 interrupted, 1 any other error (the folder cannot be written, ...).
 )";
 
 constexpr const char* kExampleSpec = R"({
@@ -110,6 +115,16 @@ Args parse(int argc, char** argv) {
     };
     if (k == "--help" || k == "-h") {
       std::fputs(kHelp, stdout);
+      std::exit(0);
+    } else if (k == "--digest") {
+      // a sample folder's digest, as its manifest line records it (checks a copy is whole)
+      const std::string dir = value();
+      try {
+        std::printf("%s\n", DatasetFolder::folder_digest(dir).c_str());
+      } catch (const std::exception& e) {
+        std::fprintf(stderr, "pcisim-dataset: --digest %s: %s\n", dir.c_str(), e.what());
+        std::exit(1);
+      }
       std::exit(0);
     } else if (k == "--print-spec") {
       std::fputs(kExampleSpec, stdout);
@@ -220,6 +235,13 @@ int main(int argc, char** argv) {
                    r.disk_full_what.c_str(), static_cast<long long>(r.made), static_cast<long long>(r.remaining));
       return 4;
     }
+    if (!r.stop_error.empty()) {
+      std::fprintf(stderr,
+                   "pcisim-dataset: stopped: %s: %lld samples made this run, %lld left; nothing half-written is "
+                   "listed. Run the same command to resume once that is fixed\n",
+                   r.stop_error.c_str(), static_cast<long long>(r.made), static_cast<long long>(r.remaining));
+      return 1;
+    }
     if (r.interrupted) {
       std::fprintf(stderr, "pcisim-dataset: interrupted: %lld samples left; run the same command to resume\n",
                    static_cast<long long>(r.remaining));
@@ -235,6 +257,9 @@ int main(int argc, char** argv) {
   } catch (const pcisim::json::JsonError& e) {
     std::fprintf(stderr, "pcisim-dataset: %s\n", e.what());
     return 2;
+  } catch (const DiskFull& e) {
+    std::fprintf(stderr, "pcisim-dataset: the disk is full (%s); free space and run the same command\n", e.what());
+    return 4;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pcisim-dataset: %s\n", e.what());
     return std::string(e.what()).find("not made yet") != std::string::npos ? 3 : 1;

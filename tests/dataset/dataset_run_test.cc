@@ -194,6 +194,11 @@ TEST_F(DatasetRun, AKillMidSampleResumesToTheSameSet) {
   bool killed = false;
   while (std::chrono::steady_clock::now() < deadline && !killed) {
     if (fs::exists(out / "samples" / "0000000") && fs::exists(out / "samples" / ".partial-0000001")) {
+      kill(pid, SIGSTOP);  // held mid-sample while a second process tries the same shard
+      std::string second;
+      EXPECT_EQ(run("--spec " + spec + " --out " + out.string(), &second), 1);
+      EXPECT_NE(second.find("another process"), std::string::npos) << second;
+      EXPECT_TRUE(fs::exists(out / "samples" / ".partial-0000001")) << "the second process touched the first's sample";
       kill(pid, SIGKILL);
       killed = true;
     }
@@ -241,21 +246,34 @@ TEST_F(DatasetRun, AFullDiskIsReportedAndNothingHalfWrittenIsListed) {
   // a 1 MiB tmpfs holds a few samples of 128-pixel frames, not forty
   const std::string cmd = "unshare -m sh -c 'mount -t tmpfs -o size=1m tmpfs " + out.string() + " && " + kTool +
                           " --spec " + spec + " --out " + out.string() + "; echo rc=$?; ls -a " + out.string() +
-                          "/samples; cat " + out.string() + "/shards/shard-0-of-1.jsonl' > " +
+                          "/samples; cat " + out.string() + "/shards/shard-0-of-1.jsonl; for d in " + out.string() +
+                          "/samples/0*; do echo digest samples/$(basename $d) $(" + kTool + " --digest $d); done' > " +
                           (dir_ / "full.log").string() + " 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0);
   const std::string log = read_bytes(dir_ / "full.log");
   EXPECT_NE(log.find("rc=4"), std::string::npos) << log;
   EXPECT_NE(log.find("disk is full"), std::string::npos) << log;
   EXPECT_EQ(log.find("\n.partial-"), std::string::npos) << "a partial sample was left (ls):\n" << log;
-  // every listed sample is whole: its folder was listed after it was complete
+  // every listed sample is whole: its files' digest, taken inside the private mount before it
+  // went away, is the digest its line recorded when it was listed
   std::istringstream lines(log);
   std::string line;
-  int listed = 0;
-  while (std::getline(lines, line))
+  int listed = 0, checked = 0;
+  while (std::getline(lines, line)) {
     if (line.starts_with("{\"anatomy\"")) ++listed;
+    if (line.starts_with("digest ")) {
+      std::istringstream d(line.substr(7));
+      std::string dir, now;
+      d >> dir >> now;
+      EXPECT_NE(log.find("\"digest\":\"" + now + "\",\"dir\":\"" + dir + "\""), std::string::npos)
+          << dir << " is listed with another digest than its files have:\n"
+          << log;
+      ++checked;
+    }
+  }
   EXPECT_GT(listed, 0) << log;
   EXPECT_LT(listed, 40) << log;
+  EXPECT_EQ(checked, listed) << log;
 }
 
 }  // namespace

@@ -111,6 +111,21 @@ TEST_F(DatasetRun, TheSameSpecGivesTheSameBytesWhateverTheJobs) {
   EXPECT_NE(log.find("ETA"), std::string::npos) << log;
 }
 
+TEST_F(DatasetRun, ASampleAfterAnotherOnTheSamePoseIsTheSameAsAlone) {
+  // a fixed pose and heart: the renderer keeps the pose's projection and the beating background
+  // from one sample to the next. Each sample made alone (a resume at every sample, one per run)
+  // must give the bytes it gives after its neighbours
+  const std::string spec = write_spec("kept", R"("samples": 3, "frames_per_sample": 2, "seed": 3,
+      "warmup_s": {"uniform": [0.5, 1.0]}, "contrast": {"probability": 1.0, "start_s": -0.5},
+      "vary": {"effects.detector_noise.photons_per_pixel": {"log_uniform": [500, 3000]}})", /*beating=*/true);
+  std::string log;
+  ASSERT_EQ(run("--spec " + spec + " --out " + (dir_ / "together").string(), &log), 0) << log;
+  for (int k = 0; k < 3; ++k)
+    ASSERT_EQ(run("--spec " + spec + " --out " + (dir_ / "alone").string() + " --max-samples 1", &log), 0) << log;
+  EXPECT_EQ(read_json(dir_ / "alone" / "manifest.json")["samples"],
+            read_json(dir_ / "together" / "manifest.json")["samples"]);
+}
+
 TEST_F(DatasetRun, LabelsLandWhereTheDocumentedProjectionPutsThem) {
   const std::string spec = write_spec("labels", R"("samples": 1, "frames_per_sample": 1, "seed": 2,
       "warmup_s": 3, "driver": {"insert_rate_mm_s": 8, "rotate_rate_deg_s": 0},

@@ -7,6 +7,35 @@
 #include <cmath>
 
 namespace pcisim::dataset {
+namespace {
+
+// uncompressed RLE of a region given as its pixels' column-major indices (c * height + r), sorted:
+// runs alternate outside / inside, the first outside (possibly 0); its area and box too
+nlohmann::json rle_of_sorted(const std::vector<int64_t>& idx, int width, int height, int64_t* area,
+                             std::array<int, 4>* bbox) {
+  std::vector<int64_t> counts;
+  int64_t next = 0;  // the first pixel not yet counted
+  int c0 = width, r0 = height, c1 = -1, r1 = -1;
+  for (size_t k = 0; k < idx.size();) {
+    size_t e = k + 1;  // a run of consecutive indices
+    while (e < idx.size() && idx[e] == idx[e - 1] + 1) ++e;
+    counts.push_back(idx[k] - next);
+    counts.push_back(static_cast<int64_t>(e - k));
+    next = idx[e - 1] + 1;
+    for (size_t j = k; j < e; ++j) {
+      const int c = static_cast<int>(idx[j] / height), r = static_cast<int>(idx[j] % height);
+      c0 = std::min(c0, c), c1 = std::max(c1, c), r0 = std::min(r0, r), r1 = std::max(r1, r);
+    }
+    k = e;
+  }
+  const int64_t n = static_cast<int64_t>(width) * height;
+  if (next < n || counts.empty()) counts.push_back(n - next);
+  *area = static_cast<int64_t>(idx.size());
+  *bbox = idx.empty() ? std::array<int, 4>{0, 0, 0, 0} : std::array<int, 4>{c0, r0, c1 - c0 + 1, r1 - r0 + 1};
+  return {{"counts", counts}, {"size", {height, width}}};
+}
+
+}  // namespace
 
 nlohmann::json coco_categories(int keypoints) {
   nlohmann::json names = nlohmann::json::array(), skeleton = nlohmann::json::array();
@@ -21,29 +50,12 @@ nlohmann::json coco_categories(int keypoints) {
 
 nlohmann::json coco_rle(std::span<const uint8_t> labels, int width, int height, uint8_t value, int64_t* area,
                         std::array<int, 4>* bbox) {
-  std::vector<int64_t> counts;
-  bool inside = false;
-  int64_t run = 0, n = 0;
-  int c0 = width, r0 = height, c1 = -1, r1 = -1;
-  for (int c = 0; c < width; ++c) {
-    for (int r = 0; r < height; ++r) {
-      const bool in = labels[static_cast<size_t>(r) * width + c] == value;
-      if (in != inside) {
-        counts.push_back(run);
-        run = 0;
-        inside = in;
-      }
-      ++run;
-      if (in) {
-        ++n;
-        c0 = std::min(c0, c), c1 = std::max(c1, c), r0 = std::min(r0, r), r1 = std::max(r1, r);
-      }
-    }
-  }
-  counts.push_back(run);
-  *area = n;
-  *bbox = n ? std::array<int, 4>{c0, r0, c1 - c0 + 1, r1 - r0 + 1} : std::array<int, 4>{0, 0, 0, 0};
-  return {{"counts", counts}, {"size", {height, width}}};
+  std::vector<int64_t> idx;
+  for (int r = 0; r < height; ++r)
+    for (int c = 0; c < width; ++c)
+      if (labels[static_cast<size_t>(r) * width + c] == value) idx.push_back(static_cast<int64_t>(c) * height + r);
+  std::sort(idx.begin(), idx.end());
+  return rle_of_sorted(idx, width, height, area, bbox);
 }
 
 nlohmann::json coco_frame_annotations(std::span<const Eigen::Vector3d> keypoints, std::span<const uint8_t> branch_ids,
@@ -76,14 +88,22 @@ nlohmann::json coco_frame_annotations(std::span<const Eigen::Vector3d> keypoints
                    {"area", (x1 - x0) * (y1 - y0)},
                    {"iscrowd", 0}});
   }
-  // the vessels: one annotation per branch present in the label image
-  std::vector<bool> present(256, false);
-  for (uint8_t id : branch_ids) present[id] = true;
+  // the vessels: one annotation per branch present in the label image. One row-major pass
+  // gathers every labelled pixel's column-major index per branch (the image is mostly 0), then
+  // each branch's runs, area and box come from its sorted indices
+  std::vector<std::vector<int64_t>> at(256);
+  for (int r = 0; r < height; ++r) {
+    const uint8_t* row = branch_ids.data() + static_cast<size_t>(r) * width;
+    for (int c = 0; c < width; ++c)
+      if (row[c] != 0) at[row[c]].push_back(static_cast<int64_t>(c) * height + r);
+  }
   for (int id = 1; id < 256; ++id) {
-    if (!present[id]) continue;
+    std::vector<int64_t>& idx = at[static_cast<size_t>(id)];
+    if (idx.empty()) continue;
+    std::sort(idx.begin(), idx.end());
     int64_t area = 0;
     std::array<int, 4> box{};
-    nlohmann::json rle = coco_rle(branch_ids, width, height, static_cast<uint8_t>(id), &area, &box);
+    nlohmann::json rle = rle_of_sorted(idx, width, height, &area, &box);
     out.push_back({{"id", 0},
                    {"image_id", 0},
                    {"category_id", 2},

@@ -18,7 +18,8 @@ namespace pcisim::dataset {
 nlohmann::json coco_categories(int keypoints);
 
 // uncompressed RLE of the pixels of `labels` equal to `value`: column-major runs, the first a run
-// of pixels not in the region (possibly 0), as pycocotools' frPyObjects reads it
+// of pixels not in the region (possibly 0), as pycocotools' frPyObjects reads it (the vessel
+// annotations below are written by the same run builder)
 nlohmann::json coco_rle(std::span<const uint8_t> labels, int width, int height, uint8_t value, int64_t* area,
                         std::array<int, 4>* bbox);
 

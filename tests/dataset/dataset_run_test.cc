@@ -117,7 +117,8 @@ TEST_F(DatasetRun, ASampleAfterAnotherOnTheSamePoseIsTheSameAsAlone) {
   // must give the bytes it gives after its neighbours
   const std::string spec = write_spec("kept", R"("samples": 3, "frames_per_sample": 2, "seed": 3,
       "warmup_s": {"uniform": [0.5, 1.0]}, "contrast": {"probability": 1.0, "start_s": -0.5},
-      "vary": {"effects.detector_noise.photons_per_pixel": {"log_uniform": [500, 3000]}})", /*beating=*/true);
+      "vary": {"effects.detector_noise.photons_per_pixel": {"log_uniform": [500, 3000]}})",
+                                      /*beating=*/true);
   std::string log;
   ASSERT_EQ(run("--spec " + spec + " --out " + (dir_ / "together").string(), &log), 0) << log;
   for (int k = 0; k < 3; ++k)

@@ -93,5 +93,30 @@ TEST(Coco, RleDecodesBackToTheRegion) {
   EXPECT_EQ(back, labels);
 }
 
+TEST(Coco, EachBranchsAnnotationDecodesToItsPixels) {
+  const int w = 9, h = 6;
+  std::vector<uint8_t> ids(w * h, 0);
+  for (int r = 0; r < h; ++r) ids[r * w + 2] = 1;  // a vertical vessel, branch index 0
+  for (int c = 3; c < 8; ++c) ids[4 * w + c] = 4;  // a horizontal one, branch index 3
+  ids[w * h - 1] = 4;                              // and its lone last pixel
+  const auto anns = coco_frame_annotations({}, ids, w, h, {"LM", "LAD", "LCx", "D1"});
+  ASSERT_EQ(anns.size(), 2u);  // no visible keypoint: no wire annotation
+  for (const auto& a : anns) {
+    const int id = a["branch"] == "LM" ? 1 : 4;
+    EXPECT_EQ(a["category_id"], 2);
+    std::vector<uint8_t> back(w * h, 0);
+    int64_t at = 0;
+    bool in = false;
+    for (const auto& n : a["segmentation"]["counts"]) {
+      for (int64_t k = 0; k < n.get<int64_t>(); ++k, ++at)
+        if (in) back[(at % h) * w + at / h] = static_cast<uint8_t>(id);
+      in = !in;
+    }
+    EXPECT_EQ(at, w * h);
+    for (int p = 0; p < w * h; ++p) EXPECT_EQ(back[p] != 0, ids[p] == id) << a["branch"] << " pixel " << p;
+    EXPECT_EQ(a["area"], id == 1 ? 6 : 6);
+  }
+}
+
 }  // namespace
 }  // namespace pcisim::dataset

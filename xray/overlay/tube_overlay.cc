@@ -7,12 +7,10 @@
 
 namespace pcisim::xray {
 
-void add_cone_segment(const DetectorGeometry& g, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double ra_mm,
-                      double rb_mm, double mu_per_mm, Image* image) {
-  ConeChord cone;
-  if (!cone.set(g.source_mm, a, b, ra_mm, rb_mm)) return;
+bool cone_shadow_box(const DetectorGeometry& g, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double ra_mm,
+                     double rb_mm, std::array<int, 4>* box) {
   Eigen::Vector2d pa, pb;
-  if (!g.project(a, &pa) || !g.project(b, &pb)) return;
+  if (!g.project(a, &pa) || !g.project(b, &pb)) return false;
   const Eigen::Vector3d n = g.normal();
   const double sid = n.dot(g.center_mm - g.source_mm);
   // the shadow's half-width in pixels: the larger radius magnified at the nearer end, plus a pixel
@@ -22,11 +20,21 @@ void add_cone_segment(const DetectorGeometry& g, const Eigen::Vector3d& a, const
   const double rl = std::min(pa.y(), pb.y()) - margin, rh = std::max(pa.y(), pb.y()) + margin;
   // !(x >= lo) also catches NaN; bounds are clamped in double before the cast to int, so a point
   // near the source plane (a huge shadow) or far out cannot overflow it
-  if (!(ch >= 0) || !(rh >= 0) || !(cl <= g.width - 1) || !(rl <= g.height - 1)) return;
-  const int c0 = static_cast<int>(std::max(0.0, std::floor(cl)));
-  const int c1 = static_cast<int>(std::min(g.width - 1.0, std::ceil(ch)));
-  const int r0 = static_cast<int>(std::max(0.0, std::floor(rl)));
-  const int r1 = static_cast<int>(std::min(g.height - 1.0, std::ceil(rh)));
+  if (!(ch >= 0) || !(rh >= 0) || !(cl <= g.width - 1) || !(rl <= g.height - 1)) return false;
+  (*box)[0] = static_cast<int>(std::max(0.0, std::floor(cl)));
+  (*box)[1] = static_cast<int>(std::min(g.width - 1.0, std::ceil(ch)));
+  (*box)[2] = static_cast<int>(std::max(0.0, std::floor(rl)));
+  (*box)[3] = static_cast<int>(std::min(g.height - 1.0, std::ceil(rh)));
+  return true;
+}
+
+void add_cone_segment(const DetectorGeometry& g, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double ra_mm,
+                      double rb_mm, double mu_per_mm, Image* image) {
+  ConeChord cone;
+  if (!cone.set(g.source_mm, a, b, ra_mm, rb_mm)) return;
+  std::array<int, 4> box;
+  if (!cone_shadow_box(g, a, b, ra_mm, rb_mm, &box)) return;
+  const int c0 = box[0], c1 = box[1], r0 = box[2], r1 = box[3];
   const Eigen::Vector3d du = g.pixel_mm * g.u;
   const float mu = static_cast<float>(mu_per_mm);
   for (int r = r0; r <= r1; ++r) {

@@ -10,7 +10,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <regex>
 #include <sstream>
 #include <vector>
 
@@ -82,6 +81,21 @@ std::vector<nlohmann::json> read_lines(const fs::path& p, bool cut_torn) {
   return out;
 }
 
+// N of a shard file "shard-I-of-N.jsonl", "failed-I-of-N.jsonl" or "shard-I-of-N.lock"; 0 otherwise
+int shard_count_of(const std::string& name) {
+  if (!name.starts_with("shard-") && !name.starts_with("failed-")) return 0;
+  const size_t of = name.find("-of-"), dot = name.rfind('.');
+  if (of == std::string::npos || dot == std::string::npos || dot < of + 5) return 0;
+  const std::string ext = name.substr(dot);
+  if (ext != ".jsonl" && ext != ".lock") return 0;
+  int n = 0;
+  for (size_t i = of + 4; i < dot; ++i) {
+    if (name[i] < '0' || name[i] > '9' || n > 1'000'000) return 0;
+    n = n * 10 + (name[i] - '0');
+  }
+  return n;
+}
+
 int64_t parse_sample_dir(const std::string& name, const std::string& prefix) {
   if (!name.starts_with(prefix) || name.size() != prefix.size() + 7) return -1;
   int64_t v = 0;
@@ -139,13 +153,12 @@ DatasetFolder::DatasetFolder(const std::string& out_dir, const std::string& spec
     write_file_atomic(spec_path, spec_text);
   }
   // one shard count per folder: sample i belongs to shard i % N
-  static const std::regex shard_file(R"((shard|failed)-(\d+)-of-(\d+)\.(jsonl|lock))");
   for (const auto& e : fs::directory_iterator(fs::path(root_) / "shards")) {
-    std::smatch m;
     const std::string name = e.path().filename().string();
-    if (std::regex_match(name, m, shard_file) && std::stoi(m[3]) != shard.count)
+    const int count = shard_count_of(name);
+    if (count > 0 && count != shard.count)
       throw std::runtime_error(fmt::format("{}: this folder is being made in {} shards, not {} (found {})", root_,
-                                           m[3].str(), shard.count, name));
+                                           count, shard.count, name));
   }
 
   // what this shard has done: listed and present. A listed folder that is gone is made again

@@ -251,6 +251,9 @@ TEST_F(DatasetRun, AFailingSampleIsRecordedAndTheRunGoesOn) {
     EXPECT_TRUE(f.contains("seed"));
     EXPECT_FALSE(fs::exists(dir_ / "f" / "samples" / fmt::format("{:07d}", f["sample"].get<int64_t>())));
   }
+  // the folder was made as one shard: a run in two is refused, naming the count
+  EXPECT_EQ(run("--spec " + spec + " --out " + (dir_ / "f").string() + " --shard 1/2", &log), 1);
+  EXPECT_NE(log.find("in 1 shards, not 2"), std::string::npos) << log;
 }
 
 TEST_F(DatasetRun, AFullDiskIsReportedAndNothingHalfWrittenIsListed) {

@@ -23,11 +23,11 @@ double seconds_since(Clock::time_point t0) {
 // renderers kept per job, one per recent anatomy (each holds its CT's projector)
 constexpr size_t kCachedRenderers = 3;
 
-// the branch holding the tip, in the tree where `points_m` (tree order; empty: at rest) put it
+// the branch holding the tip, in the tree where `points_m` (tree order; empty: at rest) put it.
+// `scratch` is a copy of `rest` (made once per anatomy: only its positions change per frame)
 int tip_branch(const anatomy::VesselTree& rest, const std::vector<Eigen::Vector3d>& points_m,
                const Eigen::Vector3d& tip_m, anatomy::VesselTree* scratch) {
   if (points_m.empty()) return anatomy::innermost_branch(rest, tip_m);
-  *scratch = rest;
   size_t k = 0;
   for (auto& b : scratch->branches)
     for (auto& p : b.points)
@@ -163,6 +163,10 @@ nlohmann::json SampleRunner::run(const SamplePlan& plan, FrameSink& sink) {
     truth.keypoints = keys;
     // the tip's branch: the lumen holding it most deeply, in the tree as the heart has moved it
     if (!snap.wire_nodes_m.empty()) {
+      if (moved_tree_of_ != built->key) {
+        moved_tree_ = c.vessels;
+        moved_tree_of_ = built->key;
+      }
       const int b = tip_branch(c.vessels, snap.vessel_points_m, snap.wire_nodes_m.back(), &moved_tree_);
       if (b >= 0) truth.tip_branch = built->branch_names[static_cast<size_t>(b)];
     }

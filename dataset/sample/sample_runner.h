@@ -80,6 +80,7 @@ class SampleRunner {
   std::vector<std::unique_ptr<Renderer>> renderers_;  // the most recently used last
   VesselLabeler labeler_;
   anatomy::VesselTree moved_tree_;  // the tree where the heart has carried it (the tip's branch)
+  std::string moved_tree_of_;       // the anatomy moved_tree_ was copied from
   std::vector<double> point_opacity_;
   xray::FluoroFrame frame_;
   StageTimes times_;

@@ -8,8 +8,7 @@
 
 namespace pcisim::dataset {
 
-// segments under this opacity are left out of the frame too (xray/fluoro/fluoroscopy.cc)
-constexpr double kMinOpacity = 1e-3;
+using xray::kMinDrawnOpacity;
 
 void VesselLabeler::label(const xray::DetectorGeometry& g, const xray::ContrastBolus& bolus, double iodine_mu_per_mm) {
   const size_t n = static_cast<size_t>(g.width) * g.height;
@@ -30,10 +29,10 @@ void VesselLabeler::label(const xray::DetectorGeometry& g, const xray::ContrastB
   // branch by branch: its own line integral (in one_, zero outside the box being worked on),
   // added to the total, and the largest wins the pixel; only the branch's shadow box is visited
   for (size_t b = 0; b < branches; ++b) {
-    if (bolus.branch_opacity()[b] < kMinOpacity) continue;
+    if (bolus.branch_opacity()[b] < kMinDrawnOpacity) continue;
     int c0 = g.width, c1 = -1, r0 = g.height, r1 = -1;
     for (size_t i = 0; i < segs.size(); ++i) {
-      if (segs[i].branch != static_cast<int>(b) || op[i] < kMinOpacity) continue;
+      if (segs[i].branch != static_cast<int>(b) || op[i] < kMinDrawnOpacity) continue;
       std::array<int, 4> box;
       if (!xray::cone_shadow_box(g, segs[i].a_mm, segs[i].b_mm, segs[i].ra_mm, segs[i].rb_mm, &box)) continue;
       xray::add_cone_segment(g, segs[i].a_mm, segs[i].b_mm, segs[i].ra_mm, segs[i].rb_mm, iodine_mu_per_mm * op[i],

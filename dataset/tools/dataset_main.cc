@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <csignal>
+#include <cstdint>
 #include <cstdio>
 #include <iostream>
 #include <string>
@@ -105,6 +106,20 @@ struct Args {
   std::exit(2);
 }
 
+// the value of `flag` as a whole number in [lo, hi], or the usage error naming it
+int64_t whole_number(const std::string& flag, const std::string& v, int64_t lo, int64_t hi) {
+  int64_t n = 0;
+  size_t used = 0;
+  try {
+    n = std::stoll(v, &used);
+  } catch (...) {
+    used = 0;
+  }
+  if (used == 0 || used != v.size() || n < lo || n > hi)
+    usage(fmt::format("{}: expected a whole number in [{}, {}], got \"{}\"", flag, lo, hi, v));
+  return n;
+}
+
 Args parse(int argc, char** argv) {
   Args a;
   for (int i = 1; i < argc; ++i) {
@@ -138,21 +153,9 @@ Args parse(int argc, char** argv) {
     } else if (k == "--check") {
       a.check = true;
     } else if (k == "--max-samples") {
-      const std::string v = value();
-      try {
-        a.max_samples = std::stoll(v);
-      } catch (...) {
-        usage("--max-samples: expected a whole number, got \"" + v + "\"");
-      }
-      if (a.max_samples < 0) usage("--max-samples: expected 0 or more");
+      a.max_samples = whole_number(k, value(), 0, INT64_MAX);
     } else if (k == "--jobs") {
-      const std::string v = value();
-      try {
-        a.jobs = std::stoi(v);
-      } catch (...) {
-        usage("--jobs: expected a whole number, got \"" + v + "\"");
-      }
-      if (a.jobs < 1 || a.jobs > 256) usage("--jobs: expected 1 to 256");
+      a.jobs = static_cast<int>(whole_number(k, value(), 1, 256));
     } else if (k == "--shard") {
       const std::string v = value();
       const size_t slash = v.find('/');

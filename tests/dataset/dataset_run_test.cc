@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "png/png_gray.h"
+#include "tests/common/file_text.h"
 
 namespace {
 
@@ -65,22 +66,13 @@ class DatasetRun : public ::testing::Test {
   int run(const std::string& args, std::string* log = nullptr) {
     const fs::path out = dir_ / "tool.log";
     const int status = std::system((kTool + " " + args + " > " + out.string() + " 2>&1").c_str());
-    std::ifstream in(out);
-    std::stringstream s;
-    s << in.rdbuf();
-    if (log) *log = s.str();
+    if (log) *log = pcisim::test::file_text(out);
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   }
 
   static nlohmann::json read_json(const fs::path& p) {
     std::ifstream in(p);
     return nlohmann::json::parse(in);
-  }
-  static std::string read_bytes(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
   }
 
   fs::path dir_;
@@ -104,7 +96,7 @@ TEST_F(DatasetRun, TheSameSpecGivesTheSameBytesWhateverTheJobs) {
   ASSERT_EQ(a["samples"].size(), 3u);
   EXPECT_EQ(a["frames"], 6);
   EXPECT_EQ(a["samples"], b["samples"]);  // every sample's digest of every file
-  EXPECT_EQ(read_bytes(dir_ / "a" / "coco.json"), read_bytes(dir_ / "b" / "coco.json"));
+  EXPECT_EQ(pcisim::test::file_text(dir_ / "a" / "coco.json"), pcisim::test::file_text(dir_ / "b" / "coco.json"));
   // and the samples differ from each other (their draws, their noise)
   EXPECT_NE(a["samples"][0]["digest"], a["samples"][1]["digest"]);
   // the progress line has an ETA
@@ -227,7 +219,7 @@ TEST_F(DatasetRun, AKillMidSampleResumesToTheSameSet) {
   ASSERT_EQ(run("--spec " + spec + " --out " + out.string(), &log), 0) << log;
   EXPECT_NE(log.find("resuming"), std::string::npos) << log;
   EXPECT_EQ(read_json(out / "manifest.json")["samples"], read_json(dir_ / "whole" / "manifest.json")["samples"]);
-  EXPECT_EQ(read_bytes(out / "coco.json"), read_bytes(dir_ / "whole" / "coco.json"));
+  EXPECT_EQ(pcisim::test::file_text(out / "coco.json"), pcisim::test::file_text(dir_ / "whole" / "coco.json"));
   EXPECT_FALSE(fs::exists(out / "samples" / ".partial-0000001"));
   // a second resume has nothing left to do, and another spec is refused in this folder
   ASSERT_EQ(run("--spec " + spec + " --out " + out.string(), &log), 0) << log;
@@ -269,7 +261,7 @@ TEST_F(DatasetRun, AFullDiskIsReportedAndNothingHalfWrittenIsListed) {
                           "/samples/0*; do echo digest samples/$(basename $d) $(" + kTool + " --digest $d); done' > " +
                           (dir_ / "full.log").string() + " 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0);
-  const std::string log = read_bytes(dir_ / "full.log");
+  const std::string log = pcisim::test::file_text(dir_ / "full.log");
   EXPECT_NE(log.find("rc=4"), std::string::npos) << log;
   EXPECT_NE(log.find("disk is full"), std::string::npos) << log;
   EXPECT_EQ(log.find("\n.partial-"), std::string::npos) << "a partial sample was left (ls):\n" << log;

@@ -15,16 +15,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include "tests/common/file_text.h"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using pcisim::test::file_text;
 
 int sh(const std::string& cmd) {
   const int status = std::system(cmd.c_str());
@@ -45,11 +42,11 @@ TEST(DatasetSlurm, AThreeShardArrayEqualsOneLocalRun) {
   const int started =
       sh(src + "/scripts/slurm-local start " + cluster.string() + " > " + (dir / "env").string() + " 2> " + start_log);
   if (started == 3) {
-    const std::string why = slurp(start_log);
+    const std::string why = file_text(start_log);
     fs::remove_all(dir);
     GTEST_SKIP() << "Slurm cannot start here: " << why;
   }
-  ASSERT_EQ(started, 0) << slurp(start_log);
+  ASSERT_EQ(started, 0) << file_text(start_log);
 
   // the spec: a small scene, seven samples of two frames, varied anatomy, pose and dose
   std::ofstream(dir / "scene.json") << R"({"name": "slurm-test", "anatomy": {"phantom_seed": 1}, "effects": {
@@ -68,11 +65,11 @@ TEST(DatasetSlurm, AThreeShardArrayEqualsOneLocalRun) {
   const int local = sh(tool + " --spec " + spec + " --out " + (dir / "local").string() + " > " +
                        (dir / "local.log").string() + " 2>&1");
   sh(src + "/scripts/slurm-local stop " + cluster.string() + " > /dev/null 2>&1");
-  ASSERT_EQ(submitted, 0) << slurp(dir / "submit.log") << slurp(dir / "array" / "slurm" / "shard-0.log");
-  ASSERT_EQ(local, 0) << slurp(dir / "local.log");
+  ASSERT_EQ(submitted, 0) << file_text(dir / "submit.log") << file_text(dir / "array" / "slurm" / "shard-0.log");
+  ASSERT_EQ(local, 0) << file_text(dir / "local.log");
 
-  const auto merged = nlohmann::json::parse(slurp(dir / "array" / "manifest.json"));
-  const auto single = nlohmann::json::parse(slurp(dir / "local" / "manifest.json"));
+  const auto merged = nlohmann::json::parse(file_text(dir / "array" / "manifest.json"));
+  const auto single = nlohmann::json::parse(file_text(dir / "local" / "manifest.json"));
   // every sample exactly once, made by the shard it belongs to
   std::multiset<int64_t> seen;
   for (const auto& s : merged["samples"]) seen.insert(s["sample"].get<int64_t>());
@@ -81,7 +78,7 @@ TEST(DatasetSlurm, AThreeShardArrayEqualsOneLocalRun) {
     EXPECT_TRUE(fs::exists(dir / "array" / "shards" / ("shard-" + std::to_string(k) + "-of-3.jsonl")));
   // the same set: every file of every sample, and the merged COCO file
   EXPECT_EQ(merged["samples"], single["samples"]);
-  EXPECT_EQ(slurp(dir / "array" / "coco.json"), slurp(dir / "local" / "coco.json"));
+  EXPECT_EQ(file_text(dir / "array" / "coco.json"), file_text(dir / "local" / "coco.json"));
   fs::remove_all(dir);
 }
 

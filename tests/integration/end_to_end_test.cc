@@ -12,16 +12,13 @@
 #include <sstream>
 #include <sys/wait.h>
 
+#include "tests/common/file_text.h"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using pcisim::test::file_text;
 
 TEST(EndToEnd, ServerBridgeAndCaptureProduceLabelledFramesAndForces) {
   if (std::system("unshare -n true 2>/dev/null") != 0) GTEST_SKIP() << "network namespaces are not permitted here";
@@ -54,11 +51,11 @@ TEST(EndToEnd, ServerBridgeAndCaptureProduceLabelledFramesAndForces) {
       std::system((std::string(PCISIM_SOURCE_DIR) + "/scripts/in-private-netns bash -c \"" + body + "\"").c_str());
   ASSERT_TRUE(WIFEXITED(status));
   if (WEXITSTATUS(status) == 77) GTEST_SKIP() << "in-private-netns could not create a namespace";
-  ASSERT_EQ(WEXITSTATUS(status), 0) << slurp(dir / "server.txt") << slurp(dir / "bridge.txt");
+  ASSERT_EQ(WEXITSTATUS(status), 0) << file_text(dir / "server.txt") << file_text(dir / "bridge.txt");
 
   // forces came back to the bridge
   std::smatch m;
-  const std::string bridge = slurp(dir / "bridge.txt");
+  const std::string bridge = file_text(dir / "bridge.txt");
   ASSERT_TRUE(std::regex_search(bridge, m, std::regex("(\\d+) force commands received, (\\d+) bad"))) << bridge;
   EXPECT_GT(std::stoll(m[1]), 3000);
 
@@ -66,11 +63,11 @@ TEST(EndToEnd, ServerBridgeAndCaptureProduceLabelledFramesAndForces) {
   std::vector<fs::path> sidecars;
   for (const auto& e : fs::directory_iterator(dir / "frames" / "fluoro"))
     if (e.path().extension() == ".json") sidecars.push_back(e.path());
-  ASSERT_GT(sidecars.size(), 30u) << slurp(dir / "capture.txt");
+  ASSERT_GT(sidecars.size(), 30u) << file_text(dir / "capture.txt");
   int with_contrast = 0;
   for (const auto& path : sidecars) {
     EXPECT_TRUE(fs::exists(fs::path(path).replace_extension(".png"))) << path;
-    const auto j = nlohmann::json::parse(slurp(path));
+    const auto j = nlohmann::json::parse(file_text(path));
     const auto& det = j["detector"];
     auto vec = [](const nlohmann::json& a) {
       return Eigen::Vector3d(a[0].get<double>(), a[1].get<double>(), a[2].get<double>());
@@ -95,7 +92,7 @@ TEST(EndToEnd, ServerBridgeAndCaptureProduceLabelledFramesAndForces) {
     with_contrast += !j["labels"]["contrast_branches"].empty();
   }
   EXPECT_GT(with_contrast, 5) << "the injection shows in the labels";
-  const auto stats = nlohmann::json::parse(slurp(dir / "stats.json"));
+  const auto stats = nlohmann::json::parse(file_text(dir / "stats.json"));
   EXPECT_EQ(stats["xray"]["frames"].get<int64_t>(), static_cast<int64_t>(sidecars.size())) << "every frame captured";
 }
 

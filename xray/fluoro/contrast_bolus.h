@@ -19,6 +19,10 @@ namespace pcisim::xray {
 
 enum class CoronaryOstium { kLeft, kRight };
 
+// lumen segments below this opacity are not drawn (fluoroscopy.cc) nor labelled (the dataset's
+// vessel mask): their iodine is under a thousandth of a full lumen's
+inline constexpr double kMinDrawnOpacity = 1e-3;
+
 // contrast in the tree: the bolus enters at the ostium and travels downstream, then washes out
 struct ContrastInjection {
   double start_s = 0;       // when the injection began (simulation time)

@@ -105,7 +105,7 @@ void FluoroscopyRenderer::render(const FluoroInput& in, FluoroFrame& out) {
   const auto& segs = m.bolus.segments();
   const auto& op = m.bolus.segment_opacity();
   for (size_t i = 0; i < segs.size(); ++i) {
-    if (op[i] < 1e-3) continue;
+    if (op[i] < kMinDrawnOpacity) continue;
     add_cone_segment(g, segs[i].a_mm, segs[i].b_mm, segs[i].ra_mm, segs[i].rb_mm, m.spec.iodine_mu_per_mm * op[i],
                      &m.line);
   }

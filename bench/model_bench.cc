@@ -70,10 +70,9 @@ std::array<double, 3> epicardium_error_mm(const anatomy::PhantomCta& cta, const 
   std::vector<double> d;
   for (int i : anatomy::marked_surface_vertices(anatomy::template_heart_mesh(), anatomy::kEpicardium))
     d.push_back(anatomy::distance_to_painted_heart_mm(cta.facts, 1e3 * pose.to_case(vertices_m.col(i))));
-  std::sort(d.begin(), d.end());
   double mean = 0;
   for (double x : d) mean += x / double(d.size());
-  return {mean, d[static_cast<size_t>(0.95 * double(d.size() - 1))], d.back()};
+  return {mean, percentile(d, 0.95), percentile(d, 1.0)};
 }
 
 // resets the process's peak resident memory (Linux: "5" into clear_refs), so each run's is its own

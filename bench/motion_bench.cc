@@ -25,6 +25,7 @@
 #include "anatomy/heart/template_heart_surface.h"
 #include "bench/bench_options.h"
 #include "bench/bench_registry.h"
+#include "bench/bench_stats.h"
 #include "bench/machine_info.h"
 #include "modeling/motion/demons_motion.h"
 #include "modeling/motion/synthetic_cine.h"
@@ -41,10 +42,9 @@ struct Errors {
 Errors summarise(std::vector<double> e) {
   Errors s;
   if (e.empty()) return s;
-  std::sort(e.begin(), e.end());
   for (double v : e) s.mean += v / e.size();
-  s.p95 = e[static_cast<size_t>(0.95 * (e.size() - 1))];
-  s.worst = e.back();
+  s.p95 = percentile(e, 0.95);
+  s.worst = percentile(e, 1.0);
   return s;
 }
 

@@ -70,7 +70,8 @@ function(pcisim_library name dir)
 endfunction()
 
 # pcisim_test(NAME DIR [SERIAL] DEPS...): one gtest executable from every *_test.cc below DIR;
-# SERIAL runs its tests alone (timing-sensitive whole-server runs)
+# SERIAL runs its tests alone (timing-sensitive whole-server runs) and labels them "integration",
+# the others "unit"; tests/heavy.txt adds "heavy" or "timing" to single tests (tests/test_labels.cmake)
 function(pcisim_test name dir)
   cmake_parse_arguments(ARG "SERIAL" "" "" ${ARGN})
   file(GLOB_RECURSE srcs CONFIGURE_DEPENDS ${dir}/*_test.cc)
@@ -81,5 +82,10 @@ function(pcisim_test name dir)
   target_link_libraries(${name} PRIVATE ${ARG_UNPARSED_ARGUMENTS} GTest::gtest GTest::gtest_main)
   pcisim_include_root(${name} tests PRIVATE)  # helpers as "tests/common/..."
   target_compile_definitions(${name} PRIVATE PCISIM_SOURCE_DIR="${CMAKE_SOURCE_DIR}" PCISIM_BINARY_DIR="${CMAKE_BINARY_DIR}")
-  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 300 RUN_SERIAL ${ARG_SERIAL})
+  set(label unit)
+  if(ARG_SERIAL)
+    set(label integration)
+  endif()
+  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 300 RUN_SERIAL ${ARG_SERIAL} LABELS ${label})
+  set_property(GLOBAL APPEND PROPERTY PCISIM_TEST_TARGETS "${name}:${label}")
 endfunction()

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "png/png_gray.h"
+#include "realtime/percentile.h"
 
 namespace pcisim::anatomy {
 namespace {
@@ -163,10 +164,8 @@ void write_case_overview(const Case& c, const std::string& png_path) {
   std::vector<uint8_t> image(static_cast<size_t>(width) * height, 0);
   int x0 = 0;
   for (const auto& view : views) {
-    std::vector<double> sorted = view.density;
-    const size_t q = static_cast<size_t>(0.99 * (sorted.size() - 1));
-    std::nth_element(sorted.begin(), sorted.begin() + q, sorted.end());
-    const double top = sorted[q] > 0 ? sorted[q] : 1.0;
+    const double p99 = realtime::percentile(view.density, 0.99);
+    const double top = p99 > 0 ? p99 : 1.0;
     for (int r = 0; r < view.height; ++r)
       for (int col = 0; col < view.width; ++col) {
         const size_t n = static_cast<size_t>(r) * view.width + col;

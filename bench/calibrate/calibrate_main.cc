@@ -19,18 +19,9 @@
 #include "anatomy/organ/kidney_phantom.h"
 #include "bench/kidney_tetgen_mesh.h"
 #include "physics/soft_tissue/calibration.h"
+#include "realtime/percentile.h"
 
 namespace st = pcisim::physics::soft_tissue;
-
-namespace {
-
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5))];
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -134,7 +125,7 @@ int main(int argc, char** argv) {
       fmt::print(
           "  radius {} mm, compliance {:.0e}: mean fiducial error {:.2f} mm over the stages ({:.1f} s, step "
           "p50 {:.1f} ms)\n",
-          r_mm, c, run.mean_over_stages_m * 1e3, s, percentile(run.step_ms, 0.5));
+          r_mm, c, run.mean_over_stages_m * 1e3, s, pcisim::realtime::percentile(run.step_ms, 0.5));
       nlohmann::json stages = nlohmann::json::array();
       for (const auto& e : run.stages)
         stages.push_back({{"travel_mm", e.depth_m * 1e3},
@@ -144,8 +135,8 @@ int main(int argc, char** argv) {
                           {"reference_displacement_mm", e.mean_displacement_m * 1e3}});
       curve.push_back({{"compliance_s2", c},
                        {"mean_over_stages_mm", run.mean_over_stages_m * 1e3},
-                       {"step_ms_p50", percentile(run.step_ms, 0.5)},
-                       {"step_ms_p99", percentile(run.step_ms, 0.99)},
+                       {"step_ms_p50", pcisim::realtime::percentile(run.step_ms, 0.5)},
+                       {"step_ms_p99", pcisim::realtime::percentile(run.step_ms, 0.99)},
                        {"stages", stages}});
       if (run.mean_over_stages_m < b.run.mean_over_stages_m) b.compliance = c, b.run = run;
     }
@@ -200,8 +191,8 @@ int main(int argc, char** argv) {
   }
   md += "\n**PBD step time at the optimum (ms, this machine)**\n\n| radius (mm) | p50 | p99 |\n|---|---|---|\n";
   for (const Best& b : best)
-    md += fmt::format("| {} | {:.1f} | {:.1f} |\n", b.radius_mm, percentile(b.run.step_ms, 0.5),
-                      percentile(b.run.step_ms, 0.99));
+    md += fmt::format("| {} | {:.1f} | {:.1f} |\n", b.radius_mm, pcisim::realtime::percentile(b.run.step_ms, 0.5),
+                      pcisim::realtime::percentile(b.run.step_ms, 0.99));
   std::ofstream(out + ".md") << md;
   fmt::print("wrote {}.json and {}.md\n", out, out);
   return 0;

@@ -5,6 +5,9 @@
 #include <cmath>
 #include <queue>
 #include <limits>
+#include <span>
+
+#include "realtime/percentile.h"
 
 namespace pcisim::modeling {
 namespace {
@@ -203,14 +206,6 @@ BallLook look_around(const ImageGrid& g, const Vector3d& p_ijk, double ball_mm, 
   return out;
 }
 
-// the q-quantile of v (reordered); 0 when empty
-float percentile(std::vector<float>& v, double q) {
-  if (v.empty()) return 0;
-  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * double(v.size())));
-  std::nth_element(v.begin(), v.begin() + k, v.end());
-  return v[k];
-}
-
 // marks the voxels within radius_mm of the segment a-b (physical mm); returns how many were new
 int64_t fill_cylinder(Mask* mask, const Vector3d& a_mm, const Vector3d& b_mm, double radius_mm) {
   const ImageGrid& g = mask->grid;
@@ -294,7 +289,9 @@ std::vector<Bridge> bridge_gaps(const anatomy::Volume& ct, double lower_hu, doub
             if (g.inside(i, j, k) && region->v[g.index(i, j, k)] == kRegion)
               end_hu.push_back(local_mean(g.index(i, j, k)));
       for (int64_t n : piece.voxels) piece_hu.push_back(local_mean(n));
-      const double piece_p90 = percentile(piece_hu, 0.9), end_p90 = percentile(end_hu, 0.9);
+      // NaN when the end ball is empty: then not the same contrast
+      const double piece_p90 = realtime::percentile_in_place(std::span<float>(piece_hu), 0.9);
+      const double end_p90 = realtime::percentile_in_place(std::span<float>(end_hu), 0.9);
       const bool same_contrast =
           piece_p90 >= o.min_contrast_ratio * end_p90 && piece_p90 <= end_p90 / o.min_contrast_ratio;
       if (!region_ends || !piece_starts || !same_contrast) {

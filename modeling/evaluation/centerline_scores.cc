@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "modeling/evaluation/closest_point_bvh.h"
+#include "realtime/percentile.h"
 
 namespace pcisim::modeling {
 
@@ -234,13 +235,6 @@ struct Tally {
   static double ratio(int a, int b) { return b > 0 ? static_cast<double>(a) / b : kNan; }
 };
 
-double percentile_nearest_rank(std::vector<double> v, double q) {
-  if (v.empty()) return kNan;
-  std::sort(v.begin(), v.end());
-  const size_t k = static_cast<size_t>(std::ceil(q * static_cast<double>(v.size())));
-  return v[std::clamp<size_t>(k, 1, v.size()) - 1];
-}
-
 // an extracted point scored against the reference
 struct ExtractedPoint {
   Location at;
@@ -309,7 +303,7 @@ CenterlineScores score_centerlines(const VesselTree& reference, const VesselTree
   double sum = 0;
   for (double e : radius_err_mm) sum += e;
   out.radius_error_mean_mm = radius_err_mm.empty() ? kNan : sum / radius_err_mm.size();
-  out.radius_error_p95_mm = percentile_nearest_rank(std::move(radius_err_mm), 0.95);
+  out.radius_error_p95_mm = realtime::percentile(std::move(radius_err_mm), 0.95);
 
   // per vessel: its path's points from the ostium, and the extracted points nearest to it
   double of_sum = 0;

@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "anatomy/heart/template_heart_surface.h"
+#include "realtime/percentile.h"
 
 namespace pcisim::modeling {
 namespace {
@@ -20,13 +21,6 @@ using Eigen::Matrix3Xd;
 using Eigen::Vector3d;
 using SparseMatrix = Eigen::SparseMatrix<double>;
 using Triplet = Eigen::Triplet<double>;
-
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * double(v.size() - 1) + 0.5));
-  std::nth_element(v.begin(), v.begin() + k, v.end());
-  return v[k];
-}
 
 double mean(const std::vector<double>& v) {
   double s = 0;
@@ -128,7 +122,7 @@ Targets find_targets(const FloatImage& field, const Epicardium& e, const Matrix3
     near.clear();
     for (int a : two_rings)
       if (!std::isnan(raw[a])) near.push_back(raw[a]);
-    if (near.size() >= 3 && std::abs(raw[i] - percentile(near, 0.5)) > o.outlier_mm) {
+    if (near.size() >= 3 && std::abs(raw[i] - realtime::percentile(near, 0.5)) > o.outlier_mm) {
       r.t_mm[i] = nan;
       ++r.outliers;
       continue;
@@ -327,7 +321,7 @@ HeartElasticFit fit_heart_elastic(const anatomy::Volume& ct, const anatomy::Vess
     for (double x : t.t_mm)
       if (!std::isnan(x)) d.push_back(std::abs(x));
     *mean_mm = mean(d);
-    *p95_mm = percentile(d, 0.95);
+    *p95_mm = realtime::percentile(d, 0.95);
   };
 
   Matrix3Xd x = x0;

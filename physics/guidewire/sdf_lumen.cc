@@ -5,7 +5,9 @@
 namespace pcisim::physics {
 
 SdfLumen::SdfLumen(const anatomy::VesselTree& tree, double spacing_m)
-    : sdf_(build_lumen_sdf(tree, spacing_m)), far_(tree) {
+    : SdfLumen(tree, build_lumen_sdf(tree, spacing_m)) {}
+
+SdfLumen::SdfLumen(const anatomy::VesselTree& tree, SignedDistanceField field) : sdf_(std::move(field)), far_(tree) {
   // the last cell before the band's clamp still has a true gradient
   trust_m_ = sdf_.band_m() - sdf_.spacing_m();
 }

@@ -5,6 +5,7 @@
 // off the grid, are answered by the analytic capsule lumen, which points back to the nearest
 // vessel from anywhere.
 #include <memory>
+#include <utility>
 
 #include "physics/guidewire/lumen_query.h"
 #include "physics/guidewire/tube_lumen.h"
@@ -18,6 +19,8 @@ class SdfLumen final : public LumenQuery {
   // builds the field at spacing_m (see build_lumen_sdf); throws std::invalid_argument on a
   // spacing the grid cannot hold
   SdfLumen(const anatomy::VesselTree& tree, double spacing_m);
+  // around a field already built for this tree (build_lumen_sdf; tests share one between worlds)
+  SdfLumen(const anatomy::VesselTree& tree, SignedDistanceField field);
   WallSample sample(const Eigen::Vector3d& p_m) const override;
 
   const SignedDistanceField& field() const { return sdf_; }

@@ -23,15 +23,15 @@ namespace fs = std::filesystem;
 // only (haptics sees the plain local force model, not physics)
 const std::map<std::string, std::vector<std::string>>& allowed() {
   static const std::map<std::string, std::vector<std::string>> rules = {
-      {"anatomy", {"json", "png"}},
+      {"anatomy", {"json", "png", "realtime/percentile.h"}},
       {"realtime", {}},
       {"json", {}},
       {"png", {}},
       {"physics", {"anatomy"}},
       {"haptics", {"physics/local_force_model.h"}},
-      {"xray", {"anatomy", "png"}},
-      {"ultrasound", {"anatomy", "png"}},
-      {"modeling", {"anatomy", "json", "png"}},
+      {"xray", {"anatomy", "png", "realtime/percentile.h"}},
+      {"ultrasound", {"anatomy", "png", "realtime/percentile.h"}},
+      {"modeling", {"anatomy", "json", "png", "realtime/percentile.h"}},
       {"protocol", {"pcisim_lcm"}},
       {"server",
        {"anatomy", "physics", "haptics", "xray", "ultrasound", "protocol", "pcisim_lcm", "realtime", "json", "png"}},
@@ -50,6 +50,10 @@ const std::map<std::string, std::vector<std::string>>& allowed() {
 const std::map<std::string, std::set<std::string>>& header_libraries() {
   static const std::map<std::string, std::set<std::string>> libs = {
       {"dataset", {"pcisim_scene", "pcisim_clients_lib"}},
+      // the one percentile (realtime/percentile.h) for the layers that take quantiles of samples
+      {"anatomy", {"pcisim_realtime"}},
+      {"xray", {"pcisim_realtime"}},
+      {"modeling", {"pcisim_realtime"}},
   };
   return libs;
 }

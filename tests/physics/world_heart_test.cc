@@ -15,6 +15,7 @@
 #include "physics/sdf/sdf_kernels.h"
 #include "physics/world.h"
 #include "tests/common/counting_new.h"
+#include "tests/common/shared_lumen.h"
 
 namespace pcisim::physics {
 namespace {
@@ -63,7 +64,7 @@ double outside_lumen(const anatomy::VesselTree& rest, const VesselSkin& skin, co
 }
 
 TEST(WorldHeart, BuildsTheHeartEffectsFirstAndOnlyWhenListed) {
-  World w(beating_spec());
+  World w = test::make_world(beating_spec());
   std::vector<std::string> names;
   for (const auto& c : w.effect_costs()) names.push_back(c.name);
   ASSERT_GE(names.size(), 2u);
@@ -74,7 +75,7 @@ TEST(WorldHeart, BuildsTheHeartEffectsFirstAndOnlyWhenListed) {
   WorldSpec still = beating_spec();
   still.heart_beat.reset();
   still.vessel_motion.reset();
-  World s(still);
+  World s = test::make_world(still);
   EXPECT_EQ(s.heart_state(), nullptr);
   EXPECT_EQ(s.vessel_skin(), nullptr);
   WorldSnapshot snap;
@@ -85,7 +86,7 @@ TEST(WorldHeart, BuildsTheHeartEffectsFirstAndOnlyWhenListed) {
   WorldSpec orphan;
   orphan.vessel_motion = VesselMotionParams{};
   try {
-    World bad(orphan);
+    World bad = test::make_world(orphan);
     FAIL();
   } catch (const std::invalid_argument& e) {
     EXPECT_STREQ(e.what(), "vessel_motion: needs heart_beat");
@@ -101,7 +102,7 @@ TEST_P(WorldHeartSeeds, TreeStaysOnTheEpicardiumOverAFullCycle) {
   spec.anatomy.seed = GetParam();
   spec.heart_beat = HeartBeatParams{};
   spec.vessel_motion = VesselMotionParams{};
-  World w(spec);  // the heart and the moving tree alone
+  World w = test::make_world(spec);  // the heart and the moving tree alone
   const VesselSkin& skin = *w.vessel_skin();
   const BeatingHeart& heart = *w.heart_state();
   const int lad = w.vessel_tree().find("LAD");
@@ -137,7 +138,7 @@ TEST_P(WorldHeartSeeds, HeartDoesNotSwallowTheTree) {
   spec.anatomy.seed = GetParam();
   spec.heart_beat = HeartBeatParams{};
   spec.vessel_motion = VesselMotionParams{};
-  World w(spec);
+  World w = test::make_world(spec);
   const BeatingHeart& heart = *w.heart_state();
   const auto& x = heart.rest_positions_m();
   // radial clearance of every fully attached coronary point above the heart's epicardium at rest
@@ -176,7 +177,7 @@ TEST_P(WorldHeartSeeds, HeartDoesNotSwallowTheTree) {
 INSTANTIATE_TEST_SUITE_P(Seeds, WorldHeartSeeds, ::testing::Values(1u, 3u));
 
 TEST(WorldHeart, WireStaysInsideTheMovingLumen) {
-  World w(beating_spec());
+  World w = test::make_world(beating_spec());
   WorldSnapshot snap;
   InstrumentInput in;
   double worst = -1.0;
@@ -203,7 +204,7 @@ TEST(WorldHeart, WireStaysInsideTheMovingLumen) {
 
 TEST(WorldHeart, SnapshotCarriesTheWireWithItsVessel) {
   // hold the wire still in the LAD: its world tip moves with the beating heart
-  World w(beating_spec());
+  World w = test::make_world(beating_spec());
   WorldSnapshot snap;
   InstrumentInput in;
   in.insertion_m = 0.02;
@@ -235,7 +236,7 @@ HeldRod run_held_rod(BeatCoupling coupling) {
   spec.guidewire->model = GuidewireModel::kRod;
   spec.guidewire->segment_count = 300;
   spec.guidewire->beat_coupling = coupling;
-  World w(spec);
+  World w = test::make_world(spec);
   WorldSnapshot snap;
   InstrumentInput in;
   HeldRod r;
@@ -317,11 +318,11 @@ TEST(WorldHeart, BloodDragMovesAnUnconstrainedWireDownstream) {
 }
 
 TEST(WorldHeart, BeatingStepAllocatesNothing) {
-  World w(beating_spec());
+  World w = test::make_world(beating_spec());
   WorldSpec rod_spec = beating_spec();
   rod_spec.guidewire->model = GuidewireModel::kRod;
   rod_spec.guidewire->beat_coupling = BeatCoupling::kContact;
-  World rod_world(rod_spec);
+  World rod_world = test::make_world(rod_spec);
   WorldSnapshot rod_snap;
   rod_world.step({});
   rod_world.write_snapshot(rod_snap);

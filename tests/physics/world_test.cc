@@ -11,6 +11,7 @@
 #include "anatomy/phantom/coronary_phantom.h"
 #include "anatomy/vessel/vessel_tree.h"
 #include "tests/common/counting_new.h"
+#include "tests/common/shared_lumen.h"
 
 namespace pcisim::physics {
 namespace {
@@ -32,7 +33,7 @@ std::vector<std::string> cost_names(const World& w) {
 
 std::string error_of(const WorldSpec& s) {
   try {
-    World w(s);
+    World w(s);  // the world's own field: its errors name the spacing
   } catch (const std::invalid_argument& e) {
     return e.what();
   }
@@ -53,19 +54,19 @@ TEST(World, EmptySceneBuildsNoEffect) {
 TEST(World, BuildsOnlyListedEffectsInStepOrder) {
   WorldSpec s;
   s.guidewire = GuidewireParams{};
-  EXPECT_EQ(cost_names(World(s)), (std::vector<std::string>{"guidewire"}));
+  EXPECT_EQ(cost_names(test::make_world(s)), (std::vector<std::string>{"guidewire"}));
   s.vessel_contact = VesselContactParams{};
-  EXPECT_EQ(cost_names(World(s)), (std::vector<std::string>{"guidewire", "vessel_contact"}));
+  EXPECT_EQ(cost_names(test::make_world(s)), (std::vector<std::string>{"guidewire", "vessel_contact"}));
   s.blood_flow = BloodFlowParams{};
-  EXPECT_EQ(cost_names(World(s)), (std::vector<std::string>{"guidewire", "blood_flow", "vessel_contact"}));
-  EXPECT_EQ(cost_names(World(full_spec())),
+  EXPECT_EQ(cost_names(test::make_world(s)), (std::vector<std::string>{"guidewire", "blood_flow", "vessel_contact"}));
+  EXPECT_EQ(cost_names(test::make_world(full_spec())),
             (std::vector<std::string>{"guidewire", "blood_flow", "vessel_contact", "friction"}));
 }
 
 TEST(World, UnlistedEffectsAreNeverConstructed) {
   WorldSpec s;
   s.guidewire = GuidewireParams{};
-  World wire_only(s);
+  World wire_only = test::make_world(s);
   EXPECT_NE(wire_only.guidewire_state(), nullptr);
   EXPECT_EQ(wire_only.contact_state(), nullptr);
   EXPECT_EQ(wire_only.lumen(), nullptr);  // no SDF built either
@@ -73,7 +74,7 @@ TEST(World, UnlistedEffectsAreNeverConstructed) {
   World empty(WorldSpec{});
   EXPECT_EQ(empty.guidewire_state(), nullptr);
   EXPECT_TRUE(empty.vessel_tree().branches.empty());  // not even the anatomy
-  World full(full_spec());
+  World full(full_spec());  // builds its own field: the one test here that does (the rest share one)
   EXPECT_NE(full.contact_state(), nullptr);
   EXPECT_NE(full.lumen(), nullptr);
   EXPECT_NE(full.friction_state(), nullptr);
@@ -108,7 +109,7 @@ TEST(World, BadFieldsAreNamed) {
 }
 
 TEST(World, StepAllocatesNothing) {
-  World w(full_spec());
+  World w = test::make_world(full_spec());
   WorldSnapshot snap;
   InstrumentInput in;
   w.step(in);
@@ -125,7 +126,7 @@ TEST(World, StepAllocatesNothing) {
 }
 
 TEST(World, WireComesOutOfTheCatheterAndIsTimed) {
-  World w(full_spec());
+  World w = test::make_world(full_spec());
   InstrumentInput in;
   for (int k = 0; k <= 30; ++k) {
     in.insertion_m = 0.001 * k;
@@ -148,7 +149,7 @@ TEST(World, WireComesOutOfTheCatheterAndIsTimed) {
 }
 
 TEST(World, NonFiniteInputIsRejectedAndCounted) {
-  World w(full_spec());
+  World w = test::make_world(full_spec());
   InstrumentInput in;
   in.insertion_m = 0.01;
   w.step(in);

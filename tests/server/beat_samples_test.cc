@@ -15,14 +15,10 @@
 #include "server/scene/scene.h"
 #include "xray/fluoro/case_background.h"
 #include "xray/fluoro/fluoroscopy.h"
+#include "realtime/percentile.h"
 
 namespace pcisim::server {
 namespace {
-
-double quantile(std::vector<double> v, double q) {
-  std::sort(v.begin(), v.end());
-  return v[static_cast<size_t>(q * (v.size() - 1))];
-}
 
 struct Fixture {
   Scene scene = default_scene();
@@ -67,12 +63,12 @@ TEST(BeatingBackgroundInTheScene, TheWarpCarriesTheCenterlineWhereTheSkinDoes) {
   }
   ASSERT_GT(miss_mm.size(), 1000u);
   std::printf("centerline motion p95 %.2f mm; warp miss median %.3f p95 %.3f max %.3f mm (%zu point-bins)\n",
-              quantile(motion_mm, 0.95), quantile(miss_mm, 0.5), quantile(miss_mm, 0.95), quantile(miss_mm, 1.0),
-              miss_mm.size());
+              realtime::percentile(motion_mm, 0.95), realtime::percentile(miss_mm, 0.5),
+              realtime::percentile(miss_mm, 0.95), realtime::percentile(miss_mm, 1.0), miss_mm.size());
   // the tree moves by several mm; the warp lands within a fraction of a lumen radius (>= 1 mm)
-  EXPECT_GT(quantile(motion_mm, 0.95), 4.0);
-  EXPECT_LT(quantile(miss_mm, 0.5), 0.3) << "median miss, mm";
-  EXPECT_LT(quantile(miss_mm, 0.95), 0.8) << "p95 miss, mm";
+  EXPECT_GT(realtime::percentile(motion_mm, 0.95), 4.0);
+  EXPECT_LT(realtime::percentile(miss_mm, 0.5), 0.3) << "median miss, mm";
+  EXPECT_LT(realtime::percentile(miss_mm, 0.95), 0.8) << "p95 miss, mm";
 }
 
 TEST(BeatingBackgroundInTheScene, FramesAtFourPhasesDifferOverTheHeartAndNotAtTheSpine) {

@@ -16,6 +16,7 @@
 
 #include "anatomy/mesh/kuhn_tetrahedra.h"
 #include "anatomy/organ/kidney_phantom.h"
+#include "realtime/percentile.h"
 #include "ultrasound/render/bmode_renderer.h"
 
 namespace {
@@ -128,10 +129,9 @@ int run(int argc, char** argv) {
     press(mesh, push_max / 2.0, kidney.spec.semi_axes_mm.y());
     const auto& image = renderer.render(pose, 7, &mesh);
     pcisim::ultrasound::write_png(out + "/kidney_" + name + ".png", image);
-    std::sort(ms.begin(), ms.end());
-    const auto at = [&](double q) { return ms[std::min(ms.size() - 1, static_cast<size_t>(q * ms.size()))]; };
+    const auto at = [&](double q) { return pcisim::realtime::percentile(ms, q); };
     std::printf("%s %dx%d, %zu tets, %d frames: median %.2f ms, p95 %.2f ms, p99 %.2f ms\n", name, settings.width_px,
-                settings.height_px, mesh.tets.size(), frames, ms[ms.size() / 2], at(0.95), at(0.99));
+                settings.height_px, mesh.tets.size(), frames, at(0.5), at(0.95), at(0.99));
   }
   return 0;
 }

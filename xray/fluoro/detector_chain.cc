@@ -1,5 +1,9 @@
 #include "xray/fluoro/detector_chain.h"
 
+#include <span>
+
+#include "realtime/percentile.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -159,12 +163,8 @@ void display_window_for(const Image& background, std::vector<float>* scratch, do
     *hi = 1;
     return;
   }
-  auto pct = [scratch](double q) {
-    const size_t k = std::min(scratch->size() - 1, static_cast<size_t>(q * (scratch->size() - 1)));
-    std::nth_element(scratch->begin(), scratch->begin() + k, scratch->end());
-    return static_cast<double>((*scratch)[k]);
-  };
-  const double a = pct(0.01), b = pct(0.995);
+  const double a = realtime::percentile_in_place(std::span<float>(*scratch), 0.01);
+  const double b = realtime::percentile_in_place(std::span<float>(*scratch), 0.995);
   *lo = a;
   *hi = b + 0.15 * std::max(b - a, 1e-6);
 }

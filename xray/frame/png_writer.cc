@@ -7,6 +7,7 @@
 
 #ifdef PCISIM_XRAY_HAVE_PNG
 #include "png/png_gray.h"
+#include "realtime/percentile.h"
 #endif
 
 namespace pcisim::xray {
@@ -32,12 +33,8 @@ bool write_png_preview(const Image& image, const std::string& path, std::string*
     *error = path + ": empty image";
     return false;
   }
-  auto percentile = [&sorted](double q) {
-    const size_t k = std::min(sorted.size() - 1, static_cast<size_t>(q * (sorted.size() - 1)));
-    std::nth_element(sorted.begin(), sorted.begin() + k, sorted.end());
-    return sorted[k];
-  };
-  const float lo = percentile(0.005), hi = percentile(0.995);
+  const float lo = realtime::percentile_in_place(std::span<float>(sorted), 0.005);
+  const float hi = realtime::percentile_in_place(std::span<float>(sorted), 0.995);
   const float scale = hi > lo ? 1.f / (hi - lo) : 0.f;
   std::vector<uint8_t> grey(image.pixels.size());
   for (size_t n = 0; n < grey.size(); ++n) {

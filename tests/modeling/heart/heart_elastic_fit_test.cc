@@ -16,6 +16,7 @@
 #include "anatomy/phantom/phantom_cta.h"
 #include "anatomy/phantom/thorax_phantom.h"
 #include "modeling/heart/heart_placement.h"
+#include "realtime/percentile.h"
 
 namespace pcisim::modeling {
 namespace {
@@ -42,11 +43,10 @@ SurfaceError against_truth(const anatomy::PhantomCta& cta, const anatomy::HeartP
   std::vector<double> d;
   for (int i : anatomy::marked_surface_vertices(anatomy::template_heart_mesh(), anatomy::kEpicardium))
     d.push_back(anatomy::distance_to_painted_heart_mm(cta.facts, 1e3 * pose.to_case(v_m.col(i))));
-  std::sort(d.begin(), d.end());
   SurfaceError e;
   for (double x : d) e.mean_mm += x / double(d.size());
-  e.p95_mm = d[static_cast<size_t>(0.95 * double(d.size() - 1))];
-  e.max_mm = d.back();
+  e.p95_mm = realtime::percentile(d, 0.95);
+  e.max_mm = realtime::percentile(d, 1.0);
   return e;
 }
 

@@ -6,6 +6,7 @@
 
 #include "anatomy/vessel/vessel_tree.h"
 #include "tests/physics/guidewire/wire_test_support.h"
+#include "tests/common/shared_lumen.h"
 
 namespace pcisim::physics {
 namespace {
@@ -31,7 +32,7 @@ TEST(BranchSelection, TurningTheTipSendsTheWireIntoTheLadOrTheLcx) {
     const char* branch;
   };
   for (const Case c : {Case{90.0, "LAD"}, Case{-90.0, "LCx"}}) {
-    World world(test::default_scene());
+    World world = test::make_world(test::default_scene());
     test::BranchScript script;
     script.turn_deg = c.turn_deg;
     WorldSnapshot snap;
@@ -56,7 +57,7 @@ TEST(BranchSelection, TheChoiceHoldsOverARangeOfTurns) {
   // the LCx
   for (const auto& [turn, branch] :
        {std::pair{45.0, "LAD"}, std::pair{120.0, "LAD"}, std::pair{-45.0, "LCx"}, std::pair{-135.0, "LCx"}}) {
-    World world(test::default_scene());
+    World world = test::make_world(test::default_scene());
     test::BranchScript script;
     script.turn_deg = turn;
     WorldSnapshot snap;

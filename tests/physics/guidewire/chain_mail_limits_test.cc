@@ -13,6 +13,7 @@
 #include "physics/guidewire/chain_mail_wire.h"
 #include "physics/guidewire/link_spec.h"
 #include "tests/physics/guidewire/wire_test_support.h"
+#include "tests/common/shared_lumen.h"
 
 namespace pcisim::physics {
 namespace {
@@ -83,7 +84,7 @@ TEST(ChainMailLimits, TheLinksUseTheDerivedLimitsAndGivenOnesStayAsSet) {
 TEST(ChainMailLimits, ANitinolCoresLimitsStillFollowTheTraineeIntoTheLad) {
   WorldSpec spec = test::default_scene();
   spec.guidewire->chain_mail_limits = ChainMailLimits::kNitinolCore;
-  World world(spec);
+  World world = test::make_world(spec);
   test::BranchScript script;
   for (double t = 0.0; t <= script.end_s(); t += spec.step_s) world.step(script.at(t));
   WorldSnapshot snap;

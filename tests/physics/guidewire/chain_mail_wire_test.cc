@@ -9,6 +9,7 @@
 
 #include "anatomy/phantom/coronary_phantom.h"
 #include "tests/physics/guidewire/wire_test_support.h"
+#include "tests/common/shared_lumen.h"
 
 namespace pcisim::physics {
 namespace {
@@ -53,7 +54,7 @@ TEST(ChainMailWire, LimitsHoldAfterEveryStepOfAFreeWire) {
 TEST(ChainMailWire, LimitsHoldAfterEveryStepInTheCoronaryTree) {
   // the whole default scene: contact, friction and blood flow all move nodes between sweeps
   for (double turn : {90.0, 270.0}) {
-    World world(test::default_scene());
+    World world = test::make_world(test::default_scene());
     BranchScript script;
     script.turn_deg = turn;
     const double dt = test::default_scene().step_s;

@@ -9,6 +9,7 @@
 
 #include "physics/guidewire/wall_contact.h"
 #include "tests/physics/guidewire/wire_test_support.h"
+#include "tests/common/shared_lumen.h"
 
 namespace pcisim::physics {
 namespace {
@@ -101,7 +102,7 @@ TEST(CoulombFriction, NeverPushesForwardAndStaysInsideTheCoulombConeInTheCoronar
   // cone or at most mu_k |dp_n| long
   int checked = 0;
   for (double turn : {90.0, -90.0}) {
-    World world(test::default_scene());
+    World world = test::make_world(test::default_scene());
     test::BranchScript script;
     script.turn_deg = turn;
     const FrictionParams fp = world.friction_state()->params();

@@ -13,6 +13,7 @@
 #include "physics/guidewire/wall_contact.h"
 #include "anatomy/phantom/coronary_phantom.h"
 #include "tests/physics/guidewire/wire_test_support.h"
+#include "tests/common/shared_lumen.h"
 
 namespace pcisim::physics {
 namespace {
@@ -65,7 +66,7 @@ bool in_subtree(const anatomy::VesselTree& tree, int branch, const char* root) {
 TEST(GuidewireHardCases, PushingOneHundredMillimetresIntoADeadEnd) {
   // into the LCx, then 100 mm more over 10 s: the LCx (80 mm) and its marginals end well
   // before that, so the wire is driven into dead ends and has to buckle or be refused
-  World world(default_scene());
+  World world = test::make_world(default_scene());
   BranchScript script;
   script.turn_deg = -90.0;
   const double dt = default_scene().step_s;
@@ -84,7 +85,7 @@ TEST(GuidewireHardCases, PushingOneHundredMillimetresIntoADeadEnd) {
 }
 
 TEST(GuidewireHardCases, FullPullBackAndReinsertion) {
-  World world(default_scene());
+  World world = test::make_world(default_scene());
   BranchScript script;
   const double dt = default_scene().step_s;
   for (double t = 0.0; t <= script.end_s(); t += dt) world.step(script.at(t));
@@ -112,7 +113,7 @@ TEST(GuidewireHardCases, FullPullBackAndReinsertion) {
 }
 
 TEST(GuidewireHardCases, OneHundredTurnsOfRotation) {
-  World world(default_scene());
+  World world = test::make_world(default_scene());
   BranchScript script;
   const double dt = default_scene().step_s;
   for (double t = 0.0; t <= script.end_s(); t += dt) world.step(script.at(t));
@@ -136,7 +137,7 @@ TEST(GuidewireHardCases, OneHundredTurnsOfRotation) {
 TEST(GuidewireHardCases, TimeStepTenTimesLonger) {
   WorldSpec spec = default_scene();
   spec.step_s *= 10.0;  // 3 Hz: ten times the feed and turn per step
-  World world(spec);
+  World world = test::make_world(spec);
   BranchScript script;
   for (double t = 0.0; t <= script.end_s(); t += spec.step_s) {
     world.step(script.at(t));
@@ -150,7 +151,7 @@ TEST(GuidewireHardCases, TimeStepTenTimesLonger) {
 }
 
 TEST(GuidewireHardCases, NonFiniteInstrumentInputIsRejectedAndThePreviousSampleKept) {
-  World world(default_scene());
+  World world = test::make_world(default_scene());
   BranchScript script;
   const double dt = default_scene().step_s;
   double t = 0.0;

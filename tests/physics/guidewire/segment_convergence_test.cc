@@ -10,6 +10,7 @@
 
 #include "anatomy/vessel/vessel_tree.h"
 #include "tests/physics/guidewire/wire_test_support.h"
+#include "tests/common/shared_lumen.h"
 
 namespace pcisim::physics {
 namespace {
@@ -25,7 +26,7 @@ struct Session {
 Session run_session(int segments, double turn_deg) {
   WorldSpec spec = test::default_scene();
   spec.guidewire->segment_count = segments;
-  World world(spec);
+  World world = test::make_world(spec);
   test::BranchScript script;
   script.turn_deg = turn_deg;
   Session s;

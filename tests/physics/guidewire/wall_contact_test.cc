@@ -13,6 +13,7 @@
 #include "physics/guidewire/tube_lumen.h"
 #include "anatomy/phantom/coronary_phantom.h"
 #include "tests/physics/guidewire/wire_test_support.h"
+#include "tests/common/shared_lumen.h"
 
 namespace pcisim::physics {
 namespace {
@@ -71,7 +72,7 @@ TEST(WallContact, NoFreeNodeEndsAStepOutsideTheLumenByMoreThanTheMargin) {
   // the scripted sessions into the LAD and the LCx, checked after every step against the
   // world's own contact geometry (the SDF of the lofted lumen)
   for (double turn : {90.0, -90.0}) {
-    World world(test::default_scene());
+    World world = test::make_world(test::default_scene());
     test::BranchScript script;
     script.turn_deg = turn;
     const double eps = world.contact_state()->params().wall_margin_m;

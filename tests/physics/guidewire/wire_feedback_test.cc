@@ -8,12 +8,13 @@
 #include <cmath>
 
 #include "tests/physics/guidewire/wire_test_support.h"
+#include "tests/common/shared_lumen.h"
 
 namespace pcisim::physics {
 namespace {
 
 TEST(WireFeedback, FrictionResistsPushAndPullAndTheModelLivesTwoPeriods) {
-  World world(test::default_scene());
+  World world = test::make_world(test::default_scene());
   test::BranchScript script;
   const double dt = test::default_scene().step_s;
   double push_sum = 0.0, pull_sum = 0.0;
@@ -46,7 +47,7 @@ TEST(WireFeedback, FrictionResistsPushAndPullAndTheModelLivesTwoPeriods) {
 }
 
 TEST(WireFeedback, TorqueResistsTheTurnWhileTheTipTouches) {
-  World world(test::default_scene());
+  World world = test::make_world(test::default_scene());
   test::BranchScript script;
   const double dt = test::default_scene().step_s;
   for (double t = 0.0; t <= script.end_s(); t += dt) world.step(script.at(t));
@@ -84,7 +85,7 @@ TEST(WireFeedback, EqTwentyAsWrittenFollowsTheFirstLinksChangeAndIsZeroAtRest) {
   // Both F_internal variants from the same state every step: eq 20 (k times the first free link's
   // change of length since the last step) moves while the wire is pushed and is zero once it
   // rests, whatever load it still carries; the figures are docs/guidewire.md's
-  World world(test::default_scene());
+  World world = test::make_world(test::default_scene());
   test::BranchScript script;
   script.turn_deg = -90.0;
   const double dt = test::default_scene().step_s;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <array>
 #include <vector>
 
@@ -93,28 +94,64 @@ TEST(Coco, RleDecodesBackToTheRegion) {
   EXPECT_EQ(back, labels);
 }
 
+// the box of the pixels equal to id, row by row: [first column, first row, columns spanned, rows
+// spanned], the COCO box of whole pixels (pixel (c, r) covers [c, c + 1) x [r, r + 1))
+std::array<int, 4> box_of(const std::vector<uint8_t>& ids, int w, int h, uint8_t id) {
+  int c0 = w, r0 = h, c1 = -1, r1 = -1;
+  for (int r = 0; r < h; ++r)
+    for (int c = 0; c < w; ++c)
+      if (ids[r * w + c] == id) c0 = std::min(c0, c), r0 = std::min(r0, r), c1 = std::max(c1, c), r1 = std::max(r1, r);
+  return {c0, r0, c1 - c0 + 1, r1 - r0 + 1};
+}
+
 TEST(Coco, EachBranchsAnnotationDecodesToItsPixels) {
   const int w = 9, h = 6;
   std::vector<uint8_t> ids(w * h, 0);
-  for (int r = 0; r < h; ++r) ids[r * w + 2] = 1;  // a vertical vessel, branch index 0
-  for (int c = 3; c < 8; ++c) ids[4 * w + c] = 4;  // a horizontal one, branch index 3
-  ids[w * h - 1] = 4;                              // and its lone last pixel
-  const auto anns = coco_frame_annotations({}, ids, w, h, {"LM", "LAD", "LCx", "D1"});
-  ASSERT_EQ(anns.size(), 2u);  // no visible keypoint: no wire annotation
-  for (const auto& a : anns) {
-    const int id = a["branch"] == "LM" ? 1 : 4;
+  for (int r = 0; r < h; ++r) ids[r * w + 2] = 1;  // a vertical vessel, branch index 0: 6 pixels
+  for (int c = 4; c < 8; ++c) ids[4 * w + c] = 4;  // a horizontal one, branch index 3: 4 pixels
+  ids[w * h - 1] = 4;                              // and its lone last pixel: 5 in all
+  // no visible keypoint: no wire annotation
+  const std::vector<Eigen::Vector3d> hidden(3, Eigen::Vector3d(4, 2, 0));
+  EXPECT_EQ(coco_frame_annotations(hidden, ids, w, h, {"LM", "LAD", "LCx", "D1"}).size(), 2u);
+  // a wire in the image's lower left: one keypoint outside (v = 0), the last on the bottom row
+  // near the left edge so that its box is cut at two edges
+  const std::vector<Eigen::Vector3d> keys = {{-3, 1, 0}, {1.25, 2.5, 2}, {3, 3.75, 2}, {0.25, 5, 2}};
+  const auto anns = coco_frame_annotations(keys, ids, w, h, {"LM", "LAD", "LCx", "D1"});
+  ASSERT_EQ(anns.size(), 3u);
+  const auto& wire = anns[0];
+  EXPECT_EQ(wire["category_id"], 1);
+  EXPECT_EQ(wire["num_keypoints"], 3);
+  // COCO keypoints: pixel centre + 0.5, the hidden one (0, 0, 0)
+  EXPECT_EQ(wire["keypoints"], nlohmann::json({0, 0, 0, 1.75, 3.0, 2, 3.5, 4.25, 2, 0.75, 5.5, 2}));
+  // the visible keypoints span x [0.75, 3.5] and y [3.0, 5.5]; grown by a pixel each way and cut
+  // at the image's left and bottom edges (x >= 0, y <= 6): [0.0, 2.0] to [4.5, 6.0]
+  EXPECT_EQ(wire["bbox"], nlohmann::json({0.0, 2.0, 4.5, 4.0}));
+  EXPECT_EQ(wire["area"], 18.0);
+  // then the branches in id order
+  EXPECT_EQ(anns[1]["branch"], "LM");
+  EXPECT_EQ(anns[2]["branch"], "D1");
+  for (size_t i = 1; i < anns.size(); ++i) {
+    const auto& a = anns[i];
+    const uint8_t id = i == 1 ? 1 : 4;
     EXPECT_EQ(a["category_id"], 2);
     std::vector<uint8_t> back(w * h, 0);
     int64_t at = 0;
     bool in = false;
     for (const auto& n : a["segmentation"]["counts"]) {
       for (int64_t k = 0; k < n.get<int64_t>(); ++k, ++at)
-        if (in) back[(at % h) * w + at / h] = static_cast<uint8_t>(id);
+        if (in) back[(at % h) * w + at / h] = id;
       in = !in;
     }
     EXPECT_EQ(at, w * h);
     for (int p = 0; p < w * h; ++p) EXPECT_EQ(back[p] != 0, ids[p] == id) << a["branch"] << " pixel " << p;
-    EXPECT_EQ(a["area"], id == 1 ? 6 : 6);
+    // LM: column 2, every row; D1: columns 4..7 of row 4 and the last pixel (8, 5)
+    EXPECT_EQ(a["area"], id == 1 ? 6 : 5) << a["branch"];
+    EXPECT_EQ(a["area"], std::count(back.begin(), back.end(), id)) << a["branch"];
+    // the box around the decoded mask's pixels, and the synthetic truth's
+    const std::array<int, 4> want = id == 1 ? std::array<int, 4>{2, 0, 1, 6} : std::array<int, 4>{4, 4, 5, 2};
+    const auto box = a["bbox"].get<std::array<int, 4>>();
+    EXPECT_EQ(box, box_of(back, w, h, id)) << a["branch"];
+    EXPECT_EQ(box, want) << a["branch"];
   }
 }
 

@@ -4,9 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <vector>
 
 #include "physics/heart/beating_heart.h"
 #include "anatomy/heart/heart_frame.h"
@@ -116,31 +119,57 @@ TEST(HeartHardCases, NanInOneFreeParticleIsQuarantined) {
   EXPECT_EQ(h.system().quarantined_now(), 0);
 }
 
-// 24 hours of beating in fast-forward: big steps, each advancing 20.76 cycles, so the phase
-// samples the whole cycle; positions and the free particles' kinetic energy stay bounded. As with
-// dt x10, each step lands the base anywhere in its cycle, so the AV-plane springs strain (~1.0).
+// 24 hours of beating in 257 steps of 336.2 s: each step advances 86400 / 257 s x 72 bpm =
+// 103680 / 257 = 403.42 cycles, so step n lands on phase (103680 n mod 257) / 257, every one of
+// the 257 phases k / 257 once (the base jumps anywhere in its cycle, as with dt x10, so the AV-plane
+// springs strain, ~1.0). The phase is accumulated per step (beating_heart.cc), not recomputed
+// from the time: after n steps it must be that closed form (integer arithmetic) up to the
+// rounding of each step's 403.42 cycles, so it drifts at most linearly and loses nothing to the
+// size of the time or of the cycle count (103680 beats).
 TEST(HeartHardCases, TwentyFourHoursOfBeating) {
   BeatingHeart h(HeartBeatParams{});
-  const double dt = 17.3;
-  const int steps = static_cast<int>(24 * 3600 / dt);
+  constexpr double kDayS = 24 * 3600;
+  constexpr int64_t kSteps = 257;           // prime, so that the phases visited are all distinct
+  constexpr int64_t kBeatsPerDay = 103680;  // 24 h at 72 bpm
+  const double dt = kDayS / kSteps;
+  // per step: dt, dt x 72 and / 60 each rounded once (9.3e-14 of the 403.42 cycles together) and
+  // the sum once (half an ulp of 404, 2.8e-14): at most 1.21e-13, the bound (4.5e-14 per step
+  // measured, 1.2e-11 after the day). A phase summed in float is 8.8e-6 off after one step; one
+  // recomputed from the accumulated time is past the bound at step 22 (3.0e-12)
+  const double drift_per_step = 1.25e-13;
   const auto start = std::chrono::steady_clock::now();
   HeartHealth worst;
-  double max_kinetic = 0;
-  for (int k = 0; k < steps; ++k) {
+  double max_kinetic = 0, max_error = 0, max_error_per_step = 0;
+  std::vector<char> seen(kSteps, 0);
+  for (int64_t n = 1; n <= kSteps; ++n) {
     h.step(dt);
     const HeartHealth now = health(h);
     worst.merge(now);
     max_kinetic = std::max(max_kinetic, now.free_kinetic_j);
     if (!now.finite) break;
+    const int64_t k = (kBeatsPerDay * n) % kSteps;  // n steps are 103680 n / 257 cycles
+    seen[k] = 1;
+    ASSERT_GE(h.phase(), 0.0) << n;
+    ASSERT_LT(h.phase(), 1.0) << n;
+    // across the wrap: 0.999999 is 1e-6 from 0
+    const double d = std::abs(h.phase() - static_cast<double>(k) / kSteps);
+    const double error = std::min(d, 1.0 - d);
+    ASSERT_LE(error, n * drift_per_step) << "step " << n << ": phase " << h.phase() << ", closed form " << k << "/257";
+    max_error = std::max(max_error, error);
+    max_error_per_step = std::max(max_error_per_step, error / n);
   }
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("24 h in %d steps, %.1f s wall; time %.0f s\n", steps, wall_s, h.time_s());
-  EXPECT_NEAR(h.time_s(), steps * dt, 1e-6);
+  std::printf("24 h in %lld steps, %.2f s wall; time %.9f s; phase %.3g from the closed form at most (%.3g per step)\n",
+              static_cast<long long>(kSteps), wall_s, h.time_s(), max_error, max_error_per_step);
+  // a day is 103680 whole beats: back at end-diastole
+  EXPECT_LE(std::min(h.phase(), 1.0 - h.phase()), kSteps * drift_per_step);
+  EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), kSteps);
+  // 257 sums of dt, each rounded to half an ulp of 86400 (7.3e-12)
+  EXPECT_NEAR(h.time_s(), kDayS, 2e-9);
   expect_healthy(worst, 1.25, "24 h");
-  EXPECT_LT(max_kinetic, 1e-6);  // steps of 17 s: the velocities are displacements / 17 s
-  // the phase is accumulated, not recomputed from a large time: still exact after a day
-  const double cycles = h.time_s() * 72.0 / 60.0;
-  EXPECT_NEAR(h.phase(), cycles - std::floor(cycles), 1e-6);
+  // the velocities are displacements / 336 s: 1.06e-11 J measured (3.9e-9 J at the old 17.3 s
+  // steps, x (17.3 / 336)^2 = 1.04e-11); bound 3x
+  EXPECT_LT(max_kinetic, 3e-11);
   expect_recovers(h, 0.5e-3, "24 h");
 }
 

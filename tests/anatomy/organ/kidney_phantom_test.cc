@@ -1,11 +1,13 @@
-// The procedural kidney: a closed manifold surface whose volume is the implicit shape's, a CT that
-// paints exactly the drawn tissues, and beads spread through the organ.
+// The procedural kidney: a closed manifold surface whose volume is the implicit shape's, a CT whose
+// voxels are the layers the spec draws (judged from its semi-axes and shells, not by the function
+// that painted them), and beads spread through the organ.
 #include "anatomy/organ/kidney_phantom.h"
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
 
+#include <array>
 #include <cmath>
 
 #include "anatomy/mesh/mesh_io.h"
@@ -47,38 +49,100 @@ TEST(KidneyPhantom, SurfaceIsClosedManifoldWithTheImplicitVolume) {
   EXPECT_GT(p.facts.implicit_volume_mm3, 0.85 * ellipsoid);
 }
 
+// The organ's layers from the spec alone, not from kidney_tissue_at: an ellipsoid of the spec's
+// semi-axes whose radius the hilum pulls in toward -x (docs/soft-tissue.md, "The organ"), shells at
+// normalised radius pelvis_fraction and medulla_fraction. The hilum only pulls the surface in: by at
+// most hilum_depth (on the medial axis), and on the lateral side (x >= 0) by under 9.1e-4
+// (0.4 exp(-(pi/2)^2 / (2 x 0.45^2)) = 9.04e-4). So at a voxel centre the true normalised radius
+// lies in [s_e, s_e / g], s_e the bare ellipsoid's, g = 1 - 9.1e-4 laterally and 1 - hilum_depth
+// medially; where that interval is inside one layer the layer is known, elsewhere the voxel is
+// not judged.
+enum class Expected { kUnknown, kAir, kFat, kTable, kCortex, kMedulla, kPelvis, kTumour, kBead };
+
+Expected expected_tissue(const KidneySpec& spec, const KidneyFacts& f, const Vector3d& p) {
+  const Vector3d a = spec.semi_axes_mm;
+  const double s_lo = p.cwiseQuotient(a).norm(), eps = 1e-9;
+  if (s_lo >= 1.0 + eps) {  // outside the ellipsoid: outside the organ, whatever the hilum does
+    const double table_top = a.y() + spec.table_gap_mm, table_bottom = table_top + spec.table_thickness_mm;
+    if (p.y() > table_bottom) return Expected::kAir;
+    return p.y() >= table_top ? Expected::kTable : Expected::kFat;
+  }
+  // beads and the tumour are drawn inside the organ, over the layers
+  const double bead2 = spec.bead_radius_mm * spec.bead_radius_mm;
+  for (const Vector3d& b : f.fiducials_mm)
+    if ((p - b).squaredNorm() <= bead2) return Expected::kBead;
+  if ((p - f.tumour_centre_mm).norm() <= spec.tumour_radius_mm) return Expected::kTumour;
+  const double s_hi = s_lo / (p.x() >= 0.0 ? 1.0 - 9.1e-4 : 1.0 - spec.hilum_depth);
+  if (s_hi < spec.pelvis_fraction - eps) return Expected::kPelvis;
+  if (s_lo > spec.pelvis_fraction + eps && s_hi < spec.medulla_fraction - eps) return Expected::kMedulla;
+  if (s_lo > spec.medulla_fraction + eps && s_hi < 1.0 - eps) return Expected::kCortex;
+  return Expected::kUnknown;
+}
+
+double expected_hu(Expected e) {
+  switch (e) {
+    case Expected::kAir:
+      return -1000.0;
+    case Expected::kFat:
+      return -100.0;
+    case Expected::kTable:
+      return 200.0;
+    case Expected::kCortex:
+      return 150.0;
+    case Expected::kMedulla:
+      return 30.0;
+    case Expected::kPelvis:
+      return 10.0;
+    case Expected::kTumour:
+      return 60.0;
+    case Expected::kBead:
+      return 2000.0;
+    case Expected::kUnknown:
+      break;
+  }
+  return std::nan("");
+}
+
 TEST(KidneyPhantom, HuAtKnownPointsIsTheDrawnTissue) {
   const KidneyPhantom& p = phantom();
   const auto& f = p.facts;
-  const Vector3d a = p.spec.semi_axes_mm;
   Vector3d c;
   EXPECT_EQ(hu_near(p.ct, f.tumour_centre_mm, &c), kKidneyTumourHu);
   for (const Vector3d& b : f.fiducials_mm) EXPECT_EQ(hu_near(p.ct, b, &c), kKidneyBeadHu);
+  // the hilum: on the medial axis (-x) the capsule is pulled in to (1 - 0.4) x 30 = 18 mm, so the
+  // pelvis ends at 7.2 mm, the medulla at 14.4 mm, and 21 mm out (inside the bare ellipsoid) is fat.
+  // The nearest voxel centres are 0.5 mm off the axis (y on half millimetres): s moves < 0.2 %
   const struct {
-    Vector3d p;
-    KidneyTissue t;
-  } known[] = {{{0, 0, 0.95 * a.z()}, KidneyTissue::kCortex},
-               {{0.9 * a.x(), 0, 0}, KidneyTissue::kCortex},
-               {{0, 0, -0.6 * a.z()}, KidneyTissue::kMedulla},
-               {{0, 0, 0.2 * a.z()}, KidneyTissue::kPelvis},
-               {{0, 0, a.z() + 6.0}, KidneyTissue::kFat},
-               {{a.x() + 6.0, 0, 0}, KidneyTissue::kFat},
-               {{0, f.table_top_y_mm + 5.0, 0}, KidneyTissue::kTable}};
-  for (const auto& k : known) {
-    const double hu = hu_near(p.ct, k.p, &c);
-    EXPECT_EQ(kidney_tissue_at(p.spec, f, c), k.t) << c.transpose();
-    EXPECT_EQ(hu, kidney_tissue_hu(k.t)) << c.transpose();
+    double x_mm;
+    Expected e;
+  } hilum[] = {
+      {-4.0, Expected::kPelvis}, {-10.0, Expected::kMedulla}, {-16.0, Expected::kCortex}, {-21.0, Expected::kFat}};
+  for (const auto& h : hilum) {
+    const double hu = hu_near(p.ct, Vector3d(h.x_mm, 0.0, 0.0), &c);
+    ASSERT_LT((c - Vector3d(h.x_mm, 0.0, 0.0)).norm(), 0.51);
+    EXPECT_EQ(hu, expected_hu(h.e)) << "medial axis at " << h.x_mm << " mm";
   }
-  // and every voxel is its centre's classification
-  int64_t wrong = 0;
+  // every voxel whose layer the spec decides, by layer: painted as that layer
+  std::array<int64_t, 9> judged{}, wrong{};
   for (int64_t k = 0; k < p.ct.dims[2]; ++k)
     for (int64_t j = 0; j < p.ct.dims[1]; ++j)
       for (int64_t i = 0; i < p.ct.dims[0]; ++i) {
         const Vector3d x =
             p.ct.index_to_physical_mm(Vector3d(static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)));
-        wrong += p.ct.hu(i, j, k) != kidney_tissue_hu(kidney_tissue_at(p.spec, f, x));
+        const Expected e = expected_tissue(p.spec, f, x);
+        if (e == Expected::kUnknown) continue;
+        ++judged[static_cast<int>(e)];
+        wrong[static_cast<int>(e)] += p.ct.hu(i, j, k) != expected_hu(e);
       }
-  EXPECT_EQ(wrong, 0);
+  const char* names[] = {"unknown", "air", "fat", "table", "cortex", "medulla", "pelvis", "tumour", "bead"};
+  std::printf("voxels judged:");
+  for (int e = 1; e < 9; ++e) std::printf(" %s %ld", names[e], static_cast<long>(judged[e]));
+  std::printf("\n");
+  for (int e = 1; e < 9; ++e) {
+    EXPECT_EQ(wrong[e], 0) << names[e] << ": " << wrong[e] << " of " << judged[e] << " voxels";
+    // each layer judged on many voxels (measured: pelvis 4517, the fewest; 188 in the 45 beads)
+    EXPECT_GT(judged[e], e == static_cast<int>(Expected::kBead) ? 90 : 1000) << names[e];
+  }
 }
 
 TEST(KidneyPhantom, BeadsAreInsideAndSpreadAndTheSeedVaries) {

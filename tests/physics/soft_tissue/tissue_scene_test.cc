@@ -134,7 +134,7 @@ TEST(TissueScene, TheProbePressesTheKidneyAndItRecovers) {
   EXPECT_EQ(world.force_model().f0_n, 0.0);
 
   // press to 8 mm below the skin over 1 s, hold 0.5 s
-  double peak_force_n = 0.0, peak_model_k = 0.0;
+  double peak_force_n = 0.0, peak_model_k = 0.0, last_free_y_m = -0.0225;
   WorldSnapshot snap;
   for (int i = 1; i <= 45; ++i) {
     const double y = -0.0225 + 0.013 * std::min(1.0, i / 30.0);
@@ -143,12 +143,26 @@ TEST(TissueScene, TheProbePressesTheKidneyAndItRecovers) {
     const Vector3d beam = snap.probe_rotation.col(2);
     peak_force_n = std::max(peak_force_n, -snap.probe_force_n.dot(beam));
     peak_model_k = std::max(peak_model_k, world.force_model().k_n_per_m);
+    if (-snap.probe_force_n.dot(beam) <= 0.0) last_free_y_m = y;
     ASSERT_TRUE(snap.probe_force_n.allFinite());
   }
   const LocalForceModel pressed = world.force_model();
   EXPECT_GT(pressed.f0_n, 0.1) << "the kidney pushes the probe back";
   EXPECT_NEAR(pressed.x0_m, -0.0095, 1e-9) << "depth along the beam (+y)";
-  EXPECT_GT(peak_model_k, 0.0);
+  // the haptic K (the secant between steps) against two estimates made without it. (1) The held
+  // force over the indentation since the probe last felt nothing (0.55 N over 6.5 mm: 85 N/m,
+  // measured after 0.5 s of holding, at rest): a contact whose area grows as it is pressed
+  // (f ~ d^n, n from 1 for a flat punch to 2 for a cone; 1.5 for Hertz) stiffens to n f / d, so
+  // the largest secant lies between 1 and 2 times it (measured 130 N/m, 1.5 x). (2) A flat 40 x
+  // 12 mm punch on an elastic half-space, K = 2 E a / (1 - nu^2) with a = sqrt(A / pi) = 12.4 mm
+  // and the 5 kPa, nu 0.45 of the FEM the compliance was calibrated against (docs/soft-tissue.md):
+  // 155 N/m; the organ is finite (softer) and sits on its support (stiffer), so within 2 x
+  const double settled_secant = pressed.f0_n / (pressed.x0_m - last_free_y_m);
+  EXPECT_GE(peak_model_k, settled_secant);
+  EXPECT_LE(peak_model_k, 2.0 * settled_secant);
+  const double punch_k = 2.0 * 5e3 * std::sqrt(0.040 * 0.012 / M_PI) / (1.0 - 0.45 * 0.45);
+  EXPECT_GT(peak_model_k, 0.5 * punch_k);
+  EXPECT_LT(peak_model_k, 2.0 * punch_k);
   EXPECT_LE(peak_model_k, soft_tissue::ProbeContactParams{}.max_stiffness_n_per_m);
   // the skin under the probe went with it (the organ is squeezed against its support), and the
   // coarse tet mesh the image maps through follows it
@@ -159,9 +173,11 @@ TEST(TissueScene, TheProbePressesTheKidneyAndItRecovers) {
     deepest_tet_m = std::max(deepest_tet_m, snap.tissue_tet_vertices_m[v].y() - rest.tissue_tet_vertices_m[v].y());
   EXPECT_GT(deepest_tet_m, 1e-3);
   std::printf(
-      "8 mm press at 4 mm particles: force %.2f N along the beam (peak %.2f), K %.0f N/m, deepest particle "
-      "move %.1f mm, deepest tet vertex %.1f mm\n",
-      pressed.f0_n, peak_force_n, pressed.k_n_per_m, deepest_particle_m * 1e3, deepest_tet_m * 1e3);
+      "8 mm press at 4 mm particles: force %.2f N along the beam (peak %.2f), K %.0f N/m (largest %.0f; held force "
+      "over the indentation %.0f N/m, flat punch %.0f N/m), deepest particle move %.1f mm, deepest tet vertex %.1f "
+      "mm\n",
+      pressed.f0_n, peak_force_n, pressed.k_n_per_m, peak_model_k, settled_secant, punch_k, deepest_particle_m * 1e3,
+      deepest_tet_m * 1e3);
 
   // a NaN pose is ignored: the probe stays where it was
   InstrumentInput bad = probe_at(std::numeric_limits<double>::quiet_NaN());

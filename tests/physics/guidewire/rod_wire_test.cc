@@ -22,6 +22,7 @@
 #include "physics/guidewire/tube_lumen.h"
 #include "tests/common/counting_new.h"
 #include "tests/physics/guidewire/wire_test_support.h"
+#include "tests/common/shared_lumen.h"
 
 namespace pcisim::physics {
 namespace {
@@ -73,7 +74,7 @@ std::string tip_branch(const World& world) {
 }
 
 TEST(RodWireWorld, FollowsTheTraineeScriptIntoTheLad) {
-  World world(rod_scene());
+  World world = test::make_world(rod_scene());
   BranchScript script;
   const double dt = rod_scene().step_s;
   double worst = -1.0, tip_n = 0.0, hub_n = 0.0, hub_nm = 0.0;
@@ -136,7 +137,7 @@ void expect_settles(World& world) {
 
 TEST(RodWireWorld, PushingOneHundredMillimetresMoreStaysSound) {
   // down the LCx, then 100 mm more over 10 s into the phantom's branches: finite, inside, settles
-  World world(rod_scene());
+  World world = test::make_world(rod_scene());
   BranchScript script;
   script.turn_deg = -90.0;
   const double dt = rod_scene().step_s;
@@ -171,7 +172,7 @@ TEST(RodWireWorld, PushingOneHundredMillimetresMoreStaysSound) {
 }
 
 TEST(RodWireWorld, FullPullBackAndReinsertion) {
-  World world(rod_scene());
+  World world = test::make_world(rod_scene());
   double start_m = 0.0;
   run_script_then(world, 2.0, [&](double s, InstrumentInput& in) {
     if (s == 0.0) start_m = in.insertion_m;
@@ -195,7 +196,7 @@ TEST(RodWireWorld, FullPullBackAndReinsertion) {
 TEST(RodWireWorld, OneHundredHubTurnsAgainstFriction) {
   // 5 turns a second for 20 s with the tip down the LAD: the twist the wire stores stays
   // bounded (friction lets go, the tip whips round), nothing diverges, the tip stays in the LAD
-  World world(rod_scene());
+  World world = test::make_world(rod_scene());
   double start_rad = 0.0, worst_lag_rad = 0.0;
   run_script_then(world, 20.0, [&](double s, InstrumentInput& in) {
     if (s == 0.0) start_rad = in.rotation_rad;
@@ -212,7 +213,7 @@ TEST(RodWireWorld, OneHundredHubTurnsAgainstFriction) {
 TEST(RodWireWorld, TenTimesTheStep) {
   WorldSpec spec = rod_scene();
   spec.step_s *= 10.0;  // 3 Hz: ten times the feed and turn per step
-  World world(spec);
+  World world = test::make_world(spec);
   BranchScript script;
   double worst = -1.0;
   for (double t = 0.0; t <= script.end_s(); t += spec.step_s) {
@@ -230,7 +231,7 @@ TEST(RodWireWorld, NonFiniteInputKeepsThePreviousSample) {
   // after the script the hand keeps feeding (3 mm/s) and turning (0.5 rad/s), so a held sample
   // differs from a new one; from 0.3 s to 0.45 s the samples are NaN / Inf, to 0.6 s absurd (a
   // finite 5 km of feed and 2e6 rad, which the wire itself would take: the guard's other half)
-  World world(rod_scene());
+  World world = test::make_world(rod_scene());
   BranchScript script;
   const double dt = rod_scene().step_s;
   double t = 0.0;
@@ -269,7 +270,7 @@ TEST(RodWireWorld, NonFiniteInputKeepsThePreviousSample) {
 }
 
 TEST(RodWireWorld, StepAllocatesNothing) {
-  World world(rod_scene());
+  World world = test::make_world(rod_scene());
   BranchScript script;
   const double dt = rod_scene().step_s;
   double t = 0.0;

@@ -1,26 +1,22 @@
 #include "tests/common/shared_lumen.h"
 
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "anatomy/phantom/coronary_phantom.h"
 #include "physics/guidewire/sdf_lumen.h"
 #include "physics/sdf/lumen_sdf.h"
+#include "tests/common/fixture_file.h"
 
 namespace pcisim::physics::test {
 namespace {
-
-namespace fs = std::filesystem;
 
 // FNV-1a over raw bytes: a key, not a digest anyone trusts with security
 struct Hash {
@@ -34,18 +30,6 @@ struct Hash {
     add(&v, sizeof v);
   }
 };
-
-// the executable's own build: its size and modification time (any relink changes them)
-uint64_t build_key() {
-  struct stat st {};
-  Hash h;
-  if (::stat("/proc/self/exe", &st) == 0) {
-    h.add(st.st_size);
-    h.add(st.st_mtim.tv_sec);
-    h.add(st.st_mtim.tv_nsec);
-  }
-  return h.h;
-}
 
 uint64_t tree_key(const anatomy::VesselTree& tree, double spacing_m) {
   Hash h;
@@ -72,7 +56,7 @@ bool read_pod(std::ifstream& in, T* v) {
 }
 
 // the field stored at path, or false when it is missing, torn or of another build
-bool read_field(const fs::path& path, uint64_t key, SignedDistanceField* out) {
+bool read_field(const std::string& path, uint64_t key, SignedDistanceField* out) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return false;
   char magic[8];
@@ -97,53 +81,22 @@ bool read_field(const fs::path& path, uint64_t key, SignedDistanceField* out) {
   return true;
 }
 
-// written beside, then renamed: a reader sees the whole file or none (tests run two at a time)
-void write_field(const fs::path& path, uint64_t key, const SignedDistanceField& f) {
-  std::error_code ec;
-  fs::create_directories(path.parent_path(), ec);
-  const fs::path tmp = path.string() + ".tmp" + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    const double spacing_m = f.spacing_m(), band_m = f.band_m();
-    const uint64_t n_table = f.brick_table().size(), n_values = f.values_m().size();
-    out.write(kMagic, 8);
-    out.write(reinterpret_cast<const char*>(&key), 8);
-    out.write(reinterpret_cast<const char*>(&spacing_m), 8);
-    out.write(reinterpret_cast<const char*>(&band_m), 8);
-    out.write(reinterpret_cast<const char*>(f.origin_m().data()), 24);
-    out.write(reinterpret_cast<const char*>(f.dims().data()), 12);
-    out.write(reinterpret_cast<const char*>(&n_table), 8);
-    out.write(reinterpret_cast<const char*>(&n_values), 8);
-    out.write(reinterpret_cast<const char*>(f.brick_table().data()), static_cast<std::streamsize>(n_table * 4));
-    out.write(reinterpret_cast<const char*>(f.values_m().data()), static_cast<std::streamsize>(n_values * 4));
-    if (!out) {
-      out.close();
-      fs::remove(tmp, ec);
-      return;  // a cache that cannot be written only costs time
-    }
-  }
-  fs::rename(tmp, path, ec);
-  if (ec) fs::remove(tmp, ec);
-}
-
-std::string hex(const char* prefix, uint64_t v, const char* suffix) {
-  char s[64];
-  std::snprintf(s, sizeof s, "%s%016llx%s", prefix, static_cast<unsigned long long>(v), suffix);
-  return s;
-}
-
-// PCISIM_BINARY_DIR/test-fixtures/<executable>/<build>/: a new build of the executable removes
-// the fields its older builds left
-fs::path fixture_folder(uint64_t build) {
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  const fs::path mine = fs::path(PCISIM_BINARY_DIR) / "test-fixtures" / (ec ? "unknown" : exe.filename().string());
-  const fs::path folder = mine / hex("", build, "");
-  if (!fs::exists(folder, ec)) {
-    for (const auto& e : fs::directory_iterator(mine, ec))
-      if (e.path() != folder) fs::remove_all(e.path(), ec);
-  }
-  return folder;
+// the field at path (shared_fixture_file renames it into place once written)
+void write_field(const std::string& path, uint64_t key, const SignedDistanceField& f) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  const double spacing_m = f.spacing_m(), band_m = f.band_m();
+  const uint64_t n_table = f.brick_table().size(), n_values = f.values_m().size();
+  out.write(kMagic, 8);
+  out.write(reinterpret_cast<const char*>(&key), 8);
+  out.write(reinterpret_cast<const char*>(&spacing_m), 8);
+  out.write(reinterpret_cast<const char*>(&band_m), 8);
+  out.write(reinterpret_cast<const char*>(f.origin_m().data()), 24);
+  out.write(reinterpret_cast<const char*>(f.dims().data()), 12);
+  out.write(reinterpret_cast<const char*>(&n_table), 8);
+  out.write(reinterpret_cast<const char*>(&n_values), 8);
+  out.write(reinterpret_cast<const char*>(f.brick_table().data()), static_cast<std::streamsize>(n_table * 4));
+  out.write(reinterpret_cast<const char*>(f.values_m().data()), static_cast<std::streamsize>(n_values * 4));
+  if (!out) throw std::runtime_error(path + ": cannot write the shared contact field");
 }
 
 std::mutex mutex;
@@ -153,19 +106,28 @@ SharedLumenCounts counts;
 
 std::shared_ptr<const LumenQuery> shared_lumen(const anatomy::VesselTree& tree, double spacing_m) {
   static std::map<uint64_t, std::shared_ptr<const LumenQuery>> memory;
-  const uint64_t build = build_key(), key = tree_key(tree, spacing_m) ^ build;
+  const uint64_t key = tree_key(tree, spacing_m);
   const std::lock_guard<std::mutex> lock(mutex);
   if (const auto it = memory.find(key); it != memory.end()) {
     ++counts.reused;
     return it->second;
   }
-  const fs::path path = fixture_folder(build) / hex("sdf-", key, ".bin");
+  // made by the first process of this build to ask (built here, then counted as built)
   SignedDistanceField field;
-  if (read_field(path, key, &field)) {
+  bool built = false;
+  char name[40];
+  std::snprintf(name, sizeof name, "sdf-%016llx.bin", static_cast<unsigned long long>(key));
+  const std::string path = pcisim::test::shared_fixture_file(name, [&](const std::string& tmp) {
+    field = build_lumen_sdf(tree, spacing_m);
+    built = true;
+    write_field(tmp, key, field);
+  });
+  if (built) {
+    ++counts.built;
+  } else if (read_field(path, key, &field)) {
     ++counts.read;
   } else {
-    field = build_lumen_sdf(tree, spacing_m);
-    write_field(path, key, field);
+    field = build_lumen_sdf(tree, spacing_m);  // a file that does not read back whole: never trusted
     ++counts.built;
   }
   auto lumen = std::make_shared<const SdfLumen>(tree, std::move(field));

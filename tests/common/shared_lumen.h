@@ -2,10 +2,9 @@
 // The contact field of a vessel tree built once and shared, because building it is the suite's
 // most repeated cost (0.7-1.6 s at 0.2 mm in Release, ~25x that under ASan). Shared twice:
 //  - in memory, by every World of one test process;
-//  - on disk, by the test processes of one test executable (CTest runs each test alone), in
-//    PCISIM_BINARY_DIR/test-fixtures/. The key holds the tree's every number, the spacing and the
-//    executable's own build (its size and time), so a rebuilt executable never reads a field an
-//    older build wrote, and a file that does not read back whole is rebuilt.
+//  - on disk, by the test processes of one test executable (CTest runs each test alone): a
+//    fixture file (tests/common/fixture_file.h) keyed by the tree's every number and the spacing;
+//    a file that does not read back whole is not trusted (the field is built again).
 // The field is exactly what physics::SdfLumen(tree, spacing_m) builds: the same bytes.
 #include <memory>
 

@@ -11,7 +11,9 @@
 #include "anatomy/heart/heart_mesh.h"
 #include "anatomy/mesh/mesh_io.h"
 #include "anatomy/phantom/phantom_cta.h"
+#include "anatomy/vessel/vessel_tree_json.h"
 #include "modeling/cta/modeling_error.h"
+#include "tests/common/fixture_file.h"
 
 namespace pcisim::modeling {
 namespace {
@@ -31,6 +33,16 @@ anatomy::PhantomCta small_cta(uint32_t seed, bool with_coronaries = true, double
   spec.with_coronaries = with_coronaries;
   spec.stenosis_fraction = stenosis;
   return anatomy::make_phantom_cta(spec);
+}
+
+// the tree of the seed-2 model at the default options, built once per test executable build for
+// the tests that read only its tree (tests/common/fixture_file.h; the JSON round trip is exact)
+anatomy::VesselTree seed2_tree(const anatomy::PhantomCta& cta) {
+  const std::string path = test::shared_fixture_file("cta-seed2-vessels.json", [&](const std::string& p) {
+    anatomy::write_vessel_tree_json(build_cta_model(cta.ct, {cta.aortic_seed_mm}, CtaPipelineOptions{}).model.vessels,
+                                    p);
+  });
+  return anatomy::read_vessel_tree_json(path);
 }
 
 // the distance (mm) from p_mm to the nearest centerline of the tree, the aorta left out
@@ -132,12 +144,11 @@ TEST(CtaPipeline, AHeartFitThatCannotBeDoneLeavesTheTemplateAsPlaced) {
 // the major vessels are followed along most of their length (phantom 2 at 0.5 mm, a 60 % stenosis)
 TEST(CtaPipeline, EachMajorVesselIsFollowedPastHalfItsLength) {
   const anatomy::PhantomCta cta = small_cta(2);
-  const CtaModel m = build_cta_model(cta.ct, {cta.aortic_seed_mm}, CtaPipelineOptions{});
+  const anatomy::VesselTree tree = seed2_tree(cta);
   for (const char* name : {"LAD", "LCx", "RCA"}) {
-    const int mine = m.model.vessels.find(name), truth = cta.truth.find(name);
+    const int mine = tree.find(name), truth = cta.truth.find(name);
     ASSERT_GE(mine, 0) << name;
-    EXPECT_GT(anatomy::branch_length_m(m.model.vessels.branches[mine]),
-              0.5 * anatomy::branch_length_m(cta.truth.branches[truth]))
+    EXPECT_GT(anatomy::branch_length_m(tree.branches[mine]), 0.5 * anatomy::branch_length_m(cta.truth.branches[truth]))
         << name;
   }
 }
@@ -183,14 +194,14 @@ TEST(CtaPipeline, ATreeContinuesPastATightStenosisAndSaysWhere) {
 // a cardiac vein runs along an artery, touching it: none of it becomes part of the tree
 TEST(CtaPipeline, AVeinTouchingAnArteryIsNotMergedIntoTheTree) {
   const anatomy::PhantomCta cta = small_cta(2);
-  const CtaModel m = build_cta_model(cta.ct, {cta.aortic_seed_mm}, CtaPipelineOptions{});
+  const anatomy::VesselTree tree = seed2_tree(cta);
   const auto& vein = cta.facts.vein_points_mm;
   ASSERT_GT(vein.size(), 10u);
   // the vein's centre lies (artery radius + vein radius) from the artery's: a tree point on the
   // vein would be within its radius of it
   int on_vein = 0;
   for (size_t i = vein.size() / 5; i < vein.size() * 4 / 5; ++i) {
-    if (distance_to_tree_mm(m.model.vessels, vein[i]) < 0.5 * cta.facts.vein_radius_mm) ++on_vein;
+    if (distance_to_tree_mm(tree, vein[i]) < 0.5 * cta.facts.vein_radius_mm) ++on_vein;
   }
   EXPECT_EQ(on_vein, 0) << "of " << vein.size() * 3 / 5 << " vein points beside " << cta.facts.vein_beside;
 }

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -16,6 +17,7 @@
 #include "anatomy/organ/kidney_phantom.h"
 #include "physics/soft_tissue/contact_rules.h"
 #include "tests/common/counting_new.h"
+#include "tests/common/fixture_file.h"
 
 namespace pcisim::physics::soft_tissue {
 namespace {
@@ -128,8 +130,46 @@ double touching_table_y_m() {
   return kidney().model.rest_m.row(1).maxCoeff() + TissueParams{}.contact_radius_factor * kRadius;
 }
 
+// the settled organ's particle state in a fixture file: the test processes of one build settle it
+// once (under ASan a settle is ~13 s a process). Positions, velocities and the last finite
+// positions are the state PbdSystem carries from step to step (particles.h); the XPBD
+// multipliers start from zero each step
+void write_matrix(std::ofstream& out, const Matrix3Xd& m) {
+  const int64_t cols = m.cols();
+  out.write(reinterpret_cast<const char*>(&cols), sizeof cols);
+  out.write(reinterpret_cast<const char*>(m.data()), static_cast<std::streamsize>(sizeof(double) * m.size()));
+}
+bool read_matrix(std::ifstream& in, Matrix3Xd* m) {
+  int64_t cols = 0;
+  if (!in.read(reinterpret_cast<char*>(&cols), sizeof cols) || cols != m->cols()) return false;
+  return static_cast<bool>(
+      in.read(reinterpret_cast<char*>(m->data()), static_cast<std::streamsize>(sizeof(double) * m->size())));
+}
+
 const Settled& settled() {
-  static const Settled s = settle(touching_table_y_m(), 0.5);
+  static const Settled s = [] {
+    const double table_y_m = touching_table_y_m();
+    const std::string path = test::shared_fixture_file("settled-kidney.bin", [&](const std::string& p) {
+      const Settled fresh = settle(table_y_m, 0.5);
+      const pbd::Particles& x = fresh.body.system().particles();
+      std::ofstream out(p, std::ios::binary);
+      out.write(reinterpret_cast<const char*>(&fresh.ms_per_step), sizeof fresh.ms_per_step);
+      write_matrix(out, x.position_m);
+      write_matrix(out, x.velocity_m_per_s);
+      write_matrix(out, x.last_finite_m);
+      if (!out) throw std::runtime_error(p + ": cannot write the settled kidney");
+    });
+    TissueBody body(kidney().model, TissueParams{}, table(table_y_m), box_probe(kProbeHalf_m, probe_at(-0.1)));
+    pbd::Particles& x = body.system().particles();
+    double ms = 0;
+    std::ifstream in(path, std::ios::binary);
+    if (!in.read(reinterpret_cast<char*>(&ms), sizeof ms) || !read_matrix(in, &x.position_m) ||
+        !read_matrix(in, &x.velocity_m_per_s) || !read_matrix(in, &x.last_finite_m))
+      throw std::runtime_error(path + ": the settled kidney does not read back");
+    const double top = x.position_m.row(1).minCoeff() - body.contacts().contact_radius_m();
+    Matrix3Xd rest = x.position_m;
+    return Settled{std::move(body), table(table_y_m), rest, top, ms};
+  }();
   return s;
 }
 

@@ -124,6 +124,34 @@ TEST(CtaPipeline, OneAorticSeedGivesTheNamedTreeOnTheTruth) {
   EXPECT_EQ(loft->figures[2].second, 1.0);
 }
 
+// the whole pipeline on a coarse CTA (0.8 mm voxels, a quarter of the voxels of the others): the
+// test of the pipeline that runs under the sanitizers (the 0.5 mm ones are heavy there: 50 s and
+// more each, tests/heavy.txt); the four named vessels lie on the truth within a voxel
+TEST(CtaPipeline, ACoarseCtaGivesTheNamedVesselsOnTheTruth) {
+  const anatomy::PhantomCta cta = small_cta(2, true, 0.6, Eigen::Matrix3d::Identity(), Vector3d(0.8, 0.8, 0.8));
+  const CtaModel m = build_cta_model(cta.ct, {cta.aortic_seed_mm}, CtaPipelineOptions{});
+  const anatomy::VesselTree& tree = m.model.vessels;
+  ASSERT_GE(tree.branches.size(), 4u);
+  EXPECT_EQ(tree.branches[0].name, "aorta");
+  const auto& aorta = cta.truth.branches[cta.truth.find("aorta")];
+  for (const char* name : {"LM", "LAD", "LCx", "RCA"}) {
+    const int mine = tree.find(name), truth = cta.truth.find(name);
+    ASSERT_GE(mine, 0) << name << " not found";
+    double sum_mm = 0;
+    int counted = 0;
+    for (const auto& p : tree.branches[mine].points) {
+      if (distance_to(aorta, p.position_m) < aorta.points.front().radius_m + 4e-3) continue;  // as above
+      sum_mm += distance_to(cta.truth.branches[truth], p.position_m) * 1e3;
+      ++counted;
+    }
+    ASSERT_GE(counted, 5) << name;
+    std::printf("%s: %d points off the aorta, mean distance to truth %.2f mm\n", name, counted, sum_mm / counted);
+    EXPECT_LT(sum_mm / counted, 0.8) << name;  // one voxel
+  }
+  EXPECT_EQ(anatomy::check_closed_manifold(m.model.lumen), "");
+  EXPECT_EQ(anatomy::count_components(m.model.lumen), 1);
+}
+
 // a heart fit that finds no outline leaves no fitted heart in the case (the world then dents the
 // placed template under the tree) and says why; the model is built all the same
 TEST(CtaPipeline, AHeartFitThatCannotBeDoneLeavesTheTemplateAsPlaced) {

@@ -67,6 +67,10 @@ uint64_t executable_build_key() {
   return h;
 }
 
+std::string fixture_path(const std::string& name) {
+  return (fixture_folder() / name).string();
+}
+
 std::string shared_fixture_file(const std::string& name, const std::function<void(const std::string& path)>& make) {
   const fs::path path = fixture_folder() / name;
   std::error_code ec;

@@ -16,6 +16,9 @@ namespace pcisim::test {
 // reader never sees half a file. make() throwing leaves no file behind (and rethrows).
 std::string shared_fixture_file(const std::string& name, const std::function<void(const std::string& path)>& make);
 
+// where the fixture `name` of this build is kept (it may not exist yet)
+std::string fixture_path(const std::string& name);
+
 // the key of this executable's build (its size and modification time), for keys of fixtures
 uint64_t executable_build_key();
 

@@ -99,6 +99,12 @@ void write_field(const std::string& path, uint64_t key, const SignedDistanceFiel
   if (!out) throw std::runtime_error(path + ": cannot write the shared contact field");
 }
 
+std::string file_name(uint64_t key) {
+  char name[40];
+  std::snprintf(name, sizeof name, "sdf-%016llx.bin", static_cast<unsigned long long>(key));
+  return name;
+}
+
 std::mutex mutex;
 SharedLumenCounts counts;
 
@@ -115,9 +121,7 @@ std::shared_ptr<const LumenQuery> shared_lumen(const anatomy::VesselTree& tree, 
   // made by the first process of this build to ask (built here, then counted as built)
   SignedDistanceField field;
   bool built = false;
-  char name[40];
-  std::snprintf(name, sizeof name, "sdf-%016llx.bin", static_cast<unsigned long long>(key));
-  const std::string path = pcisim::test::shared_fixture_file(name, [&](const std::string& tmp) {
+  const std::string path = pcisim::test::shared_fixture_file(file_name(key), [&](const std::string& tmp) {
     field = build_lumen_sdf(tree, spacing_m);
     built = true;
     write_field(tmp, key, field);
@@ -139,6 +143,11 @@ std::shared_ptr<const LumenQuery> shared_lumen(const WorldSpec& spec) {
   if (!spec.vessel_contact) return nullptr;
   return shared_lumen(anatomy::make_coronary_phantom(anatomy::CoronaryPhantomSpec{spec.anatomy.seed}),
                       spec.vessel_contact->sdf_spacing_m);
+}
+
+bool read_stored_field(const anatomy::VesselTree& tree, double spacing_m, SignedDistanceField* out) {
+  const uint64_t key = tree_key(tree, spacing_m);
+  return read_field(pcisim::test::fixture_path(file_name(key)), key, out);
 }
 
 SharedLumenCounts shared_lumen_counts() {

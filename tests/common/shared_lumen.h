@@ -10,6 +10,7 @@
 
 #include "anatomy/vessel/vessel_tree.h"
 #include "physics/guidewire/lumen_query.h"
+#include "physics/sdf/signed_distance_field.h"
 #include "physics/world.h"
 #include "physics/world_spec.h"
 
@@ -26,6 +27,10 @@ std::shared_ptr<const LumenQuery> shared_lumen(const WorldSpec& spec);
 inline World make_world(const WorldSpec& spec) {
   return World(spec, shared_lumen(spec));
 }
+
+// the field of (tree, spacing_m) as stored in this build's fixture file, read back from disk (its
+// test compares it with the field the world builds); false when no process has stored it
+bool read_stored_field(const anatomy::VesselTree& tree, double spacing_m, SignedDistanceField* out);
 
 // how many fields this process built, read from disk, or took from memory (tests of the cache)
 struct SharedLumenCounts {

@@ -21,6 +21,7 @@ TEST(Percentile, IsTheNearestRankOfTheSortedSamples) {
   EXPECT_EQ(percentile(v, 0.0), 1.0);
   EXPECT_EQ(percentile(v, -1.0), 1.0);
   EXPECT_EQ(percentile(v, 2.0), 100.0);
+  EXPECT_EQ(percentile(v, std::nan("")), 1.0) << "a NaN q is taken as 0";
   EXPECT_EQ(v[0], 1.0) << "the caller's samples keep their order";
   EXPECT_EQ(v[1], 38.0);
 }

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <utility>
 
 #include "anatomy/phantom/coronary_phantom.h"
 #include "physics/guidewire/sdf_lumen.h"
@@ -25,6 +26,11 @@ TEST(SharedLumen, IsTheFieldTheWorldBuildsAndIsBuiltOnce) {
   EXPECT_EQ(test::shared_lumen_counts().reused, after.reused + 1);
   EXPECT_NE(test::shared_lumen(tree, 0.7e-3), shared) << "another spacing is another field";
 
+  // and the field as the other test processes read it: from the file, not from this process
+  SignedDistanceField stored;
+  ASSERT_TRUE(test::read_stored_field(tree, spacing_m, &stored)) << "the shared field was stored";
+  const SdfLumen from_disk(tree, std::move(stored));
+
   // samples near the wall (inside the band) and far from it, around every branch
   std::mt19937 rng(7);
   std::normal_distribution<double> jitter(0.0, 1.5e-3);
@@ -32,9 +38,11 @@ TEST(SharedLumen, IsTheFieldTheWorldBuildsAndIsBuiltOnce) {
   for (const auto& b : tree.branches) {
     for (const auto& p : b.points) {
       const Eigen::Vector3d q = p.position_m + Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng));
-      const WallSample a = own.sample(q), c = shared->sample(q);
+      const WallSample a = own.sample(q), c = shared->sample(q), d = from_disk.sample(q);
       ASSERT_EQ(a.distance_m, c.distance_m) << "branch " << b.name;
       ASSERT_EQ(a.normal, c.normal) << "branch " << b.name;
+      ASSERT_EQ(a.distance_m, d.distance_m) << "branch " << b.name << ", read from the file";
+      ASSERT_EQ(a.normal, d.normal) << "branch " << b.name << ", read from the file";
       ++compared;
     }
   }

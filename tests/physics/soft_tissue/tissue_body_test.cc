@@ -157,6 +157,7 @@ const Settled& settled() {
       write_matrix(out, x.position_m);
       write_matrix(out, x.velocity_m_per_s);
       write_matrix(out, x.last_finite_m);
+      out.close();  // a failed last flush shows here
       if (!out) throw std::runtime_error(p + ": cannot write the settled kidney");
     });
     TissueBody body(kidney().model, TissueParams{}, table(table_y_m), box_probe(kProbeHalf_m, probe_at(-0.1)));

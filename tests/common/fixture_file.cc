@@ -56,15 +56,12 @@ class FileLock {
 
 uint64_t executable_build_key() {
   struct stat st {};
-  uint64_t h = 1469598103934665603ull;  // FNV-1a over the size and the time
-  auto add = [&h](const void* p, size_t n) {
-    for (size_t i = 0; i < n; ++i) h = (h ^ static_cast<const unsigned char*>(p)[i]) * 1099511628211ull;
-  };
+  FixtureKey key;
   if (::stat("/proc/self/exe", &st) == 0) {
-    add(&st.st_size, sizeof st.st_size);
-    add(&st.st_mtim, sizeof st.st_mtim);
+    key.add(st.st_size);
+    key.add(st.st_mtim);
   }
-  return h;
+  return key.h;
 }
 
 std::string fixture_path(const std::string& name) {

@@ -4,6 +4,7 @@
 // Kept in PCISIM_BINARY_DIR/test-fixtures/<executable>/<build>/, where <build> is the
 // executable's size and time: a rebuilt executable never reads what an older build made, and
 // its first use removes the older builds' files.
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -18,6 +19,19 @@ std::string shared_fixture_file(const std::string& name, const std::function<voi
 
 // where the fixture `name` of this build is kept (it may not exist yet)
 std::string fixture_path(const std::string& name);
+
+// FNV-1a over raw bytes, for the keys of fixtures (a key, not a digest anyone trusts with security)
+struct FixtureKey {
+  uint64_t h = 1469598103934665603ull;
+  void add(const void* p, size_t n) {
+    const auto* b = static_cast<const unsigned char*>(p);
+    for (size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
+  }
+  template <class T>
+  void add(const T& v) {
+    add(&v, sizeof v);
+  }
+};
 
 // the key of this executable's build (its size and modification time), for keys of fixtures
 uint64_t executable_build_key();

@@ -18,21 +18,8 @@
 namespace pcisim::physics::test {
 namespace {
 
-// FNV-1a over raw bytes: a key, not a digest anyone trusts with security
-struct Hash {
-  uint64_t h = 1469598103934665603ull;
-  void add(const void* p, size_t n) {
-    const auto* b = static_cast<const unsigned char*>(p);
-    for (size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
-  }
-  template <class T>
-  void add(const T& v) {
-    add(&v, sizeof v);
-  }
-};
-
 uint64_t tree_key(const anatomy::VesselTree& tree, double spacing_m) {
-  Hash h;
+  pcisim::test::FixtureKey h;
   h.add(spacing_m);
   for (const auto& b : tree.branches) {
     h.add(b.name.data(), b.name.size());

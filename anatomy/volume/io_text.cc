@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "anatomy/volume/volume_io.h"
+#include "json/regular_file.h"
 
 #ifdef PCISIM_ANATOMY_HAVE_ZLIB
 #include <zlib.h>
@@ -23,29 +24,11 @@
 namespace pcisim::anatomy::io {
 
 std::string read_file(const std::string& path, int64_t max_bytes) {
-  // opened without blocking, then checked: only a regular file of a bounded size is read
-  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-  if (fd < 0) throw VolumeIoError(path + ": cannot open the file for reading");
-  struct stat st {};
-  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-    ::close(fd);
-    throw VolumeIoError(path + ": not a regular file (a FIFO, device or folder is never read)");
+  try {
+    return json::read_regular_file(path, "the file", max_bytes);
+  } catch (const json::FileError& e) {
+    throw VolumeIoError(e.what());
   }
-  if (st.st_size > max_bytes) {
-    ::close(fd);
-    throw VolumeIoError(fmt::format("{}: {} bytes, over the {} byte limit", path, st.st_size, max_bytes));
-  }
-  std::string out(static_cast<size_t>(st.st_size), '\0');
-  size_t got = 0;
-  while (got < out.size()) {
-    const ssize_t n = ::read(fd, out.data() + got, out.size() - got);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) break;
-    got += static_cast<size_t>(n);
-  }
-  ::close(fd);
-  if (got != out.size()) throw VolumeIoError(path + ": the file shrank while it was read");
-  return out;
 }
 
 void load_voxels(const std::string& path, const VoxelData& d, Volume& vol) {

@@ -1,4 +1,5 @@
 #include "clients/bridge/probe_script.h"
+#include "clients/bridge/trainee_script.h"  // kMaxScriptFileBytes
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -11,6 +12,7 @@
 #include "pcisim_lcm/probe_state_t.hpp"
 #include "protocol/probe_ranges.h"
 #include "json/json_reader.h"
+#include "json/regular_file.h"
 
 namespace pcisim::clients {
 namespace {
@@ -135,11 +137,12 @@ ProbeScript ProbeScript::parse(const std::string& text, const std::string& sourc
 }
 
 ProbeScript ProbeScript::load(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(fmt::format("{}: cannot read the probe script", path));
-  std::stringstream text;
-  text << in.rdbuf();
-  return parse(text.str(), path);
+  // a regular file of at most a MiB (a FIFO or /dev/zero named as a script would hang the reader)
+  try {
+    return parse(json::read_regular_file(path, "the probe script", kMaxScriptFileBytes), path);
+  } catch (const json::FileError& e) {
+    throw std::runtime_error(e.what());
+  }
 }
 
 ProbeReading ProbeScript::sample(double t_s) const {

@@ -10,6 +10,7 @@
 
 #include "pcisim_lcm/instrument_state_t.hpp"
 #include "json/json_reader.h"
+#include "json/regular_file.h"
 
 namespace pcisim::clients {
 namespace {
@@ -100,11 +101,12 @@ TraineeScript TraineeScript::parse(const std::string& text, const std::string& s
 }
 
 TraineeScript TraineeScript::load(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(fmt::format("{}: cannot read the trainee script", path));
-  std::stringstream text;
-  text << in.rdbuf();
-  return parse(text.str(), path);
+  // a regular file of at most a MiB (a FIFO or /dev/zero named as a script would hang the reader)
+  try {
+    return parse(json::read_regular_file(path, "the trainee script", kMaxScriptFileBytes), path);
+  } catch (const json::FileError& e) {
+    throw std::runtime_error(e.what());
+  }
 }
 
 double TraineeScript::value(const std::vector<Ramp>& ramps, double t_s, double* rate) {

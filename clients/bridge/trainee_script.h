@@ -13,6 +13,9 @@ struct InstrumentReading {
   int32_t buttons = 0;  // instrument_state_t::BUTTON_* bits
 };
 
+// a trainee script is a page of JSON; a larger file is refused unread
+inline constexpr int64_t kMaxScriptFileBytes = int64_t{1} << 20;
+
 class TraineeScript {
  public:
   // throws std::runtime_error naming the source and the JSON path of a bad action

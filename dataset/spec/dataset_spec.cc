@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "json/json_reader.h"
+#include "json/regular_file.h"
 #include "server/scene/scene.h"
 
 namespace pcisim::dataset {
@@ -15,16 +16,11 @@ namespace {
 namespace fs = std::filesystem;
 
 std::string read_text(const std::string& path, const std::string& what, std::uintmax_t max_bytes) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec) || ec)
-    throw json::JsonError(fmt::format("{}: cannot read the {} (missing or not a file)", path, what));
-  if (fs::file_size(path, ec) > max_bytes || ec)
-    throw json::JsonError(fmt::format("{}: the {} is over {} bytes", path, what, max_bytes));
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  if (!in) throw json::JsonError(fmt::format("{}: cannot read the {}", path, what));
-  return s.str();
+  try {
+    return json::read_regular_file(path, "the " + what, static_cast<int64_t>(max_bytes));
+  } catch (const json::FileError& e) {
+    throw json::JsonError(e.what());
+  }
 }
 
 std::string resolve(const std::string& base_dir, const std::string& p) {

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "json/json_reader.h"
+#include "json/regular_file.h"
 #include "physics/guidewire/wire_presets.h"
 #include "server/scene/scene.h"
 #include "xray/projectors/trilinear_projector.h"
@@ -466,21 +467,15 @@ Scene parse_scene(const std::string& text, const std::string& source) {
 }
 
 Scene load_scene_file(const std::string& path) {
-  // a regular file, checked before opening (a FIFO would block the reader); the error_code form,
-  // so an over-long or unreadable path is a json::JsonError rather than a filesystem_error
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec) || ec)
-    throw json::JsonError(fmt::format("{}: cannot read the scene file (missing or not a file)", path));
-  // a scene is a page of JSON; a huge file would hold the LCM thread and its memory for seconds
-  const auto size = std::filesystem::file_size(path, ec);
-  if (ec || size > kMaxSceneFileBytes)
-    throw json::JsonError(
-        fmt::format("{}: scene file of {} bytes is over the {} byte limit", path, ec ? 0 : size, kMaxSceneFileBytes));
-  std::ifstream in(path);
-  if (!in) throw json::JsonError(fmt::format("{}: cannot read the scene file (missing or not a file)", path));
-  std::stringstream text;
-  text << in.rdbuf();
-  return parse_scene(text.str(), path);
+  // a regular file (a FIFO would block the reader); a scene is a page of JSON, and a huge file
+  // would hold the LCM thread and its memory for seconds
+  std::string text;
+  try {
+    text = json::read_regular_file(path, "the scene file", kMaxSceneFileBytes);
+  } catch (const json::FileError& e) {
+    throw json::JsonError(e.what());
+  }
+  return parse_scene(text, path);
 }
 
 Scene default_scene() {

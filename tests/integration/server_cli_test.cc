@@ -64,7 +64,7 @@ TEST(ServerCli, BadSceneStopsAtStartWithTheJsonPath) {
 
   const Result missing = run("--duration 1 --lcm-url memq:// --scene /nonexistent.json");
   EXPECT_EQ(missing.exit_code, 2);
-  EXPECT_NE(missing.output.find("/nonexistent.json: cannot read the scene file"), std::string::npos) << missing.output;
+  EXPECT_NE(missing.output.find("/nonexistent.json: cannot open the scene file"), std::string::npos) << missing.output;
 }
 
 TEST(ServerCli, RunsForItsDurationAndWritesStats) {

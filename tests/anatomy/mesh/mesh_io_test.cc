@@ -56,7 +56,7 @@ TEST_F(MeshIo, AFileOverTheMeshLimitIsRefusedUnreadNamingItsSizeAndTheLimit) {
   const auto start = std::chrono::steady_clock::now();
   const std::string why = refusal([&] { read_mesh(big); });
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  EXPECT_EQ(why, big + ": 536870913 bytes, over the 536870912 byte limit");
+  EXPECT_EQ(why.rfind(big + ": 536870913 bytes, over the 536870912 byte limit", 0), 0u) << why;
   EXPECT_LT(seconds, 0.1) << "the file was read before it was refused";
   // a file at the limit is read (and refused for what it holds, not for its size)
   fs::resize_file(big, 1000);

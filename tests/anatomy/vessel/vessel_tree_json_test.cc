@@ -150,7 +150,8 @@ TEST(VesselTreeJsonTest, BadFilesNameTheFileAndTheField) {
       read_vessel_tree_json(path);
       ADD_FAILURE() << "read " << path;
     } catch (const std::runtime_error& e) {
-      EXPECT_EQ(std::string(e.what()), path + ": not a regular file (a FIFO, device or folder is never read)");
+      EXPECT_EQ(std::string(e.what()),
+                path + ": not a regular file (" + (path == fifo ? "a FIFO" : "a folder") + ", never read as the file)");
     }
   }
   std::filesystem::remove(fifo);

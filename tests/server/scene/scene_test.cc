@@ -198,7 +198,7 @@ TEST(Scene, MissingFileIsAClearError) {
     load_scene_file("/nonexistent/scene.json");
     FAIL() << "expected json::JsonError";
   } catch (const json::JsonError& e) {
-    EXPECT_STREQ(e.what(), "/nonexistent/scene.json: cannot read the scene file (missing or not a file)");
+    EXPECT_STREQ(e.what(), "/nonexistent/scene.json: cannot open the scene file: No such file or directory");
   }
 }
 

@@ -62,7 +62,7 @@ TEST_F(DrrTool, BadArgumentsNameTheArgument) {
       {"--volume v.mha " + geo + "--pixel-mm 1 --size 4,4 --projector exact --step 1 --out x",
        "--step: only used by the cpu, gl and cuda projectors"},
       {"--volume /nonexistent/v.mha " + geo + "--pixel-mm 1 --size 4,4 --projector exact --out x",
-       "--volume: /nonexistent/v.mha: cannot open the file for reading"},
+       "--volume: /nonexistent/v.mha: cannot open the file: No such file or directory"},
       {"--frobnicate", "--frobnicate: unknown argument"},
       {"--write-phantom p.mha --size 4,4", "--size: expected X,Y,Z"},
   };

@@ -12,8 +12,11 @@
 #include <sstream>
 #include <vector>
 
+#include "anatomy/dicom/dicom_limits.h"
+#include "anatomy/dicom/dicom_precheck.h"
 #include "anatomy/dicom/itk_dicom_io.h"
 #include "anatomy/volume/io_text.h"
+#include "json/regular_file.h"
 
 namespace pcisim::anatomy {
 namespace {
@@ -47,6 +50,8 @@ Slice read_slice_header(const std::string& file) {
   try {
     tags = itk_io::read_tags(
         file, {"0020|0032", "0020|0037", "0028|0030", "0028|0010", "0028|0011", "0028|0008", "0020|0100", "0018|1060"});
+  } catch (const DicomError&) {
+    throw;  // the header walk's, naming the file and the tag
   } catch (const std::runtime_error& e) {
     throw DicomError(file + ": " + e.what());
   }
@@ -124,8 +129,12 @@ double check_stack(std::vector<Slice>& slices, const std::string& where) {
   std::vector<double> sorted = gaps;
   std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
   const double spacing = sorted[sorted.size() / 2];
-  if (!(spacing > 1e-3))
+  if (!(spacing > dicom::kMinSpacingMm))
     throw DicomError(where + ": slices share positions (spacing " + fmt::format("{:.3f}", spacing) + " mm)");
+  // positions are bounded (dicom_limits.h), so the spacing is finite; a voxel this deep is no CT
+  if (spacing > dicom::kMaxSpacingMm)
+    throw DicomError(
+        fmt::format("{}: slice spacing {:g} mm, over the {:g} mm limit", where, spacing, dicom::kMaxSpacingMm));
   const double tolerance = std::max(0.01 * spacing, 0.01);
   for (size_t i = 0; i < gaps.size(); ++i) {
     if (std::abs(gaps[i] - spacing) > tolerance)
@@ -196,24 +205,64 @@ auto naming_folder(const std::string& folder, F&& f) {
   }
 }
 
-// the files of the one series in `folder` (or of series_uid), in ITK's order; `uid_out` gets its UID
-std::vector<std::string> series_files_of(const std::string& folder, const std::string& series_uid,
-                                         std::string& uid_out) {
+// the image files of each series in `folder`, by SeriesInstanceUID, every one through the header
+// walk (dicom_precheck.h) before GDCM may see it: a file without the preamble and "DICM" is a
+// stray file (a README, a thumbnail) and skipped, as is a DICOMDIR and anything not a regular file
+// (a subfolder, a FIFO: never opened); a file that fails the walk refuses the series, naming it.
+// A symbolic link is followed only to a file inside the folder.
+std::map<std::string, std::vector<std::string>> series_in(const std::string& folder) {
   std::error_code ec;
   if (!fs::is_directory(folder, ec)) throw DicomError(folder + ": not a folder");
-  // the series in the folder, by SeriesInstanceUID
-  const std::vector<std::string> uids = itk_io::series_uids(folder);
+  std::vector<fs::path> paths;
+  for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    if (int64_t(paths.size()) == dicom::kMaxFolderFiles)
+      throw DicomError(fmt::format("{}: more than {} files in the folder", folder, dicom::kMaxFolderFiles));
+    paths.push_back(it->path());
+  }
+  if (ec) throw DicomError(folder + ": cannot list the folder: " + ec.message());
+  std::sort(paths.begin(), paths.end());
+  const fs::path inside = fs::weakly_canonical(folder, ec);
+  std::map<std::string, std::vector<std::string>> series;
+  for (const fs::path& p : paths) {
+    const std::string file = p.string();
+    if (!fs::is_regular_file(p, ec)) continue;
+    if (fs::is_symlink(p, ec)) {
+      const fs::path target = fs::weakly_canonical(p, ec);
+      if (ec || target.parent_path() != inside)
+        throw DicomError(file + ": a symbolic link to a file outside the folder (" + target.string() + ")");
+    }
+    std::string bytes;
+    try {
+      bytes = json::read_regular_file(file, "the DICOM file", dicom::kMaxFileBytes);
+    } catch (const json::FileError& e) {
+      throw DicomError(e.what());
+    }
+    if (!dicom::has_dicom_magic(bytes)) continue;
+    const dicom::CheckedFile checked = dicom::precheck_dicom(file, bytes);
+    if (checked.dicomdir) continue;
+    if (checked.series_uid.empty()) throw DicomError(file + ": SeriesInstanceUID (0020,000E): missing");
+    series[checked.series_uid].push_back(file);
+  }
+  return series;
+}
+
+// the files of the one series in `folder` (or of series_uid), in name order; `uid_out` gets its UID
+std::vector<std::string> series_files_of(const std::string& folder, const std::string& series_uid,
+                                         std::string& uid_out) {
+  std::map<std::string, std::vector<std::string>> series = series_in(folder);
+  std::vector<std::string> uids;
+  for (const auto& [uid, files] : series) uids.push_back(uid);
   if (uids.empty()) throw DicomError(folder + ": no DICOM series found");
   std::string uid = series_uid;
   if (uid.empty()) {
     if (uids.size() > 1)
       throw DicomError(fmt::format("{}: {} series found ({}): name one", folder, uids.size(), fmt::join(uids, ", ")));
     uid = uids.front();
-  } else if (std::find(uids.begin(), uids.end(), uid) == uids.end()) {
+  } else if (series.count(uid) == 0) {
     throw DicomError(fmt::format("{}: no series {} (found: {})", folder, uid, fmt::join(uids, ", ")));
   }
   uid_out = uid;
-  return itk_io::series_files(folder, uid);
+  return series[uid];
 }
 
 // geometry first, from every file's own tags

@@ -2,18 +2,18 @@
 // A CT series (or a cine: 3-D + time) from a folder of DICOM files (ITK's GDCM image IO): HU
 // (rescale slope and intercept applied), geometry in LPS millimetres as the files state it. Before
 // any voxel is read, every slice's position is checked along the slice normal: a missing slice or
-// uneven spacing is refused naming the file, as are mixed orientations or pixel sizes.
-#include <stdexcept>
+// uneven spacing is refused naming the file, as are mixed orientations or pixel sizes. Every file
+// in the folder is first walked by our own header check (dicom_precheck.h) and its numbers
+// bounded (dicom_limits.h) before GDCM or ITK sees it: in the folder, a file that does not start
+// with the 128-byte preamble and "DICM" is a stray file and skipped, as is a DICOMDIR that passes
+// the walk; any other file that fails refuses the series, naming the file and the tag.
 #include <string>
 #include <vector>
 
+#include "anatomy/dicom/dicom_error.h"
 #include "anatomy/volume/volume.h"
 
 namespace pcisim::anatomy {
-
-struct DicomError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
 
 // the one series in `folder`, or the one with this SeriesInstanceUID when there are several.
 // int16 voxels when every HU fits, else float32. Throws DicomError "<folder or file>: <what>".

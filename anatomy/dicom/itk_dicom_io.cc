@@ -1,14 +1,13 @@
 #include "anatomy/dicom/itk_dicom_io.h"
 
 #include <itkGDCMImageIO.h>
-#include <itkGDCMSeriesFileNames.h>
 #include <itkImage.h>
 #include <itkImageSeriesReader.h>
 #include <itkMetaDataObject.h>
 
-#include <iostream>
-#include <streambuf>
 #include <stdexcept>
+
+#include "anatomy/dicom/dicom_precheck.h"
 
 namespace pcisim::anatomy::itk_io {
 namespace {
@@ -22,42 +21,15 @@ auto itk_call(F&& f) {
   }
 }
 
-// std::cerr muted while `f` runs. Listing a cine's files, GDCM's own ordering by position fails
-// (each position repeats once a time point) and GDCM prints "position is not unique" to std::cerr
-// for every image before falling back to instance numbers; the callers sort the files themselves
-// and say what is wrong in their exceptions. (GDCM's trace switch, gdcm::Trace, would need GDCM's
-// headers and libraries, which ITK's targets do not pass on.)
-template <class F>
-auto cerr_muted(F&& f) {
-  struct Null : std::streambuf {
-    int overflow(int c) override { return traits_type::not_eof(c); }
-  };
-  static Null null;
-  struct Restore {
-    std::streambuf* was = std::cerr.rdbuf(&null);
-    ~Restore() { std::cerr.rdbuf(was); }
-  } restore;
-  return f();
-}
-
-itk::GDCMSeriesFileNames::Pointer names_in(const std::string& folder) {
-  auto names = itk::GDCMSeriesFileNames::New();
-  names->SetUseSeriesDetails(false);
-  names->SetDirectory(folder);
-  return names;
+// the header walk first: GDCM never opens a file that fails it (nor a DICOMDIR: no image)
+void checked(const std::string& file) {
+  if (dicom::precheck_dicom_file(file).dicomdir) throw DicomError(file + ": a DICOMDIR, not an image");
 }
 
 }  // namespace
 
-std::vector<std::string> series_uids(const std::string& folder) {
-  return itk_call([&] { return cerr_muted([&] { return names_in(folder)->GetSeriesUIDs(); }); });
-}
-
-std::vector<std::string> series_files(const std::string& folder, const std::string& uid) {
-  return itk_call([&] { return cerr_muted([&] { return names_in(folder)->GetFileNames(uid); }); });
-}
-
 std::vector<std::string> read_tags(const std::string& file, const std::vector<std::string>& tags) {
+  checked(file);
   return itk_call([&] {
     auto io = itk::GDCMImageIO::New();
     io->SetFileName(file);
@@ -74,6 +46,7 @@ std::vector<std::string> read_tags(const std::string& file, const std::vector<st
 
 void read_voxels(const std::vector<std::string>& files, const VoxelSink& take) {
   // ITK's exceptions become runtime_error; the caller's own (thrown by take) pass through
+  for (const auto& f : files) checked(f);
   auto reader = itk::ImageSeriesReader<itk::Image<float, 3>>::New();
   itk_call([&] {
     reader->SetImageIO(itk::GDCMImageIO::New());

@@ -1,7 +1,10 @@
 #pragma once
 // The ITK side of the DICOM reader, in plain standard types: ITK 5.2 bundles its own Eigen 3.3,
 // which must never meet the system Eigen pcisim uses in one translation unit, so only
-// itk_dicom_io.cc includes ITK. Errors throw std::runtime_error with ITK's description.
+// itk_dicom_io.cc includes ITK. Errors throw std::runtime_error with ITK's description. Every file
+// is walked by dicom::precheck_dicom_file (DicomError naming the file and tag) before GDCM opens it:
+// GDCM asserts (SIGABRT) on malformed files. Listing a folder is dicom_series.cc's, through the
+// same check (GDCM's own listing would open every file unchecked).
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -10,10 +13,6 @@
 
 namespace pcisim::anatomy::itk_io {
 
-// SeriesInstanceUIDs of the DICOM files in a folder
-std::vector<std::string> series_uids(const std::string& folder);
-// the files of one series (ITK's order; the caller sorts by position)
-std::vector<std::string> series_files(const std::string& folder, const std::string& uid);
 // the string value of each tag ("gggg|eeee") in a file's header, "" when absent
 std::vector<std::string> read_tags(const std::string& file, const std::vector<std::string>& tags);
 // the voxels of these files stacked in this order, rescaled to HU (slope and intercept), handed

@@ -14,6 +14,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "anatomy/volume/inside_folder.h"
 #include "anatomy/volume/volume_io.h"
 #include "json/regular_file.h"
 
@@ -28,6 +29,27 @@ std::string read_file(const std::string& path, int64_t max_bytes) {
     return json::read_regular_file(path, "the file", max_bytes);
   } catch (const json::FileError& e) {
     throw VolumeIoError(e.what());
+  }
+}
+
+std::string read_data_file(const std::string& header_path, const std::string& name, DataFileScope scope,
+                           const char* field, std::string* data_name) {
+  *data_name = !name.empty() && name.front() == '/' ? name : folder_of(header_path) + name;
+  std::string open_path = *data_name;
+  if (scope == DataFileScope::kHeaderFolder) {
+    const InsideFolder inside = resolve_inside_folder(folder_of(header_path), name);
+    if (inside.escape != FolderEscape::kNone)
+      throw VolumeIoError(
+          fmt::format("{}: {}: '{}' {} (a volume in a case folder reads its data only from the "
+                      "folder that holds its header)",
+                      base_name(header_path), field, escaped_name(name), inside.why));
+    open_path = inside.resolved;  // what was checked is what is opened
+  }
+  try {
+    return read_file(open_path);
+  } catch (const VolumeIoError& e) {
+    throw VolumeIoError(fmt::format("{}: {}: cannot open '{}' ({})", base_name(header_path), field,
+                                    escaped_name(*data_name), e.what()));
   }
 }
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "anatomy/volume/volume.h"
+#include "anatomy/volume/volume_io.h"
 
 namespace pcisim::anatomy::io {
 
@@ -15,6 +16,13 @@ namespace pcisim::anatomy::io {
 // over the limit before reading it, naming its size and the limit
 inline constexpr int64_t kMaxFileBytes = int64_t{8} << 30;
 std::string read_file(const std::string& path, int64_t max_bytes = kMaxFileBytes);
+
+// the bytes of the detached data file `name` a header at `header_path` names in `field` (relative
+// to the header's folder, or absolute); *data_name gets the path for messages. kHeaderFolder
+// refuses a name leading out of the header's folder (resolve_inside_folder) before opening it,
+// and reads the resolved path. Throws VolumeIoError "<header>: <field>: <what>".
+std::string read_data_file(const std::string& header_path, const std::string& name, DataFileScope scope,
+                           const char* field, std::string* data_name);
 
 // how a header says its voxels are stored, for load_voxels
 struct VoxelData {

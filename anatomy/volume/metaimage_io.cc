@@ -26,7 +26,7 @@ bool parse_bool(std::string_view v, bool* out) {
 
 }  // namespace
 
-Volume read_metaimage(const std::string& path, bool require_spacing) {
+Volume read_metaimage(const std::string& path, bool require_spacing, DataFileScope data_files) {
   const std::string text = io::read_file(path);
   std::map<std::string, std::string> keys;  // lower-case key -> value
   std::map<std::string, std::string> spelled;
@@ -168,12 +168,7 @@ Volume read_metaimage(const std::string& path, bool require_spacing) {
         io::lower(data_file) == "list") {
       fail(path, "ElementDataFile", fmt::format("only LOCAL or one file name is supported, got '{}'", data_file));
     }
-    data_name = data_file.front() == '/' ? data_file : io::folder_of(path) + data_file;
-    try {
-      external = io::read_file(data_name);
-    } catch (const VolumeIoError& e) {
-      fail(path, "ElementDataFile", fmt::format("cannot open '{}' ({})", data_name, e.what()));
-    }
+    external = io::read_data_file(path, data_file, data_files, "ElementDataFile", &data_name);
     bytes = external.data();
     available = static_cast<int64_t>(external.size());
   }

@@ -277,7 +277,7 @@ Layout parse_layout(const std::string& path, const Header& h, bool require_spaci
 
 // the voxels: a 3-D volume, or a sequence's frames stacked along z (frame t is slices t Z .. t Z + Z - 1,
 // which is the file's order: x fastest, time slowest)
-Volume load_block(const std::string& path, const Header& h, const Layout& layout) {
+Volume load_block(const std::string& path, const Header& h, const Layout& layout, DataFileScope data_files) {
   Volume block = layout.grid;
   if (layout.frames > 0) block.dims[2] *= layout.frames;  // parse_layout checked the product
   std::string external;
@@ -291,12 +291,7 @@ Volume load_block(const std::string& path, const Header& h, const Layout& layout
     if (data_file->find(' ') != std::string::npos || io::lower(*data_file).rfind("list", 0) == 0) {
       fail(path, "data file", fmt::format("only one file name is supported, got '{}'", *data_file));
     }
-    data_name = data_file->front() == '/' ? *data_file : io::folder_of(path) + *data_file;
-    try {
-      external = io::read_file(data_name);
-    } catch (const VolumeIoError& e) {
-      fail(path, "data file", fmt::format("cannot open '{}' ({})", data_name, e.what()));
-    }
+    external = io::read_data_file(path, *data_file, data_files, "data file", &data_name);
     bytes = external.data();
     available = static_cast<int64_t>(external.size());
   }
@@ -373,15 +368,15 @@ bool volume_io_has_gzip() {
 #endif
 }
 
-Volume read_nrrd(const std::string& path, bool require_spacing) {
+Volume read_nrrd(const std::string& path, bool require_spacing, DataFileScope data_files) {
   const Header h = read_header(path);
-  return load_block(path, h, parse_layout(path, h, require_spacing, /*sequence=*/false));
+  return load_block(path, h, parse_layout(path, h, require_spacing, /*sequence=*/false), data_files);
 }
 
-std::vector<Volume> read_nrrd_sequence(const std::string& path, bool require_spacing) {
+std::vector<Volume> read_nrrd_sequence(const std::string& path, bool require_spacing, DataFileScope data_files) {
   const Header h = read_header(path);
   const Layout layout = parse_layout(path, h, require_spacing, /*sequence=*/true);
-  const Volume block = load_block(path, h, layout);
+  const Volume block = load_block(path, h, layout, data_files);
   const Volume& g = layout.grid;
   const int64_t frame_bytes = g.data_bytes();
   std::vector<Volume> frames;
@@ -442,14 +437,14 @@ void write_nrrd_sequence(const std::vector<Volume>& frames, const std::string& p
   write_data(path, header_text(f0, n, gzip), data.data(), static_cast<int64_t>(data.size()), gzip);
 }
 
-Volume read_volume(const std::string& path, bool require_spacing) {
+Volume read_volume(const std::string& path, bool require_spacing, DataFileScope data_files) {
   const std::string l = io::lower(path);
   auto ends = [&l](const char* s) {
     const size_t n = std::strlen(s);
     return l.size() >= n && l.compare(l.size() - n, n, s) == 0;
   };
-  if (ends(".mha") || ends(".mhd")) return read_metaimage(path, require_spacing);
-  if (ends(".nrrd") || ends(".nhdr")) return read_nrrd(path, require_spacing);
+  if (ends(".mha") || ends(".mhd")) return read_metaimage(path, require_spacing, data_files);
+  if (ends(".nrrd") || ends(".nhdr")) return read_nrrd(path, require_spacing, data_files);
   throw VolumeIoError(fmt::format("{}: file name: expected .mha, .mhd, .nrrd or .nhdr", io::base_name(path)));
 }
 

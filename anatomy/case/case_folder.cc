@@ -4,6 +4,8 @@
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>
+#include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <filesystem>
@@ -14,13 +16,16 @@
 #ifdef PCISIM_ANATOMY_HAVE_PNG
 #include "anatomy/case/case_overview.h"
 #endif
+#include "anatomy/case/case_limits.h"
 #include "anatomy/case/slicer_markups.h"
 #include "anatomy/heart/heart_mesh.h"
 #include "anatomy/mesh/mesh_io.h"
 #include "anatomy/vessel/vessel_tree_json.h"
+#include "anatomy/volume/inside_folder.h"
 #include "anatomy/volume/io_text.h"
 #include "anatomy/volume/volume_io.h"
 #include "json/json_reader.h"
+#include "json/regular_file.h"
 
 namespace pcisim::anatomy {
 namespace {
@@ -38,16 +43,37 @@ std::string lower_ascii(std::string s) {
   return s;
 }
 
-// a file named by case.json: relative, inside the folder, present
+// a path named by case.json: relative, no control character, and inside the folder once every
+// symbolic link is followed (a case reads nothing outside its folder); `kind` is "file" or "folder"
+void check_inside(const fs::path& dir, const std::string& case_json, const std::string& field, const std::string& name,
+                  const char* kind) {
+  const InsideFolder inside = resolve_inside_folder(dir.string(), name);
+  switch (inside.escape) {
+    case FolderEscape::kNone:
+      return;
+    case FolderEscape::kNotRelative:
+      fail(case_json, field, fmt::format("'{}' must be a {} name inside the case folder", escaped_name(name), kind));
+    case FolderEscape::kControlCharacter:
+      fail(case_json, field,
+           fmt::format("'{}' holds a control character (a {} name inside the case folder expected)", escaped_name(name),
+                       kind));
+    default:
+      fail(case_json, field,
+           fmt::format("'{}' {} (a case reads nothing outside its folder)", escaped_name(name), inside.why));
+  }
+}
+
+// a file named by case.json: inside the folder (check_inside), present, and a regular file (a
+// FIFO would block the reader, /dev/zero never ends, a folder is no file)
 std::string member_file(const fs::path& dir, const std::string& case_json, const std::string& field,
                         const std::string& name) {
-  const fs::path p(name);
-  if (name.empty() || p.is_absolute() || name.find("..") != std::string::npos)
-    fail(case_json, field, fmt::format("'{}' must be a file name inside the case folder", name));
-  const fs::path full = dir / p;
+  check_inside(dir, case_json, field, name, "file");
+  const fs::path full = dir / name;
   std::error_code ec;
-  if (!fs::is_regular_file(full, ec))
+  if (!fs::exists(fs::status(full, ec)))
     fail(case_json, field, fmt::format("file '{}' not found in {}", name, dir.string()));
+  if (const std::string why = json::regular_file_problem(full.string(), "a case's " + field); !why.empty())
+    fail(case_json, field, why);
   return full.string();
 }
 
@@ -88,6 +114,109 @@ void check_organ_inside(const TriangleMesh& surface, const Volume& ct, const std
   }
 }
 
+// ---- where a case's points may lie (docs/anatomy.md, "Limits"; bounds in case_limits.h) ----
+
+using namespace case_limits;
+
+// every vertex of a case's mesh within kMaxCoordinateM of the origin: products of coordinates
+// (volumes, winding numbers) then stay finite
+void check_mesh_coordinates(const TriangleMesh& mesh, const std::string& file) {
+  for (size_t v = 0; v < mesh.vertices_m.size(); ++v)
+    if (!(mesh.vertices_m[v].cwiseAbs().maxCoeff() <= kMaxCoordinateM)) {
+      const Eigen::Vector3d& p = mesh.vertices_m[v];
+      fail(file, fmt::format("vertices[{}]", v),
+           fmt::format("at ({:.6g}, {:.6g}, {:.6g}) m, more than {:.0f} m from the origin (a patient is smaller)",
+                       p.x(), p.y(), p.z(), kMaxCoordinateM));
+    }
+}
+
+// the box a case's landmarks, heart and support must lie in or near: the CT's (half a voxel
+// beyond its outer voxel centres), or without a CT the centerlines'
+struct NearBox {
+  const Volume* ct = nullptr;
+  Eigen::Vector3d lo_mm = Eigen::Vector3d::Zero(), hi_mm = Eigen::Vector3d::Zero();  // without a CT
+  std::string name;                                                                  // "the CT ct.nrrd", for messages
+};
+
+NearBox near_box(const Case& c, const std::string& ct_file, const std::string& vessels_file) {
+  NearBox box;
+  if (c.ct) {
+    box.ct = &*c.ct;
+    box.name = "the CT " + fs::path(ct_file).filename().string();
+    return box;
+  }
+  box.lo_mm = Eigen::Vector3d::Constant(INFINITY);
+  box.hi_mm = -box.lo_mm;
+  for (const auto& b : c.vessels.branches)
+    for (const auto& p : b.points) {
+      box.lo_mm = box.lo_mm.cwiseMin(p.position_m * 1e3);
+      box.hi_mm = box.hi_mm.cwiseMax(p.position_m * 1e3);
+    }
+  box.name = "the centerlines' box (" + fs::path(vessels_file).filename().string() + "; the case has no CT)";
+  return box;
+}
+
+// the box's corners, mm
+std::array<Eigen::Vector3d, 8> box_corners_mm(const NearBox& box) {
+  std::array<Eigen::Vector3d, 8> corners;
+  for (int k = 0; k < 8; ++k) {
+    Eigen::Vector3d x;
+    for (int a = 0; a < 3; ++a) {
+      const bool high = (k >> a) & 1;
+      x[a] = box.ct ? (high ? box.ct->dims[a] - 0.5 : -0.5) : (high ? box.hi_mm[a] : box.lo_mm[a]);
+    }
+    corners[k] = box.ct ? box.ct->index_to_physical_mm(x) : x;
+  }
+  return corners;
+}
+
+// how far p lies outside the box, mm (0 inside)
+double mm_outside(const NearBox& box, const Eigen::Vector3d& p_mm) {
+  Eigen::Vector3d out_mm;
+  if (box.ct) {
+    const Eigen::Vector3d ijk = box.ct->physical_to_index(p_mm);
+    for (int a = 0; a < 3; ++a)
+      out_mm[a] = std::max({-0.5 - ijk[a], ijk[a] - (box.ct->dims[a] - 0.5), 0.0}) * box.ct->spacing_mm[a];
+  } else {
+    for (int a = 0; a < 3; ++a) out_mm[a] = std::max({box.lo_mm[a] - p_mm[a], p_mm[a] - box.hi_mm[a], 0.0});
+  }
+  return out_mm.norm();
+}
+
+// a point of case.json (a landmark, the heart's place) inside the box or within kNearCtMm of it
+void check_near(const NearBox& box, const Eigen::Vector3d& p_m, const std::string& file, const std::string& field,
+                const std::string& what) {
+  if (!(p_m.cwiseAbs().maxCoeff() <= kMaxCoordinateM))
+    fail(file, field,
+         fmt::format("{} at ({:.6g}, {:.6g}, {:.6g}) m is more than {:.0f} m from the origin (it must lie inside "
+                     "{} or within {:.0f} mm of it)",
+                     what, p_m.x(), p_m.y(), p_m.z(), kMaxCoordinateM, box.name, kNearCtMm));
+  const Eigen::Vector3d p_mm = p_m * 1e3;
+  const double out_mm = mm_outside(box, p_mm);
+  if (!(out_mm <= kNearCtMm))
+    fail(file, field,
+         fmt::format("{} at ({:.1f}, {:.1f}, {:.1f}) mm lies {:.1f} mm outside {} (at most {:.0f} mm outside it "
+                     "is allowed)",
+                     what, p_mm.x(), p_mm.y(), p_mm.z(), out_mm, box.name, kNearCtMm));
+}
+
+// the support plane (unit normal, offset) passes through the box or within kNearCtMm of it
+void check_plane_near(const NearBox& box, const Eigen::Vector3d& normal, double offset_m, const std::string& file,
+                      const std::string& field) {
+  double lo_mm = INFINITY, hi_mm = -INFINITY;
+  for (const Eigen::Vector3d& x : box_corners_mm(box)) {
+    lo_mm = std::min(lo_mm, normal.dot(x));
+    hi_mm = std::max(hi_mm, normal.dot(x));
+  }
+  const double d_mm = offset_m * 1e3;
+  const double gap_mm = std::max({lo_mm - d_mm, d_mm - hi_mm, 0.0});
+  if (!(gap_mm <= kNearCtMm))
+    fail(file, field,
+         fmt::format("the plane ({:.1f} mm along its normal) passes {:.1f} mm from {} (at most {:.0f} mm outside it "
+                     "is allowed: the organ rests on it)",
+                     d_mm, gap_mm, box.name, kNearCtMm));
+}
+
 void write_fiducials(const std::vector<Eigen::Vector3d>& fiducials_m, const std::string& path) {
   Json centres = Json::array();
   for (const Eigen::Vector3d& f : fiducials_m) centres.push_back({f.x() * 1e3, f.y() * 1e3, f.z() * 1e3});
@@ -122,11 +251,14 @@ std::vector<Eigen::Vector3d> read_fiducials(const std::string& file, const Trian
                                             const std::string& surface_file) {
   std::vector<Eigen::Vector3d> fiducials_m;
   try {
-    const Json doc = json::parse_json_checked(io::read_file(file), file);
+    const Json doc = json::parse_json_checked(io::read_file(file, kMaxFiducialsFileBytes), file);
     json::JsonReader r(doc, "");
     if (r.text("format", "") != kFiducialsFormat) r.fail("format", fmt::format("expected \"{}\"", kFiducialsFormat));
     r.integer("version", 0, kCaseVersion, kCaseVersion);
     const Json& centres = r.list("centres_mm");
+    // each bead is tested against every triangle of the surface below
+    if (centres.size() > static_cast<size_t>(kMaxFiducials))
+      r.fail("centres_mm", fmt::format("{} beads, more than {} (the limit)", centres.size(), kMaxFiducials));
     for (size_t i = 0; i < centres.size(); ++i) {
       const Json& c = centres[i];
       bool ok = c.is_array() && c.size() == 3;
@@ -169,8 +301,9 @@ Organ read_organ(json::JsonReader o, const fs::path& dir, const std::string& cas
   organ.name = o.text("name", "organ");
   if (organ.name.empty()) o.fail("name", "expected a non-empty name");
   *surface_file = member_file(dir, case_json, "organ.surface", o.text("surface", ""));
-  organ.surface = read_mesh(*surface_file, kMillimetre);
+  organ.surface = read_mesh(*surface_file, kMillimetre, kMaxOrganTriangles);
   if (organ.surface.triangles.empty()) fail(*surface_file, "mesh", "no triangles (the organ needs its surface)");
+  check_mesh_coordinates(organ.surface, *surface_file);
   if (const std::string why = check_closed_manifold(organ.surface); !why.empty())
     fail(*surface_file, "mesh", why + " (the organ must be a closed, manifold surface)");
   if (signed_volume_m3(organ.surface) <= 0.0)
@@ -185,8 +318,16 @@ Organ read_organ(json::JsonReader o, const fs::path& dir, const std::string& cas
   json::JsonReader s = o.child("support");
   Eigen::Vector3d n;
   if (!s.numbers("normal", {n.data(), 3})) s.fail("normal", "expected [x, y, z], a direction out of the support");
-  if (!(n.norm() > 0.0) || !n.normalized().allFinite())
-    s.fail("normal", "expected a non-zero direction (out of the support, toward the organ)");
+  // bounded before it is normalised: the norm of [0, -1e308, 0] overflows to inf, and the normal
+  // became 0 (refused only later, by the soft-tissue effect, naming no file)
+  if (!n.allFinite() || n.cwiseAbs().maxCoeff() > kMaxDirectionComponent)
+    s.fail("normal", fmt::format("expected a direction whose components are within +-{:g} (any length; got [{:g}, "
+                                 "{:g}, {:g}])",
+                                 kMaxDirectionComponent, n.x(), n.y(), n.z()));
+  if (!(n.norm() >= kMinDirectionLength))
+    s.fail("normal", fmt::format("expected a non-zero direction (out of the support, toward the organ; at least {:g} "
+                                 "long)",
+                                 kMinDirectionLength));
   organ.support_normal = n.normalized();
   if (!s.has("offset_mm"))
     s.fail("offset_mm", "missing (the plane's signed distance from the origin along the normal)");
@@ -279,12 +420,15 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
   const std::string case_json = (dir / "case.json").string();
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw CaseError(fmt::format("{}: not a case folder (no such directory)", dir_name));
-  if (!fs::is_regular_file(case_json, ec))
+  if (!fs::exists(fs::symlink_status(case_json, ec)))
     throw CaseError(fmt::format("{}: missing (a case folder needs case.json)", case_json));
+  if (const InsideFolder inside = resolve_inside_folder(dir_name, "case.json"); inside.escape != FolderEscape::kNone)
+    throw CaseError(fmt::format("{}: {} (a case reads nothing outside its folder)", case_json, inside.why));
+  if (const std::string why = json::regular_file_problem(case_json, "case.json"); !why.empty()) throw CaseError(why);
   Case c;
   std::string vessels_file, ct_file, ct_dicom, organ_surface_file;
   try {
-    const Json doc = json::parse_json_checked(io::read_file(case_json), case_json);
+    const Json doc = json::parse_json_checked(io::read_file(case_json, kMaxCaseJsonBytes), case_json);
     json::JsonReader r(doc, "");
     if (r.text("format", "") != kCaseFormat) r.fail("format", fmt::format("expected \"{}\"", kCaseFormat));
     // what the numbers mean is never guessed: version, units and frame must be stated
@@ -303,7 +447,8 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
     }
     if (r.has("lumen")) {
       const std::string lumen_file = member_file(dir, case_json, "lumen", r.text("lumen", ""));
-      c.lumen = read_mesh(lumen_file, kMillimetre);
+      c.lumen = read_mesh(lumen_file, kMillimetre, kMaxLumenTriangles);
+      check_mesh_coordinates(c.lumen, lumen_file);
       if (const std::string why = check_closed_manifold(c.lumen); !why.empty())
         fail(lumen_file, "mesh", why + " (the lumen must be a closed, manifold surface)");
     }
@@ -315,8 +460,7 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
       if (ct.has("file")) ct_file = member_file(dir, case_json, "ct.file", ct.text("file", ""));
       if (ct.has("dicom")) {
         const std::string name = ct.text("dicom", "");
-        if (name.empty() || fs::path(name).is_absolute() || name.find("..") != std::string::npos)
-          fail(case_json, "ct.dicom", fmt::format("'{}' must be a folder inside the case folder", name));
+        check_inside(dir, case_json, "ct.dicom", name, "folder");
         ct_dicom = (dir / name).string();
         if (!fs::is_directory(ct_dicom, ec))
           fail(case_json, "ct.dicom", fmt::format("folder '{}' not found in {}", name, dir.string()));
@@ -325,6 +469,9 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
       c.ct_lumen_enhanced = ct.boolean("lumen_enhanced", true);
       ct.finish();
     }
+    if (r.list("landmarks").size() > static_cast<size_t>(kMaxLandmarks))
+      r.fail("landmarks",
+             fmt::format("{} landmarks, more than {} (the limit)", r.list("landmarks").size(), kMaxLandmarks));
     for (const auto& l : r.list("landmarks")) {
       json::JsonReader lr(l, "landmarks[]");
       Landmark m;
@@ -358,16 +505,16 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
               1e-6 ||
           c.heart.rotation.determinant() < 0)
         h.fail("rotation", "expected a rotation (orthonormal rows, determinant +1)");
-      if (!numbers(t, 3) || std::abs(t[0].get<double>()) > 10 || std::abs(t[1].get<double>()) > 10 ||
-          std::abs(t[2].get<double>()) > 10)
-        h.fail("translation_m", "expected [x, y, z] in metres, each within 10 m");
+      if (!numbers(t, 3) || std::abs(t[0].get<double>()) > kMaxCoordinateM ||
+          std::abs(t[1].get<double>()) > kMaxCoordinateM || std::abs(t[2].get<double>()) > kMaxCoordinateM)
+        h.fail("translation_m", fmt::format("expected [x, y, z] in metres, each within {:.0f} m", kMaxCoordinateM));
       c.heart.translation_m = {t[0].get<double>(), t[1].get<double>(), t[2].get<double>()};
       if (h.has("rest_vertices")) {
         // one vertex per template vertex, near the template (a fit moves the surface by
         // millimetres, never by a heart's size): a file of another mesh or in metres is refused
         const std::string node_file = member_file(dir, case_json, "heart.rest_vertices", h.text("rest_vertices", ""));
         try {
-          const std::string text = io::read_file(node_file);
+          const std::string text = io::read_file(node_file, kMaxHeartNodeFileBytes);
           c.heart_vertices_m = parse_tetgen_nodes({text, node_file}, 1e-3);
         } catch (const std::invalid_argument& e) {
           throw CaseError(e.what());
@@ -406,7 +553,8 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
   }
   if (!ct_file.empty()) {
     try {
-      c.ct = read_volume(ct_file, /*require_spacing=*/true);
+      // a detached data file too must lie beside the header, inside the case
+      c.ct = read_volume(ct_file, /*require_spacing=*/true, DataFileScope::kHeaderFolder);
     } catch (const VolumeIoError& e) {
       throw CaseError(e.what());
     }
@@ -421,6 +569,16 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
   }
   if (c.ct) check_vessels_inside(c.vessels, *c.ct, vessels_file, ct_file);
   if (c.organ) check_organ_inside(c.organ->surface, *c.ct, organ_surface_file, ct_file);
+  // the numbers of case.json that place things: in or near the CT (a heart centre 5 m away ran
+  // and wrote samples of nothing)
+  const NearBox box = near_box(c, ct_file, vessels_file);
+  for (size_t i = 0; i < c.landmarks.size(); ++i)
+    check_near(box, c.landmarks[i].position_m, case_json, fmt::format("landmarks[{}].position_m", i),
+               fmt::format("landmark \"{}\"", c.landmarks[i].name));
+  if (!c.heart.is_identity())
+    check_near(box, c.heart.translation_m, case_json, "heart.translation_m", "the heart's centre");
+  if (c.organ)
+    check_plane_near(box, c.organ->support_normal, c.organ->support_offset_m, case_json, "organ.support.offset_mm");
   return c;
 }
 

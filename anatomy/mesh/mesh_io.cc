@@ -137,7 +137,19 @@ void check_finite(const std::string& path, const Eigen::Vector3d& v, size_t inde
   if (!v.allFinite()) fail(path, fmt::format("vertex {} is not finite", index));
 }
 
-TriangleMesh read_stl(const std::string& path, std::string_view bytes, double scale) {
+// the caller's bound on a mesh's size (kNoTriangleLimit: the file's size alone bounds it)
+struct MeshLimit {
+  int64_t triangles;
+  // a mesh's triangles use at most 3 vertices each: more can only be padding
+  int64_t vertices() const { return triangles > INT64_MAX / 4 ? INT64_MAX : 3 * triangles + 3; }
+};
+
+[[noreturn]] void too_many(const std::string& path, const char* field, int64_t n, const char* what, int64_t limit) {
+  if (n < 0) fail(path, fmt::format("{}: more than {} {} (the limit for this mesh)", field, limit, what));
+  fail(path, fmt::format("{}: {} {}, more than {} (the limit for this mesh)", field, n, what, limit));
+}
+
+TriangleMesh read_stl(const std::string& path, std::string_view bytes, double scale, MeshLimit limit) {
   TriangleMesh mesh;
   Welder weld(mesh);
   // binary: 80-byte header, uint32 count, 50 bytes per triangle; anything else is ASCII
@@ -145,6 +157,7 @@ TriangleMesh read_stl(const std::string& path, std::string_view bytes, double sc
     uint32_t n = 0;
     std::memcpy(&n, bytes.data() + 80, 4);
     if (bytes.size() == 84 + uint64_t{50} * n) {
+      if (n > limit.triangles) too_many(path, "triangle count", n, "triangles", limit.triangles);
       mesh.triangles.reserve(n);
       for (uint32_t t = 0; t < n; ++t) {
         const char* rec = bytes.data() + 84 + size_t{50} * t + 12;  // skip the normal
@@ -177,6 +190,8 @@ TriangleMesh read_stl(const std::string& path, std::string_view bytes, double sc
       fail(path, fmt::format("triangle {}: a vertex is not three finite numbers", mesh.triangles.size()));
     tri[corner++] = weld.add(p, scale);
     if (corner == 3) {
+      if (static_cast<int64_t>(mesh.triangles.size()) >= limit.triangles)
+        too_many(path, "facets", -1, "triangles", limit.triangles);
       mesh.triangles.push_back(tri);
       corner = 0;
     }
@@ -186,7 +201,7 @@ TriangleMesh read_stl(const std::string& path, std::string_view bytes, double sc
 }
 
 // PLY: vertex x y z (float or double, other properties skipped) and faces as index lists
-TriangleMesh read_ply(const std::string& path, std::string_view bytes, double scale) {
+TriangleMesh read_ply(const std::string& path, std::string_view bytes, double scale, MeshLimit limit) {
   struct Property {
     std::string name, type, count_type;  // count_type set for a list
   };
@@ -287,6 +302,11 @@ TriangleMesh read_ply(const std::string& path, std::string_view bytes, double sc
     if (static_cast<uint64_t>(e.count) > data_bytes)
       fail(path,
            fmt::format("element {}: {} rows cannot fit in the {} bytes after the header", e.name, e.count, data_bytes));
+    // each face is at least one triangle
+    if (e.name == "face" && e.count > limit.triangles)
+      too_many(path, "element face", e.count, "faces", limit.triangles);
+    if (e.name == "vertex" && e.count > limit.vertices())
+      too_many(path, "element vertex", e.count, "vertices", limit.vertices());
   }
   for (const auto& e : elements) {
     for (const auto& p : e.props) size_of(p.type);
@@ -314,6 +334,8 @@ TriangleMesh read_ply(const std::string& path, std::string_view bytes, double sc
           }
           if (e.name == "face" && (p.name == "vertex_indices" || p.name == "vertex_index")) {
             if (idx.size() < 3) fail(path, fmt::format("face {}: fewer than 3 vertices", i));
+            if (static_cast<int64_t>(mesh.triangles.size() + idx.size() - 2) > limit.triangles)
+              too_many(path, "element face", -1, "triangles", limit.triangles);
             for (size_t k = 1; k + 1 < idx.size(); ++k) mesh.triangles.push_back({idx[0], idx[k], idx[k + 1]});
           }
           continue;
@@ -332,7 +354,7 @@ TriangleMesh read_ply(const std::string& path, std::string_view bytes, double sc
 }
 
 // OBJ: "v x y z" and "f a b c ..." (a/b/c forms, negative indices from the end); polygons fanned
-TriangleMesh read_obj(const std::string& path, std::string_view bytes, double scale) {
+TriangleMesh read_obj(const std::string& path, std::string_view bytes, double scale, MeshLimit limit) {
   TriangleMesh mesh;
   Lines in(bytes);
   std::string_view line;
@@ -347,6 +369,8 @@ TriangleMesh read_obj(const std::string& path, std::string_view bytes, double sc
       Eigen::Vector3d v;
       if (!w.length(scale, v.x()) || !w.length(scale, v.y()) || !w.length(scale, v.z()) || !v.allFinite())
         fail(path, fmt::format("line {}: a vertex needs three finite numbers", line_no));
+      if (static_cast<int64_t>(mesh.vertices_m.size()) >= limit.vertices())
+        too_many(path, fmt::format("line {}", line_no).c_str(), -1, "vertices", limit.vertices());
       mesh.vertices_m.push_back(v);
     } else if (key == "f") {
       idx.clear();
@@ -362,6 +386,8 @@ TriangleMesh read_obj(const std::string& path, std::string_view bytes, double sc
         idx.push_back(static_cast<int>(zero_based));
       }
       if (idx.size() < 3) fail(path, fmt::format("line {}: a face needs 3 vertices", line_no));
+      if (static_cast<int64_t>(mesh.triangles.size() + idx.size() - 2) > limit.triangles)
+        too_many(path, fmt::format("line {}", line_no).c_str(), -1, "triangles", limit.triangles);
       for (size_t k = 1; k + 1 < idx.size(); ++k) mesh.triangles.push_back({idx[0], idx[k], idx[k + 1]});
     }
   }
@@ -370,7 +396,7 @@ TriangleMesh read_obj(const std::string& path, std::string_view bytes, double sc
 
 }  // namespace
 
-TriangleMesh read_mesh(const std::string& path, double metres_per_unit) {
+TriangleMesh read_mesh(const std::string& path, double metres_per_unit, int64_t max_triangles) {
   const std::string ext = extension_of(path);
   if (ext != ".stl" && ext != ".ply" && ext != ".obj") fail(path, "unknown mesh format (expected .stl, .ply or .obj)");
   std::string bytes;
@@ -379,17 +405,18 @@ TriangleMesh read_mesh(const std::string& path, double metres_per_unit) {
   } catch (const std::exception& e) {
     throw MeshIoError(e.what());
   }
-  return parse_mesh(path, ext, bytes, metres_per_unit);
+  return parse_mesh(path, ext, bytes, metres_per_unit, max_triangles);
 }
 
 TriangleMesh parse_mesh(const std::string& path, const std::string& format, std::string_view bytes,
-                        double metres_per_unit) {
+                        double metres_per_unit, int64_t max_triangles) {
   if (format != ".stl" && format != ".ply" && format != ".obj") fail(path, "unknown mesh format '" + format + "'");
   if (static_cast<int64_t>(bytes.size()) > kMaxMeshFileBytes)
     fail(path, fmt::format("{} bytes, over the {} byte limit for a mesh file", bytes.size(), kMaxMeshFileBytes));
-  TriangleMesh mesh = format == ".stl"   ? read_stl(path, bytes, metres_per_unit)
-                      : format == ".ply" ? read_ply(path, bytes, metres_per_unit)
-                                         : read_obj(path, bytes, metres_per_unit);
+  const MeshLimit limit{std::max<int64_t>(max_triangles, 1)};
+  TriangleMesh mesh = format == ".stl"   ? read_stl(path, bytes, metres_per_unit, limit)
+                      : format == ".ply" ? read_ply(path, bytes, metres_per_unit, limit)
+                                         : read_obj(path, bytes, metres_per_unit, limit);
   const int n = static_cast<int>(mesh.vertices_m.size());
   for (size_t t = 0; t < mesh.triangles.size(); ++t)
     for (int k : mesh.triangles[t])

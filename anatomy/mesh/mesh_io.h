@@ -24,13 +24,19 @@ inline constexpr double kMillimetre = 1e-3;
 // ASCII; a larger file is refused (naming its size and this limit) before it is read
 inline constexpr int64_t kMaxMeshFileBytes = int64_t{512} << 20;
 
+// no bound on a mesh's triangles but the file's size (a case names its own: anatomy/case/case_limits.h)
+inline constexpr int64_t kNoTriangleLimit = INT64_MAX;
+
 // by extension (.stl, .ply, .obj, any case). STL has no shared vertices: corners at the same
-// position are welded into one vertex, in order of first appearance.
-TriangleMesh read_mesh(const std::string& path, double metres_per_unit = kMillimetre);
+// position are welded into one vertex, in order of first appearance. A mesh of more than
+// max_triangles triangles (or more vertices than they could use, 3 each) is refused as soon as a
+// header or the count read so far says so, before the rest is parsed or allocated.
+TriangleMesh read_mesh(const std::string& path, double metres_per_unit = kMillimetre,
+                       int64_t max_triangles = kNoTriangleLimit);
 // the same from a file's bytes, parsed in place (never copied); `format` is ".stl", ".ply" or
 // ".obj", `name` what errors say
 TriangleMesh parse_mesh(const std::string& name, const std::string& format, std::string_view bytes,
-                        double metres_per_unit = kMillimetre);
+                        double metres_per_unit = kMillimetre, int64_t max_triangles = kNoTriangleLimit);
 
 // binary STL in millimetres; the 80-byte header says "SPACE=LPS" (3D Slicer reads the space from
 // it) and "units=mm". Coordinates are float32: write_stl then read_mesh gives the mesh rounded to

@@ -1,10 +1,13 @@
 #include "anatomy/vessel/vessel_tree_json.h"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "anatomy/case/case_limits.h"
 #include "anatomy/volume/io_text.h"
 #include "json/json_reader.h"
 
@@ -12,6 +15,7 @@ namespace pcisim::anatomy {
 namespace {
 
 using nlohmann::json;
+using namespace case_limits;
 
 // every error names the file and the JSON path of the offending field
 [[noreturn]] void fail(const std::string& file, const std::string& path, const std::string& what) {
@@ -88,8 +92,14 @@ VesselTree read_vessel_tree_json(const std::string& file) {
   integer_in(*member(doc, "version", file, "(root)"), 1, 1, file, "version");
   const json& branches = *member(doc, "branches", file, "(root)");
   if (!branches.is_array() || branches.empty()) fail(file, "branches", "expected a non-empty array");
+  // every count and length is bounded before the points are read: the lofted tubes and the
+  // wall-contact field grow with them (docs/anatomy.md, "Limits")
+  if (branches.size() > static_cast<size_t>(kMaxBranches))
+    fail(file, "branches", fmt::format("{} branches, more than {} (the limit)", branches.size(), kMaxBranches));
 
   VesselTree tree;
+  size_t tree_points = 0;
+  double tree_length_m = 0.0;
   tree.branches.reserve(branches.size());
   for (size_t i = 0; i < branches.size(); ++i) {
     const std::string bp = "branches[" + std::to_string(i) + "]";
@@ -115,6 +125,14 @@ VesselTree read_vessel_tree_json(const std::string& file) {
     }
     const json& points = *member(jb, "points", file, bp);
     if (!points.is_array() || points.size() < 2) fail(file, bp + ".points", "expected an array of at least 2 points");
+    if (points.size() > static_cast<size_t>(kMaxBranchPoints))
+      fail(file, bp + ".points",
+           fmt::format("{} points, more than {} (the limit per branch)", points.size(), kMaxBranchPoints));
+    tree_points += points.size();
+    if (tree_points > static_cast<size_t>(kMaxTreePoints))
+      fail(file, bp + ".points",
+           fmt::format("the tree reaches {} points here, more than {} (the limit for the tree)", tree_points,
+                       kMaxTreePoints));
     b.points.reserve(points.size());
     for (size_t k = 0; k < points.size(); ++k) {
       const std::string pp = bp + ".points[" + std::to_string(k) + "]";
@@ -125,13 +143,34 @@ VesselTree read_vessel_tree_json(const std::string& file) {
       if (!pos.is_array() || pos.size() != 3) fail(file, pp + ".position_m", "expected an array of 3 numbers");
       CenterlinePoint c;
       for (int d = 0; d < 3; ++d) {
-        c.position_m[d] = finite_number(pos[d], file, pp + ".position_m[" + std::to_string(d) + "]");
+        const std::string cp = pp + ".position_m[" + std::to_string(d) + "]";
+        c.position_m[d] = finite_number(pos[d], file, cp);
+        if (std::abs(c.position_m[d]) > kMaxCoordinateM)
+          fail(file, cp,
+               fmt::format("{} m, more than {} m from the origin (the limit)", c.position_m[d], kMaxCoordinateM));
       }
       const json& r = *member(jp, "radius_m", file, pp);
       if (!r.is_number() || !std::isfinite(r.get<double>()) || r.get<double>() <= 0.0) {
         fail(file, pp + ".radius_m", "expected a number > 0");
       }
       c.radius_m = r.get<double>();
+      if (c.radius_m < kMinVesselRadiusM || c.radius_m > kMaxVesselRadiusM)
+        fail(file, pp + ".radius_m",
+             fmt::format("{} m, outside [{}, {}] m (from a 99% stenosis to an aneurysmal aortic root)", c.radius_m,
+                         kMinVesselRadiusM, kMaxVesselRadiusM));
+      if (k > 0) {
+        // a repeated point gives the tube no direction; a branch that doubles back on itself
+        // over and over makes the length, and so the work, grow
+        const double step_m = (c.position_m - b.points.back().position_m).norm();
+        if (!(step_m >= kMinPointSpacingM))
+          fail(file, pp + ".position_m",
+               fmt::format("{:.3g} m from points[{}], closer than {} m (consecutive points must differ)", step_m, k - 1,
+                           kMinPointSpacingM));
+        tree_length_m += step_m;
+        if (tree_length_m > kMaxTreeLengthM)
+          fail(file, pp + ".position_m",
+               fmt::format("the centerlines' total length passes {} m here (the limit for the tree)", kMaxTreeLengthM));
+      }
       b.points.push_back(c);
     }
     tree.branches.push_back(std::move(b));

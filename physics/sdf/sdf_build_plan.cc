@@ -112,8 +112,9 @@ BuildPlan make_build_plan(const anatomy::TriangleMesh& mesh, double spacing_m, d
     const double n = std::ceil((hi[a] - lo[a] + 2 * padding_m) / spacing_m) + 1;
     const double rounded = std::ceil(n / kBrick) * kBrick;  // whole bricks
     points *= rounded;
-    if (rounded > 1 << 24 || points > 2147483647.0) {
-      throw std::invalid_argument("SignedDistanceField: grid too large for spacing " + std::to_string(spacing_m));
+    if (rounded > 1 << 24 || points > static_cast<double>(kMaxGridPoints)) {
+      throw std::invalid_argument("SignedDistanceField: grid too large for spacing " + std::to_string(spacing_m) +
+                                  " (more than " + std::to_string(kMaxGridPoints) + " points)");
     }
     g.dims[a] = static_cast<int>(rounded);
     g.bricks[a] = g.dims[a] / kBrick;
@@ -175,6 +176,11 @@ BuildPlan make_build_plan(const anatomy::TriangleMesh& mesh, double spacing_m, d
           for (int bx = blo[0]; bx <= bhi[0]; ++bx) {
             const int64_t b = bx + int64_t(g.bricks[0]) * (by + int64_t(g.bricks[1]) * bz);
             if (plan.table[b] < 0) {
+              // wide walls at a fine spacing: refused before the pool and the keys are allocated
+              if (int64_t(plan.pool_bricks() + 1) * kBrickPoints > kMaxBandPoints)
+                throw std::invalid_argument("SignedDistanceField: the walls' band needs more than " +
+                                            std::to_string(kMaxBandPoints) + " grid points at spacing " +
+                                            std::to_string(spacing_m) + " (a lumen too large for it)");
               plan.table[b] = plan.pool_bricks();
               plan.pool_brick_coords.insert(plan.pool_brick_coords.end(), {bx, by, bz});
             }

@@ -29,7 +29,17 @@ struct BuildPlan {
   int32_t pool_bricks() const { return static_cast<int32_t>(pool_brick_coords.size() / 3); }
 };
 
-// throws std::invalid_argument for an empty mesh, a bad spacing/band or a grid that would not fit
+// the largest grid, in grid points: indices into it are int32 (the brick table itself is small,
+// one int32 per 512 points; the guidewire bench's 0.1 mm field over the phantom is 1.6 G points)
+inline constexpr int64_t kMaxGridPoints = 2147483647;
+// the most grid points in stored (band) bricks: 4 bytes each in the field and 8 more for the
+// build's nearest-triangle keys, so 768 MB at the limit; the phantom at 0.1 mm stores 32 M
+inline constexpr int64_t kMaxBandPoints = int64_t{1} << 26;
+
+// throws std::invalid_argument for an empty mesh, a bad spacing/band, a grid of more than
+// kMaxGridPoints, or walls whose band would store more than kMaxBandPoints. Both counts are
+// checked before anything of their size is allocated: the grid's from the mesh's bounds, the
+// band's while its bricks are listed (before the parity rows and the pool)
 BuildPlan make_build_plan(const anatomy::TriangleMesh& mesh, double spacing_m, double padding_m, double band_m);
 
 // after every component's values are folded into pool: points of other components' bricks that

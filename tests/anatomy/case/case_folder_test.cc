@@ -4,8 +4,12 @@
 
 #include <Eigen/Geometry>
 
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -195,7 +199,7 @@ TEST_F(CaseFolder, TheHeartPoseReadsBackAsWritten) {
   Case c = small_case();
   c.heart.rotation = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   c.heart.scale = 1.07;
-  c.heart.translation_m = Eigen::Vector3d(0.021, -0.14, -0.093);
+  c.heart.translation_m = Eigen::Vector3d(0.021, -0.094, -0.053);  // in the CT (or within 50 mm of it)
   write_case(c, dir_.string());
   const Case b = read_case(dir_.string());
   EXPECT_LT((b.heart.rotation - c.heart.rotation).cwiseAbs().maxCoeff(), 1e-12);
@@ -533,6 +537,133 @@ TEST_F(OrganCaseFolder, AnUnknownOrganKeyIsRefused) {
   expect_refused("case.json", "organ.stiffness", "unknown key");
 }
 
+// ---- the bounds on a case's numbers (anatomy/case/case_limits.h, docs/anatomy.md "Limits") ----
+
+// a heart centre 1e300 m (or 5 m) away ran, and the dataset wrote samples of nothing
+TEST_F(CaseFolder, ALandmarkOrTheHeartFarFromTheCtIsRefused) {
+  const auto written = case_json();
+  auto j = written;
+  j["landmarks"][0]["position_m"] = {1e300, 0.0, 0.0};
+  set_case_json(j);
+  EXPECT_NE(refusal().find("case.json: landmarks[0].position_m: landmark \"heart centre\" at (1e+300, 0, 0) m is "
+                           "more than 10 m from the origin"),
+            std::string::npos)
+      << refusal();
+  j["landmarks"][0]["position_m"] = {5.0, 0.0, 0.0};
+  set_case_json(j);
+  EXPECT_NE(refusal().find("case.json: landmarks[0].position_m: landmark \"heart centre\" at (5000.0, 0.0, 0.0) mm "
+                           "lies 4887.4 mm outside the CT ct.nrrd (at most 50 mm outside it is allowed)"),
+            std::string::npos)
+      << refusal();
+  // near is allowed: 40 mm beyond the CT's box (which ends at x = 112.6 mm)
+  j["landmarks"][0]["position_m"] = {0.1526, 0.0, 0.0};
+  set_case_json(j);
+  EXPECT_EQ(refusal(), "");
+  // without a CT, near the centerlines' box
+  j = written;
+  j.erase("ct");
+  j["landmarks"][0]["position_m"] = {0.0, 0.0, -1.0};
+  set_case_json(j);
+  EXPECT_NE(refusal().find("landmarks[0].position_m: landmark \"heart centre\" at (0.0, 0.0, -1000.0) mm lies"),
+            std::string::npos)
+      << refusal();
+  EXPECT_NE(refusal().find("outside the centerlines' box (vessels.json; the case has no CT)"), std::string::npos)
+      << refusal();
+  // the heart placed half a metre away
+  Case c = small_case();
+  c.heart.translation_m = Eigen::Vector3d(0.5, 0.0, 0.0);
+  write_case(c, dir_.string());
+  EXPECT_NE(refusal().find("case.json: heart.translation_m: the heart's centre at (500.0, 0.0, 0.0) mm lies"),
+            std::string::npos)
+      << refusal();
+}
+
+// a support normal of [0, -1e308, 0]: its norm overflowed to inf and the normal became 0, refused
+// only later by the soft-tissue effect, naming no file
+TEST_F(OrganCaseFolder, AnOverflowingSupportNormalIsRefusedBeforeItIsNormalised) {
+  auto j = case_json();
+  j["organ"]["support"]["normal"] = {0.0, -1e308, 0.0};
+  set_case_json(j);
+  expect_refused("case.json", "organ.support.normal",
+                 "expected a direction whose components are within +-1e+06 (any length; got [0, -1e+308, 0])");
+  j["organ"]["support"]["normal"] = {1e-200, 0.0, 0.0};  // its square underflows
+  set_case_json(j);
+  expect_refused("case.json", "organ.support.normal", "expected a non-zero direction");
+  j["organ"]["support"]["normal"] = {0.0, -1e5, 0.0};  // any length within the bound
+  set_case_json(j);
+  EXPECT_EQ(refusal(), "");
+}
+
+TEST_F(OrganCaseFolder, ASupportPlaneFarFromTheCtIsRefused) {
+  auto j = case_json();
+  j["organ"]["support"]["offset_mm"] = -5000.0;  // 5 m below the organ
+  set_case_json(j);
+  expect_refused("case.json", "organ.support.offset_mm", "the plane (-5000.0 mm along its normal) passes");
+  EXPECT_NE(refusal().find("mm from the CT ct.nrrd (at most 50 mm outside it is allowed"), std::string::npos)
+      << refusal();
+}
+
+// 90 000 beads were each tested against every triangle of the surface: 30 s before the start
+TEST_F(OrganCaseFolder, TooManyBeadsOrSurfaceTrianglesAreRefusedBeforeTheWork) {
+  auto f = fiducials_json();
+  const auto once = f["centres_mm"];
+  while (f["centres_mm"].size() <= 256)
+    for (const auto& c : once) f["centres_mm"].push_back(c);
+  set_fiducials_json(f);
+  expect_refused("fiducials.json", "centres_mm", std::to_string(f["centres_mm"].size()) + " beads, more than 256");
+  // a binary STL of 100 001 triangles: refused by its count, before a corner is read
+  {
+    std::ofstream stl(dir_ / "organ.stl", std::ios::binary);
+    const uint32_t n = 100001;
+    stl << std::string(80, ' ');
+    stl.write(reinterpret_cast<const char*>(&n), 4);
+    stl << std::string(size_t{50} * n, '\0');
+  }
+  auto j = case_json();
+  j["organ"]["surface"] = "organ.stl";
+  set_case_json(j);
+  expect_refused("organ.stl", "triangle count", "100001 triangles, more than 100000 (the limit for this mesh)");
+}
+
+// a case's meshes are read with a bound on their triangles (the lumen's 8 M, the organ's 100 k):
+// every format refuses as soon as its header or its count so far passes it
+TEST(MeshFiles, ATriangleLimitIsCheckedBeforeTheMeshIsParsed) {
+  auto error = [](const std::string& format, const std::string& bytes) {
+    try {
+      parse_mesh("m" + format, format, bytes, kMillimetre, /*max_triangles=*/2);
+    } catch (const MeshIoError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  std::string stl(80, ' ');
+  const uint32_t n = 3;
+  stl.append(reinterpret_cast<const char*>(&n), 4);
+  stl += std::string(150, '\0');
+  EXPECT_EQ(error(".stl", stl), "m.stl: triangle count: 3 triangles, more than 2 (the limit for this mesh)");
+  std::string ascii = "solid t\n";
+  for (int t = 0; t < 3; ++t)
+    ascii +=
+        "facet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n"
+        "endloop\nendfacet\n";
+  EXPECT_EQ(error(".stl", ascii), "m.stl: facets: more than 2 triangles (the limit for this mesh)");
+  const std::string ply_head =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+      "property float z\nelement face ";
+  const std::string ply_rest = "\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n";
+  EXPECT_EQ(error(".ply", ply_head + "3" + ply_rest + "3 0 1 2\n3 0 1 3\n3 0 2 3\n"),
+            "m.ply: element face: 3 faces, more than 2 (the limit for this mesh)");
+  EXPECT_EQ(error(".ply", ply_head + "1" + ply_rest + "4 0 1 2 3\n3 0 2 3\n"), "");  // a quad: 2 triangles
+  EXPECT_EQ(error(".ply", ply_head + "2" + ply_rest + "4 0 1 2 3\n3 0 2 3\n"),
+            "m.ply: element face: more than 2 triangles (the limit for this mesh)");
+  EXPECT_EQ(error(".obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3 4\nf 1 3 4\n"),
+            "m.obj: line 6: more than 2 triangles (the limit for this mesh)");
+  // vertices beyond what the triangles could use (3 each)
+  std::string vertices;
+  for (int i = 0; i < 10; ++i) vertices += "v 0 0 0\n";
+  EXPECT_EQ(error(".obj", vertices), "m.obj: line 10: more than 9 vertices (the limit for this mesh)");
+}
+
 // an organ makes vessels optional only where there is one: a coronary case without its vessels
 // is refused as before, and a case may hold both (each read back)
 TEST_F(CaseFolder, ACoronaryCaseStillNeedsItsVessels) {
@@ -620,6 +751,227 @@ TEST(MeshFiles, StlPlyAndObjReadToTheSameSurface) {
   EXPECT_EQ(ply_error("ply\nformat ascii 1.0\nelement ian 8888888888888880\nend_header\n0\n"),
             "f.ply: element ian: 8888888888888880 rows of no properties");
   fs::remove_all(dir);
+}
+
+// ---- nothing in a case folder is read from outside it; a file that is no file says so (#38) ----
+
+// the CT's detached data file outside the case (valid voxels, so only where they lie can refuse
+// them): an absolute path (MetaImage), ".." (NRRD), a link out; each refused naming the header
+// and the field
+TEST_F(CaseFolder, ACtDataFileOutsideTheFolderIsRefused) {
+  const fs::path outside = dir_.string() + "-outside";
+  fs::create_directories(outside);
+  write_metaimage(*small_case().ct, (outside / "ct.mhd").string());  // and outside/ct.raw
+  const std::string raw = (outside / "ct.raw").string();
+  auto header_of = [](const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  auto use_ct = [&](const std::string& file, const std::string& text) {
+    std::ofstream(dir_ / file, std::ios::binary) << text;
+    auto j = case_json();
+    j["ct"]["file"] = file;
+    set_case_json(j);
+  };
+  const std::string mhd = header_of(outside / "ct.mhd");
+  const std::string mhd_head = mhd.substr(0, mhd.find("ElementDataFile"));
+  use_ct("ct.mhd", mhd_head + "ElementDataFile = " + raw + "\n");
+  EXPECT_NE(refusal().find("ct.mhd: ElementDataFile: '" + raw + "' is an absolute path"), std::string::npos)
+      << refusal();
+  // the written ct.nrrd's header, its data detached
+  std::string nhdr = header_of(dir_ / "ct.nrrd");
+  nhdr = nhdr.substr(0, nhdr.find("\n\n") + 1);
+  nhdr.replace(nhdr.find("encoding: "), nhdr.find('\n', nhdr.find("encoding: ")) - nhdr.find("encoding: "),
+               "encoding: raw");
+  const std::string up = "../" + outside.filename().string() + "/ct.raw";
+  use_ct("ct.nhdr", nhdr + "data file: " + up + "\n");
+  EXPECT_NE(refusal().find("ct.nhdr: data file: '" + up + "' goes up with '..'"), std::string::npos) << refusal();
+  fs::create_symlink(raw, dir_ / "ct.raw");
+  use_ct("ct.nhdr", nhdr + "data file: ct.raw\n");
+  EXPECT_NE(refusal().find("ct.nhdr: data file: 'ct.raw' leads to '"), std::string::npos) << refusal();
+  // the same bytes inside the folder are read
+  fs::remove(dir_ / "ct.raw");
+  fs::copy_file(raw, dir_ / "ct.raw");
+  EXPECT_EQ(refusal(), "");
+  fs::remove_all(outside);
+}
+
+// a member (or case.json itself) that is a symbolic link out of the folder; a link that stays
+// inside is followed
+TEST_F(CaseFolder, AMemberLinkedFromOutsideTheFolderIsRefused) {
+  const fs::path outside = dir_.string() + "-outside";
+  fs::create_directories(outside);
+  fs::rename(dir_ / "lumen.stl", outside / "lumen.stl");
+  fs::create_symlink(outside / "lumen.stl", dir_ / "lumen.stl");
+  EXPECT_NE(refusal().find("case.json: lumen: 'lumen.stl' leads to '" + (outside / "lumen.stl").string() +
+                           "' through a symbolic link, outside the folder"),
+            std::string::npos)
+      << refusal();
+  fs::remove(dir_ / "lumen.stl");
+  fs::rename(outside / "lumen.stl", dir_ / "lumen.stl");
+  fs::rename(dir_ / "case.json", outside / "case.json");
+  fs::create_symlink(outside / "case.json", dir_ / "case.json");
+  EXPECT_NE(refusal().find("case.json: leads to '"), std::string::npos) << refusal();
+  fs::remove(dir_ / "case.json");
+  fs::rename(outside / "case.json", dir_ / "case.json");
+  fs::create_directories(dir_ / "data");
+  fs::rename(dir_ / "vessels.json", dir_ / "data" / "v.json");
+  fs::create_symlink("data/v.json", dir_ / "vessels.json");
+  EXPECT_EQ(refusal(), "");
+  fs::remove_all(outside);
+}
+
+// a FIFO (which would block the reader), a folder, /dev/zero through a link, a device node: each
+// named for what it is, never "not found"
+TEST_F(CaseFolder, AFifoAFolderOrADeviceIsNotARegularFile) {
+  const fs::path lumen = dir_ / "lumen.stl";
+  const std::string head = "case.json: lumen: " + lumen.string() + ": not a regular file";
+  fs::remove(lumen);
+  ASSERT_EQ(::mkfifo(lumen.c_str(), 0600), 0);
+  EXPECT_NE(refusal().find(head + " (a FIFO"), std::string::npos) << refusal();
+  fs::remove(lumen);
+  fs::create_directory(lumen);
+  EXPECT_NE(refusal().find(head + " (a folder"), std::string::npos) << refusal();
+  fs::remove(lumen);
+  fs::create_symlink("/dev/zero", lumen);
+  EXPECT_NE(refusal().find("case.json: lumen: 'lumen.stl' leads to '/dev/zero' (a character device)"),
+            std::string::npos)
+      << refusal();
+  fs::remove(lumen);
+  // a device node made in the folder (only where the user may make one: root)
+  if (::mknod(lumen.c_str(), S_IFCHR | 0600, makedev(1, 5)) == 0) {
+    const std::string why = refusal();
+    EXPECT_NE(why.find("case.json: lumen: " + lumen.string() + ": "), std::string::npos) << why;
+    EXPECT_EQ(why.find("not found"), std::string::npos) << why;  // a nodev mount: "cannot open"
+  }
+}
+
+// a NUL in a name would cut it (the system reads "ct.nrrd"): the whole name is shown, escaped
+TEST_F(CaseFolder, AControlCharacterInAFileNameIsRefusedShowingTheWholeName) {
+  auto j = case_json();
+  j["ct"]["file"] = std::string("ct.nrrd\0.mha", 12);
+  set_case_json(j);
+  EXPECT_NE(refusal().find("case.json: ct.file: 'ct.nrrd\\u0000.mha' holds a control character"), std::string::npos)
+      << refusal();
+  j["ct"]["file"] = "ct\n.nrrd";
+  set_case_json(j);
+  EXPECT_NE(refusal().find("case.json: ct.file: 'ct\\u000a.nrrd' holds a control character"), std::string::npos)
+      << refusal();
+}
+
+// the seeds of the case folder's fuzz target (fuzz/targets/case_folder_fuzz.cc): a written
+// phantom case and a written kidney case, shrunk so each is a few KB, that read back as cases.
+// PCISIM_WRITE_CASE_FUZZ_SEEDS=DIR writes them, packed as the target reads them ("%%% NAME\n"
+// then the file's bytes, entries separated by a newline), into DIR (fuzz/corpus/case_folder/)
+TEST(CaseFolderFuzzSeeds, TheShrunkPhantomAndKidneyCasesReadBackAndStaySmall) {
+  PhantomCaseSpec ps;
+  ps.seed = 3;
+  ps.ct_dims = {6, 6, 4};  // the tree inside 258 x 258 x 172 mm
+  ps.ct_spacing_mm = 43.0;
+  Case phantom = make_phantom_case(ps);
+  // a tetrahedron for the lumen (the loft is 100s of KB), a heart pose so "heart" is written; the
+  // tree (some 1300 points) thinned to every 50th point, each branch's last point and its
+  // children's parent points kept (renumbered), so its topology and radii stay
+  phantom.lumen.vertices_m = {{0, 0, 0}, {0.01, 0, 0}, {0, 0.01, 0}, {0, 0, 0.01}};
+  phantom.lumen.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  phantom.heart.translation_m = {0.001, 0.0, -0.002};
+  auto& branches = phantom.vessels.branches;
+  std::vector<std::vector<int>> new_index(branches.size());  // -1: dropped
+  for (size_t b = 0; b < branches.size(); ++b) {
+    const int n = static_cast<int>(branches[b].points.size());
+    std::vector<bool> keep(n);
+    for (int i = 0; i < n; ++i) keep[i] = i % 50 == 0 || i + 1 == n;
+    for (const auto& child : branches)
+      if (child.parent == static_cast<int>(b) && child.parent_point >= 0) keep[child.parent_point] = true;
+    std::vector<CenterlinePoint> kept;
+    for (int i = 0; i < n; ++i) {
+      new_index[b].push_back(keep[i] ? static_cast<int>(kept.size()) : -1);
+      if (keep[i]) kept.push_back(branches[b].points[i]);
+    }
+    branches[b].points = kept;
+  }
+  for (auto& b : branches)
+    if (b.parent >= 0 && b.parent_point >= 0) b.parent_point = new_index[b.parent][b.parent_point];
+  KidneySpec ks;
+  ks.surface_rings = 6;
+  ks.surface_segments = 8;
+  ks.fiducial_count = 3;
+  ks.fiducial_min_gap_mm = 20.0;
+  ks.ct_spacing_mm = 25.0;
+  KidneyPhantom k = make_kidney_phantom(ks);
+  Case kidney;
+  kidney.name = "kidney phantom";
+  kidney.organ = kidney_organ(k);
+  kidney.ct = std::move(k.ct);
+
+  const fs::path root = fs::temp_directory_path() / ("pcisim-case-seeds-" + std::to_string(::getpid()));
+  const char* out = std::getenv("PCISIM_WRITE_CASE_FUZZ_SEEDS");
+  using Entries = std::vector<std::pair<std::string, std::string>>;  // name (or "a -> b"), bytes
+  // what read_case reads from `dir` (slicer/ and overview.png are for people), case.json first;
+  // a link is packed as one ("NAME -> TARGET") and its target's folder entered
+  auto entries_of = [](const fs::path& dir) {
+    Entries e;
+    std::vector<std::string> names;
+    for (const auto& f : fs::recursive_directory_iterator(dir)) {
+      const std::string rel = f.path().lexically_relative(dir).string();  // links not followed
+      if (rel.rfind("slicer", 0) == 0 || rel == "overview.png" || f.is_directory() && !f.is_symlink()) continue;
+      names.push_back(rel);
+    }
+    std::sort(names.begin(), names.end(), [](const std::string& a, const std::string& b) {
+      return (a != "case.json") < (b != "case.json") || ((a != "case.json") == (b != "case.json") && a < b);
+    });
+    for (const std::string& n : names) {
+      if (fs::is_symlink(dir / n)) {
+        e.emplace_back(n + " -> " + fs::read_symlink(dir / n).string(), "");
+        continue;
+      }
+      std::ifstream in(dir / n, std::ios::binary);
+      e.emplace_back(n, std::string(std::istreambuf_iterator<char>(in), {}));
+    }
+    return e;
+  };
+  // as the fuzz target reads them: "%%% NAME\n" then the bytes, a newline between entries
+  auto save = [&](const std::string& seed, const Entries& entries) {
+    std::string packed;
+    for (const auto& [n, bytes] : entries) {
+      ASSERT_EQ(bytes.find("\n%%% "), std::string::npos) << seed << ": " << n << " holds the archive's separator";
+      packed += (packed.empty() ? "" : "\n") + ("%%% " + n + "\n") + bytes;
+    }
+    EXPECT_LT(packed.size(), 16u << 10) << seed << ": " << packed.size() << " bytes";
+    if (out) std::ofstream(fs::path(out) / (seed + ".case"), std::ios::binary) << packed;
+  };
+  for (const auto& [name, c] : {std::pair<std::string, const Case*>{"phantom", &phantom}, {"kidney", &kidney}}) {
+    const fs::path dir = root / name;
+    write_case(*c, dir.string());
+    ASSERT_NO_THROW(read_case(dir.string())) << name;
+    save(name, entries_of(dir));
+  }
+  // the phantom's CT as a MetaImage with detached data, then its vessels through a link to a
+  // subfolder: both read
+  const fs::path dir = root / "phantom";
+  write_metaimage(*phantom.ct, (dir / "ct.mhd").string());
+  fs::remove(dir / "ct.nrrd");
+  {
+    nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "case.json"));
+    j["ct"]["file"] = "ct.mhd";
+    std::ofstream(dir / "case.json") << j.dump(2);
+  }
+  ASSERT_NO_THROW(read_case(dir.string()));
+  save("phantom-detached", entries_of(dir));
+  fs::create_directories(dir / "data");
+  fs::rename(dir / "vessels.json", dir / "data" / "vessels.json");
+  fs::create_symlink("data/vessels.json", dir / "vessels.json");
+  ASSERT_NO_THROW(read_case(dir.string()));
+  save("phantom-links", entries_of(dir));
+  // and the hostile forms the target knows, each refused: a data file outside, a FIFO, a link out
+  Entries hostile = entries_of(dir);
+  for (auto& [n, bytes] : hostile) {
+    if (n == "ct.mhd") bytes.replace(bytes.find("ElementDataFile = ct.raw"), 24, "ElementDataFile = ../ct.raw");
+    if (n == "lumen.stl") n = "lumen.stl |fifo", bytes.clear();
+    if (n == "vessels.json -> data/vessels.json") n = "vessels.json -> /dev/zero";
+  }
+  save("phantom-hostile", hostile);
+  fs::remove_all(root);
 }
 
 }  // namespace

@@ -111,19 +111,19 @@ TEST(VesselTreeJsonTest, BadFilesNameTheFileAndTheField) {
       {"empty", R"({"format": "pcisim-vessel-tree", "version": 1, "branches": []})",
        "branches: expected a non-empty array"},
       {"position", R"({"format": "pcisim-vessel-tree", "version": 1, "branches": [{"name": "a", "parent": -1,
-         "points": [{"position_m": [0, 0], "radius_m": 1}, {"position_m": [0, 0, 1], "radius_m": 1}]}]})",
+         "points": [{"position_m": [0, 0], "radius_m": 0.001}, {"position_m": [0, 0, 1], "radius_m": 0.001}]}]})",
        "branches[0].points[0].position_m: expected an array of 3 numbers"},
       {"coordinate", R"({"format": "pcisim-vessel-tree", "version": 1, "branches": [{"name": "a", "parent": -1,
-         "points": [{"position_m": [0, 0, 0], "radius_m": 1}, {"position_m": [0, "x", 1], "radius_m": 1}]}]})",
+         "points": [{"position_m": [0, 0, 0], "radius_m": 0.001}, {"position_m": [0, "x", 1], "radius_m": 0.001}]}]})",
        "branches[0].points[1].position_m[1]: expected a number"},
       {"missing", R"({"format": "pcisim-vessel-tree", "version": 1, "branches": [{"name": "a", "parent": -1}]})",
        "branches[0].points: missing"},
       {"duplicate", R"({"format": "pcisim-vessel-tree", "version": 1, "branches": [
-         {"name": "a", "parent": -1, "points": [{"position_m": [0, 0, 0], "radius_m": 1}, {"position_m": [0, 0, 1], "radius_m": 1}]},
-         {"name": "a", "parent": 0, "parent_point": 0, "points": [{"position_m": [0, 0, 0], "radius_m": 1}, {"position_m": [0, 0, 1], "radius_m": 1}]}]})",
+         {"name": "a", "parent": -1, "points": [{"position_m": [0, 0, 0], "radius_m": 0.001}, {"position_m": [0, 0, 1], "radius_m": 0.001}]},
+         {"name": "a", "parent": 0, "parent_point": 0, "points": [{"position_m": [0, 0, 0], "radius_m": 0.001}, {"position_m": [0, 0, 1], "radius_m": 0.001}]}]})",
        "branches[1].name: duplicate branch name \"a\""},
       {"few_points", R"({"format": "pcisim-vessel-tree", "version": 1, "branches": [{"name": "a", "parent": -1,
-         "points": [{"position_m": [0, 0, 0], "radius_m": 1}]}]})",
+         "points": [{"position_m": [0, 0, 0], "radius_m": 0.001}]}]})",
        "branches[0].points: expected an array of at least 2 points"},
   };
   for (const Case& c : cases) {
@@ -166,6 +166,64 @@ TEST(VesselTreeJsonTest, BadFilesNameTheFileAndTheField) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent-dir/x.json"), std::string::npos) << e.what();
   }
+}
+
+// ---- the bounds (anatomy/case/case_limits.h, docs/anatomy.md "Limits") ----
+
+// a tree of `branches` straight branches of `points` points `step_m` apart (each a root), radius r_m
+std::string straight_tree(int branches, int points, double step_m, double r_m = 0.001) {
+  std::string text = R"({"format": "pcisim-vessel-tree", "version": 1, "branches": [)";
+  for (int b = 0; b < branches; ++b) {
+    text += (b ? "," : "") + std::string(R"({"name": "b)") + std::to_string(b) + R"(", "parent": -1, "points": [)";
+    for (int k = 0; k < points; ++k)
+      text += (k ? "," : "") + std::string(R"({"position_m": [)") + std::to_string(0.001 * b) + ", 0, " +
+              std::to_string(step_m * k) + R"(], "radius_m": )" + std::to_string(r_m) + "}";
+    text += "]}";
+  }
+  return text + "]}";
+}
+
+// a radius of 1e6 m lofted a tube of billions of triangles (std::bad_alloc); 0.1 m started for 20 s
+TEST(VesselTreeJsonTest, ARadiusBeyondAnAorticRootIsRefused) {
+  for (const char* r : {"1e6", "0.1", "0.031"}) {
+    const std::string message = error_for("radius.json", tree_text("", r));
+    EXPECT_NE(message.find("branches[1].points[2].radius_m: "), std::string::npos) << message;
+    EXPECT_NE(message.find("m, outside [1e-06, 0.03] m"), std::string::npos) << message;
+  }
+  EXPECT_NE(error_for("tiny.json", tree_text("", "1e-300")).find("branches[1].points[2].radius_m: 1e-300 m, outside"),
+            std::string::npos);
+  // the widest allowed reads
+  const std::string path = write_text("wide.json", tree_text("", "0.03"));
+  EXPECT_DOUBLE_EQ(read_vessel_tree_json(path).branches[1].points[2].radius_m, 0.03);
+  std::filesystem::remove(path);
+}
+
+// a branch whose points repeat 300 times started for over 20 s: points per branch and in the
+// tree, repeated consecutive points and the total length are bounded before the work
+TEST(VesselTreeJsonTest, TooManyRepeatedOrTooLongCenterlinesAreRefused) {
+  EXPECT_NE(error_for("branch.json", straight_tree(1, 4001, 1e-5))
+                .find("branches[0].points: 4001 points, more than 4000 (the limit per branch)"),
+            std::string::npos);
+  EXPECT_NE(error_for("tree.json", straight_tree(6, 3400, 1e-5))
+                .find("branches[5].points: the tree reaches 20400 points here, more than 20000"),
+            std::string::npos);
+  EXPECT_NE(error_for("long.json", straight_tree(2, 1100, 1e-3))
+                .find("branches[1].points[902].position_m: the centerlines' total length passes 2 m here"),
+            std::string::npos);
+  // each point twice (a point repeated: the tube has no direction there)
+  std::string twice = tree_text("");
+  const std::string point = R"({"position_m": [0.001, 0, 0.001], "radius_m": 0.002})";
+  twice.replace(twice.find(point), point.size(), point + ", " + point);
+  EXPECT_NE(error_for("twice.json", twice)
+                .find("branches[1].points[2].position_m: 0 m from points[1], closer than 1e-06 m (consecutive points "
+                      "must differ)"),
+            std::string::npos);
+  // a coordinate no patient has (squares of it overflow further on)
+  EXPECT_NE(error_for("far.json", straight_tree(1, 2, 20.0))
+                .find("branches[0].points[1].position_m[2]: 20 m, more than 10 m from the origin"),
+            std::string::npos);
+  EXPECT_NE(error_for("branches.json", straight_tree(513, 2, 1e-3)).find("branches: 513 branches, more than 512"),
+            std::string::npos);
 }
 
 #else

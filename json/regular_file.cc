@@ -11,6 +11,14 @@
 namespace pcisim::json {
 namespace {
 
+// closes its descriptor however the reader leaves (an allocation that throws included)
+struct Fd {
+  int fd = -1;
+  ~Fd() {
+    if (fd >= 0) ::close(fd);
+  }
+};
+
 // what a stat mode is, for "not a regular file" messages
 const char* kind_of(mode_t mode) {
   if (S_ISDIR(mode)) return "a folder";
@@ -39,8 +47,8 @@ int open_regular(const std::string& path, const std::string& what, struct stat* 
     return -1;
   }
   if (::fstat(fd, st) != 0 || !S_ISREG(st->st_mode)) {
+    ::close(fd);  // before the message, whose formatting may throw
     *why = fmt::format("{}: not a regular file ({}, never read as {})", path, kind_of(st->st_mode), what);
-    ::close(fd);
     return -1;
   }
   return fd;
@@ -51,26 +59,19 @@ int open_regular(const std::string& path, const std::string& what, struct stat* 
 std::string read_regular_file(const std::string& path, const std::string& what, int64_t max_bytes) {
   struct stat st {};
   std::string why;
-  const int fd = open_regular(path, what, &st, &why);
-  if (fd < 0) throw FileError(why);
-  if (st.st_size > max_bytes) {
-    ::close(fd);
+  const Fd file{open_regular(path, what, &st, &why)};
+  if (file.fd < 0) throw FileError(why);
+  if (st.st_size > max_bytes)
     throw FileError(fmt::format("{}: {} bytes, over the {} byte limit for {}", path, st.st_size, max_bytes, what));
-  }
   std::string out(static_cast<size_t>(st.st_size), '\0');
   size_t got = 0;
   while (got < out.size()) {
-    const ssize_t n = ::read(fd, out.data() + got, out.size() - got);
+    const ssize_t n = ::read(file.fd, out.data() + got, out.size() - got);
     if (n < 0 && errno == EINTR) continue;
-    if (n < 0) {
-      const int e = errno;
-      ::close(fd);
-      throw FileError(fmt::format("{}: cannot read {}: {}", path, what, std::strerror(e)));
-    }
+    if (n < 0) throw FileError(fmt::format("{}: cannot read {}: {}", path, what, std::strerror(errno)));
     if (n == 0) break;
     got += static_cast<size_t>(n);
   }
-  ::close(fd);
   if (got != out.size()) throw FileError(fmt::format("{}: {} shrank while it was read", path, what));
   return out;
 }

@@ -1,7 +1,8 @@
 #pragma once
 // The one reader of the files a user names (scenes, cases, trainee and probe scripts, dataset
 // specs, volumes, meshes): only a regular file of a bounded size is read. A FIFO would block the
-// reader for ever and /dev/zero never ends, so both are refused unopened; a size is checked before
+// reader for ever and /dev/zero never ends, so both are refused unread (opened without blocking and
+// checked on the open file); a size is checked before
 // a byte is read. Every error names the path and the cause.
 #include <cstdint>
 #include <stdexcept>

@@ -1,7 +1,6 @@
 // pcisim-server: the real-time PCI training server (see docs/ and DESIGN.md).
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <csignal>
 #include <fstream>
 #include <iostream>
 #include <spdlog/spdlog.h>
@@ -11,15 +10,9 @@
 #include "server/case_builder.h"
 #include "server/scene/scene.h"
 #include "server/session_runner.h"
+#include "realtime/stop_signal.h"
 
-namespace {
-
-std::atomic<bool> g_stop{false};
-extern "C" void on_signal(int) {
-  g_stop = true;
-}
-
-}  // namespace
+namespace {}  // namespace
 
 int main(int argc, char** argv) {
   using namespace pcisim::server;
@@ -60,6 +53,8 @@ int main(int argc, char** argv) {
                  "scene's procedural organ too (the case must then have an organ; a coronary scene needs its "
                  "vessels)");
   CLI11_PARSE(app, argc, argv);
+  // until the session runs, SIGINT/SIGTERM end the process at once (reading a case takes seconds)
+  pcisim::realtime::install_stop_signals("pcisim-server");
   // an in-process control bus gets an in-process image bus unless told otherwise
   if (app.count("--lcm-image-url") == 0 && lcm_url.rfind("memq://", 0) == 0) image_url = "memq://";
   spdlog::set_level(spdlog::level::from_str(log_level));
@@ -115,8 +110,6 @@ int main(int argc, char** argv) {
     return 3;
   }
 
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
   // a scene loaded over LCM restarts the pipeline with it; --duration counts the running time of
   // the whole session, not the time spent building scenes
   SessionLimits limits;
@@ -126,7 +119,7 @@ int main(int argc, char** argv) {
   options.image_url = image_url;
   options.case_dir = case_dir;  // for every scene of the session, not only the first
   try {
-    const StatsReport stats = run_session(std::move(scene), lcm, options, g_stop, limits);
+    const StatsReport stats = run_session(std::move(scene), lcm, options, pcisim::realtime::stop_flag(), limits);
     std::cout << human_summary(stats) << "\n";
     if (!stats_path.empty()) {
       std::ofstream out(stats_path);

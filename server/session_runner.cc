@@ -6,6 +6,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "realtime/stop_signal.h"
 #include "server/case_builder.h"
 #include "server/server.h"
 
@@ -18,6 +19,9 @@ StatsReport run_session(Scene scene, lcm::LCM& control, const SessionOptions& op
   double ran_s = 0;                  // running time so far (scene builds do not count)
   bool rebuilding_fallback = false;
   for (;;) {
+    // building a scene is a start no loop watches: a signal during it ends the program at once
+    // (realtime/stop_signal.h; nothing happens where no handler is installed, as in tests)
+    realtime::mark_starting();
     // --case replaces the anatomy of every scene, the first and each one loaded over LCM (a
     // soft-tissue scene's procedural organ too: it runs on the case's organ)
     if (!options.case_dir.empty()) use_case_folder(scene, options.case_dir);
@@ -43,7 +47,9 @@ StatsReport run_session(Scene scene, lcm::LCM& control, const SessionOptions& op
     fallback = scene;
     server->cpu_latency_us = options.cpu_latency_us;
     const double left_s = options.duration_s > 0 ? std::max(options.duration_s - ran_s, 1e-3) : 0.0;
+    realtime::mark_running(options.stop_within_s);
     StatsReport stats = server->run(left_s, stop);
+    realtime::mark_stopped();  // the watchdog leaves the stats to be written
     ran_s += stats.elapsed_s;
     if (auto next = server->take_requested_scene(); next && !stop) {
       scene = std::move(*next);

@@ -20,6 +20,10 @@ struct SessionOptions {
   int cpu_latency_us = 0;  // PM QoS while running; < 0 leaves the CPUs alone
   std::string image_url;   // the frames' LCM URL, opened when a scene has x-ray
   std::string case_dir;    // --case: every scene of the session runs on this case folder ("": its own anatomy)
+  // once a scene runs, how long its clean stop (loops joined, zero force sent, stats written) may
+  // take after SIGINT/SIGTERM before the process is ended (the bound is 1 s); while a
+  // scene builds, a signal ends the process at once (realtime/stop_signal.h)
+  double stop_within_s = 0.9;
 };
 
 // throws when the first scene cannot be built (there is nothing to fall back to); returns the

@@ -425,10 +425,17 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
   if (const InsideFolder inside = resolve_inside_folder(dir_name, "case.json"); inside.escape != FolderEscape::kNone)
     throw CaseError(fmt::format("{}: {} (a case reads nothing outside its folder)", case_json, inside.why));
   if (const std::string why = json::regular_file_problem(case_json, "case.json"); !why.empty()) throw CaseError(why);
+  // read before the try below, whose messages add case.json's path (this one names it already)
+  std::string case_text;
+  try {
+    case_text = io::read_file(case_json, kMaxCaseJsonBytes);
+  } catch (const VolumeIoError& e) {
+    throw CaseError(e.what());
+  }
   Case c;
   std::string vessels_file, ct_file, ct_dicom, organ_surface_file;
   try {
-    const Json doc = json::parse_json_checked(io::read_file(case_json, kMaxCaseJsonBytes), case_json);
+    const Json doc = json::parse_json_checked(case_text, case_json);
     json::JsonReader r(doc, "");
     if (r.text("format", "") != kCaseFormat) r.fail("format", fmt::format("expected \"{}\"", kCaseFormat));
     // what the numbers mean is never guessed: version, units and frame must be stated

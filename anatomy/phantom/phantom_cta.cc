@@ -11,6 +11,8 @@
 #include <thread>
 #include <utility>
 
+#include <fmt/format.h>
+
 #include "anatomy/phantom/coronary_phantom.h"
 #include "anatomy/phantom/thorax_phantom.h"
 
@@ -377,21 +379,37 @@ void signed_permutation(const Matrix3d& d, int axis_of[3], int sign_of[3]) {
 }
 
 void validate_spec(const PhantomCtaSpec& s) {
+  const char* axis = "xyz";
+  int64_t voxels = 1;
   for (int a = 0; a < 3; ++a) {
-    if (s.dims[a] <= 0 || s.dims[a] > 4096) throw std::invalid_argument("PhantomCtaSpec.dims: expected 1..4096");
-    if (!(s.spacing_mm[a] > 0) || !std::isfinite(s.spacing_mm[a])) {
-      throw std::invalid_argument("PhantomCtaSpec.spacing_mm: expected positive finite values");
-    }
+    if (s.dims[a] < 1 || s.dims[a] > kMaxPhantomCtaDim)
+      throw std::invalid_argument(fmt::format("PhantomCtaSpec.dims: expected 1..{} voxels along {}, got {}",
+                                              kMaxPhantomCtaDim, axis[a], s.dims[a]));
+    voxels *= s.dims[a];  // at most 4096^3: no overflow
+    if (!(s.spacing_mm[a] >= kMinPhantomCtaVoxelMm && s.spacing_mm[a] <= kMaxPhantomCtaVoxelMm))
+      throw std::invalid_argument(fmt::format("PhantomCtaSpec.spacing_mm: expected {} to {} mm along {}, got {}",
+                                              kMinPhantomCtaVoxelMm, kMaxPhantomCtaVoxelMm, axis[a], s.spacing_mm[a]));
+    const double extent_mm = static_cast<double>(s.dims[a]) * s.spacing_mm[a];
+    if (extent_mm > kMaxPhantomCtaExtentMm)
+      throw std::invalid_argument(fmt::format(
+          "PhantomCtaSpec.dims x spacing_mm: expected a field of view of at most {} mm along {}, got {} x {} = {} mm",
+          kMaxPhantomCtaExtentMm, axis[a], s.dims[a], s.spacing_mm[a], extent_mm));
   }
+  if (voxels > kMaxPhantomCtaVoxels)
+    throw std::invalid_argument(fmt::format("PhantomCtaSpec.dims: expected at most {} voxels, got {} x {} x {} = {}",
+                                            kMaxPhantomCtaVoxels, s.dims[0], s.dims[1], s.dims[2], voxels));
   if (!(s.noise_sigma_hu >= 0) || !std::isfinite(s.noise_sigma_hu)) {
     throw std::invalid_argument("PhantomCtaSpec.noise_sigma_hu: expected >= 0");
   }
-  if (!(s.blur_sigma_mm >= 0) || !std::isfinite(s.blur_sigma_mm)) {
-    throw std::invalid_argument("PhantomCtaSpec.blur_sigma_mm: expected >= 0");
-  }
+  if (!(s.blur_sigma_mm >= 0 && s.blur_sigma_mm <= kMaxPhantomCtaBlurMm))
+    throw std::invalid_argument(fmt::format("PhantomCtaSpec.blur_sigma_mm: expected 0 to {} mm, got {}",
+                                            kMaxPhantomCtaBlurMm, s.blur_sigma_mm));
   if (!(s.stenosis_fraction < 1.0) || std::isnan(s.stenosis_fraction)) {
     throw std::invalid_argument("PhantomCtaSpec.stenosis_fraction: expected < 1");
   }
+  if (s.threads < 0 || s.threads > kMaxPhantomCtaThreads)
+    throw std::invalid_argument(fmt::format("PhantomCtaSpec.threads: expected 0..{} (0: every core), got {}",
+                                            kMaxPhantomCtaThreads, s.threads));
 }
 
 }  // namespace

@@ -17,6 +17,20 @@
 
 namespace pcisim::anatomy {
 
+// what make_phantom_cta builds, bounded so that no spec allocates without bound (pcisim-model
+// refuses the same, naming its options; docs/modeling.md states them):
+// voxels: the generator peaks at ~6 bytes a voxel (float HU beside the int16 CT): 2^28 is ~1.7 GB
+inline constexpr int64_t kMaxPhantomCtaVoxels = int64_t{1} << 28;
+inline constexpr int64_t kMaxPhantomCtaDim = 4096;  // voxels along one axis
+// a voxel: a clinical CT's is 0.3..5 mm; down to 0.1 (the blur's kernel is 6 sigma / voxel wide)
+// and up to 20 (coarse grids for geometry-only runs)
+inline constexpr double kMinPhantomCtaVoxelMm = 0.1, kMaxPhantomCtaVoxelMm = 20.0;
+// the field of view along any axis: a scanner's bore is ~700 mm; the painters cover what it holds
+inline constexpr double kMaxPhantomCtaExtentMm = 1000.0;
+inline constexpr int kMaxPhantomCtaThreads = 256;
+// the scanner's point spread: ~0.3..1 mm
+inline constexpr double kMaxPhantomCtaBlurMm = 5.0;
+
 struct PhantomCtaSpec {
   uint32_t seed = 1;  // everything below that is drawn, is drawn from this
   std::array<int64_t, 3> dims{512, 512, 250};
@@ -103,8 +117,10 @@ struct PhantomCta {
 // the heart fit is measured against
 double distance_to_painted_heart_mm(const PhantomCtaFacts& facts, const Eigen::Vector3d& p_mm);
 
-// throws std::invalid_argument for a spec it cannot build (non-positive dims or spacing, a
-// direction that is not a signed permutation, negative noise or blur, a fraction >= 1)
+// throws std::invalid_argument "PhantomCtaSpec.<field>: <expected>, got <value>" for a spec it
+// cannot build, before allocating anything: dims, voxel size, extent or threads outside the bounds
+// above, a direction that is not a signed permutation, negative or non-finite noise or blur, a
+// stenosis fraction >= 1)
 PhantomCta make_phantom_cta(const PhantomCtaSpec& spec);
 
 #ifdef PCISIM_HAVE_JSON

@@ -3,7 +3,6 @@
 // force_command_t the server sends back (the force it would render); or, with --probe-script, a
 // scripted ultrasound probe into probe_state_t.
 #include <CLI/CLI.hpp>
-#include <csignal>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
@@ -14,15 +13,7 @@
 #include "clients/bridge/replay_device.h"
 #include "clients/bridge/serial_device.h"
 #include "protocol/channels.h"
-
-namespace {
-
-std::atomic<bool> g_stop{false};
-extern "C" void on_signal(int) {
-  g_stop = true;
-}
-
-}  // namespace
+#include "realtime/stop_signal.h"
 
 int main(int argc, char** argv) {
   using namespace pcisim::clients;
@@ -73,6 +64,8 @@ int main(int argc, char** argv) {
   app.add_flag("--print-script", print_script, "print the built-in trainee script and exit");
   app.add_flag("--print-probe-script", print_probe_script, "print the built-in probe script and exit");
   CLI11_PARSE(app, argc, argv);
+  // until it runs, SIGINT/SIGTERM end it at once, saying so
+  pcisim::realtime::install_stop_signals("pcisim-bridge");
 
   if (print_script || print_probe_script) {
     if (print_script) std::cout << TraineeScript::builtin_text();
@@ -105,15 +98,14 @@ int main(int argc, char** argv) {
     std::cerr << "pcisim-bridge: cannot open LCM at " << lcm_url << "\n";
     return 3;
   }
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  pcisim::realtime::mark_running();  // from now SIGINT/SIGTERM stop the loop cleanly
   options.duration_s = duration_s;
   options.wait_for_server_s = wait_for_server_s;
   const std::string source =
       probe ? fmt::format("scripted probe '{}' ({:.1f} s)", probe->name(), probe->duration_s()) : dev->describe();
   spdlog::info("bridge: {}, publishing at {} Hz on {}", source, options.rate_hz, lcm_url);
   Bridge bridge = probe ? Bridge(lcm, *probe, options) : Bridge(lcm, *dev, options);
-  const BridgeStats s = bridge.run(g_stop);
+  const BridgeStats s = bridge.run(pcisim::realtime::stop_flag());
   std::string extra;
   if (auto* serial = dynamic_cast<SerialDevice*>(dev.get()))
     extra = fmt::format(", serial lines {} ok / {} malformed{}", serial->lines(), serial->malformed(),

@@ -11,15 +11,7 @@
 #include <thread>
 
 #include "clients/remote/gateway.h"
-
-namespace {
-
-std::atomic<bool> g_stop{false};
-extern "C" void on_signal(int) {
-  g_stop = true;
-}
-
-}  // namespace
+#include "realtime/stop_signal.h"
 
 int main(int argc, char** argv) {
   using namespace pcisim::remote;
@@ -94,6 +86,8 @@ int main(int argc, char** argv) {
       "enabled it and no other instrument is heard on the bus; hardware always wins. Pedals a page holds down "
       "are released when it disconnects. SIGINT/SIGTERM close every connection and exit.");
   CLI11_PARSE(app, argc, argv);
+  // until it runs, SIGINT/SIGTERM end it at once, saying so
+  pcisim::realtime::install_stop_signals("pcisim-remote");
   spdlog::set_level(spdlog::level::from_str(log_level));
   o.encoder.format = format == "png" ? ImageFormat::kPng : ImageFormat::kJpeg;
   if (window.size() == 2) {
@@ -113,8 +107,7 @@ int main(int argc, char** argv) {
               << " (for udpm, is there a multicast route? see docs/protocol.md)\n";
     return 3;
   }
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  pcisim::realtime::mark_running();  // from now SIGINT/SIGTERM stop the loop cleanly
   std::signal(SIGPIPE, SIG_IGN);
   Gateway gateway(o, control, images, AccessTokens());
   try {
@@ -142,7 +135,7 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  while (!g_stop) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  while (!pcisim::realtime::stop_flag()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
   spdlog::info("remote: stopping");
   gateway.stop();
   const auto s = gateway.hub_stats();

@@ -4,6 +4,9 @@
 
 #include "json/json_reader.h"
 #include "xray/projectors/cuda_projector.h"
+#ifdef PCISIM_HAVE_OSMESA
+#include "xray/projectors/gl/gl_projector.h"
+#endif
 
 namespace pcisim::dataset {
 
@@ -19,6 +22,38 @@ bool gpu_projector_available() {
 #endif
   }();
   return available;
+}
+
+xray::ProjectorKind sample_projector(const DatasetSpec& spec, xray::ProjectorKind scene_kind) {
+  if (spec.projector == "cpu") return xray::ProjectorKind::kCpuTrilinear;
+  if (spec.projector == "exact") return xray::ProjectorKind::kExact;
+  if (spec.projector == "cuda") return xray::ProjectorKind::kCudaTrilinear;
+  if (spec.projector == "auto" && gpu_projector_available()) return xray::ProjectorKind::kCudaTrilinear;
+  return scene_kind;
+}
+
+std::string projector_problem(xray::ProjectorKind kind) {
+  std::string why;
+  switch (kind) {
+    case xray::ProjectorKind::kExact:
+    case xray::ProjectorKind::kCpuTrilinear:
+      return "";
+    case xray::ProjectorKind::kCudaTrilinear:
+#if defined(PCISIM_HAVE_CUDA)
+      if (xray::CudaTrilinearProjector::available(&why)) return "";
+      return "no GPU: " + why;
+#else
+      return "this build has no CUDA";
+#endif
+    case xray::ProjectorKind::kGl:
+#if defined(PCISIM_HAVE_OSMESA)
+      if (xray::gl_projector_available(&why)) return "";
+      return "no GL context can be made (" + why + ")";
+#else
+      return "this build has no OSMesa";
+#endif
+  }
+  return "an unknown projector";
 }
 
 SamplePlan plan_sample(const DatasetSpec& spec, int64_t index) {
@@ -67,10 +102,7 @@ SamplePlan plan_sample(const DatasetSpec& spec, int64_t index) {
 
   // the projector: the spec's choice over the scene's
   auto& kind = p.scene.xray->fluoro.projector.projector;
-  if (spec.projector == "cpu") kind = xray::ProjectorKind::kCpuTrilinear;
-  if (spec.projector == "exact") kind = xray::ProjectorKind::kExact;
-  if (spec.projector == "cuda") kind = xray::ProjectorKind::kCudaTrilinear;
-  if (spec.projector == "auto" && gpu_projector_available()) kind = xray::ProjectorKind::kCudaTrilinear;
+  kind = sample_projector(spec, kind);
   p.gpu_projector = kind == xray::ProjectorKind::kCudaTrilinear;
   return p;
 }

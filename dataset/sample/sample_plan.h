@@ -36,4 +36,11 @@ SamplePlan plan_sample(const DatasetSpec& spec, int64_t index);
 // whether "auto" finds a GPU (this build has CUDA and a device answers); asked once
 bool gpu_projector_available();
 
+// the projector a sample renders with: the spec's "projector" over the scene's (`scene_kind`)
+xray::ProjectorKind sample_projector(const DatasetSpec& spec, xray::ProjectorKind scene_kind);
+
+// "" when `kind` can run on this machine, else why not (no CUDA in this build, no GPU answers, no
+// GL context): a cheap probe, nothing rendered
+std::string projector_problem(xray::ProjectorKind kind);
+
 }  // namespace pcisim::dataset

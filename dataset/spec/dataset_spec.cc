@@ -173,6 +173,12 @@ DatasetSpec parse_dataset_spec(const std::string& text, const std::string& sourc
           throw json::JsonError(fmt::format("{}: the anatomy is drawn by the spec's \"anatomy\" key", where));
         s.vary.push_back({path, Distribution::parse(value, where)});
       }
+      size_t tried = 0;
+      for (const auto& v : s.vary) tried += v.distribution.extremes().size();
+      if (tried > kMaxVariedValuesTried)
+        r.fail("vary", fmt::format("expected at most {} values to try against the scene (each choice's values, each "
+                                   "range's two ends), got {}",
+                                   kMaxVariedValuesTried, tried));
     }
     r.finish();
   } catch (const json::JsonError& e) {

@@ -76,6 +76,11 @@ struct DatasetSpec {
   std::vector<VaryEntry> vary;
 };
 
+// the values tried against the base scene before any sample (every choice value, both ends of
+// every range, over all vary entries): each is a scene parse (~0.1 ms), so a spec is checked in
+// well under a second, however long its lists
+inline constexpr size_t kMaxVariedValuesTried = 4096;
+
 // throws json::JsonError "<source>: <json path>: <what was expected>". Every vary entry is tried
 // at its extremes (both ends of a range, every choice) against the base scene, so a value the
 // scene would refuse is named here, before any sample runs. `base_dir` resolves relative paths

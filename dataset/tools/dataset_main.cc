@@ -3,8 +3,6 @@
 // no CLI11).
 #include <fmt/format.h>
 
-#include <atomic>
-#include <csignal>
 #include <cstdint>
 #include <cstdio>
 #include <iostream>
@@ -13,8 +11,10 @@
 
 #include "dataset/run/dataset_folder.h"
 #include "dataset/run/dataset_run.h"
+#include "dataset/run/input_checks.h"
 #include "dataset/sample/sample_plan.h"
 #include "json/json_reader.h"
+#include "realtime/stop_signal.h"
 
 namespace {
 
@@ -44,7 +44,8 @@ every key of the spec and the labels' exact definitions are in docs/dataset.md.
                    projector is the GPU, one job per CPU core keeps it busy
   --max-samples K  stop after K samples (made or failed; a later run resumes)
   --merge          write DIR/manifest.json and DIR/coco.json from every shard's lists
-  --check          check the spec (every key, every varied value at its extremes) and exit
+  --check          check the spec (every key, every varied value at its extremes, the scripts,
+                   projector and cases it names) and exit
 
 Without --shard the run merges by itself when it has made every sample. Interrupting it
 (Ctrl-C) finishes the sample in progress; running the same command again resumes, never
@@ -54,9 +55,16 @@ DIR/shards/failed-*.jsonl and the run goes on.
 A run stops (the sample in progress removed, nothing half-written listed) when the folder
 cannot be written or memory runs out; a second process on the same shard is refused.
 
-Exit status: 0 done (failed samples included, and counted), 2 bad arguments or spec, 3 merge
-asked before every sample is made, 4 the disk is full (resume when there is space),
-5 interrupted, 1 any other error (the folder cannot be written, ...).
+Before the first sample every key of the spec is checked, and so is what it names: each
+trainee script is read and parsed, the projector each sample would take is probed (CUDA needs a
+GPU that answers, GL a context), each case folder is read and fitted to the scene.
+
+Exit status: 0 done (failed samples included, and counted, as long as one was made), 2 bad
+arguments or spec (or what it names), 3 merge asked before every sample is made, 4 the disk is
+full (resume when there is space), 5 interrupted, 6 every sample this run tried failed, 1 any
+other error (the folder cannot be written, ...). SIGINT/SIGTERM while the spec is checked ends
+the program at once (128 + the signal); once samples run, the first finishes the sample in
+progress and the second ends the program at once.
 )";
 
 constexpr const char* kExampleSpec = R"({
@@ -87,11 +95,6 @@ constexpr const char* kExampleSpec = R"({
   }
 }
 )";
-
-std::atomic<bool> g_stop{false};
-extern "C" void on_signal(int) {
-  g_stop.store(true);
-}
 
 struct Args {
   std::string spec, out;
@@ -198,10 +201,14 @@ void print_stages(const StageTimes& t) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // until the samples run, SIGINT/SIGTERM end the process at once (the up-front checks read every case)
+  pcisim::realtime::install_stop_signals("pcisim-dataset");
   const Args a = parse(argc, argv);
   DatasetSpec spec;
   try {
     spec = load_dataset_spec(a.spec);
+    // the scripts, the projector and the cases, before any sample (a merge runs none)
+    if (!a.merge) check_spec_inputs(spec);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pcisim-dataset: %s\n", e.what());
     return 2;
@@ -221,14 +228,14 @@ int main(int argc, char** argv) {
                    static_cast<long long>(m["frames"].get<int64_t>()), m["failed"].size());
       return 0;
     }
-    std::signal(SIGINT, on_signal);
-    std::signal(SIGTERM, on_signal);
+    // from now a signal finishes the sample in progress (a second one ends the process at once)
+    pcisim::realtime::mark_running();
     RunOptions o;
     o.out_dir = a.out;
     o.shard = a.shard;
     o.max_samples = a.max_samples;
     o.jobs = a.jobs;
-    o.stop = &g_stop;
+    o.stop = &pcisim::realtime::stop_flag();
     const RunReport r = run_dataset(spec, o, std::cerr);
     print_stages(r.times);
     if (r.disk_full) {
@@ -255,6 +262,14 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "pcisim-dataset: %s: %lld samples, %lld frames, %zu failed (manifest.json, coco.json)\n",
                    a.out.c_str(), static_cast<long long>(m["samples_made"].get<int64_t>()),
                    static_cast<long long>(m["frames"].get<int64_t>()), m["failed"].size());
+    }
+    // a run that made nothing of what it tried is no success, whatever was recorded
+    if (r.made == 0 && r.failed > 0) {
+      std::fprintf(stderr,
+                   "pcisim-dataset: every sample this run tried failed (%lld; their errors are above and in "
+                   "%s/shards/failed-*.jsonl)\n",
+                   static_cast<long long>(r.failed), a.out.c_str());
+      return 6;
     }
     return 0;
   } catch (const pcisim::json::JsonError& e) {

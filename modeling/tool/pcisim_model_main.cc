@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -11,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 #include "anatomy/case/case_folder.h"
 #include "anatomy/heart/synthetic_heart_motion.h"
@@ -24,6 +26,7 @@
 #include "modeling/picture/heart_fit_picture.h"
 #include "modeling/picture/model_overview.h"
 #include "modeling/report/model_report.h"
+#include "realtime/stop_signal.h"
 
 namespace {
 
@@ -44,14 +47,68 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// an option's value refused before any work: one line "pcisim-model: <option>: <what>", exit 2
+struct OptionError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// --dims: three whole numbers x,y,z, each within the phantom's bounds (anatomy/phantom/phantom_cta.h)
+std::array<int64_t, 3> parse_dims(const std::string& s) {
+  std::array<int64_t, 3> d{};
+  const std::string expected = fmt::format("expected three whole numbers x,y,z, each 1..{}, at most {} voxels in all",
+                                           anatomy::kMaxPhantomCtaDim, anatomy::kMaxPhantomCtaVoxels);
+  size_t at = 0;
+  for (int a = 0; a < 3; ++a) {
+    const size_t end = a < 2 ? s.find(',', at) : s.size();
+    const std::string part = s.substr(at, end == std::string::npos ? std::string::npos : end - at);
+    size_t used = 0;
+    long long v = 0;
+    try {
+      v = std::stoll(part, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (end == std::string::npos || part.empty() || used != part.size() ||
+        !std::isdigit(static_cast<unsigned char>(part[0])))
+      throw OptionError(fmt::format("--dims: {}, got '{}'", expected, s));
+    if (v < 1 || v > anatomy::kMaxPhantomCtaDim)
+      throw OptionError(fmt::format("--dims: {}, got '{}' ({} along {})", expected, s, v, "xyz"[a]));
+    d[a] = v;
+    at = end + 1;
+  }
+  if (d[0] * d[1] * d[2] > anatomy::kMaxPhantomCtaVoxels)
+    throw OptionError(fmt::format("--dims: {}, got '{}' ({} voxels)", expected, s, d[0] * d[1] * d[2]));
+  return d;
+}
+
+// --voxel-mm: three sizes within the phantom's bounds (0.1 to 20 mm)
+Eigen::Vector3d parse_voxel_mm(const std::string& s) {
+  const std::string expected = fmt::format("expected three voxel sizes x,y,z in mm, each {} to {}",
+                                           anatomy::kMinPhantomCtaVoxelMm, anatomy::kMaxPhantomCtaVoxelMm);
+  Eigen::Vector3d p;
+  char c1 = 0, c2 = 0;
+  std::istringstream in(s);
+  if (!(in >> p.x() >> c1 >> p.y() >> c2 >> p.z()) || c1 != ',' || c2 != ',' || !in.eof())
+    throw OptionError(fmt::format("--voxel-mm: {}, got '{}'", expected, s));
+  for (int a = 0; a < 3; ++a)
+    if (!(p[a] >= anatomy::kMinPhantomCtaVoxelMm && p[a] <= anatomy::kMaxPhantomCtaVoxelMm))
+      throw OptionError(fmt::format("--voxel-mm: {}, got '{}'", expected, s));
+  return p;
+}
+
 int make_phantom(uint32_t seed, const std::string& out, const std::string& voxel, const std::string& dims, double noise,
                  double stenosis, bool no_coronaries, bool flip_z, bool origin_frame) {
   anatomy::PhantomCtaSpec spec;
   spec.seed = seed;
-  if (!voxel.empty()) spec.spacing_mm = parse_point(voxel, "--voxel-mm");
-  if (!dims.empty()) {
-    const Eigen::Vector3d d = parse_point(dims, "--dims");
-    spec.dims = {int64_t(d.x()), int64_t(d.y()), int64_t(d.z())};
+  if (!voxel.empty()) spec.spacing_mm = parse_voxel_mm(voxel);
+  if (!dims.empty()) spec.dims = parse_dims(dims);
+  for (int a = 0; a < 3; ++a) {
+    const double extent_mm = static_cast<double>(spec.dims[a]) * spec.spacing_mm[a];
+    if (extent_mm > anatomy::kMaxPhantomCtaExtentMm)
+      throw OptionError(
+          fmt::format("--dims, --voxel-mm: expected a field of view of at most {} mm along each axis, "
+                      "got {} x {} = {} mm along {}",
+                      anatomy::kMaxPhantomCtaExtentMm, spec.dims[a], spec.spacing_mm[a], extent_mm, "xyz"[a]));
   }
   spec.noise_sigma_hu = noise;
   spec.stenosis_fraction = stenosis;
@@ -298,6 +355,8 @@ int cine_main(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // no loop watches a flag here: SIGINT/SIGTERM end the run at once, saying so
+  pcisim::realtime::install_stop_signals("pcisim-model", "working");
   if (argc > 1 && std::string(argv[1]) == "motion") return motion_main(argc - 1, argv + 1);
   if (argc > 1 && std::string(argv[1]) == "cine") return cine_main(argc - 1, argv + 1);
   CLI::App app{
@@ -366,8 +425,10 @@ int main(int argc, char** argv) {
   ph->add_flag("--make-phantom-cta", make_phantom_cta,
                "write a synthetic CTA (ct.nrrd), its true centerlines and radii (truth.json), what was drawn "
                "(phantom.json) and a picture; --seed N picks the phantom");
-  ph->add_option("--voxel-mm", voxel, "voxel size x,y,z (mm); default 0.4,0.4,0.6");
-  ph->add_option("--dims", dims, "voxels along x,y,z; default 512,512,250");
+  ph->add_option("--voxel-mm", voxel, "voxel size x,y,z (mm), each 0.1 to 20; default 0.4,0.4,0.6");
+  ph->add_option("--dims", dims,
+                 "voxels along x,y,z, each 1..4096, at most 2^28 in all and 1000 mm of field along each axis; default "
+                 "512,512,250");
   ph->add_option("--noise-hu", noise_hu, "noise sigma (HU)")->check(CLI::Range(0.0, 200.0));
   ph->add_option("--stenosis", stenosis, "diameter reduction of the stenosis (0..0.99); default drawn 0.5..0.8")
       ->check(CLI::Range(0.0, 0.99));

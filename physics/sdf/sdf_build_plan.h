@@ -33,8 +33,9 @@ struct BuildPlan {
 // one int32 per 512 points; the guidewire bench's 0.1 mm field over the phantom is 1.6 G points)
 inline constexpr int64_t kMaxGridPoints = 2147483647;
 // the most grid points in stored (band) bricks: 4 bytes each in the field and 8 more for the
-// build's nearest-triangle keys, so 768 MB at the limit; the phantom at 0.1 mm stores 32 M
-inline constexpr int64_t kMaxBandPoints = int64_t{1} << 26;
+// build's nearest-triangle keys, so 1.5 GB at the limit; the phantom at 0.1 mm (the guidewire
+// bench's finest field) stores 32 M, a patient's wider aorta a few times that
+inline constexpr int64_t kMaxBandPoints = int64_t{1} << 27;
 
 // throws std::invalid_argument for an empty mesh, a bad spacing/band, a grid of more than
 // kMaxGridPoints, or walls whose band would store more than kMaxBandPoints. Both counts are

@@ -31,7 +31,7 @@ const std::map<std::string, std::vector<std::string>>& allowed() {
       {"haptics", {"physics/local_force_model.h"}},
       {"xray", {"anatomy", "png", "realtime/percentile.h"}},
       {"ultrasound", {"anatomy", "png", "realtime/percentile.h"}},
-      {"modeling", {"anatomy", "json", "png", "realtime/percentile.h"}},
+      {"modeling", {"anatomy", "json", "png", "realtime/percentile.h", "realtime/stop_signal.h"}},
       {"protocol", {"pcisim_lcm"}},
       {"server",
        {"anatomy", "physics", "haptics", "xray", "ultrasound", "protocol", "pcisim_lcm", "realtime", "json", "png"}},
@@ -39,7 +39,7 @@ const std::map<std::string, std::vector<std::string>>& allowed() {
       // the dataset maker runs scenes headless: the server's scene library, not its threads
       {"dataset",
        {"server/scene/scene.h", "server/case_builder.h", "server/beat_samples.h", "anatomy", "physics", "xray", "json",
-        "png", "clients/bridge/trainee_script.h"}},
+        "png", "clients/bridge/trainee_script.h", "realtime/stop_signal.h"}},
   };
   return rules;
 }

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <fmt/format.h>
 
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "anatomy/case/case_folder.h"
+#include "anatomy/case/case_limits.h"
 #include "anatomy/heart/heart_mesh.h"
 #include "anatomy/case/slicer_markups.h"
 #include "anatomy/mesh/mesh_io.h"
@@ -611,10 +613,11 @@ TEST_F(OrganCaseFolder, TooManyBeadsOrSurfaceTrianglesAreRefusedBeforeTheWork) {
     for (const auto& c : once) f["centres_mm"].push_back(c);
   set_fiducials_json(f);
   expect_refused("fiducials.json", "centres_mm", std::to_string(f["centres_mm"].size()) + " beads, more than 256");
-  // a binary STL of 100 001 triangles: refused by its count, before a corner is read
+  // a binary STL of one triangle over the limit (a 25 MB file of zeros): refused by its count,
+  // before a corner is read
+  const uint32_t n = static_cast<uint32_t>(anatomy::case_limits::kMaxOrganTriangles + 1);
   {
     std::ofstream stl(dir_ / "organ.stl", std::ios::binary);
-    const uint32_t n = 100001;
     stl << std::string(80, ' ');
     stl.write(reinterpret_cast<const char*>(&n), 4);
     stl << std::string(size_t{50} * n, '\0');
@@ -622,10 +625,12 @@ TEST_F(OrganCaseFolder, TooManyBeadsOrSurfaceTrianglesAreRefusedBeforeTheWork) {
   auto j = case_json();
   j["organ"]["surface"] = "organ.stl";
   set_case_json(j);
-  expect_refused("organ.stl", "triangle count", "100001 triangles, more than 100000 (the limit for this mesh)");
+  expect_refused(
+      "organ.stl", "triangle count",
+      fmt::format("{} triangles, more than {} (the limit for this mesh)", n, anatomy::case_limits::kMaxOrganTriangles));
 }
 
-// a case's meshes are read with a bound on their triangles (the lumen's 8 M, the organ's 100 k):
+// a case's meshes are read with a bound on their triangles (the lumen's 8 M, the organ's 500 k):
 // every format refuses as soon as its header or its count so far passes it
 TEST(MeshFiles, ATriangleLimitIsCheckedBeforeTheMeshIsParsed) {
   auto error = [](const std::string& format, const std::string& bytes) {

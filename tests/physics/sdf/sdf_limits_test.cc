@@ -28,15 +28,16 @@ std::string refusal(const anatomy::TriangleMesh& mesh, double spacing_m, double 
   return "";
 }
 
-// a half-metre lumen at 1 mm with a 50 mm band: 250 M grid points (within kMaxGridPoints) but
-// ~150 M in band bricks, a 1.8 GB build; refused while its bricks are listed, in milliseconds
+// a 0.6 m lumen at 1 mm with a 100 mm band: 216 M grid points (within kMaxGridPoints) but
+// ~152 M in band bricks (the grid without its inner 0.4 m cube; nothing is stored outside the
+// grid), a 1.8 GB build; refused while its bricks are listed, in milliseconds
 TEST(SdfLimits, AWallBandOfTooManyPointsIsRefusedBeforeThePool) {
-  const std::string why = refusal(cube(0.5), 1e-3, 0.05);
+  const std::string why = refusal(cube(0.6), 1e-3, 0.1);
   EXPECT_NE(why.find("the walls' band needs more than " + std::to_string(kMaxBandPoints) + " grid points"),
             std::string::npos)
       << why;
   // the same walls with the default band (4 cells) fit
-  EXPECT_EQ(refusal(cube(0.5), 1e-3, 0.0), "");
+  EXPECT_EQ(refusal(cube(0.6), 1e-3, 0.0), "");
 }
 
 TEST(SdfLimits, AGridOfTooManyPointsIsRefused) {

@@ -12,7 +12,7 @@ namespace pcisim::anatomy::io {
 
 // the bytes of a regular file of at most max_bytes (json::read_regular_file, the one reader);
 // throws VolumeIoError naming the path (a FIFO
-// or device is refused unopened: a FIFO would block for ever, /dev/zero never ends), and a file
+// or device is refused unread: a FIFO would block for ever, /dev/zero never ends), and a file
 // over the limit before reading it, naming its size and the limit
 inline constexpr int64_t kMaxFileBytes = int64_t{8} << 30;
 std::string read_file(const std::string& path, int64_t max_bytes = kMaxFileBytes);

@@ -203,6 +203,56 @@ TEST_F(HostileInputs, NotRegularFilesAndNulsInACase) {
   expect_refused(serve(dir), {"case.json", "ct.file", "\\u0000"});
 }
 
+// three DICOM files that once aborted the process inside GDCM or vnl (SIGABRT): only the preamble
+// and DICM; an element length of 0xFFFFFFF0; an ImagePositionPatient of 1e308. Made from the
+// fuzz corpus' CT slice (explicit VR little endian)
+TEST_F(HostileInputs, DicomFilesThatOnceAbortedGdcm) {
+  if (!fs::exists(kModel)) GTEST_SKIP() << "pcisim-model is not built (no ITK)";
+  const std::string good = pcisim::test::file_text(PCISIM_SOURCE_DIR "/fuzz/corpus/dicom/ct_explicit_vr.dcm");
+  ASSERT_EQ(good.substr(128, 4), "DICM");
+  const size_t version = good.find(std::string("\x02\x00\x01\x00OB\0\0", 8));
+  const size_t position =
+      good.find(std::string(" \x00"
+                            "2\x00"
+                            "DS\x06\x00"
+                            "0\\0\\0 ",
+                            14));
+  ASSERT_NE(version, std::string::npos);
+  ASSERT_NE(position, std::string::npos);
+  std::string long_element = good;
+  long_element.replace(version + 8, 4, std::string("\xf0\xff\xff\xff", 4));
+  const std::string far = good.substr(0, position) +
+                          std::string(
+                              " \x00"
+                              "2\x00"
+                              "DS\x0a\x00"
+                              "0\\0\\1e308 ",
+                              18) +
+                          good.substr(position + 14);
+  struct Hostile {
+    std::string bytes, tag;
+  };
+  for (const Hostile& h : {Hostile{good.substr(0, 132), "(0002,0000)"}, Hostile{long_element, "(0002,0001)"},
+                           Hostile{far, "ImagePositionPatient (0020,0032)"}}) {
+    const fs::path dir = root_ / "dicom";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    std::ofstream(dir / "slice.dcm", std::ios::binary) << h.bytes;
+    SCOPED_TRACE(h.tag);
+    const Outcome o = run({kModel, "--ct", dir.string(), "--seed", "0,0,0", "--out", (root_ / "dicom-out").string()});
+    EXPECT_TRUE(o.exited) << "ended by signal " << o.code << "\n" << o.output;
+    EXPECT_NE(o.code, 0) << o.output;
+    EXPECT_LT(o.seconds, kRefuseWithin_s) << o.output;
+    // progress lines ("reading ...") aside, one message: the program's, naming the file and the tag
+    std::vector<std::string> said;
+    for (const std::string& line : message_lines(o.output))
+      if (line.rfind("pcisim-model:", 0) == 0) said.push_back(line);
+    ASSERT_EQ(said.size(), 1u) << o.output;
+    EXPECT_NE(said[0].find("slice.dcm"), std::string::npos) << said[0];
+    EXPECT_NE(said[0].find(h.tag), std::string::npos) << said[0];
+  }
+}
+
 // phantom CTs the size of a building, or of an atom, once ran out of memory
 TEST_F(HostileInputs, PhantomCtaSizes) {
   if (!fs::exists(kModel)) GTEST_SKIP() << "pcisim-model is not built (no ITK)";

@@ -413,8 +413,13 @@ int main(int argc, char** argv) {
   knobs->add_option("--radius-iterations", o.radius.iterations, "iterations of each 2-D level set [heart eq 2]")
       ->check(CLI::Range(2, 10000));
   double lumen_spacing_mm = o.stitched_lumen.spacing_m * 1e3;
-  knobs->add_option("--lumen-spacing-mm", lumen_spacing_mm, "grid spacing of the stitched lumen surface (mm)")
-      ->check(CLI::Range(0.02, 2.0));
+  // finer than 0.1 mm the stitched lumen of a phantom CTA passes the 8 M triangles a case's
+  // lumen.stl may hold (anatomy/case/case_limits.h: 7.2 M at 0.1 mm), so the case would be refused
+  knobs
+      ->add_option("--lumen-spacing-mm", lumen_spacing_mm,
+                   "grid spacing of the stitched lumen surface (mm); finer than 0.1 mm the lumen would exceed "
+                   "the triangles a case may hold")
+      ->check(CLI::Range(0.1, 2.0));
   bool tubes = false;
   knobs->add_flag("--lumen-tubes", tubes, "lumen.stl as one closed tube per branch instead of one stitched surface");
   bool no_heart_fit = false;

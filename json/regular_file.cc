@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
@@ -54,6 +55,21 @@ int open_regular(const std::string& path, const std::string& what, struct stat* 
   return fd;
 }
 
+// at most n bytes from fd's current offset (fewer where the file ends first)
+std::string read_up_to(int fd, int64_t n, const std::string& path, const std::string& what) {
+  std::string out(static_cast<size_t>(n), '\0');
+  size_t got = 0;
+  while (got < out.size()) {
+    const ssize_t r = ::read(fd, out.data() + got, out.size() - got);
+    if (r < 0 && errno == EINTR) continue;
+    if (r < 0) throw FileError(fmt::format("{}: cannot read {}: {}", path, what, std::strerror(errno)));
+    if (r == 0) break;
+    got += static_cast<size_t>(r);
+  }
+  out.resize(got);
+  return out;
+}
+
 }  // namespace
 
 std::string read_regular_file(const std::string& path, const std::string& what, int64_t max_bytes) {
@@ -63,17 +79,18 @@ std::string read_regular_file(const std::string& path, const std::string& what, 
   if (file.fd < 0) throw FileError(why);
   if (st.st_size > max_bytes)
     throw FileError(fmt::format("{}: {} bytes, over the {} byte limit for {}", path, st.st_size, max_bytes, what));
-  std::string out(static_cast<size_t>(st.st_size), '\0');
-  size_t got = 0;
-  while (got < out.size()) {
-    const ssize_t n = ::read(file.fd, out.data() + got, out.size() - got);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) throw FileError(fmt::format("{}: cannot read {}: {}", path, what, std::strerror(errno)));
-    if (n == 0) break;
-    got += static_cast<size_t>(n);
-  }
-  if (got != out.size()) throw FileError(fmt::format("{}: {} shrank while it was read", path, what));
+  std::string out = read_up_to(file.fd, st.st_size, path, what);
+  if (static_cast<int64_t>(out.size()) != st.st_size)
+    throw FileError(fmt::format("{}: {} shrank while it was read", path, what));
   return out;
+}
+
+std::string read_regular_file_head(const std::string& path, const std::string& what, int64_t bytes) {
+  struct stat st {};
+  std::string why;
+  const Fd file{open_regular(path, what, &st, &why)};
+  if (file.fd < 0) throw FileError(why);
+  return read_up_to(file.fd, std::min<int64_t>(bytes, st.st_size), path, what);
 }
 
 std::string regular_file_problem(const std::string& path, const std::string& what) {

@@ -24,6 +24,10 @@ inline constexpr int64_t kMaxRegularFileBytes = int64_t{8} << 30;
 std::string read_regular_file(const std::string& path, const std::string& what = "the file",
                               int64_t max_bytes = kMaxRegularFileBytes);
 
+// the first `bytes` bytes of the regular file at `path` (all of it when shorter), whatever its
+// size: enough to tell a file's kind from its magic without reading it whole. Throws as above
+std::string read_regular_file_head(const std::string& path, const std::string& what, int64_t bytes);
+
 // "" when `path` names a regular file that could be read, else the cause as read_regular_file
 // would say it (without reading the file)
 std::string regular_file_problem(const std::string& path, const std::string& what = "the file");

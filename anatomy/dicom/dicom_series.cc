@@ -1,9 +1,5 @@
 #include "anatomy/dicom/dicom_series.h"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-#include <cerrno>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -26,27 +22,6 @@ namespace pcisim::anatomy {
 namespace {
 
 namespace fs = std::filesystem;
-
-// whether a regular file begins with the 128-byte preamble and "DICM": only its head is read
-// (opened without blocking, as a FIFO swapped in would otherwise hold the reader)
-bool starts_with_dicom_magic(const std::string& file) {
-  const int fd = ::open(file.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
-  if (fd < 0) return true;  // unreadable: the full read names the cause
-  struct stat st {};
-  std::string head(132, '\0');
-  ssize_t got = 0;
-  if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode)) {
-    while (got < 132) {
-      const ssize_t n = ::read(fd, head.data() + got, static_cast<size_t>(132 - got));
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) break;
-      got += n;
-    }
-  }
-  ::close(fd);
-  head.resize(static_cast<size_t>(got));
-  return dicom::has_dicom_magic(head);
-}
 
 struct Slice {
   std::string file;
@@ -257,9 +232,9 @@ std::map<std::string, std::vector<std::string>> series_in(const std::string& fol
         throw DicomError(file + ": a symbolic link to a file outside the folder (" + target.string() + ")");
     }
     // a stray file (a README, a thumbnail, a 4 GB video) is skipped on its first 132 bytes
-    if (!starts_with_dicom_magic(file)) continue;
     std::string bytes;
     try {
+      if (!dicom::has_dicom_magic(json::read_regular_file_head(file, "the DICOM file", 132))) continue;
       bytes = json::read_regular_file(file, "the DICOM file", dicom::kMaxFileBytes);
     } catch (const json::FileError& e) {
       throw DicomError(e.what());

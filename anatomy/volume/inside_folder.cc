@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <system_error>
 
@@ -21,6 +22,12 @@ bool within(const fs::path& folder, const fs::path& p) {
   return true;
 }
 
+// what escaped_name shows as \uXXXX and a name may not hold: C0 controls (NUL included) and DEL
+bool is_control(char c) {
+  const auto u = static_cast<unsigned char>(c);
+  return u < 0x20 || u == 0x7f;
+}
+
 InsideFolder refuse(FolderEscape e, std::string why) {
   InsideFolder out;
   out.escape = e;
@@ -33,9 +40,8 @@ InsideFolder refuse(FolderEscape e, std::string why) {
 std::string escaped_name(std::string_view name) {
   std::string out;
   for (const char c : name) {
-    const auto u = static_cast<unsigned char>(c);
-    if (u < 0x20 || u == 0x7f) {
-      out += fmt::format("\\u{:04x}", u);
+    if (is_control(c)) {
+      out += fmt::format("\\u{:04x}", static_cast<unsigned char>(c));
     } else {
       out += c;
     }
@@ -44,10 +50,8 @@ std::string escaped_name(std::string_view name) {
 }
 
 InsideFolder resolve_inside_folder(const std::string& folder, const std::string& name) {
-  for (const char c : name) {
-    const auto u = static_cast<unsigned char>(c);
-    if (u < 0x20 || u == 0x7f) return refuse(FolderEscape::kControlCharacter, "holds a control character");
-  }
+  if (std::any_of(name.begin(), name.end(), is_control))
+    return refuse(FolderEscape::kControlCharacter, "holds a control character");
   const fs::path rel(name);
   if (name.empty()) return refuse(FolderEscape::kNotRelative, "is empty");
   if (rel.has_root_path()) return refuse(FolderEscape::kNotRelative, "is an absolute path");

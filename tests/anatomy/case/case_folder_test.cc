@@ -26,6 +26,7 @@
 #include "anatomy/organ/kidney_phantom.h"
 #include "anatomy/phantom/phantom_case.h"
 #include "anatomy/volume/volume_io.h"
+#include "tests/common/file_text.h"
 
 namespace pcisim::anatomy {
 namespace {
@@ -768,23 +769,19 @@ TEST_F(CaseFolder, ACtDataFileOutsideTheFolderIsRefused) {
   fs::create_directories(outside);
   write_metaimage(*small_case().ct, (outside / "ct.mhd").string());  // and outside/ct.raw
   const std::string raw = (outside / "ct.raw").string();
-  auto header_of = [](const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-  };
   auto use_ct = [&](const std::string& file, const std::string& text) {
     std::ofstream(dir_ / file, std::ios::binary) << text;
     auto j = case_json();
     j["ct"]["file"] = file;
     set_case_json(j);
   };
-  const std::string mhd = header_of(outside / "ct.mhd");
+  const std::string mhd = test::file_text(outside / "ct.mhd");
   const std::string mhd_head = mhd.substr(0, mhd.find("ElementDataFile"));
   use_ct("ct.mhd", mhd_head + "ElementDataFile = " + raw + "\n");
   EXPECT_NE(refusal().find("ct.mhd: ElementDataFile: '" + raw + "' is an absolute path"), std::string::npos)
       << refusal();
   // the written ct.nrrd's header, its data detached
-  std::string nhdr = header_of(dir_ / "ct.nrrd");
+  std::string nhdr = test::file_text(dir_ / "ct.nrrd");
   nhdr = nhdr.substr(0, nhdr.find("\n\n") + 1);
   nhdr.replace(nhdr.find("encoding: "), nhdr.find('\n', nhdr.find("encoding: ")) - nhdr.find("encoding: "),
                "encoding: raw");

@@ -17,6 +17,7 @@
 #include <iterator>
 #include <map>
 
+#include "tests/common/file_text.h"
 #include "anatomy/dicom/dicom_limits.h"
 #include "anatomy/dicom/dicom_precheck.h"
 #include "anatomy/dicom/dicom_series.h"
@@ -30,11 +31,6 @@ namespace fs = std::filesystem;
 
 constexpr const char* kSeries = "1.2.826.0.1.3680043.2.1125.4.1";
 constexpr int kColumns = 6, kRows = 5, kSlices = 4;
-
-std::string bytes_of(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
 
 void put(const fs::path& file, const std::string& bytes) {
   std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes;
@@ -172,7 +168,7 @@ class DicomHostile : public ::testing::Test {
       std::vector<int16_t> hu(kColumns * kRows);
       for (size_t i = 0; i < hu.size(); ++i) hu[i] = int16_t(-100 + 10 * int(i) + k);
       testing::write_dicom_slice(s, kColumns, kRows, hu);
-      pristine_[k] = bytes_of(file(k));
+      pristine_[k] = test::file_text(file(k));
     }
   }
   void TearDown() override { fs::remove_all(dir_); }
@@ -363,7 +359,7 @@ TEST_F(DicomHostile, CompressedAndUnknownTransferSyntaxesAreRefusedByName) {
 // the header walk straight on bytes, as the fuzz target runs it: cut at every length, a good file
 // is refused (a DicomError naming the file), never passed short
 TEST_F(DicomHostile, EveryPrefixOfAGoodFileIsRefused) {
-  const std::string b = bytes_of(file(0));
+  const std::string b = test::file_text(file(0));
   EXPECT_EQ(dicom::precheck_dicom("good.dcm", b).series_uid, kSeries);
   for (size_t n = 0; n < b.size(); ++n) {
     try {

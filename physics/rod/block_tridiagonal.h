@@ -61,6 +61,26 @@ class BlockTridiagonal {
     for (int j = n - 2; j >= first; --j) out[j] = forward_[j] - reduced_upper_[j] * out[j + 1];
   }
 
+  // the same solve for a b that is zero before unit `nonzero_from`, and only units
+  // [lowest_wanted, units) of x wanted: the forward sweep starts at nonzero_from (the units
+  // before it stay zero) and the back sweep stops at lowest_wanted, so a column of A^-1 whose
+  // b sits near the chain's end costs what is left of the chain. Both in [first, units).
+  void solve_partial(const std::vector<Vector>& b, std::vector<Vector>* x, int nonzero_from, int lowest_wanted) {
+    const int n = units();
+    if (nonzero_from >= n || lowest_wanted >= n) return;
+    for (int j = nonzero_from; j < n; ++j) {
+      Vector y = b[j];
+      if (j > nonzero_from) y.noalias() -= upper_[j - 1].transpose() * forward_[j - 1];
+      forward_[j] = pivot_[j].solve(y);
+    }
+    std::vector<Vector>& out = *x;
+    out[n - 1] = forward_[n - 1];
+    for (int j = n - 2; j >= lowest_wanted; --j) {
+      out[j] = -(reduced_upper_[j] * out[j + 1]);
+      if (j >= nonzero_from) out[j] += forward_[j];
+    }
+  }
+
  private:
   std::vector<Block> diagonal_, upper_;
   std::vector<Eigen::LLT<Block>> pivot_;  // Cholesky of S_j

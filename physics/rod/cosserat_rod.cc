@@ -74,6 +74,8 @@ CosseratRod::CosseratRod(const CosseratRodParams& params, const Eigen::Vector3d&
   if (params_.solver == RodSolver::kDirect) {
     rhs_.assign(n_, BlockTridiagonal6::Vector::Zero());
     dlambda_.assign(n_, BlockTridiagonal6::Vector::Zero());
+    column_rhs_.assign(n_, BlockTridiagonal6::Vector::Zero());
+    column_.assign(n_, BlockTridiagonal6::Vector::Zero());
     ss_jacobian_.assign(n_, Eigen::Matrix3d::Zero());
     bt_jacobian_.assign(n_, Eigen::Matrix3d::Zero());
   }
@@ -269,28 +271,101 @@ bool CosseratRod::solve_constraints_direct(double h, RodContact* contact) {
     }
     if (!system_.factor(f)) return false;
     system_.solve(rhs_, &dlambda_, f);
-    // dx = W J^T dlambda
-    for (int j = f; j < n_; ++j) {
-      ss_lambda_[j] += dlambda_[j].head<3>();
-      bt_lambda_[j] += dlambda_[j].tail<3>();
-    }
-    for (int i = f + 1; i <= n_; ++i) {
-      Eigen::Vector3d g = dlambda_[i - 1].head<3>();
-      if (i < n_) g -= dlambda_[i].head<3>();
-      x_[i] += inv_mass_[i] * inv_l * g;
-    }
-    for (int j = f; j < n_; ++j) {
-      Eigen::Vector3d g =
-          ss_jacobian_[j].transpose() * dlambda_[j].head<3>() + bt_jacobian_[j].transpose() * dlambda_[j].tail<3>();
-      if (j + 1 < n_) g -= bt_jacobian_[j + 1].transpose() * dlambda_[j + 1].tail<3>();
-      const Eigen::Vector3d dtheta = 4.0 * inv_inertia_q_[j] * g;
-      const Eigen::Quaterniond w(0.0, dtheta.x(), dtheta.y(), dtheta.z());
-      q_[j].coeffs() += 0.5 * (w * q_[j]).coeffs();
-      q_[j].normalize();
-    }
+    apply_multiplier_change();
     if (contact) contact->project(*this, it, h);
   }
   return true;
+}
+
+// dx = W J^T dlambda, dtheta likewise, over the free units
+void CosseratRod::apply_multiplier_change() {
+  const int f = hub_;
+  const double inv_l = 1.0 / l_;
+  for (int j = f; j < n_; ++j) {
+    ss_lambda_[j] += dlambda_[j].head<3>();
+    bt_lambda_[j] += dlambda_[j].tail<3>();
+  }
+  for (int i = f + 1; i <= n_; ++i) {
+    Eigen::Vector3d g = dlambda_[i - 1].head<3>();
+    if (i < n_) g -= dlambda_[i].head<3>();
+    x_[i] += inv_mass_[i] * inv_l * g;
+  }
+  for (int j = f; j < n_; ++j) {
+    Eigen::Vector3d g =
+        ss_jacobian_[j].transpose() * dlambda_[j].head<3>() + bt_jacobian_[j].transpose() * dlambda_[j].tail<3>();
+    if (j + 1 < n_) g -= bt_jacobian_[j + 1].transpose() * dlambda_[j + 1].tail<3>();
+    const Eigen::Vector3d dtheta = 4.0 * inv_inertia_q_[j] * g;
+    const Eigen::Quaterniond w(0.0, dtheta.x(), dtheta.y(), dtheta.z());
+    q_[j].coeffs() += 0.5 * (w * q_[j]).coeffs();
+    q_[j].normalize();
+  }
+}
+
+bool CosseratRod::contact_nodes_fit(std::span<const int> nodes) const {
+  if (!direct_ran_ || params_.solver != RodSolver::kDirect) return false;
+  int previous = hub_;
+  for (int p : nodes) {
+    if (p <= previous || p > n_) return false;
+    previous = p;
+  }
+  return true;
+}
+
+// one column per node and axis: a unit impulse e on node p moves it by e / m_p directly
+// (H W_z H^T) and pulls segments p - 1 and p, whose multipliers answer with
+// y = -S^-1 J W_z H^T e; every listed node q then moves by W_z (J^T y)_q on top
+bool CosseratRod::contact_compliance(std::span<const int> nodes, Eigen::Ref<Eigen::MatrixXd> w) {
+  const int k = static_cast<int>(nodes.size());
+  if (!contact_nodes_fit(nodes) || w.rows() != 3 * k || w.cols() != 3 * k) return false;
+  if (k == 0) return true;
+  const double inv_l = 1.0 / l_;
+  const int lowest = nodes.front() - 1;  // the lowest unit any listed node reads
+  for (int a = 0; a < k; ++a) {
+    const int p = nodes[a];
+    const double s = inv_mass_[p] * inv_l;
+    for (int d = 0; d < 3; ++d) {
+      const Eigen::Vector3d e = Eigen::Vector3d::Unit(d);
+      // node p ends segment p - 1 (J = I / l) and starts segment p (J = -I / l)
+      column_rhs_[p - 1].head<3>() = -s * e;
+      if (p < n_) column_rhs_[p].head<3>() = s * e;
+      system_.solve_partial(column_rhs_, &column_, p - 1, lowest);
+      column_rhs_[p - 1].setZero();
+      if (p < n_) column_rhs_[p].setZero();
+      for (int b = 0; b < k; ++b) {
+        const int q = nodes[b];
+        Eigen::Vector3d g = column_[q - 1].head<3>();
+        if (q < n_) g -= column_[q].head<3>();
+        Eigen::Vector3d dx = inv_mass_[q] * inv_l * g;
+        if (q == p) dx += inv_mass_[p] * e;
+        w.block<3, 1>(3 * b, 3 * a + d) = dx;
+      }
+    }
+  }
+  return true;
+}
+
+bool CosseratRod::apply_contact_impulses(std::span<const int> nodes, std::span<const Eigen::Vector3d> impulses) {
+  if (!contact_nodes_fit(nodes) || impulses.size() != nodes.size()) return false;
+  if (nodes.empty()) return true;
+  const int f = hub_;
+  const double inv_l = 1.0 / l_;
+  for (int j = f; j < n_; ++j) rhs_[j].setZero();
+  for (size_t a = 0; a < nodes.size(); ++a) {
+    const int p = nodes[a];
+    const Eigen::Vector3d s = inv_mass_[p] * inv_l * impulses[a];
+    rhs_[p - 1].head<3>() -= s;
+    if (p < n_) rhs_[p].head<3>() += s;
+  }
+  system_.solve(rhs_, &dlambda_, f);
+  apply_multiplier_change();
+  for (size_t a = 0; a < nodes.size(); ++a) x_[nodes[a]] += inv_mass_[nodes[a]] * impulses[a];
+  return true;
+}
+
+void CosseratRod::shift_node_without_velocity(int node, const Eigen::Vector3d& d_m) {
+  if (node <= hub_ || node > n_) return;
+  x_[node] += d_m;
+  x_old_[node] += d_m;
 }
 
 // follow-the-leader length bound (Mueller et al. 2012): not a constraint of the paper, a

@@ -73,6 +73,20 @@ class CosseratRod {
   // free node and their torque on a free segment's frame, J^T lambda / h^2, world frame
   Eigen::Vector3d node_constraint_force_n(int node) const;
   Eigen::Vector3d segment_constraint_torque_nm(int segment) const;
+  // --- wall contact inside the solve (issue #33): for a RodContact hook after a direct solve ---
+  // the contact compliance (Delassus operator) W = H A^-1 H^T of free nodes: how far each listed
+  // node moves (m, world frame) per unit impulse (N s^2, force h^2) on any listed node, through
+  // this substep's linearised rod: A^-1 = (M + J^T alpha~^-1 J)^-1 = W_z - W_z J^T S^-1 J W_z
+  // (Woodbury), with S the system the solve just factored. `nodes` are free (> hub_node()),
+  // strictly increasing, k of them; w is 3k x 3k, row/column 3a + d for node a, axis d.
+  // False (w untouched) when the last solve was not direct or the arguments do not fit.
+  bool contact_compliance(std::span<const int> nodes, Eigen::Ref<Eigen::MatrixXd> w);
+  // the rod's response to impulses on the listed nodes (same rules): the multipliers change by
+  // dl = -S^-1 J W_z H^T L (so the hub's force includes the wall's reaction) and the nodes and
+  // frames move by W_z (J^T dl + H^T L)
+  bool apply_contact_impulses(std::span<const int> nodes, std::span<const Eigen::Vector3d> impulses_n_s2);
+  // moves a free node, and where its substep began, by d: a position fix that makes no velocity
+  void shift_node_without_velocity(int node, const Eigen::Vector3d& d_m);
   // where the nodes and frames were when the current substep began
   std::span<const Eigen::Vector3d> substep_start_nodes_m() const { return x_old_; }
   std::span<const Eigen::Quaterniond> substep_start_orientations() const { return q_old_; }
@@ -110,6 +124,9 @@ class CosseratRod {
   void solve_constraints(double h, RodContact* contact);
   // returns false (and leaves the state as the last good iteration) when the system is singular
   bool solve_constraints_direct(double h, RodContact* contact);
+  // after a direct solve of dlambda_: lambda += dlambda, x += W_z J^T dlambda, frames likewise
+  void apply_multiplier_change();
+  bool contact_nodes_fit(std::span<const int> nodes) const;
   void guard_stretch();
   void update_velocities(double h);
 
@@ -131,6 +148,7 @@ class CosseratRod {
   // in the world frame, then bend-twist of the pair ending at that segment)
   BlockTridiagonal6 system_;
   std::vector<BlockTridiagonal6::Vector> rhs_, dlambda_;
+  std::vector<BlockTridiagonal6::Vector> column_rhs_, column_;  // contact_compliance's columns
   std::vector<Eigen::Matrix3d> ss_jacobian_, bt_jacobian_;
 };
 

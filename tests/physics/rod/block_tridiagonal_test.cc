@@ -81,6 +81,40 @@ TEST(BlockTridiagonal6, SolvesTheTailFromAFirstUnit) {
   for (int j = first; j < n; ++j) EXPECT_LT((x[j] - xd.segment<6>(6 * (j - first))).norm(), 1e-12 * xd.norm()) << j;
 }
 
+TEST(BlockTridiagonal6, APartialSolveGivesTheDenseSolvesUnitsAtAndBelowWhatIsWanted) {
+  // b zero before unit 5 (garbage there must not be read), x wanted from unit 3 on: the
+  // answer there is the dense solve's, and units below 3 are left as they were
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const int n = 10, nonzero_from = 5, lowest = 3;
+  BlockTridiagonal6 chain(n);
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(6 * n, 6 * n);
+  for (int j = 0; j < n; ++j) {
+    BlockTridiagonal6::Block m;
+    for (int k = 0; k < 36; ++k) m(k) = u(rng);
+    chain.diagonal(j) = m * m.transpose() + 15.0 * BlockTridiagonal6::Block::Identity();
+    dense.block<6, 6>(6 * j, 6 * j) = chain.diagonal(j);
+    if (j + 1 < n) {
+      for (int k = 0; k < 36; ++k) m(k) = u(rng);
+      chain.upper(j) = m;
+      dense.block<6, 6>(6 * j, 6 * j + 6) = m;
+      dense.block<6, 6>(6 * j + 6, 6 * j) = m.transpose();
+    }
+  }
+  std::vector<BlockTridiagonal6::Vector> b(n, BlockTridiagonal6::Vector::Constant(std::nan("")));
+  std::vector<BlockTridiagonal6::Vector> x(n, BlockTridiagonal6::Vector::Constant(42.0));
+  Eigen::VectorXd bd = Eigen::VectorXd::Zero(6 * n);
+  for (int j = nonzero_from; j < n; ++j) {
+    for (int k = 0; k < 6; ++k) b[j](k) = u(rng);
+    bd.segment<6>(6 * j) = b[j];
+  }
+  ASSERT_TRUE(chain.factor());
+  chain.solve_partial(b, &x, nonzero_from, lowest);
+  const Eigen::VectorXd xd = dense.llt().solve(bd);
+  for (int j = lowest; j < n; ++j) EXPECT_LT((x[j] - xd.segment<6>(6 * j)).norm(), 1e-12 * xd.norm()) << "unit " << j;
+  for (int j = 0; j < lowest; ++j) EXPECT_EQ(x[j](0), 42.0) << "unit " << j << " was written";
+}
+
 TEST(BlockTridiagonal6, RefusesASingularPivot) {
   BlockTridiagonal6 chain(3);
   for (int j = 0; j < 3; ++j) chain.diagonal(j) = BlockTridiagonal6::Block::Identity();

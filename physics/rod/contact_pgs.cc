@@ -1,0 +1,122 @@
+#include "physics/rod/contact_pgs.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+
+namespace pcisim::physics::rod {
+namespace {
+
+// two unit vectors spanning the plane normal to n
+void tangent_basis(const Eigen::Vector3d& n, Eigen::Vector3d* t1, Eigen::Vector3d* t2) {
+  const Eigen::Vector3d helper = std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  *t1 = n.cross(helper).normalized();
+  *t2 = n.cross(*t1);
+}
+
+// sliding: the tangent impulse of magnitude c against the slip it leaves. With the slip
+// s = s_o + W_tt L_t (s_o: the slip without this contact's friction), L_t = -c s / |s| says that
+// s minimises the strictly convex  1/2 (s - s_o)' M (s - s_o) + c |s|,  M = W_tt^-1 (its
+// gradient is M (s - s_o) + c s / |s| = -L_t + c s / |s|). Projecting the stick impulse on the
+// cone instead would put friction along W_tt^-1 s, not against s, where W_tt is anisotropic (a
+// rod is far stiffer along its axis than across it). Newton on s, halving a step that does not
+// descend; the caller has made sure s = 0 is not the answer (|M s_o| > c).
+Eigen::Vector2d slide_on_cone(const Eigen::Matrix2d& m, const Eigen::Vector2d& s_o, double c) {
+  auto objective = [&](const Eigen::Vector2d& s) { return 0.5 * (s - s_o).dot(m * (s - s_o)) + c * s.norm(); };
+  Eigen::Vector2d s = s_o;
+  double f = objective(s);
+  const double scale = s_o.norm();
+  for (int it = 0; it < 30 && s.norm() > 0.0; ++it) {
+    const double len = s.norm();
+    const Eigen::Vector2d u = s / len;
+    const Eigen::Vector2d g = m * (s - s_o) + c * u;
+    const Eigen::Matrix2d hess = m + (c / len) * (Eigen::Matrix2d::Identity() - u * u.transpose());
+    const Eigen::Vector2d step = -hess.inverse() * g;
+    double a = 1.0;
+    Eigen::Vector2d next = s + step;
+    double f_next = objective(next);
+    while (f_next > f && a > 1e-8) {
+      a *= 0.5;
+      next = s + a * step;
+      f_next = objective(next);
+    }
+    if (!(f_next <= f)) break;
+    s = next;
+    f = f_next;
+    if ((a * step).norm() <= 1e-14 * scale) break;
+  }
+  if (!(s.norm() > 0.0)) return Eigen::Vector2d::Zero();
+  return -c * s.normalized();
+}
+
+}  // namespace
+
+ContactPgs::ContactPgs(int max_contacts) {
+  if (max_contacts < 0) throw std::invalid_argument("contact solve: max_contacts must be >= 0");
+  motion_.assign(max_contacts, Eigen::Vector3d::Zero());
+}
+
+ContactSolveStats ContactPgs::solve(const Eigen::Ref<const Eigen::MatrixXd>& w, std::span<const NodeContact> c,
+                                    std::span<Eigen::Vector3d> impulses, int max_sweeps, double tolerance_m) {
+  const int k = static_cast<int>(c.size());
+  ContactSolveStats stats;
+  if (k > max_contacts() || static_cast<int>(impulses.size()) != k || w.rows() != 3 * k || w.cols() != 3 * k)
+    throw std::invalid_argument("contact solve: sizes do not match");
+  // d = W L from the warm start
+  for (int a = 0; a < k; ++a) {
+    motion_[a].setZero();
+    for (int b = 0; b < k; ++b) motion_[a] += w.block<3, 3>(3 * a, 3 * b) * impulses[b];
+  }
+  // one contact's impulse changes by dl: every node's motion follows its column of W
+  auto apply = [&](int a, const Eigen::Vector3d& dl) {
+    impulses[a] += dl;
+    for (int b = 0; b < k; ++b) motion_[b] += w.block<3, 3>(3 * b, 3 * a) * dl;
+  };
+  for (int sweep = 0; sweep < max_sweeps; ++sweep) {
+    double change = 0.0;
+    for (int a = 0; a < k; ++a) {
+      const NodeContact& ca = c[a];
+      const Eigen::Vector3d& n = ca.normal;
+      const Eigen::Matrix3d waa = w.block<3, 3>(3 * a, 3 * a);
+      // normal: the push that closes the gap, never a pull
+      const double w_nn = n.dot(waa * n);
+      const double l_n = -n.dot(impulses[a]);
+      const double l_n_new = std::max(0.0, l_n + (ca.gap_m + n.dot(motion_[a])) / w_nn);
+      if (l_n_new != l_n) {
+        apply(a, -(l_n_new - l_n) * n);
+        change = std::max(change, std::abs(l_n_new - l_n) * w_nn);
+      }
+      // tangent: the impulse that stops the slip, inside the static cone; else the kinetic one
+      // against the slip that is left
+      Eigen::Vector3d t1, t2;
+      tangent_basis(n, &t1, &t2);
+      Eigen::Matrix<double, 3, 2> t;
+      t << t1, t2;
+      const Eigen::Vector2d l_t = t.transpose() * impulses[a];
+      const Eigen::Matrix2d w_tt = t.transpose() * waa * t;
+      const Eigen::Vector2d slip_without = t.transpose() * (ca.slip_m + motion_[a]) - w_tt * l_t;
+      const Eigen::Matrix2d m = w_tt.inverse();
+      Eigen::Vector2d l_t_new = -(m * slip_without);
+      if (l_t_new.norm() > l_n_new * ca.mu_static)
+        l_t_new = l_n_new > 0.0 && ca.mu_kinetic > 0.0 ? slide_on_cone(m, slip_without, l_n_new * ca.mu_kinetic)
+                                                       : Eigen::Vector2d::Zero();
+      const Eigen::Vector2d dl_t = l_t_new - l_t;
+      if (dl_t.squaredNorm() > 0.0) {
+        apply(a, t * dl_t);
+        change = std::max(change, (w_tt * dl_t).norm());
+      }
+    }
+    stats.sweeps = sweep + 1;
+    stats.last_change_m = change;
+    if (change <= tolerance_m) {
+      stats.converged = true;
+      break;
+    }
+  }
+  return stats;
+}
+
+}  // namespace pcisim::physics::rod

@@ -1,0 +1,47 @@
+#pragma once
+// The contact problem of a substep (issue #33): wall contact and Coulomb friction of k nodes,
+// solved on the rod's contact compliance W = H A^-1 H^T (CosseratRod::contact_compliance) by
+// projected Gauss-Seidel over the contacts, as SOFA's constraint solvers do for a beam (Duriez
+// et al. 2006, "Realistic haptic rendering of interacting deformable objects in virtual
+// environments": free motion, then this problem, then the correction). Per contact, with
+// d = W L the nodes' motion under the impulses L (N s^2, force h^2, world frame):
+//   non-penetration   gap + n.d <= 0,  L_n = -n.L >= 0,  L_n (gap + n.d) = 0
+//   stick             slip + P d = 0 (P: the wall's tangent plane) while |L_t| <= mu_s L_n
+//   slide             otherwise |L_t| = mu_k L_n, against the slip
+// Each sweep takes each contact's normal row (a scalar, clamped at 0), then its two tangent rows
+// (a 2 x 2 solve, projected on the cone). Sized once; solve() allocates nothing.
+#include <Eigen/Core>
+#include <span>
+#include <vector>
+
+namespace pcisim::physics::rod {
+
+struct NodeContact {
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit, out of the lumen: the wall pushes along -normal
+  double gap_m = 0.0;                                 // after the free solve: > 0 is inside the wall
+  Eigen::Vector3d slip_m = Eigen::Vector3d::Zero();   // the node's motion along the wall over the substep, free solve
+  double mu_static = 0.0, mu_kinetic = 0.0;
+};
+
+struct ContactSolveStats {
+  int sweeps = 0;
+  double last_change_m = 0.0;  // the largest motion any contact's update made in the last sweep
+  bool converged = false;
+};
+
+class ContactPgs {
+ public:
+  explicit ContactPgs(int max_contacts);
+  int max_contacts() const { return static_cast<int>(motion_.size()); }
+  // impulses: one per contact, the warm start on entry and the answer on return. Sweeps until no
+  // update moves its node more than tolerance_m, at most max_sweeps. w is 3k x 3k, k <= max_contacts.
+  ContactSolveStats solve(const Eigen::Ref<const Eigen::MatrixXd>& w, std::span<const NodeContact> contacts,
+                          std::span<Eigen::Vector3d> impulses, int max_sweeps, double tolerance_m);
+  // the nodes' motion W L under the last answer
+  std::span<const Eigen::Vector3d> motion_m() const { return motion_; }
+
+ private:
+  std::vector<Eigen::Vector3d> motion_;
+};
+
+}  // namespace pcisim::physics::rod

@@ -1,0 +1,154 @@
+// The contact problem's solver on problems solved by hand: one contact pushed out of a wall,
+// one already clear, two coupled contacts (both pushing, and one lifting off), a block that
+// sticks exactly while its slip needs no more than mu_s N and otherwise slides with mu_k N
+// against its slip, and a random coupled problem whose answer meets every condition of Coulomb
+// contact (Signorini's, the cone, sliding against the slip).
+#include "physics/rod/contact_pgs.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <random>
+#include <vector>
+
+namespace pcisim::physics::rod {
+namespace {
+
+constexpr double kTolerance = 1e-12;
+
+NodeContact floor_contact(double gap_m, Eigen::Vector3d slip = Eigen::Vector3d::Zero(), double mu_s = 0.0,
+                          double mu_k = 0.0) {
+  NodeContact c;
+  c.normal = -Eigen::Vector3d::UnitZ();  // the floor is below: out of the lumen is down
+  c.gap_m = gap_m;
+  c.slip_m = slip;
+  c.mu_static = mu_s;
+  c.mu_kinetic = mu_k;
+  return c;
+}
+
+TEST(ContactPgs, PushesOneNodeExactlyOutOfTheWallAndLeavesAClearOneAlone) {
+  ContactPgs pgs(2);
+  const double mass = 0.5;
+  const Eigen::MatrixXd w = Eigen::MatrixXd::Identity(3, 3) / mass;
+  std::vector<Eigen::Vector3d> l(1, Eigen::Vector3d::Zero());
+  const NodeContact in_wall = floor_contact(1e-3);
+  ContactSolveStats s = pgs.solve(w, {&in_wall, 1}, l, 10, kTolerance);
+  EXPECT_TRUE(s.converged);
+  EXPECT_NEAR(l[0].z(), mass * 1e-3, 1e-15);  // pushed up: the impulse that moves m by 1 mm
+  EXPECT_NEAR(pgs.motion_m()[0].z(), 1e-3, 1e-15);
+  const NodeContact clear = floor_contact(-1e-3);
+  l[0] = Eigen::Vector3d(0.0, 0.0, 5.0);  // a warm start that no longer applies
+  s = pgs.solve(w, {&clear, 1}, l, 10, kTolerance);
+  EXPECT_TRUE(s.converged);
+  EXPECT_EQ(l[0], Eigen::Vector3d::Zero());
+}
+
+// two nodes on a floor coupled through W = [[2, 1], [1, 2]] (normal rows; tangents decoupled)
+Eigen::MatrixXd coupled_pair() {
+  Eigen::MatrixXd w = Eigen::MatrixXd::Identity(6, 6) * 2.0;
+  w(2, 5) = w(5, 2) = 1.0;
+  return w;
+}
+
+TEST(ContactPgs, TwoCoupledContactsPushTogetherOrOneLiftsOff) {
+  ContactPgs pgs(2);
+  const Eigen::MatrixXd w = coupled_pair();
+  std::vector<Eigen::Vector3d> l(2, Eigen::Vector3d::Zero());
+  // both in the wall by 3 and 1: both active, [2 1; 1 2] L = (3, 1), L = (5/3, -1/3): the second
+  // would pull, so it lifts off and the first alone takes 3 / 2 (moving the second up 3 / 2 > 1)
+  const NodeContact a[2] = {floor_contact(3.0), floor_contact(1.0)};
+  ContactSolveStats s = pgs.solve(w, a, l, 100, kTolerance);
+  EXPECT_TRUE(s.converged);
+  EXPECT_NEAR(l[0].z(), 1.5, 1e-12);
+  EXPECT_NEAR(l[1].z(), 0.0, 1e-12);
+  // both by 3 and 2: L = W^-1 (3, 2) = (4/3, 1/3), both push
+  const NodeContact b[2] = {floor_contact(3.0), floor_contact(2.0)};
+  s = pgs.solve(w, b, l, 200, kTolerance);
+  EXPECT_TRUE(s.converged) << s.sweeps;
+  EXPECT_NEAR(l[0].z(), 4.0 / 3.0, 1e-10);
+  EXPECT_NEAR(l[1].z(), 1.0 / 3.0, 1e-10);
+}
+
+// a block of mass m on the floor, in it by g, slipping s along x over the substep: it takes
+// N = m g; stopping it takes m s along the floor, allowed while m s <= mu_s m g, i.e. s <= mu_s g
+TEST(ContactPgs, ABlockSticksExactlyWhileStaticFrictionCanHoldItAndOtherwiseSlidesOnTheKineticCone) {
+  ContactPgs pgs(1);
+  const double m = 2.0, g = 1e-3, mu_s = 0.3, mu_k = 0.2;
+  const Eigen::MatrixXd w = Eigen::MatrixXd::Identity(3, 3) / m;
+  for (const double s : {0.25 * g, 0.299 * g, 0.301 * g, 0.5 * g}) {
+    std::vector<Eigen::Vector3d> l(1, Eigen::Vector3d::Zero());
+    const NodeContact c = floor_contact(g, Eigen::Vector3d(s, 0.0, 0.0), mu_s, mu_k);
+    EXPECT_TRUE(pgs.solve(w, {&c, 1}, l, 50, kTolerance).converged);
+    EXPECT_NEAR(l[0].z(), m * g, 1e-15);
+    if (s <= mu_s * g) {
+      EXPECT_NEAR(l[0].x(), -m * s, 1e-15) << "slip " << s / g << " g must stick";
+      EXPECT_NEAR(pgs.motion_m()[0].x() + s, 0.0, 1e-15);
+    } else {
+      EXPECT_NEAR(l[0].x(), -mu_k * m * g, 1e-15) << "slip " << s / g << " g must slide";
+      EXPECT_NEAR(pgs.motion_m()[0].x() + s, s - mu_k * g, 1e-15);  // slowed by mu_k N h^2 / m
+    }
+    EXPECT_NEAR(l[0].y(), 0.0, 1e-15);
+  }
+}
+
+TEST(ContactPgs, ASlidingNodesFrictionOpposesItsSlipInTheWallsPlane) {
+  ContactPgs pgs(1);
+  const Eigen::MatrixXd w = Eigen::MatrixXd::Identity(3, 3);
+  const Eigen::Vector3d slip(0.03, -0.04, 0.0);  // 0.05 along (0.6, -0.8)
+  std::vector<Eigen::Vector3d> l(1, Eigen::Vector3d::Zero());
+  const NodeContact c = floor_contact(0.01, slip, 0.5, 0.4);
+  EXPECT_TRUE(pgs.solve(w, {&c, 1}, l, 50, kTolerance).converged);
+  const Eigen::Vector3d tangent(l[0].x(), l[0].y(), 0.0);
+  EXPECT_NEAR(tangent.norm(), 0.4 * 0.01, 1e-15);
+  EXPECT_NEAR(tangent.normalized().dot(-slip.normalized()), 1.0, 1e-12);
+}
+
+// a coupled problem as a rod gives: random SPD W, random normals, gaps and slips. Every
+// condition of Coulomb contact holds at the answer (to the sweep tolerance)
+TEST(ContactPgs, ACoupledRandomProblemMeetsSignoriniAndTheCone) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const int k = 12;
+  Eigen::MatrixXd a(3 * k, 3 * k);
+  for (int i = 0; i < a.size(); ++i) a(i) = u(rng);
+  const Eigen::MatrixXd w = a * a.transpose() / (3 * k) + 0.2 * Eigen::MatrixXd::Identity(3 * k, 3 * k);
+  std::vector<NodeContact> c(k);
+  for (NodeContact& ci : c) {
+    ci.normal = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
+    ci.gap_m = 1e-3 * u(rng);
+    ci.slip_m = 1e-3 * Eigen::Vector3d(u(rng), u(rng), u(rng));
+    ci.slip_m -= ci.slip_m.dot(ci.normal) * ci.normal;
+    ci.mu_static = 0.3;
+    ci.mu_kinetic = 0.3;  // one coefficient: the answer is a fixed point of the cone projection
+  }
+  ContactPgs pgs(k);
+  std::vector<Eigen::Vector3d> l(k, Eigen::Vector3d::Zero());
+  const ContactSolveStats s = pgs.solve(w, c, l, 2000, 1e-13);
+  ASSERT_TRUE(s.converged) << s.sweeps << " sweeps, last change " << s.last_change_m;
+  const double tol = 1e-9;
+  int pushing = 0, sliding = 0;
+  for (int i = 0; i < k; ++i) {
+    const Eigen::Vector3d& n = c[i].normal;
+    const Eigen::Vector3d d = pgs.motion_m()[i];
+    const double l_n = -n.dot(l[i]);
+    const double gap = c[i].gap_m + n.dot(d);
+    const Eigen::Vector3d l_t = l[i] + l_n * n;
+    const Eigen::Vector3d slip = c[i].slip_m + d - n.dot(d) * n;
+    EXPECT_GE(l_n, 0.0) << i;
+    EXPECT_LE(gap, tol) << i;
+    EXPECT_LT(std::abs(l_n * gap), tol * std::max(l_n, 1.0)) << i;
+    EXPECT_LE(l_t.norm(), 0.3 * l_n + tol) << i;
+    if (slip.norm() > 1e-9 && l_n > 0.0) {  // sliding: on the cone, against the slip
+      ++sliding;
+      EXPECT_NEAR(l_t.norm(), 0.3 * l_n, tol) << i;
+      EXPECT_NEAR(l_t.normalized().dot(-slip.normalized()), 1.0, 1e-6) << i;
+    }
+    pushing += l_n > 0.0;
+  }
+  std::printf("%d sweeps: %d of %d contacts push, %d slide\n", s.sweeps, pushing, k, sliding);
+  EXPECT_GT(pushing, 0);
+}
+
+}  // namespace
+}  // namespace pcisim::physics::rod

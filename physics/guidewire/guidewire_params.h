@@ -21,6 +21,14 @@ enum class InternalForce { kRefusedFeed, kEq20 };
 // through contact and friction (rod model only)
 enum class BeatCoupling { kKinematic, kContact };
 
+// how the rod meets the wall (docs/guidewire.md): kProjection, the scenes' scheme, moves nodes
+// out of the wall after each solve and decides friction on the rod's forces (the wall has the
+// last word, so a pushed wire crumples); kSolve solves contact and Coulomb friction with the
+// rod's elasticity, on its contact compliance (physics/rod/contact_pgs.h; issue #33). kSolve is
+// for rigs only: it holds a tip on a wall but is not yet stable in a dead end or a bend, so no
+// scene key selects it
+enum class RodContactScheme { kProjection, kSolve };
+
 // where the chain-mail's limits come from: the alpha / beta fields as set, or derived from the
 // rod section's bending stiffness for a nitinol or a stainless-steel core (chain_mail_limits.h)
 enum class ChainMailLimits { kGiven, kNitinolCore, kSteelCore };
@@ -65,6 +73,7 @@ struct GuidewireParams {
   double rod_damping_per_s = 8.0;
   int rod_substeps = 8;    // XPBD substeps per physics step (more when a step is long)
   int rod_iterations = 1;  // direct solves per substep, each followed by wall contact and friction
+  RodContactScheme rod_contact = RodContactScheme::kProjection;
   // the hub lets the wire slip (refuses further feed) while the wire pushes back harder than
   // this: the grip of a torque device and the guide catheter's support are finite
   double feed_refuse_force_n = 1.0;

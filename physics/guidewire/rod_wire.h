@@ -17,6 +17,13 @@
 // wire's axis for the touching segments' spin (rod_wire.cc). The tip has its own coefficients,
 // as in the chain-mail. The wall's normal force on a node is its mass times the correction over h^2.
 //
+// With guidewire.rod_contact "solve" (issue #33) the wall is part of the solve instead: after the
+// rod's free solve, the nodes near the wall become contacts, their contact problem (non-
+// penetration and Coulomb friction) is solved on the rod's contact compliance W = H A^-1 H^T
+// (CosseratRod::contact_compliance, rod::ContactPgs) and the rod answers the impulses through its
+// own stiffness, so the hub's force includes the wall's reaction. What the linearisation leaves
+// inside a curved wall is moved out without velocity and reported (contact_report).
+//
 // Built once; step() allocates nothing.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -29,9 +36,23 @@
 #include "physics/guidewire/guidewire_params.h"
 #include "physics/guidewire/lumen_query.h"
 #include "physics/guidewire/wire_feedback.h"
+#include "physics/rod/contact_pgs.h"
 #include "physics/rod/cosserat_rod.h"
 
 namespace pcisim::physics {
+
+// the contact problem of the solve scheme over the last step
+struct RodContactReport {
+  int contacts = 0;         // in the last substep
+  int most_contacts = 0;    // the most in any substep of the step
+  int dropped = 0;          // candidates over the cap (kMaxRodContacts) in the step, the shallowest
+  int most_sweeps = 0;      // the contact solve's sweeps, the most in a substep
+  int unconverged = 0;      // substeps whose solve stopped at the sweep cap
+  double residual_m = 0.0;  // the deepest a node was left inside the wall after the solve (then moved out)
+};
+
+// the most contacts one substep solves (the deepest are kept)
+inline constexpr int kMaxRodContacts = 96;
 
 class RodWire final : public rod::RodContact {
  public:
@@ -85,8 +106,18 @@ class RodWire final : public rod::RodContact {
   // eq 19's inputs for the local force model, from the rod's forces
   WireFeedback feedback() const;
   const rod::CosseratRod& rod() const { return rod_; }
+  // loads for rigs and benches (the scenes use none): a dead force on a node, and gravity
+  void set_node_force_n(int node, const Eigen::Vector3d& force_n) {
+    dead_load_n_.at(node) = force_n;
+    rod_.set_node_force_n(node, force_n);
+  }
+  void set_gravity_m_per_s2(const Eigen::Vector3d& g) { rod_.set_gravity_m_per_s2(g); }
   const CatheterPath& path() const { return path_; }
   int64_t recoveries() const { return recoveries_; }
+  const RodContactReport& contact_report() const { return report_; }
+  // the wall's force on each node over the last step, world frame (the solve scheme; the
+  // projection's is along the normal, magnitude wall_force_n)
+  std::span<const Eigen::Vector3d> wall_force_vector_n() const { return wall_force_vector_n_; }
 
   // RodContact: wall contact and friction of the free nodes
   void project(rod::CosseratRod& rod, int iteration, double substep_s) override;
@@ -97,6 +128,12 @@ class RodWire final : public rod::RodContact {
   Eigen::Quaterniond catheter_frame(const Eigen::Vector3d& tangent) const;
   void recover();
   void find_rest_point(int i, double a, double dt_s, int substeps);
+  // the solve scheme's contact after the rod's last solve of a substep
+  void solve_contact(rod::CosseratRod& rod, double h);
+  // the spin about the wire's axis of touching segments held by static friction (both schemes)
+  void hold_spin(rod::CosseratRod& rod);
+  double mu_static(int node) const;
+  double mu_kinetic(int node) const;
 
   GuidewireParams params_;
   CatheterPath path_;
@@ -125,6 +162,23 @@ class RodWire final : public rod::RodContact {
   bool tip_held_ = false;                 // the tip segment held about its axis by static friction
   double axial_stiffness_n_per_m_ = 0.0;  // measured between steps, for the local force model
   int64_t recoveries_ = 0;
+  // the solve scheme: candidates, the chosen contacts, their problem and answer, and each node's
+  // impulse of the last substep (the next one's warm start)
+  rod::ContactPgs pgs_{0};
+  Eigen::MatrixXd compliance_;
+  std::vector<int> candidates_, contact_nodes_;
+  std::vector<double> candidate_gap_m_;
+  std::vector<WallSample> candidate_wall_;
+  std::vector<rod::NodeContact> contacts_;
+  std::vector<Eigen::Vector3d> contact_impulse_, node_impulse_, wall_impulse_vector_n_s_, wall_force_vector_n_;
+  std::vector<Eigen::Vector3d> increment_;  // per contact: the impulse a round adds
+  // per node, while it is a contact this substep: its impulse (the next round's start, and what
+  // the rod has been handed) and whether it is in the set
+  std::vector<Eigen::Vector3d> node_trial_, node_applied_;
+  std::vector<uint8_t> in_set_;
+  std::vector<Eigen::Vector3d> dead_load_n_;  // set_node_force_n's loads
+  double last_inv_h2_ = 0.0;                  // 1 / h^2 of the last substep (node_impulse_'s)
+  RodContactReport report_;
 };
 
 // the rod's section as CosseratRodParams (stiffness, mass, tip, substeps), documented in

@@ -101,7 +101,7 @@ CosseratRod::CosseratRod(const CosseratRodParams& params, const Eigen::Vector3d&
     const double scale = tip ? params_.tip_stiffness_ratio : 1.0;
     const double ei = scale * params_.bending_stiffness_nm2, gj = scale * params_.torsional_stiffness_nm2;
     bt_stiffness_[j] = {ei, ei, gj};
-    bt_compliance_[j] = bt_stiffness_[j].cwiseInverse() / dual_length_m(j);
+    bt_compliance_[j] = bt_stiffness_[j].cwiseInverse();
   }
 }
 
@@ -212,10 +212,10 @@ void CosseratRod::solve_constraints(double h, RodContact* contact) {
     // pair f: the hub's frame (immovable: the clamp frame at hub 0, over half a segment) and segment f
     Eigen::Quaterniond hub_frame = pair_first_frame(f);
     project_bend_twist(hub_frame, 0.0, q_[f], inv_inertia_q_[f], dual_length_m(f), rest_darboux_[f],
-                       bt_compliance_[f] * inv_h2, bt_lambda_[f]);
+                       bt_compliance_[f] * (inv_h2 / dual_length_m(f)), bt_lambda_[f]);
     for (int j = f + 1; j < n_; ++j) {
       project_bend_twist(q_[j - 1], inv_inertia_q_[j - 1], q_[j], inv_inertia_q_[j], l_, rest_darboux_[j],
-                         bt_compliance_[j] * inv_h2, bt_lambda_[j]);
+                         bt_compliance_[j] * (inv_h2 / dual_length_m(j)), bt_lambda_[j]);
     }
     if (contact) contact->project(*this, it, h);
   }
@@ -245,7 +245,7 @@ bool CosseratRod::solve_constraints_direct(double h, RodContact* contact) {
       const Eigen::Matrix3d r = q_[j].toRotationMatrix();
       const Eigen::Vector3d gamma = (x_[j + 1] - x_[j]) * inv_l - r.col(2);
       const Eigen::Matrix3d alpha_ss = r * (ss_compliance_[j] * inv_h2).asDiagonal() * r.transpose();
-      const Eigen::Vector3d alpha_bt = bt_compliance_[j] * inv_h2;
+      const Eigen::Vector3d alpha_bt = bt_compliance_[j] * (inv_h2 / dual_length_m(j));
       Eigen::Vector3d omega;
       const Eigen::Matrix3d& c = ss_jacobian_[j] = stretch_shear_rotation_jacobian(q_[j]);
       const Eigen::Matrix3d& b = bt_jacobian_[j] =

@@ -111,7 +111,11 @@ class CosseratRod {
   // (EI, EI, GJ) of a pair. Pair 0 joins the clamp frame and segment 0, pair j segments j-1, j.
   const Eigen::Vector3d& stretch_shear_stiffness(int segment) const { return ss_stiffness_[segment]; }
   const Eigen::Vector3d& bend_twist_stiffness(int pair) const { return bt_stiffness_[pair]; }
-  double dual_length_m(int pair) const { return pair == 0 ? 0.5 * l_ : l_; }
+  // the length a pair's bend and twist are spread over: half a segment at the clamp (pair 0) and
+  // at the hub (the wire is straight inside the catheter up to the hub node, so the bend
+  // between the last kinematic frame and the first free one happens over the free half only), a
+  // segment elsewhere
+  double dual_length_m(int pair) const { return pair == 0 || pair == hub_ ? 0.5 * l_ : l_; }
   const Eigen::Vector3d& rest_darboux_per_m(int pair) const { return rest_darboux_[pair]; }
   // the frame before pair j's second segment: the clamp frame for pair 0
   const Eigen::Quaterniond& pair_first_frame(int pair) const { return pair == 0 ? clamp_q_ : q_[pair - 1]; }
@@ -139,6 +143,7 @@ class CosseratRod {
   std::vector<Eigen::Vector3d> omega_;  // angular velocity per segment, material frame
   std::vector<double> inv_inertia_q_;   // inverse "mass" of the quaternion as a 4-vector, 1 / (4 I)
   std::vector<Eigen::Vector3d> ss_stiffness_, ss_compliance_, ss_lambda_;
+  // bt_compliance_ per metre of the pair's dual length (1 / stiffness): divided by it where used
   std::vector<Eigen::Vector3d> bt_stiffness_, bt_compliance_, bt_lambda_, rest_darboux_;
   Eigen::Quaterniond clamp_q_;
   int hub_ = 0;

@@ -34,13 +34,8 @@ constexpr double kMaxCompressionM = 0.02;
 // the wall is below kStuckM over a substep counts as held by static friction
 constexpr double kContactBandM = 0.1e-3;
 constexpr int kContactSweeps = 100;
-constexpr double kContactToleranceM = 1e-9;
+constexpr double kContactToleranceM = 1e-7;
 constexpr double kStuckM = 1e-8;
-// rounds past the first (nodes the response pushed in join, the wall re-linearised where the
-// nodes now are) measured unstable in a dead end and a bend (the wire reached 10-60 m/s):
-// one round until #33's contact solve holds there
-constexpr int kContactRounds = 1;
-constexpr double kRoundGapM = 1e-6;
 
 }  // namespace
 
@@ -125,13 +120,8 @@ RodWire::RodWire(const GuidewireParams& params, CatheterPath path, const LumenQu
     contact_nodes_.reserve(kMaxRodContacts);
     contacts_.reserve(kMaxRodContacts);
     contact_impulse_.reserve(kMaxRodContacts);
-    increment_.assign(kMaxRodContacts, Eigen::Vector3d::Zero());
-    node_trial_.assign(n + 1, Eigen::Vector3d::Zero());
-    node_applied_.assign(n + 1, Eigen::Vector3d::Zero());
-    in_set_.assign(n + 1, 0);
   }
   node_impulse_.assign(n + 1, Eigen::Vector3d::Zero());
-  dead_load_n_.assign(n + 1, Eigen::Vector3d::Zero());
   wall_impulse_vector_n_s_.assign(n + 1, Eigen::Vector3d::Zero());
   wall_force_vector_n_.assign(n + 1, Eigen::Vector3d::Zero());
   // start fully inside the catheter, the tip at the exit
@@ -245,7 +235,6 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
   // the moving wall: every node's rest point at the step's start
   if (motion_)
     for (int i = 0; i < node_count(); ++i) find_rest_point(i, 0.0, dt_s, substeps);
-  const bool solve_scheme = params_.rod_contact == RodContactScheme::kSolve && lumen_ && contact_;
   for (int k = 1; k <= substeps; ++k) {
     const double before_m = fed_m_;
     const double a = static_cast<double>(k) / substeps;
@@ -264,13 +253,7 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
       }
     }
     place_in_catheter(before_m, h);
-    // the solve scheme: the wall's last forces load the free solve (its free motion is then the
-    // change from the last substep, small, so the wall's and the rod's linearisations hold)
-    if (solve_scheme)
-      for (int i = 0; i < node_count(); ++i)
-        rod_.set_node_force_n(i, dead_load_n_[i] + node_impulse_[i] * last_inv_h2_);
-    rod_.step(h, solve_scheme ? this : lumen_ && contact_ ? this : nullptr);
-    last_inv_h2_ = 1.0 / (h * h);
+    rod_.step(h, lumen_ && contact_ ? this : nullptr);
     if (!rod_.all_finite()) recover();
   }
   rotation_before_step_rad_ = rotation_rad_;
@@ -411,19 +394,15 @@ double RodWire::mu_kinetic(int node) const {
 
 // The solve scheme (issue #33), after the rod's last solve of a substep:
 //   1. contacts: the free nodes the free solve left within kContactBandM of the wall, and those
-//      the wall pushed in the last substep
+//      the wall pushed in the last substep (the deepest kMaxRodContacts), each with its wall
+//      normal, gap (distance + margin, > 0 inside the wall) and its motion along the wall over
+//      the substep relative to the wall
 //   2. W = H A^-1 H^T for them, from the rod's factor
-//   3. each contact's wall normal, gap (distance + margin, > 0 inside the wall) and motion along
-//      the wall over the substep relative to the wall, as at the free solve: sampled where the
-//      node is, less what the impulses applied so far moved it (the warm start the free solve was loaded with)
-//   4. the contact problem on W (rod::ContactPgs), warm-started from the impulses so far (the
-//      last substep's in the first round)
-//   5. the rod's response to the change of impulses: multipliers, nodes and frames move together
-//   6. again from 2 (at most kContactRounds rounds, W kept while the set is) while a node the
-//      response pushed into the wall was no contact (it joins), or a contact is left deeper than
-//      kRoundGapM: the wall is linearised where the node now is, so a curved wall's error shrinks
-//   7. what is left inside is moved out along the normal without velocity (reported)
-//   8. forces: the wall's on a node is its impulse / h^2; the spin rule of the projection scheme
+//   3. the contact problem on W (rod::ContactPgs), starting from the last substep's impulses
+//   4. the rod's response to the impulses: multipliers, nodes and frames move together
+//   5. what the linearisation leaves inside is moved out along the normal without velocity and
+//      reported (a curved wall, or a node the response pushed in that was no contact)
+//   6. forces: the wall's on a node is its impulse / h^2; the spin rule of the projection scheme
 //      is fed with the normal force
 void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
   const double margin = contact_->wall_margin_m;
@@ -434,98 +413,61 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
   std::fill(segment_stuck_.begin(), segment_stuck_.end(), 0);
   std::fill(stuck_.begin(), stuck_.end(), 0);
   std::fill(node_wall_n_.begin(), node_wall_n_.end(), 0.0);
-  std::fill(in_set_.begin(), in_set_.end(), 0);
-  // 1. candidates (their gap kept in candidate_gap_m_ for the cap), warm-started
+  // 1. candidates, then the deepest kMaxRodContacts of them in the rod's order
   int count = 0;
-  // a contact starts from the force the free solve was loaded with (the last substep's), already
-  // applied
-  auto join = [&](int i, double gap) {
-    candidates_[count++] = i;
-    candidate_gap_m_[i] = gap;
-    node_trial_[i] = node_applied_[i] = node_impulse_[i] * (last_inv_h2_ * h * h);
-    in_set_[i] = 1;
-  };
   for (int i = first_free; i < node_count(); ++i) {
     const WallSample s = lumen_->sample(x[i] - offset_[i]);
     const double gap = s.distance_m + margin;
-    if (gap > -kContactBandM || node_impulse_[i].squaredNorm() > 0.0) join(i, gap);
+    if (!(gap > -kContactBandM) && node_impulse_[i].squaredNorm() == 0.0) continue;
+    candidates_[count++] = i;
+    candidate_gap_m_[i] = gap;
+    candidate_wall_[i] = s;
+  }
+  if (count > kMaxRodContacts) {
+    report_.dropped += count - kMaxRodContacts;
+    std::nth_element(candidates_.begin(), candidates_.begin() + kMaxRodContacts, candidates_.begin() + count,
+                     [&](int a, int b) { return candidate_gap_m_[a] > candidate_gap_m_[b]; });
+    count = kMaxRodContacts;
+    std::sort(candidates_.begin(), candidates_.begin() + count);
+  }
+  contact_nodes_.assign(candidates_.begin(), candidates_.begin() + count);
+  contacts_.resize(count);
+  contact_impulse_.resize(count);
+  for (int a = 0; a < count; ++a) {
+    const int i = contact_nodes_[a];
+    const Eigen::Vector3d& n = candidate_wall_[i].normal;
+    const Eigen::Vector3d moved = x[i] - x_start[i] - wall_substep_m_[i];
+    contacts_[a] = {n, candidate_gap_m_[i], moved - moved.dot(n) * n, mu_static(i), mu_kinetic(i)};
+    // the solver's start: the node's last impulse, its push along the new normal only
+    const Eigen::Vector3d& last = node_impulse_[i];
+    contact_impulse_[a] = std::min(last.dot(n), 0.0) * n + (last - last.dot(n) * n);
   }
   std::fill(node_impulse_.begin(), node_impulse_.end(), Eigen::Vector3d::Zero());
-  bool set_changed = true;
-  int rounds = 0;
-  while (count > 0) {
-    if (set_changed) {
-      // the deepest kMaxRodContacts, in the rod's order
-      if (count > kMaxRodContacts) {
-        report_.dropped += count - kMaxRodContacts;
-        std::nth_element(candidates_.begin(), candidates_.begin() + kMaxRodContacts, candidates_.begin() + count,
-                         [&](int a, int b) { return candidate_gap_m_[a] > candidate_gap_m_[b]; });
-        for (int a = kMaxRodContacts; a < count; ++a) in_set_[candidates_[a]] = 0;
-        count = kMaxRodContacts;
-      }
-      std::sort(candidates_.begin(), candidates_.begin() + count);
-      contact_nodes_.assign(candidates_.begin(), candidates_.begin() + count);
-      contacts_.resize(count);
-      contact_impulse_.resize(count);
-      // 2. W
-      if (!rod.contact_compliance(contact_nodes_, compliance_.topLeftCorner(3 * count, 3 * count))) break;
-    }
-    const auto w = compliance_.topLeftCorner(3 * count, 3 * count);
-    // 3. the problem as at the free solve
-    for (int a = 0; a < count; ++a) {
-      const int i = contact_nodes_[a];
-      Eigen::Vector3d delta = Eigen::Vector3d::Zero();
-      for (int b = 0; b < count; ++b) delta += w.block<3, 3>(3 * a, 3 * b) * node_applied_[contact_nodes_[b]];
-      const WallSample s = lumen_->sample(x[i] - offset_[i]);
-      const Eigen::Vector3d& n = s.normal;
-      const Eigen::Vector3d moved = x[i] - x_start[i] - wall_substep_m_[i] - delta;
-      contacts_[a] = {n, s.distance_m + margin - n.dot(delta), moved - moved.dot(n) * n, mu_static(i), mu_kinetic(i)};
-      contact_impulse_[a] = node_trial_[i];
-    }
-    // 4. the contact problem
+  report_.contacts = count;
+  report_.most_contacts = std::max(report_.most_contacts, count);
+  // 2-4
+  auto w = compliance_.topLeftCorner(3 * count, 3 * count);
+  if (count > 0 && rod.contact_compliance(contact_nodes_, w)) {
     const rod::ContactSolveStats st = pgs_.solve(w, contacts_, contact_impulse_, kContactSweeps, kContactToleranceM);
     report_.most_sweeps = std::max(report_.most_sweeps, st.sweeps);
     report_.unconverged += st.converged ? 0 : 1;
-    // 5. the response to what changed since the last round
+    rod.apply_contact_impulses(contact_nodes_, contact_impulse_);
     for (int a = 0; a < count; ++a) {
       const int i = contact_nodes_[a];
-      increment_[a] = contact_impulse_[a] - node_applied_[i];
-      node_applied_[i] = node_trial_[i] = contact_impulse_[a];
+      const Eigen::Vector3d& n = contacts_[a].normal;
+      const double push = -n.dot(contact_impulse_[a]);
+      if (!(push > 0.0)) continue;
+      node_impulse_[i] = contact_impulse_[a];
+      touched_[i] = 1;
+      normal_[i] = n;
+      node_wall_n_[i] = push * inv_h2;
+      wall_impulse_n_s_[i] += push / h;
+      wall_impulse_vector_n_s_[i] += contact_impulse_[a] / h;
+      const Eigen::Vector3d slip = contacts_[a].slip_m + pgs_.motion_m()[a];
+      stuck_[i] = (slip - slip.dot(n) * n).norm() < kStuckM;
     }
-    rod.apply_contact_impulses(contact_nodes_, std::span<const Eigen::Vector3d>(increment_.data(), count));
-    // 6. another round?
-    if (++rounds >= kContactRounds) break;
-    const int before = count;
-    double deepest = 0.0;
-    for (int i = first_free; i < node_count(); ++i) {
-      const WallSample s = lumen_->sample(x[i] - offset_[i]);
-      const double gap = s.distance_m + margin;
-      if (in_set_[i]) {
-        deepest = std::max(deepest, gap);
-      } else if (gap > 0.0) {
-        join(i, gap);
-      }
-    }
-    set_changed = count != before;
-    if (!set_changed && deepest <= kRoundGapM) break;
   }
-  report_.contacts = count;
-  report_.most_contacts = std::max(report_.most_contacts, count);
-  for (int a = 0; a < static_cast<int>(contact_nodes_.size()); ++a) {
-    const int i = contact_nodes_[a];
-    const Eigen::Vector3d& n = contacts_[a].normal;
-    const double push = -n.dot(contact_impulse_[a]);
-    if (!(push > 0.0)) continue;
-    node_impulse_[i] = contact_impulse_[a];
-    touched_[i] = 1;
-    normal_[i] = n;
-    node_wall_n_[i] = push * inv_h2;
-    wall_impulse_n_s_[i] += push / h;
-    wall_impulse_vector_n_s_[i] += contact_impulse_[a] / h;
-    const Eigen::Vector3d slip = contacts_[a].slip_m + pgs_.motion_m()[a];
-    stuck_[i] = (slip - slip.dot(n) * n).norm() < kStuckM;
-  }
-  // 7. what is left inside, out along the normal, without velocity
+  // 5. the linearisation's leftovers, out along the normal, without velocity
   for (int i = first_free; i < node_count(); ++i) {
     const WallSample s = lumen_->sample(x[i] - offset_[i]);
     const double dn = s.distance_m + margin;
@@ -533,7 +475,7 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
     report_.residual_m = std::max(report_.residual_m, dn);
     rod.shift_node_without_velocity(i, -dn * s.normal);
   }
-  // 8. the spin about the wire's axis
+  // 6. the spin about the wire's axis
   hold_spin(rod);
 }
 

@@ -107,10 +107,7 @@ class RodWire final : public rod::RodContact {
   WireFeedback feedback() const;
   const rod::CosseratRod& rod() const { return rod_; }
   // loads for rigs and benches (the scenes use none): a dead force on a node, and gravity
-  void set_node_force_n(int node, const Eigen::Vector3d& force_n) {
-    dead_load_n_.at(node) = force_n;
-    rod_.set_node_force_n(node, force_n);
-  }
+  void set_node_force_n(int node, const Eigen::Vector3d& force_n) { rod_.set_node_force_n(node, force_n); }
   void set_gravity_m_per_s2(const Eigen::Vector3d& g) { rod_.set_gravity_m_per_s2(g); }
   const CatheterPath& path() const { return path_; }
   int64_t recoveries() const { return recoveries_; }
@@ -171,13 +168,6 @@ class RodWire final : public rod::RodContact {
   std::vector<WallSample> candidate_wall_;
   std::vector<rod::NodeContact> contacts_;
   std::vector<Eigen::Vector3d> contact_impulse_, node_impulse_, wall_impulse_vector_n_s_, wall_force_vector_n_;
-  std::vector<Eigen::Vector3d> increment_;  // per contact: the impulse a round adds
-  // per node, while it is a contact this substep: its impulse (the next round's start, and what
-  // the rod has been handed) and whether it is in the set
-  std::vector<Eigen::Vector3d> node_trial_, node_applied_;
-  std::vector<uint8_t> in_set_;
-  std::vector<Eigen::Vector3d> dead_load_n_;  // set_node_force_n's loads
-  double last_inv_h2_ = 0.0;                  // 1 / h^2 of the last substep (node_impulse_'s)
   RodContactReport report_;
 };
 

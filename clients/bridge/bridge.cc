@@ -46,6 +46,8 @@ void Bridge::on_force(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   ++forces_received_;
   last_force_n_ = force_.axial_force_n;
   last_torque_nmm_ = force_.torque_nmm;
+  last_flags_ = force_.flags;
+  last_command_ns_ = monotonic_ns();
 }
 
 BridgeStats Bridge::run(const std::atomic<bool>& stop) {
@@ -137,6 +139,17 @@ void Bridge::publish_instrument(double t_s, int64_t now_ns, int64_t seq, bool lo
   m.insertion_rate_mm_s = r.insertion_rate_mm_s;
   m.rotation_rate_rad_s = r.rotation_rate_rad_s;
   publish(m);
+  // the force back to the device: the server's while it is fresh and healthy, else zero
+  ForceSetpoint force;
+  const ForceGateState state = gate_force(
+      {ok, now_ns, last_command_ns_.load(), last_flags_.load(), last_force_n_.load(), last_torque_nmm_.load()}, &force);
+  stats.force_rendered += device_->render(force, seq) ? 1 : 0;
+  if (state != ForceGateState::kRendering) {
+    ++stats.force_zeroed;
+    stats.force_state = state;
+  }
+  if (state != tick.force_state && forces_received_ > 0) spdlog::info("bridge: {}", describe(state));
+  tick.force_state = state;
   if (log)
     spdlog::info(
         "bridge: t={:5.1f}s insertion {:6.1f} mm rotation {:6.2f} rad buttons {:#x}{} | renders {:+.3f} N "

@@ -1,6 +1,7 @@
 #pragma once
 // The instrument bridge loop: polls a device at 1 kHz on absolute deadlines, publishes
-// instrument_state_t, and keeps what the server sends back (the force it would render).
+// instrument_state_t, and hands the device the force the server sends back (zero first in any
+// fault: force_gate.h) every tick.
 // A device in fault is published as STATUS_FAULT with its last good position: no motion.
 // A probe bridge publishes a probe script's probe_state_t instead, on the same clock.
 #include <atomic>
@@ -9,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "clients/bridge/force_gate.h"
 #include "clients/bridge/instrument_device.h"
 #include "clients/bridge/probe_script.h"
 #include "pcisim_lcm/force_command_t.hpp"
@@ -31,6 +33,10 @@ struct BridgeOptions {
 
 struct BridgeStats {
   int64_t published = 0, fault_samples = 0;
+  // the force handed to the device: ticks it reached it, ticks it was zero because of a fault
+  // (force_gate.h), and the last zeroing's reason
+  int64_t force_rendered = 0, force_zeroed = 0;
+  ForceGateState force_state = ForceGateState::kNoCommand;
   int64_t missed_periods = 0;  // deadlines skipped because a sample came more than a period late
   int64_t forces_received = 0, forces_bad = 0;
   double elapsed_s = 0.0;  // from the first publish to the last (waiting for the server included)
@@ -52,6 +58,7 @@ class Bridge {
     pcisim_lcm::instrument_state_t message{};
     InstrumentReading reading, last_good;
     bool was_fault = false;
+    ForceGateState force_state = ForceGateState::kNoCommand;
   };
   Bridge(lcm::LCM& lcm, InstrumentDevice* device, const ProbeScript* probe, const BridgeOptions& options);
   void on_force(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
@@ -71,6 +78,8 @@ class Bridge {
   pcisim_lcm::force_command_t force_{};
   std::atomic<int64_t> forces_received_{0}, forces_bad_{0};
   std::atomic<double> last_force_n_{0}, last_torque_nmm_{0};
+  std::atomic<int32_t> last_flags_{0};
+  std::atomic<int64_t> last_command_ns_{-1};  // monotonic, when the last good command arrived
 };
 
 }  // namespace pcisim::clients

@@ -108,8 +108,10 @@ int main(int argc, char** argv) {
   const BridgeStats s = bridge.run(pcisim::realtime::stop_flag());
   std::string extra;
   if (auto* serial = dynamic_cast<SerialDevice*>(dev.get()))
-    extra = fmt::format(", serial lines {} ok / {} malformed{}", serial->lines(), serial->malformed(),
-                        serial->unplugged() ? ", unplugged" : "");
+    extra = fmt::format(", serial lines {} ok / {} malformed{}, force lines {} sent / {} dropped", serial->lines(),
+                        serial->malformed(), serial->unplugged() ? ", unplugged" : "", serial->force_lines(),
+                        serial->force_lines_dropped());
+  if (!probe) extra += fmt::format(", force zero in {} ticks (last: {})", s.force_zeroed, describe(s.force_state));
   spdlog::info(
       "bridge: done, {} samples published ({:.0f} Hz, {} in fault, {} periods missed), {} force commands "
       "received, {} bad{}",

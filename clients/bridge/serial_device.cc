@@ -160,6 +160,39 @@ bool SerialDevice::read(double t_s, InstrumentReading& out) {
   return true;
 }
 
+bool SerialDevice::render(const ForceSetpoint& force, int64_t seq) {
+  if (unplugged_) return false;
+  auto flush = [&] {
+    while (out_begin_ < out_end_) {
+      const ssize_t n = ::write(fd_, out_ + out_begin_, out_end_ - out_begin_);
+      if (n > 0) {
+        out_begin_ += static_cast<size_t>(n);
+      } else if (n < 0 && errno == EINTR) {
+        continue;
+      } else {
+        if (n < 0 && errno != EAGAIN) unplugged_ = true;  // EIO after a hang-up: the box is gone
+        return false;
+      }
+    }
+    return true;
+  };
+  // the tail of a line the port took in part goes first; while it is stuck, this line is dropped
+  if (!flush()) {
+    ++force_lines_dropped_;
+    return false;
+  }
+  out_begin_ = 0;
+  out_end_ = format_force_line(force, seq, out_);
+  flush();
+  if (out_begin_ == 0) {  // nothing of it went out
+    out_end_ = 0;
+    ++force_lines_dropped_;
+    return false;
+  }
+  ++force_lines_;  // whole, or its tail goes first next tick
+  return true;
+}
+
 std::string SerialDevice::describe() const {
   return fmt::format("serial encoder on {} ({} mm/count, {} rad/count)", port_, cal_.mm_per_count, cal_.rad_per_count);
 }

@@ -1,7 +1,8 @@
 #pragma once
 // An encoder box on a serial port (or a pseudo-terminal): one ASCII line per sample, format in
 // docs/serial-protocol.md. Malformed lines are counted and skipped; a port that is unplugged
-// (read error or hang-up) or silent for longer than the timeout puts the device in fault.
+// (read error or hang-up) or silent for longer than the timeout puts the device in fault. The
+// bridge's force goes back on the same port, one line per tick (force_line.h).
 #include <cstdint>
 #include <string>
 
@@ -15,7 +16,9 @@ struct SerialCalibration {
   int64_t insertion_zero_counts = 0;
   double min_insertion_mm = 0.0;  // readings are clamped into this range
   double max_insertion_mm = 400.0;
-  double silent_timeout_s = 0.05;  // no valid line for this long: fault
+  // no valid line for this long: fault (and zero force, within the 50 ms a fault may take to
+  // reach the hand, docs/serial-protocol.md)
+  double silent_timeout_s = 0.03;
 };
 
 // throws std::invalid_argument ("serial calibration: ...") for zero or non-finite scales, an
@@ -37,8 +40,13 @@ class SerialDevice : public InstrumentDevice {
   ~SerialDevice() override;
 
   bool read(double t_s, InstrumentReading& out) override;
+  // writes the force line (force_line.h) without blocking: a line the port takes in part is
+  // finished before the next; while the port takes nothing, lines are dropped (counted)
+  bool render(const ForceSetpoint& force, int64_t seq) override;
   std::string describe() const override;
 
+  int64_t force_lines() const { return force_lines_; }
+  int64_t force_lines_dropped() const { return force_lines_dropped_; }
   int64_t lines() const { return lines_; }
   int64_t malformed() const { return malformed_; }
   bool unplugged() const { return unplugged_; }
@@ -56,6 +64,10 @@ class SerialDevice : public InstrumentDevice {
   int64_t lines_ = 0, malformed_ = 0;
   bool unplugged_ = false;
   bool overlong_ = false;  // the line being read outgrew kMaxLine: counted malformed at its end
+  // the force side: the unwritten tail of the last line
+  char out_[kForceLineMaxBytes] = {};
+  size_t out_begin_ = 0, out_end_ = 0;
+  int64_t force_lines_ = 0, force_lines_dropped_ = 0;
   static constexpr size_t kMaxLine = 4000;
 };
 

@@ -101,15 +101,15 @@ TEST_F(SerialOverPty, SilenceAndUnpluggingAreFaults) {
   box_says("E 0 0 0\n");
   settle();
   EXPECT_TRUE(dev.read(1.000, r));
-  EXPECT_TRUE(dev.read(1.040, r)) << "40 ms of silence is within the timeout";
-  EXPECT_FALSE(dev.read(1.060, r)) << "60 ms of silence is a fault";
+  EXPECT_TRUE(dev.read(1.025, r)) << "25 ms of silence is within the timeout";
+  EXPECT_FALSE(dev.read(1.035, r)) << "35 ms of silence is a fault";
   box_says("E 5 0 0\n");
   settle();
-  EXPECT_TRUE(dev.read(1.070, r)) << "a new line clears the fault";
+  EXPECT_TRUE(dev.read(1.040, r)) << "a new line clears the fault";
   close(master);  // the box is unplugged
   master = -1;
   settle();
-  EXPECT_FALSE(dev.read(1.071, r));
+  EXPECT_FALSE(dev.read(1.041, r));
   EXPECT_TRUE(dev.unplugged());
 }
 

@@ -1,0 +1,231 @@
+// The force back to the hand (issue #37): the force line's format and ranges, the gate that
+// zeroes the force first in every fault, the box simulator's watchdog, and the closed loop over a
+// pseudo-terminal: a server's force commands reach the box, and each fault (the server silent, a
+// command flagged stale, a non-finite command, the box silent) turns into zero force at the box
+// within 50 ms.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "clients/bridge/box_simulator.h"
+#include "clients/bridge/bridge.h"
+#include "clients/bridge/force_gate.h"
+#include "clients/bridge/force_line.h"
+#include "clients/bridge/serial_device.h"
+#include "pcisim_lcm/force_command_t.hpp"
+#include "protocol/channels.h"
+#include "realtime/clock.h"
+#include "tests/common/counting_new.h"
+
+namespace pcisim::clients {
+namespace {
+
+using F = pcisim_lcm::force_command_t;
+
+std::string line_of(const ForceSetpoint& f, int64_t seq) {
+  char buf[kForceLineMaxBytes];
+  return std::string(buf, format_force_line(f, seq, buf));
+}
+
+TEST(ForceLine, WritesMilliNewtonsAndMicroNewtonMetresRoundedAndClamped) {
+  EXPECT_EQ(line_of({0.5, 2.0}, 7), "F 500 2000 7\n");  // 2 N mm = 2000 uN m
+  EXPECT_EQ(line_of({-0.0125, -0.0004}, 8), "F -13 0 8\n") << "half away from zero";
+  EXPECT_EQ(line_of({0.0015, 0.0015}, 9), "F 2 2 9\n");
+  EXPECT_EQ(line_of({50.0, 5000.0}, 10), "F 20000 1000000 10\n") << "clamped to 20 N and 1 N m";
+  EXPECT_EQ(line_of({-50.0, -5000.0}, 11), "F -20000 -1000000 11\n");
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(line_of({nan, inf}, 12), "F 0 0 12\n") << "nothing non-finite reaches a box";
+  // what the box reads back
+  ForceLine f;
+  ASSERT_TRUE(parse_force_line("F -13 2000 99\r", f));
+  EXPECT_EQ(f.axial_mn, -13);
+  EXPECT_EQ(f.torque_unm, 2000);
+  EXPECT_EQ(f.seq, 99);
+  for (const char* bad :
+       {"", "F", "F 1 2", "F 1 2 3 4", "E 1 2 3", "F1 2 3", "F 1.5 2 3", "F 20001 0 1", "F 0 -1000001 1", "F a b c"})
+    EXPECT_FALSE(parse_force_line(bad, f)) << "'" << bad << "'";
+  // formatting allocates nothing
+  testing::AllocationCount count;
+  char buf[kForceLineMaxBytes];
+  for (int i = 0; i < 100; ++i) format_force_line({0.1 * i, -0.2 * i}, i, buf);
+  EXPECT_EQ(count.allocations(), 0);
+}
+
+TEST(ForceGate, RendersAFreshHealthyCommandAndZeroesEveryFault) {
+  ForceGateInput in;
+  in.device_ok = true;
+  in.now_ns = 1'000'000'000;
+  in.last_command_ns = in.now_ns - 1'000'000;
+  in.axial_n = 0.7;
+  in.torque_nmm = -1.5;
+  ForceSetpoint out;
+  ASSERT_EQ(gate_force(in, &out), ForceGateState::kRendering);
+  EXPECT_EQ(out.axial_n, 0.7);
+  EXPECT_EQ(out.torque_nmm, -1.5);
+  // the server's own shaping (clamped, faded, ramping) is rendered as sent
+  for (const int32_t flags : {int32_t{F::FLAG_CLAMPED}, int32_t{F::FLAG_FADED}, int32_t{F::FLAG_RAMPING}}) {
+    ForceGateInput shaped = in;
+    shaped.flags = flags;
+    EXPECT_EQ(gate_force(shaped, &out), ForceGateState::kRendering) << flags;
+  }
+  struct Case {
+    ForceGateState expected;
+    void (*change)(ForceGateInput&);
+  };
+  const Case faults[] = {
+      {ForceGateState::kDeviceFault, [](ForceGateInput& i) { i.device_ok = false; }},
+      {ForceGateState::kNoCommand, [](ForceGateInput& i) { i.last_command_ns = -1; }},
+      {ForceGateState::kServerSilent, [](ForceGateInput& i) { i.last_command_ns = i.now_ns - kServerSilentNs - 1; }},
+      {ForceGateState::kFlaggedStale, [](ForceGateInput& i) { i.flags = F::FLAG_STALE; }},
+      {ForceGateState::kFlaggedFault,
+       [](ForceGateInput& i) { i.flags = int32_t{F::FLAG_FAULT} | int32_t{F::FLAG_FADED}; }},
+      {ForceGateState::kNotFinite, [](ForceGateInput& i) { i.torque_nmm = std::nan(""); }},
+  };
+  for (const Case& c : faults) {
+    ForceGateInput faulty = in;
+    c.change(faulty);
+    out = {1.0, 1.0};
+    EXPECT_EQ(gate_force(faulty, &out), c.expected) << describe(c.expected);
+    EXPECT_EQ(out.axial_n, 0.0) << describe(c.expected);
+    EXPECT_EQ(out.torque_nmm, 0.0) << describe(c.expected);
+  }
+  // still fresh at exactly the silence threshold
+  ForceGateInput edge = in;
+  edge.last_command_ns = edge.now_ns - kServerSilentNs;
+  EXPECT_EQ(gate_force(edge, &out), ForceGateState::kRendering);
+}
+
+// the box applies a force line until the next and, by its watchdog, zero once none came for 50 ms;
+// a SerialDevice on its port writes the lines
+TEST(BoxSimulator, AppliesEachForceLineAndItsWatchdogZeroesItAfter50Ms) {
+  BoxSimulator box(TraineeScript::parse(TraineeScript::builtin_text(), "built-in"), SerialCalibration{});
+  SerialDevice device(box.port(), 115200, SerialCalibration{});
+  EXPECT_EQ(box.applied_axial_n(0.0), 0.0) << "nothing before the first line";
+  EXPECT_TRUE(box.watchdog_tripped(0.0));
+  ASSERT_TRUE(device.render({0.25, -3.0}, 1));
+  usleep(20000);
+  box.step(1.000);
+  EXPECT_EQ(box.force_lines(), 1);
+  EXPECT_DOUBLE_EQ(box.applied_axial_n(1.000), 0.25);
+  EXPECT_DOUBLE_EQ(box.applied_torque_nmm(1.000), -3.0);
+  EXPECT_DOUBLE_EQ(box.applied_axial_n(1.000 + 0.049), 0.25);
+  EXPECT_EQ(box.applied_axial_n(1.000 + 0.051), 0.0) << "the watchdog";
+  EXPECT_EQ(box.applied_torque_nmm(1.000 + 0.051), 0.0);
+  // the box's encoder lines reach the device as the script's motion
+  usleep(20000);
+  InstrumentReading r;
+  EXPECT_TRUE(device.read(1.0, r));
+  EXPECT_GT(box.lines_sent(), 0);
+  EXPECT_EQ(device.malformed(), 0);
+  EXPECT_EQ(box.malformed(), 0);
+}
+
+// the closed loop: a "server" thread publishes force commands on memq through phases, the box
+// thread steps at 1 kHz (sending the script's motion, reading the force), the bridge runs between
+// them on the serial device. Each phase's force arrives; each fault is zero at the box within 50 ms
+TEST(ForceOut, EachFaultIsZeroForceAtTheBoxWithin50Ms) {
+  lcm::LCM lcm("memq://");
+  BoxSimulator box(TraineeScript::parse(TraineeScript::builtin_text(), "built-in"), SerialCalibration{});
+  SerialDevice device(box.port(), 115200, SerialCalibration{});
+  const int64_t t0_ns = realtime::monotonic_ns();
+  auto now_s = [&] { return (realtime::monotonic_ns() - t0_ns) * 1e-9; };
+  // the server's phases: [start, end) s, axial N, flags, a NaN command instead
+  struct Phase {
+    double start_s, end_s, axial_n;
+    int32_t flags;
+    bool nan;
+  };
+  const Phase phases[] = {
+      {0.00, 0.30, 0.5, 0, false},              // rendering
+      {0.40, 0.50, 0.9, F::FLAG_STALE, false},  // stale (0.30-0.40: silent)
+      {0.50, 0.60, 0.8, 0, false},              // rendering
+      {0.60, 0.70, 0.0, 0, true},               // NaN commands (refused by the bridge's checks: silence)
+      {0.70, 0.90, 0.3, 0, false},              // rendering; the box goes silent at 0.80
+  };
+  constexpr double kBoxSilentS = 0.80, kEndS = 0.95;
+  std::atomic<bool> done{false};
+  std::thread server([&] {
+    F m{};
+    for (int64_t seq = 0; !done; ++seq) {
+      const double t = now_s();
+      for (const Phase& p : phases) {
+        if (t < p.start_s || t >= p.end_s) continue;
+        m.seq = seq;
+        m.axial_force_n = p.nan ? std::nan("") : p.axial_n;
+        m.torque_nmm = 2.0;
+        m.flags = p.flags;
+        lcm.publish(protocol::kForceChannel, &m);
+      }
+      usleep(1000);
+    }
+  });
+  std::thread box_thread([&] {
+    while (!done) {
+      const double t = now_s();
+      if (t < kBoxSilentS)
+        box.step(t);
+      else
+        box.listen(t);
+      usleep(1000);
+    }
+  });
+  BridgeOptions o;
+  o.duration_s = kEndS;
+  o.log_each_second = false;
+  Bridge bridge(lcm, device, o);
+  std::atomic<bool> stop{false};
+  const BridgeStats stats = bridge.run(stop);
+  done = true;
+  server.join();
+  box_thread.join();
+
+  const auto& log = box.log();
+  ASSERT_GT(log.size(), 500u);
+  // the force in a window, and the first zero line at or after a fault's start
+  auto all_in = [&](double from, double to, int64_t mn) {
+    int n = 0;
+    for (const BoxForceSample& s : log)
+      if (s.t_s >= from && s.t_s < to) {
+        EXPECT_EQ(s.line.axial_mn, mn) << "at " << s.t_s << " s";
+        ++n;
+      }
+    EXPECT_GT(n, 20) << "lines in [" << from << ", " << to << ")";
+  };
+  auto zero_after = [&](double fault_s) {
+    for (const BoxForceSample& s : log)
+      if (s.t_s >= fault_s && s.line.axial_mn == 0 && s.line.torque_unm == 0) return s.t_s - fault_s;
+    return 1e9;
+  };
+  all_in(0.10, 0.29, 500);
+  const double silent_s = zero_after(0.30), stale_s = zero_after(0.40), nan_s = zero_after(0.60),
+               box_silent_s = zero_after(kBoxSilentS);
+  std::printf(
+      "zero force at the box after: the server silent %.1f ms, a stale command %.1f ms, NaN commands %.1f ms, the "
+      "box silent %.1f ms; %lld lines, %lld zeroed ticks\n",
+      1e3 * silent_s, 1e3 * stale_s, 1e3 * nan_s, 1e3 * box_silent_s, static_cast<long long>(log.size()),
+      static_cast<long long>(stats.force_zeroed));
+  EXPECT_LT(silent_s, 0.050);
+  EXPECT_LT(stale_s, 0.050);
+  all_in(0.43, 0.50, 0);  // stale: zero throughout
+  all_in(0.53, 0.60, 800);
+  EXPECT_LT(nan_s, 0.050);
+  all_in(0.73, 0.80, 300);
+  // the box silent: the bridge's device faults after the serial timeout (30 ms) and sends zero
+  EXPECT_LT(box_silent_s, 0.050);
+  EXPECT_EQ(box.malformed(), 0);
+  EXPECT_EQ(device.force_lines_dropped(), 0);
+  // and once the bridge is gone, the box's watchdog zeroes what it applies
+  const double last_s = log.back().t_s;
+  EXPECT_EQ(box.applied_axial_n(last_s + kBoxWatchdogS + 0.001), 0.0);
+}
+
+}  // namespace
+}  // namespace pcisim::clients

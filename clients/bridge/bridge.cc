@@ -89,7 +89,7 @@ BridgeStats Bridge::run(const std::atomic<bool>& stop) {
     if (probe_) {
       publish_probe(t_s, now_ns, seq, log, probe);
     } else {
-      publish_instrument(t_s, now_ns, seq, log, instrument, stats);
+      publish_instrument(t_s, now_ns, seq, log, !waiting, instrument, stats);
     }
     ++stats.published;
     if (!first_publish_ns) first_publish_ns = now_ns;
@@ -117,7 +117,7 @@ void Bridge::publish(const Message& message) {
   lcm_.publish(channel_, bytes_.data(), static_cast<unsigned>(size));
 }
 
-void Bridge::publish_instrument(double t_s, int64_t now_ns, int64_t seq, bool log, InstrumentTick& tick,
+void Bridge::publish_instrument(double t_s, int64_t now_ns, int64_t seq, bool log, bool render, InstrumentTick& tick,
                                 BridgeStats& stats) {
   // a device in fault reports no motion: the last good position, rates zero, status fault
   const bool ok = device_->read(t_s, tick.reading);
@@ -139,7 +139,9 @@ void Bridge::publish_instrument(double t_s, int64_t now_ns, int64_t seq, bool lo
   m.insertion_rate_mm_s = r.insertion_rate_mm_s;
   m.rotation_rate_rad_s = r.rotation_rate_rad_s;
   publish(m);
-  // the force back to the device: the server's while it is fresh and healthy, else zero
+  // the force back to the device: the server's while it is fresh and healthy, else zero; none
+  // while waiting for the server (the first line marks the start: a box may hold its script till then)
+  if (!render) return;
   ForceSetpoint force;
   const ForceGateState state = gate_force(
       {ok, now_ns, last_command_ns_.load(), last_flags_.load(), last_force_n_.load(), last_torque_nmm_.load()}, &force);

@@ -62,8 +62,9 @@ class Bridge {
   };
   Bridge(lcm::LCM& lcm, InstrumentDevice* device, const ProbeScript* probe, const BridgeOptions& options);
   void on_force(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
-  // one tick's message; `log`: the once-a-second line
-  void publish_instrument(double t_s, int64_t now_ns, int64_t seq, bool log, InstrumentTick& tick, BridgeStats& stats);
+  // one tick's message; `log`: the once-a-second line; `render`: hand the device its force
+  void publish_instrument(double t_s, int64_t now_ns, int64_t seq, bool log, bool render, InstrumentTick& tick,
+                          BridgeStats& stats);
   void publish_probe(double t_s, int64_t now_ns, int64_t seq, bool log, pcisim_lcm::probe_state_t& message);
   // lcm-cpp's publish(message) allocates the bytes, and the channel's std::string, every call
   template <class Message>

@@ -47,7 +47,15 @@ void Bridge::on_force(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   last_force_n_ = force_.axial_force_n;
   last_torque_nmm_ = force_.torque_nmm;
   last_flags_ = force_.flags;
-  last_command_ns_ = monotonic_ns();
+  const int64_t now_ns = monotonic_ns();
+  last_command_ns_ = now_ns;
+  // the first command that answers a sample: its round trip
+  const int64_t answered = force_.instrument_seq;
+  if (answered > answered_seq_.load() && answered >= 0) {
+    const int slot = static_cast<int>(answered % kSentSlots);
+    if (sent_seq_[slot].load() == answered) sample_to_force_.add((now_ns - sent_ns_[slot].load()) * 1e-3);
+    answered_seq_ = answered;
+  }
 }
 
 BridgeStats Bridge::run(const std::atomic<bool>& stop) {
@@ -106,6 +114,9 @@ BridgeStats Bridge::run(const std::atomic<bool>& stop) {
   stats.forces_bad = forces_bad_;
   stats.last_force_n = last_force_n_;
   stats.last_torque_nmm = last_torque_nmm_;
+  stats.sample_to_force = sample_to_force_;
+  stats.sample_to_device = sample_to_device_;
+  stats.device_write = device_write_;
   return stats;
 }
 
@@ -138,6 +149,11 @@ void Bridge::publish_instrument(double t_s, int64_t now_ns, int64_t seq, bool lo
   m.rotation_rad = r.rotation_rad;
   m.insertion_rate_mm_s = r.insertion_rate_mm_s;
   m.rotation_rate_rad_s = r.rotation_rate_rad_s;
+  {
+    const int slot = static_cast<int>(seq % kSentSlots);
+    sent_ns_[slot] = monotonic_ns();
+    sent_seq_[slot] = seq;
+  }
   publish(m);
   // the force back to the device: the server's while it is fresh and healthy, else zero; none
   // while waiting for the server (the first line marks the start: a box may hold its script till then)
@@ -145,7 +161,17 @@ void Bridge::publish_instrument(double t_s, int64_t now_ns, int64_t seq, bool lo
   ForceSetpoint force;
   const ForceGateState state = gate_force(
       {ok, now_ns, last_command_ns_.load(), last_flags_.load(), last_force_n_.load(), last_torque_nmm_.load()}, &force);
-  stats.force_rendered += device_->render(force, seq) ? 1 : 0;
+  const int64_t write_ns = monotonic_ns();
+  const bool delivered = device_->render(force, seq);
+  device_write_.add((monotonic_ns() - write_ns) * 1e-3);
+  stats.force_rendered += delivered ? 1 : 0;
+  // the first write of a force that answers a newer sample: sample -> device latency
+  const int64_t answered = answered_seq_.load();
+  if (delivered && state == ForceGateState::kRendering && answered > rendered_seq_) {
+    const int slot = static_cast<int>(answered % kSentSlots);
+    if (sent_seq_[slot].load() == answered) sample_to_device_.add((monotonic_ns() - sent_ns_[slot].load()) * 1e-3);
+    rendered_seq_ = answered;
+  }
   if (state != ForceGateState::kRendering) {
     ++stats.force_zeroed;
     stats.force_state = state;

@@ -4,6 +4,7 @@
 // fault: force_gate.h) every tick.
 // A device in fault is published as STATUS_FAULT with its last good position: no motion.
 // A probe bridge publishes a probe script's probe_state_t instead, on the same clock.
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <lcm/lcm-cpp.hpp>
@@ -12,6 +13,7 @@
 
 #include "clients/bridge/force_gate.h"
 #include "clients/bridge/instrument_device.h"
+#include "clients/bridge/latency_histogram.h"
 #include "clients/bridge/probe_script.h"
 #include "pcisim_lcm/force_command_t.hpp"
 #include "pcisim_lcm/instrument_state_t.hpp"
@@ -37,7 +39,12 @@ struct BridgeStats {
   // (force_gate.h), and the last zeroing's reason
   int64_t force_rendered = 0, force_zeroed = 0;
   ForceGateState force_state = ForceGateState::kNoCommand;
-  int64_t missed_periods = 0;  // deadlines skipped because a sample came more than a period late
+  // end-to-end latency (issue #37): from an instrument sample leaving the bridge to the first
+  // force command computed from it (its instrument_seq) arriving back, and on to the first device
+  // write of that force
+  LatencyHistogram sample_to_force, sample_to_device;
+  LatencyHistogram device_write;  // the device's render() call itself, every tick
+  int64_t missed_periods = 0;     // deadlines skipped because a sample came more than a period late
   int64_t forces_received = 0, forces_bad = 0;
   double elapsed_s = 0.0;  // from the first publish to the last (waiting for the server included)
   double last_force_n = 0.0, last_torque_nmm = 0.0;
@@ -81,6 +88,13 @@ class Bridge {
   std::atomic<double> last_force_n_{0}, last_torque_nmm_{0};
   std::atomic<int32_t> last_flags_{0};
   std::atomic<int64_t> last_command_ns_{-1};  // monotonic, when the last good command arrived
+  // when each recent sample left (slot seq % kSentSlots, tagged with its seq), the newest
+  // instrument_seq a command answered, and the histograms (each written by one thread)
+  static constexpr int kSentSlots = 4096;
+  std::array<std::atomic<int64_t>, kSentSlots> sent_ns_{}, sent_seq_{};
+  std::atomic<int64_t> answered_seq_{-1};
+  int64_t rendered_seq_ = -1;  // publishing thread: the newest answered sample written to the device
+  LatencyHistogram sample_to_force_, sample_to_device_, device_write_;
 };
 
 }  // namespace pcisim::clients

@@ -111,7 +111,17 @@ int main(int argc, char** argv) {
     extra = fmt::format(", serial lines {} ok / {} malformed{}, force lines {} sent / {} dropped", serial->lines(),
                         serial->malformed(), serial->unplugged() ? ", unplugged" : "", serial->force_lines(),
                         serial->force_lines_dropped());
-  if (!probe) extra += fmt::format(", force zero in {} ticks (last: {})", s.force_zeroed, describe(s.force_state));
+  if (!probe) {
+    extra += fmt::format(", force zero in {} ticks (last: {})", s.force_zeroed, describe(s.force_state));
+    auto figures = [](const LatencyHistogram& h) {
+      return fmt::format("p50 {:.2f} / p99 {:.2f} / p99.9 {:.2f} / max {:.2f} ms over {}", h.percentile_us(0.5) * 1e-3,
+                         h.percentile_us(0.99) * 1e-3, h.percentile_us(0.999) * 1e-3, h.max_us() * 1e-3, h.count());
+    };
+    extra += fmt::format("; latency sample -> force back {}", figures(s.sample_to_force));
+    if (s.sample_to_device.count() > 0)
+      extra += fmt::format(", -> device write (the next tick's) {}; the write itself {}", figures(s.sample_to_device),
+                           figures(s.device_write));
+  }
   spdlog::info(
       "bridge: done, {} samples published ({:.0f} Hz, {} in fault, {} periods missed), {} force commands "
       "received, {} bad{}",

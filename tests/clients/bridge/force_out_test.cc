@@ -20,7 +20,9 @@
 #include "clients/bridge/force_gate.h"
 #include "clients/bridge/force_line.h"
 #include "clients/bridge/serial_device.h"
+#include "clients/bridge/latency_histogram.h"
 #include "pcisim_lcm/force_command_t.hpp"
+#include "pcisim_lcm/instrument_state_t.hpp"
 #include "protocol/channels.h"
 #include "realtime/clock.h"
 #include "tests/common/counting_new.h"
@@ -225,6 +227,78 @@ TEST(ForceOut, EachFaultIsZeroForceAtTheBoxWithin50Ms) {
   // and once the bridge is gone, the box's watchdog zeroes what it applies
   const double last_s = log.back().t_s;
   EXPECT_EQ(box.applied_axial_n(last_s + kBoxWatchdogS + 0.001), 0.0);
+}
+
+TEST(LatencyHistogram, PercentilesAreTheUpperEdgeOfTheirBinAndNothingIsAllocated) {
+  LatencyHistogram h;
+  EXPECT_EQ(h.percentile_us(0.5), 0.0);
+  testing::AllocationCount count;
+  for (int i = 0; i < 1000; ++i) h.add(i < 990 ? 105.0 : 3000.0);  // 99 % at 105 us, 1 % at 3 ms
+  h.add(25000.0);                                                  // beyond the bins
+  EXPECT_EQ(count.allocations(), 0);
+  EXPECT_EQ(h.count(), 1001);
+  EXPECT_DOUBLE_EQ(h.percentile_us(0.5), 110.0);   // the 100-110 us bin
+  EXPECT_DOUBLE_EQ(h.percentile_us(0.98), 110.0);  // 990 of the 1001 values
+  EXPECT_DOUBLE_EQ(h.percentile_us(0.995), 3010.0);
+  EXPECT_DOUBLE_EQ(h.percentile_us(1.0), 25000.0);  // the overflow bin reports the max
+  EXPECT_DOUBLE_EQ(h.max_us(), 25000.0);
+}
+
+// a server that answers every instrument sample at once (instrument_seq = its seq): the bridge
+// measures each sample's round trip and its way on to the box's port
+struct EchoServer {
+  lcm::LCM* lcm = nullptr;
+  void on(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    pcisim_lcm::instrument_state_t m;
+    if (m.decode(rbuf->data, 0, rbuf->data_size) < 0) return;
+    F f{};
+    f.seq = m.seq;
+    f.instrument_seq = m.seq;
+    f.axial_force_n = 0.2;
+    lcm->publish(protocol::kForceChannel, &f);
+  }
+};
+
+TEST(ForceOut, TheBridgeMeasuresEachSamplesRoundTripAndItsWayToTheDevice) {
+  lcm::LCM lcm("memq://");
+  EchoServer echo{&lcm};
+  lcm.subscribe(protocol::kInstrumentChannel, &EchoServer::on, &echo);
+  BoxSimulator box(TraineeScript::parse(TraineeScript::builtin_text(), "built-in"), SerialCalibration{});
+  SerialDevice device(box.port(), 115200, SerialCalibration{});
+  std::atomic<bool> done{false};
+  const int64_t t0_ns = realtime::monotonic_ns();
+  std::thread box_thread([&] {
+    while (!done) {
+      box.step((realtime::monotonic_ns() - t0_ns) * 1e-9);
+      usleep(1000);
+    }
+  });
+  BridgeOptions o;
+  o.duration_s = 1.0;
+  o.log_each_second = false;
+  Bridge bridge(lcm, device, o);
+  std::atomic<bool> stop{false};
+  const BridgeStats s = bridge.run(stop);
+  done = true;
+  box_thread.join();
+  const LatencyHistogram& back = s.sample_to_force;
+  const LatencyHistogram& out = s.sample_to_device;
+  std::printf(
+      "memq: sample -> force back p50 %.0f / p99 %.0f / max %.0f us over %lld; -> device write p50 %.0f / p99 "
+      "%.0f us over %lld\n",
+      back.percentile_us(0.5), back.percentile_us(0.99), back.max_us(), static_cast<long long>(back.count()),
+      out.percentile_us(0.5), out.percentile_us(0.99), static_cast<long long>(out.count()));
+  // nearly every sample is answered, each counted once; the write follows the answer
+  EXPECT_GT(back.count(), 800);
+  EXPECT_LE(back.count(), s.published);
+  EXPECT_GT(out.count(), 800);
+  EXPECT_GE(out.percentile_us(0.5), back.percentile_us(0.5) - LatencyHistogram::kBinUs);
+  EXPECT_LT(back.percentile_us(0.5), 20000.0);  // within the histogram (memq answers within a tick or two)
+  EXPECT_GT(box.force_lines(), 800);
+  // the write itself: one non-blocking write per tick
+  EXPECT_GT(s.device_write.count(), 900);
+  std::printf("the device write itself: p50 %.0f / p99 %.0f / max %.0f us\n", s.device_write.percentile_us(0.5),
+              s.device_write.percentile_us(0.99), s.device_write.max_us());
 }
 
 }  // namespace

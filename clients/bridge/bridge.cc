@@ -30,7 +30,8 @@ Bridge::Bridge(lcm::LCM& lcm, InstrumentDevice* device, const ProbeScript* probe
       device_(device),
       probe_(probe),
       options_(options),
-      channel_(probe ? protocol::kProbeChannel : protocol::kInstrumentChannel) {
+      channel_(probe ? protocol::kProbeChannel : protocol::kInstrumentChannel),
+      shaper_(options.force_shaping) {
   bytes_.resize(probe ? pcisim_lcm::probe_state_t{}.getEncodedSize()
                       : pcisim_lcm::instrument_state_t{}.getEncodedSize());
   if (!(options.rate_hz >= 1.0 && options.rate_hz <= 1e4))
@@ -161,6 +162,7 @@ void Bridge::publish_instrument(double t_s, int64_t now_ns, int64_t seq, bool lo
   ForceSetpoint force;
   const ForceGateState state = gate_force(
       {ok, now_ns, last_command_ns_.load(), last_flags_.load(), last_force_n_.load(), last_torque_nmm_.load()}, &force);
+  force = shaper_.step(force, 1.0 / options_.rate_hz, state != ForceGateState::kRendering);
   const int64_t write_ns = monotonic_ns();
   const bool delivered = device_->render(force, seq);
   device_write_.add((monotonic_ns() - write_ns) * 1e-3);

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "clients/bridge/device_profile.h"
 #include "clients/bridge/force_gate.h"
 #include "clients/bridge/instrument_device.h"
 #include "clients/bridge/latency_histogram.h"
@@ -31,6 +32,9 @@ struct BridgeOptions {
   // CPU wake-ups held at this latency (PM QoS; -1 = leave the CPUs alone); quiet when not permitted
   int fifo_priority = 60;
   int cpu_latency_us = 0;
+  // the server's force on its way to the device: the instrument's scale, limits and filter
+  // (device_profile.h); zero in any fault bypasses it
+  ForceShaping force_shaping;
 };
 
 struct BridgeStats {
@@ -95,6 +99,7 @@ class Bridge {
   std::atomic<int64_t> answered_seq_{-1};
   int64_t rendered_seq_ = -1;  // publishing thread: the newest answered sample written to the device
   LatencyHistogram sample_to_force_, sample_to_device_, device_write_;
+  ForceShaper shaper_;
 };
 
 }  // namespace pcisim::clients

@@ -3,6 +3,8 @@
 // force_command_t the server sends back (the force it would render); or, with --probe-script, a
 // scripted ultrasound probe into probe_state_t.
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+#include <fstream>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
@@ -10,6 +12,7 @@
 #include <spdlog/spdlog.h>
 
 #include "clients/bridge/bridge.h"
+#include "clients/bridge/device_profile.h"
 #include "clients/bridge/replay_device.h"
 #include "clients/bridge/serial_device.h"
 #include "protocol/channels.h"
@@ -23,14 +26,14 @@ int main(int argc, char** argv) {
       "replay (an lcm-logger log of a session, docs/recording.md), serial (an encoder box, "
       "docs/serial-protocol.md). With --probe-script it publishes a scripted ultrasound probe's "
       "probe_state_t on PCISIM_PROBE instead (docs/trainee-script.md, \"Probe script\")."};
-  std::string device = "scripted", script_path, probe_script_path, log_path, port;
+  std::string device = "scripted", script_path, probe_script_path, log_path, port, stats_path, profile_path;
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   std::string replay_channel = pcisim::protocol::kInstrumentChannel;
   double duration_s = 0, wait_for_server_s = 0, speed = 1.0;
   BridgeOptions options;
   SerialCalibration cal;
   int baud = 115200;
-  bool print_script = false, print_probe_script = false;
+  bool print_script = false, print_probe_script = false, print_profile = false;
   auto* device_opt = app.add_option("--device", device, "instrument source")
                          ->check(CLI::IsMember({"scripted", "replay", "serial"}))
                          ->capture_default_str();
@@ -44,10 +47,19 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   auto* port_opt = app.add_option("--port", port, "serial: the serial port or pseudo-terminal, e.g. /dev/ttyUSB0");
   app.add_option("--baud", baud, "serial: baud rate")->capture_default_str();
-  app.add_option("--mm-per-count", cal.mm_per_count, "serial: insertion encoder calibration")->capture_default_str();
-  app.add_option("--rad-per-count", cal.rad_per_count, "serial: rotation encoder calibration")->capture_default_str();
-  app.add_option("--zero-counts", cal.insertion_zero_counts, "serial: insertion counts at 0 mm")->capture_default_str();
-  app.add_option("--max-insertion-mm", cal.max_insertion_mm, "serial: insertion limit")->capture_default_str();
+  auto* profile_opt = app.add_option("--profile", profile_path,
+                                     "serial: the instrument box's profile (JSON: encoder scales and signs, insertion "
+                                     "range, silent timeout, force scale, limits and filter; docs/serial-protocol.md); "
+                                     "--print-profile shows the default");
+  std::vector<CLI::Option*> cal_opts = {
+      app.add_option("--mm-per-count", cal.mm_per_count, "serial: insertion encoder calibration")
+          ->capture_default_str(),
+      app.add_option("--rad-per-count", cal.rad_per_count, "serial: rotation encoder calibration")
+          ->capture_default_str(),
+      app.add_option("--zero-counts", cal.insertion_zero_counts, "serial: insertion counts at 0 mm")
+          ->capture_default_str(),
+      app.add_option("--max-insertion-mm", cal.max_insertion_mm, "serial: insertion limit")->capture_default_str()};
+  for (CLI::Option* c : cal_opts) profile_opt->excludes(c);
   // a probe bridge has no instrument: the probe replaces the device
   app.add_option("--probe-script", probe_script_path,
                  "publish probe_state_t on PCISIM_PROBE from a probe script (JSON, FILE) or 'builtin' (a press on "
@@ -61,20 +73,27 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 600.0));
   app.add_option("--rate-hz", options.rate_hz, "publish rate")->check(CLI::Range(1.0, 10000.0))->capture_default_str();
   app.add_option("--device-id", options.device_id, "device_id of the messages published")->capture_default_str();
+  app.add_option("--stats-json", stats_path,
+                 "write the run's figures at exit: samples, force lines, and the end-to-end latency histograms' "
+                 "percentiles (sample -> force back, -> device write, the write itself)");
   app.add_flag("--print-script", print_script, "print the built-in trainee script and exit");
+  app.add_flag("--print-profile", print_profile, "print the default instrument box profile and exit");
   app.add_flag("--print-probe-script", print_probe_script, "print the built-in probe script and exit");
   CLI11_PARSE(app, argc, argv);
   // until it runs, SIGINT/SIGTERM end it at once, saying so
   pcisim::realtime::install_stop_signals("pcisim-bridge");
 
-  if (print_script || print_probe_script) {
+  if (print_script || print_probe_script || print_profile) {
     if (print_script) std::cout << TraineeScript::builtin_text();
     if (print_probe_script) std::cout << ProbeScript::builtin_text();
+    if (print_profile) std::cout << default_device_profile_text() << "\n";
     return 0;
   }
   std::unique_ptr<InstrumentDevice> dev;
   std::optional<ProbeScript> probe;
   try {
+    if (!profile_path.empty() && device != "serial")
+      throw std::runtime_error("--profile describes an instrument box: it needs --device serial");
     if (!probe_script_path.empty()) {
       probe = probe_script_path == "builtin" ? ProbeScript::parse(ProbeScript::builtin_text(), "built-in")
                                              : ProbeScript::load(probe_script_path);
@@ -87,6 +106,12 @@ int main(int argc, char** argv) {
       dev = std::make_unique<ReplayDevice>(log_path, speed, replay_channel);
     } else {
       if (port.empty()) throw std::runtime_error("--device serial needs --port PATH");
+      if (!profile_path.empty()) {
+        const DeviceProfile profile = load_device_profile(profile_path);
+        cal = profile.calibration;
+        options.force_shaping = profile.force;
+        spdlog::info("bridge: instrument profile '{}' from {}", profile.name, profile_path);
+      }
       dev = std::make_unique<SerialDevice>(port, baud, cal);
     }
   } catch (const std::exception& e) {
@@ -121,6 +146,35 @@ int main(int argc, char** argv) {
     if (s.sample_to_device.count() > 0)
       extra += fmt::format(", -> device write (the next tick's) {}; the write itself {}", figures(s.sample_to_device),
                            figures(s.device_write));
+  }
+  if (!stats_path.empty()) {
+    auto figures = [](const LatencyHistogram& h) {
+      return nlohmann::json{{"p50", h.percentile_us(0.5)},
+                            {"p99", h.percentile_us(0.99)},
+                            {"p999", h.percentile_us(0.999)},
+                            {"max", h.max_us()},
+                            {"count", h.count()}};
+    };
+    nlohmann::json j = {{"published", s.published},
+                        {"fault_samples", s.fault_samples},
+                        {"missed_periods", s.missed_periods},
+                        {"forces_received", s.forces_received},
+                        {"forces_bad", s.forces_bad},
+                        {"force_rendered", s.force_rendered},
+                        {"force_zeroed", s.force_zeroed},
+                        {"sample_to_force_us", figures(s.sample_to_force)},
+                        {"sample_to_device_us", figures(s.sample_to_device)},
+                        {"device_write_us", figures(s.device_write)}};
+    if (auto* serial = dynamic_cast<SerialDevice*>(dev.get())) {
+      j["force_lines"] = serial->force_lines();
+      j["force_lines_dropped"] = serial->force_lines_dropped();
+    }
+    std::ofstream out(stats_path);
+    out << j.dump(2) << "\n";
+    if (!out) {
+      std::cerr << "pcisim-bridge: " << stats_path << ": cannot write the stats\n";
+      return 1;
+    }
   }
   spdlog::info(
       "bridge: done, {} samples published ({:.0f} Hz, {} in fault, {} periods missed), {} force commands "

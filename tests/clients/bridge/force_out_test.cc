@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -128,6 +129,31 @@ TEST(BoxSimulator, AppliesEachForceLineAndItsWatchdogZeroesItAfter50Ms) {
   EXPECT_GT(box.lines_sent(), 0);
   EXPECT_EQ(device.malformed(), 0);
   EXPECT_EQ(box.malformed(), 0);
+}
+
+// a force line per tick allocates nothing on the serial device, and a box that is unplugged
+// (the pty closed) stops the writes: the device is in fault, and the box's watchdog is what zeroes
+// its actuators
+TEST(BoxSimulator, ForceLinesAllocateNothingAndAnUnpluggedBoxTakesNoMore) {
+  auto box = std::make_unique<BoxSimulator>(TraineeScript::parse(TraineeScript::builtin_text(), "built-in"),
+                                            SerialCalibration{});
+  SerialDevice device(box->port(), 115200, SerialCalibration{});
+  ASSERT_TRUE(device.render({0.1, 0.1}, 0));  // the first write warms up what libc keeps
+  long allocations = -1;
+  {
+    testing::AllocationCount count;
+    for (int i = 1; i <= 200; ++i) device.render({0.001 * i, -0.002 * i}, i);
+    allocations = count.allocations();
+  }
+  EXPECT_EQ(allocations, 0);
+  usleep(20000);
+  box->step(0.0);
+  EXPECT_EQ(box->force_lines(), 201);
+  box.reset();  // unplugged
+  InstrumentReading r;
+  EXPECT_FALSE(device.read(0.1, r));
+  EXPECT_TRUE(device.unplugged());
+  EXPECT_FALSE(device.render({0.5, 0.0}, 300));
 }
 
 // the closed loop: a "server" thread publishes force commands on memq through phases, the box

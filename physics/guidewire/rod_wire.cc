@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <cstdio>
+#include <cstdlib>
 
 #include "physics/guidewire/link_spec.h"
 
@@ -393,13 +395,14 @@ double RodWire::mu_kinetic(int node) const {
 }
 
 // The solve scheme (issue #33), after the rod's last solve of a substep:
-//   1. contacts: the free nodes the free solve left within kContactBandM of the wall, and those
-//      the wall pushed in the last substep (the deepest kMaxRodContacts), each with its wall
-//      normal, gap (distance + margin, > 0 inside the wall) and its motion along the wall over
-//      the substep relative to the wall
+//   0. the last substep's impulses are applied first (the free solve dropped the wall's forces)
+//   1. contacts: the free nodes within kContactBandM of the wall there, and those the wall pushed
+//      in the last substep (the deepest kMaxRodContacts), each with its wall normal, gap (distance
+//      + margin, > 0 inside the wall) and its motion along the wall over the substep relative to
+//      the wall, less what step 0 moved it (the problem is posed from the free solve)
 //   2. W = H A^-1 H^T for them, from the rod's factor
 //   3. the contact problem on W (rod::ContactPgs), starting from the last substep's impulses
-//   4. the rod's response to the impulses: multipliers, nodes and frames move together
+//   4. the rod's response to the change of impulses: multipliers, nodes and frames move together
 //   5. what the linearisation leaves inside is moved out along the normal without velocity and
 //      reported (a curved wall, or a node the response pushed in that was no contact)
 //   6. forces: the wall's on a node is its impulse / h^2; the spin rule of the projection scheme
@@ -413,6 +416,18 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
   std::fill(segment_stuck_.begin(), segment_stuck_.end(), 0);
   std::fill(stuck_.begin(), stuck_.end(), 0);
   std::fill(node_wall_n_.begin(), node_wall_n_.end(), 0.0);
+  // 0. the last substep's impulses first: the free solve dropped the wall's forces, so a wire held
+  //    by a wall sprang back by its whole elastic deflection; answered by the same impulses it is
+  //    back about where the wall holds it, and the contacts are found and linearised there
+  int warm = 0;
+  for (int i = first_free; i < node_count(); ++i)
+    if (node_impulse_[i].squaredNorm() > 0.0) {
+      contact_nodes_.resize(warm + 1);
+      contact_impulse_.resize(warm + 1);
+      contact_nodes_[warm] = i;
+      contact_impulse_[warm++] = node_impulse_[i];
+    }
+  if (warm > 0) rod.apply_contact_impulses(contact_nodes_, contact_impulse_);
   // 1. candidates, then the deepest kMaxRodContacts of them in the rod's order
   int count = 0;
   for (int i = first_free; i < node_count(); ++i) {
@@ -433,25 +448,37 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
   contact_nodes_.assign(candidates_.begin(), candidates_.begin() + count);
   contacts_.resize(count);
   contact_impulse_.resize(count);
-  for (int a = 0; a < count; ++a) {
+  auto w = compliance_.topLeftCorner(3 * count, 3 * count);
+  const bool have_w = count > 0 && rod.contact_compliance(contact_nodes_, w);
+  for (int a = 0; a < count && have_w; ++a) {
     const int i = contact_nodes_[a];
     const Eigen::Vector3d& n = candidate_wall_[i].normal;
-    const Eigen::Vector3d moved = x[i] - x_start[i] - wall_substep_m_[i];
-    contacts_[a] = {n, candidate_gap_m_[i], moved - moved.dot(n) * n, mu_static(i), mu_kinetic(i)};
-    // the solver's start: the node's last impulse, its push along the new normal only
-    const Eigen::Vector3d& last = node_impulse_[i];
-    contact_impulse_[a] = std::min(last.dot(n), 0.0) * n + (last - last.dot(n) * n);
+    // the problem is posed from the free solve: what the warm impulses moved the node comes off
+    // its gap and slip (the wall linearised where the node stands now)
+    Eigen::Vector3d warm_motion = Eigen::Vector3d::Zero();
+    for (int b = 0; b < count; ++b) warm_motion += w.block<3, 3>(3 * a, 3 * b) * node_impulse_[contact_nodes_[b]];
+    const Eigen::Vector3d moved = x[i] - x_start[i] - wall_substep_m_[i] - warm_motion;
+    contacts_[a] = {n, candidate_gap_m_[i] - n.dot(warm_motion), moved - moved.dot(n) * n, mu_static(i), mu_kinetic(i)};
+    contact_impulse_[a] = node_impulse_[i];  // the solver starts from the warm impulse
   }
-  std::fill(node_impulse_.begin(), node_impulse_.end(), Eigen::Vector3d::Zero());
   report_.contacts = count;
   report_.most_contacts = std::max(report_.most_contacts, count);
-  // 2-4
-  auto w = compliance_.topLeftCorner(3 * count, 3 * count);
-  if (count > 0 && rod.contact_compliance(contact_nodes_, w)) {
+  // 2-4: the answer, applied as its change from the warm impulses
+  if (have_w) {
     const rod::ContactSolveStats st = pgs_.solve(w, contacts_, contact_impulse_, kContactSweeps, kContactToleranceM);
     report_.most_sweeps = std::max(report_.most_sweeps, st.sweeps);
     report_.unconverged += st.converged ? 0 : 1;
+    for (int a = 0; a < count; ++a) {
+      const int i = contact_nodes_[a];
+      const Eigen::Vector3d answer = contact_impulse_[a];
+      contact_impulse_[a] -= node_impulse_[i];
+      node_impulse_[i] = answer;
+    }
     rod.apply_contact_impulses(contact_nodes_, contact_impulse_);
+    for (int a = 0; a < count; ++a) contact_impulse_[a] = node_impulse_[contact_nodes_[a]];
+  }
+  std::fill(node_impulse_.begin(), node_impulse_.end(), Eigen::Vector3d::Zero());
+  if (have_w) {
     for (int a = 0; a < count; ++a) {
       const int i = contact_nodes_[a];
       const Eigen::Vector3d& n = contacts_[a].normal;

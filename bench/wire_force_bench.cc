@@ -49,6 +49,7 @@ struct TipOnWall {
 };
 
 struct TipOnWallResult {
+  double free_length_mm = 0;  // what the wire has free: whole segments, the requested L rounded up
   double contact_force_n = 0, ei_nm2 = 0, beam_n = 0, elastica_n = 0, tip_x_mm = 0, residual_mm = 0;
   int contacts = 0;
   double step_ms_p50 = 0, step_ms_p99 = 0;
@@ -100,10 +101,13 @@ TipOnWallResult run_tip_on_wall(const TipOnWall& c) {
     }
   }
   TipOnWallResult r;
+  // the references for the wire's own free length: whole segments from the hub node to the tip
+  const double free_m = (w.node_count() - w.first_free_node()) * w.rod().segment_length_m();
+  r.free_length_mm = 1e3 * free_m;
   r.contact_force_n = force_sum / std::max(force_n, 1);
   r.ei_nm2 = g.bending_stiffness_nm2;
-  r.beam_n = 3.0 * r.ei_nm2 * d_m / (length_m * length_m * length_m);
-  r.elastica_n = elastica_load_parameter(d_m / length_m) * r.ei_nm2 / (length_m * length_m);
+  r.beam_n = 3.0 * r.ei_nm2 * d_m / (free_m * free_m * free_m);
+  r.elastica_n = elastica_load_parameter(d_m / free_m) * r.ei_nm2 / (free_m * free_m);
   r.tip_x_mm = 1e3 * w.nodes_m().back().x();
   r.residual_mm = 1e3 * w.contact_report().residual_m;
   r.contacts = w.contact_report().contacts;
@@ -114,14 +118,15 @@ TipOnWallResult run_tip_on_wall(const TipOnWall& c) {
 
 std::string json_line(const TipOnWall& c, const TipOnWallResult& r) {
   return fmt::format(
-      "{{\"case\": \"tip_on_wall\", \"length_mm\": {}, \"deflection_mm\": {}, \"segments\": {}, \"substeps\": {}, "
+      "{{\"case\": \"tip_on_wall\", \"length_mm\": {}, \"free_length_mm\": {:.4g}, \"deflection_mm\": {}, "
+      "\"segments\": {}, \"substeps\": {}, "
       "\"contact_force_n\": {:.6g}, \"ei_nm2\": {:.6g}, \"beam_n\": {:.6g}, \"elastica_n\": {:.6g}, "
       "\"error_pct\": {:.4f}, \"tip_x_mm\": {:.4f}, \"residual_mm\": {:.3g}, \"contacts\": {}, \"step_ms_p50\": "
       "{:.3f}, "
       "\"step_ms_p99\": {:.3f}}}",
-      c.length_mm, c.deflection_mm, c.segments, c.substeps, r.contact_force_n, r.ei_nm2, r.beam_n, r.elastica_n,
-      100.0 * (r.contact_force_n / r.elastica_n - 1.0), r.tip_x_mm, r.residual_mm, r.contacts, r.step_ms_p50,
-      r.step_ms_p99);
+      c.length_mm, r.free_length_mm, c.deflection_mm, c.segments, c.substeps, r.contact_force_n, r.ei_nm2, r.beam_n,
+      r.elastica_n, 100.0 * (r.contact_force_n / r.elastica_n - 1.0), r.tip_x_mm, r.residual_mm, r.contacts,
+      r.step_ms_p50, r.step_ms_p99);
 }
 
 constexpr const char* kUsage =

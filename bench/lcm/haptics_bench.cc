@@ -203,7 +203,8 @@ std::string bridge_row(const json& s) {
                        h["p99"].get<double>() * 1e-3, h["p999"].get<double>() * 1e-3, h["max"].get<double>() * 1e-3);
   };
   const auto& back = s["sample_to_force_us"];
-  const bool met = back["p99"].get<double>() <= 2000.0 && back["p999"].get<double>() <= 4000.0 &&
+  const bool met = back["count"].get<int64_t>() > 0 && back["p99"].get<double>() <= 2000.0 &&
+                   back["p999"].get<double>() <= 4000.0 && s["device_write_us"]["count"].get<int64_t>() > 0 &&
                    s["device_write_us"]["p99"].get<double>() <= 200.0;
   return fmt::format("| {} | {} | {} | {} | {} | {} / {} | {} |", s["load"].get<std::string>(),
                      ms("sample_to_force_us"), ms("sample_to_device_us"), ms("device_write_us"),

@@ -28,6 +28,7 @@ BoxSimulator::BoxSimulator(TraineeScript script, const SerialCalibration& calibr
   fcntl(master_, F_SETFL, fcntl(master_, F_GETFL) | O_NONBLOCK);
   port_ = name;
   pending_.reserve(256);
+  out_.reserve(128);
   log_.reserve(static_cast<size_t>(std::min<int64_t>(max_log_, 1 << 16)));
 }
 
@@ -42,9 +43,20 @@ void BoxSimulator::step(double t_s) {
   const auto insertion = static_cast<long long>(std::llround(r.insertion_mm / cal_.mm_per_count)) +
                          static_cast<long long>(cal_.insertion_zero_counts);
   const auto rotation = static_cast<long long>(std::llround(r.rotation_rad / cal_.rad_per_count));
-  char line[96];
-  const int n = std::snprintf(line, sizeof line, "E %lld %lld %d\n", insertion, rotation, r.buttons);
-  if (n > 0 && ::write(master_, line, static_cast<size_t>(n)) == n) ++sent_;
+  // a line the pty took in part is finished first; while it is stuck, this sample is skipped
+  if (!out_.empty()) {
+    const ssize_t w = ::write(master_, out_.data(), out_.size());
+    if (w > 0) out_.erase(0, static_cast<size_t>(w));
+  }
+  if (out_.empty()) {
+    char line[96];
+    const int n = std::snprintf(line, sizeof line, "E %lld %lld %d\n", insertion, rotation, r.buttons);
+    const ssize_t w = n > 0 ? ::write(master_, line, static_cast<size_t>(n)) : -1;
+    if (w > 0) {
+      ++sent_;
+      if (w < n) out_.assign(line + w, static_cast<size_t>(n - w));
+    }
+  }
   read_forces(t_s);
 }
 

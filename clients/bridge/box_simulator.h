@@ -51,7 +51,8 @@ class BoxSimulator {
   SerialCalibration cal_;
   int master_ = -1, slave_ = -1;  // the slave stays open so the port exists before the bridge opens it
   std::string port_;
-  std::string pending_;
+  std::string pending_;  // a force line being read
+  std::string out_;      // the tail of an encoder line the pty took in part
   std::vector<BoxForceSample> log_;
   int64_t max_log_ = 0, sent_ = 0, received_ = 0, malformed_ = 0;
   ForceLine last_{};

@@ -36,7 +36,22 @@ Bridge::Bridge(lcm::LCM& lcm, InstrumentDevice* device, const ProbeScript* probe
                       : pcisim_lcm::instrument_state_t{}.getEncodedSize());
   if (!(options.rate_hz >= 1.0 && options.rate_hz <= 1e4))
     throw std::invalid_argument("bridge: rate_hz must be in [1, 10000], got " + std::to_string(options.rate_hz));
+  validate(options.force_shaping);
+  for (auto& seq : sent_seq_) seq = -1;  // no sample has left yet
   lcm_.subscribe(protocol::kForceChannel, &Bridge::on_force, this);
+}
+
+ForceGateInput Bridge::last_command() const {
+  ForceGateInput in;
+  for (;;) {
+    const uint64_t before = command_version_.load(std::memory_order_acquire);
+    if (before & 1u) continue;  // being written
+    in.last_command_ns = last_command_ns_.load();
+    in.flags = last_flags_.load();
+    in.axial_n = last_force_n_.load();
+    in.torque_nmm = last_torque_nmm_.load();
+    if (command_version_.load(std::memory_order_acquire) == before) return in;
+  }
 }
 
 void Bridge::on_force(const lcm::ReceiveBuffer* rbuf, const std::string&) {
@@ -45,17 +60,22 @@ void Bridge::on_force(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     return;
   }
   ++forces_received_;
+  const int64_t now_ns = monotonic_ns();
+  command_version_.fetch_add(1, std::memory_order_acq_rel);  // odd: being written
   last_force_n_ = force_.axial_force_n;
   last_torque_nmm_ = force_.torque_nmm;
   last_flags_ = force_.flags;
-  const int64_t now_ns = monotonic_ns();
   last_command_ns_ = now_ns;
-  // the first command that answers a sample: its round trip
+  command_version_.fetch_add(1, std::memory_order_acq_rel);
+  // the first command that answers a sample this bridge sent: its round trip (a server still
+  // answering an earlier bridge's numbers is not counted, nor does it move the mark)
   const int64_t answered = force_.instrument_seq;
-  if (answered > answered_seq_.load() && answered >= 0) {
+  if (answered > answered_seq_.load() && answered <= published_seq_.load()) {
     const int slot = static_cast<int>(answered % kSentSlots);
-    if (sent_seq_[slot].load() == answered) sample_to_force_.add((now_ns - sent_ns_[slot].load()) * 1e-3);
-    answered_seq_ = answered;
+    if (sent_seq_[slot].load() == answered) {
+      sample_to_force_.add((now_ns - sent_ns_[slot].load()) * 1e-3);
+      answered_seq_ = answered;
+    }
   }
 }
 
@@ -152,16 +172,20 @@ void Bridge::publish_instrument(double t_s, int64_t now_ns, int64_t seq, bool lo
   m.rotation_rate_rad_s = r.rotation_rate_rad_s;
   {
     const int slot = static_cast<int>(seq % kSentSlots);
+    sent_seq_[slot] = -1;  // the slot is being reused: no answer matches it until it is whole
     sent_ns_[slot] = monotonic_ns();
     sent_seq_[slot] = seq;
+    published_seq_ = seq;
   }
   publish(m);
   // the force back to the device: the server's while it is fresh and healthy, else zero; none
   // while waiting for the server (the first line marks the start: a box may hold its script till then)
   if (!render) return;
   ForceSetpoint force;
-  const ForceGateState state = gate_force(
-      {ok, now_ns, last_command_ns_.load(), last_flags_.load(), last_force_n_.load(), last_torque_nmm_.load()}, &force);
+  ForceGateInput command = last_command();
+  command.device_ok = ok;
+  command.now_ns = now_ns;
+  const ForceGateState state = gate_force(command, &force);
   force = shaper_.step(force, 1.0 / options_.rate_hz, state != ForceGateState::kRendering);
   const int64_t write_ns = monotonic_ns();
   const bool delivered = device_->render(force, seq);

@@ -92,11 +92,15 @@ class Bridge {
   std::atomic<double> last_force_n_{0}, last_torque_nmm_{0};
   std::atomic<int32_t> last_flags_{0};
   std::atomic<int64_t> last_command_ns_{-1};  // monotonic, when the last good command arrived
+  // the four above are one command: written under an odd version, read until a version holds
+  // even and unchanged (a seqlock), so a fault's flags never pair with the next command's force
+  std::atomic<uint64_t> command_version_{0};
+  ForceGateInput last_command() const;
   // when each recent sample left (slot seq % kSentSlots, tagged with its seq), the newest
   // instrument_seq a command answered, and the histograms (each written by one thread)
   static constexpr int kSentSlots = 4096;
   std::array<std::atomic<int64_t>, kSentSlots> sent_ns_{}, sent_seq_{};
-  std::atomic<int64_t> answered_seq_{-1};
+  std::atomic<int64_t> answered_seq_{-1}, published_seq_{-1};
   int64_t rendered_seq_ = -1;  // publishing thread: the newest answered sample written to the device
   LatencyHistogram sample_to_force_, sample_to_device_, device_write_;
   ForceShaper shaper_;

@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
   std::unique_ptr<InstrumentDevice> dev;
   std::optional<ProbeScript> probe;
   try {
-    if (!profile_path.empty() && device != "serial")
+    if (!profile_path.empty() && (device != "serial" || !probe_script_path.empty()))
       throw std::runtime_error("--profile describes an instrument box: it needs --device serial");
     if (!probe_script_path.empty()) {
       probe = probe_script_path == "builtin" ? ProbeScript::parse(ProbeScript::builtin_text(), "built-in")
@@ -137,7 +137,9 @@ int main(int argc, char** argv) {
                         serial->malformed(), serial->unplugged() ? ", unplugged" : "", serial->force_lines(),
                         serial->force_lines_dropped());
   if (!probe) {
-    extra += fmt::format(", force zero in {} ticks (last: {})", s.force_zeroed, describe(s.force_state));
+    extra += s.force_zeroed > 0
+                 ? fmt::format(", force zero in {} ticks (last: {})", s.force_zeroed, describe(s.force_state))
+                 : std::string(", force never zeroed");
     auto figures = [](const LatencyHistogram& h) {
       return fmt::format("p50 {:.2f} / p99 {:.2f} / p99.9 {:.2f} / max {:.2f} ms over {}", h.percentile_us(0.5) * 1e-3,
                          h.percentile_us(0.99) * 1e-3, h.percentile_us(0.999) * 1e-3, h.max_us() * 1e-3, h.count());

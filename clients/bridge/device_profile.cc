@@ -79,7 +79,20 @@ DeviceProfile parse_device_profile(const std::string& text, const std::string& s
     throw std::runtime_error(fmt::format("{}: {}", source, e.what()));
   }
   validate(p.calibration);
+  validate(p.force);
   return p;
+}
+
+void validate(const ForceShaping& f) {
+  auto require = [](bool ok, const char* what) {
+    if (!ok) throw std::invalid_argument(std::string("force shaping: ") + what);
+  };
+  auto scale_ok = [](double v) { return std::isfinite(v) && v != 0.0 && std::abs(v) <= 100.0; };
+  require(scale_ok(f.axial_scale) && scale_ok(f.torque_scale), "scales must be finite, non-zero, within +-100");
+  require(f.max_axial_n >= 1e-3 && f.max_axial_n <= kMaxAxialMilliNewton * 1e-3, "max_axial_n must be in [0.001, 20]");
+  require(f.max_torque_nmm >= 1e-3 && f.max_torque_nmm <= kMaxTorqueMicroNewtonMetre * 1e-3,
+          "max_torque_nmm must be in [0.001, 1000]");
+  require(f.filter_hz == 0.0 || (f.filter_hz >= 1.0 && f.filter_hz <= 1e4), "filter_hz must be 0 or in [1, 10000]");
 }
 
 DeviceProfile load_device_profile(const std::string& path) {

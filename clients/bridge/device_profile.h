@@ -20,6 +20,10 @@ struct ForceShaping {
   double filter_hz = 0.0;                        // 0 or [1, 10000]
 };
 
+// throws std::invalid_argument ("force shaping: ...") for a zero or non-finite scale, a limit
+// outside the force line's range, or a filter below 1 Hz (not 0)
+void validate(const ForceShaping& shaping);
+
 struct DeviceProfile {
   std::string name = "default";
   SerialCalibration calibration;

@@ -47,7 +47,10 @@ bool parse_force_line(std::string_view line, ForceLine& out) {
   if (!field(p, end, f.axial_mn) || !field(p, end, f.torque_unm) || !field(p, end, f.seq)) return false;
   while (p < end && *p == ' ') ++p;
   if (p != end) return false;
-  if (std::abs(f.axial_mn) > kMaxAxialMilliNewton || std::abs(f.torque_unm) > kMaxTorqueMicroNewtonMetre) return false;
+  // explicit comparisons: std::abs of INT64_MIN is undefined
+  if (f.axial_mn < -kMaxAxialMilliNewton || f.axial_mn > kMaxAxialMilliNewton ||
+      f.torque_unm < -kMaxTorqueMicroNewtonMetre || f.torque_unm > kMaxTorqueMicroNewtonMetre)
+    return false;
   out = f;
   return true;
 }

@@ -15,7 +15,8 @@ class LatencyHistogram {
 
   void add(double us) {
     if (!(us >= 0.0)) us = 0.0;
-    const int bin = std::min(static_cast<int>(us / kBinUs), kBins);
+    // beyond the bins (or infinite) goes to the overflow bin before any cast to int
+    const int bin = us >= kBins * kBinUs ? kBins : static_cast<int>(us / kBinUs);
     ++counts_[bin];
     ++count_;
     max_us_ = std::max(max_us_, us);

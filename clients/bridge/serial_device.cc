@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/ioctl.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -181,8 +182,23 @@ bool SerialDevice::render(const ForceSetpoint& force, int64_t seq) {
     ++force_lines_dropped_;
     return false;
   }
+  // a line slower than a line a tick (a low baud) must not queue force in the kernel, where a
+  // fault's zero would wait behind it: while more than a line waits to go out, a force line is
+  // dropped, and a zero line first discards what waits (a newline ends any line cut short)
+  const bool zero = force.axial_n == 0.0 && force.torque_nmm == 0.0;
+  int queued = 0;
+  size_t lead = 0;
+  if (::ioctl(fd_, TIOCOUTQ, &queued) == 0 && queued > static_cast<int>(kForceLineMaxBytes)) {
+    if (!zero) {
+      ++force_lines_dropped_;
+      return false;
+    }
+    ::tcflush(fd_, TCOFLUSH);
+    out_[0] = '\n';
+    lead = 1;
+  }
   out_begin_ = 0;
-  out_end_ = format_force_line(force, seq, out_);
+  out_end_ = lead + format_force_line(force, seq, out_ + lead);
   flush();
   if (out_begin_ == 0) {  // nothing of it went out
     out_end_ = 0;

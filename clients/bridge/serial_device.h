@@ -65,7 +65,7 @@ class SerialDevice : public InstrumentDevice {
   bool unplugged_ = false;
   bool overlong_ = false;  // the line being read outgrew kMaxLine: counted malformed at its end
   // the force side: the unwritten tail of the last line
-  char out_[kForceLineMaxBytes] = {};
+  char out_[kForceLineMaxBytes + 1] = {};  // a line, and a newline before it after a flush
   size_t out_begin_ = 0, out_end_ = 0;
   int64_t force_lines_ = 0, force_lines_dropped_ = 0;
   static constexpr size_t kMaxLine = 4000;

@@ -294,6 +294,8 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
 // feed says, the free rod laid straight out of the exit, everything at rest
 void RodWire::recover() {
   ++recoveries_;
+  // the solve scheme's impulses belong to the state that failed: none carried into the next
+  std::fill(node_impulse_.begin(), node_impulse_.end(), Eigen::Vector3d::Zero());
   const int hub = rod_.hub_node();
   const auto x = rod_.mutable_nodes_m();
   const auto v = rod_.mutable_velocities_m_per_s();
@@ -420,13 +422,16 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
   //    by a wall sprang back by its whole elastic deflection; answered by the same impulses it is
   //    back about where the wall holds it, and the contacts are found and linearised there
   int warm = 0;
-  for (int i = first_free; i < node_count(); ++i)
+  for (int i = 0; i < first_free; ++i) node_impulse_[i].setZero();  // back in the catheter
+  for (int i = first_free; i < node_count(); ++i) {
+    if (!node_impulse_[i].allFinite()) node_impulse_[i].setZero();
     if (node_impulse_[i].squaredNorm() > 0.0) {
       contact_nodes_.resize(warm + 1);
       contact_impulse_.resize(warm + 1);
       contact_nodes_[warm] = i;
       contact_impulse_[warm++] = node_impulse_[i];
     }
+  }
   if (warm > 0) rod.apply_contact_impulses(contact_nodes_, contact_impulse_);
   // 1. candidates, then the deepest kMaxRodContacts of them in the rod's order
   int count = 0;
@@ -441,7 +446,12 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
   if (count > kMaxRodContacts) {
     report_.dropped += count - kMaxRodContacts;
     std::nth_element(candidates_.begin(), candidates_.begin() + kMaxRodContacts, candidates_.begin() + count,
-                     [&](int a, int b) { return candidate_gap_m_[a] > candidate_gap_m_[b]; });
+                     [&](int a, int b) {
+                       // the warm nodes first (their impulses are applied already), then the deepest
+                       const bool warm_a = node_impulse_[a].squaredNorm() > 0.0;
+                       const bool warm_b = node_impulse_[b].squaredNorm() > 0.0;
+                       return warm_a != warm_b ? warm_a : candidate_gap_m_[a] > candidate_gap_m_[b];
+                     });
     count = kMaxRodContacts;
     std::sort(candidates_.begin(), candidates_.begin() + count);
   }

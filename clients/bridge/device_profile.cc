@@ -65,12 +65,13 @@ DeviceProfile parse_device_profile(const std::string& text, const std::string& s
     {
       json::JsonReader r = top.child("force");
       ForceShaping& f = p.force;
-      f.axial_scale = scale(r, "axial_scale", f.axial_scale, 100);
-      f.torque_scale = scale(r, "torque_scale", f.torque_scale, 100);
-      f.max_axial_n = r.number("max_axial_n", f.max_axial_n, 1e-3, kMaxAxialMilliNewton * 1e-3);
-      f.max_torque_nmm = r.number("max_torque_nmm", f.max_torque_nmm, 1e-3, kMaxTorqueMicroNewtonMetre * 1e-3);
-      f.filter_hz = r.number("filter_hz", f.filter_hz, 0, 1e4);
-      if (f.filter_hz > 0 && f.filter_hz < 1)
+      f.axial_scale = scale(r, "axial_scale", f.axial_scale, kMaxForceScale);
+      f.torque_scale = scale(r, "torque_scale", f.torque_scale, kMaxForceScale);
+      f.max_axial_n = r.number("max_axial_n", f.max_axial_n, kMinForceLimit, kMaxAxialMilliNewton * 1e-3);
+      f.max_torque_nmm =
+          r.number("max_torque_nmm", f.max_torque_nmm, kMinForceLimit, kMaxTorqueMicroNewtonMetre * 1e-3);
+      f.filter_hz = r.number("filter_hz", f.filter_hz, 0, kMaxFilterHz);
+      if (f.filter_hz > 0 && f.filter_hz < kMinFilterHz)
         r.fail("filter_hz", fmt::format("expected 0 (no filter) or a cutoff in [1, 10000] Hz, got {}", f.filter_hz));
       r.finish();
     }
@@ -87,12 +88,14 @@ void validate(const ForceShaping& f) {
   auto require = [](bool ok, const char* what) {
     if (!ok) throw std::invalid_argument(std::string("force shaping: ") + what);
   };
-  auto scale_ok = [](double v) { return std::isfinite(v) && v != 0.0 && std::abs(v) <= 100.0; };
+  auto scale_ok = [](double v) { return std::isfinite(v) && v != 0.0 && std::abs(v) <= kMaxForceScale; };
   require(scale_ok(f.axial_scale) && scale_ok(f.torque_scale), "scales must be finite, non-zero, within +-100");
-  require(f.max_axial_n >= 1e-3 && f.max_axial_n <= kMaxAxialMilliNewton * 1e-3, "max_axial_n must be in [0.001, 20]");
-  require(f.max_torque_nmm >= 1e-3 && f.max_torque_nmm <= kMaxTorqueMicroNewtonMetre * 1e-3,
+  require(f.max_axial_n >= kMinForceLimit && f.max_axial_n <= kMaxAxialMilliNewton * 1e-3,
+          "max_axial_n must be in [0.001, 20]");
+  require(f.max_torque_nmm >= kMinForceLimit && f.max_torque_nmm <= kMaxTorqueMicroNewtonMetre * 1e-3,
           "max_torque_nmm must be in [0.001, 1000]");
-  require(f.filter_hz == 0.0 || (f.filter_hz >= 1.0 && f.filter_hz <= 1e4), "filter_hz must be 0 or in [1, 10000]");
+  require(f.filter_hz == 0.0 || (f.filter_hz >= kMinFilterHz && f.filter_hz <= kMaxFilterHz),
+          "filter_hz must be 0 or in [1, 10000]");
 }
 
 DeviceProfile load_device_profile(const std::string& path) {

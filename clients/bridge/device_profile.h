@@ -13,6 +13,11 @@ namespace pcisim::clients {
 
 // the server's force on its way to the box: times the scales, clamped to the limits, then a
 // first-order low-pass (0 Hz: none). Zero in a fault is never filtered: it is sent at once
+// the shaping's ranges, the one source for the profile reader and validate()
+inline constexpr double kMaxForceScale = 100.0;
+inline constexpr double kMinForceLimit = 1e-3;  // N or N mm
+inline constexpr double kMinFilterHz = 1.0, kMaxFilterHz = 1e4;
+
 struct ForceShaping {
   double axial_scale = 1.0, torque_scale = 1.0;  // [-100, 100]
   double max_axial_n = 20.0;                     // (0, 20]: the force line's range at most

@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <cstdio>
-#include <cstdlib>
 
 #include "physics/guidewire/link_spec.h"
 
@@ -368,7 +366,7 @@ void RodWire::project(rod::CosseratRod& rod, int iteration, double h) {
     normal_[i] = s.normal;
     node_wall_n_[i] = wall_n;
     if (!friction_) continue;
-    const double mu_s = node_in_tip(i) ? friction_->tip_static : friction_->body_static;
+    const double mu_s = mu_static(i);
     const Eigen::Vector3d f = rod.node_constraint_force_n(i);
     const Eigen::Vector3d f_t = f - f.dot(s.normal) * s.normal;
     // the node's motion along the wall relative to the wall (which moved wall_substep_m_)
@@ -497,8 +495,7 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
       node_impulse_[i] = contact_impulse_[a];
       touched_[i] = 1;
       normal_[i] = n;
-      node_wall_n_[i] = push * inv_h2;
-      wall_impulse_n_s_[i] += push / h;
+      node_wall_n_[i] = push * inv_h2;  // after_substep adds it to the step's impulse
       wall_impulse_vector_n_s_[i] += contact_impulse_[a] / h;
       const Eigen::Vector3d slip = contacts_[a].slip_m + pgs_.motion_m()[a];
       stuck_[i] = (slip - slip.dot(n) * n).norm() < kStuckM;
@@ -529,7 +526,7 @@ void RodWire::hold_spin(rod::CosseratRod& rod) {
     for (int i : {j, j + 1})
       if (i >= first_free && touched_[i]) wall_n += 0.5 * node_wall_n_[i];
     if (wall_n <= 0.0) continue;
-    const double mu_s = node_in_tip(j + 1) ? friction_->tip_static : friction_->body_static;
+    const double mu_s = mu_static(j + 1);
     const Eigen::Vector3d axis = q[j] * Eigen::Vector3d::UnitZ();
     // the frame's turn about its axis since the substep began (swing-twist: the twist part)
     Eigen::Quaterniond turn = q[j] * q_start[j].conjugate();
@@ -552,18 +549,17 @@ void RodWire::after_substep(rod::CosseratRod& rod, double h) {
     const double pass = 1.0 - 1.0 / (1.0 + params_.rod_damping_per_s * h);
     for (int i = first_free; i < node_count(); ++i) v[i] += pass * wall_velocity_[i];
   }
-  // the wall's impulse over the substep, for the step's average force (the solve scheme adds its own)
+  // the wall's impulse over the substep, for the step's average force
+  for (int i = first_free; i < node_count(); ++i)
+    if (node_wall_n_[i] > 0.0) wall_impulse_n_s_[i] += node_wall_n_[i] * h;
   const bool solve = params_.rod_contact == RodContactScheme::kSolve;
-  if (!solve)
-    for (int i = first_free; i < node_count(); ++i)
-      if (node_wall_n_[i] > 0.0) wall_impulse_n_s_[i] += node_wall_n_[i] * h;
   if (friction_) {
     const auto v = rod.mutable_velocities_m_per_s();
     const auto omega = rod.mutable_angular_velocities_rad_per_s();
     // (the solve scheme's friction on the nodes is in its impulses)
     for (int i = first_free; i < node_count() && !solve; ++i) {
       if (!(node_wall_n_[i] > 0.0) || stuck_[i]) continue;
-      const double mu_k = node_in_tip(i) ? friction_->tip_kinetic : friction_->body_kinetic;
+      const double mu_k = mu_kinetic(i);
       const Eigen::Vector3d& n = normal_[i];
       const Eigen::Vector3d v_rel = v[i] - wall_velocity_[i];
       const Eigen::Vector3d v_t = v_rel - v_rel.dot(n) * n;
@@ -581,7 +577,7 @@ void RodWire::after_substep(rod::CosseratRod& rod, double h) {
       for (int i : {j, j + 1})
         if (i >= first_free) wall_n += 0.5 * node_wall_n_[i];
       if (wall_n <= 0.0) continue;
-      const double mu_k = node_in_tip(j + 1) ? friction_->tip_kinetic : friction_->body_kinetic;
+      const double mu_k = mu_kinetic(j + 1);
       const double slow = mu_k * wall_n * r * h / rod.segment_inertia_kg_m2(j);
       omega[j].z() -= std::copysign(std::min(std::abs(omega[j].z()), slow), omega[j].z());
     }

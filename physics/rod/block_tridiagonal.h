@@ -46,25 +46,12 @@ class BlockTridiagonal {
   }
 
   // x = A^-1 b (after factor(first)) over units [first, units); b and x hold units() vectors
-  void solve(const std::vector<Vector>& b, std::vector<Vector>* x, int first = 0) {
-    const int n = units();
-    if (first >= n) return;
-    // forward: y_j = b_j - U_{j-1}' S_{j-1}^-1 y_{j-1}, kept as z_j = S_j^-1 y_j
-    for (int j = first; j < n; ++j) {
-      Vector y = b[j];
-      if (j > first) y.noalias() -= upper_[j - 1].transpose() * forward_[j - 1];
-      forward_[j] = pivot_[j].solve(y);
-    }
-    // back: x_j = z_j - X_j x_{j+1}
-    std::vector<Vector>& out = *x;
-    out[n - 1] = forward_[n - 1];
-    for (int j = n - 2; j >= first; --j) out[j] = forward_[j] - reduced_upper_[j] * out[j + 1];
-  }
+  void solve(const std::vector<Vector>& b, std::vector<Vector>* x, int first = 0) { solve_partial(b, x, first, first); }
 
-  // the same solve for a b that is zero before unit `nonzero_from`, and only units
-  // [lowest_wanted, units) of x wanted: the forward sweep starts at nonzero_from (the units
-  // before it stay zero) and the back sweep stops at lowest_wanted, so a column of A^-1 whose
-  // b sits near the chain's end costs what is left of the chain. Both in [first, units).
+  // the solve for a b that is zero before unit `nonzero_from`, and only units [lowest_wanted,
+  // units) of x wanted (solve() is nonzero_from = lowest_wanted = first): the forward sweep starts at nonzero_from (the
+  // units before it stay zero) and the back sweep stops at lowest_wanted, so a column of A^-1 whose b sits near the
+  // chain's end costs what is left of the chain. Both in [first, units).
   void solve_partial(const std::vector<Vector>& b, std::vector<Vector>* x, int nonzero_from, int lowest_wanted) {
     const int n = units();
     if (nonzero_from >= n || lowest_wanted >= n) return;

@@ -1,6 +1,9 @@
 #include "clients/bridge/replay_device.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <string>
 #include <lcm/lcm-cpp.hpp>
 
 #include <filesystem>
@@ -14,7 +17,16 @@ namespace {
 
 // writes a log as lcm-logger would: 1 kHz instrument samples, plus noise on other channels
 std::string write_log(int samples, bool with_bad = false) {
-  const auto path = (std::filesystem::temp_directory_path() / "pcisim_replay_test.lcmlog").string();
+  // a name of this process's own, removed when it ends: CTest runs the tests of this file in
+  // parallel processes, and one shared name let a test read a log another was rewriting
+  // ("Invalid header after log data")
+  static const struct OwnLog {
+    std::string path =
+        (std::filesystem::temp_directory_path() / ("pcisim_replay_test_" + std::to_string(::getpid()) + ".lcmlog"))
+            .string();
+    ~OwnLog() { std::filesystem::remove(path); }
+  } own;
+  const std::string& path = own.path;
   std::filesystem::remove(path);
   lcm::LogFile log(path, "w");
   EXPECT_TRUE(log.good());

@@ -51,9 +51,9 @@ void PbdSystem::add_bending(int a, int b, int c, int d, double compliance_per_n_
   bending_.push_back({a, b, c, d, theta, compliance_per_n_m});
 }
 
-void PbdSystem::add_cluster(std::span<const int> members, double compliance_s2) {
+void PbdSystem::add_cluster(std::span<const int> members, double compliance_s2, double volume_compliance_per_j) {
   require_building(finalized_);
-  clusters_.add(members, compliance_s2);
+  clusters_.add(members, compliance_s2, volume_compliance_per_j);
 }
 
 void PbdSystem::finalize() {
@@ -77,6 +77,7 @@ void PbdSystem::finalize() {
   distance_lambda_.setZero(static_cast<Eigen::Index>(distance_.size()));
   bending_lambda_.setZero(static_cast<Eigen::Index>(bending_.size()));
   cluster_lambda_.setZero(3, clusters_.slot_count());
+  volume_lambda_.setZero(clusters_.count());
   goal_scratch_m_.assign(std::max(clusters_.max_size(), 1), Eigen::Vector3d::Zero());
 
   std::vector<int> slots;
@@ -168,6 +169,9 @@ void PbdSystem::step(double dt_s, const PbdParams& params, ContactProjector* con
   if (!(dt_s > 0.0) || !std::isfinite(dt_s)) return;
   if (contacts && params.solver == SolverKind::kJacobiCuda)
     throw std::invalid_argument("pbd: contacts are solved on the CPU only; use kGaussSeidel or kJacobi");
+  if (params.solver == SolverKind::kJacobiCuda && clusters_.any_volume())
+    throw std::invalid_argument(
+        "pbd: cluster volume constraints are solved on the CPU only; use kGaussSeidel or kJacobi");
   if (params.solver == SolverKind::kJacobiCuda && !cuda_.solver)
     cuda_.solver = std::make_shared<PbdCudaSolver>(*this);  // throws std::invalid_argument without CUDA
   quarantine_non_finite_inputs();
@@ -192,6 +196,7 @@ void PbdSystem::step_on_cpu(double dt_s, const PbdParams& params, ContactProject
     distance_lambda_.setZero();
     bending_lambda_.setZero();
     cluster_lambda_.setZero();
+    volume_lambda_.setZero();
     for (int it = 0; it < params.iterations; ++it) {
       if (params.solver == SolverKind::kJacobi) {
         // the last iteration is not over-relaxed: an overshoot (1 - w)^k C left in x* becomes a
@@ -272,6 +277,12 @@ void PbdSystem::solve_gauss_seidel(double h_s) {
       cluster_lambda_.col(s) += dl;
       x.col(i) += dx;
     }
+    if (clusters_.volume_compliance_per_j(cl) >= 0.0) {
+      volume_lambda_[cl] +=
+          clusters_.volume_correction(cl, x, particles_.mass_kg, w, h_s, volume_lambda_[cl], goal_scratch_m_.data());
+      for (int s = clusters_.begin(cl); s < clusters_.end(cl); ++s)
+        x.col(clusters_.member(s)) += goal_scratch_m_[s - clusters_.begin(cl)];
+    }
   }
 }
 
@@ -336,6 +347,27 @@ void PbdSystem::solve_jacobi(double h_s, double sor_w, JacobiAveraging averaging
           slot.col(s).setZero();
         }
       }
+    }
+    cluster_group_.apply(x, sor_w, per_particle);
+  }
+  if (clusters_.any_volume()) {
+    // the volumes as one more group over the same slots, reading the positions the shapes left
+    Eigen::Matrix3Xd& slot = cluster_group_.slots();
+    for (int cl = 0; cl < clusters_.count(); ++cl) {
+      const double dl =
+          clusters_.volume_correction(cl, x, particles_.mass_kg, w, h_s, volume_lambda_[cl], goal_scratch_m_.data());
+      const double share = per_particle ? 1.0 : cluster_min_inv_count_[cl];
+      // the multiplier takes the share the averaging delivers (the cluster's mean 1/n per particle)
+      double delivered = share;
+      if (per_particle) {
+        delivered = 0.0;
+        for (int s = clusters_.begin(cl); s < clusters_.end(cl); ++s)
+          delivered += cluster_group_.inverse_count(clusters_.member(s));
+        delivered /= clusters_.end(cl) - clusters_.begin(cl);
+      }
+      volume_lambda_[cl] += sor_w * delivered * dl;
+      for (int s = clusters_.begin(cl); s < clusters_.end(cl); ++s)
+        slot.col(s) = share * goal_scratch_m_[s - clusters_.begin(cl)];
     }
     cluster_group_.apply(x, sor_w, per_particle);
   }

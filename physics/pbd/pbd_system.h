@@ -28,7 +28,9 @@ class PbdSystem {
   // rest values are taken from the positions at the time of the call
   void add_distance(int i, int j, double compliance_m_per_n);
   void add_bending(int a, int b, int c, int d, double compliance_per_n_m);  // hinge a-b, wings c, d
-  void add_cluster(std::span<const int> members, double compliance_s2);
+  // volume_compliance_per_j >= 0 adds the cluster's volume constraint (shape_matching_clusters.h);
+  // CPU solvers only: with kJacobiCuda a system that has one throws std::invalid_argument
+  void add_cluster(std::span<const int> members, double compliance_s2, double volume_compliance_per_j = -1.0);
   void finalize();
   bool finalized() const { return finalized_; }
 
@@ -93,6 +95,7 @@ class PbdSystem {
   // XPBD multipliers, reset every substep
   Eigen::VectorXd distance_lambda_, bending_lambda_;
   Eigen::Matrix3Xd cluster_lambda_;  // one 3-vector per cluster slot
+  Eigen::VectorXd volume_lambda_;    // one per cluster
 
   // Jacobi: one group per constraint type, and how much of each dlambda the averaging delivers
   JacobiGroup distance_group_, bending_group_, cluster_group_;

@@ -1,18 +1,22 @@
 #include "physics/pbd/shape_matching_clusters.h"
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "physics/pbd/rotation_extraction.h"
 
 namespace pcisim::physics::pbd {
 
-void ShapeMatchingClusters::add(std::span<const int> members, double compliance_s2) {
+void ShapeMatchingClusters::add(std::span<const int> members, double compliance_s2, double volume_compliance_per_j) {
   if (members.empty()) throw std::invalid_argument("shape matching: empty cluster");
   if (!(compliance_s2 >= 0.0)) throw std::invalid_argument("shape matching: compliance must be >= 0");
   member_.insert(member_.end(), members.begin(), members.end());
   offset_.push_back(static_cast<int>(member_.size()));
   compliance_s2_.push_back(compliance_s2);
+  volume_compliance_per_j_.push_back(std::isfinite(volume_compliance_per_j) ? volume_compliance_per_j : -1.0);
   max_size_ = std::max(max_size_, static_cast<int>(members.size()));
 }
 
@@ -20,6 +24,8 @@ void ShapeMatchingClusters::finalize(const Eigen::Matrix3Xd& rest_m, const Eigen
   rest_offset_m_.setZero(3, slot_count());
   rest_moment_kg_m2_.assign(count(), 0.0);
   rotation_.assign(count(), Eigen::Matrix3d::Identity());
+  rest_aqq_inverse_.assign(count(), Eigen::Matrix3d::Zero());
+  any_volume_ = false;
   for (int c = 0; c < count(); ++c) {
     double m_sum = 0.0;
     Eigen::Vector3d cm = Eigen::Vector3d::Zero();
@@ -34,6 +40,19 @@ void ShapeMatchingClusters::finalize(const Eigen::Matrix3Xd& rest_m, const Eigen
       rest_offset_m_.col(s) = rest_m.col(member_[s]) - cm;
       rest_moment_kg_m2_[c] += mass_kg[member_[s]] * rest_offset_m_.col(s).squaredNorm();
     }
+    // the volume needs a rest shape with extent along every axis: a flat or straight cluster
+    // (smallest principal moment under 1e-6 of the largest) keeps shape matching only
+    Eigen::Matrix3d a_qq = Eigen::Matrix3d::Zero();
+    for (int s = begin(c); s < end(c); ++s)
+      a_qq.noalias() += mass_kg[member_[s]] * rest_offset_m_.col(s) * rest_offset_m_.col(s).transpose();
+    const Eigen::Vector3d moments =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(a_qq, Eigen::EigenvaluesOnly).eigenvalues();
+    if (moments[0] > 1e-6 * moments[2]) {
+      rest_aqq_inverse_[c] = a_qq.inverse();
+    } else {
+      volume_compliance_per_j_[c] = -1.0;
+    }
+    any_volume_ = any_volume_ || volume_compliance_per_j_[c] >= 0.0;
   }
 }
 
@@ -54,6 +73,50 @@ void ShapeMatchingClusters::goals(int c, const Eigen::Matrix3Xd& x_m, const Eige
   rotation_[c] = extract_rotation(a_pq, rotation_[c], rest_moment_kg_m2_[c]);
   // eq 10: g_i = R (x0_i - x0_cm) + x_cm
   for (int s = begin(c); s < end(c); ++s) goals_m[s - begin(c)] = rotation_[c] * rest_offset_m_.col(s) + t;
+}
+
+double ShapeMatchingClusters::volume_correction(int c, const Eigen::Matrix3Xd& x_m, const Eigen::VectorXd& mass_kg,
+                                                const Eigen::VectorXd& inv_mass_per_kg, double dt_s, double lambda,
+                                                Eigen::Vector3d* dx_m) const {
+  const double alpha = volume_compliance_per_j_[c];
+  if (alpha < 0.0) {
+    for (int s = begin(c); s < end(c); ++s) dx_m[s - begin(c)].setZero();
+    return 0.0;
+  }
+  // the centre and the linear fit F = A_pq A_qq^-1
+  double m_sum = 0.0;
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+  for (int s = begin(c); s < end(c); ++s) {
+    m_sum += mass_kg[member_[s]];
+    t += mass_kg[member_[s]] * x_m.col(member_[s]);
+  }
+  t /= m_sum;
+  Eigen::Matrix3d a_pq = Eigen::Matrix3d::Zero();
+  for (int s = begin(c); s < end(c); ++s)
+    a_pq.noalias() += mass_kg[member_[s]] * (x_m.col(member_[s]) - t) * rest_offset_m_.col(s).transpose();
+  const Eigen::Matrix3d f = a_pq * rest_aqq_inverse_[c];
+  // cof(F) = det(F) F^-T, column by column from cross products (defined for a singular F too)
+  Eigen::Matrix3d cof;
+  cof.col(0) = f.col(1).cross(f.col(2));
+  cof.col(1) = f.col(2).cross(f.col(0));
+  cof.col(2) = f.col(0).cross(f.col(1));
+  const double constraint = f.col(0).dot(cof.col(0)) - 1.0;
+  const Eigen::Matrix3d g = cof * rest_aqq_inverse_[c];
+  double denom = alpha / (dt_s * dt_s);
+  for (int s = begin(c); s < end(c); ++s) {
+    const int i = member_[s];
+    denom += inv_mass_per_kg[i] * mass_kg[i] * mass_kg[i] * (g * rest_offset_m_.col(s)).squaredNorm();
+  }
+  if (!(denom > 0.0) || !std::isfinite(denom) || !std::isfinite(constraint)) {
+    for (int s = begin(c); s < end(c); ++s) dx_m[s - begin(c)].setZero();
+    return 0.0;
+  }
+  const double dl = (-constraint - alpha / (dt_s * dt_s) * lambda) / denom;
+  for (int s = begin(c); s < end(c); ++s) {
+    const int i = member_[s];
+    dx_m[s - begin(c)] = (inv_mass_per_kg[i] * mass_kg[i] * dl) * (g * rest_offset_m_.col(s));
+  }
+  return dl;
 }
 
 }  // namespace pcisim::physics::pbd

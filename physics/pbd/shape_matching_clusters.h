@@ -10,7 +10,9 @@ namespace pcisim::physics::pbd {
 class ShapeMatchingClusters {
  public:
   // build time. compliance_s2 = 1/omega^2 of the pull toward the goal (0 = rigid cluster)
-  void add(std::span<const int> members, double compliance_s2);
+  // volume_compliance_per_j: the cluster's volume constraint (below) with this compliance (1/J:
+  // 1 / (bulk modulus x the cluster's share of the volume)); negative = none
+  void add(std::span<const int> members, double compliance_s2, double volume_compliance_per_j = -1.0);
   // rest shape = the given positions; sizes every buffer; nothing is allocated afterwards
   void finalize(const Eigen::Matrix3Xd& rest_m, const Eigen::VectorXd& mass_kg);
 
@@ -21,6 +23,9 @@ class ShapeMatchingClusters {
   int member(int slot) const { return member_[slot]; }
   int max_size() const { return max_size_; }
   double compliance_s2(int c) const { return compliance_s2_[c]; }
+  // negative when the cluster has no volume constraint (none set, or its rest shape is flat)
+  double volume_compliance_per_j(int c) const { return volume_compliance_per_j_[c]; }
+  bool any_volume() const { return any_volume_; }
   void set_compliance_s2(int c, double value) { compliance_s2_[c] = value; }
   const Eigen::Matrix3d& rotation(int c) const { return rotation_[c]; }
   // the warm start kept by another solver (PbdCudaSolver) between steps
@@ -32,6 +37,16 @@ class ShapeMatchingClusters {
   // members of c, written to goals_m[0 .. size). Updates the cluster's remembered rotation.
   void goals(int c, const Eigen::Matrix3Xd& x_m, const Eigen::VectorXd& mass_kg, Eigen::Vector3d* goals_m) const;
 
+  // The cluster's volume, C = det(F) - 1 with F = A_pq A_qq^-1 its best linear fit (Mueller et al.
+  // 2005, "Meshless deformations based on shape matching", eq 7), an XPBD constraint of compliance
+  // alpha (alpha~ = alpha / dt^2). grad_i C = m_i cof(F) A_qq^-1 q_i (the centre's term sums to
+  // zero), so dx_i = w_i grad_i C dlambda, dlambda = (-C - alpha~ lambda) / (sum w |grad C|^2 + alpha~).
+  // Writes each member's correction to dx_m[0 .. size) and returns dlambda; 0 (and no correction)
+  // when the cluster has no volume constraint or the fit is degenerate.
+  double volume_correction(int c, const Eigen::Matrix3Xd& x_m, const Eigen::VectorXd& mass_kg,
+                           const Eigen::VectorXd& inv_mass_per_kg, double dt_s, double lambda,
+                           Eigen::Vector3d* dx_m) const;
+
  private:
   std::vector<int> offset_{0};
   std::vector<int> member_;
@@ -39,6 +54,9 @@ class ShapeMatchingClusters {
   int max_size_ = 0;
   Eigen::Matrix3Xd rest_offset_m_;  // q_i = x0_i - x0_cm per slot (eq 8)
   std::vector<double> rest_moment_kg_m2_;
+  std::vector<double> volume_compliance_per_j_;
+  std::vector<Eigen::Matrix3d> rest_aqq_inverse_;  // (sum m q q^T)^-1 per cluster
+  bool any_volume_ = false;
   mutable std::vector<Eigen::Matrix3d> rotation_;  // a warm-start cache, not part of the state
 };
 

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 #include "physics/fem/voxel_mesh.h"
@@ -39,6 +42,17 @@ CalibrationSetup kidney_calibration_setup(const anatomy::Organ& organ) {
   s.probe.start_position_m = Eigen::Vector3d(0.0, skin_y - 1e-3, 0.0);
   s.stage_depths_m = {4e-3, 7e-3, 10e-3, 13e-3};  // 3, 6, 9 and 12 mm into the skin
   return s;
+}
+
+anatomy::KidneySpec calibration_kidney(CalibrationOrgan which) {
+  anatomy::KidneySpec k;
+  k.ct_spacing_mm = 4.0;  // the calibration never reads the CT
+  if (which == CalibrationOrgan::kHeldOut) {
+    k.semi_axes_mm = {31.0, 16.0, 60.0};
+    k.hilum_depth = 0.5;
+    k.seed = 2;
+  }
+  return k;
 }
 
 fem::FemMesh voxel_reference_mesh(const CalibrationSetup& s) {
@@ -181,6 +195,103 @@ PbdRun run_pbd_protocol(const CalibrationSetup& s, const SoftTissueSpec& spec_in
   for (size_t k = 1; k < run.stages.size(); ++k) sum += run.stages[k].mean_m;
   run.mean_over_stages_m = run.stages.size() > 1 ? sum / static_cast<double>(run.stages.size() - 1) : 0.0;
   return run;
+}
+
+namespace {
+constexpr const char* kReferenceMagic = "pcisim-fem-reference 1";
+
+void write_points(std::ostream& out, const Eigen::Matrix3Xd& p) {
+  char line[96];
+  for (Eigen::Index i = 0; i < p.cols(); ++i) {
+    std::snprintf(line, sizeof line, "%.17g %.17g %.17g\n", p(0, i), p(1, i), p(2, i));
+    out << line;
+  }
+}
+}  // namespace
+
+void write_fem_reference(const std::string& path, const CalibrationSetup& s, const FemReference& ref,
+                         const std::string& mesh_description) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("fem reference: cannot write " + path);
+  const auto n = static_cast<Eigen::Index>(s.organ.fiducials_m.size());
+  Eigen::Matrix3Xd rest(3, n);
+  for (Eigen::Index i = 0; i < n; ++i) rest.col(i) = s.organ.fiducials_m[static_cast<size_t>(i)];
+  out << kReferenceMagic << "\n";
+  out << "mesh " << mesh_description << "\n";
+  char line[160];
+  std::snprintf(line, sizeof line, "material %.17g %.17g %.17g\n", s.young_pa, s.poisson, s.density_kg_per_m3);
+  out << line;
+  std::snprintf(line, sizeof line, "gravity %.17g %.17g %.17g\n", s.gravity_m_per_s2.x(), s.gravity_m_per_s2.y(),
+                s.gravity_m_per_s2.z());
+  out << line;
+  std::snprintf(line, sizeof line, "solve %d %d %.3f\n", ref.nodes, ref.tets, ref.seconds);
+  out << line << "stages " << s.stage_depths_m.size();
+  for (double d : s.stage_depths_m) {
+    std::snprintf(line, sizeof line, " %.17g", d);
+    out << line;
+  }
+  out << "\nfiducials " << n << "\nunloaded\n";
+  write_points(out, rest);
+  for (size_t k = 0; k < ref.fiducials_m.size(); ++k) {
+    out << "stage " << k << "\n";
+    write_points(out, ref.fiducials_m[k]);
+  }
+  if (!out) throw std::runtime_error("fem reference: cannot write " + path);
+}
+
+FemReference read_fem_reference(const std::string& path, const CalibrationSetup& s, std::string* mesh_description) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("fem reference: cannot read " + path);
+  auto fail = [&](const std::string& what) { return std::runtime_error("fem reference " + path + ": " + what); };
+  std::string line, word;
+  if (!std::getline(in, line) || line != kReferenceMagic) throw fail("not a pcisim FEM reference (first line)");
+  if (!std::getline(in, line) || line.rfind("mesh ", 0) != 0) throw fail("no mesh line");
+  if (mesh_description) *mesh_description = line.substr(5);
+  double young = 0, poisson = 0, density = 0;
+  Eigen::Vector3d g;
+  FemReference ref;
+  size_t stages = 0;
+  Eigen::Index n = 0;
+  if (!(in >> word >> young >> poisson >> density) || word != "material") throw fail("bad material line");
+  if (!(in >> word >> g.x() >> g.y() >> g.z()) || word != "gravity") throw fail("bad gravity line");
+  if (!(in >> word >> ref.nodes >> ref.tets >> ref.seconds) || word != "solve") throw fail("bad solve line");
+  if (!(in >> word >> stages) || word != "stages" || stages > 1000) throw fail("bad stages line");
+  std::vector<double> depths(stages);
+  for (double& d : depths)
+    if (!(in >> d)) throw fail("bad stage depth");
+  if (!(in >> word >> n) || word != "fiducials" || n < 0 || n > 1000000) throw fail("bad fiducials line");
+  auto read_points = [&](const char* label) {
+    if (!(in >> word) || word != label) throw fail(std::string("expected '") + label + "'");
+    if (std::string(label) == "stage" && !(in >> word)) throw fail("bad stage header");
+    Eigen::Matrix3Xd p(3, n);
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (!(in >> p(0, i) >> p(1, i) >> p(2, i)) || !p.col(i).allFinite()) throw fail("bad fiducial position");
+    return p;
+  };
+  const Eigen::Matrix3Xd unloaded = read_points("unloaded");
+  for (size_t k = 0; k <= stages; ++k) ref.fiducials_m.push_back(read_points("stage"));
+  ref.solves.assign(stages + 1, fem::FemSolveReport{true, 0, 0.0});
+
+  // the file must be this setup's: its material, gravity, stages and organ
+  auto differs = [](double a, double b) { return std::abs(a - b) > 1e-12 * std::max(1.0, std::abs(b)); };
+  if (differs(young, s.young_pa) || differs(poisson, s.poisson) || differs(density, s.density_kg_per_m3))
+    throw std::invalid_argument("fem reference " + path + ": its material (E, nu, density) is not the setup's");
+  if ((g - s.gravity_m_per_s2).norm() > 1e-12) throw std::invalid_argument("fem reference " + path + ": other gravity");
+  if (depths.size() != s.stage_depths_m.size())
+    throw std::invalid_argument("fem reference " + path + ": " + std::to_string(depths.size()) +
+                                " stages, the setup has " + std::to_string(s.stage_depths_m.size()));
+  for (size_t k = 0; k < depths.size(); ++k)
+    if (differs(depths[k], s.stage_depths_m[k]))
+      throw std::invalid_argument("fem reference " + path + ": stage " + std::to_string(k + 1) +
+                                  " is at another depth");
+  if (n != static_cast<Eigen::Index>(s.organ.fiducials_m.size()))
+    throw std::invalid_argument("fem reference " + path + ": " + std::to_string(n) + " fiducials, the organ has " +
+                                std::to_string(s.organ.fiducials_m.size()));
+  for (Eigen::Index i = 0; i < n; ++i)
+    if ((unloaded.col(i) - s.organ.fiducials_m[static_cast<size_t>(i)]).norm() > 1e-9)
+      throw std::invalid_argument("fem reference " + path + ": fiducial " + std::to_string(i) +
+                                  " is not where the organ has it (another organ or seed)");
+  return ref;
 }
 
 }  // namespace pcisim::physics::soft_tissue

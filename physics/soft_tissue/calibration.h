@@ -8,8 +8,10 @@
 // friction it would also hold in tension, which a press from above does not ask of it), the probe
 // frictionless.
 #include <Eigen/Core>
+#include <string>
 #include <vector>
 
+#include "anatomy/organ/kidney_phantom.h"
 #include "anatomy/organ/organ.h"
 #include "physics/fem/static_fem.h"
 #include "physics/soft_tissue/soft_tissue_spec.h"
@@ -37,6 +39,12 @@ struct CalibrationSetup {
 // above the skin, stages 3, 6, 9 and 12 mm
 CalibrationSetup kidney_calibration_setup(const anatomy::Organ& organ);
 
+// The two kidneys of the calibration: the one it is tuned on (the phantom's defaults, seed 1) and
+// a held-out one it never sees while tuning (another shape and bead placement: 10 % longer, 9 %
+// flatter, a deeper hilum, seed 2), to show whether the calibration transfers.
+enum class CalibrationOrgan { kTuning, kHeldOut };
+anatomy::KidneySpec calibration_kidney(CalibrationOrgan which);
+
 struct FemReference {
   std::vector<Eigen::Matrix3Xd> fiducials_m;  // [0]: at rest under gravity, then one per stage
   std::vector<fem::FemSolveReport> solves;
@@ -48,6 +56,18 @@ struct FemReference {
 FemReference solve_fem_reference(const CalibrationSetup& setup, fem::FemMesh mesh);
 FemReference solve_fem_reference(const CalibrationSetup& setup);
 fem::FemMesh voxel_reference_mesh(const CalibrationSetup& setup);
+
+// A reference kept in a file (pcisim-calibrate --save-reference), so that a test or a search can
+// use a converged reference without solving it again (a body-fitted 5 mm reference takes minutes).
+// Plain text: a header (the material, the mesh in words, the stages), the organ's fiducials at rest
+// without gravity (to check that the file belongs to the organ it is used with), then each
+// stage's fiducials. Throws std::runtime_error naming the path on a write or read error, and
+// std::invalid_argument naming what differs when the file's stages, fiducials or material are
+// not the setup's.
+void write_fem_reference(const std::string& path, const CalibrationSetup& setup, const FemReference& reference,
+                         const std::string& mesh_description);
+FemReference read_fem_reference(const std::string& path, const CalibrationSetup& setup,
+                                std::string* mesh_description = nullptr);
 
 struct StageError {
   double depth_m = 0.0;  // the probe's travel at this stage

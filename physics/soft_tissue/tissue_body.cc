@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 namespace pcisim::physics::soft_tissue {
 
@@ -35,6 +36,15 @@ double particle_mass(const TissueModel& model, const TissueParams& p) {
   return p.density_kg_per_m3 * r * r * r;
 }
 
+// each particle's contact distance (TissueParams::contact_surface)
+Eigen::VectorXd contact_radii(const TissueModel& model, const TissueParams& p) {
+  const double sphere_m = p.contact_radius_factor * model.spec.particle_radius_m;
+  Eigen::VectorXd r = Eigen::VectorXd::Constant(model.rest_m.cols(), sphere_m);
+  if (p.contact_surface == ContactSurface::kSkin && model.skin_depth_m.size() == r.size())
+    r = r.cwiseMin(model.skin_depth_m);
+  return r;
+}
+
 }  // namespace
 
 TissueBody::TissueBody(const TissueModel& model, const TissueParams& params, const ContactPlane& support,
@@ -43,10 +53,20 @@ TissueBody::TissueBody(const TissueModel& model, const TissueParams& params, con
       pbd_params_(pbd_params(params)),
       particle_mass_kg_(particle_mass(model, params)),
       rest_m_(model.rest_m),
-      contacts_(static_cast<int>(model.rest_m.cols()), params.contact_radius_factor * model.spec.particle_radius_m,
-                params, unit_support(support), normalised(probe)) {
+      contacts_(contact_radii(model, params), params, unit_support(support), normalised(probe)) {
   for (int i = 0; i < rest_m_.cols(); ++i) system_.add_particle(rest_m_.col(i), particle_mass_kg_);
-  for (const std::vector<int>& members : model.clusters) system_.add_cluster(members, params_.cluster_compliance_s2);
+  // each cluster's share of the volume: its particles' cubes (m / density), each split among the
+  // clusters that hold it, so that the shares add up to the organ
+  std::vector<int> clusters_of(static_cast<size_t>(rest_m_.cols()), 0);
+  for (const std::vector<int>& members : model.clusters)
+    for (int i : members) ++clusters_of[static_cast<size_t>(i)];
+  const double cube_m3 = particle_mass_kg_ / params_.density_kg_per_m3;
+  for (const std::vector<int>& members : model.clusters) {
+    double volume_m3 = 0.0;
+    for (int i : members) volume_m3 += cube_m3 / clusters_of[static_cast<size_t>(i)];
+    const double volume_compliance = params_.bulk_modulus_pa > 0.0 ? 1.0 / (params_.bulk_modulus_pa * volume_m3) : -1.0;
+    system_.add_cluster(members, params_.cluster_compliance_s2, volume_compliance);
+  }
   system_.finalize();
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "physics/soft_tissue/contact_rules.h"
 
@@ -18,16 +19,16 @@ Vector3d tangential(const Vector3d& v, const Vector3d& n) {
 
 }  // namespace
 
-TissueContacts::TissueContacts(int particle_count, double contact_radius_m, const TissueParams& params,
+TissueContacts::TissueContacts(Eigen::VectorXd contact_radius_m, const TissueParams& params,
                                const ContactPlane& support, const ConvexProbe& probe)
-    : radius_m_(contact_radius_m),
+    : radius_m_(std::move(contact_radius_m)),
       params_(params),
       support_(support),
       probe_(probe),
       probe_step_start_(probe.pose),
       probe_target_(probe.pose),
       probe_now_(probe.pose) {
-  contacts_.resize(2 * static_cast<size_t>(std::max(particle_count, 0)));
+  contacts_.resize(2 * static_cast<size_t>(radius_m_.size()));
 }
 
 void TissueContacts::begin_step() {
@@ -60,13 +61,12 @@ void TissueContacts::begin_substep(pbd::Particles& particles, double h_s, double
   probe_now_ = interpolate(probe_step_start_, probe_target_, fraction_of_step);
   count_ = 0;
   probe_contacts_ = support_contacts_ = 0;
-  const double reach_m = radius_m_ + params_.contact_margin_m;
   const bool have_probe = !probe_.faces.empty();
   for (int i = 0; i < particles.size(); ++i) {
     if (!(particles.inv_mass_per_kg[i] > 0.0)) continue;  // pinned, driven or quarantined
     const Vector3d x = particles.position_m.col(i), xp = particles.predicted_m.col(i);
-    if (std::min(plane_gap_m(x, support_, radius_m_), plane_gap_m(xp, support_, radius_m_)) <
-        params_.contact_margin_m) {
+    const double radius_m = radius_m_[i], reach_m = radius_m + params_.contact_margin_m;
+    if (std::min(plane_gap_m(x, support_, radius_m), plane_gap_m(xp, support_, radius_m)) < params_.contact_margin_m) {
       add_contact(i, false, support_, Vector3d::Zero());
       ++support_contacts_;
     }
@@ -96,7 +96,7 @@ void TissueContacts::stabilise(pbd::Particles& particles) {
     for (int k = 0; k < count_; ++k) {
       const Contact& c = contacts_[k];
       Vector3d x = particles.position_m.col(c.particle);
-      const double moved = non_penetration_m(c.plane, radius_m_, &x);
+      const double moved = non_penetration_m(c.plane, radius_m_[c.particle], &x);
       if (moved == 0.0) continue;
       const Vector3d dx = x - particles.position_m.col(c.particle);
       particles.position_m.col(c.particle) = x;
@@ -114,7 +114,7 @@ void TissueContacts::project(pbd::Particles& particles, double h_s) {
     Contact& c = contacts_[k];
     auto xp = particles.predicted_m.col(c.particle);
     Vector3d x = xp;
-    c.normal_m += non_penetration_m(c.plane, radius_m_, &x);
+    c.normal_m += non_penetration_m(c.plane, radius_m_[c.particle], &x);
     const double mu_s = c.probe ? params_.probe_mu_static : params_.support_mu_static;
     const double mu_k = c.probe ? params_.probe_mu_kinetic : params_.support_mu_kinetic;
     if (c.normal_m > 0.0 && mu_s > 0.0) {

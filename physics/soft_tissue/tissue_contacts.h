@@ -14,8 +14,9 @@ namespace pcisim::physics::soft_tissue {
 
 class TissueContacts final : public pbd::ContactProjector {
  public:
-  // support: its top plane (normal out of the support); probe: normalised, may have no faces
-  TissueContacts(int particle_count, double contact_radius_m, const TissueParams& params, const ContactPlane& support,
+  // contact_radius_m: each particle's contact distance; support: its top plane (normal out of the
+  // support); probe: normalised, may have no faces
+  TissueContacts(Eigen::VectorXd contact_radius_m, const TissueParams& params, const ContactPlane& support,
                  const ConvexProbe& probe);
 
   // where the probe is at the end of the next step (substeps move it there on a line and a slerp)
@@ -30,7 +31,9 @@ class TissueContacts final : public pbd::ContactProjector {
   const ProbePose& probe_pose() const { return probe_now_; }
   const ConvexProbe& probe() const { return probe_; }
   const ContactPlane& support() const { return support_; }
-  double contact_radius_m() const { return radius_m_; }
+  // the largest contact distance (every particle's, with ContactSurface::kSpheres), and one particle's
+  double contact_radius_m() const { return radius_m_.size() ? radius_m_.maxCoeff() : 0.0; }
+  double contact_radius_m(int particle) const { return radius_m_[particle]; }
   // force the tissue puts on the probe and on the support over the last step (mean of its substeps)
   const Eigen::Vector3d& probe_force_n() const { return probe_force_n_; }
   const Eigen::Vector3d& support_force_n() const { return support_force_n_; }
@@ -51,7 +54,7 @@ class TissueContacts final : public pbd::ContactProjector {
   void add_contact(int particle, bool probe, const ContactPlane& plane, const Eigen::Vector3d& shift_m);
   void stabilise(pbd::Particles& particles);
 
-  double radius_m_;
+  Eigen::VectorXd radius_m_;
   TissueParams params_;
   ContactPlane support_;
   ConvexProbe probe_;

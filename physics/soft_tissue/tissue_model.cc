@@ -13,6 +13,7 @@
 
 #include "anatomy/mesh/kuhn_tetrahedra.h"
 #include "physics/pbd/grid_clusters.h"
+#include "physics/sdf/sdf_kernels.h"
 
 namespace pcisim::physics::soft_tissue {
 
@@ -210,6 +211,39 @@ void build_tets(TissueModel& model, double h) {
   for (const auto& t : kept) model.tets.push_back({remap[t[0]], remap[t[1]], remap[t[2]], remap[t[3]]});
 }
 
+// each point's distance to the surface, up to max_m: the points binned in cubes of max_m, each
+// triangle tested against the points in the cubes its box (grown by max_m) overlaps
+Eigen::VectorXd skin_depths(const anatomy::TriangleMesh& mesh, const Matrix3Xd& x_m, double max_m) {
+  Eigen::VectorXd depth = Eigen::VectorXd::Constant(x_m.cols(), max_m);
+  if (x_m.cols() == 0) return depth;
+  const Vector3d lo = x_m.rowwise().minCoeff().array() - max_m;
+  const Eigen::Vector3i n = ((x_m.rowwise().maxCoeff() - lo).array() / max_m).floor().cast<int>() + 2;
+  auto cell = [&](const Vector3d& p) {
+    return ((p - lo) / max_m).array().floor().cast<int>().max(0).min(n.array() - 1).matrix().eval();
+  };
+  std::vector<std::vector<int>> bin(static_cast<size_t>(n.x()) * n.y() * n.z());
+  auto index = [&](const Eigen::Vector3i& c) { return static_cast<size_t>(c.x() + n.x() * (c.y() + n.y() * c.z())); };
+  for (Eigen::Index i = 0; i < x_m.cols(); ++i) bin[index(cell(x_m.col(i)))].push_back(static_cast<int>(i));
+  auto v3 = [](const Vector3d& p) { return sdf::V3{p.x(), p.y(), p.z()}; };
+  for (const auto& t : mesh.triangles) {
+    const Vector3d& a = mesh.vertices_m[t[0]];
+    const Vector3d& b = mesh.vertices_m[t[1]];
+    const Vector3d& c = mesh.vertices_m[t[2]];
+    const Eigen::Vector3i c0 = cell(a.cwiseMin(b).cwiseMin(c).array() - max_m);
+    const Eigen::Vector3i c1 = cell(a.cwiseMax(b).cwiseMax(c).array() + max_m);
+    for (int k = c0.z(); k <= c1.z(); ++k)
+      for (int j = c0.y(); j <= c1.y(); ++j)
+        for (int i = c0.x(); i <= c1.x(); ++i)
+          for (int p : bin[index({i, j, k})]) {
+            int region = 0;
+            const sdf::V3 q = sdf::closest_on_triangle(v3(x_m.col(p)), v3(a), v3(b), v3(c), &region);
+            const double d = (x_m.col(p) - Vector3d(q.x, q.y, q.z)).norm();
+            depth[p] = std::min(depth[p], d);
+          }
+  }
+  return depth;
+}
+
 }  // namespace
 
 TissueModel build_tissue_model(const anatomy::TriangleMesh& surface_m, std::span<const Vector3d> fiducials_m,
@@ -236,6 +270,7 @@ TissueModel build_tissue_model(const anatomy::TriangleMesh& surface_m, std::span
     throw std::invalid_argument("build_tissue_model: no voxel of " + mm(spec.voxel_m) +
                                 " mm has its centre inside the organ");
   model.rest_m = greedy_sample(model.interior_voxels_m, spec.particle_radius_m);
+  model.skin_depth_m = skin_depths(surface_m, model.rest_m, spec.particle_radius_m);
   // [soft-tissue "Cluster-based deformation"] overlapping cubical clusters
   model.clusters = pbd::grid_clusters(model.rest_m, spec.cluster_spacing_factor * spec.particle_radius_m,
                                       spec.cluster_overlap, spec.cluster_min_members);

@@ -44,6 +44,10 @@ struct TissueModel {
   Eigen::Matrix3Xd tet_vertices_m;
   std::vector<std::array<int, 4>> tets;
   std::vector<SkinBinding> tet_skin;  // one per tet vertex
+  // each particle's distance to the organ's surface at rest, searched up to the particle radius
+  // (deeper particles read the radius): how far its contact sphere may reach before it passes
+  // the skin (TissueParams::contact_surface)
+  Eigen::VectorXd skin_depth_m;
   // voxelisation: occupied voxel centres (kept for tests and the tet embedding)
   Eigen::Matrix3Xd interior_voxels_m;
 };

@@ -19,6 +19,7 @@ void validate(const TissueParams& p) {
   };
   check(p.density_kg_per_m3, kTissueDensityKgPerM3, "density_kg_per_m3");
   check(p.cluster_compliance_s2, kTissueClusterComplianceS2, "cluster_compliance_s2");
+  check(p.bulk_modulus_pa, kTissueBulkModulusPa, "bulk_modulus_pa");
   check(p.substeps, kTissueSubsteps, "substeps");
   check(p.iterations, kTissueIterations, "iterations");
   require(p.solver == pbd::SolverKind::kGaussSeidel || p.solver == pbd::SolverKind::kJacobi, "solver",

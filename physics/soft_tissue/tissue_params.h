@@ -9,6 +9,17 @@
 
 namespace pcisim::physics::soft_tissue {
 
+// where the organ meets the support and the probe (TissueParams::contact_surface)
+enum class ContactSurface {
+  // each particle is a sphere of contact_radius_factor x the particle radius: the paper's
+  // particle collisions. A particle sampled just under the skin pokes out of the organ by up to
+  // half a radius, so the probe meets the tissue that much before it reaches the skin
+  kSpheres,
+  // each sphere is cut to the particle's rest depth under the organ's surface: the contact is
+  // the organ's own skin (at rest), as a mesh-based reference (the calibration's FEM) has it
+  kSkin,
+};
+
 struct TissueParams {
   // each particle stands for a cube of edge = the model's particle radius (the sampling
   // spacing): m = density r^3 (the kidney's particles then weigh its volume within ~10 %)
@@ -17,6 +28,11 @@ struct TissueParams {
   // 0 = rigid clusters. Not calibrated (issue #16 item 6): 2e-5 gives 1.7 N for a 12 mm press of
   // a 20 x 40 mm face at 3.3 mm particles. [0, 1]
   double cluster_compliance_s2 = 2.0e-5;
+  // resistance to volume change: each cluster's volume (det F - 1, pbd/shape_matching_clusters.h)
+  // with compliance 1 / (K V_c), V_c the cluster's share of the organ's volume. Shape matching
+  // alone lets a cluster shrink as easily as it shears (no Poisson effect); a kidney is nearly
+  // incompressible [soft-tissue, Discussion, after Miller et al.]. 0 = no volume constraint. [0, 1e9]
+  double bulk_modulus_pa = 0.0;
   int substeps = 3;    // [soft-tissue, Table 1]; [1, 100]
   int iterations = 9;  // solver passes per substep [soft-tissue, Table 1]; [1, 1000]
   // Gauss-Seidel, or Jacobi with SOR [soft-tissue eq 7] (the paper: "local" relaxation, factor 1);
@@ -29,6 +45,7 @@ struct TissueParams {
   // contact distance of a particle = factor x the model's particle radius: 0.5 puts the spheres of
   // neighbouring particles (spaced ~r) face to face, so the organ's skin touches. [0, 2]
   double contact_radius_factor = 0.5;
+  ContactSurface contact_surface = ContactSurface::kSpheres;
   double contact_margin_m = 2.0e-3;  // a particle this far beyond contact is still a candidate; [0, 0.1]
   // Coulomb friction [soft-tissue, Table 1: shape friction 0.35]; kinetic <= static. [0, 10]
   double support_mu_static = 0.35;
@@ -40,6 +57,7 @@ struct TissueParams {
 // the ranges above, once: validate() and the scene loader (effects.soft_tissue) both use them
 inline constexpr ParamRange kTissueDensityKgPerM3{1.0, 1e5};
 inline constexpr ParamRange kTissueClusterComplianceS2{0.0, 1.0};
+inline constexpr ParamRange kTissueBulkModulusPa{0.0, 1e9};
 inline constexpr ParamRange kTissueSubsteps{1, 100};
 inline constexpr ParamRange kTissueIterations{1, 1000};
 inline constexpr ParamRange kTissueSorW{1.0, 2.0};

@@ -178,6 +178,7 @@ physics::soft_tissue::SoftTissueSpec read_soft_tissue(json::JsonReader r) {
   p.density_kg_per_m3 = in_range(r, "density_kg_per_m3", p.density_kg_per_m3, st::kTissueDensityKgPerM3);
   p.cluster_compliance_s2 =
       in_range(r, "cluster_compliance_s2", p.cluster_compliance_s2, st::kTissueClusterComplianceS2);
+  p.bulk_modulus_pa = in_range(r, "bulk_modulus_pa", p.bulk_modulus_pa, st::kTissueBulkModulusPa);
   p.substeps = in_range(r, "substeps", p.substeps, st::kTissueSubsteps);
   p.iterations = in_range(r, "iterations", p.iterations, st::kTissueIterations);
   p.solver = r.text("solver", "gauss_seidel", {"gauss_seidel", "jacobi"}) == "jacobi"
@@ -189,6 +190,10 @@ physics::soft_tissue::SoftTissueSpec read_soft_tissue(json::JsonReader r) {
   p.damping_per_s = in_range(r, "damping_per_s", p.damping_per_s, st::kTissueDampingPerS);
   p.contact_radius_factor =
       in_range(r, "contact_radius_factor", p.contact_radius_factor, st::kTissueContactRadiusFactor);
+  p.contact_surface = r.text("contact_surface", p.contact_surface == st::ContactSurface::kSkin ? "skin" : "spheres",
+                             {"spheres", "skin"}) == "skin"
+                          ? st::ContactSurface::kSkin
+                          : st::ContactSurface::kSpheres;
   p.support_mu_static = in_range(r, "support_mu_static", p.support_mu_static, st::kTissueFriction);
   p.support_mu_kinetic = in_range(r, "support_mu_kinetic", p.support_mu_kinetic, st::kTissueFriction);
   if (p.support_mu_kinetic > p.support_mu_static) r.fail("support_mu_kinetic", "expected at most support_mu_static");

@@ -546,6 +546,9 @@ TEST(TissueBody, ValidateNamesTheFieldAndItsRange) {
   p.cluster_compliance_s2 = -1.0;
   EXPECT_NE(message(p).find("cluster_compliance_s2 must be in [0, 1]"), std::string::npos) << message(p);
   p = {};
+  p.bulk_modulus_pa = -1.0;
+  EXPECT_NE(message(p).find("bulk_modulus_pa must be in [0, 1000000000]"), std::string::npos) << message(p);
+  p = {};
   p.support_mu_kinetic = 0.5;  // above the static 0.35
   EXPECT_NE(message(p).find("support_mu_kinetic must be in [0, support_mu_static]"), std::string::npos) << message(p);
   p = {};

@@ -196,3 +196,36 @@ TEST(TissueModel, ParticleCountsPerRadius) {
 
 }  // namespace
 }  // namespace pcisim::physics::soft_tissue
+
+namespace pcisim::physics::soft_tissue {
+namespace {
+
+// each particle's depth under the skin, on a round organ whose depth is known: R - |x| (the
+// lat-long surface's chords are within 0.05 mm of the sphere), the radius for deeper particles
+TEST(TissueModel, SkinDepthIsTheDistanceToTheSurface) {
+  anatomy::KidneySpec round;
+  round.semi_axes_mm = {20.0, 20.0, 20.0};
+  round.hilum_depth = 0.0;
+  round.ct_spacing_mm = 4.0;
+  round.fiducial_count = 0;
+  const anatomy::KidneyPhantom p = anatomy::make_kidney_phantom(round);
+  TissueModelSpec spec;
+  spec.particle_radius_m = 3e-3;
+  const TissueModel m = build_tissue_model(p.surface, {}, spec);
+  ASSERT_EQ(m.skin_depth_m.size(), m.rest_m.cols());
+  int near_skin = 0;
+  for (Eigen::Index i = 0; i < m.rest_m.cols(); ++i) {
+    const double exact = 20e-3 - m.rest_m.col(i).norm();
+    ASSERT_GT(exact, 0.0) << "particle " << i << " outside the organ";
+    if (exact < spec.particle_radius_m - 0.1e-3) {
+      EXPECT_NEAR(m.skin_depth_m[i], exact, 0.06e-3) << "particle " << i;
+      ++near_skin;
+    } else if (exact > spec.particle_radius_m + 0.1e-3) {
+      EXPECT_DOUBLE_EQ(m.skin_depth_m[i], spec.particle_radius_m) << "particle " << i;
+    }
+  }
+  EXPECT_GT(near_skin, 100) << "the organ's outer layer of particles";
+}
+
+}  // namespace
+}  // namespace pcisim::physics::soft_tissue

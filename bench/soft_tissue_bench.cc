@@ -49,7 +49,8 @@ int run(const std::vector<std::string>& args) {
   const st::FemReference ref = st::solve_fem_reference(setup, kidney_tetgen_mesh(k, setup.fem_spacing_m));
   std::printf("  %d nodes, %.1f s\n", ref.nodes, ref.seconds);
 
-  // the cluster compliance of each radius's calibration optimum (docs/benchmarks/soft-tissue-calibration.md)
+  // the cluster compliance of each radius's optimum for the paper's model, shape matching alone
+  // (docs/benchmarks/soft-tissue-calibration.md; the scene's optimum adds the clusters' volume)
   const std::vector<std::pair<double, double>> radii =
       o.quick ? std::vector<std::pair<double, double>>{{5.0, 3e-5}}
               : std::vector<std::pair<double, double>>{{3.3, 1e-5}, {5.0, 3e-5}};

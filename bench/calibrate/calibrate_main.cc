@@ -18,6 +18,8 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
+#include <stdexcept>
 
 #include "anatomy/organ/kidney_phantom.h"
 #include "bench/kidney_tetgen_mesh.h"
@@ -60,6 +62,25 @@ nlohmann::json stages_json(const st::PbdRun& run) {
   return stages;
 }
 
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// written beside the file and renamed into place: a reader never sees half a reference
+void write_text(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp);
+    out << text;
+    if (!(out << std::flush)) throw std::runtime_error("cannot write " + tmp);
+  }
+  std::filesystem::rename(tmp, path);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -79,11 +100,14 @@ int main(int argc, char** argv) {
   std::string mesher = "tetgen";
   std::string out = "docs/benchmarks/soft-tissue-calibration";
   std::string references_dir = "docs/benchmarks";
-  app.add_option("--radii-mm", radii_mm, "particle radii to calibrate (the paper: 2.2-3.3 mm)");
-  app.add_option("--compliances", compliances, "the cluster compliances searched (s^2; smaller is stiffer)");
+  app.add_option("--radii-mm", radii_mm, "particle radii to calibrate (the paper: 2.2-3.3 mm)")
+      ->check(CLI::Range(1.5, 20.0));
+  app.add_option("--compliances", compliances, "the cluster compliances searched (s^2; smaller is stiffer)")
+      ->check(CLI::Range(0.0, 1.0));
   app.add_option("--bulk-kpa", bulk_kpa,
                  "the bulk moduli of the clusters' volume constraint searched (kPa; 0 = none, shape matching "
-                 "alone; the reference's own is E / (3 (1 - 2 nu)) = 16.7 kPa)");
+                 "alone; the reference's own is E / (3 (1 - 2 nu)) = 16.7 kPa)")
+      ->check(CLI::Range(0.0, 1e6));
   app.add_option("--contacts", contacts, "the contact surfaces searched: spheres (the paper's) and/or skin")
       ->check(CLI::IsMember({"spheres", "skin"}));
   app.add_option("--young-kpa", young_kpa, "the reference's Young's modulus")->check(CLI::Range(0.1, 1000.0));
@@ -105,246 +129,252 @@ int main(int argc, char** argv) {
   app.add_flag("--solve-references", solve, "solve both FEM references and write them to --references-dir");
   app.add_option("--out", out, "report path without extension");
   CLI11_PARSE(app, argc, argv);
+  try {
+    // progress goes out line by line even into a pipe
+    std::setvbuf(stdout, nullptr, _IOLBF, 0);
+    const std::string mesh_words = fmt::format(
+        "{} tets of {} mm", mesher == "tetgen" ? "TetGen (body-fitted)" : "voxel (Kuhn, stair-stepped)", fem_mm);
 
-  // progress goes out line by line even into a pipe
-  std::setvbuf(stdout, nullptr, _IOLBF, 0);
-  const std::string mesh_words = fmt::format(
-      "{} tets of {} mm", mesher == "tetgen" ? "TetGen (body-fitted)" : "voxel (Kuhn, stair-stepped)", fem_mm);
-
-  struct Organ {
-    const char* name;
-    st::CalibrationOrgan which;
-    pcisim::anatomy::KidneySpec spec;
-    st::CalibrationSetup setup;
-    st::FemReference ref;
-    std::vector<double> check_diff_mm;
-  };
-  std::vector<Organ> organs;
-  for (auto [name, which] :
-       {std::pair{"tuning", st::CalibrationOrgan::kTuning}, std::pair{"held-out", st::CalibrationOrgan::kHeldOut}}) {
-    Organ o{name, which, st::calibration_kidney(which), {}, {}, {}};
-    o.setup = st::kidney_calibration_setup(pcisim::anatomy::kidney_organ(pcisim::anatomy::make_kidney_phantom(o.spec)));
-    o.setup.young_pa = young_kpa * 1e3;
-    o.setup.poisson = poisson;
-    o.setup.fem_spacing_m = fem_mm * 1e-3;
-    o.setup.warmup_steps = warmup;
-    o.setup.steps_per_stage = per_stage;
-    const std::string path =
-        (std::filesystem::path(references_dir) / fmt::format("soft-tissue-reference-{}.txt", name)).string();
-    auto mesh_at = [&](double spacing_m) {
-      st::CalibrationSetup at = o.setup;
-      at.fem_spacing_m = spacing_m;
-      return mesher == "voxel" ? st::voxel_reference_mesh(at) : pcisim::bench::kidney_tetgen_mesh(o.spec, spacing_m);
+    struct Organ {
+      const char* name;
+      st::CalibrationOrgan which;
+      pcisim::anatomy::KidneySpec spec;
+      st::CalibrationSetup setup;
+      st::FemReference ref;
+      std::vector<double> check_diff_mm;
     };
-    if (solve) {
-      fmt::print("{} kidney: solving the neo-Hookean FEM, E {} kPa, nu {}, {} ...\n", name, young_kpa, poisson,
-                 mesh_words);
-      o.ref = st::solve_fem_reference(o.setup, mesh_at(o.setup.fem_spacing_m));
-      fmt::print("  {} nodes, {} tets, {:.1f} s; stages:", o.ref.nodes, o.ref.tets, o.ref.seconds);
-      for (const auto& r : o.ref.solves)
-        fmt::print(" [{} Newton, residual {:.1e} N{}]", r.newton_iterations, r.residual_n,
-                   r.converged ? "" : ", NOT converged");
-      fmt::print("\n");
-      st::write_fem_reference(path, o.setup, o.ref, mesh_words);
-      if (check_mm > 0) {
-        // the reference's own discretisation error, estimated by a coarser mesh (not a bound)
-        const st::FemReference c = st::solve_fem_reference(o.setup, mesh_at(check_mm * 1e-3));
-        for (size_t k = 0; k < c.fiducials_m.size(); ++k)
-          o.check_diff_mm.push_back((c.fiducials_m[k] - o.ref.fiducials_m[k]).colwise().norm().mean() * 1e3);
-        fmt::print("  a {} mm reference differs from it by {} mm (mean over the beads, per stage)\n", check_mm,
-                   fmt::join(o.check_diff_mm, ", "));
-      }
-    } else {
-      std::string words;
-      o.ref = st::read_fem_reference(path, o.setup, &words);
-      if (words != mesh_words) {
-        fmt::print(stderr, "{}: solved on {}, not {}; run with --solve-references\n", path, words, mesh_words);
-        return 2;
-      }
-      fmt::print("{} kidney: reference {} ({}, {} nodes, solved in {:.0f} s)\n", name, path, words, o.ref.nodes,
-                 o.ref.seconds);
-    }
-    organs.push_back(std::move(o));
-  }
-  const Organ& tuning = organs[0];
-  const Organ& held_out = organs[1];
-
-  // the search, on the tuning kidney only
-  struct Result {
-    Setting setting;
-    st::PbdRun run;
-    double objective_m = INFINITY;
-  };
-  std::vector<Result> all;
-  std::vector<Result> best(radii_mm.size()), best_paper(radii_mm.size());
-  auto run_on = [&](const Organ& o, const Setting& s) {
-    st::SoftTissueSpec spec;
-    spec.model.particle_radius_m = s.radius_mm * 1e-3;
-    spec.params.cluster_compliance_s2 = s.compliance;
-    spec.params.bulk_modulus_pa = s.bulk_kpa * 1e3;
-    spec.params.contact_surface = s.contact;
-    return st::run_pbd_protocol(o.setup, spec, o.ref);
-  };
-  const size_t total = radii_mm.size() * compliances.size() * bulk_kpa.size() * contacts.size();
-  for (size_t ri = 0; ri < radii_mm.size(); ++ri)
-    for (const std::string& contact : contacts)
-      for (double k : bulk_kpa)
-        for (double c : compliances) {
-          Result r;
-          r.setting = {radii_mm[ri], c, k,
-                       contact == "skin" ? st::ContactSurface::kSkin : st::ContactSurface::kSpheres};
-          const auto t0 = std::chrono::steady_clock::now();
-          r.run = run_on(tuning, r.setting);
-          r.objective_m = objective(r.run);
-          const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-          fmt::print("  [{}/{}] {}: mean error {:.2f} mm over the stages ({:.1f} s, step p50 {:.1f} ms)\n",
-                     all.size() + 1, total, describe(r.setting), r.objective_m * 1e3, sec,
-                     pcisim::realtime::percentile(r.run.step_ms, 0.5));
-          if (r.objective_m < best[ri].objective_m) best[ri] = r;
-          // the paper's model: shape matching alone, particle spheres
-          if (k == 0.0 && contact == "spheres" && r.objective_m < best_paper[ri].objective_m) best_paper[ri] = r;
-          all.push_back(std::move(r));
+    std::vector<Organ> organs;
+    for (auto [name, which] :
+         {std::pair{"tuning", st::CalibrationOrgan::kTuning}, std::pair{"held-out", st::CalibrationOrgan::kHeldOut}}) {
+      Organ o{name, which, st::calibration_kidney(which), {}, {}, {}};
+      o.setup =
+          st::kidney_calibration_setup(pcisim::anatomy::kidney_organ(pcisim::anatomy::make_kidney_phantom(o.spec)));
+      o.setup.young_pa = young_kpa * 1e3;
+      o.setup.poisson = poisson;
+      o.setup.fem_spacing_m = fem_mm * 1e-3;
+      o.setup.warmup_steps = warmup;
+      o.setup.steps_per_stage = per_stage;
+      const std::string path =
+          (std::filesystem::path(references_dir) / fmt::format("soft-tissue-reference-{}.txt", name)).string();
+      auto mesh_at = [&](double spacing_m) {
+        st::CalibrationSetup at = o.setup;
+        at.fem_spacing_m = spacing_m;
+        return mesher == "voxel" ? st::voxel_reference_mesh(at) : pcisim::bench::kidney_tetgen_mesh(o.spec, spacing_m);
+      };
+      if (solve) {
+        fmt::print("{} kidney: solving the neo-Hookean FEM, E {} kPa, nu {}, {} ...\n", name, young_kpa, poisson,
+                   mesh_words);
+        o.ref = st::solve_fem_reference(o.setup, mesh_at(o.setup.fem_spacing_m));
+        fmt::print("  {} nodes, {} tets, {:.1f} s; stages:", o.ref.nodes, o.ref.tets, o.ref.seconds);
+        for (const auto& r : o.ref.solves)
+          fmt::print(" [{} Newton, residual {:.1e} N{}]", r.newton_iterations, r.residual_n,
+                     r.converged ? "" : ", NOT converged");
+        fmt::print("\n");
+        write_text(path, st::fem_reference_text(o.setup, o.ref, mesh_words));
+        if (check_mm > 0) {
+          // the reference's own discretisation error, estimated by a coarser mesh (not a bound)
+          const st::FemReference c = st::solve_fem_reference(o.setup, mesh_at(check_mm * 1e-3));
+          for (size_t k = 0; k < c.fiducials_m.size(); ++k)
+            o.check_diff_mm.push_back((c.fiducials_m[k] - o.ref.fiducials_m[k]).colwise().norm().mean() * 1e3);
+          fmt::print("  a {} mm reference differs from it by {} mm (mean over the beads, per stage)\n", check_mm,
+                     fmt::join(o.check_diff_mm, ", "));
         }
+      } else {
+        std::string words;
+        o.ref = st::parse_fem_reference(read_text(path), o.setup, path, &words);
+        if (words != mesh_words) {
+          fmt::print(stderr, "{}: solved on {}, not {}; run with --solve-references\n", path, words, mesh_words);
+          return 2;
+        }
+        fmt::print("{} kidney: reference {} ({}, {} nodes, solved in {:.0f} s)\n", name, path, words, o.ref.nodes,
+                   o.ref.seconds);
+      }
+      organs.push_back(std::move(o));
+    }
+    const Organ& tuning = organs[0];
+    const Organ& held_out = organs[1];
 
-  // each optimum, and the paper's model's, on the held-out kidney (not re-tuned)
-  std::vector<st::PbdRun> transfer, transfer_paper;
-  for (size_t ri = 0; ri < radii_mm.size(); ++ri) {
-    transfer.push_back(run_on(held_out, best[ri].setting));
-    fmt::print("  held out, {}: mean error {:.2f} mm over the stages\n", describe(best[ri].setting),
-               objective(transfer.back()) * 1e3);
-    transfer_paper.push_back(best_paper[ri].objective_m < INFINITY ? run_on(held_out, best_paper[ri].setting)
-                                                                   : st::PbdRun{});
-  }
+    // the search, on the tuning kidney only
+    struct Result {
+      Setting setting;
+      st::PbdRun run;
+      double objective_m = INFINITY;
+    };
+    std::vector<Result> all;
+    std::vector<Result> best(radii_mm.size()), best_paper(radii_mm.size());
+    auto run_on = [&](const Organ& o, const Setting& s) {
+      st::SoftTissueSpec spec;
+      spec.model.particle_radius_m = s.radius_mm * 1e-3;
+      spec.params.cluster_compliance_s2 = s.compliance;
+      spec.params.bulk_modulus_pa = s.bulk_kpa * 1e3;
+      spec.params.contact_surface = s.contact;
+      return st::run_pbd_protocol(o.setup, spec, o.ref);
+    };
+    const size_t total = radii_mm.size() * compliances.size() * bulk_kpa.size() * contacts.size();
+    for (size_t ri = 0; ri < radii_mm.size(); ++ri)
+      for (const std::string& contact : contacts)
+        for (double k : bulk_kpa)
+          for (double c : compliances) {
+            Result r;
+            r.setting = {radii_mm[ri], c, k,
+                         contact == "skin" ? st::ContactSurface::kSkin : st::ContactSurface::kSpheres};
+            const auto t0 = std::chrono::steady_clock::now();
+            r.run = run_on(tuning, r.setting);
+            r.objective_m = objective(r.run);
+            const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            fmt::print("  [{}/{}] {}: mean error {:.2f} mm over the stages ({:.1f} s, step p50 {:.1f} ms)\n",
+                       all.size() + 1, total, describe(r.setting), r.objective_m * 1e3, sec,
+                       pcisim::realtime::percentile(r.run.step_ms, 0.5));
+            if (r.objective_m < best[ri].objective_m) best[ri] = r;
+            // the paper's model: shape matching alone, particle spheres
+            if (k == 0.0 && contact == "spheres" && r.objective_m < best_paper[ri].objective_m) best_paper[ri] = r;
+            all.push_back(std::move(r));
+          }
 
-  // the JSON report
-  nlohmann::json report;
-  auto organ_json = [&](const Organ& o) {
-    return nlohmann::json{{"semi_axes_mm", {o.spec.semi_axes_mm.x(), o.spec.semi_axes_mm.y(), o.spec.semi_axes_mm.z()}},
-                          {"hilum_depth", o.spec.hilum_depth},
-                          {"seed", o.spec.seed},
-                          {"reference_nodes", o.ref.nodes},
-                          {"reference_tets", o.ref.tets},
-                          {"reference_seconds", o.ref.seconds},
-                          {"coarser_mesh_difference_mm_per_stage", o.check_diff_mm}};
-  };
-  report["reference"] = {{"model", "static neo-Hookean FEM, linear tets"},
-                         {"mesh", mesh_words},
-                         {"young_kpa", young_kpa},
-                         {"poisson", poisson},
-                         {"spacing_mm", fem_mm},
-                         {"coarser_mesh_mm", solve ? check_mm : 0.0}};
-  report["organs"] = {{"tuning", organ_json(tuning)}, {"held_out", organ_json(held_out)}};
-  std::vector<double> stage_mm;
-  for (double d : tuning.setup.stage_depths_m) stage_mm.push_back(d * 1e3);
-  report["stages_probe_travel_mm"] = stage_mm;
-  report["protocol"] = {{"warmup_steps", warmup}, {"steps_per_stage", per_stage}, {"step_s", tuning.setup.step_s}};
-  report["objective"] = "mean over the stages (rest included) of the mean fiducial error";
-  nlohmann::json search = nlohmann::json::array();
-  for (const Result& r : all)
-    search.push_back({{"radius_mm", r.setting.radius_mm},
-                      {"compliance_s2", r.setting.compliance},
-                      {"bulk_kpa", r.setting.bulk_kpa},
-                      {"contact", contact_name(r.setting.contact)},
-                      {"objective_mm", r.objective_m * 1e3},
-                      {"step_ms_p50", pcisim::realtime::percentile(r.run.step_ms, 0.5)},
-                      {"step_ms_p99", pcisim::realtime::percentile(r.run.step_ms, 0.99)},
-                      {"stages", stages_json(r.run)}});
-  report["search"] = search;
-  nlohmann::json optima = nlohmann::json::array();
-  for (size_t ri = 0; ri < radii_mm.size(); ++ri) {
-    const Setting& s = best[ri].setting;
-    optima.push_back({{"radius_mm", s.radius_mm},
-                      {"compliance_s2", s.compliance},
-                      {"bulk_kpa", s.bulk_kpa},
-                      {"contact", contact_name(s.contact)},
-                      {"tuning", stages_json(best[ri].run)},
-                      {"held_out", stages_json(transfer[ri])},
-                      {"paper_model",
-                       {{"compliance_s2", best_paper[ri].setting.compliance},
-                        {"tuning", stages_json(best_paper[ri].run)},
-                        {"held_out", stages_json(transfer_paper[ri])}}}});
-  }
-  report["optima"] = optima;
-  std::ofstream(out + ".json") << report.dump(1) << "\n";
+    // each optimum, and the paper's model's, on the held-out kidney (not re-tuned)
+    std::vector<st::PbdRun> transfer, transfer_paper;
+    for (size_t ri = 0; ri < radii_mm.size(); ++ri) {
+      transfer.push_back(run_on(held_out, best[ri].setting));
+      fmt::print("  held out, {}: mean error {:.2f} mm over the stages\n", describe(best[ri].setting),
+                 objective(transfer.back()) * 1e3);
+      transfer_paper.push_back(best_paper[ri].objective_m < INFINITY ? run_on(held_out, best_paper[ri].setting)
+                                                                     : st::PbdRun{});
+    }
 
-  // the summary
-  std::string md = fmt::format(
-      "# Soft-tissue calibration (generated by `pcisim-calibrate`; do not edit)\n\n"
-      "Reference: static neo-Hookean FEM, E = {} kPa, nu = {}, linear tets: {} (tuning kidney {} nodes, "
-      "held-out kidney {} nodes), the same probe and gravity as the PBD, the support sticking (a node that "
-      "reaches it stays where it touched; PBD: sticking friction), the probe frictionless. Protocol: {} warm-up "
-      "steps, the probe moved over {} steps of 1/60 s to each stage. Search on the tuning kidney (the phantom's "
-      "defaults, seed {}): cluster compliance in {{{}}} s^2 x bulk modulus in {{{}}} kPa x contact surface in "
-      "{{{}}}, objective the mean fiducial error over the stages, rest included. The held-out kidney ({} x {} x "
-      "{} mm semi-axes, hilum {}, seed {}) was never run during the search. *Moved* is the reference's mean bead "
-      "displacement from rest: the error of a model that does not deform. *Explained* = 1 - error / moved.\n\n",
-      young_kpa, poisson, mesh_words, tuning.ref.nodes, held_out.ref.nodes, warmup, per_stage, tuning.spec.seed,
-      fmt::join(compliances, ", "), fmt::join(bulk_kpa, ", "), fmt::join(contacts, ", "),
-      held_out.spec.semi_axes_mm.x(), held_out.spec.semi_axes_mm.y(), held_out.spec.semi_axes_mm.z(),
-      held_out.spec.hilum_depth, held_out.spec.seed);
-  auto stage_table = [&](const char* title, const std::vector<const st::PbdRun*>& runs,
-                         const std::vector<std::string>& labels) {
-    md += fmt::format("**{}** (mm; explained in %)\n\n| probe travel (mm) | moved (no deformation) |", title);
-    for (const std::string& l : labels) md += fmt::format(" {} mean / std / max | explained |", l);
-    md += "\n|---|---|";
-    for (size_t i = 0; i < labels.size(); ++i) md += "---|---|";
-    md += "\n";
-    for (size_t k = 0; k < runs.front()->stages.size(); ++k) {
-      const auto& e0 = runs.front()->stages[k];
-      md += fmt::format("| {:.0f} | {:.2f} |", e0.depth_m * 1e3, e0.mean_displacement_m * 1e3);
-      for (const st::PbdRun* r : runs) {
-        const auto& e = r->stages[k];
-        md += fmt::format(" {:.2f} / {:.2f} / {:.2f} | {} |", e.mean_m * 1e3, e.std_m * 1e3, e.max_m * 1e3,
-                          e.mean_displacement_m >= 0.5e-3
-                              ? fmt::format("{:.0f}", 100.0 * (1.0 - e.mean_m / e.mean_displacement_m))
-                              : std::string("-"));
+    // the JSON report
+    nlohmann::json report;
+    auto organ_json = [&](const Organ& o) {
+      return nlohmann::json{
+          {"semi_axes_mm", {o.spec.semi_axes_mm.x(), o.spec.semi_axes_mm.y(), o.spec.semi_axes_mm.z()}},
+          {"hilum_depth", o.spec.hilum_depth},
+          {"seed", o.spec.seed},
+          {"reference_nodes", o.ref.nodes},
+          {"reference_tets", o.ref.tets},
+          {"reference_seconds", o.ref.seconds},
+          {"coarser_mesh_difference_mm_per_stage", o.check_diff_mm}};
+    };
+    report["reference"] = {{"model", "static neo-Hookean FEM, linear tets"},
+                           {"mesh", mesh_words},
+                           {"young_kpa", young_kpa},
+                           {"poisson", poisson},
+                           {"spacing_mm", fem_mm},
+                           {"coarser_mesh_mm", solve ? check_mm : 0.0}};
+    report["organs"] = {{"tuning", organ_json(tuning)}, {"held_out", organ_json(held_out)}};
+    std::vector<double> stage_mm;
+    for (double d : tuning.setup.stage_depths_m) stage_mm.push_back(d * 1e3);
+    report["stages_probe_travel_mm"] = stage_mm;
+    report["protocol"] = {{"warmup_steps", warmup}, {"steps_per_stage", per_stage}, {"step_s", tuning.setup.step_s}};
+    report["objective"] = "mean over the stages (rest included) of the mean fiducial error";
+    nlohmann::json search = nlohmann::json::array();
+    for (const Result& r : all)
+      search.push_back({{"radius_mm", r.setting.radius_mm},
+                        {"compliance_s2", r.setting.compliance},
+                        {"bulk_kpa", r.setting.bulk_kpa},
+                        {"contact", contact_name(r.setting.contact)},
+                        {"objective_mm", r.objective_m * 1e3},
+                        {"step_ms_p50", pcisim::realtime::percentile(r.run.step_ms, 0.5)},
+                        {"step_ms_p99", pcisim::realtime::percentile(r.run.step_ms, 0.99)},
+                        {"stages", stages_json(r.run)}});
+    report["search"] = search;
+    nlohmann::json optima = nlohmann::json::array();
+    for (size_t ri = 0; ri < radii_mm.size(); ++ri) {
+      const Setting& s = best[ri].setting;
+      optima.push_back({{"radius_mm", s.radius_mm},
+                        {"compliance_s2", s.compliance},
+                        {"bulk_kpa", s.bulk_kpa},
+                        {"contact", contact_name(s.contact)},
+                        {"tuning", stages_json(best[ri].run)},
+                        {"held_out", stages_json(transfer[ri])},
+                        {"paper_model",
+                         {{"compliance_s2", best_paper[ri].setting.compliance},
+                          {"tuning", stages_json(best_paper[ri].run)},
+                          {"held_out", stages_json(transfer_paper[ri])}}}});
+    }
+    report["optima"] = optima;
+    std::ofstream(out + ".json") << report.dump(1) << "\n";
+
+    // the summary
+    std::string md = fmt::format(
+        "# Soft-tissue calibration (generated by `pcisim-calibrate`; do not edit)\n\n"
+        "Reference: static neo-Hookean FEM, E = {} kPa, nu = {}, linear tets: {} (tuning kidney {} nodes, "
+        "held-out kidney {} nodes), the same probe and gravity as the PBD, the support sticking (a node that "
+        "reaches it stays where it touched; PBD: sticking friction), the probe frictionless. Protocol: {} warm-up "
+        "steps, the probe moved over {} steps of 1/60 s to each stage. Search on the tuning kidney (the phantom's "
+        "defaults, seed {}): cluster compliance in {{{}}} s^2 x bulk modulus in {{{}}} kPa x contact surface in "
+        "{{{}}}, objective the mean fiducial error over the stages, rest included. The held-out kidney ({} x {} x "
+        "{} mm semi-axes, hilum {}, seed {}) was never run during the search. *Moved* is the reference's mean bead "
+        "displacement from rest: the error of a model that does not deform. *Explained* = 1 - error / moved.\n\n",
+        young_kpa, poisson, mesh_words, tuning.ref.nodes, held_out.ref.nodes, warmup, per_stage, tuning.spec.seed,
+        fmt::join(compliances, ", "), fmt::join(bulk_kpa, ", "), fmt::join(contacts, ", "),
+        held_out.spec.semi_axes_mm.x(), held_out.spec.semi_axes_mm.y(), held_out.spec.semi_axes_mm.z(),
+        held_out.spec.hilum_depth, held_out.spec.seed);
+    auto stage_table = [&](const char* title, const std::vector<const st::PbdRun*>& runs,
+                           const std::vector<std::string>& labels) {
+      md += fmt::format("**{}** (mm; explained in %)\n\n| probe travel (mm) | moved (no deformation) |", title);
+      for (const std::string& l : labels) md += fmt::format(" {} mean / std / max | explained |", l);
+      md += "\n|---|---|";
+      for (size_t i = 0; i < labels.size(); ++i) md += "---|---|";
+      md += "\n";
+      for (size_t k = 0; k < runs.front()->stages.size(); ++k) {
+        const auto& e0 = runs.front()->stages[k];
+        md += fmt::format("| {:.0f} | {:.2f} |", e0.depth_m * 1e3, e0.mean_displacement_m * 1e3);
+        for (const st::PbdRun* r : runs) {
+          const auto& e = r->stages[k];
+          md += fmt::format(" {:.2f} / {:.2f} / {:.2f} | {} |", e.mean_m * 1e3, e.std_m * 1e3, e.max_m * 1e3,
+                            e.mean_displacement_m >= 0.5e-3
+                                ? fmt::format("{:.0f}", 100.0 * (1.0 - e.mean_m / e.mean_displacement_m))
+                                : std::string("-"));
+        }
+        md += "\n";
       }
       md += "\n";
+    };
+    std::vector<std::string> labels;
+    std::vector<const st::PbdRun*> tuned, moved, paper, paper_moved;
+    for (size_t ri = 0; ri < radii_mm.size(); ++ri) {
+      labels.push_back(describe(best[ri].setting));
+      tuned.push_back(&best[ri].run);
+      moved.push_back(&transfer[ri]);
     }
-    md += "\n";
-  };
-  std::vector<std::string> labels;
-  std::vector<const st::PbdRun*> tuned, moved, paper, paper_moved;
-  for (size_t ri = 0; ri < radii_mm.size(); ++ri) {
-    labels.push_back(describe(best[ri].setting));
-    tuned.push_back(&best[ri].run);
-    moved.push_back(&transfer[ri]);
-  }
-  stage_table("Tuning kidney, each radius at its optimum", tuned, labels);
-  stage_table("Held-out kidney, the same settings (not re-tuned)", moved, labels);
-  labels.clear();
-  for (size_t ri = 0; ri < radii_mm.size(); ++ri)
-    if (best_paper[ri].objective_m < INFINITY) {
-      labels.push_back(describe(best_paper[ri].setting));
-      paper.push_back(&best_paper[ri].run);
-      paper_moved.push_back(&transfer_paper[ri]);
+    stage_table("Tuning kidney, each radius at its optimum", tuned, labels);
+    stage_table("Held-out kidney, the same settings (not re-tuned)", moved, labels);
+    labels.clear();
+    for (size_t ri = 0; ri < radii_mm.size(); ++ri)
+      if (best_paper[ri].objective_m < INFINITY) {
+        labels.push_back(describe(best_paper[ri].setting));
+        paper.push_back(&best_paper[ri].run);
+        paper_moved.push_back(&transfer_paper[ri]);
+      }
+    if (!paper.empty()) {
+      stage_table("The paper's model (shape matching alone, particle spheres) at its optimum, tuning kidney", paper,
+                  labels);
+      stage_table("The paper's model, held-out kidney", paper_moved, labels);
     }
-  if (!paper.empty()) {
-    stage_table("The paper's model (shape matching alone, particle spheres) at its optimum, tuning kidney", paper,
-                labels);
-    stage_table("The paper's model, held-out kidney", paper_moved, labels);
-  }
-  md += "**Objective (mm) over the search, tuning kidney**\n\n| radius (mm) | contact | bulk (kPa) |";
-  for (double c : compliances) md += fmt::format(" c {:.0e} |", c);
-  md += "\n|---|---|---|";
-  for (size_t i = 0; i < compliances.size(); ++i) md += "---|";
-  md += "\n";
-  for (size_t i = 0; i < all.size(); i += compliances.size()) {
-    const Setting& s = all[i].setting;
-    md += fmt::format("| {} | {} | {} |", s.radius_mm, contact_name(s.contact), s.bulk_kpa);
-    for (size_t j = 0; j < compliances.size() && i + j < all.size(); ++j)
-      md += fmt::format(" {:.2f} |", all[i + j].objective_m * 1e3);
+    md += "**Objective (mm) over the search, tuning kidney**\n\n| radius (mm) | contact | bulk (kPa) |";
+    for (double c : compliances) md += fmt::format(" c {:.0e} |", c);
+    md += "\n|---|---|---|";
+    for (size_t i = 0; i < compliances.size(); ++i) md += "---|";
     md += "\n";
-  }
-  md +=
-      "\n**PBD step time at each optimum (ms, this machine, 3 substeps x 9 Gauss-Seidel iterations)**\n\n"
-      "| setting | p50 | p99 |\n|---|---|---|\n";
-  for (const Result& b : best)
+    for (size_t i = 0; i < all.size(); i += compliances.size()) {
+      const Setting& s = all[i].setting;
+      md += fmt::format("| {} | {} | {} |", s.radius_mm, contact_name(s.contact), s.bulk_kpa);
+      for (size_t j = 0; j < compliances.size() && i + j < all.size(); ++j)
+        md += fmt::format(" {:.2f} |", all[i + j].objective_m * 1e3);
+      md += "\n";
+    }
     md +=
-        fmt::format("| {} | {:.1f} | {:.1f} |\n", describe(b.setting), pcisim::realtime::percentile(b.run.step_ms, 0.5),
-                    pcisim::realtime::percentile(b.run.step_ms, 0.99));
-  md += fmt::format("\n![error against stage](soft-tissue-calibration.png)\n");
-  std::ofstream(out + ".md") << md;
-  fmt::print("wrote {}.json and {}.md\n", out, out);
+        "\n**PBD step time at each optimum (ms, this machine, 3 substeps x 9 Gauss-Seidel iterations)**\n\n"
+        "| setting | p50 | p99 |\n|---|---|---|\n";
+    for (const Result& b : best)
+      md += fmt::format("| {} | {:.1f} | {:.1f} |\n", describe(b.setting),
+                        pcisim::realtime::percentile(b.run.step_ms, 0.5),
+                        pcisim::realtime::percentile(b.run.step_ms, 0.99));
+    md += fmt::format("\n![error against stage](soft-tissue-calibration.png)\n");
+    std::ofstream(out + ".md") << md;
+    fmt::print("wrote {}.json and {}.md\n", out, out);
+  } catch (const std::exception& e) {  // a reference that is not this setup's, a file that cannot be written
+    fmt::print(stderr, "pcisim-calibrate: {}\n", e.what());
+    return 2;
+  }
   return 0;
 }

@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <sstream>
 #include <stdexcept>
 
@@ -198,99 +197,139 @@ PbdRun run_pbd_protocol(const CalibrationSetup& s, const SoftTissueSpec& spec_in
 }
 
 namespace {
-constexpr const char* kReferenceMagic = "pcisim-fem-reference 1";
+constexpr const char* kReferenceMagic = "pcisim-fem-reference 2";
 
-void write_points(std::ostream& out, const Eigen::Matrix3Xd& p) {
-  char line[96];
-  for (Eigen::Index i = 0; i < p.cols(); ++i) {
-    std::snprintf(line, sizeof line, "%.17g %.17g %.17g\n", p(0, i), p(1, i), p(2, i));
-    out << line;
+void put_numbers(std::ostream& out, const char* key, const std::vector<double>& values) {
+  char v[32];
+  out << key;
+  for (double x : values) {
+    std::snprintf(v, sizeof v, " %.17g", x);
+    out << v;
   }
+  out << "\n";
+}
+
+void put_points(std::ostream& out, const Eigen::Matrix3Xd& p) {
+  for (Eigen::Index i = 0; i < p.cols(); ++i) put_numbers(out, "", {p(0, i), p(1, i), p(2, i)});
+}
+
+// what the probe, the support and the material are, as the numbers the text keeps
+std::vector<double> probe_numbers(const CalibrationSetup& s) {
+  const Eigen::Quaterniond q = s.probe.start_rotation.normalized();
+  return {s.probe.face_width_m,
+          s.probe.face_thickness_m,
+          s.probe.height_m,
+          s.probe.start_position_m.x(),
+          s.probe.start_position_m.y(),
+          s.probe.start_position_m.z(),
+          q.w(),
+          q.x(),
+          q.y(),
+          q.z()};
+}
+std::vector<double> support_numbers(const CalibrationSetup& s) {
+  return {s.organ.support_normal.x(), s.organ.support_normal.y(), s.organ.support_normal.z(), s.organ.support_offset_m};
 }
 }  // namespace
 
-void write_fem_reference(const std::string& path, const CalibrationSetup& s, const FemReference& ref,
-                         const std::string& mesh_description) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error("fem reference: cannot write " + path);
+std::string fem_reference_text(const CalibrationSetup& s, const FemReference& ref,
+                               const std::string& mesh_description) {
   const auto n = static_cast<Eigen::Index>(s.organ.fiducials_m.size());
-  Eigen::Matrix3Xd rest(3, n);
-  for (Eigen::Index i = 0; i < n; ++i) rest.col(i) = s.organ.fiducials_m[static_cast<size_t>(i)];
-  out << kReferenceMagic << "\n";
-  out << "mesh " << mesh_description << "\n";
-  char line[160];
-  std::snprintf(line, sizeof line, "material %.17g %.17g %.17g\n", s.young_pa, s.poisson, s.density_kg_per_m3);
-  out << line;
-  std::snprintf(line, sizeof line, "gravity %.17g %.17g %.17g\n", s.gravity_m_per_s2.x(), s.gravity_m_per_s2.y(),
-                s.gravity_m_per_s2.z());
-  out << line;
-  std::snprintf(line, sizeof line, "solve %d %d %.3f\n", ref.nodes, ref.tets, ref.seconds);
-  out << line << "stages " << s.stage_depths_m.size();
-  for (double d : s.stage_depths_m) {
-    std::snprintf(line, sizeof line, " %.17g", d);
-    out << line;
-  }
+  if (ref.fiducials_m.size() != s.stage_depths_m.size() + 1 || ref.solves.size() != ref.fiducials_m.size())
+    throw std::invalid_argument("fem reference: not one result per stage (and rest)");
+  for (const Eigen::Matrix3Xd& f : ref.fiducials_m)
+    if (f.cols() != n) throw std::invalid_argument("fem reference: a stage without one position per fiducial");
+  if (mesh_description.find('\n') != std::string::npos)
+    throw std::invalid_argument("fem reference: the mesh description must be one line");
+  std::ostringstream out;
+  out << kReferenceMagic << "\nmesh " << mesh_description << "\n";
+  put_numbers(out, "material", {s.young_pa, s.poisson, s.density_kg_per_m3});
+  put_numbers(out, "gravity", {s.gravity_m_per_s2.x(), s.gravity_m_per_s2.y(), s.gravity_m_per_s2.z()});
+  put_numbers(out, "probe", probe_numbers(s));
+  put_numbers(out, "support", support_numbers(s));
+  out << "solve " << ref.nodes << " " << ref.tets << " " << ref.seconds << "\n";
+  out << "stages " << s.stage_depths_m.size();
+  put_numbers(out, "", s.stage_depths_m);
+  out << "converged";
+  for (const auto& r : ref.solves) out << " " << (r.converged ? 1 : 0);
   out << "\nfiducials " << n << "\nunloaded\n";
-  write_points(out, rest);
+  Eigen::Matrix3Xd unloaded(3, n);
+  for (Eigen::Index i = 0; i < n; ++i) unloaded.col(i) = s.organ.fiducials_m[static_cast<size_t>(i)];
+  put_points(out, unloaded);
   for (size_t k = 0; k < ref.fiducials_m.size(); ++k) {
     out << "stage " << k << "\n";
-    write_points(out, ref.fiducials_m[k]);
+    put_points(out, ref.fiducials_m[k]);
   }
-  if (!out) throw std::runtime_error("fem reference: cannot write " + path);
+  return out.str();
 }
 
-FemReference read_fem_reference(const std::string& path, const CalibrationSetup& s, std::string* mesh_description) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("fem reference: cannot read " + path);
-  auto fail = [&](const std::string& what) { return std::runtime_error("fem reference " + path + ": " + what); };
+FemReference parse_fem_reference(const std::string& text, const CalibrationSetup& s, const std::string& source,
+                                 std::string* mesh_description) {
+  std::istringstream in(text);
+  auto fail = [&](const std::string& what) { return std::runtime_error("fem reference " + source + ": " + what); };
+  auto differs = [&](const std::string& what) {
+    return std::invalid_argument("fem reference " + source + ": " + what + " is not the setup's");
+  };
   std::string line, word;
-  if (!std::getline(in, line) || line != kReferenceMagic) throw fail("not a pcisim FEM reference (first line)");
+  if (!std::getline(in, line) || line != kReferenceMagic)
+    throw fail("not a pcisim FEM reference of this version (first line: " + line.substr(0, 40) + ")");
   if (!std::getline(in, line) || line.rfind("mesh ", 0) != 0) throw fail("no mesh line");
   if (mesh_description) *mesh_description = line.substr(5);
-  double young = 0, poisson = 0, density = 0;
-  Eigen::Vector3d g;
+  auto numbers = [&](const char* key, size_t count) {
+    std::vector<double> v(count);
+    if (!(in >> word) || word != key) throw fail(std::string("expected '") + key + "'");
+    for (double& x : v)
+      if (!(in >> x) || !std::isfinite(x)) throw fail(std::string("bad '") + key + "' line");
+    return v;
+  };
+  auto same = [](const std::vector<double>& a, const std::vector<double>& b) {
+    if (a.size() != b.size()) return false;
+    for (size_t i = 0; i < a.size(); ++i)
+      if (std::abs(a[i] - b[i]) > 1e-12 * std::max(1.0, std::abs(b[i]))) return false;
+    return true;
+  };
+  if (!same(numbers("material", 3), {s.young_pa, s.poisson, s.density_kg_per_m3}))
+    throw differs("its material (E, nu, density)");
+  if (!same(numbers("gravity", 3), {s.gravity_m_per_s2.x(), s.gravity_m_per_s2.y(), s.gravity_m_per_s2.z()}))
+    throw differs("its gravity");
+  if (!same(numbers("probe", 10), probe_numbers(s))) throw differs("its probe (size, start pose)");
+  if (!same(numbers("support", 4), support_numbers(s))) throw differs("its support plane");
   FemReference ref;
+  if (!(in >> word >> ref.nodes >> ref.tets >> ref.seconds) || word != "solve") throw fail("bad 'solve' line");
   size_t stages = 0;
-  Eigen::Index n = 0;
-  if (!(in >> word >> young >> poisson >> density) || word != "material") throw fail("bad material line");
-  if (!(in >> word >> g.x() >> g.y() >> g.z()) || word != "gravity") throw fail("bad gravity line");
-  if (!(in >> word >> ref.nodes >> ref.tets >> ref.seconds) || word != "solve") throw fail("bad solve line");
-  if (!(in >> word >> stages) || word != "stages" || stages > 1000) throw fail("bad stages line");
+  if (!(in >> word >> stages) || word != "stages" || stages > 1000) throw fail("bad 'stages' line");
   std::vector<double> depths(stages);
   for (double& d : depths)
     if (!(in >> d)) throw fail("bad stage depth");
-  if (!(in >> word >> n) || word != "fiducials" || n < 0 || n > 1000000) throw fail("bad fiducials line");
-  auto read_points = [&](const char* label) {
-    if (!(in >> word) || word != label) throw fail(std::string("expected '") + label + "'");
-    if (std::string(label) == "stage" && !(in >> word)) throw fail("bad stage header");
+  if (!same(depths, s.stage_depths_m)) throw differs("its stages (" + std::to_string(stages) + ")");
+  if (!(in >> word) || word != "converged") throw fail("expected 'converged'");
+  ref.solves.assign(stages + 1, fem::FemSolveReport{});
+  for (auto& r : ref.solves) {
+    int c = 0;
+    if (!(in >> c) || (c != 0 && c != 1)) throw fail("bad 'converged' line");
+    r.converged = c == 1;
+  }
+  Eigen::Index n = 0;
+  if (!(in >> word >> n) || word != "fiducials" || n != static_cast<Eigen::Index>(s.organ.fiducials_m.size()))
+    throw differs("its fiducial count");
+  auto points = [&]() {
     Eigen::Matrix3Xd p(3, n);
     for (Eigen::Index i = 0; i < n; ++i)
       if (!(in >> p(0, i) >> p(1, i) >> p(2, i)) || !p.col(i).allFinite()) throw fail("bad fiducial position");
     return p;
   };
-  const Eigen::Matrix3Xd unloaded = read_points("unloaded");
-  for (size_t k = 0; k <= stages; ++k) ref.fiducials_m.push_back(read_points("stage"));
-  ref.solves.assign(stages + 1, fem::FemSolveReport{true, 0, 0.0});
-
-  // the file must be this setup's: its material, gravity, stages and organ
-  auto differs = [](double a, double b) { return std::abs(a - b) > 1e-12 * std::max(1.0, std::abs(b)); };
-  if (differs(young, s.young_pa) || differs(poisson, s.poisson) || differs(density, s.density_kg_per_m3))
-    throw std::invalid_argument("fem reference " + path + ": its material (E, nu, density) is not the setup's");
-  if ((g - s.gravity_m_per_s2).norm() > 1e-12) throw std::invalid_argument("fem reference " + path + ": other gravity");
-  if (depths.size() != s.stage_depths_m.size())
-    throw std::invalid_argument("fem reference " + path + ": " + std::to_string(depths.size()) +
-                                " stages, the setup has " + std::to_string(s.stage_depths_m.size()));
-  for (size_t k = 0; k < depths.size(); ++k)
-    if (differs(depths[k], s.stage_depths_m[k]))
-      throw std::invalid_argument("fem reference " + path + ": stage " + std::to_string(k + 1) +
-                                  " is at another depth");
-  if (n != static_cast<Eigen::Index>(s.organ.fiducials_m.size()))
-    throw std::invalid_argument("fem reference " + path + ": " + std::to_string(n) + " fiducials, the organ has " +
-                                std::to_string(s.organ.fiducials_m.size()));
+  if (!(in >> word) || word != "unloaded") throw fail("expected 'unloaded'");
+  const Eigen::Matrix3Xd unloaded = points();
   for (Eigen::Index i = 0; i < n; ++i)
     if ((unloaded.col(i) - s.organ.fiducials_m[static_cast<size_t>(i)]).norm() > 1e-9)
-      throw std::invalid_argument("fem reference " + path + ": fiducial " + std::to_string(i) +
-                                  " is not where the organ has it (another organ or seed)");
+      throw differs("fiducial " + std::to_string(i) + " (another organ or seed?)");
+  for (size_t k = 0; k <= stages; ++k) {
+    size_t number = 0;
+    if (!(in >> word >> number) || word != "stage" || number != k)
+      throw fail("expected 'stage " + std::to_string(k) + "'");
+    ref.fiducials_m.push_back(points());
+  }
+  if (in >> word) throw fail("text after the last stage");
   return ref;
 }
 

@@ -57,17 +57,20 @@ FemReference solve_fem_reference(const CalibrationSetup& setup, fem::FemMesh mes
 FemReference solve_fem_reference(const CalibrationSetup& setup);
 fem::FemMesh voxel_reference_mesh(const CalibrationSetup& setup);
 
-// A reference kept in a file (pcisim-calibrate --save-reference), so that a test or a search can
-// use a converged reference without solving it again (a body-fitted 5 mm reference takes minutes).
-// Plain text: a header (the material, the mesh in words, the stages), the organ's fiducials at rest
-// without gravity (to check that the file belongs to the organ it is used with), then each
-// stage's fiducials. Throws std::runtime_error naming the path on a write or read error, and
-// std::invalid_argument naming what differs when the file's stages, fiducials or material are
-// not the setup's.
-void write_fem_reference(const std::string& path, const CalibrationSetup& setup, const FemReference& reference,
-                         const std::string& mesh_description);
-FemReference read_fem_reference(const std::string& path, const CalibrationSetup& setup,
-                                std::string* mesh_description = nullptr);
+// A reference as text, so that a test or a search can use a converged reference without solving
+// it again (a body-fitted 5 mm reference takes minutes; pcisim-calibrate --solve-references keeps
+// them in docs/benchmarks/soft-tissue-reference-*.txt; the callers read and write the files).
+// Plain text: a header (the mesh in words, the material, gravity, the probe, the support, the
+// stages, whether each solve converged), the organ's fiducials unloaded (to check that the text
+// belongs to the organ it is used with), then each stage's fiducials.
+// fem_reference_text throws std::invalid_argument when the reference does not have one result of
+// the organ's fiducials per stage; parse_fem_reference throws std::runtime_error naming `source`
+// on malformed text, and std::invalid_argument naming what differs when the text's material,
+// gravity, probe, support, stages or fiducials are not the setup's.
+std::string fem_reference_text(const CalibrationSetup& setup, const FemReference& reference,
+                               const std::string& mesh_description);
+FemReference parse_fem_reference(const std::string& text, const CalibrationSetup& setup, const std::string& source,
+                                 std::string* mesh_description = nullptr);
 
 struct StageError {
   double depth_m = 0.0;  // the probe's travel at this stage
@@ -77,7 +80,7 @@ struct StageError {
 
 struct PbdRun {
   std::vector<StageError> stages;   // [0]: rest
-  double mean_over_stages_m = 0.0;  // the search's objective: the mean over the pressed stages
+  double mean_over_stages_m = 0.0;  // the mean over the pressed stages (pcisim-calibrate's objective adds rest)
   std::vector<double> step_ms;      // wall time of each step after the warm-up
 };
 

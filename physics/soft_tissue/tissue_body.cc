@@ -40,8 +40,13 @@ double particle_mass(const TissueModel& model, const TissueParams& p) {
 Eigen::VectorXd contact_radii(const TissueModel& model, const TissueParams& p) {
   const double sphere_m = p.contact_radius_factor * model.spec.particle_radius_m;
   Eigen::VectorXd r = Eigen::VectorXd::Constant(model.rest_m.cols(), sphere_m);
-  if (p.contact_surface == ContactSurface::kSkin && model.skin_depth_m.size() == r.size())
-    r = r.cwiseMin(model.skin_depth_m);
+  // kSkin: each sphere reaches the skin exactly (the depth, at most the particle radius)
+  if (p.contact_surface == ContactSurface::kSkin) {
+    if (model.skin_depth_m.size() != r.size())
+      throw std::invalid_argument(
+          "soft_tissue: contact_surface skin needs the model's skin depths (build_tissue_model)");
+    r = model.skin_depth_m;
+  }
   return r;
 }
 

@@ -62,6 +62,8 @@ void TissueContacts::begin_substep(pbd::Particles& particles, double h_s, double
   count_ = 0;
   probe_contacts_ = support_contacts_ = 0;
   const bool have_probe = !probe_.faces.empty();
+  // a body of another size than the radii were made for: no contacts rather than a read past them
+  if (particles.size() != radius_m_.size()) return;
   for (int i = 0; i < particles.size(); ++i) {
     if (!(particles.inv_mass_per_kg[i] > 0.0)) continue;  // pinned, driven or quarantined
     const Vector3d x = particles.position_m.col(i), xp = particles.predicted_m.col(i);

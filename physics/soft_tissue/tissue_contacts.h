@@ -14,7 +14,8 @@ namespace pcisim::physics::soft_tissue {
 
 class TissueContacts final : public pbd::ContactProjector {
  public:
-  // contact_radius_m: each particle's contact distance; support: its top plane (normal out of the
+  // contact_radius_m: each particle's contact distance (begin_substep needs one per particle);
+  // support: its top plane (normal out of the
   // support); probe: normalised, may have no faces
   TissueContacts(Eigen::VectorXd contact_radius_m, const TissueParams& params, const ContactPlane& support,
                  const ConvexProbe& probe);

@@ -218,8 +218,10 @@ Eigen::VectorXd skin_depths(const anatomy::TriangleMesh& mesh, const Matrix3Xd& 
   if (x_m.cols() == 0) return depth;
   const Vector3d lo = x_m.rowwise().minCoeff().array() - max_m;
   const Eigen::Vector3i n = ((x_m.rowwise().maxCoeff() - lo).array() / max_m).floor().cast<int>() + 2;
+  // clamped before the cast: a far (or non-finite) point lands in an edge cell, never past it
   auto cell = [&](const Vector3d& p) {
-    return ((p - lo) / max_m).array().floor().cast<int>().max(0).min(n.array() - 1).matrix().eval();
+    const Eigen::Array3d c = ((p - lo) / max_m).array().floor();
+    return c.max(0.0).min((n.array() - 1).cast<double>()).cast<int>().matrix().eval();
   };
   std::vector<std::vector<int>> bin(static_cast<size_t>(n.x()) * n.y() * n.z());
   auto index = [&](const Eigen::Vector3i& c) { return static_cast<size_t>(c.x() + n.x() * (c.y() + n.y() * c.z())); };

@@ -15,8 +15,9 @@ enum class ContactSurface {
   // particle collisions. A particle sampled just under the skin pokes out of the organ by up to
   // half a radius, so the probe meets the tissue that much before it reaches the skin
   kSpheres,
-  // each sphere is cut to the particle's rest depth under the organ's surface: the contact is
-  // the organ's own skin (at rest), as a mesh-based reference (the calibration's FEM) has it
+  // each particle's sphere reaches the organ's surface at rest: its radius is the particle's
+  // rest depth under the skin (at most the particle radius; contact_radius_factor is not used),
+  // so the contact is the organ's own skin, as a mesh-based reference (the calibration's FEM) has it
   kSkin,
 };
 

@@ -1,10 +1,17 @@
-// The calibration protocol on a coarse kidney: the FEM reference converges at every stage and
-// its fiducials go deeper as the probe does; the PBD model runs the same stages, and at the
-// calibrated stiffness its error over the stages is lower than at a much stiffer or a much softer
-// one (the objective falls toward the calibrated stiffness from both sides).
+// The calibration protocol. The FEM reference converges at every stage on a coarse kidney and its
+// beads go deeper as the probe does; a reference kept as text reads back exactly and is refused
+// for another organ, material, probe, support or stages; and against the converged body-fitted reference
+// pcisim-calibrate solved (docs/benchmarks/soft-tissue-reference-*.txt), the calibrated PBD model beats a much stiffer
+// and a much softer one, and beats standing still (the reference's own bead motion) at the last stage, on the kidney it
+// was tuned on and on the held-out one.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
 
 #include "anatomy/organ/kidney_phantom.h"
 #include "physics/soft_tissue/calibration.h"
@@ -12,12 +19,9 @@
 namespace pcisim::physics::soft_tissue {
 namespace {
 
-CalibrationSetup coarse_setup() {
-  anatomy::KidneySpec k;
-  k.ct_spacing_mm = 4.0;  // the CT is not used
-  CalibrationSetup s = kidney_calibration_setup(anatomy::kidney_organ(anatomy::make_kidney_phantom(k)));
-  s.fem_spacing_m = 6e-3;  // seconds, not minutes (pcisim-calibrate runs the fine reference; on 8 mm
-                           // voxels the stair-stepped skin lies below the first stage)
+CalibrationSetup setup_for(CalibrationOrgan which) {
+  CalibrationSetup s =
+      kidney_calibration_setup(anatomy::kidney_organ(anatomy::make_kidney_phantom(calibration_kidney(which))));
   // fewer steps than the paper's 120 + 90: the press is quasi-static (measured at 5 mm particles,
   // compliance 3e-5: 1.94, 1.94 and 1.96 mm mean error over the stages with 10 + 5, 20 + 10 and
   // 10 + 10 steps; at 7 mm 2.43 with 20 + 10 and 120 + 90)
@@ -26,26 +30,25 @@ CalibrationSetup coarse_setup() {
   return s;
 }
 
-const FemReference& reference() {
-  static const FemReference ref = solve_fem_reference(coarse_setup());
+std::string stored_reference_path(CalibrationOrgan which) {
+  return std::string(PCISIM_SOURCE_DIR) + "/docs/benchmarks/soft-tissue-reference-" +
+         (which == CalibrationOrgan::kTuning ? "tuning" : "held-out") + ".txt";
+}
+
+// the coarse voxel reference: seconds, not minutes, and stair-stepped (docs/soft-tissue.md: it is
+// not converged, so only the pipeline is checked on it, never the PBD)
+const FemReference& coarse_reference() {
+  static const FemReference ref = [] {
+    CalibrationSetup s = setup_for(CalibrationOrgan::kTuning);
+    s.fem_spacing_m = 6e-3;
+    return solve_fem_reference(s);
+  }();
   return ref;
 }
 
-// the PBD model at 5 mm particles, the coarsest radius pcisim-calibrate searched
-PbdRun run_at(double compliance_s2) {
-  SoftTissueSpec spec;
-  spec.model.particle_radius_m = 5e-3;
-  spec.params.cluster_compliance_s2 = compliance_s2;
-  return run_pbd_protocol(coarse_setup(), spec, reference());
-}
-// its calibrated compliance (docs/benchmarks/soft-tissue-calibration.md: 3e-5 s^2 at 5 mm, 1.48 mm
-// over the stages against the 5 mm TetGen reference, 1.88 mm at 1e-6, 9.09 mm at 1e-3)
-constexpr double kCalibratedComplianceS2 = 3e-5;
-
-TEST(Calibration, TheReferenceConvergesAndThePbdRunsTheSameStages) {
-  const CalibrationSetup s = coarse_setup();
-  const FemReference& ref = reference();
-  ASSERT_EQ(ref.fiducials_m.size(), s.stage_depths_m.size() + 1);
+TEST(Calibration, TheReferenceConvergesAndItsBeadsGoDeeper) {
+  const FemReference& ref = coarse_reference();
+  ASSERT_EQ(ref.fiducials_m.size(), setup_for(CalibrationOrgan::kTuning).stage_depths_m.size() + 1);
   for (const auto& r : ref.solves) EXPECT_TRUE(r.converged) << "residual " << r.residual_n;
   // deeper stages move the beads further (mean displacement from rest, strictly increasing)
   double last = 0.0;
@@ -55,42 +58,114 @@ TEST(Calibration, TheReferenceConvergesAndThePbdRunsTheSameStages) {
     last = d;
   }
   EXPECT_GT(last, 1e-3) << "a 12 mm press moves the beads by a millimetre or more on average";
+}
 
-  // calibrated, 30 x stiffer, 33 x softer
-  const PbdRun cal = run_at(kCalibratedComplianceS2), stiff = run_at(1e-6), soft = run_at(1e-3);
-  for (const PbdRun* r : {&cal, &stiff, &soft}) {
-    ASSERT_EQ(r->stages.size(), ref.fiducials_m.size());
-    for (const StageError& e : r->stages) {
-      EXPECT_TRUE(std::isfinite(e.mean_m) && std::isfinite(e.max_m));
-      EXPECT_GE(e.max_m, e.mean_m);
-      EXPECT_GE(e.mean_m, 0.0);
-    }
-    EXPECT_EQ(r->step_ms.size(), s.stage_depths_m.size() * static_cast<size_t>(s.steps_per_stage));
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+FemReference stored_reference(CalibrationOrgan which) {
+  return parse_fem_reference(read_text(stored_reference_path(which)), setup_for(which), stored_reference_path(which));
+}
+
+TEST(Calibration, AReferenceAsTextReadsBackAndIsRefusedForAnotherSetup) {
+  const CalibrationSetup tuning = setup_for(CalibrationOrgan::kTuning);
+  const std::string text = fem_reference_text(tuning, coarse_reference(), "voxel tets of 6 mm");
+  std::string words;
+  const FemReference back = parse_fem_reference(text, tuning, "test", &words);
+  EXPECT_EQ(words, "voxel tets of 6 mm");
+  ASSERT_EQ(back.fiducials_m.size(), coarse_reference().fiducials_m.size());
+  for (size_t k = 0; k < back.fiducials_m.size(); ++k) {
+    EXPECT_EQ((back.fiducials_m[k] - coarse_reference().fiducials_m[k]).cwiseAbs().maxCoeff(), 0.0) << "stage " << k;
+    EXPECT_EQ(back.solves[k].converged, coarse_reference().solves[k].converged);
   }
-  const StageError& end = cal.stages.back();
-  std::printf(
-      "reference %d nodes, %.1f s; mean error over stages at 5 mm: compliance 3e-5 %.2f mm, 1e-6 %.2f mm, 1e-3 %.2f "
-      "mm; at %.0f mm travel %.2f mm off, the reference's beads moved %.2f mm\n",
-      ref.nodes, ref.seconds, cal.mean_over_stages_m * 1e3, stiff.mean_over_stages_m * 1e3,
-      soft.mean_over_stages_m * 1e3, end.depth_m * 1e3, end.mean_m * 1e3, end.mean_displacement_m * 1e3);
-  // measured 1.94 mm calibrated against 2.15 mm stiffer (the stiff side is flat: the documented
-  // 1.48 against 1.88) and 9.75 mm softer: lower than both, by at least a tenth of a millimetre
-  EXPECT_LT(cal.mean_over_stages_m, stiff.mean_over_stages_m - 0.1e-3);
-  EXPECT_LT(cal.mean_over_stages_m, 0.5 * soft.mean_over_stages_m);
+  // another organ, material, probe, support or stages
+  EXPECT_THROW(parse_fem_reference(text, setup_for(CalibrationOrgan::kHeldOut), "test"), std::invalid_argument);
+  auto refused = [&](auto change) {
+    CalibrationSetup other = tuning;
+    change(other);
+    try {
+      parse_fem_reference(text, other, "test");
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(refused([](CalibrationSetup& s) { s.young_pa *= 2.0; }).find("material"), std::string::npos);
+  EXPECT_NE(refused([](CalibrationSetup& s) { s.probe.face_width_m = 0.05; }).find("probe"), std::string::npos);
+  EXPECT_NE(refused([](CalibrationSetup& s) { s.organ.support_offset_m += 1e-3; }).find("support"), std::string::npos);
+  EXPECT_NE(refused([](CalibrationSetup& s) { s.stage_depths_m.pop_back(); }).find("stages"), std::string::npos);
+  // malformed: cut short, another version, text after the last stage
+  EXPECT_THROW(parse_fem_reference(text.substr(0, text.size() / 2), tuning, "test"), std::runtime_error);
+  EXPECT_THROW(parse_fem_reference("pcisim-fem-reference 1\n" + text.substr(text.find('\n') + 1), tuning, "test"),
+               std::runtime_error);
+  EXPECT_THROW(parse_fem_reference(text + "stage 5\n", tuning, "test"), std::runtime_error);
+  // a reference without one result per stage is not written
+  FemReference short_ref = coarse_reference();
+  short_ref.fiducials_m.pop_back();
+  short_ref.solves.pop_back();
+  EXPECT_THROW(fem_reference_text(tuning, short_ref, "x"), std::invalid_argument);
+  // the committed references belong to their organs
+  EXPECT_NO_THROW(stored_reference(CalibrationOrgan::kTuning));
+  EXPECT_NO_THROW(stored_reference(CalibrationOrgan::kHeldOut));
+}
+
+// pcisim-calibrate's optimum at 3.3 mm particles, the kidney scene's
+// (docs/benchmarks/soft-tissue-calibration.md)
+constexpr double kRadiusM = 3.3e-3;
+constexpr double kCalibratedComplianceS2 = 2e-5;
+constexpr double kCalibratedBulkPa = 100e3;
+
+PbdRun run_at(CalibrationOrgan which, double compliance_s2) {
+  static const FemReference tuning_ref = stored_reference(CalibrationOrgan::kTuning);
+  static const FemReference held_out_ref = stored_reference(CalibrationOrgan::kHeldOut);
+  SoftTissueSpec spec;
+  spec.model.particle_radius_m = kRadiusM;
+  spec.params.cluster_compliance_s2 = compliance_s2;
+  spec.params.bulk_modulus_pa = kCalibratedBulkPa;
+  return run_pbd_protocol(setup_for(which), spec, which == CalibrationOrgan::kTuning ? tuning_ref : held_out_ref);
+}
+
+double mean_over_stages(const PbdRun& r) {
+  double sum = 0.0;
+  for (const StageError& e : r.stages) sum += e.mean_m;
+  return sum / static_cast<double>(r.stages.size());
+}
+
+TEST(Calibration, TheCalibratedStiffnessBeatsAStifferAndASofterOne) {
+  // calibrated, 30 x stiffer, 33 x softer
+  const PbdRun cal = run_at(CalibrationOrgan::kTuning, kCalibratedComplianceS2);
+  const PbdRun stiff = run_at(CalibrationOrgan::kTuning, 1e-6), soft = run_at(CalibrationOrgan::kTuning, 1e-3);
+  for (const PbdRun* r : {&cal, &stiff, &soft}) {
+    ASSERT_EQ(r->stages.size(), 5u);
+    EXPECT_EQ(r->step_ms.size(), 4u * 5u);
+  }
+  std::printf("mean error over the stages at 3.3 mm: compliance %.0e %.2f mm, 1e-6 %.2f mm, 1e-3 %.2f mm\n",
+              kCalibratedComplianceS2, mean_over_stages(cal) * 1e3, mean_over_stages(stiff) * 1e3,
+              mean_over_stages(soft) * 1e3);
+  // measured 0.74 mm calibrated against 1.46 mm stiffer and 7.99 mm softer
+  EXPECT_LT(mean_over_stages(cal), mean_over_stages(stiff) - 0.2e-3);
+  EXPECT_LT(mean_over_stages(cal), 0.5 * mean_over_stages(soft));
 }
 
 // The no-deformation baseline: a model that did not move at all would be off at the last stage by
-// the reference's own mean bead displacement, so the calibrated model must do better than that.
-// It holds against the converged 5 mm TetGen reference (docs/benchmarks/soft-tissue-calibration.md:
-// 2.24 mm off while the beads moved 2.67 mm at 5 mm particles), but NOT against this test's coarse
-// 6 mm voxel reference (measured 2.84 mm off, the beads moved 2.78 mm; 3.07 vs 2.78 at 7 mm
-// particles): disabled until the model (or the cheap reference) explains more of the motion (#31)
-// (run it with --gtest_also_run_disabled_tests)
-TEST(Calibration, DISABLED_TheCalibratedModelBeatsStandingStillAtTheLastStage) {
-  const StageError last = run_at(kCalibratedComplianceS2).stages.back();
-  EXPECT_LT(last.mean_m, last.mean_displacement_m)
-      << "at " << last.depth_m * 1e3 << " mm travel: " << last.mean_m * 1e3 << " mm off, the reference's beads moved "
-      << last.mean_displacement_m * 1e3 << " mm";
+// the reference's own mean bead displacement; the calibrated model must explain at least 40 % of
+// that motion, on the kidney it was tuned on and on the held-out one it never saw
+TEST(Calibration, TheCalibratedModelBeatsStandingStillAtTheLastStage) {
+  for (CalibrationOrgan which : {CalibrationOrgan::kTuning, CalibrationOrgan::kHeldOut}) {
+    const StageError last = run_at(which, kCalibratedComplianceS2).stages.back();
+    std::printf("%s kidney at %.0f mm travel: %.2f mm off, the reference's beads moved %.2f mm\n",
+                which == CalibrationOrgan::kTuning ? "tuning" : "held-out", last.depth_m * 1e3, last.mean_m * 1e3,
+                last.mean_displacement_m * 1e3);
+    // measured 1.17 mm off where the beads moved 2.67 mm (tuning), 1.42 of 2.74 mm (held out); the
+    // paper's model (shape matching alone) 2.17 of 2.67 mm at its optimum: it fails this
+    EXPECT_LT(last.mean_m, 0.6 * last.mean_displacement_m)
+        << "at " << last.depth_m * 1e3 << " mm travel: " << last.mean_m * 1e3 << " mm off, the reference's beads moved "
+        << last.mean_displacement_m * 1e3 << " mm";
+  }
 }
 
 }  // namespace

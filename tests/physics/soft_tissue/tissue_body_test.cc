@@ -564,3 +564,44 @@ TEST(TissueBody, ValidateNamesTheFieldAndItsRange) {
 
 }  // namespace
 }  // namespace pcisim::physics::soft_tissue
+
+namespace pcisim::physics::soft_tissue {
+namespace {
+
+// contact_surface skin: the probe meets the tissue at the organ's skin (the surface mesh's top),
+// where the particle spheres of the paper's contacts reach up to half a radius above it. No
+// gravity, the probe's face set 0.3 mm into the skin: with skin contact no particle moves more
+// than that, with spheres the top layer is pushed by up to 0.5 r - depth + 0.3 mm. With the
+// clusters' volume on, stepping allocates nothing, whichever solver
+TEST(TissueBody, SkinContactMeetsTheProbeAtTheSkinAndAllocatesNothing) {
+  const Kidney& k = kidney();
+  double skin_top_y = 1e300;
+  for (const Vector3d& v : k.phantom.surface.vertices_m) skin_top_y = std::min(skin_top_y, v.y());
+  const double far_table_y = k.model.rest_m.row(1).maxCoeff() + 0.05;
+  double moved[2] = {0.0, 0.0};
+  for (ContactSurface surface : {ContactSurface::kSpheres, ContactSurface::kSkin}) {
+    TissueParams p;
+    p.gravity_m_per_s2.setZero();
+    p.bulk_modulus_pa = 1e5;
+    p.contact_surface = surface;
+    TissueBody b(k.model, p, table(far_table_y), box_probe(kProbeHalf_m, probe_at(skin_top_y - 5e-3)));
+    b.set_probe_pose(probe_at(skin_top_y + 0.3e-3));
+    for (int n = 0; n < 3; ++n) b.step(kDt);
+    moved[surface == ContactSurface::kSkin] = max_distance(b.positions_m(), k.model.rest_m);
+    for (pbd::SolverKind solver : {pbd::SolverKind::kGaussSeidel, pbd::SolverKind::kJacobi}) {
+      p.solver = solver;
+      TissueBody c(k.model, p, table(far_table_y), box_probe(kProbeHalf_m, probe_at(skin_top_y + 0.3e-3)));
+      c.step(kDt);
+      pcisim::testing::AllocationCount count;
+      for (int n = 0; n < 3; ++n) c.step(kDt);
+      EXPECT_EQ(count.allocations(), 0) << "solver " << static_cast<int>(solver);
+    }
+  }
+  std::printf("probe 0.3 mm into the skin: particles moved up to %.3f mm (spheres), %.3f mm (skin)\n", moved[0] * 1e3,
+              moved[1] * 1e3);
+  EXPECT_LT(moved[1], 0.35e-3) << "skin contact: the probe reaches only what it indents";
+  EXPECT_GT(moved[0], 0.5e-3) << "particle spheres stand out of the skin";
+}
+
+}  // namespace
+}  // namespace pcisim::physics::soft_tissue

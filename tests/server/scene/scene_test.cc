@@ -293,6 +293,9 @@ TEST(Scene, TheKidneySceneListsOnlyTheSoftTissueEffects) {
   ASSERT_TRUE(s.world.soft_tissue && s.world.probe_contact && s.ultrasound);
   EXPECT_DOUBLE_EQ(s.world.soft_tissue->model.particle_radius_m, 3.3e-3);
   EXPECT_EQ(s.world.soft_tissue->params.substeps, 3);
+  EXPECT_DOUBLE_EQ(s.world.soft_tissue->params.cluster_compliance_s2, 2e-5);
+  EXPECT_DOUBLE_EQ(s.world.soft_tissue->params.bulk_modulus_pa, 100e3);
+  EXPECT_EQ(s.world.soft_tissue->params.contact_surface, physics::soft_tissue::ContactSurface::kSpheres);
   EXPECT_DOUBLE_EQ(s.world.probe_contact->face_width_m, 0.040);
   EXPECT_NEAR(s.world.probe_contact->start_position_m.y(), -0.030, 1e-15);
   EXPECT_EQ(s.ultrasound->settings.geometry, ultrasound::ProbeGeometry::kLinear);
@@ -314,6 +317,15 @@ TEST(Scene, SoftTissueMistakesNameTheirPath) {
             "test.json: effects.ultrasound: needs effect \"probe_contact\" in the same scene");
   EXPECT_EQ(error_of("{" + organ + R"("effects": {"soft_tissue": {"particle_radius_mm": 50}}})"),
             "test.json: effects.soft_tissue.particle_radius_mm: expected a number in [1.5, 20], got 50");
+  {
+    const Scene skin =
+        parse_scene("{" + organ + R"("effects": {"soft_tissue": {"contact_surface": "skin"}}})", "test.json");
+    EXPECT_EQ(skin.world.soft_tissue->params.contact_surface, physics::soft_tissue::ContactSurface::kSkin);
+  }
+  EXPECT_EQ(error_of("{" + organ + R"("effects": {"soft_tissue": {"contact_surface": "mesh"}}})"),
+            "test.json: effects.soft_tissue.contact_surface: expected one of \"spheres\", \"skin\", got \"mesh\"");
+  EXPECT_EQ(error_of("{" + organ + R"("effects": {"soft_tissue": {"bulk_modulus_pa": -1}}})"),
+            "test.json: effects.soft_tissue.bulk_modulus_pa: expected a number in [0, 1000000000], got -1");
   EXPECT_EQ(error_of("{" + organ + R"("effects": {"soft_tissue": {"solver": "sor"}}})"),
             "test.json: effects.soft_tissue.solver: expected one of \"gauss_seidel\", \"jacobi\", got \"sor\"");
   EXPECT_EQ(error_of("{" + organ +

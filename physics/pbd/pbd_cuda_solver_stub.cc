@@ -18,7 +18,10 @@ std::string pbd_cuda_device_name() {
   return {};
 }
 
-PbdCudaSolver::PbdCudaSolver(const PbdSystem&) {
+PbdCudaSolver::PbdCudaSolver(const PbdSystem& sys) {
+  if (sys.clusters().any_volume())
+    throw std::invalid_argument(
+        "pbd: cluster volume constraints are solved on the CPU only; use kGaussSeidel or kJacobi");
   throw std::invalid_argument("pbd: solver kJacobiCuda needs CUDA, and this build has none");
 }
 

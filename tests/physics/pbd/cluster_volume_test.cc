@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "physics/pbd/grid_clusters.h"
+#include "physics/pbd/pbd_cuda_solver.h"
 #include "physics/pbd/pbd_system.h"
 
 namespace pcisim::physics::pbd {
@@ -140,6 +141,13 @@ TEST(ClusterVolume, TheCudaSolverRefusesVolumeConstraints) {
   try {
     sys.step(1.0 / 60.0, p);
     FAIL() << "stepped a volume constraint on the device";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("volume"), std::string::npos) << e.what();
+  }
+  // and the device solver itself, built directly, with or without a device
+  try {
+    PbdCudaSolver direct(sys);
+    FAIL() << "built a device solver for a volume constraint";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("volume"), std::string::npos) << e.what();
   }

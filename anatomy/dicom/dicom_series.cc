@@ -12,6 +12,7 @@
 #include <sstream>
 #include <vector>
 
+#include "realtime/percentile.h"
 #include "anatomy/dicom/dicom_limits.h"
 #include "anatomy/dicom/dicom_precheck.h"
 #include "anatomy/dicom/itk_dicom_io.h"
@@ -127,8 +128,7 @@ double check_stack(std::vector<Slice>& slices, const std::string& where) {
   std::vector<double> gaps;
   for (size_t i = 1; i < slices.size(); ++i) gaps.push_back(slices[i].along_normal_mm - slices[i - 1].along_normal_mm);
   std::vector<double> sorted = gaps;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  const double spacing = sorted[sorted.size() / 2];
+  const double spacing = realtime::upper_median_in_place(std::span<double>(sorted));
   if (!(spacing > dicom::kMinSpacingMm))
     throw DicomError(where + ": slices share positions (spacing " + fmt::format("{:.3f}", spacing) + " mm)");
   // positions are bounded (dicom_limits.h), so the spacing is finite; a voxel this deep is no CT

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include "realtime/percentile.h"
 
 namespace pcisim::modeling {
 namespace {
@@ -16,8 +17,7 @@ double median_hu(const ModelBranch& b, const FloatImage& hu, size_t from, size_t
     v.push_back(hu.at(hu.grid.continuous_index(b.points_mm[i]), -1000.0f));
   }
   if (v.empty()) return std::nan("");
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
+  return realtime::upper_median_in_place(std::span<double>(v));
 }
 
 }  // namespace

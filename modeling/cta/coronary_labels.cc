@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <functional>
+#include "realtime/percentile.h"
 
 namespace pcisim::modeling {
 namespace {
@@ -147,10 +148,7 @@ anatomy::VesselTree label_coronary_trees(const std::vector<anatomy::CenterlinePo
     std::vector<double> beyond(b[0].radius_mm.begin() + first_clear,
                                b[0].radius_mm.begin() + std::min(b[0].radius_mm.size(), first_clear + 10));
     double r_ostium = b[0].radius_mm[first_clear];
-    if (!beyond.empty()) {
-      std::nth_element(beyond.begin(), beyond.begin() + beyond.size() / 2, beyond.end());
-      r_ostium = beyond[beyond.size() / 2];
-    }
+    if (!beyond.empty()) r_ostium = realtime::upper_median_in_place(std::span<double>(beyond));
     b[0].points_mm.erase(b[0].points_mm.begin(), b[0].points_mm.begin() + first_clear);
     b[0].radius_mm.erase(b[0].radius_mm.begin(), b[0].radius_mm.begin() + first_clear);
     for (auto& c : b) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include "realtime/percentile.h"
 
 namespace pcisim::modeling {
 namespace {
@@ -152,8 +153,7 @@ double cross_section_radius(const FloatImage& hu, const Eigen::Vector3d& centre,
     }
     r[k] = std::min<double>(s > c ? c : hit, c);
   }
-  std::nth_element(r.begin(), r.begin() + o.rays / 2, r.end());
-  return r[o.rays / 2] * h;
+  return realtime::upper_median_in_place(std::span<double>(r)) * h;
 }
 
 }  // namespace pcisim::modeling

@@ -9,6 +9,7 @@
 
 #include "modeling/cta/modeling_error.h"
 #include "modeling/heart/heart_placement.h"
+#include "realtime/percentile.h"
 
 namespace pcisim::modeling {
 namespace {
@@ -36,8 +37,7 @@ std::vector<double> median_filter(const std::vector<double>& v, int window) {
   for (int i = 0; i < int(v.size()); ++i) {
     w.clear();
     for (int k = std::max(0, i - h); k <= std::min<int>(v.size() - 1, i + h); ++k) w.push_back(v[k]);
-    std::nth_element(w.begin(), w.begin() + w.size() / 2, w.end());
-    out[i] = w[w.size() / 2];
+    out[i] = realtime::upper_median_in_place(std::span<double>(w));
   }
   return out;
 }

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "anatomy/phantom/coronary_phantom.h"
+#include "realtime/percentile.h"
 
 namespace pcisim::modeling {
 namespace {
@@ -83,8 +84,8 @@ HeartPlacement place_template_heart(const anatomy::VesselTree& patient, const He
       d2[i] = best * scale * scale;
     }
     std::vector<double> sorted = d2;
-    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-    const double cut = o.trim_factor * o.trim_factor * std::max(sorted[sorted.size() / 2], 0.25);
+    const double cut =
+        o.trim_factor * o.trim_factor * std::max(realtime::upper_median_in_place(std::span<double>(sorted)), 0.25);
     Eigen::Matrix3Xd src(3, pts.size()), dst(3, pts.size());
     int n = 0;
     double sum = 0;

@@ -1,4 +1,5 @@
-// The one percentile: nearest rank, by its definition on samples whose ranks are known.
+// The one percentile: nearest rank, by its definition on samples whose ranks are known; and the
+// upper median the models' estimators take, the same selection at its stated rank.
 #include "realtime/percentile.h"
 
 #include <gtest/gtest.h>
@@ -38,6 +39,22 @@ TEST(Percentile, InPlaceReordersOnlyAndAgreesWithTheCopy) {
   const float copy = percentile(v, 0.9);
   EXPECT_EQ(percentile_in_place(std::span<float>(v), 0.9), copy);
   EXPECT_EQ(copy, 9.0f);
+}
+
+// the models' estimators: the middle of an odd count (the 0.5 percentile), the upper of the two
+// middle samples of an even count (the 0.5 percentile is the lower one), on shuffled samples
+TEST(Percentile, UpperMedianIsTheMiddleOrTheUpperMiddle) {
+  std::vector<double> odd{7, 1, 5, 3, 9};
+  EXPECT_EQ(upper_median_in_place(std::span<double>(odd)), 5.0);
+  EXPECT_EQ(percentile(std::vector<double>{7, 1, 5, 3, 9}, 0.5), 5.0);
+  std::vector<double> even{8, 2, 6, 4};
+  EXPECT_EQ(upper_median_in_place(std::span<double>(even)), 6.0);
+  EXPECT_EQ(percentile(std::vector<double>{8, 2, 6, 4}, 0.5), 4.0);
+  std::vector<double> rays(32);
+  for (int i = 0; i < 32; ++i) rays[i] = (i * 13) % 32;  // 0..31 shuffled
+  EXPECT_EQ(upper_median_in_place(std::span<double>(rays)), 16.0);
+  std::vector<double> none;
+  EXPECT_TRUE(std::isnan(upper_median_in_place(std::span<double>(none))));
 }
 
 }  // namespace

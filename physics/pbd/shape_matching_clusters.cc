@@ -56,20 +56,27 @@ void ShapeMatchingClusters::finalize(const Eigen::Matrix3Xd& rest_m, const Eigen
   }
 }
 
-void ShapeMatchingClusters::goals(int c, const Eigen::Matrix3Xd& x_m, const Eigen::VectorXd& mass_kg,
-                                  Eigen::Vector3d* goals_m) const {
-  // eq 8: current centre of mass t (nominal masses, so pinned and driven members still count)
+// eq 8: the current centre of mass t (nominal masses, so pinned and driven members still count);
+// eq 9: A_pq = sum m p q^T (A_qq only matters for the linear blend and the volume)
+void ShapeMatchingClusters::centre_and_moment(int c, const Eigen::Matrix3Xd& x_m, const Eigen::VectorXd& mass_kg,
+                                              Eigen::Vector3d* t, Eigen::Matrix3d* a_pq) const {
   double m_sum = 0.0;
-  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+  t->setZero();
   for (int s = begin(c); s < end(c); ++s) {
     m_sum += mass_kg[member_[s]];
-    t += mass_kg[member_[s]] * x_m.col(member_[s]);
+    *t += mass_kg[member_[s]] * x_m.col(member_[s]);
   }
-  t /= m_sum;
-  // eq 9: A_pq = sum m p q^T; A_qq only matters for the linear (non-rigid) blend, not used here
-  Eigen::Matrix3d a_pq = Eigen::Matrix3d::Zero();
+  *t /= m_sum;
+  a_pq->setZero();
   for (int s = begin(c); s < end(c); ++s)
-    a_pq.noalias() += mass_kg[member_[s]] * (x_m.col(member_[s]) - t) * rest_offset_m_.col(s).transpose();
+    a_pq->noalias() += mass_kg[member_[s]] * (x_m.col(member_[s]) - *t) * rest_offset_m_.col(s).transpose();
+}
+
+void ShapeMatchingClusters::goals(int c, const Eigen::Matrix3Xd& x_m, const Eigen::VectorXd& mass_kg,
+                                  Eigen::Vector3d* goals_m) const {
+  Eigen::Vector3d t;
+  Eigen::Matrix3d a_pq;
+  centre_and_moment(c, x_m, mass_kg, &t, &a_pq);
   rotation_[c] = extract_rotation(a_pq, rotation_[c], rest_moment_kg_m2_[c]);
   // eq 10: g_i = R (x0_i - x0_cm) + x_cm
   for (int s = begin(c); s < end(c); ++s) goals_m[s - begin(c)] = rotation_[c] * rest_offset_m_.col(s) + t;
@@ -83,17 +90,10 @@ double ShapeMatchingClusters::volume_correction(int c, const Eigen::Matrix3Xd& x
     for (int s = begin(c); s < end(c); ++s) dx_m[s - begin(c)].setZero();
     return 0.0;
   }
-  // the centre and the linear fit F = A_pq A_qq^-1
-  double m_sum = 0.0;
-  Eigen::Vector3d t = Eigen::Vector3d::Zero();
-  for (int s = begin(c); s < end(c); ++s) {
-    m_sum += mass_kg[member_[s]];
-    t += mass_kg[member_[s]] * x_m.col(member_[s]);
-  }
-  t /= m_sum;
-  Eigen::Matrix3d a_pq = Eigen::Matrix3d::Zero();
-  for (int s = begin(c); s < end(c); ++s)
-    a_pq.noalias() += mass_kg[member_[s]] * (x_m.col(member_[s]) - t) * rest_offset_m_.col(s).transpose();
+  // the linear fit F = A_pq A_qq^-1
+  Eigen::Vector3d t;
+  Eigen::Matrix3d a_pq;
+  centre_and_moment(c, x_m, mass_kg, &t, &a_pq);
   const Eigen::Matrix3d f = a_pq * rest_aqq_inverse_[c];
   // cof(F) = det(F) F^-T, column by column from cross products (defined for a singular F too)
   Eigen::Matrix3d cof;

@@ -48,6 +48,9 @@ class ShapeMatchingClusters {
                            Eigen::Vector3d* dx_m) const;
 
  private:
+  void centre_and_moment(int c, const Eigen::Matrix3Xd& x_m, const Eigen::VectorXd& mass_kg, Eigen::Vector3d* t,
+                         Eigen::Matrix3d* a_pq) const;
+
   std::vector<int> offset_{0};
   std::vector<int> member_;
   std::vector<double> compliance_s2_;

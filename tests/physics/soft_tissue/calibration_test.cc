@@ -136,7 +136,7 @@ double mean_over_stages(const PbdRun& r) {
 }
 
 TEST(Calibration, TheCalibratedStiffnessBeatsAStifferAndASofterOne) {
-  // calibrated, 30 x stiffer, 33 x softer
+  // calibrated, 20 x stiffer, 50 x softer
   const PbdRun cal = run_at(CalibrationOrgan::kTuning, kCalibratedComplianceS2);
   const PbdRun stiff = run_at(CalibrationOrgan::kTuning, 1e-6), soft = run_at(CalibrationOrgan::kTuning, 1e-3);
   for (const PbdRun* r : {&cal, &stiff, &soft}) {

@@ -376,7 +376,8 @@ struct PbdCudaSolver::Impl {
 
 PbdCudaSolver::PbdCudaSolver(const PbdSystem& sys) : impl_(std::make_unique<Impl>()) {
   if (sys.clusters().any_volume())
-    throw std::invalid_argument("pbd: cluster volume constraints are solved on the CPU only; use kGaussSeidel or kJacobi");
+    throw std::invalid_argument(
+        "pbd: cluster volume constraints are solved on the CPU only; use kGaussSeidel or kJacobi");
   std::string why;
   if (!pbd_cuda_available(&why)) throw std::invalid_argument("pbd: solver kJacobiCuda needs a CUDA device: " + why);
   if (!sys.finalized()) throw std::logic_error("pbd: finalize() before building the CUDA solver");

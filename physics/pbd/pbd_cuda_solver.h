@@ -35,8 +35,9 @@ struct PbdCudaStepTimings {
 
 class PbdCudaSolver {
  public:
-  // throws std::invalid_argument naming kJacobiCuda when there is no CUDA build or no device,
-  // std::runtime_error on a CUDA error
+  // throws std::invalid_argument naming the volume when the system has cluster volume constraints
+  // (CPU only), naming kJacobiCuda when there is no CUDA build or no device; std::runtime_error on
+  // a CUDA error
   explicit PbdCudaSolver(const PbdSystem& system);
   ~PbdCudaSolver();
   PbdCudaSolver(const PbdCudaSolver&) = delete;

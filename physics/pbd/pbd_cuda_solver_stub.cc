@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "physics/pbd/pbd_cuda_solver.h"
+#include "physics/pbd/pbd_system.h"
 
 namespace pcisim::physics::pbd {
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 
 namespace pcisim::realtime {
 
@@ -39,8 +40,9 @@ int64_t LatencyHistogram::count() const {
 double LatencyHistogram::quantile_ns(double q) const {
   const int64_t n = count();
   if (n == 0) return 0.0;
-  // rank of the sample at quantile q, 1-based
-  const auto rank = static_cast<uint64_t>(q <= 0 ? 1 : std::max<double>(1.0, q * static_cast<double>(n) + 0.5));
+  // the nearest rank, as realtime::percentile: the ceil(q n)-th smallest (1-based), at least the first
+  const double r = std::ceil(std::min(std::max(q, 0.0), 1.0) * static_cast<double>(n));
+  const auto rank = static_cast<uint64_t>(std::max(r, 1.0));
   uint64_t seen = 0;
   for (int b = 0; b < kBuckets; ++b) {
     seen += counts_[b].load(std::memory_order_relaxed);

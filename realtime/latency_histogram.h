@@ -14,7 +14,8 @@ class LatencyHistogram {
   void reset();
 
   int64_t count() const;
-  // value at quantile q in [0, 1] (bucket midpoint); 0 when empty
+  // value at quantile q in [0, 1]: the bucket (its midpoint, at most the largest sample) that holds
+  // the nearest-rank sample, the ceil(q n)-th smallest, as realtime::percentile ranks; 0 when empty
   double quantile_ns(double q) const;
   double max_ns() const { return static_cast<double>(max_ns_.load(std::memory_order_relaxed)); }
 

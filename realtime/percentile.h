@@ -1,7 +1,9 @@
 #pragma once
 // The one percentile of the project: every report's "p50", "p95" and "p99" and every benchmark's
-// median mean percentile() below, so the figures compare; the models' robust estimators take the
-// upper median, the same selection at a stated rank. No other quantile is computed anywhere.
+// median mean percentile() below, so the figures compare (LatencyHistogram ranks its buckets the
+// same way); the models' robust estimators take the upper median, the same selection at a stated
+// rank. The one other quantile is an area-weighted one (a surface distance's 95 %, in
+// modeling/evaluation/lumen_scores.cc), which weights samples and so is not a rank of them.
 #include <algorithm>
 #include <cmath>
 #include <limits>

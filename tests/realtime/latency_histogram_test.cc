@@ -1,4 +1,5 @@
 #include "realtime/latency_histogram.h"
+#include "realtime/percentile.h"
 
 #include <gtest/gtest.h>
 
@@ -32,13 +33,28 @@ TEST(LatencyHistogram, QuantilesMatchSortedSamplesWithinResolution) {
   std::sort(samples.begin(), samples.end());
   EXPECT_EQ(h.count(), 100000);
   for (double q : {0.5, 0.9, 0.99, 0.999}) {
-    const double exact = static_cast<double>(samples[static_cast<size_t>(q * samples.size()) - 1]);
+    const double exact = static_cast<double>(percentile(std::vector<int64_t>(samples), q));  // the one rank
     EXPECT_NEAR(h.quantile_ns(q), exact, 0.01 * exact) << "q=" << q;
   }
   EXPECT_EQ(h.max_ns(), static_cast<double>(samples.back()));
   h.reset();
   EXPECT_EQ(h.count(), 0);
   EXPECT_EQ(h.quantile_ns(0.5), 0.0);
+}
+
+// below 256 ns the buckets are exact, so the rank is seen whole: the same nearest rank as
+// realtime::percentile (the median of 1..10 is 5, its 0.95 quantile 10)
+TEST(LatencyHistogram, RanksAsThePercentileDoes) {
+  realtime::LatencyHistogram h;
+  std::vector<int64_t> samples;
+  for (int64_t v = 10; v >= 1; --v) {
+    h.record(v);
+    samples.push_back(v);
+  }
+  for (double q : {0.0, 0.1, 0.5, 0.55, 0.9, 0.95, 1.0})
+    EXPECT_EQ(h.quantile_ns(q), static_cast<double>(percentile(samples, q))) << "q=" << q;
+  EXPECT_EQ(h.quantile_ns(0.5), 5.0);
+  EXPECT_EQ(h.quantile_ns(0.95), 10.0);
 }
 
 }  // namespace

@@ -82,11 +82,11 @@ double pressed_block_volume_ratio(bool volume, SolverKind solver) {
   const double height = (kH - 1) * kSpacingM, squash = 0.1 * height;
   PbdParams p;
   p.solver = solver;
-  p.iterations = 20;
+  p.iterations = 10;
   p.substeps = 2;
   p.damping_per_s = 50.0;
-  for (int step = 1; step <= 200; ++step) {
-    const double dz = -squash * std::min(1.0, step / 100.0);
+  for (int step = 1; step <= 80; ++step) {
+    const double dz = -squash * std::min(1.0, step / 40.0);
     for (int i = kN * kN * (kH - 1); i < rest.cols(); ++i)
       sys.set_driven_target(i, rest.col(i) + Eigen::Vector3d(0, 0, dz));
     sys.step(1.0 / 60.0, p);
@@ -107,7 +107,7 @@ TEST(ClusterVolume, APressedBlockKeepsItsVolumeOnlyWithTheConstraint) {
     const double with = pressed_block_volume_ratio(true, s), without = pressed_block_volume_ratio(false, s);
     std::printf("solver %d: volume / rest volume pressed by 10 %%: %.4f with the constraint, %.4f without\n",
                 static_cast<int>(s), with, without);
-    // measured 0.971 (Gauss-Seidel) and 0.993 (Jacobi): the layers next to the glued ends are
+    // measured 0.970 (Gauss-Seidel) and 0.986 (Jacobi): the layers next to the glued ends are
     // frustums, which the box measure overstates the loss of
     EXPECT_GT(with, 0.96) << "the middle layers bulge out by what the press took from the height";
     EXPECT_LT(with, 1.02);

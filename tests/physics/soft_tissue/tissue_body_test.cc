@@ -588,14 +588,20 @@ TEST(TissueBody, SkinContactMeetsTheProbeAtTheSkinAndAllocatesNothing) {
     b.set_probe_pose(probe_at(skin_top_y + 0.3e-3));
     for (int n = 0; n < 3; ++n) b.step(kDt);
     moved[surface == ContactSurface::kSkin] = max_distance(b.positions_m(), k.model.rest_m);
-    for (pbd::SolverKind solver : {pbd::SolverKind::kGaussSeidel, pbd::SolverKind::kJacobi}) {
-      p.solver = solver;
-      TissueBody c(k.model, p, table(far_table_y), box_probe(kProbeHalf_m, probe_at(skin_top_y + 0.3e-3)));
-      c.step(kDt);
+    if (surface != ContactSurface::kSkin) continue;
+    // the allocation check needs only one surface (the volume path is the same under either):
+    // Gauss-Seidel on the body above, pressed, then Jacobi on a second
+    {
       pcisim::testing::AllocationCount count;
-      for (int n = 0; n < 3; ++n) c.step(kDt);
-      EXPECT_EQ(count.allocations(), 0) << "solver " << static_cast<int>(solver);
+      for (int n = 0; n < 3; ++n) b.step(kDt);
+      EXPECT_EQ(count.allocations(), 0) << "Gauss-Seidel";
     }
+    p.solver = pbd::SolverKind::kJacobi;
+    TissueBody c(k.model, p, table(far_table_y), box_probe(kProbeHalf_m, probe_at(skin_top_y + 0.3e-3)));
+    c.step(kDt);
+    pcisim::testing::AllocationCount count;
+    for (int n = 0; n < 3; ++n) c.step(kDt);
+    EXPECT_EQ(count.allocations(), 0) << "Jacobi";
   }
   std::printf("probe 0.3 mm into the skin: particles moved up to %.3f mm (spheres), %.3f mm (skin)\n", moved[0] * 1e3,
               moved[1] * 1e3);

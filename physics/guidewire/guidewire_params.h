@@ -74,6 +74,10 @@ struct GuidewireParams {
   int rod_substeps = 8;    // XPBD substeps per physics step (more when a step is long)
   int rod_iterations = 1;  // direct solves per substep, each followed by wall contact and friction
   RodContactScheme rod_contact = RodContactScheme::kProjection;
+  // with rod_contact kSolve: how many times a substep may be halved and retried when its contact
+  // problem is no longer a small linear one (a node near the wall moved far, or the wall turned
+  // under it; rod_wire.cc); 0 keeps every substep as rod_substeps sets it
+  int rod_substep_halvings = 4;
   // the hub lets the wire slip (refuses further feed) while the wire pushes back harder than
   // this: the grip of a torque device and the guide catheter's support are finite
   double feed_refuse_force_n = 1.0;
@@ -103,6 +107,7 @@ inline constexpr ParamRange kGuidewireOuterDiameterM{1e-4, 3e-3};
 inline constexpr ParamRange kGuidewireRodDampingPerS{0, 1000};
 inline constexpr ParamRange kGuidewireRodSubsteps{1, 100};
 inline constexpr ParamRange kGuidewireRodIterations{1, 20};
+inline constexpr ParamRange kGuidewireRodSubstepHalvings{0, 6};
 inline constexpr ParamRange kGuidewireFeedRefuseForceN{0.01, 100};
 
 struct VesselContactParams {

@@ -63,6 +63,7 @@ void validate(const GuidewireParams& p) {
   in_range(p.rod_damping_per_s, kGuidewireRodDampingPerS, "rod_damping_per_s");
   in_range(p.rod_substeps, kGuidewireRodSubsteps, "rod_substeps");
   in_range(p.rod_iterations, kGuidewireRodIterations, "rod_iterations");
+  in_range(p.rod_substep_halvings, kGuidewireRodSubstepHalvings, "rod_substep_halvings");
   in_range(p.feed_refuse_force_n, kGuidewireFeedRefuseForceN, "feed_refuse_force_n");
   if (p.model == GuidewireModel::kRod)
     check(p.torsional_rigidity_nm2 > 0.0, "torsional_rigidity_nm2", "above 0 for the rod");

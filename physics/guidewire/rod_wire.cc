@@ -36,6 +36,18 @@ constexpr double kContactBandM = 0.1e-3;
 constexpr int kContactSweeps = 100;
 constexpr double kContactToleranceM = 1e-7;
 constexpr double kStuckM = 1e-8;
+// halved substeps (the solve scheme): a substep is taken back when a contact moved more than
+// kRetryMotionM relative to its wall (a third of a coronary lumen's radius would cross it; only
+// its motion towards or away from the wall was tried, 2026-11-28: 14 x fewer retries round the
+// bend, but the wire fed at 40 mm/s into a dead end blew up), when
+// the wall's normal turned by more than kRetryTurnDeg between where the node began and where it
+// is (the tangent plane is no longer the wall it meets), or when the answer leaves a node more
+// than kRetryResidualM inside (issue #33's penetration target); the length doubles again after
+// kGoodSubstepsBeforeLonger good substeps in a row
+constexpr double kRetryMotionM = 0.25e-3;
+constexpr double kRetryTurnDeg = 20.0;
+constexpr double kRetryResidualM = 0.05e-3;
+constexpr int kGoodSubstepsBeforeLonger = 4;
 
 }  // namespace
 
@@ -109,7 +121,7 @@ RodWire::RodWire(const GuidewireParams& params, CatheterPath path, const LumenQu
   stuck_.assign(n + 1, 0);
   wall_impulse_n_s_.assign(n + 1, 0.0);
   wall_force_n_.assign(n + 1, 0.0);
-  for (auto* v : {&rest_point_m_, &offset_from_, &offset_to_, &offset_, &wall_substep_m_, &wall_velocity_})
+  for (auto* v : {&rest_point_m_, &offset_from_, &offset_to_, &offset_, &wall_velocity_})
     v->assign(n + 1, Eigen::Vector3d::Zero());
   if (params_.rod_contact == RodContactScheme::kSolve) {
     pgs_ = rod::ContactPgs(kMaxRodContacts);
@@ -124,6 +136,10 @@ RodWire::RodWire(const GuidewireParams& params, CatheterPath path, const LumenQu
   node_impulse_.assign(n + 1, Eigen::Vector3d::Zero());
   wall_impulse_vector_n_s_.assign(n + 1, Eigen::Vector3d::Zero());
   wall_force_vector_n_.assign(n + 1, Eigen::Vector3d::Zero());
+  // the halved substeps' copies, sized once
+  rod_.save_state(saved_rod_);
+  saved_impulse_ = node_impulse_;
+  saved_touched_ = touched_;
   // start fully inside the catheter, the tip at the exit
   place_in_catheter(0.0, 1.0);
   const auto x = rod_.mutable_nodes_m();
@@ -180,14 +196,14 @@ void RodWire::set_lumen_motion(const LumenMotion* motion) {
   motion_ = motion;
   if (motion_) return;
   // no motion: the wall stands at rest again (the nodes follow it through contact)
-  for (auto* v : {&offset_from_, &offset_to_, &offset_, &wall_substep_m_, &wall_velocity_})
+  for (auto* v : {&offset_from_, &offset_to_, &offset_, &wall_velocity_})
     std::fill(v->begin(), v->end(), Eigen::Vector3d::Zero());
 }
 
 // node i's rest point r (x = r + d(r, a), a few fixed-point steps from its last offset; the
 // vessels' motion is smooth on the scale of the wire's motion in a substep) and the wall's
 // offset there at the step's start and end
-void RodWire::find_rest_point(int i, double a, double dt_s, int substeps) {
+void RodWire::find_rest_point(int i, double a, double dt_s) {
   const Eigen::Vector3d& x = rod_.nodes_m()[i];
   Eigen::Vector3d r = x - offset_[i];
   for (int k = 0; k < kRestPointIterations; ++k) {
@@ -201,9 +217,7 @@ void RodWire::find_rest_point(int i, double a, double dt_s, int substeps) {
   offset_to_[i] = motion_->displacement_m(r, 1.0);
   if (!offset_from_[i].allFinite() || !offset_to_[i].allFinite())
     offset_from_[i] = offset_to_[i] = Eigen::Vector3d::Zero();
-  const Eigen::Vector3d move = offset_to_[i] - offset_from_[i];
-  wall_substep_m_[i] = move / substeps;
-  wall_velocity_[i] = move / dt_s;
+  wall_velocity_[i] = (offset_to_[i] - offset_from_[i]) / dt_s;
 }
 
 void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
@@ -231,30 +245,83 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
   // (measured: 2 substeps, 90 mm fed in a curved tube, the tip stopped 35 mm short)
   const int substeps =
       std::max(params_.rod_substeps, static_cast<int>(std::min(std::ceil(dt_s / kMaxSubstepS - 1e-9), 10000.0)));
-  const double h = dt_s / substeps;
+  // the step is counted in ticks of the shortest substep allowed; a substep of `halvings_` is
+  // 2^(most - halvings_) ticks, so a halved substep and the later longer ones stay on one grid
+  const int most = params_.rod_contact == RodContactScheme::kSolve ? params_.rod_substep_halvings : 0;
+  halvings_ = std::min(halvings_, most);
+  const int64_t ticks_per_substep = int64_t{1} << most, ticks = substeps * ticks_per_substep;
   // the moving wall: every node's rest point at the step's start
   if (motion_)
-    for (int i = 0; i < node_count(); ++i) find_rest_point(i, 0.0, dt_s, substeps);
-  for (int k = 1; k <= substeps; ++k) {
-    const double before_m = fed_m_;
-    const double a = static_cast<double>(k) / substeps;
-    fed_m_ = previous_fed_m + a * (fed_target_m - previous_fed_m);
+    for (int i = 0; i < node_count(); ++i) find_rest_point(i, 0.0, dt_s);
+  bool feed_stopped = refusing_;
+  for (int64_t done = 0; done < ticks;) {
+    const int64_t span = ticks_per_substep >> halvings_;
+    const double a0 = static_cast<double>(done) / ticks, a = static_cast<double>(done + span) / ticks;
+    const double h = dt_s * static_cast<double>(span) / ticks;
+    if (most > 0) {
+      rod_.save_state(saved_rod_);
+      saved_impulse_ = node_impulse_;
+      saved_touched_ = touched_;
+      saved_report_ = report_;
+    }
+    const double before_m = fed_m_, rotation_before_rad = rotation_rad_;
+    // with the wall inside the solve the hub's force is the wall's too, so the grip slips as soon
+    // as it exceeds the limit, within the step: a whole step's feed pushed into a jammed wire
+    // (4 mm at the fastest feed) is more than one substep's contact problem can answer
+    const bool stop_feed = params_.rod_contact == RodContactScheme::kSolve && !feed_stopped && fed_target_m > fed_m_ &&
+                           substep_hub_axial_n_ > params_.feed_refuse_force_n;
+    if (!feed_stopped) fed_m_ = previous_fed_m + a * (fed_target_m - previous_fed_m);
+    if (stop_feed) fed_m_ = before_m;
     rotation_rad_ = previous_rotation_rad + a * (rotation_target_rad - previous_rotation_rad);
     if (motion_) {
       // the wall a substep further on; a node that moved far since its rest point was found (a
       // tip that snaps round, a node fed out) finds it again where it now is
-      const double a0 = static_cast<double>(k - 1) / substeps;
       const auto x = rod_.nodes_m();
       for (int i = 0; i < node_count(); ++i) {
         // how far the node moved through the vessel (in its rest frame) since its rest point was found
         if (((x[i] - offset_[i]) - rest_point_m_[i]).squaredNorm() > kRestPointRefreshM * kRestPointRefreshM)
-          find_rest_point(i, a0, dt_s, substeps);
+          find_rest_point(i, a0, dt_s);
         offset_[i] = offset_from_[i] + a * (offset_to_[i] - offset_from_[i]);
       }
     }
+    // the last substep's impulses are its forces times its length squared: the same forces over this one
+    if (last_substep_s_ > 0.0 && h != last_substep_s_) {
+      const double scale = (h / last_substep_s_) * (h / last_substep_s_);
+      for (Eigen::Vector3d& p : node_impulse_) p *= scale;
+    }
     place_in_catheter(before_m, h);
+    retry_ = false;
     rod_.step(h, lumen_ && contact_ ? this : nullptr);
+    if ((retry_ || !rod_.all_finite()) && halvings_ < most) {
+      // taken back: the state before it, and half the length
+      rod_.restore_state(saved_rod_);
+      node_impulse_ = saved_impulse_;
+      touched_ = saved_touched_;
+      report_ = saved_report_;
+      ++report_.retried;
+      fed_m_ = before_m;
+      rotation_rad_ = rotation_before_rad;
+      ++halvings_;
+      // (the stop is decided again before the retry, from the same accepted substep's force)
+      good_in_a_row_ = 0;
+      continue;
+    }
     if (!rod_.all_finite()) recover();
+    if (stop_feed) {
+      feed_stopped = true;
+      refusing_ = true;
+    }
+    substep_hub_axial_n_ = -rod_.hub_force_n().dot(path_.exit_direction());
+    if (!std::isfinite(substep_hub_axial_n_)) substep_hub_axial_n_ = 0.0;
+    done += span;
+    last_substep_s_ = h;
+    ++report_.substeps;
+    report_.finest_halvings = std::max(report_.finest_halvings, halvings_);
+    // back to the longer substep after a few good ones, where it fits the grid
+    if (halvings_ > 0 && ++good_in_a_row_ >= kGoodSubstepsBeforeLonger && done % (2 * span) == 0) {
+      --halvings_;
+      good_in_a_row_ = 0;
+    }
   }
   rotation_before_step_rad_ = rotation_rad_;
 
@@ -369,8 +436,8 @@ void RodWire::project(rod::CosseratRod& rod, int iteration, double h) {
     const double mu_s = mu_static(i);
     const Eigen::Vector3d f = rod.node_constraint_force_n(i);
     const Eigen::Vector3d f_t = f - f.dot(s.normal) * s.normal;
-    // the node's motion along the wall relative to the wall (which moved wall_substep_m_)
-    const Eigen::Vector3d dx = x[i] - x_start[i] - wall_substep_m_[i];
+    // the node's motion along the wall relative to the wall (which moved wall_velocity_ h)
+    const Eigen::Vector3d dx = x[i] - x_start[i] - h * wall_velocity_[i];
     const Eigen::Vector3d dx_t = dx - dx.dot(s.normal) * s.normal;
     if (f_t.norm() <= mu_s * wall_n) {
       x[i] -= dx_t;
@@ -465,9 +532,23 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
     // its gap and slip (the wall linearised where the node stands now)
     Eigen::Vector3d warm_motion = Eigen::Vector3d::Zero();
     for (int b = 0; b < count; ++b) warm_motion += w.block<3, 3>(3 * a, 3 * b) * node_impulse_[contact_nodes_[b]];
-    const Eigen::Vector3d moved = x[i] - x_start[i] - wall_substep_m_[i] - warm_motion;
+    const Eigen::Vector3d moved = x[i] - x_start[i] - h * wall_velocity_[i] - warm_motion;
     contacts_[a] = {n, candidate_gap_m_[i] - n.dot(warm_motion), moved - moved.dot(n) * n, mu_static(i), mu_kinetic(i)};
     contact_impulse_[a] = node_impulse_[i];  // the solver starts from the warm impulse
+  }
+  // the linearisation is a short substep's: a contact that moved far relative to its wall, or
+  // whose wall turned under it, asks for the substep to be taken back and halved
+  const bool may_retry = halvings_ < params_.rod_substep_halvings;
+  const double cos_turn = std::cos(kRetryTurnDeg * std::numbers::pi / 180.0);
+  for (int a = 0; a < count && have_w && may_retry; ++a) {
+    const int i = contact_nodes_[a];
+    const Eigen::Vector3d moved = x[i] - x_start[i] - h * wall_velocity_[i];
+    const Eigen::Vector3d began_at = x_start[i] - (offset_[i] - h * wall_velocity_[i]);
+    if (moved.squaredNorm() > kRetryMotionM * kRetryMotionM ||
+        lumen_->sample(began_at).normal.dot(contacts_[a].normal) < cos_turn) {
+      retry_ = true;
+      return;
+    }
   }
   report_.contacts = count;
   report_.most_contacts = std::max(report_.most_contacts, count);
@@ -495,20 +576,26 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
       node_impulse_[i] = contact_impulse_[a];
       touched_[i] = 1;
       normal_[i] = n;
-      node_wall_n_[i] = push * inv_h2;  // after_substep adds it to the step's impulse
-      wall_impulse_vector_n_s_[i] += contact_impulse_[a] / h;
+      node_wall_n_[i] = push * inv_h2;  // after_substep adds it (and node_impulse_) to the step's impulse
       const Eigen::Vector3d slip = contacts_[a].slip_m + pgs_.motion_m()[a];
       stuck_[i] = (slip - slip.dot(n) * n).norm() < kStuckM;
     }
   }
-  // 5. the linearisation's leftovers, out along the normal, without velocity
+  // 5. the linearisation's leftovers, out along the normal, without velocity (or, where a node
+  //    was left deep inside, the substep taken back and halved)
+  double residual_m = 0.0;
   for (int i = first_free; i < node_count(); ++i) {
     const WallSample s = lumen_->sample(x[i] - offset_[i]);
     const double dn = s.distance_m + margin;
     if (dn <= 0.0) continue;
-    report_.residual_m = std::max(report_.residual_m, dn);
+    residual_m = std::max(residual_m, dn);
     rod.shift_node_without_velocity(i, -dn * s.normal);
   }
+  if (residual_m > kRetryResidualM && may_retry) {
+    retry_ = true;
+    return;
+  }
+  report_.residual_m = std::max(report_.residual_m, residual_m);
   // 6. the spin about the wire's axis
   hold_spin(rod);
 }
@@ -542,6 +629,15 @@ void RodWire::hold_spin(rod::CosseratRod& rod) {
 // taken off the velocity along the wall (never reversing it), and mu_k N r h off the spin
 void RodWire::after_substep(rod::CosseratRod& rod, double h) {
   const int first_free = rod.hub_node() + 1;
+  // a substep that went non-finite is taken back too, where it may be
+  if (!retry_ && params_.rod_contact == RodContactScheme::kSolve && halvings_ < params_.rod_substep_halvings &&
+      !rod.all_finite())
+    retry_ = true;
+  if (retry_) {
+    // the substep is taken back (step()): nothing of it counts
+    std::fill(node_wall_n_.begin(), node_wall_n_.end(), 0.0);
+    return;
+  }
   // the rod's damping is blood's drag, and the blood moves with its vessel: relative to a moving
   // wall, v = wall + keep (v - wall), where the rod applied v = keep v
   if (motion_) {
@@ -549,10 +645,14 @@ void RodWire::after_substep(rod::CosseratRod& rod, double h) {
     const double pass = 1.0 - 1.0 / (1.0 + params_.rod_damping_per_s * h);
     for (int i = first_free; i < node_count(); ++i) v[i] += pass * wall_velocity_[i];
   }
-  // the wall's impulse over the substep, for the step's average force
-  for (int i = first_free; i < node_count(); ++i)
-    if (node_wall_n_[i] > 0.0) wall_impulse_n_s_[i] += node_wall_n_[i] * h;
+  // the wall's impulse over the substep, for the step's average force (the solve scheme's as a
+  // vector: its impulses are force h^2)
   const bool solve = params_.rod_contact == RodContactScheme::kSolve;
+  for (int i = first_free; i < node_count(); ++i) {
+    if (!(node_wall_n_[i] > 0.0)) continue;
+    wall_impulse_n_s_[i] += node_wall_n_[i] * h;
+    if (solve) wall_impulse_vector_n_s_[i] += node_impulse_[i] / h;
+  }
   if (friction_) {
     const auto v = rod.mutable_velocities_m_per_s();
     const auto omega = rod.mutable_angular_velocities_rad_per_s();

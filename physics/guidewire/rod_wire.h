@@ -22,7 +22,12 @@
 // penetration and Coulomb friction) is solved on the rod's contact compliance W = H A^-1 H^T
 // (CosseratRod::contact_compliance, rod::ContactPgs) and the rod answers the impulses through its
 // own stiffness, so the hub's force includes the wall's reaction. What the linearisation leaves
-// inside a curved wall is moved out without velocity and reported (contact_report).
+// inside a curved wall is moved out without velocity and reported (contact_report). The contact
+// problem is linearised where the nodes stand after the free solve: where that stops being a
+// small step (a node near the wall moved far in the substep, the wall's normal turned under it,
+// or the answer leaves a node deep inside), the substep is taken back and tried at half the
+// length, up to rod_substep_halvings times; a few good short substeps later the length doubles
+// again (step()).
 //
 // Built once; step() allocates nothing.
 #include <Eigen/Core>
@@ -49,6 +54,9 @@ struct RodContactReport {
   int most_sweeps = 0;      // the contact solve's sweeps, the most in a substep
   int unconverged = 0;      // substeps whose solve stopped at the sweep cap
   double residual_m = 0.0;  // the deepest a node was left inside the wall after the solve (then moved out)
+  int substeps = 0;         // substeps taken in the step (more than rod_substeps where some were halved)
+  int retried = 0;          // substeps taken back and tried again at half the length
+  int finest_halvings = 0;  // the shortest substep of the step: rod_substeps' halved this many times
 };
 
 // the most contacts one substep solves (the deepest are kept)
@@ -124,8 +132,9 @@ class RodWire final : public rod::RodContact {
   void place_in_catheter(double previous_fed_m, double dt_s);
   Eigen::Quaterniond catheter_frame(const Eigen::Vector3d& tangent) const;
   void recover();
-  void find_rest_point(int i, double a, double dt_s, int substeps);
-  // the solve scheme's contact after the rod's last solve of a substep
+  void find_rest_point(int i, double a, double dt_s);
+  // the solve scheme's contact after the rod's last solve of a substep; sets retry_ instead
+  // where the substep should be taken back and tried shorter
   void solve_contact(rod::CosseratRod& rod, double h);
   // the spin about the wire's axis of touching segments held by static friction (both schemes)
   void hold_spin(rod::CosseratRod& rod);
@@ -150,7 +159,7 @@ class RodWire final : public rod::RodContact {
   // start and end and now (per substep), and the wall's motion per substep and velocity over the step
   const LumenMotion* motion_ = nullptr;
   std::vector<Eigen::Vector3d> rest_point_m_;
-  std::vector<Eigen::Vector3d> offset_from_, offset_to_, offset_, wall_substep_m_, wall_velocity_;
+  std::vector<Eigen::Vector3d> offset_from_, offset_to_, offset_, wall_velocity_;
   double commanded_feed_m_ = 0.0, fed_m_ = 0.0, rotation_rad_ = 0.0;
   double rotation_before_step_rad_ = 0.0;
   double hub_axial_n_ = 0.0, hub_torque_nm_ = 0.0;
@@ -169,6 +178,18 @@ class RodWire final : public rod::RodContact {
   std::vector<rod::NodeContact> contacts_;
   std::vector<Eigen::Vector3d> contact_impulse_, node_impulse_, wall_impulse_vector_n_s_, wall_force_vector_n_;
   RodContactReport report_;
+  // halved substeps (the solve scheme): the state before the substep being tried, whether the
+  // contact asked for it to be taken back, how many times the substep is halved now, the good
+  // substeps in a row at that length, and the last substep's length (the warm impulses scale with
+  // its square)
+  rod::RodState saved_rod_;
+  std::vector<Eigen::Vector3d> saved_impulse_;
+  std::vector<uint8_t> saved_touched_;
+  RodContactReport saved_report_;
+  bool retry_ = false;
+  double substep_hub_axial_n_ = 0.0;  // the rod's push-back on the hub after the last accepted substep
+  int halvings_ = 0, good_in_a_row_ = 0;
+  double last_substep_s_ = 0.0;
 };
 
 // the rod's section as CosseratRodParams (stiffness, mass, tip, substeps), documented in

@@ -75,18 +75,25 @@ ContactSolveStats ContactPgs::solve(const Eigen::Ref<const Eigen::MatrixXd>& w, 
     impulses[a] += dl;
     for (int b = 0; b < k; ++b) motion_[b] += w.block<3, 3>(3 * b, 3 * a) * dl;
   };
-  for (int sweep = 0; sweep < max_sweeps; ++sweep) {
+  // one sweep over the contacts; returns the largest motion an update made. Each contact's
+  // normal row, then its tangent rows against its own motion so far; the other nodes' motion
+  // follows once per contact
+  auto sweep = [&]() {
     double change = 0.0;
     for (int a = 0; a < k; ++a) {
       const NodeContact& ca = c[a];
       const Eigen::Vector3d& n = ca.normal;
       const Eigen::Matrix3d waa = w.block<3, 3>(3 * a, 3 * a);
+      const Eigen::Vector3d start = impulses[a];
       // normal: the push that closes the gap, never a pull
       const double w_nn = n.dot(waa * n);
       const double l_n = -n.dot(impulses[a]);
       const double l_n_new = std::max(0.0, l_n + (ca.gap_m + n.dot(motion_[a])) / w_nn);
+      Eigen::Vector3d own_motion = motion_[a];
       if (l_n_new != l_n) {
-        apply(a, -(l_n_new - l_n) * n);
+        const Eigen::Vector3d dl = -(l_n_new - l_n) * n;
+        impulses[a] += dl;
+        own_motion += waa * dl;
         change = std::max(change, std::abs(l_n_new - l_n) * w_nn);
       }
       // tangent: the impulse that stops the slip, inside the static cone; else the kinetic one
@@ -97,7 +104,7 @@ ContactSolveStats ContactPgs::solve(const Eigen::Ref<const Eigen::MatrixXd>& w, 
       t << t1, t2;
       const Eigen::Vector2d l_t = t.transpose() * impulses[a];
       const Eigen::Matrix2d w_tt = t.transpose() * waa * t;
-      const Eigen::Vector2d slip_without = t.transpose() * (ca.slip_m + motion_[a]) - w_tt * l_t;
+      const Eigen::Vector2d slip_without = t.transpose() * (ca.slip_m + own_motion) - w_tt * l_t;
       const Eigen::Matrix2d m = w_tt.inverse();
       Eigen::Vector2d l_t_new = -(m * slip_without);
       if (l_t_new.norm() > l_n_new * ca.mu_static)
@@ -105,11 +112,18 @@ ContactSolveStats ContactPgs::solve(const Eigen::Ref<const Eigen::MatrixXd>& w, 
                                                        : Eigen::Vector2d::Zero();
       const Eigen::Vector2d dl_t = l_t_new - l_t;
       if (dl_t.squaredNorm() > 0.0) {
-        apply(a, t * dl_t);
+        impulses[a] += t * dl_t;
         change = std::max(change, (w_tt * dl_t).norm());
       }
+      const Eigen::Vector3d dl = impulses[a] - start;
+      impulses[a] = start;
+      if (dl.squaredNorm() > 0.0) apply(a, dl);
     }
-    stats.sweeps = sweep + 1;
+    return change;
+  };
+  for (int sweep_count = 0; sweep_count < max_sweeps; ++sweep_count) {
+    const double change = sweep();
+    stats.sweeps = sweep_count + 1;
     stats.last_change_m = change;
     if (change <= tolerance_m) {
       stats.converged = true;

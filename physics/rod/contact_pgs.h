@@ -9,7 +9,10 @@
 //   stick             slip + P d = 0 (P: the wall's tangent plane) while |L_t| <= mu_s L_n
 //   slide             otherwise |L_t| = mu_k L_n, against the slip
 // Each sweep takes each contact's normal row (a scalar, clamped at 0), then its two tangent rows
-// (a 2 x 2 solve, projected on the cone). Sized once; solve() allocates nothing.
+// (a 2 x 2 solve, projected on the cone); the other nodes' motion follows once per contact.
+// (Accelerating the sweeps as a nonsmooth nonlinear conjugate gradient, Silcowitz et al. 2010,
+// made a wire driven into a dead end blow up: tried 2026-11-28, not kept.) Sized once; solve()
+// allocates nothing.
 #include <Eigen/Core>
 #include <span>
 #include <vector>

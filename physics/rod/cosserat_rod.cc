@@ -398,6 +398,26 @@ void CosseratRod::update_velocities(double h) {
   }
 }
 
+void CosseratRod::save_state(RodState& s) const {
+  s.x = x_;
+  s.v = v_;
+  s.omega = omega_;
+  s.q = q_;
+  s.clamp_q = clamp_q_;
+  s.hub = hub_;
+}
+
+void CosseratRod::restore_state(const RodState& s) {
+  if (s.x.size() != x_.size() || s.v.size() != v_.size() || s.omega.size() != omega_.size() || s.q.size() != q_.size())
+    throw std::invalid_argument("rod: restore_state needs a state this rod saved");
+  std::copy(s.x.begin(), s.x.end(), x_.begin());
+  std::copy(s.v.begin(), s.v.end(), v_.begin());
+  std::copy(s.omega.begin(), s.omega.end(), omega_.begin());
+  std::copy(s.q.begin(), s.q.end(), q_.begin());
+  clamp_q_ = s.clamp_q;
+  set_hub_node(s.hub);  // the kinematic nodes' inverse masses with it
+}
+
 double CosseratRod::max_speed_m_per_s() const {
   double m = 0.0;
   for (const Eigen::Vector3d& v : v_) m = std::max(m, v.norm());

@@ -40,6 +40,16 @@ class RodContact {
   virtual void after_substep(CosseratRod& /*rod*/, double /*substep_s*/) {}
 };
 
+// what a substep changes of the rod (positions, frames, velocities, the hub and its clamp), so a
+// caller can take a substep back and try it shorter (RodWire's halved substeps, issue #33).
+// Sized by the first save_state; later saves into the same RodState allocate nothing
+struct RodState {
+  std::vector<Eigen::Vector3d> x, v, omega;
+  std::vector<Eigen::Quaterniond> q;
+  Eigen::Quaterniond clamp_q = Eigen::Quaterniond::Identity();
+  int hub = 0;
+};
+
 class CosseratRod {
  public:
   // a straight rod at rest from clamp_position_m along clamp_orientation's third director (e3);
@@ -119,6 +129,11 @@ class CosseratRod {
   const Eigen::Vector3d& rest_darboux_per_m(int pair) const { return rest_darboux_[pair]; }
   // the frame before pair j's second segment: the clamp frame for pair 0
   const Eigen::Quaterniond& pair_first_frame(int pair) const { return pair == 0 ? clamp_q_ : q_[pair - 1]; }
+  // the state a substep changes, and back to it (the multipliers and forces of the last substep
+  // are not restored: the next substep computes them again); restore_state throws
+  // std::invalid_argument for a state of another size
+  void save_state(RodState& s) const;
+  void restore_state(const RodState& s);
   // largest node speed, for "came to rest" checks
   double max_speed_m_per_s() const;
   bool all_finite() const;

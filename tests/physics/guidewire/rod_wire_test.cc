@@ -28,6 +28,7 @@ namespace pcisim::physics {
 namespace {
 
 using test::BranchScript;
+using test::curved_tube;
 
 WorldSpec rod_scene() {
   WorldSpec s = test::default_scene();
@@ -287,24 +288,6 @@ TEST(RodWireWorld, StepAllocatesNothing) {
     allocations = count.allocations();
   }
   EXPECT_EQ(allocations, 0);
-}
-
-// a curved tube: 40 mm straight from the catheter's exit, then a 90 degree bend of 15 mm radius
-// and 60 mm straight, 1.5 mm lumen radius
-anatomy::VesselTree curved_tube() {
-  anatomy::VesselTree tree;
-  anatomy::VesselBranch b;
-  b.name = "tube";
-  b.parent = -1;
-  auto add = [&](const Eigen::Vector3d& p) { b.points.push_back({p, 1.5e-3}); };
-  for (double z = 0.0; z <= 0.04 + 1e-9; z += 1e-3) add({0.0, 0.0, z});
-  for (int k = 1; k <= 24; ++k) {
-    const double a = 0.5 * std::numbers::pi * k / 24.0;
-    add({0.015 * (1.0 - std::cos(a)), 0.0, 0.04 + 0.015 * std::sin(a)});
-  }
-  for (double x = 0.016; x <= 0.075 + 1e-9; x += 1e-3) add({x, 0.0, 0.055});
-  tree.branches.push_back(b);
-  return tree;
 }
 
 // the rod wire in the curved tube with the tube's lumen, fed `fed_m` over 3 s and held 1 s
@@ -607,6 +590,15 @@ TEST(RodWireParams, RejectsBadValuesNamingTheField) {
     FAIL() << "accepted beat_coupling contact for the chain-mail";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("guidewire.beat_coupling"), std::string::npos) << e.what();
+  }
+  // the substep may be halved at most 6 times (1/64 of the set length)
+  GuidewireParams halved;
+  halved.rod_substep_halvings = 7;
+  try {
+    validate(halved);
+    FAIL() << "accepted 7 halvings";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("rod_substep_halvings"), std::string::npos) << e.what();
   }
 }
 

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "anatomy/phantom/tube_phantoms.h"
 #include "physics/guidewire/chain_mail_wire.h"
 #include "physics/guidewire/lumen_query.h"
 #include "physics/world.h"
@@ -24,6 +25,12 @@ inline WorldSpec default_scene() {
   s.friction = FrictionParams{};
   s.blood_flow = BloodFlowParams{};
   return s;
+}
+
+// the rod tests' curved tube (anatomy/phantom/tube_phantoms.h): 40 mm straight from the
+// catheter's exit along +z, 90 degrees of 15 mm radius, 60 mm straight along +x; 1.5 mm lumen
+inline anatomy::VesselTree curved_tube() {
+  return anatomy::bent_tube_phantom();
 }
 
 // a ramp of `amount` that starts at `at_s` and lasts `over_s`

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "physics/rod/elastica.h"
 #include "physics/rod/rod_statics.h"
@@ -253,6 +254,36 @@ TEST(CosseratRodDynamics, StepAllocatesNothing) {
     }
     EXPECT_EQ(allocations, 0);
   }
+}
+
+// a substep taken back (RodWire's halved substeps): restoring the saved state (the hub
+// included) and stepping again gives exactly what stepping from it gave, and saving into the same
+// RodState again allocates nothing
+TEST(CosseratRodDynamics, ARestoredStateStepsExactlyAsTheSavedOne) {
+  CosseratRodParams p = unit_cantilever(20);
+  p.solver = RodSolver::kDirect;
+  CosseratRod rod = make_unit_cantilever(p);
+  rod.set_node_force_n(20, Eigen::Vector3d(0.0, -2.0, 0.0));
+  for (int i = 0; i < 5; ++i) rod.step(kDt);
+  RodState saved;
+  rod.save_state(saved);
+  rod.step(kDt);
+  const std::vector<Eigen::Vector3d> once(rod.nodes_m().begin(), rod.nodes_m().end());
+  rod.set_hub_node(4);  // nodes 1-4 kinematic now: the restore frees them again
+  rod.step(kDt);
+  rod.restore_state(saved);
+  EXPECT_EQ(rod.hub_node(), 0);
+  for (int i = 0; i <= 20; ++i) EXPECT_EQ(rod.nodes_m()[i], saved.x[i]) << i;
+  rod.step(kDt);
+  for (int i = 0; i <= 20; ++i) EXPECT_EQ(rod.nodes_m()[i], once[i]) << i;
+  long allocations = -1;
+  {
+    pcisim::testing::AllocationCount count;
+    rod.save_state(saved);
+    rod.restore_state(saved);
+    allocations = count.allocations();
+  }
+  EXPECT_EQ(allocations, 0);
 }
 
 TEST(CosseratRodDynamics, RejectsBadParameters) {

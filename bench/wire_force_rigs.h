@@ -1,0 +1,107 @@
+#pragma once
+// The rigs of `pcisim-bench wire-force` (issue #33): the rod wire with its wall inside the solve
+// (RodContactScheme::kSolve) in a set-up whose answer is a textbook result the bench computes
+// without the rod. One function per rig, each returning what it measured and its reference:
+//   tip_on_wall  a clamped wire whose tip a rigid finger pushes aside: the elastica's tip load
+//   capstan      a wire of negligible bending stiffness drawn round a bent tube and held at its
+//                far end: pull = hold e^(mu theta) (theta: the angle the wire wraps)
+//   end_on       a straight wire pushed into the closed end of a straight tube: it first buckles
+//                at the clamped-pinned Euler load; afterwards the tube holds it
+//   dead_end     the default wire fed into the closed end of a bent tube: the hub's force against
+//                the feed (a curve for the report's plot), what crumples, what is left in the wall
+#include <string>
+#include <vector>
+
+namespace pcisim::bench::wire_force {
+
+// every rig steps the wire at the scenes' 30 Hz
+inline constexpr double kStepS = 1.0 / 30.0;
+
+// one 30 Hz step of the wire: its median and 99th percentile over a run, and the substeps a
+// step took (more than the 8 set where the contact halved them)
+struct StepCost {
+  double ms_p50 = 0, ms_p99 = 0;
+  int substeps_p50 = 0, substeps_max = 0;
+};
+
+// a step's cost from the per-step figures (wire_force_rigs.cc)
+StepCost step_cost(std::vector<double> step_ms, std::vector<int> substeps);
+
+// --- tip_on_wall ---
+// the wire's free length is whole segments (the hub is a node): 48 mm is whole at 0.5-4 mm
+struct TipOnWall {
+  double length_mm = 48, deflection_mm = 4.8;
+  int segments = 300, substeps = 8;
+};
+struct TipOnWallResult {
+  double free_length_mm = 0;  // what the wire has free: whole segments, the requested L rounded up
+  double contact_force_n = 0, ei_nm2 = 0, beam_n = 0, elastica_n = 0, tip_x_mm = 0, residual_mm = 0;
+  int contacts = 0;
+  StepCost cost;
+};
+TipOnWallResult run_tip_on_wall(const TipOnWall& c);
+std::string json_line(const TipOnWall& c, const TipOnWallResult& r);
+
+// --- capstan ---
+// the tube: 30 mm straight from the catheter's exit, then a bend of angle_deg at 15 mm radius
+// (beyond 180 degrees a helix rising 5 mm a turn, so the tube clears itself), then 40 mm straight;
+// 1.5 mm lumen radius. The wire (EI and GJ 1e-9, the range's floor; no soft tip) is drawn through
+// by a 0.01 N leader force on its tip, then its tip is held by hold_n along the last straight
+// while the hub pulls it back at 10 mm/s; mu is both friction coefficients
+struct Capstan {
+  double mu = 0.2, angle_deg = 90, hold_n = 0.05;
+};
+struct CapstanResult {
+  double pull_n = 0;         // the hub's pull, mean over the last 0.75 s of the 1.5 s pull
+  double pull_spread_n = 0;  // its largest departure from that mean in those steps
+  double wrap_rad = 0;       // the angle the wire wraps: the bend, less the helix's rise
+  double capstan_n = 0;      // hold e^(mu wrap)
+  double residual_mm = 0;    // the deepest a node was left in the wall while pulled
+  bool drawn_through = false;
+  StepCost cost;
+};
+CapstanResult run_capstan(const Capstan& c);
+std::string json_line(const Capstan& c, const CapstanResult& r);
+
+// --- end_on ---
+// a straight tube closed at the far end, the catheter's exit on its axis, its lumen radius the
+// clearance plus the wall margin (the wire's centerline may move clearance_mm off the axis). The
+// wire (default section, no soft tip, no friction) is fed until its tip meets the end at free
+// length length_mm, then 20 mm more at 5 mm/s; a lateral gravity of 0.05 m/s^2 is the
+// imperfection that picks the buckling direction
+struct EndOn {
+  double length_mm = 50, clearance_mm = 0.5;
+};
+struct EndOnResult {
+  double buckling_n = 0;  // the hub's force when the wire's largest lateral deflection first reaches half the clearance
+  double column_mm = 0;   // the buckling column: from the hub node (the clamp) to the end's stop
+  double euler_n = 0;     // clamped-pinned over that column: 4.4934^2 EI / L^2 (= pi^2 EI / (0.699 L)^2)
+  double max_hub_n = 0;   // the largest hub force over the 20 mm
+  double max_crumpled_mm = 0;  // the most the free wire was shorter than its length
+  double blew_up_at_mm = -1;   // the feed past the end at which it blew up (the run stops), -1: never
+  double worst_mm = 0;         // the furthest a node went past the wall margin (<= 0: never)
+  bool buckled = false;
+  StepCost cost;
+};
+EndOnResult run_end_on(const EndOn& c);
+std::string json_line(const EndOn& c, const EndOnResult& r);
+
+// --- dead_end ---
+// the default wire (its soft tip straight), friction 0.3 / 0.2, in the tube of the rod tests
+// (40 mm straight, 90 degrees at 15 mm radius, then straight to its closed end 124 mm along its
+// centerline; 1.5 mm lumen radius): fed 110 mm, then on towards 200 mm over 3 s and held 1 s
+struct DeadEndSample {
+  double commanded_mm = 0, fed_mm = 0, hub_n = 0, tip_n = 0, crumpled_mm = 0, worst_mm = 0, step_ms = 0;
+  int substeps = 0;
+};
+struct DeadEndResult {
+  std::vector<DeadEndSample> samples;  // one per step from the 110 mm on
+  double max_hub_n = 0, max_tip_n = 0, max_crumpled_mm = 0, worst_mm = 0;
+  double largest_hub_jump_n = 0;  // the largest change of the hub's force between two steps
+  double refused_mm = 0;          // at the end
+  StepCost cost;
+};
+DeadEndResult run_dead_end();
+std::string json_line(const DeadEndResult& r);
+
+}  // namespace pcisim::bench::wire_force

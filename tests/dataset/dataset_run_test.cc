@@ -81,8 +81,8 @@ class DatasetRun : public ::testing::Test {
 constexpr const char* kVaried = R"(
   "samples": 3, "frames_per_sample": 2, "seed": 11,
   "anatomy": {"phantom_seeds": {"integers": [1, 2]}},
-  "warmup_s": {"uniform": [1.0, 1.5]},
-  "contrast": {"probability": 1.0, "start_s": {"uniform": [-1.0, 0.0]}},
+  "warmup_s": {"uniform": [0.3, 0.5]},
+  "contrast": {"probability": 1.0, "start_s": {"uniform": [-0.3, 0.0]}},
   "vary": {"effects.xray.primary_deg": {"uniform": [-40, 40]},
            "effects.detector_noise.photons_per_pixel": {"log_uniform": [500, 3000]}})";
 

@@ -87,8 +87,8 @@ TEST_F(CaseEquivalence, WrittenPhantomCaseRunsLikeItsSeed) {
   physics::World a(by_seed.world, seed_case->vessels), b(by_case.world, file_case->vessels);
   physics::WorldSnapshot sa, sb;
   physics::InstrumentInput in;
-  for (int step = 0; step < 240; ++step) {
-    in.insertion_m = step < 160 ? 0.0006 * step : 0.096 - 0.0003 * (step - 160);
+  for (int step = 0; step < 160; ++step) {
+    in.insertion_m = step < 110 ? 0.0006 * step : 0.066 - 0.0003 * (step - 110);
     in.rotation_rad = 0.02 * step;
     a.step(in);
     b.step(in);

@@ -1,5 +1,7 @@
 // Who may connect: the page loads for anyone, the WebSocket only with a token, and the token's
 // role decides what the connection may do. Real sockets on loopback.
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 #include <gtest/gtest.h>
 #include <set>
@@ -10,6 +12,8 @@
 namespace pcisim::remote::test {
 namespace {
 
+namespace net = boost::asio;
+namespace beast = boost::beast;
 namespace http = beast::http;
 
 http::response<http::string_body> http_get(uint16_t port, const std::string& target) {

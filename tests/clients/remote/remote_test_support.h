@@ -2,11 +2,6 @@
 // Helpers for the pcisim-remote tests: a gateway on in-process LCM (memq) listening on a free
 // loopback port, a real WebSocket client on its own thread, and a recorder of what the gateway
 // publishes on the bus.
-#include <boost/asio/ip/tcp.hpp>
-#include <boost/asio/post.hpp>
-#include <boost/beast/core.hpp>
-#include <boost/beast/http.hpp>
-#include <boost/beast/websocket.hpp>
 #include <chrono>
 #include <condition_variable>
 #include <deque>
@@ -26,9 +21,6 @@
 
 namespace pcisim::remote::test {
 
-namespace net = boost::asio;
-namespace beast = boost::beast;
-namespace websocket = beast::websocket;
 using namespace std::chrono_literals;
 
 inline const char* kObserverToken = "observer-token-0123456789abcdef";
@@ -83,158 +75,34 @@ struct WsMessage {
   std::string image() const { return data.substr(4 + header_bytes()); }
 };
 
-// a real WebSocket client: reads on its own thread into an inbox (unless told not to read)
+// a real WebSocket client: reads on its own thread into an inbox (unless told not to read). Its
+// Beast code lives in remote_test_support.cc, compiled once for every test file that uses it.
 class WsClient {
  public:
-  WsClient() : ws_(io_) {}
-  ~WsClient() { close_hard(); }
+  WsClient();
+  ~WsClient();
+  WsClient(const WsClient&) = delete;
+  WsClient& operator=(const WsClient&) = delete;
 
   // the HTTP status of the upgrade's answer: 101 when connected
   int connect(uint16_t port, const std::string& target, bool read = true, int receive_buffer = 0,
-              const std::string& authorization = "") {
-    auto& sock = beast::get_lowest_layer(ws_).socket();
-    beast::error_code ec;
-    sock.open(net::ip::tcp::v4());
-    if (receive_buffer > 0) sock.set_option(net::socket_base::receive_buffer_size(receive_buffer));
-    sock.connect({net::ip::address_v4::loopback(), port}, ec);
-    if (ec) return -1;  // nothing listens
-    if (!authorization.empty())
-      ws_.set_option(websocket::stream_base::decorator([authorization](websocket::request_type& req) {
-        req.set(beast::http::field::authorization, authorization);
-      }));
-    ws_.handshake("127.0.0.1", target, ec);
-    if (ec) return upgrade_status(port, target, authorization);
-    connected_ = true;
-    if (read) start_reading();
-    return 101;
-  }
-
+              const std::string& authorization = "");
   // the status a refused upgrade got, asked again over plain HTTP (beast keeps no refused answer)
-  static int upgrade_status(uint16_t port, const std::string& target, const std::string& authorization) {
-    namespace http = beast::http;
-    net::io_context io;
-    beast::tcp_stream stream(io);
-    beast::error_code ec;
-    stream.connect({net::ip::address_v4::loopback(), port}, ec);
-    if (ec) return -1;
-    http::request<http::empty_body> req{http::verb::get, target, 11};
-    req.set(http::field::host, "127.0.0.1");
-    req.set(http::field::upgrade, "websocket");
-    req.set(http::field::connection, "upgrade");
-    req.set(http::field::sec_websocket_key, "dGhlIHNhbXBsZSBub25jZQ==");
-    req.set(http::field::sec_websocket_version, "13");
-    if (!authorization.empty()) req.set(http::field::authorization, authorization);
-    http::write(stream, req, ec);
-    beast::flat_buffer buf;
-    http::response<http::string_body> res;
-    http::read(stream, buf, res, ec);
-    return ec ? -1 : res.result_int();
-  }
-
-  void start_reading() {
-    read();
-    thread_ = std::thread([this] { io_.run(); });
-  }
-
-  void send(const nlohmann::json& j) {
-    auto text = std::make_shared<std::string>(j.dump());
-    net::post(io_, [this, text] {
-      outbox_.push_back(*text);
-      if (!writing_) write_next();
-    });
-  }
-
+  static int upgrade_status(uint16_t port, const std::string& target, const std::string& authorization);
+  void start_reading();
+  void send(const nlohmann::json& j);
   // the next message within timeout
-  std::optional<WsMessage> next(std::chrono::milliseconds timeout = 3000ms) {
-    std::unique_lock lock(mutex_);
-    if (!cv_.wait_for(lock, timeout, [&] { return !inbox_.empty() || closed_; })) return std::nullopt;
-    if (inbox_.empty()) return std::nullopt;
-    WsMessage m = std::move(inbox_.front());
-    inbox_.pop_front();
-    return m;
-  }
-
+  std::optional<WsMessage> next(std::chrono::milliseconds timeout = 3000ms);
   // the next JSON message of this type (others are skipped; frames are counted)
-  std::optional<nlohmann::json> next_of(const std::string& type, std::chrono::milliseconds timeout = 3000ms) {
-    const auto end = std::chrono::steady_clock::now() + timeout;
-    while (std::chrono::steady_clock::now() < end) {
-      auto m = next(std::chrono::duration_cast<std::chrono::milliseconds>(end - std::chrono::steady_clock::now()));
-      if (!m) return std::nullopt;
-      if (m->binary) continue;
-      auto j = m->json();
-      if (j["type"] == type) return j;
-    }
-    return std::nullopt;
-  }
-
-  std::optional<WsMessage> next_frame(std::chrono::milliseconds timeout = 3000ms) {
-    const auto end = std::chrono::steady_clock::now() + timeout;
-    while (std::chrono::steady_clock::now() < end) {
-      auto m = next(std::chrono::duration_cast<std::chrono::milliseconds>(end - std::chrono::steady_clock::now()));
-      if (!m) return std::nullopt;
-      if (m->binary) return m;
-    }
-    return std::nullopt;
-  }
-
-  bool closed() {
-    std::lock_guard lock(mutex_);
-    return closed_;
-  }
-
+  std::optional<nlohmann::json> next_of(const std::string& type, std::chrono::milliseconds timeout = 3000ms);
+  std::optional<WsMessage> next_frame(std::chrono::milliseconds timeout = 3000ms);
+  bool closed();
   // drops the connection without a close frame, as a crashed page or a cut cable would
-  void close_hard() {
-    if (thread_.joinable()) {
-      net::post(io_, [this] {
-        beast::error_code ec;
-        beast::get_lowest_layer(ws_).socket().shutdown(net::ip::tcp::socket::shutdown_both, ec);
-        beast::get_lowest_layer(ws_).socket().close(ec);
-      });
-      thread_.join();
-    } else if (connected_) {
-      beast::error_code ec;
-      beast::get_lowest_layer(ws_).socket().close(ec);
-    }
-    connected_ = false;
-  }
+  void close_hard();
 
  private:
-  void read() {
-    ws_.async_read(buf_, [this](beast::error_code ec, size_t) {
-      std::lock_guard lock(mutex_);
-      if (ec) {
-        closed_ = true;
-        cv_.notify_all();
-        return;
-      }
-      inbox_.push_back({ws_.got_binary(), beast::buffers_to_string(buf_.data())});
-      buf_.consume(buf_.size());
-      cv_.notify_all();
-      read();
-    });
-  }
-  void write_next() {
-    if (outbox_.empty()) return;
-    writing_ = true;
-    current_ = std::move(outbox_.front());
-    outbox_.pop_front();
-    ws_.text(true);
-    ws_.async_write(net::buffer(current_), [this](beast::error_code ec, size_t) {
-      writing_ = false;
-      if (!ec) write_next();
-    });
-  }
-
-  net::io_context io_;
-  websocket::stream<beast::tcp_stream> ws_;
-  beast::flat_buffer buf_;
-  std::thread thread_;
-  std::mutex mutex_;
-  std::condition_variable cv_;
-  std::deque<WsMessage> inbox_;
-  bool closed_ = false, connected_ = false, writing_ = false;
-  std::deque<std::string> outbox_;
-  std::string current_;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
 };
 
 inline std::string ws_target(const char* token) {

@@ -1,8 +1,9 @@
 // pcisim-bench wire-force: the rod wire's forces against mechanics the bench does not compute
 // itself (issue #33), with the wall inside the rod's solve (RodContactScheme::kSolve). The rigs
 // (wire_force_rigs.h, one file each): tip_on_wall (the elastica's tip load), capstan (Euler's
-// capstan equation), end_on (Euler's clamped-pinned buckling load) and dead_end (the default
-// wire pushed into a closed tube: the hub's force against the feed, for the report's plot).
+// capstan equation), end_on (Euler's clamped-pinned buckling load), dead_end (the default
+// wire pushed into a closed tube: the hub's force against the feed, for the report's plot) and
+// torque_lag (the tip's spin against the hub's turn).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -37,6 +38,10 @@ constexpr const char* kUsage =
     "      force when it first buckles) against euler_n (clamped-pinned), max_hub_n over 20 mm more feed\n"
     "  --case dead_end\n"
     "      the default wire fed into the closed end of a bent tube: the hub's force against the feed (curve)\n"
+    "  --case torque_lag [--path tortuous|straight (tortuous)] [--friction on|off (on)] [--fed-mm F (130, 60-140)]\n"
+    "      the hub turned 360 deg at 180 deg/s, then held 2 s: the tip's spin against time (curve), the lag when the\n"
+    "      hub stops and after the hold, the tip's fastest turn / the hub's rate (> 1: whip). Straight and\n"
+    "      frictionless, the tip follows the hub (the baseline)\n"
     "pcisim-bench wire-force [--out DIR (docs/benchmarks)] [--no-plot] [--quick]\n"
     "  the sweep: every case over the ranges above; wire-force.md, .json and .png (the plot: matplotlib).\n"
     "  --quick: one run of each case\n";
@@ -59,6 +64,7 @@ int one_case(const std::vector<std::string>& args) {
   TipOnWall tip;
   Capstan cap;
   EndOn end;
+  TorqueLag lag;
   bool length_given = false;
   double length_mm = 0;
   for (size_t i = 0; i < args.size(); ++i) {
@@ -91,6 +97,16 @@ int one_case(const std::vector<std::string>& args) {
       ok = number_in(a, v, 0.01, 1, &cap.hold_n);
     } else if (a == "--clearance-mm") {
       ok = number_in(a, v, 0.1, 1, &end.clearance_mm);
+    } else if (a == "--path" && (v == "tortuous" || v == "straight")) {
+      lag.tortuous = v == "tortuous";
+    } else if (a == "--friction" && (v == "on" || v == "off")) {
+      lag.friction = v == "on";
+    } else if (a == "--fed-mm") {
+      ok = number_in(a, v, 60, 140, &lag.fed_mm);
+    } else if (a == "--path" || a == "--friction") {
+      std::fprintf(stderr, "pcisim-bench wire-force: %s must be %s, not '%s'\n", a.c_str(),
+                   a == "--path" ? "tortuous or straight" : "on or off", v.c_str());
+      return 2;
     } else {
       std::fprintf(stderr, "pcisim-bench wire-force: unknown option %s\n%s", a.c_str(), kUsage);
       return 2;
@@ -117,9 +133,13 @@ int one_case(const std::vector<std::string>& args) {
     std::printf("%s\n", json_line(end, run_end_on(end)).c_str());
   } else if (kind == "dead_end") {
     std::printf("%s\n", json_line(run_dead_end()).c_str());
+  } else if (kind == "torque_lag") {
+    std::printf("%s\n", json_line(lag, run_torque_lag(lag)).c_str());
   } else {
-    std::fprintf(stderr, "pcisim-bench wire-force: --case must be tip_on_wall, capstan, end_on or dead_end, not '%s'\n",
-                 kind.c_str());
+    std::fprintf(
+        stderr,
+        "pcisim-bench wire-force: --case must be tip_on_wall, capstan, end_on, dead_end or torque_lag, not '%s'\n",
+        kind.c_str());
     return 2;
   }
   return 0;
@@ -187,6 +207,17 @@ int run(const std::vector<std::string>& args) {
     }
   const DeadEndResult dead = run_dead_end();
   keep(json_line(dead));
+  // torque lag: the tortuous tube with and without friction, and the straight frictionless baseline
+  std::vector<std::pair<TorqueLag, TorqueLagResult>> lags;
+  for (const auto& [tortuous, friction] :
+       bo.quick ? std::vector<std::pair<bool, bool>>{{true, true}}
+                : std::vector<std::pair<bool, bool>>{{false, false}, {true, false}, {true, true}}) {
+    TorqueLag l;
+    l.tortuous = tortuous;
+    l.friction = friction;
+    lags.push_back({l, run_torque_lag(l)});
+    keep(json_line(l, lags.back().second));
+  }
 
   std::filesystem::create_directories(bo.out_dir);
   const std::string json_path = (std::filesystem::path(bo.out_dir) / "wire-force.json").string();
@@ -268,7 +299,7 @@ int run(const std::vector<std::string>& args) {
         r.blew_up_at_mm < 0 ? std::string("never") : fmt::format("{:.2f}", r.blew_up_at_mm), r.worst_mm, r.cost.ms_p50,
         r.cost.ms_p99, r.cost.substeps_p50, r.cost.substeps_max);
   }
-  md << "\n## dead_end\n\nThe default wire (EI 1.56e-5 N m², 10 mm soft tip of 4e-7 N m², straight) with friction "
+  md << "\n## dead_end\n\nThe default wire (EI 1.56e-5 N m², 12 mm soft tip of 4e-7 N m², straight) with friction "
         "0.3 / 0.2 in the rod tests' bent tube (40 mm straight, 90° at 15 mm radius, closed 124 mm along its "
         "centerline; 1.5 mm lumen radius), fed 110 mm, then on towards 200 mm over 3 s and held 1 s; the grip "
         "slips above 1 N (`feed_refuse_force_n`). Targets (issue #33): nothing crumples (the free wire's length kept "
@@ -283,11 +314,33 @@ int run(const std::vector<std::string>& args) {
      << fmt::format("- refused at the end: {:.1f} mm of the 200 commanded\n", dead.refused_mm)
      << fmt::format("- ms a step: {:.1f} / {:.1f} (p50 / p99), substeps {} / {}\n", dead.cost.ms_p50, dead.cost.ms_p99,
                     dead.cost.substeps_p50, dead.cost.substeps_max);
+  md << "\n## torque_lag\n\nThe default wire (EI 1.56e-5 N m², 12 mm soft tip, straight) fed 130 mm at 30 mm/s into a "
+        "tube of 1.5 mm lumen radius, settled 0.5 s, then the hub turned 360° at 180°/s and held 2 s. Tortuous: 32 mm "
+        "straight, bends of 90°, 90° and 120° at 10–12 mm radius in three planes with 15 mm straights between them, "
+        "then straight (the tip 13 mm past the last bend). The tip's spin: its material frame's turn about its own "
+        "tangent, step by step, the tangent's own turn taken out (the old frame carried to the new tangent by the "
+        "smallest rotation). No textbook value: the straight frictionless tube is the check of the measure (the tip "
+        "follows the hub); the tortuous tube shows what friction does (issue #33 item 5: lag and whip). Whip: the "
+        "tip's fastest turn over one step against the hub's rate.\n\n"
+     << "| tube | friction | lag when the hub stops ° | after the 2 s hold ° | most lag ° | fastest tip / hub | ms "
+        "p50 / p99 | substeps |\n|---|---|---|---|---|---|---|---|\n";
+  for (const auto& [l, r] : lags) {
+    if (!r.completed) {
+      md << fmt::format("| {} | {} | went non-finite | | | | | |\n", l.tortuous ? "tortuous" : "straight",
+                        l.friction ? "on" : "off");
+      continue;
+    }
+    md << fmt::format("| {} | {} | {:+.2f} | {:+.2f} | {:.2f} | {:.2f} | {:.1f} / {:.1f} | {} / {} |\n",
+                      l.tortuous ? "tortuous" : "straight", l.friction ? "0.1 / 0.07 body, 0.2 / 0.15 tip" : "none",
+                      r.lag_at_turn_end_deg, r.final_lag_deg, r.max_lag_deg, r.max_tip_rate_ratio, r.cost.ms_p50,
+                      r.cost.ms_p99, r.cost.substeps_p50, r.cost.substeps_max);
+  }
   md.close();
   if (bo.plot && std::filesystem::exists("docs/benchmarks/wire-force.py")) {
     if (run_plot_script("wire-force",
                         "docs/benchmarks/wire-force.py " + json_path + " " + bo.out_dir + "/wire-force.png"))
-      std::ofstream(md_path, std::ios::app) << "\n![the dead end and the capstan](wire-force.png)\n";
+      std::ofstream(md_path, std::ios::app)
+          << "\n![the dead end, the capstan, end on and the torque lag](wire-force.png)\n";
   }
   std::printf("wire-force: wrote %s and %s\n", md_path.c_str(), json_path.c_str());
   return 0;

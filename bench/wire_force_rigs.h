@@ -9,6 +9,8 @@
 //                at the clamped-pinned Euler load; afterwards the tube holds it
 //   dead_end     the default wire fed into the closed end of a bent tube: the hub's force against
 //                the feed (a curve for the report's plot), what crumples, what is left in the wall
+//   torque_lag   the hub turned a whole turn at a constant rate: the tip's rotation against time in
+//                a tortuous tube with friction, beside a straight frictionless tube (the tip follows)
 #include <string>
 #include <vector>
 
@@ -103,5 +105,29 @@ struct DeadEndResult {
 };
 DeadEndResult run_dead_end();
 std::string json_line(const DeadEndResult& r);
+
+// --- torque_lag ---
+// the default wire (its soft tip straight; friction 0.1 / 0.07 body, 0.2 / 0.15 tip, or none) fed
+// fed_mm at 30 mm/s into a tube of 1.5 mm lumen radius: tortuous (32 mm straight, then bends of
+// 90, 90 and 120 degrees at 10-12 mm radius in three planes with 15 mm between them, then
+// straight) or straight; then the hub turned 360 degrees at 180 deg/s and held 2 s
+struct TorqueLag {
+  bool tortuous = true, friction = true;
+  double fed_mm = 130;
+};
+struct TorqueLagSample {
+  double t_s = 0, hub_deg = 0, tip_deg = 0;  // from the turn's start; the tip's spin about its axis
+};
+struct TorqueLagResult {
+  std::vector<TorqueLagSample> samples;  // one per step of the turn and the hold
+  double lag_at_turn_end_deg = 0;        // hub - tip when the hub stops
+  double final_lag_deg = 0;              // after the hold
+  double max_lag_deg = 0;
+  double max_tip_rate_ratio = 0;  // the tip's fastest turn over one step / the hub's rate (> 1: whip)
+  bool completed = false;         // false: the run went non-finite
+  StepCost cost;
+};
+TorqueLagResult run_torque_lag(const TorqueLag& c);
+std::string json_line(const TorqueLag& c, const TorqueLagResult& r);
 
 }  // namespace pcisim::bench::wire_force

@@ -1,5 +1,6 @@
-# plots pcisim-bench wire-force's results: the dead end's hub and tip force against the feed, and
-# the capstan's and end-on's measured forces against their textbook values.
+# plots pcisim-bench wire-force's results: the dead end's hub and tip force against the feed, the
+# capstan's and end-on's measured forces against their textbook values, and the tip's spin against
+# the hub's turn (torque lag).
 # usage: wire-force.py wire-force.json wire-force.png
 import json
 import math
@@ -11,7 +12,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
 runs = json.load(open(sys.argv[1]))["runs"]
-fig, axes = plt.subplots(1, 3, figsize=(16, 4.8))
+fig, grid = plt.subplots(2, 2, figsize=(14, 9.6))
+axes = grid.flatten()
 
 ax = axes[0]
 for r in runs:
@@ -61,6 +63,23 @@ ax.set_ylabel("hub force at first buckling N")
 ax.set_title("end on")
 ax.legend(fontsize=7)
 ax.grid(alpha=0.3, which="both")
+
+ax = axes[3]
+for r in runs:
+    if r["case"] != "torque_lag" or not r["completed"]:
+        continue
+    cols = r["curve_columns"]
+    curve = [dict(zip(cols, row)) for row in r["curve"]]
+    label = f"{'tortuous' if r['tortuous'] else 'straight'}, friction {'on' if r['friction'] else 'off'}"
+    ax.plot([c["t_s"] for c in curve], [c["tip_deg"] for c in curve], label=f"tip: {label}")
+    hub = [(c["t_s"], c["hub_deg"]) for c in curve]
+if any(r["case"] == "torque_lag" and r["completed"] for r in runs):
+    ax.plot([h[0] for h in hub], [h[1] for h in hub], color="k", lw=0.8, ls="--", label="hub")
+ax.set_xlabel("time from the turn's start s")
+ax.set_ylabel("rotation °")
+ax.set_title("torque lag: the hub turned 360° at 180°/s, then held")
+ax.legend(fontsize=7)
+ax.grid(alpha=0.3)
 
 fig.suptitle("The rod wire with its wall inside the solve, against mechanics (pcisim-bench wire-force)")
 fig.tight_layout()

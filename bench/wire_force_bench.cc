@@ -39,6 +39,7 @@ constexpr const char* kUsage =
     "  --case dead_end\n"
     "      the default wire fed into the closed end of a bent tube: the hub's force against the feed (curve)\n"
     "  --case torque_lag [--path tortuous|straight (tortuous)] [--friction on|off (on)] [--fed-mm F (130, 60-140)]\n"
+    "      (the tortuous tube's last bend ends 115.5 mm in: fed less, the tip stops short of it)\n"
     "      the hub turned 360 deg at 180 deg/s, then held 2 s: the tip's spin against time (curve), the lag when the\n"
     "      hub stops and after the hold, the tip's fastest turn / the hub's rate (> 1: whip). Straight and\n"
     "      frictionless, the tip follows the hub (the baseline)\n"
@@ -317,23 +318,24 @@ int run(const std::vector<std::string>& args) {
   md << "\n## torque_lag\n\nThe default wire (EI 1.56e-5 N m², 12 mm soft tip, straight) fed 130 mm at 30 mm/s into a "
         "tube of 1.5 mm lumen radius, settled 0.5 s, then the hub turned 360° at 180°/s and held 2 s. Tortuous: 32 mm "
         "straight, bends of 90°, 90° and 120° at 10–12 mm radius in three planes with 15 mm straights between them, "
-        "then straight (the tip 13 mm past the last bend). The tip's spin: its material frame's turn about its own "
+        "then straight (the last bend ends 115.5 mm along the centerline from the catheter's exit: the tip "
+        "14.5 mm past it). The tip's spin: its material frame's turn about its own "
         "tangent, step by step, the tangent's own turn taken out (the old frame carried to the new tangent by the "
         "smallest rotation). No textbook value: the straight frictionless tube is the check of the measure (the tip "
         "follows the hub); the tortuous tube shows what friction does (issue #33 item 5: lag and whip). Whip: the "
         "tip's fastest turn over one step against the hub's rate.\n\n"
-     << "| tube | friction | lag when the hub stops ° | after the 2 s hold ° | most lag ° | fastest tip / hub | ms "
-        "p50 / p99 | substeps |\n|---|---|---|---|---|---|---|---|\n";
+     << "| tube | friction | lag when the hub stops ° | after the 2 s hold ° | most lag ° | most lead ° | fastest tip "
+        "/ hub | ms p50 / p99 | substeps |\n|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& [l, r] : lags) {
     if (!r.completed) {
-      md << fmt::format("| {} | {} | went non-finite | | | | | |\n", l.tortuous ? "tortuous" : "straight",
+      md << fmt::format("| {} | {} | went non-finite (recovered) | | | | | | |\n", l.tortuous ? "tortuous" : "straight",
                         l.friction ? "on" : "off");
       continue;
     }
-    md << fmt::format("| {} | {} | {:+.2f} | {:+.2f} | {:.2f} | {:.2f} | {:.1f} / {:.1f} | {} / {} |\n",
+    md << fmt::format("| {} | {} | {:+.2f} | {:+.2f} | {:.2f} | {:.2f} | {:.2f} | {:.1f} / {:.1f} | {} / {} |\n",
                       l.tortuous ? "tortuous" : "straight", l.friction ? "0.1 / 0.07 body, 0.2 / 0.15 tip" : "none",
-                      r.lag_at_turn_end_deg, r.final_lag_deg, r.max_lag_deg, r.max_tip_rate_ratio, r.cost.ms_p50,
-                      r.cost.ms_p99, r.cost.substeps_p50, r.cost.substeps_max);
+                      r.lag_at_turn_end_deg, r.final_lag_deg, r.max_lag_deg, r.max_lead_deg, r.max_tip_rate_ratio,
+                      r.cost.ms_p50, r.cost.ms_p99, r.cost.substeps_p50, r.cost.substeps_max);
   }
   md.close();
   if (bo.plot && std::filesystem::exists("docs/benchmarks/wire-force.py")) {

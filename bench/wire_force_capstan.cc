@@ -139,11 +139,9 @@ std::string json_line(const Capstan& c, const CapstanResult& r) {
   return fmt::format(
       "{{\"case\": \"capstan\", \"mu\": {}, \"angle_deg\": {}, \"hold_n\": {}, \"drawn_through\": {}, "
       "\"pull_n\": {:.6g}, \"pull_spread_n\": {:.3g}, \"wrap_rad\": {:.6g}, \"capstan_n\": {:.6g}, \"error_pct\": "
-      "{:.3f}, \"residual_mm\": {:.3g}, \"step_ms_p50\": {:.2f}, \"step_ms_p99\": {:.2f}, \"substeps_p50\": {}, "
-      "\"substeps_max\": {}}}",
+      "{:.3f}, \"residual_mm\": {:.3g}, {}}}",
       c.mu, c.angle_deg, c.hold_n, r.drawn_through, r.pull_n, r.pull_spread_n, r.wrap_rad, r.capstan_n,
-      100.0 * (r.pull_n / r.capstan_n - 1.0), r.residual_mm, r.cost.ms_p50, r.cost.ms_p99, r.cost.substeps_p50,
-      r.cost.substeps_max);
+      100.0 * (r.pull_n / r.capstan_n - 1.0), r.residual_mm, cost_json(r.cost));
 }
 
 }  // namespace pcisim::bench::wire_force

@@ -20,11 +20,6 @@ namespace {
 // fed kApproachM over 3.5 s, then on towards kCommandM over kPushS, then held kHoldS
 constexpr double kApproachM = 0.11, kCommandM = 0.2, kPushS = 3.0, kHoldS = 1.0;
 
-// how much shorter the free wire is than what was fed, m
-double crumpled_m(const physics::RodWire& w) {
-  return w.compression_m();
-}
-
 }  // namespace
 
 DeadEndResult run_dead_end() {
@@ -58,7 +53,7 @@ DeadEndResult run_dead_end() {
     s.fed_mm = 1e3 * w.fed_length_m();
     s.hub_n = w.hub_axial_force_n();
     s.tip_n = w.tip_contact_force_n();
-    s.crumpled_mm = 1e3 * crumpled_m(w);
+    s.crumpled_mm = 1e3 * w.compression_m();  // how much shorter the free wire is than what was fed
     s.substeps = w.contact_report().substeps;
     s.worst_mm = -1e9;
     for (int i = w.first_free_node(); i < w.node_count(); ++i)
@@ -88,11 +83,11 @@ std::string json_line(const DeadEndResult& r) {
   }
   return fmt::format(
       "{{\"case\": \"dead_end\", \"max_hub_n\": {:.4f}, \"largest_hub_jump_n\": {:.4f}, \"max_tip_n\": {:.4f}, "
-      "\"max_crumpled_mm\": {:.3f}, \"worst_mm\": {:.4f}, \"refused_mm\": {:.2f}, \"step_ms_p50\": {:.1f}, "
-      "\"step_ms_p99\": {:.1f}, \"substeps_p50\": {}, \"substeps_max\": {}, \"curve_columns\": [\"commanded_mm\", "
+      "\"max_crumpled_mm\": {:.3f}, \"worst_mm\": {:.4f}, \"refused_mm\": {:.2f}, {}, \"curve_columns\": "
+      "[\"commanded_mm\", "
       "\"fed_mm\", \"hub_n\", \"tip_n\", \"crumpled_mm\", \"worst_mm\", \"substeps\", \"step_ms\"], \"curve\": [{}]}}",
-      r.max_hub_n, r.largest_hub_jump_n, r.max_tip_n, r.max_crumpled_mm, r.worst_mm, r.refused_mm, r.cost.ms_p50,
-      r.cost.ms_p99, r.cost.substeps_p50, r.cost.substeps_max, curve);
+      r.max_hub_n, r.largest_hub_jump_n, r.max_tip_n, r.max_crumpled_mm, r.worst_mm, r.refused_mm, cost_json(r.cost),
+      curve);
 }
 
 }  // namespace pcisim::bench::wire_force

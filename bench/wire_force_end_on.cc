@@ -106,11 +106,10 @@ std::string json_line(const EndOn& c, const EndOnResult& r) {
       "{{\"case\": \"end_on\", \"length_mm\": {}, \"clearance_mm\": {}, \"buckled\": {}, \"column_mm\": {:.3f}, "
       "\"buckling_n\": {:.6g}, "
       "\"euler_n\": {:.6g}, \"error_pct\": {:.3f}, \"max_hub_n\": {:.6g}, \"max_crumpled_mm\": {:.3f}, "
-      "\"blew_up_at_mm\": {:.2f}, \"worst_mm\": {:.4f}, \"step_ms_p50\": {:.2f}, \"step_ms_p99\": {:.2f}, "
-      "\"substeps_p50\": {}, \"substeps_max\": {}}}",
+      "\"blew_up_at_mm\": {:.2f}, \"worst_mm\": {:.4f}, {}}}",
       c.length_mm, c.clearance_mm, r.buckled, r.column_mm, r.buckling_n, r.euler_n,
       100.0 * (r.buckling_n / r.euler_n - 1.0), r.max_hub_n, r.max_crumpled_mm, r.blew_up_at_mm, r.worst_mm,
-      r.cost.ms_p50, r.cost.ms_p99, r.cost.substeps_p50, r.cost.substeps_max);
+      cost_json(r.cost));
 }
 
 }  // namespace pcisim::bench::wire_force

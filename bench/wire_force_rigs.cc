@@ -1,6 +1,8 @@
 // The wire-force rigs' shared pieces (wire_force_rigs.h).
 #include "bench/wire_force_rigs.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 
 #include "bench/bench_stats.h"
@@ -16,6 +18,11 @@ StepCost step_cost(std::vector<double> step_ms, std::vector<int> substeps) {
   c.substeps_p50 = static_cast<int>(percentile(s, 0.5));
   c.substeps_max = *std::max_element(substeps.begin(), substeps.end());
   return c;
+}
+
+std::string cost_json(const StepCost& c) {
+  return fmt::format(R"("step_ms_p50": {:.3f}, "step_ms_p99": {:.3f}, "substeps_p50": {}, "substeps_max": {})",
+                     c.ms_p50, c.ms_p99, c.substeps_p50, c.substeps_max);
 }
 
 }  // namespace pcisim::bench::wire_force

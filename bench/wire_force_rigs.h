@@ -28,6 +28,8 @@ struct StepCost {
 
 // a step's cost from the per-step figures (wire_force_rigs.cc)
 StepCost step_cost(std::vector<double> step_ms, std::vector<int> substeps);
+// its JSON fields, as every rig's line ends: "step_ms_p50": ..., "substeps_max": ...
+std::string cost_json(const StepCost& c);
 
 // --- tip_on_wall ---
 // the wire's free length is whole segments (the hub is a node): 48 mm is whole at 0.5-4 mm
@@ -109,8 +111,9 @@ std::string json_line(const DeadEndResult& r);
 // --- torque_lag ---
 // the default wire (its soft tip straight; friction 0.1 / 0.07 body, 0.2 / 0.15 tip, or none) fed
 // fed_mm at 30 mm/s into a tube of 1.5 mm lumen radius: tortuous (32 mm straight, then bends of
-// 90, 90 and 120 degrees at 10-12 mm radius in three planes with 15 mm between them, then
-// straight) or straight; then the hub turned 360 degrees at 180 deg/s and held 2 s
+// 90, 90 and 120 degrees at 10-12 mm radius in three planes with 15 mm between them, the last
+// ending 115.5 mm from the exit, then 30 mm straight) or straight (140 mm); then the hub turned
+// 360 degrees at 180 deg/s and held 2 s. Fed less than 116 mm the tip stops short of the last bend
 struct TorqueLag {
   bool tortuous = true, friction = true;
   double fed_mm = 130;
@@ -122,9 +125,10 @@ struct TorqueLagResult {
   std::vector<TorqueLagSample> samples;  // one per step of the turn and the hold
   double lag_at_turn_end_deg = 0;        // hub - tip when the hub stops
   double final_lag_deg = 0;              // after the hold
-  double max_lag_deg = 0;
-  double max_tip_rate_ratio = 0;  // the tip's fastest turn over one step / the hub's rate (> 1: whip)
-  bool completed = false;         // false: the run went non-finite
+  double max_lag_deg = 0;                // the most the tip fell behind the hub
+  double max_lead_deg = 0;               // the most it ran ahead (after a slip)
+  double max_tip_rate_ratio = 0;         // the tip's fastest turn over one step / the hub's rate (> 1: whip)
+  bool completed = false;                // false: the run went non-finite
   StepCost cost;
 };
 TorqueLagResult run_torque_lag(const TorqueLag& c);

@@ -99,11 +99,10 @@ std::string json_line(const TipOnWall& c, const TipOnWallResult& r) {
       "{{\"case\": \"tip_on_wall\", \"length_mm\": {}, \"free_length_mm\": {:.4g}, \"deflection_mm\": {}, "
       "\"segments\": {}, \"substeps\": {}, "
       "\"contact_force_n\": {:.6g}, \"ei_nm2\": {:.6g}, \"beam_n\": {:.6g}, \"elastica_n\": {:.6g}, "
-      "\"error_pct\": {:.4f}, \"tip_x_mm\": {:.4f}, \"residual_mm\": {:.3g}, \"contacts\": {}, \"step_ms_p50\": "
-      "{:.3f}, \"step_ms_p99\": {:.3f}, \"substeps_p50\": {}, \"substeps_max\": {}}}",
+      "\"error_pct\": {:.4f}, \"tip_x_mm\": {:.4f}, \"residual_mm\": {:.3g}, \"contacts\": {}, {}}}",
       c.length_mm, r.free_length_mm, c.deflection_mm, c.segments, c.substeps, r.contact_force_n, r.ei_nm2, r.beam_n,
       r.elastica_n, 100.0 * (r.contact_force_n / r.elastica_n - 1.0), r.tip_x_mm, r.residual_mm, r.contacts,
-      r.cost.ms_p50, r.cost.ms_p99, r.cost.substeps_p50, r.cost.substeps_max);
+      cost_json(r.cost));
 }
 
 }  // namespace pcisim::bench::wire_force

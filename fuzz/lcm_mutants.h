@@ -158,6 +158,7 @@ inline MessageCase wire_case() {
   m.num_nodes = 2;
   m.node_mm = {{1.5f, 0, 0}, {2, 0, 0}};
   m.contact = {0, 1};
+  m.contact_force_n = {{0, 0, 0}, {0, -0.25f, 0}};
   m.tip_branch = "TIP-BRANCH";
   const Bytes good = encode(m);
   return {"wire_state_t", good,

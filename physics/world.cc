@@ -421,12 +421,20 @@ void World::write_snapshot(WorldSnapshot& out) const {
       for (auto& p : out.wire_nodes_m) p = w.skin->to_world(p);
     const auto t = w.rod->touched();
     out.wire_contact.assign(t.begin(), t.end());
+    const auto f = w.rod->wall_force_vector_n();
+    out.wire_contact_force_n.assign(f.begin(), f.end());
+    out.tip_force_n = w.rod->tip_contact_force_n();
+    out.hub_force_n = w.rod->hub_axial_force_n();
+    out.hub_torque_nm = w.rod->hub_torque_nm();
     out.tip_m = out.wire_nodes_m.back();
     return;
   }
+  out.tip_force_n = 0.0;
   if (!w.wire) {
     out.wire_nodes_m.clear();
     out.wire_contact.clear();
+    out.wire_contact_force_n.clear();
+    out.hub_force_n = out.hub_torque_nm = 0.0;
     out.tip_m.setZero();
     return;
   }
@@ -442,6 +450,9 @@ void World::write_snapshot(WorldSnapshot& out) const {
   } else {
     std::fill(out.wire_contact.begin(), out.wire_contact.end(), 0);
   }
+  out.wire_contact_force_n.assign(nodes.size(), Eigen::Vector3d::Zero());
+  out.hub_force_n = w.model.f0_n;
+  out.hub_torque_nm = w.model.t0_nm;
   out.tip_m = out.wire_nodes_m.back();
 }
 

@@ -11,6 +11,14 @@ struct WorldSnapshot {
   int64_t step = 0;
   std::vector<Eigen::Vector3d> wire_nodes_m;  // proximal to distal; empty without guidewire
   std::vector<uint8_t> wire_contact;          // 1 where a node touches the wall
+  // the wall's force on each node over the step, N, world axes: the rod's (normal and friction
+  // with its wall in the solve, the normal alone with the projection); zero for the chain-mail,
+  // whose wall is a projection with no load response (docs/guidewire.md)
+  std::vector<Eigen::Vector3d> wire_contact_force_n;
+  double tip_force_n = 0.0;  // the wall's normal force summed over the tip's nodes (the rod; 0 for the chain-mail)
+  // what the wire pushes back on the hub with, along the feed (+ resists insertion) and about it
+  // (+ resists positive rotation): the rod's clamp multipliers, the chain-mail's [guidewire eq 19]
+  double hub_force_n = 0.0, hub_torque_nm = 0.0;
   Eigen::Vector3d tip_m = Eigen::Vector3d::Zero();
   int tip_branch = -1;       // index into the vessel tree, -1 when unknown
   double insertion_m = 0.0;  // insertion the step used

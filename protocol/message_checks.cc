@@ -34,7 +34,11 @@ bool is_well_formed(const pcisim_lcm::wire_state_t& m) {
   if (m.num_nodes < 0 || m.node_mm.size() != static_cast<size_t>(m.num_nodes)) return false;
   for (const auto& p : m.node_mm)
     if (!finite(p[0], p[1], p[2])) return false;
-  return finite(m.sim_time_s, m.insertion_mm, m.rotation_rad, m.tip_mm[0], m.tip_mm[1], m.tip_mm[2], m.heart_phase);
+  if (m.contact_force_n.size() != static_cast<size_t>(m.num_nodes)) return false;
+  for (const auto& f : m.contact_force_n)
+    if (!finite(f[0], f[1], f[2])) return false;
+  return finite(m.sim_time_s, m.insertion_mm, m.rotation_rad, m.tip_mm[0], m.tip_mm[1], m.tip_mm[2], m.heart_phase,
+                m.tip_force_n, m.hub_force_n, m.hub_torque_nm);
 }
 
 bool is_well_formed(const pcisim_lcm::sim_status_t& m) {

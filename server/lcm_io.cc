@@ -276,10 +276,18 @@ void LcmIo::publish_wire(const physics::WorldSnapshot& s) {
   m.num_nodes = static_cast<int32_t>(s.wire_nodes_m.size());
   if (m.node_mm.size() != s.wire_nodes_m.size()) m.node_mm.assign(s.wire_nodes_m.size(), std::vector<float>(3));
   m.contact.resize(s.wire_nodes_m.size());
+  if (m.contact_force_n.size() != s.wire_nodes_m.size())
+    m.contact_force_n.assign(s.wire_nodes_m.size(), std::vector<float>(3));
   for (size_t i = 0; i < s.wire_nodes_m.size(); ++i) {
     for (int k = 0; k < 3; ++k) m.node_mm[i][k] = static_cast<float>(s.wire_nodes_m[i][k] * 1e3);
     m.contact[i] = i < s.wire_contact.size() ? static_cast<int8_t>(s.wire_contact[i]) : 0;
+    for (int k = 0; k < 3; ++k)
+      m.contact_force_n[i][k] =
+          i < s.wire_contact_force_n.size() ? static_cast<float>(s.wire_contact_force_n[i][k]) : 0.0f;
   }
+  m.tip_force_n = s.tip_force_n;
+  m.hub_force_n = s.hub_force_n;
+  m.hub_torque_nm = s.hub_torque_nm;
   for (int k = 0; k < 3; ++k) m.tip_mm[k] = s.tip_m[k] * 1e3;
   m.tip_branch = branch_name_ ? branch_name_(s.tip_branch) : std::string();
   m.heart_phase = s.heart_phase;

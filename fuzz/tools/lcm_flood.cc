@@ -54,6 +54,7 @@ std::vector<Bytes> poisoned_messages() {
     w.num_nodes = 1;
     w.node_mm = {{static_cast<float>(v), 0, 0}};
     w.contact = {1};
+    w.contact_force_n = {{0, 0, 0}};
     out.push_back(pcisim::fuzz::encode(w));
     pcisim_lcm::us_frame_t u{};
     u.utime = -1;

@@ -645,13 +645,14 @@ void RodWire::after_substep(rod::CosseratRod& rod, double h) {
     const double pass = 1.0 - 1.0 / (1.0 + params_.rod_damping_per_s * h);
     for (int i = first_free; i < node_count(); ++i) v[i] += pass * wall_velocity_[i];
   }
-  // the wall's impulse over the substep, for the step's average force (the solve scheme's as a
-  // vector: its impulses are force h^2)
+  // the wall's impulse over the substep, for the step's average force: the solve scheme's as its
+  // impulse (force h^2: normal and friction), the projection's along the wall's inward normal
   const bool solve = params_.rod_contact == RodContactScheme::kSolve;
   for (int i = first_free; i < node_count(); ++i) {
     if (!(node_wall_n_[i] > 0.0)) continue;
     wall_impulse_n_s_[i] += node_wall_n_[i] * h;
-    if (solve) wall_impulse_vector_n_s_[i] += node_impulse_[i] / h;
+    wall_impulse_vector_n_s_[i] +=
+        solve ? Eigen::Vector3d(node_impulse_[i] / h) : Eigen::Vector3d(-node_wall_n_[i] * h * normal_[i]);
   }
   if (friction_) {
     const auto v = rod.mutable_velocities_m_per_s();

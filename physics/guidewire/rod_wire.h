@@ -120,8 +120,8 @@ class RodWire final : public rod::RodContact {
   const CatheterPath& path() const { return path_; }
   int64_t recoveries() const { return recoveries_; }
   const RodContactReport& contact_report() const { return report_; }
-  // the wall's force on each node over the last step, world frame (the solve scheme; the
-  // projection's is along the normal, magnitude wall_force_n)
+  // the wall's force on each node over the last step, world frame (the solve scheme's with its
+  // friction; the projection's along the wall's inward normal, magnitude wall_force_n)
   std::span<const Eigen::Vector3d> wall_force_vector_n() const { return wall_force_vector_n_; }
 
   // RodContact: wall contact and friction of the free nodes

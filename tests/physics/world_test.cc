@@ -144,6 +144,13 @@ TEST(World, WireComesOutOfTheCatheterAndIsTimed) {
   const LocalForceModel m = w.force_model();
   EXPECT_GT(m.valid_for_us, 0);
   EXPECT_NEAR(m.x0_m, 0.030, 1e-12);
+  // the chain-mail has no load response: no wall force on its nodes is published, and the hub's
+  // force is the one the haptic loop's model starts from ([guidewire eq 19])
+  ASSERT_EQ(snap.wire_contact_force_n.size(), snap.wire_nodes_m.size());
+  for (const auto& f : snap.wire_contact_force_n) EXPECT_EQ(f.norm(), 0.0);
+  EXPECT_EQ(snap.tip_force_n, 0.0);
+  EXPECT_EQ(snap.hub_force_n, m.f0_n);
+  EXPECT_EQ(snap.hub_torque_nm, m.t0_nm);
   for (const auto& c : w.effect_costs()) EXPECT_GE(c.last_step_ms, 0.0) << c.name;
   EXPECT_GT(w.effect_costs()[0].last_step_ms, 0.0);
 }

@@ -119,12 +119,23 @@ TEST(MessageChecks, WireStateWithNonFiniteNodeIsRejected) {
   m.num_nodes = 2;
   m.node_mm = {{0, 0, 0}, {1, 2, 3}};
   m.contact = {0, 1};
+  m.contact_force_n = {{0, 0, 0}, {0, -0.5f, 0}};
   auto good = encode(m);
   pcisim_lcm::wire_state_t out{};
   ASSERT_TRUE(decode_checked(as_rbuf(good), out));
   EXPECT_FLOAT_EQ(out.node_mm[1][2], 3.0f);
+  EXPECT_FLOAT_EQ(out.contact_force_n[1][1], -0.5f);
   m.node_mm[1][1] = std::numeric_limits<float>::infinity();
   auto bad = encode(m);
+  EXPECT_FALSE(decode_checked(as_rbuf(bad), out));
+  // a non-finite force, on a node or at the hub, is refused as well
+  m.node_mm[1][1] = 2;
+  m.contact_force_n[0][2] = std::numeric_limits<float>::quiet_NaN();
+  bad = encode(m);
+  EXPECT_FALSE(decode_checked(as_rbuf(bad), out));
+  m.contact_force_n[0][2] = 0;
+  m.hub_force_n = std::numeric_limits<double>::infinity();
+  bad = encode(m);
   EXPECT_FALSE(decode_checked(as_rbuf(bad), out));
 }
 

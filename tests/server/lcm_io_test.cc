@@ -117,6 +117,10 @@ TEST_F(LcmIoTest, ForceCommandsWireStateAndStatusGoOut) {
   snap.step = 3;
   snap.wire_nodes_m = {{0, 0, 0}, {0.001, 0.002, 0.003}};
   snap.wire_contact = {0, 1};
+  snap.wire_contact_force_n = {{0, 0, 0}, {0, -0.125, 0.5}};
+  snap.tip_force_n = 0.5;
+  snap.hub_force_n = 0.75;
+  snap.hub_torque_nm = -2e-4;
   snap.tip_branch = 2;
   state.snapshot_for_tx.publish();
 
@@ -133,6 +137,13 @@ TEST_F(LcmIoTest, ForceCommandsWireStateAndStatusGoOut) {
     EXPECT_EQ(listener.wires[0].num_nodes, 2);
     EXPECT_FLOAT_EQ(listener.wires[0].node_mm[1][2], 3.0f);
     EXPECT_EQ(listener.wires[0].contact[1], 1);
+    // the wall's force on each node in N (not scaled like the positions), the tip's and the hub's
+    EXPECT_FLOAT_EQ(listener.wires[0].contact_force_n[0][1], 0.0f);
+    EXPECT_FLOAT_EQ(listener.wires[0].contact_force_n[1][1], -0.125f);
+    EXPECT_FLOAT_EQ(listener.wires[0].contact_force_n[1][2], 0.5f);
+    EXPECT_DOUBLE_EQ(listener.wires[0].tip_force_n, 0.5);
+    EXPECT_DOUBLE_EQ(listener.wires[0].hub_force_n, 0.75);
+    EXPECT_DOUBLE_EQ(listener.wires[0].hub_torque_nm, -2e-4);
     EXPECT_EQ(listener.wires[0].tip_branch, "LAD");
   }
   ASSERT_TRUE(wait_for(

@@ -107,6 +107,31 @@ TEST(RodWireWorld, FollowsTheTraineeScriptIntoTheLad) {
   EXPECT_LT(hub_n, 18e-3);
   EXPECT_GT(hub_nm, 2e-6);
   EXPECT_LT(hub_nm, 12e-6);
+
+  // what the server publishes (wire_state_t): each node's wall force, into the lumen where the
+  // node touches (against the wall's outward normal there), none where it does not; the tip's and
+  // the hub's as the rod has them
+  WorldSnapshot snap;
+  world.write_snapshot(snap);
+  ASSERT_EQ(snap.wire_contact_force_n.size(), static_cast<size_t>(w.node_count()));
+  int pressed = 0;
+  for (int i = w.first_free_node(); i < w.node_count(); ++i) {
+    const Eigen::Vector3d& f = snap.wire_contact_force_n[i];
+    if (!w.touched()[i]) {
+      EXPECT_EQ(f.norm(), 0.0) << "node " << i;
+      continue;
+    }
+    // (the projection's normal may turn between substeps: the vector's sum is no longer than the
+    // magnitudes')
+    EXPECT_LE(f.norm(), w.wall_force_n()[i] * (1.0 + 1e-9)) << "node " << i;
+    if (w.wall_force_n()[i] <= 0.0) continue;
+    ++pressed;
+    EXPECT_LT(f.dot(world.lumen()->sample(w.nodes_m()[i]).normal), 0.0) << "node " << i << " pushed out of the lumen";
+  }
+  EXPECT_GT(pressed, 0);
+  EXPECT_DOUBLE_EQ(snap.tip_force_n, w.tip_contact_force_n());
+  EXPECT_DOUBLE_EQ(snap.hub_force_n, w.hub_axial_force_n());
+  EXPECT_DOUBLE_EQ(snap.hub_torque_nm, w.hub_torque_nm());
 }
 
 // the trainee script, then `more` seconds of `drive`

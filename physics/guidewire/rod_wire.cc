@@ -328,6 +328,11 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
   for (int i = 0; i < node_count(); ++i) {
     wall_force_n_[i] = wall_impulse_n_s_[i] / dt_s;
     wall_force_vector_n_[i] = wall_impulse_vector_n_s_[i] / dt_s;
+    // (a substep that went non-finite with no halving left is recovered: its impulses count for nothing)
+    if (!std::isfinite(wall_force_n_[i]) || !wall_force_vector_n_[i].allFinite()) {
+      wall_force_n_[i] = 0.0;
+      wall_force_vector_n_[i].setZero();
+    }
   }
   tip_held_ = segment_stuck_.back() != 0;
   // how much shorter the free wire is than the fed length (the wall's projection, not the rod,

@@ -423,19 +423,10 @@ void World::write_snapshot(WorldSnapshot& out) const {
     out.wire_contact.assign(t.begin(), t.end());
     const auto f = w.rod->wall_force_vector_n();
     out.wire_contact_force_n.assign(f.begin(), f.end());
-    // carried from the rest frame too: each force turned as the skin turns a short segment along
-    // it at the node (its length kept; the skin's local stretch is small beside its turn)
+    // carried from the rest frame too, each force turned with the skin at its node
     if (w.skin && !w.rod_in_world)
-      for (size_t i = 0; i < out.wire_contact_force_n.size(); ++i) {
-        Eigen::Vector3d& fi = out.wire_contact_force_n[i];
-        const double n = fi.norm();
-        if (!(n > 0.0)) continue;
-        constexpr double kSegmentM = 1e-4;
-        const Eigen::Vector3d along = kSegmentM / n * fi;
-        const Eigen::Vector3d turned = w.skin->to_world(nodes[i] + along) - w.skin->to_world(nodes[i] - along);
-        const double length = turned.norm();
-        if (length > 0.0 && std::isfinite(length)) fi = n / length * turned;
-      }
+      for (size_t i = 0; i < out.wire_contact_force_n.size(); ++i)
+        out.wire_contact_force_n[i] = w.skin->turn_to_world(nodes[i], out.wire_contact_force_n[i]);
     out.tip_force_n = w.rod->tip_contact_force_n();
     out.hub_force_n = w.rod->hub_axial_force_n();
     out.hub_torque_nm = w.rod->hub_torque_nm();

@@ -161,6 +161,16 @@ Eigen::Vector3d VesselSkin::displacement_m(const Eigen::Vector3d& p, double a) c
   return wsum > 0.0 ? Eigen::Vector3d(sum / wsum) : Eigen::Vector3d::Zero();
 }
 
+Eigen::Vector3d VesselSkin::turn_to_world(const Eigen::Vector3d& rest_p, const Eigen::Vector3d& v) const {
+  const double n = v.norm();
+  if (!(n > 0.0) || !std::isfinite(n)) return v;
+  constexpr double kSegmentM = 1e-4;
+  const Eigen::Vector3d along = kSegmentM / n * v;
+  const Eigen::Vector3d turned = to_world(rest_p + along) - to_world(rest_p - along);
+  const double length = turned.norm();
+  return length > 0.0 && std::isfinite(length) ? Eigen::Vector3d(n / length * turned) : v;
+}
+
 Eigen::Vector3d VesselSkin::to_rest(const Eigen::Vector3d& world_p) const {
   // start from the displacement of the nearest moved centerline point (the motion can exceed
   // the blend radius, so the world point itself may lie outside every blend)

@@ -42,6 +42,10 @@ class VesselSkin {
   // linearly from where the update before left them (a = 0) to where they are now (a = 1)
   Eigen::Vector3d displacement_m(const Eigen::Vector3d& rest_p_m, double a) const;
   Eigen::Vector3d to_world(const Eigen::Vector3d& rest_p_m) const { return rest_p_m + displacement_m(rest_p_m); }
+  // a vector at a rest-frame point (a force on a node) carried to the world: turned as the skin
+  // turns a short segment along it there, its length kept (the skin's local stretch is small
+  // beside its turn); a zero or non-finite vector comes back as it is
+  Eigen::Vector3d turn_to_world(const Eigen::Vector3d& rest_p_m, const Eigen::Vector3d& v) const;
   // the rest-frame point that maps to world_p (fixed-point iteration from the nearest moved
   // centerline point; linear in the tree's size, for tests and benchmarks, not per-node loops)
   Eigen::Vector3d to_rest(const Eigen::Vector3d& world_p_m) const;

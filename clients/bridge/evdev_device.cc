@@ -1,0 +1,297 @@
+#include "clients/bridge/evdev_device.h"
+
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <linux/input.h>
+#include <sys/ioctl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <numbers>
+#include <stdexcept>
+
+namespace pcisim::clients {
+namespace {
+
+struct Named {
+  const char* name;
+  int code;
+};
+constexpr Named kAxes[] = {{"ABS_X", ABS_X},
+                           {"ABS_Y", ABS_Y},
+                           {"ABS_Z", ABS_Z},
+                           {"ABS_RX", ABS_RX},
+                           {"ABS_RY", ABS_RY},
+                           {"ABS_RZ", ABS_RZ},
+                           {"ABS_THROTTLE", ABS_THROTTLE},
+                           {"ABS_RUDDER", ABS_RUDDER},
+                           {"ABS_WHEEL", ABS_WHEEL},
+                           {"ABS_GAS", ABS_GAS},
+                           {"ABS_BRAKE", ABS_BRAKE}};
+constexpr Named kKeys[] = {{"BTN_0", BTN_0},
+                           {"BTN_1", BTN_1},
+                           {"BTN_2", BTN_2},
+                           {"BTN_3", BTN_3},
+                           {"BTN_TRIGGER", BTN_TRIGGER},
+                           {"BTN_THUMB", BTN_THUMB},
+                           {"BTN_THUMB2", BTN_THUMB2},
+                           {"BTN_TOP", BTN_TOP},
+                           {"BTN_TOP2", BTN_TOP2},
+                           {"BTN_PINKIE", BTN_PINKIE},
+                           {"BTN_BASE", BTN_BASE},
+                           {"BTN_BASE2", BTN_BASE2},
+                           {"BTN_SOUTH", BTN_SOUTH},
+                           {"BTN_EAST", BTN_EAST},
+                           {"BTN_NORTH", BTN_NORTH},
+                           {"BTN_WEST", BTN_WEST}};
+
+// a table's code for `name`, or `name` read as a number below `limit`; -1 otherwise
+template <size_t N>
+int lookup(const Named (&table)[N], std::string_view name, int limit) {
+  for (const Named& n : table)
+    if (name == n.name) return n.code;
+  int code = -1;
+  const auto [end, ec] = std::from_chars(name.data(), name.data() + name.size(), code);
+  return ec == std::errc() && end == name.data() + name.size() && code >= 0 && code < limit ? code : -1;
+}
+
+constexpr size_t bytes_for(int bits) {
+  return static_cast<size_t>(bits + 7) / 8;
+}
+bool bit(const unsigned char* bits, int n) {
+  return (bits[n / 8] >> (n % 8)) & 1;
+}
+
+}  // namespace
+
+int evdev_axis_code(std::string_view name) {
+  return lookup(kAxes, name, ABS_CNT);
+}
+int evdev_key_code(std::string_view name) {
+  return name == "none" ? -1 : lookup(kKeys, name, KEY_CNT);
+}
+
+void validate(const EvdevConfig& c) {
+  auto require = [](bool ok, const std::string& what) {
+    if (!ok) throw std::invalid_argument("evdev: " + what);
+  };
+  require(c.insertion_axis >= 0 && c.insertion_axis < ABS_CNT,
+          fmt::format("insertion axis {} is not an absolute axis", c.insertion_axis));
+  require(c.rotation_axis >= 0 && c.rotation_axis < ABS_CNT,
+          fmt::format("rotation axis {} is not an absolute axis", c.rotation_axis));
+  require(c.insertion_axis != c.rotation_axis, "insertion and rotation need two different axes");
+  require(
+      std::isfinite(c.min_insertion_mm) && std::isfinite(c.max_insertion_mm) &&
+          c.min_insertion_mm != c.max_insertion_mm,
+      fmt::format("insertion range [{}, {}] mm must be finite and not empty", c.min_insertion_mm, c.max_insertion_mm));
+  require(std::isfinite(c.wheel_range_deg) && c.wheel_range_deg != 0.0 && std::abs(c.wheel_range_deg) <= 3600.0,
+          fmt::format("wheel_range_deg {} must be non-zero and within +-3600", c.wheel_range_deg));
+  require(std::isfinite(c.full_scale_torque_nmm) && c.full_scale_torque_nmm > 0.0,
+          fmt::format("full_scale_torque_nmm {} must be finite and > 0", c.full_scale_torque_nmm));
+  require(std::isfinite(c.gain) && c.gain > 0.0 && c.gain <= 1.0, fmt::format("gain {} must be in (0, 1]", c.gain));
+  for (int key : {c.fluoro_key, c.cine_key, c.contrast_key})
+    require(key >= -1 && key < KEY_CNT, fmt::format("key {} is not a key code", key));
+}
+
+int16_t constant_level(double torque_nmm, double full_scale_torque_nmm) {
+  const double x = torque_nmm / full_scale_torque_nmm * 0x7fff;
+  if (!std::isfinite(x)) return 0;
+  return static_cast<int16_t>(std::lround(std::clamp(x, -32767.0, 32767.0)));
+}
+
+EvdevDevice::EvdevDevice(const std::string& event_path, const EvdevConfig& config) : path_(event_path), cfg_(config) {
+  validate(config);
+  fd_ = ::open(event_path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+  if (fd_ < 0)
+    throw std::runtime_error(fmt::format("{}: cannot open the event device: {}", event_path, std::strerror(errno)));
+  auto fail = [&](const std::string& what) {
+    ::close(fd_);
+    fd_ = -1;
+    throw std::runtime_error(fmt::format("{}: {}", event_path, what));
+  };
+  char name[256] = {};
+  if (ioctl(fd_, EVIOCGNAME(sizeof name - 1), name) < 0) fail("not an event device (EVIOCGNAME refused)");
+  name_ = name;
+  unsigned char types[bytes_for(EV_CNT)] = {}, abs[bytes_for(ABS_CNT)] = {}, ff[bytes_for(FF_CNT)] = {};
+  ioctl(fd_, EVIOCGBIT(0, sizeof types), types);
+  ioctl(fd_, EVIOCGBIT(EV_ABS, sizeof abs), abs);
+  ioctl(fd_, EVIOCGBIT(EV_FF, sizeof ff), ff);
+  for (auto [axis, code, role] : {std::tuple{&insertion_, cfg_.insertion_axis, "insertion"},
+                                  std::tuple{&rotation_, cfg_.rotation_axis, "rotation"}}) {
+    input_absinfo info{};
+    if (!bit(types, EV_ABS) || !bit(abs, code) || ioctl(fd_, EVIOCGABS(code), &info) < 0)
+      fail(fmt::format("'{}' has no absolute axis {} for the {}", name_, code, role));
+    if (info.maximum <= info.minimum)
+      fail(fmt::format("'{}': axis {} for the {} has an empty range [{}, {}]", name_, code, role, info.minimum,
+                       info.maximum));
+    *axis = {code, info.minimum, info.maximum, info.value};
+  }
+  int effects = 0;
+  if (!bit(types, EV_FF) || !bit(ff, FF_CONSTANT))
+    fail(fmt::format("'{}' declares no FF_CONSTANT force feedback: it cannot render the torque", name_));
+  if (ioctl(fd_, EVIOCGEFFECTS, &effects) < 0 || effects < 1)
+    fail(fmt::format("'{}' has room for no force-feedback effect", name_));
+  has_gain_ = bit(ff, FF_GAIN);
+  has_autocenter_ = bit(ff, FF_AUTOCENTER);
+  // the device's settings: our gain, its own centring spring off (it would fight the wire)
+  auto set = [&](int code, double value) {
+    input_event ev{};
+    ev.type = EV_FF;
+    ev.code = static_cast<uint16_t>(code);
+    ev.value = static_cast<int32_t>(std::lround(value * 0xffff));
+    if (::write(fd_, &ev, sizeof ev) != static_cast<ssize_t>(sizeof ev))
+      fail(fmt::format("'{}' refused force-feedback setting {}: {}", name_, code, std::strerror(errno)));
+  };
+  if (has_gain_) set(FF_GAIN, cfg_.gain);
+  if (has_autocenter_) set(FF_AUTOCENTER, 0.0);
+  resync();
+}
+
+EvdevDevice::~EvdevDevice() {
+  if (fd_ < 0) return;
+  if (effect_id_ >= 0) {
+    play(false);
+    ioctl(fd_, EVIOCRMFF, static_cast<long>(effect_id_));
+  }
+  ::close(fd_);
+}
+
+void EvdevDevice::resync() {
+  for (Axis* a : {&insertion_, &rotation_}) {
+    input_absinfo info{};
+    if (ioctl(fd_, EVIOCGABS(a->code), &info) == 0) a->value = info.value;
+  }
+  unsigned char keys[bytes_for(KEY_CNT)] = {};
+  if (ioctl(fd_, EVIOCGKEY(sizeof keys), keys) < 0) return;
+  buttons_ = 0;
+  const int map[3][2] = {{cfg_.fluoro_key, 1}, {cfg_.cine_key, 2}, {cfg_.contrast_key, 4}};
+  for (const auto& m : map)
+    if (m[0] >= 0 && bit(keys, m[0])) buttons_ |= m[1];
+}
+
+double EvdevDevice::insertion_mm() const {
+  const double u = static_cast<double>(insertion_.value - insertion_.min) / (insertion_.max - insertion_.min);
+  return cfg_.min_insertion_mm + u * (cfg_.max_insertion_mm - cfg_.min_insertion_mm);
+}
+
+double EvdevDevice::rotation_rad() const {
+  const double mid = 0.5 * (static_cast<double>(rotation_.min) + rotation_.max);
+  const double u = (rotation_.value - mid) / (static_cast<double>(rotation_.max) - rotation_.min);
+  return u * cfg_.wheel_range_deg * std::numbers::pi / 180.0;
+}
+
+bool EvdevDevice::read(double t_s, InstrumentReading& out) {
+  input_event events[64];
+  bool moved = false;
+  while (!unplugged_) {
+    const ssize_t n = ::read(fd_, events, sizeof events);
+    if (n < 0) {
+      if (errno == EAGAIN || errno == EINTR) break;
+      unplugged_ = true;  // ENODEV: the device went away
+      break;
+    }
+    if (n == 0) break;
+    for (ssize_t i = 0; i < n / static_cast<ssize_t>(sizeof(input_event)); ++i) {
+      const input_event& e = events[i];
+      if (e.type == EV_SYN && e.code == SYN_DROPPED) {
+        dropped_ = true;  // the kernel's buffer overflowed: ask for the state at the next report
+      } else if (e.type == EV_SYN && e.code == SYN_REPORT && dropped_) {
+        dropped_ = false;
+        resync();
+        moved = true;
+      } else if (dropped_) {
+        continue;
+      } else if (e.type == EV_ABS) {
+        for (Axis* a : {&insertion_, &rotation_})
+          if (e.code == a->code) a->value = std::clamp(e.value, a->min, a->max), moved = true;
+      } else if (e.type == EV_KEY) {
+        const int map[3][2] = {{cfg_.fluoro_key, 1}, {cfg_.cine_key, 2}, {cfg_.contrast_key, 4}};
+        for (const auto& m : map)
+          if (m[0] == e.code) buttons_ = e.value ? (buttons_ | m[1]) : (buttons_ & ~m[1]);
+      }
+    }
+  }
+  if (unplugged_) return false;
+  const double x = insertion_mm(), r = rotation_rad();
+  if (moved) {
+    const double dt = last_event_t_s_ >= 0 ? t_s - last_event_t_s_ : 0.0;
+    if (dt > 1e-4) {
+      insertion_rate_mm_s_ = (x - last_insertion_mm_) / dt;
+      rotation_rate_rad_s_ = (r - last_rotation_rad_) / dt;
+    }
+    last_event_t_s_ = t_s;
+    last_insertion_mm_ = x;
+    last_rotation_rad_ = r;
+  } else if (last_event_t_s_ < 0 || t_s - last_event_t_s_ > 0.05) {
+    insertion_rate_mm_s_ = rotation_rate_rad_s_ = 0.0;  // still: a device reports only changes
+    last_event_t_s_ = last_event_t_s_ < 0 ? t_s : last_event_t_s_;
+    last_insertion_mm_ = x;
+    last_rotation_rad_ = r;
+  }
+  out.insertion_mm = x;
+  out.rotation_rad = r;
+  out.insertion_rate_mm_s = insertion_rate_mm_s_;
+  out.rotation_rate_rad_s = rotation_rate_rad_s_;
+  out.buttons = buttons_;
+  return true;
+}
+
+// one constant effect, infinite, along the wheel (direction 0x4000); a new level replaces the
+// old one under the same id (the kernel updates a playing effect in place)
+bool EvdevDevice::upload(int16_t level) {
+  ff_effect e{};
+  e.type = FF_CONSTANT;
+  e.id = effect_id_;
+  e.direction = 0x4000;
+  e.u.constant.level = level;
+  if (ioctl(fd_, EVIOCSFF, &e) < 0) {
+    if (errno == ENODEV) unplugged_ = true;
+    ++failed_writes_;
+    return false;
+  }
+  effect_id_ = e.id;
+  level_ = level;
+  ++uploads_;
+  return true;
+}
+
+bool EvdevDevice::play(bool on) {
+  input_event ev{};
+  ev.type = EV_FF;
+  ev.code = static_cast<uint16_t>(effect_id_);
+  ev.value = on ? 1 : 0;
+  if (::write(fd_, &ev, sizeof ev) != static_cast<ssize_t>(sizeof ev)) {
+    if (errno == ENODEV) unplugged_ = true;
+    ++failed_writes_;
+    return false;
+  }
+  playing_ = on;
+  return true;
+}
+
+bool EvdevDevice::render(const ForceSetpoint& force, int64_t /*seq*/) {
+  if (unplugged_) return false;
+  const int16_t level = constant_level(force.torque_nmm, cfg_.full_scale_torque_nmm);
+  if (level == 0) {
+    // zero (every fault sends it): the effect stops, nothing pushes the hand
+    if (playing_ && !play(false)) return false;
+    level_ = 0;
+    return true;
+  }
+  if ((level != level_ || effect_id_ < 0) && !upload(level)) return false;
+  return playing_ || play(true);
+}
+
+std::string EvdevDevice::describe() const {
+  return fmt::format(
+      "force-feedback device '{}' on {} (insertion axis {}, rotation axis {} over {} deg, full scale "
+      "{} N mm{})",
+      name_, path_, insertion_.code, rotation_.code, cfg_.wheel_range_deg, cfg_.full_scale_torque_nmm,
+      has_gain_ ? fmt::format(", gain {}", cfg_.gain) : std::string(", no gain control"));
+}
+
+}  // namespace pcisim::clients

@@ -1,0 +1,89 @@
+#pragma once
+// A Linux force-feedback input device (a wheel, a joystick) as the instrument: the kernel's evdev
+// interface, no vendor SDK (docs/serial-protocol.md, "A force-feedback device"). Positions come
+// from two absolute axes (insertion from a pedal or a stick's axis, rotation from the wheel), the
+// pedals' buttons from keys; the server's torque is rendered as one FF_CONSTANT effect, updated
+// in place when its level changes, stopped whenever the set-point is zero (every fault sends
+// zero, force_gate.h) and erased on exit. A wheel renders no axial force: only the torque.
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include "clients/bridge/instrument_device.h"
+
+namespace pcisim::clients {
+
+struct EvdevConfig {
+  int insertion_axis = 0x01;  // ABS_Y: its whole travel spans [min, max]_insertion_mm
+  int rotation_axis = 0x00;   // ABS_X: its whole travel spans wheel_range_deg, its middle is 0
+  double min_insertion_mm = 0.0, max_insertion_mm = 200.0;  // max < min flips the axis
+  double wheel_range_deg = 900.0;                           // negative flips the wheel
+  // the torque at the effect's full level (0x7fff), N mm: the server's peak (0.02 N m) by default,
+  // so the largest torque the server sends is the device's strongest
+  double full_scale_torque_nmm = 20.0;
+  double gain = 1.0;                                               // FF_GAIN, (0, 1], where the device has it
+  int fluoro_key = 0x100, cine_key = 0x101, contrast_key = 0x102;  // BTN_0 ... BTN_2; -1: none
+};
+
+// throws std::invalid_argument ("evdev: ...") naming the bad value
+void validate(const EvdevConfig& config);
+
+// "ABS_X", "ABS_GAS", ... or a number; -1 when the name is unknown
+int evdev_axis_code(std::string_view name);
+// "BTN_0", "BTN_TRIGGER", ... or a number; -1 when unknown ("none" is -1 too)
+int evdev_key_code(std::string_view name);
+
+// the effect's level for a torque (N mm): round(torque / full scale * 0x7fff), clamped
+int16_t constant_level(double torque_nmm, double full_scale_torque_nmm);
+
+class EvdevDevice : public InstrumentDevice {
+ public:
+  // opens the event node read-write and non-blocking and checks what it declares: both axes, and
+  // FF_CONSTANT with room for one effect; sets the gain (FF_GAIN) and turns the device's own
+  // centring spring off (FF_AUTOCENTER) where it has them. Throws std::runtime_error naming the
+  // node and what it lacks
+  EvdevDevice(const std::string& event_path, const EvdevConfig& config);
+  ~EvdevDevice() override;  // stops and erases the effect
+  EvdevDevice(const EvdevDevice&) = delete;
+  EvdevDevice& operator=(const EvdevDevice&) = delete;
+
+  // drains the node's events; false once it is gone (unplugged: ENODEV)
+  bool read(double t_s, InstrumentReading& out) override;
+  // the torque as the constant effect: uploaded when its level changes, played from the first
+  // non-zero level, stopped at zero. Allocates nothing
+  bool render(const ForceSetpoint& force, int64_t seq) override;
+  std::string describe() const override;
+
+  int16_t level() const { return level_; }
+  bool playing() const { return playing_; }
+  int64_t uploads() const { return uploads_; }
+  int64_t failed_writes() const { return failed_writes_; }
+  bool unplugged() const { return unplugged_; }
+  bool has_gain() const { return has_gain_; }
+
+ private:
+  struct Axis {
+    int code = 0;
+    int32_t min = 0, max = 0, value = 0;
+  };
+  void resync();  // after SYN_DROPPED: the axes' and keys' state asked of the kernel
+  bool upload(int16_t level);
+  bool play(bool on);
+  double insertion_mm() const;
+  double rotation_rad() const;
+
+  std::string path_, name_;
+  int fd_ = -1;
+  EvdevConfig cfg_;
+  Axis insertion_, rotation_;
+  int32_t buttons_ = 0;
+  bool has_gain_ = false, has_autocenter_ = false, dropped_ = false, unplugged_ = false;
+  int16_t effect_id_ = -1, level_ = 0;
+  bool playing_ = false;
+  int64_t uploads_ = 0, failed_writes_ = 0;
+  // rates: from the positions at the last read that brought an event
+  double last_event_t_s_ = -1, last_insertion_mm_ = 0, last_rotation_rad_ = 0;
+  double insertion_rate_mm_s_ = 0, rotation_rate_rad_s_ = 0;
+};
+
+}  // namespace pcisim::clients

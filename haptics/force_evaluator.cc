@@ -116,6 +116,10 @@ ForceOutput ForceEvaluator::tick(const InstrumentSample& sample, int64_t now_us)
     }
     force_n = raw.force_n * gain_;
     torque_nm = raw.torque_nm * gain_;
+    if (has_model_ && params_.interpolation == Interpolation::kLocalModel) {
+      out.axial_stiffness_n_per_m = model_.k_n_per_m * gain_;
+      out.torsional_stiffness_nm_per_rad = model_.kt_nm_per_rad * gain_;
+    }
   }
 
   // slew limit, then passivity (it may add damping), then the hard clamp has the last word
@@ -126,6 +130,9 @@ ForceOutput ForceEvaluator::tick(const InstrumentSample& sample, int64_t now_us)
     torque_nm = torque_pc_.filter(torque_nm, sample.rotation_rate_rad_per_s, dt_s, params_.peak_torque_nm);
     if (axial_pc_.last_damping() > 0 || torque_pc_.last_damping() > 0) out.flags |= kFlagDamped;
   }
+  // a clamped axis has no spring: a device's spring would push past the clamp
+  if (std::abs(force_n) > params_.peak_force_n) out.axial_stiffness_n_per_m = 0.0;
+  if (std::abs(torque_nm) > params_.peak_torque_nm) out.torsional_stiffness_nm_per_rad = 0.0;
   force_n = clamp_abs(force_n, params_.peak_force_n, out.flags);
   torque_nm = clamp_abs(torque_nm, params_.peak_torque_nm, out.flags);
 

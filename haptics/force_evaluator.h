@@ -31,6 +31,11 @@ enum ForceFlags : int32_t {
 struct ForceOutput {
   double axial_force_n = 0.0;
   double torque_nm = 0.0;
+  // the local model's rise of that force with feed and twist, for a device that renders a spring
+  // between commands (K and Kt times the ramp's gain); 0 without a local model, while fading, in a
+  // fault, and on an axis whose force was clamped
+  double axial_stiffness_n_per_m = 0.0;
+  double torsional_stiffness_nm_per_rad = 0.0;
   int32_t flags = 0;
 };
 

@@ -23,7 +23,8 @@ bool is_well_formed(const pcisim_lcm::instrument_state_t& m) {
 }
 
 bool is_well_formed(const pcisim_lcm::force_command_t& m) {
-  return finite(m.axial_force_n, m.torque_nmm);
+  return finite(m.axial_force_n, m.torque_nmm, m.axial_stiffness_n_per_mm, m.torsional_stiffness_nmm_per_rad) &&
+         m.axial_stiffness_n_per_mm >= 0.0 && m.torsional_stiffness_nmm_per_rad >= 0.0;
 }
 
 bool is_well_formed(const pcisim_lcm::session_command_t& m) {

@@ -306,6 +306,8 @@ void LcmIo::tx_loop() {
       force_msg_.instrument_seq = slot.instrument_seq;
       force_msg_.axial_force_n = slot.force.axial_force_n;
       force_msg_.torque_nmm = slot.force.torque_nm * 1e3;
+      force_msg_.axial_stiffness_n_per_mm = slot.force.axial_stiffness_n_per_m * 1e-3;
+      force_msg_.torsional_stiffness_nmm_per_rad = slot.force.torsional_stiffness_nm_per_rad * 1e3;
       force_msg_.flags = slot.force.flags;
       lcm_.publish(protocol::kForceChannel, &force_msg_);
       state_.lcm_tx.fetch_add(1, std::memory_order_relaxed);

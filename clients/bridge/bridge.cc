@@ -50,6 +50,8 @@ ForceGateInput Bridge::last_command() const {
     in.flags = last_flags_.load();
     in.axial_n = last_force_n_.load();
     in.torque_nmm = last_torque_nmm_.load();
+    in.axial_stiffness_n_per_mm = last_axial_stiffness_.load();
+    in.torsional_stiffness_nmm_per_rad = last_torsional_stiffness_.load();
     if (command_version_.load(std::memory_order_acquire) == before) return in;
   }
 }
@@ -64,6 +66,8 @@ void Bridge::on_force(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   command_version_.fetch_add(1, std::memory_order_acq_rel);  // odd: being written
   last_force_n_ = force_.axial_force_n;
   last_torque_nmm_ = force_.torque_nmm;
+  last_axial_stiffness_ = force_.axial_stiffness_n_per_mm;
+  last_torsional_stiffness_ = force_.torsional_stiffness_nmm_per_rad;
   last_flags_ = force_.flags;
   last_command_ns_ = now_ns;
   command_version_.fetch_add(1, std::memory_order_acq_rel);

@@ -112,11 +112,22 @@ ForceSetpoint ForceShaper::step(const ForceSetpoint& in, double dt_s, bool zero)
     state_ = ForceSetpoint{};
     return state_;
   }
+  // the stiffness scales with the force's magnitude (a flipped sign flips the force, not the spring)
+  // and passes the filter unchanged
   const ForceSetpoint target{
       std::clamp(in.axial_n * shaping_.axial_scale, -shaping_.max_axial_n, shaping_.max_axial_n),
-      std::clamp(in.torque_nmm * shaping_.torque_scale, -shaping_.max_torque_nmm, shaping_.max_torque_nmm)};
+      std::clamp(in.torque_nmm * shaping_.torque_scale, -shaping_.max_torque_nmm, shaping_.max_torque_nmm),
+      in.axial_stiffness_n_per_mm * std::abs(shaping_.axial_scale),
+      in.torsional_stiffness_nmm_per_rad * std::abs(shaping_.torque_scale)};
+  // no spring on an axis at the box's limit: it would push past it
+  state_.axial_stiffness_n_per_mm =
+      std::abs(in.axial_n * shaping_.axial_scale) > shaping_.max_axial_n ? 0.0 : target.axial_stiffness_n_per_mm;
+  state_.torsional_stiffness_nmm_per_rad = std::abs(in.torque_nmm * shaping_.torque_scale) > shaping_.max_torque_nmm
+                                               ? 0.0
+                                               : target.torsional_stiffness_nmm_per_rad;
   if (!(shaping_.filter_hz > 0.0)) {
-    state_ = target;
+    state_.axial_n = target.axial_n;
+    state_.torque_nmm = target.torque_nmm;
     return state_;
   }
   const double a = 1.0 - std::exp(-2.0 * std::numbers::pi * shaping_.filter_hz * std::max(dt_s, 0.0));

@@ -103,6 +103,13 @@ int16_t constant_level(double torque_nmm, double full_scale_torque_nmm) {
   return static_cast<int16_t>(std::lround(std::clamp(x, -32767.0, 32767.0)));
 }
 
+int16_t spring_coefficient(double stiffness_nmm_per_rad, const EvdevConfig& c) {
+  const double half_range_rad = 0.5 * std::abs(c.wheel_range_deg) * std::numbers::pi / 180.0;
+  const double x = stiffness_nmm_per_rad * half_range_rad / c.full_scale_torque_nmm * 0x7fff;
+  if (!std::isfinite(x)) return 0;
+  return static_cast<int16_t>(std::lround(std::clamp(x, 0.0, 32767.0)));
+}
+
 EvdevDevice::EvdevDevice(const std::string& event_path, const EvdevConfig& config) : path_(event_path), cfg_(config) {
   validate(config);
   fd_ = ::open(event_path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
@@ -136,6 +143,7 @@ EvdevDevice::EvdevDevice(const std::string& event_path, const EvdevConfig& confi
   if (ioctl(fd_, EVIOCGEFFECTS, &effects) < 0 || effects < 1)
     fail(fmt::format("'{}' has room for no force-feedback effect", name_));
   has_gain_ = bit(ff, FF_GAIN);
+  has_spring_ = bit(ff, FF_SPRING) && effects >= 2;
   has_autocenter_ = bit(ff, FF_AUTOCENTER);
   // the device's settings: our gain, its own centring spring off (it would fight the wire)
   auto set = [&](int code, double value) {
@@ -153,9 +161,10 @@ EvdevDevice::EvdevDevice(const std::string& event_path, const EvdevConfig& confi
 
 EvdevDevice::~EvdevDevice() {
   if (fd_ < 0) return;
-  if (effect_id_ >= 0) {
-    play(false);
-    ioctl(fd_, EVIOCRMFF, static_cast<long>(effect_id_));
+  for (const int16_t id : {effect_id_, spring_id_}) {
+    if (id < 0) continue;
+    play(id, false);
+    ioctl(fd_, EVIOCRMFF, static_cast<long>(id));
   }
   ::close(fd_);
 }
@@ -259,39 +268,91 @@ bool EvdevDevice::upload(int16_t level) {
   return true;
 }
 
-bool EvdevDevice::play(bool on) {
+// a spring on the wheel's axis (condition[0]: the X axis's slot), the same coefficient either
+// side of its centre, no dead band, not saturated
+bool EvdevDevice::upload_spring(int16_t coefficient, int16_t centre) {
+  ff_effect e{};
+  e.type = FF_SPRING;
+  e.id = spring_id_;
+  e.direction = 0x4000;
+  e.u.condition[0].right_coeff = e.u.condition[0].left_coeff = coefficient;
+  e.u.condition[0].right_saturation = e.u.condition[0].left_saturation = 0xffff;
+  e.u.condition[0].center = centre;
+  if (ioctl(fd_, EVIOCSFF, &e) < 0) {
+    if (errno == ENODEV) unplugged_ = true;
+    ++failed_writes_;
+    return false;
+  }
+  spring_id_ = e.id;
+  spring_coefficient_ = coefficient;
+  spring_centre_ = centre;
+  ++spring_uploads_;
+  return true;
+}
+
+bool EvdevDevice::play(int16_t id, bool on) {
   input_event ev{};
   ev.type = EV_FF;
-  ev.code = static_cast<uint16_t>(effect_id_);
+  ev.code = static_cast<uint16_t>(id);
   ev.value = on ? 1 : 0;
   if (::write(fd_, &ev, sizeof ev) != static_cast<ssize_t>(sizeof ev)) {
     if (errno == ENODEV) unplugged_ = true;
     ++failed_writes_;
     return false;
   }
-  playing_ = on;
+  (id == spring_id_ ? spring_playing_ : playing_) = on;
   return true;
 }
 
-bool EvdevDevice::render(const ForceSetpoint& force, int64_t /*seq*/) {
-  if (unplugged_) return false;
-  const int16_t level = constant_level(force.torque_nmm, cfg_.full_scale_torque_nmm);
+int16_t EvdevDevice::rotation_centre() const {
+  const double mid = 0.5 * (static_cast<double>(rotation_.min) + rotation_.max);
+  const double u = (rotation_.value - mid) / (0.5 * (static_cast<double>(rotation_.max) - rotation_.min));
+  return static_cast<int16_t>(std::lround(std::clamp(u, -1.0, 1.0) * 32767.0));
+}
+
+bool EvdevDevice::render_constant(int16_t level) {
   if (level == 0) {
     // zero (every fault sends it): the effect stops, nothing pushes the hand
-    if (playing_ && !play(false)) return false;
+    if (playing_ && !play(effect_id_, false)) return false;
     level_ = 0;
     return true;
   }
   if ((level != level_ || effect_id_ < 0) && !upload(level)) return false;
-  return playing_ || play(true);
+  return playing_ || play(effect_id_, true);
+}
+
+// the spring holds the wheel where it was read this tick (where the server's torque was
+// evaluated): re-centred once the wheel moved a few counts, so the constant effect and the spring
+// never count the same torque twice
+bool EvdevDevice::render_spring(int16_t coefficient) {
+  if (coefficient == 0) {
+    if (spring_playing_ && !play(spring_id_, false)) return false;
+    spring_coefficient_ = 0;
+    return true;
+  }
+  constexpr int kCentreToleranceCounts = 4;  // of 65535 over the axis: 0.05 deg of a 900 deg wheel
+  const int16_t centre = rotation_centre();
+  if ((coefficient != spring_coefficient_ || std::abs(centre - spring_centre_) > kCentreToleranceCounts ||
+       spring_id_ < 0) &&
+      !upload_spring(coefficient, centre))
+    return false;
+  return spring_playing_ || play(spring_id_, true);
+}
+
+bool EvdevDevice::render(const ForceSetpoint& force, int64_t /*seq*/) {
+  if (unplugged_) return false;
+  bool ok = render_constant(constant_level(force.torque_nmm, cfg_.full_scale_torque_nmm));
+  if (has_spring_) ok = render_spring(spring_coefficient(force.torsional_stiffness_nmm_per_rad, cfg_)) && ok;
+  return ok;
 }
 
 std::string EvdevDevice::describe() const {
   return fmt::format(
       "force-feedback device '{}' on {} (insertion axis {}, rotation axis {} over {} deg, full scale "
-      "{} N mm{})",
+      "{} N mm{}{})",
       name_, path_, insertion_.code, rotation_.code, cfg_.wheel_range_deg, cfg_.full_scale_torque_nmm,
-      has_gain_ ? fmt::format(", gain {}", cfg_.gain) : std::string(", no gain control"));
+      has_gain_ ? fmt::format(", gain {}", cfg_.gain) : std::string(", no gain control"),
+      has_spring_ ? ", the stiffness as a spring" : ", no spring: the stiffness is not rendered");
 }
 
 }  // namespace pcisim::clients

@@ -3,8 +3,10 @@
 // interface, no vendor SDK (docs/serial-protocol.md, "A force-feedback device"). Positions come
 // from two absolute axes (insertion from a pedal or a stick's axis, rotation from the wheel), the
 // pedals' buttons from keys; the server's torque is rendered as one FF_CONSTANT effect, updated
-// in place when its level changes, stopped whenever the set-point is zero (every fault sends
-// zero, force_gate.h) and erased on exit. A wheel renders no axial force: only the torque.
+// in place when its level changes, and its rise with twist (the local model's stiffness) as an
+// FF_SPRING centred where the wheel was read, where the device has one; both stopped whenever the
+// set-point is zero (every fault sends zero, force_gate.h) and erased on exit. A wheel renders no
+// axial force: only the torque.
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -35,6 +37,9 @@ int evdev_key_code(std::string_view name);
 
 // the effect's level for a torque (N mm): round(torque / full scale * 0x7fff), clamped
 int16_t constant_level(double torque_nmm, double full_scale_torque_nmm);
+// the spring's coefficient for a torsional stiffness (N mm / rad): the level of the torque it
+// gives half the wheel's range away from its centre, clamped to [0, 0x7fff]
+int16_t spring_coefficient(double stiffness_nmm_per_rad, const EvdevConfig& config);
 
 class EvdevDevice : public InstrumentDevice {
  public:
@@ -50,13 +55,17 @@ class EvdevDevice : public InstrumentDevice {
   // drains the node's events; false once it is gone (unplugged: ENODEV)
   bool read(double t_s, InstrumentReading& out) override;
   // the torque as the constant effect: uploaded when its level changes, played from the first
-  // non-zero level, stopped at zero. Allocates nothing
+  // non-zero level, stopped at zero; the torsional stiffness as the spring, re-centred on the
+  // wheel's position when it moved (or the coefficient changed), stopped at zero. Allocates nothing
   bool render(const ForceSetpoint& force, int64_t seq) override;
   std::string describe() const override;
 
   int16_t level() const { return level_; }
   bool playing() const { return playing_; }
   int64_t uploads() const { return uploads_; }
+  bool has_spring() const { return has_spring_; }
+  bool spring_playing() const { return spring_playing_; }
+  int64_t spring_uploads() const { return spring_uploads_; }
   int64_t failed_writes() const { return failed_writes_; }
   bool unplugged() const { return unplugged_; }
   bool has_gain() const { return has_gain_; }
@@ -68,7 +77,11 @@ class EvdevDevice : public InstrumentDevice {
   };
   void resync();  // after SYN_DROPPED: the axes' and keys' state asked of the kernel
   bool upload(int16_t level);
-  bool play(bool on);
+  bool upload_spring(int16_t coefficient, int16_t centre);
+  bool play(int16_t id, bool on);
+  bool render_constant(int16_t level);
+  bool render_spring(int16_t coefficient);
+  int16_t rotation_centre() const;  // the wheel's position as a spring's centre, +-0x7fff
   double insertion_mm() const;
   double rotation_rad() const;
 
@@ -77,10 +90,11 @@ class EvdevDevice : public InstrumentDevice {
   EvdevConfig cfg_;
   Axis insertion_, rotation_;
   int32_t buttons_ = 0;
-  bool has_gain_ = false, has_autocenter_ = false, dropped_ = false, unplugged_ = false;
+  bool has_gain_ = false, has_autocenter_ = false, has_spring_ = false, dropped_ = false, unplugged_ = false;
   int16_t effect_id_ = -1, level_ = 0;
-  bool playing_ = false;
-  int64_t uploads_ = 0, failed_writes_ = 0;
+  int16_t spring_id_ = -1, spring_coefficient_ = 0, spring_centre_ = 0;
+  bool playing_ = false, spring_playing_ = false;
+  int64_t uploads_ = 0, spring_uploads_ = 0, failed_writes_ = 0;
   // rates: from the positions at the last read that brought an event
   double last_event_t_s_ = -1, last_insertion_mm_ = 0, last_rotation_rad_ = 0;
   double insertion_rate_mm_s_ = 0, rotation_rate_rad_s_ = 0;

@@ -1,5 +1,6 @@
 #include "clients/bridge/force_gate.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "pcisim_lcm/force_command_t.hpp"
@@ -14,9 +15,14 @@ ForceGateState gate_force(const ForceGateInput& in, ForceSetpoint* out) {
   if (in.now_ns - in.last_command_ns > kServerSilentNs) return ForceGateState::kServerSilent;
   if (in.flags & F::FLAG_FAULT) return ForceGateState::kFlaggedFault;
   if (in.flags & F::FLAG_STALE) return ForceGateState::kFlaggedStale;
-  if (!std::isfinite(in.axial_n) || !std::isfinite(in.torque_nmm)) return ForceGateState::kNotFinite;
+  if (!std::isfinite(in.axial_n) || !std::isfinite(in.torque_nmm) || !std::isfinite(in.axial_stiffness_n_per_mm) ||
+      !std::isfinite(in.torsional_stiffness_nmm_per_rad))
+    return ForceGateState::kNotFinite;
   out->axial_n = in.axial_n;
   out->torque_nmm = in.torque_nmm;
+  // a negative spring would push the hand on: none
+  out->axial_stiffness_n_per_mm = std::max(in.axial_stiffness_n_per_mm, 0.0);
+  out->torsional_stiffness_nmm_per_rad = std::max(in.torsional_stiffness_nmm_per_rad, 0.0);
   return ForceGateState::kRendering;
 }
 

@@ -29,6 +29,7 @@ struct ForceGateInput {
   int64_t last_command_ns = -1;  // when the last force command arrived; -1: none yet
   int32_t flags = 0;             // force_command_t.flags
   double axial_n = 0.0, torque_nmm = 0.0;
+  double axial_stiffness_n_per_mm = 0.0, torsional_stiffness_nmm_per_rad = 0.0;
 };
 
 // the set-point (zero unless kRendering) and why

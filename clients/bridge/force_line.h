@@ -15,6 +15,10 @@ namespace pcisim::clients {
 struct ForceSetpoint {
   double axial_n = 0.0;     // positive resists insertion
   double torque_nmm = 0.0;  // positive resists positive rotation
+  // the force's rise with feed and twist about the sample it answers (>= 0): a device that
+  // renders a spring centres it there. The force line does not carry them
+  double axial_stiffness_n_per_mm = 0.0;
+  double torsional_stiffness_nmm_per_rad = 0.0;
 };
 
 // the line's ranges (a box clamps to its own actuator's limits after these)

@@ -57,6 +57,61 @@ TEST(ForceEvaluator, EvaluatesTheLocalModelAfterRampIn) {
   EXPECT_EQ(out.flags & kFlagRamping, 0);
 }
 
+// the command carries the model's stiffness for a device's spring: K and Kt times the ramp's
+// gain, none while fading, none on a clamped axis, none without a local model
+TEST(ForceEvaluator, PublishesTheLocalStiffnessOnlyWhileItRendersTheLocalModel) {
+  HapticParams p;
+  p.ramp_in_ms = 100;
+  p.slew_n_per_s = 1e5;
+  p.fade_ms = 20;
+  ForceEvaluator e(p);
+  int64_t t = 1'000'000;
+  physics::LocalForceModel m = model_at(t, 1.0, 200.0);
+  m.kt_nm_per_rad = 0.004;
+  e.set_model(m, t);
+  ForceOutput out = run(e, t, 10);
+  EXPECT_NEAR(out.axial_stiffness_n_per_m, 200.0 * 0.1, 1e-9) << "a tenth of the way through the ramp";
+  EXPECT_NEAR(out.torsional_stiffness_nm_per_rad, 0.004 * 0.1, 1e-12);
+  for (int i = 0; i < 100; ++i) {
+    m.made_utime = t;
+    e.set_model(m, t);
+    out = run(e, t, 1);
+  }
+  EXPECT_DOUBLE_EQ(out.axial_stiffness_n_per_m, 200.0);
+  EXPECT_DOUBLE_EQ(out.torsional_stiffness_nm_per_rad, 0.004);
+  // the instrument falls silent: the force fades, the spring is gone at once
+  for (int i = 0; i < 60; ++i) {
+    t += kTickUs;
+    out = e.tick(InstrumentSample{}, t);
+  }
+  EXPECT_TRUE(out.flags & kFlagFaded);
+  EXPECT_EQ(out.axial_stiffness_n_per_m, 0.0);
+  EXPECT_EQ(out.torsional_stiffness_nm_per_rad, 0.0);
+  // a clamped axis has none; the other keeps its own
+  p.ramp_in_ms = 1;
+  p.peak_force_n = 0.5;
+  ForceEvaluator clamped(p);
+  for (int i = 0; i < 20; ++i) {
+    m.made_utime = t;
+    clamped.set_model(m, t);
+    out = run(clamped, t, 1);
+  }
+  EXPECT_TRUE(out.flags & kFlagClamped);
+  EXPECT_EQ(out.axial_stiffness_n_per_m, 0.0);
+  EXPECT_DOUBLE_EQ(out.torsional_stiffness_nm_per_rad, 0.004);
+  // a zero-order hold has no local model to give
+  p.interpolation = Interpolation::kZeroOrderHold;
+  p.peak_force_n = 4.0;
+  ForceEvaluator hold(p);
+  for (int i = 0; i < 20; ++i) {
+    m.made_utime = t;
+    hold.set_model(m, t);
+    out = run(hold, t, 1);
+  }
+  EXPECT_DOUBLE_EQ(out.axial_force_n, 1.0);
+  EXPECT_EQ(out.axial_stiffness_n_per_m, 0.0);
+}
+
 TEST(ForceEvaluator, RampsInOnStartInsteadOfJumping) {
   HapticParams p;
   p.ramp_in_ms = 100;

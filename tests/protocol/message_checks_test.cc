@@ -139,6 +139,19 @@ TEST(MessageChecks, WireStateWithNonFiniteNodeIsRejected) {
   EXPECT_FALSE(decode_checked(as_rbuf(bad), out));
 }
 
+TEST(MessageChecks, AForceCommandsStiffnessIsFiniteAndNotNegative) {
+  pcisim_lcm::force_command_t m{};
+  m.axial_force_n = 0.5;
+  m.axial_stiffness_n_per_mm = 0.2;
+  m.torsional_stiffness_nmm_per_rad = 3.0;
+  EXPECT_TRUE(is_well_formed(m));
+  m.torsional_stiffness_nmm_per_rad = -1.0;  // a negative spring pushes the hand on
+  EXPECT_FALSE(is_well_formed(m));
+  m.torsional_stiffness_nmm_per_rad = 0.0;
+  m.axial_stiffness_n_per_mm = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(is_well_formed(m));
+}
+
 TEST(MessageChecks, InstrumentRatesBeyondAnyHandAreRefused) {
   auto m = instrument();
   EXPECT_TRUE(is_well_formed(m));

@@ -112,6 +112,8 @@ TEST_F(LcmIoTest, ForceCommandsWireStateAndStatusGoOut) {
   slot.instrument_seq = 9;
   slot.force.axial_force_n = 0.25;
   slot.force.torque_nm = 0.001;
+  slot.force.axial_stiffness_n_per_m = 300.0;
+  slot.force.torsional_stiffness_nm_per_rad = 0.002;
   ASSERT_TRUE(state.forces.push(slot));
   physics::WorldSnapshot& snap = state.snapshot_for_tx.write_slot();
   snap.step = 3;
@@ -134,6 +136,8 @@ TEST_F(LcmIoTest, ForceCommandsWireStateAndStatusGoOut) {
     EXPECT_EQ(listener.forces[0].instrument_seq, 9);
     EXPECT_DOUBLE_EQ(listener.forces[0].axial_force_n, 0.25);
     EXPECT_DOUBLE_EQ(listener.forces[0].torque_nmm, 1.0);
+    EXPECT_DOUBLE_EQ(listener.forces[0].axial_stiffness_n_per_mm, 0.3);  // the message's units
+    EXPECT_DOUBLE_EQ(listener.forces[0].torsional_stiffness_nmm_per_rad, 2.0);
     EXPECT_EQ(listener.wires[0].num_nodes, 2);
     EXPECT_FLOAT_EQ(listener.wires[0].node_mm[1][2], 3.0f);
     EXPECT_EQ(listener.wires[0].contact[1], 1);

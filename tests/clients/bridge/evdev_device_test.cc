@@ -185,8 +185,56 @@ TEST_F(UinputTest, TheTorqueIsOneConstantEffectUpdatedInPlaceStoppedAtZeroAndEra
   EXPECT_EQ(centre[0].value, 0) << "the device's own centring spring off";
 }
 
-// the bridge on the wheel: a server's torque reaches the device as the effect's level, and when
-// the server falls silent the effect is stopped within 50 ms (the bridge's gate sends zero)
+TEST_F(UinputTest, TheStiffnessIsASpringCentredWhereTheWheelWasRead) {
+  UinputWheel wheel;
+  EvdevConfig cfg;
+  cfg.full_scale_torque_nmm = 20.0;
+  cfg.wheel_range_deg = 900.0;
+  // 1 N mm / rad over half the wheel's range (7.854 rad) is 7.854 N mm: 0.3927 of full scale
+  const int16_t coeff = spring_coefficient(1.0, cfg);
+  EXPECT_EQ(coeff, 12868);
+  {
+    EvdevDevice dev(wheel.event_path(), cfg);
+    ASSERT_TRUE(dev.has_spring());
+    InstrumentReading r;
+    ASSERT_TRUE(dev.read(0.0, r));
+    ASSERT_TRUE(dev.render({0.0, 2.0, 0.0, 1.0}, 1));
+    EXPECT_TRUE(dev.spring_playing());
+    wheel.move(ABS_X, 16384);  // a quarter turn of the axis to the right
+    usleep(20000);
+    ASSERT_TRUE(dev.read(0.020, r));
+    ASSERT_TRUE(dev.render({0.0, 2.0, 0.0, 1.0}, 2));  // re-centred where the wheel now is
+    ASSERT_TRUE(dev.render({0.0, 2.0, 0.0, 1.0}, 3));  // unmoved: nothing sent
+    EXPECT_EQ(dev.spring_uploads(), 2);
+    ASSERT_TRUE(dev.render({0.0, 2.0, 0.0, 0.0}, 4));  // no stiffness: the spring stops
+    EXPECT_FALSE(dev.spring_playing());
+    EXPECT_TRUE(dev.playing()) << "the torque goes on";
+    ASSERT_TRUE(dev.render({0.0, 2.0, 0.0, 2.0}, 5));
+    ASSERT_TRUE(dev.render({}, 6));  // zero, as in every fault: both stop
+    EXPECT_FALSE(dev.spring_playing());
+    EXPECT_FALSE(dev.playing());
+  }
+  wait_for(wheel, FfRecord::kErase, 2);
+  const auto all = wheel.records();
+  std::vector<FfRecord> springs, constants;
+  for (const FfRecord& u : of(all, FfRecord::kUpload)) (u.type == FF_SPRING ? springs : constants).push_back(u);
+  ASSERT_EQ(springs.size(), 3u);
+  ASSERT_FALSE(constants.empty());
+  EXPECT_NE(springs[0].id, constants[0].id) << "two effects";
+  EXPECT_EQ(springs[0].coeff, coeff);
+  EXPECT_NEAR(springs[0].centre, 0, 1);
+  EXPECT_EQ(springs[1].coeff, coeff);
+  EXPECT_NEAR(springs[1].centre, 16384, 1);
+  EXPECT_EQ(springs[2].coeff, spring_coefficient(2.0, cfg));
+  for (const FfRecord& u : springs) EXPECT_EQ(u.id, springs[0].id) << "one spring, updated in place";
+  const auto erased = of(all, FfRecord::kErase);
+  ASSERT_EQ(erased.size(), 2u);
+  EXPECT_NE(erased[0].id, erased[1].id);
+}
+
+// the bridge on the wheel: a server's torque and stiffness reach the device as the constant
+// effect's level and the spring's coefficient, and when the server falls silent both are stopped
+// within 50 ms (the bridge's gate sends zero)
 TEST_F(UinputTest, TheBridgeRendersTheServersTorqueAndStopsItWhenTheServerFallsSilent) {
   UinputWheel wheel;
   lcm::LCM lcm("memq://");
@@ -200,6 +248,7 @@ TEST_F(UinputTest, TheBridgeRendersTheServersTorqueAndStopsItWhenTheServerFallsS
       if ((realtime::monotonic_ns() - t0_ns) * 1e-9 < kSilentS) {
         m.seq = seq;
         m.torque_nmm = 5.0;
+        m.torsional_stiffness_nmm_per_rad = 0.5;
         lcm.publish(protocol::kForceChannel, &m);
       }
       usleep(1000);
@@ -214,14 +263,22 @@ TEST_F(UinputTest, TheBridgeRendersTheServersTorqueAndStopsItWhenTheServerFallsS
   done = true;
   server.join();
   const auto all = wheel.records();
-  const auto uploads = of(all, FfRecord::kUpload), stops = of(all, FfRecord::kStop);
-  ASSERT_FALSE(uploads.empty());
-  EXPECT_EQ(uploads.back().level, constant_level(5.0, EvdevConfig{}.full_scale_torque_nmm));
-  ASSERT_FALSE(stops.empty()) << "the effect was never stopped";
-  const double stop_after_s = (stops.front().t_ns - t0_ns) * 1e-9 - kSilentS;
-  std::printf("the effect stopped %.1f ms after the server fell silent\n", 1e3 * stop_after_s);
-  EXPECT_GT(stop_after_s, 0.0);
-  EXPECT_LT(stop_after_s, 0.050);
+  std::vector<FfRecord> springs, constants;
+  for (const FfRecord& u : of(all, FfRecord::kUpload)) (u.type == FF_SPRING ? springs : constants).push_back(u);
+  ASSERT_FALSE(constants.empty());
+  ASSERT_FALSE(springs.empty());
+  EXPECT_EQ(constants.back().level, constant_level(5.0, EvdevConfig{}.full_scale_torque_nmm));
+  EXPECT_EQ(springs.back().coeff, spring_coefficient(0.5, EvdevConfig{}));
+  // both effects stopped, each within 50 ms of the server's silence
+  const auto stops = of(all, FfRecord::kStop);
+  ASSERT_EQ(stops.size(), 2u) << "the torque and the spring stopped once each";
+  EXPECT_NE(stops[0].id, stops[1].id);
+  for (const FfRecord& stop : stops) {
+    const double stop_after_s = (stop.t_ns - t0_ns) * 1e-9 - kSilentS;
+    std::printf("effect %d stopped %.1f ms after the server fell silent\n", stop.id, 1e3 * stop_after_s);
+    EXPECT_GT(stop_after_s, 0.0);
+    EXPECT_LT(stop_after_s, 0.050);
+  }
 }
 
 }  // namespace

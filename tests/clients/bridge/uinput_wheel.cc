@@ -145,6 +145,11 @@ void UinputWheel::serve() {
         FfRecord r{FfRecord::kUpload, 0, up.effect.id};
         r.type = up.effect.type;
         if (up.effect.type == FF_CONSTANT) r.level = up.effect.u.constant.level;
+        if (up.effect.type == FF_SPRING) {
+          const ff_condition_effect& c = up.effect.u.condition[0];
+          r.coeff = c.right_coeff == c.left_coeff ? c.right_coeff : int16_t{-1};
+          r.centre = c.center;
+        }
         up.retval = 0;
         ioctl(fd_, UI_END_FF_UPLOAD, &up);
         record(r);

@@ -20,6 +20,8 @@ struct FfRecord {
   int64_t t_ns;       // monotonic
   int id = -1;        // the effect's
   int16_t level = 0;  // an upload's constant level
+  int16_t coeff = 0;  // a spring upload's coefficient (right; -1 when left differs) and centre
+  int16_t centre = 0;
   uint16_t type = 0;  // an upload's effect type
   int32_t value = 0;  // a setting's value
 };

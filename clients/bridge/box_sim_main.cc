@@ -103,9 +103,10 @@ int main(int argc, char** argv) {
   }
   std::printf(
       "box-sim: done after %.1f s of script, %lld encoder lines sent, %lld force lines applied (%lld malformed), "
-      "largest %.3f N and %.3f N mm, watchdog tripped %lld times (%.2f s at zero)%s%s\n",
+      "largest %.3f N and %.3f N mm, watchdog tripped %lld times (%.2f s at zero)%s%s; the script's t=0 at "
+      "CLOCK_MONOTONIC %.6f s\n",
       t_s, static_cast<long long>(box->lines_sent()), static_cast<long long>(box->force_lines()),
       static_cast<long long>(box->malformed()), most_axial_n, most_torque_nmm, static_cast<long long>(trips), tripped_s,
-      log_path.empty() ? "" : ", log ", log_path.c_str());
+      log_path.empty() ? "" : ", log ", log_path.c_str(), script_start_ns * 1e-9);
   return 0;
 }

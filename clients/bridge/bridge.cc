@@ -52,6 +52,7 @@ ForceGateInput Bridge::last_command() const {
     in.torque_nmm = last_torque_nmm_.load();
     in.axial_stiffness_n_per_mm = last_axial_stiffness_.load();
     in.torsional_stiffness_nmm_per_rad = last_torsional_stiffness_.load();
+    in.instrument_seq = last_instrument_seq_.load();
     if (command_version_.load(std::memory_order_acquire) == before) return in;
   }
 }
@@ -68,6 +69,7 @@ void Bridge::on_force(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   last_torque_nmm_ = force_.torque_nmm;
   last_axial_stiffness_ = force_.axial_stiffness_n_per_mm;
   last_torsional_stiffness_ = force_.torsional_stiffness_nmm_per_rad;
+  last_instrument_seq_ = force_.instrument_seq;
   last_flags_ = force_.flags;
   last_command_ns_ = now_ns;
   command_version_.fetch_add(1, std::memory_order_acq_rel);

@@ -91,8 +91,9 @@ class Bridge {
   std::atomic<int64_t> forces_received_{0}, forces_bad_{0};
   std::atomic<double> last_force_n_{0}, last_torque_nmm_{0}, last_axial_stiffness_{0}, last_torsional_stiffness_{0};
   std::atomic<int32_t> last_flags_{0};
+  std::atomic<int64_t> last_instrument_seq_{-1};
   std::atomic<int64_t> last_command_ns_{-1};  // monotonic, when the last good command arrived
-  // the six above are one command: written under an odd version, read until a version holds
+  // the seven above are one command: written under an odd version, read until a version holds
   // even and unchanged (a seqlock), so a fault's flags never pair with the next command's force
   std::atomic<uint64_t> command_version_{0};
   ForceGateInput last_command() const;

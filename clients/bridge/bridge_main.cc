@@ -184,8 +184,8 @@ int main(int argc, char** argv) {
                         serial->malformed(), serial->unplugged() ? ", unplugged" : "", serial->force_lines(),
                         serial->force_lines_dropped());
   if (auto* ff = dynamic_cast<EvdevDevice*>(dev.get()))
-    extra = fmt::format(", force-feedback effect uploaded {} times, {} writes refused{}", ff->uploads(),
-                        ff->failed_writes(), ff->unplugged() ? ", unplugged" : "");
+    extra = fmt::format(", force-feedback effect uploaded {} times, its spring {} times, {} writes refused{}",
+                        ff->uploads(), ff->spring_uploads(), ff->failed_writes(), ff->unplugged() ? ", unplugged" : "");
   if (!probe) {
     extra += s.force_zeroed > 0
                  ? fmt::format(", force zero in {} ticks (last: {})", s.force_zeroed, describe(s.force_state))

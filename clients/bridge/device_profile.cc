@@ -120,6 +120,7 @@ ForceSetpoint ForceShaper::step(const ForceSetpoint& in, double dt_s, bool zero)
       in.axial_stiffness_n_per_mm * std::abs(shaping_.axial_scale),
       in.torsional_stiffness_nmm_per_rad * std::abs(shaping_.torque_scale)};
   // no spring on an axis at the box's limit: it would push past it
+  state_.sample_seq = in.sample_seq;
   state_.axial_stiffness_n_per_mm =
       std::abs(in.axial_n * shaping_.axial_scale) > shaping_.max_axial_n ? 0.0 : target.axial_stiffness_n_per_mm;
   state_.torsional_stiffness_nmm_per_rad = std::abs(in.torque_nmm * shaping_.torque_scale) > shaping_.max_torque_nmm

@@ -12,7 +12,9 @@
 #include <cmath>
 #include <cstring>
 #include <numbers>
+#include <chrono>
 #include <stdexcept>
+#include <tuple>
 
 namespace pcisim::clients {
 namespace {
@@ -135,7 +137,7 @@ EvdevDevice::EvdevDevice(const std::string& event_path, const EvdevConfig& confi
     if (info.maximum <= info.minimum)
       fail(fmt::format("'{}': axis {} for the {} has an empty range [{}, {}]", name_, code, role, info.minimum,
                        info.maximum));
-    *axis = {code, info.minimum, info.maximum, info.value};
+    *axis = {code, info.minimum, info.maximum, std::clamp(info.value, info.minimum, info.maximum)};
   }
   int effects = 0;
   if (!bit(types, EV_FF) || !bit(ff, FF_CONSTANT))
@@ -157,10 +159,17 @@ EvdevDevice::EvdevDevice(const std::string& event_path, const EvdevConfig& confi
   if (has_gain_) set(FF_GAIN, cfg_.gain);
   if (has_autocenter_) set(FF_AUTOCENTER, 0.0);
   resync();
+  for (auto& slot : positions_) slot = {-1, 0};
+  writer_ = std::thread([this] { write_loop(); });
 }
 
 EvdevDevice::~EvdevDevice() {
-  if (fd_ < 0) return;
+  {
+    std::lock_guard lock(mutex_);
+    stop_ = true;
+  }
+  wanted_cv_.notify_all();
+  if (writer_.joinable()) writer_.join();
   for (const int16_t id : {effect_id_, spring_id_}) {
     if (id < 0) continue;
     play(id, false);
@@ -172,7 +181,7 @@ EvdevDevice::~EvdevDevice() {
 void EvdevDevice::resync() {
   for (Axis* a : {&insertion_, &rotation_}) {
     input_absinfo info{};
-    if (ioctl(fd_, EVIOCGABS(a->code), &info) == 0) a->value = info.value;
+    if (ioctl(fd_, EVIOCGABS(a->code), &info) == 0) a->value = std::clamp(info.value, a->min, a->max);
   }
   unsigned char keys[bytes_for(KEY_CNT)] = {};
   if (ioctl(fd_, EVIOCGKEY(sizeof keys), keys) < 0) return;
@@ -236,8 +245,9 @@ bool EvdevDevice::read(double t_s, InstrumentReading& out) {
     last_insertion_mm_ = x;
     last_rotation_rad_ = r;
   } else if (last_event_t_s_ < 0 || t_s - last_event_t_s_ > 0.05) {
-    insertion_rate_mm_s_ = rotation_rate_rad_s_ = 0.0;  // still: a device reports only changes
-    last_event_t_s_ = last_event_t_s_ < 0 ? t_s : last_event_t_s_;
+    // still: a device reports only changes; the next motion's rate counts from now
+    insertion_rate_mm_s_ = rotation_rate_rad_s_ = 0.0;
+    last_event_t_s_ = t_s;
     last_insertion_mm_ = x;
     last_rotation_rad_ = r;
   }
@@ -304,46 +314,86 @@ bool EvdevDevice::play(int16_t id, bool on) {
   return true;
 }
 
-int16_t EvdevDevice::rotation_centre() const {
+int16_t EvdevDevice::centre_of(int32_t axis_value) const {
   const double mid = 0.5 * (static_cast<double>(rotation_.min) + rotation_.max);
-  const double u = (rotation_.value - mid) / (0.5 * (static_cast<double>(rotation_.max) - rotation_.min));
+  const double u = (axis_value - mid) / (0.5 * (static_cast<double>(rotation_.max) - rotation_.min));
   return static_cast<int16_t>(std::lround(std::clamp(u, -1.0, 1.0) * 32767.0));
 }
 
-bool EvdevDevice::render_constant(int16_t level) {
-  if (level == 0) {
-    // zero (every fault sends it): the effect stops, nothing pushes the hand
-    if (playing_ && !play(effect_id_, false)) return false;
-    level_ = 0;
-    return true;
-  }
-  if ((level != level_ || effect_id_ < 0) && !upload(level)) return false;
-  return playing_ || play(effect_id_, true);
-}
-
-// the spring holds the wheel where it was read this tick (where the server's torque was
-// evaluated): re-centred once the wheel moved a few counts, so the constant effect and the spring
-// never count the same torque twice
-bool EvdevDevice::render_spring(int16_t coefficient) {
-  if (coefficient == 0) {
-    if (spring_playing_ && !play(spring_id_, false)) return false;
-    spring_coefficient_ = 0;
-    return true;
-  }
-  constexpr int kCentreToleranceCounts = 4;  // of 65535 over the axis: 0.05 deg of a 900 deg wheel
-  const int16_t centre = rotation_centre();
-  if ((coefficient != spring_coefficient_ || std::abs(centre - spring_centre_) > kCentreToleranceCounts ||
-       spring_id_ < 0) &&
-      !upload_spring(coefficient, centre))
-    return false;
-  return spring_playing_ || play(spring_id_, true);
-}
-
-bool EvdevDevice::render(const ForceSetpoint& force, int64_t /*seq*/) {
+// the 1 kHz loop's side: the set-point as levels, handed over. A flipped wheel (negative range)
+// flips the torque too, so that it still resists the trainee's turn in the device's own terms
+bool EvdevDevice::render(const ForceSetpoint& force, int64_t seq) {
+  positions_[static_cast<size_t>(seq) % kPositionSlots] = {seq, rotation_.value};
   if (unplugged_) return false;
-  bool ok = render_constant(constant_level(force.torque_nmm, cfg_.full_scale_torque_nmm));
-  if (has_spring_) ok = render_spring(spring_coefficient(force.torsional_stiffness_nmm_per_rad, cfg_)) && ok;
-  return ok;
+  const double sign = cfg_.wheel_range_deg < 0.0 ? -1.0 : 1.0;
+  Wanted w;
+  w.level = constant_level(sign * force.torque_nmm, cfg_.full_scale_torque_nmm);
+  if (has_spring_) {
+    w.coefficient = spring_coefficient(force.torsional_stiffness_nmm_per_rad, cfg_);
+    // where the wheel stood at the sample the torque answers (the server evaluated the torque
+    // there): the spring adds Kt times the turn since; now when that sample is not kept
+    const auto& at = positions_[static_cast<size_t>(std::max<int64_t>(force.sample_seq, 0)) % kPositionSlots];
+    w.centre = centre_of(force.sample_seq >= 0 && at.first == force.sample_seq ? at.second : rotation_.value);
+  }
+  {
+    std::lock_guard lock(mutex_);
+    if (w.level == wanted_.level && w.coefficient == wanted_.coefficient && w.centre == wanted_.centre) return true;
+    w.version = wanted_.version + 1;
+    wanted_ = w;
+  }
+  wanted_cv_.notify_one();
+  return true;
+}
+
+bool EvdevDevice::flush(double timeout_s) {
+  std::unique_lock lock(mutex_);
+  return applied_cv_.wait_for(lock, std::chrono::duration<double>(timeout_s),
+                              [&] { return applied_version_ == wanted_.version || unplugged_; });
+}
+
+// the writer: the newest set-point, applied; those in between are skipped
+void EvdevDevice::write_loop() {
+  std::unique_lock lock(mutex_);
+  for (;;) {
+    wanted_cv_.wait(lock, [&] { return stop_ || wanted_.version != applied_version_; });
+    if (stop_) return;
+    const Wanted w = wanted_;
+    lock.unlock();
+    apply(w);
+    lock.lock();
+    applied_version_ = w.version;
+    applied_cv_.notify_all();
+  }
+}
+
+void EvdevDevice::apply(const Wanted& w) {
+  if (unplugged_) return;
+  apply_constant(w.level);
+  if (has_spring_) apply_spring(w.coefficient, w.centre);
+}
+
+// zero (every fault sends it) stops the effect: nothing pushes the hand; so does an upload that
+// failed (the old level would play on)
+void EvdevDevice::apply_constant(int16_t level) {
+  if (level != 0) {
+    const bool current = effect_id_ >= 0 && level == level_;
+    if ((current || upload(level)) && (playing_ || play(effect_id_, true))) return;
+  }
+  if (playing_) play(effect_id_, false);
+  level_ = 0;
+}
+
+// the spring: re-centred once its centre moved a few counts, so that it adds the turn since the
+// sample the torque answers and nothing the constant effect already gives
+void EvdevDevice::apply_spring(int16_t coefficient, int16_t centre) {
+  constexpr int kCentreToleranceCounts = 4;  // of 65535 over the axis: 0.05 deg of a 900 deg wheel
+  if (coefficient != 0) {
+    const bool current = spring_id_ >= 0 && coefficient == spring_coefficient_ &&
+                         std::abs(centre - spring_centre_) <= kCentreToleranceCounts;
+    if ((current || upload_spring(coefficient, centre)) && (spring_playing_ || play(spring_id_, true))) return;
+  }
+  if (spring_playing_) play(spring_id_, false);
+  spring_coefficient_ = 0;
 }
 
 std::string EvdevDevice::describe() const {

@@ -4,10 +4,19 @@
 // from two absolute axes (insertion from a pedal or a stick's axis, rotation from the wheel), the
 // pedals' buttons from keys; the server's torque is rendered as one FF_CONSTANT effect, updated
 // in place when its level changes, and its rise with twist (the local model's stiffness) as an
-// FF_SPRING centred where the wheel was read, where the device has one; both stopped whenever the
-// set-point is zero (every fault sends zero, force_gate.h) and erased on exit. A wheel renders no
-// axial force: only the torque.
+// FF_SPRING centred where the wheel stood at the sample the torque answers, where the device has
+// one; both stopped whenever the set-point is zero (every fault sends zero, force_gate.h) and
+// erased on exit. A thread of its own talks to the device, so that an upload that waits for it
+// never holds the 1 kHz loop. A wheel renders no axial force: only the torque. A positive level
+// (direction 0x4000) is taken to push the wheel towards lower axis values; a device that pushes
+// the other way needs the profile's torque_scale negative.
+#include <array>
+#include <atomic>
+#include <condition_variable>
 #include <cstdint>
+#include <mutex>
+#include <thread>
+#include <utility>
 #include <string>
 #include <string_view>
 
@@ -46,28 +55,34 @@ class EvdevDevice : public InstrumentDevice {
   // opens the event node read-write and non-blocking and checks what it declares: both axes, and
   // FF_CONSTANT with room for one effect; sets the gain (FF_GAIN) and turns the device's own
   // centring spring off (FF_AUTOCENTER) where it has them. Throws std::runtime_error naming the
-  // node and what it lacks
+  // node and what it lacks. Starts the writer thread (below)
   EvdevDevice(const std::string& event_path, const EvdevConfig& config);
-  ~EvdevDevice() override;  // stops and erases the effect
+  ~EvdevDevice() override;  // stops the writer, then stops and erases the effects
   EvdevDevice(const EvdevDevice&) = delete;
   EvdevDevice& operator=(const EvdevDevice&) = delete;
 
   // drains the node's events; false once it is gone (unplugged: ENODEV)
   bool read(double t_s, InstrumentReading& out) override;
-  // the torque as the constant effect: uploaded when its level changes, played from the first
-  // non-zero level, stopped at zero; the torsional stiffness as the spring, re-centred on the
-  // wheel's position when it moved (or the coefficient changed), stopped at zero. Allocates nothing
+  // hands the set-point to the writer thread and returns: an upload (EVIOCSFF) may wait for the
+  // device (hid-pidff waits for its reports to go out; a uinput device for its maker's answer),
+  // which the 1 kHz loop must not. The writer applies the newest set-point only: the torque as
+  // the constant effect (uploaded when its level changes, played from the first non-zero level,
+  // stopped at zero or when an upload fails), the torsional stiffness as the spring centred where
+  // the wheel stood at the sample the torque answers (re-uploaded when that moved a few counts or
+  // the coefficient changed), stopped at zero. False once the device is unplugged. Allocates nothing
   bool render(const ForceSetpoint& force, int64_t seq) override;
   std::string describe() const override;
+  // waits until the writer has applied the newest set-point (at most timeout_s); false on timeout
+  bool flush(double timeout_s = 1.0);
 
-  int16_t level() const { return level_; }
-  bool playing() const { return playing_; }
-  int64_t uploads() const { return uploads_; }
+  int16_t level() const { return level_.load(); }  // as applied
+  bool playing() const { return playing_.load(); }
+  int64_t uploads() const { return uploads_.load(); }
   bool has_spring() const { return has_spring_; }
-  bool spring_playing() const { return spring_playing_; }
-  int64_t spring_uploads() const { return spring_uploads_; }
-  int64_t failed_writes() const { return failed_writes_; }
-  bool unplugged() const { return unplugged_; }
+  bool spring_playing() const { return spring_playing_.load(); }
+  int64_t spring_uploads() const { return spring_uploads_.load(); }
+  int64_t failed_writes() const { return failed_writes_.load(); }
+  bool unplugged() const { return unplugged_.load(); }
   bool has_gain() const { return has_gain_; }
 
  private:
@@ -75,29 +90,47 @@ class EvdevDevice : public InstrumentDevice {
     int code = 0;
     int32_t min = 0, max = 0, value = 0;
   };
+  // what the writer should make the device do
+  struct Wanted {
+    int16_t level = 0, coefficient = 0, centre = 0;
+    uint64_t version = 0;
+  };
   void resync();  // after SYN_DROPPED: the axes' and keys' state asked of the kernel
+  void write_loop();
+  void apply(const Wanted& w);
   bool upload(int16_t level);
   bool upload_spring(int16_t coefficient, int16_t centre);
   bool play(int16_t id, bool on);
-  bool render_constant(int16_t level);
-  bool render_spring(int16_t coefficient);
-  int16_t rotation_centre() const;  // the wheel's position as a spring's centre, +-0x7fff
+  void apply_constant(int16_t level);
+  void apply_spring(int16_t coefficient, int16_t centre);
   double insertion_mm() const;
   double rotation_rad() const;
+  int16_t centre_of(int32_t axis_value) const;  // a wheel position as a spring's centre, +-0x7fff
 
   std::string path_, name_;
   int fd_ = -1;
   EvdevConfig cfg_;
   Axis insertion_, rotation_;
   int32_t buttons_ = 0;
-  bool has_gain_ = false, has_autocenter_ = false, has_spring_ = false, dropped_ = false, unplugged_ = false;
-  int16_t effect_id_ = -1, level_ = 0;
-  int16_t spring_id_ = -1, spring_coefficient_ = 0, spring_centre_ = 0;
-  bool playing_ = false, spring_playing_ = false;
-  int64_t uploads_ = 0, spring_uploads_ = 0, failed_writes_ = 0;
+  bool has_gain_ = false, has_autocenter_ = false, has_spring_ = false, dropped_ = false;
   // rates: from the positions at the last read that brought an event
   double last_event_t_s_ = -1, last_insertion_mm_ = 0, last_rotation_rad_ = 0;
   double insertion_rate_mm_s_ = 0, rotation_rate_rad_s_ = 0;
+  // the wheel's position at each recent tick (seq % size, tagged with the seq): a spring's centre
+  static constexpr int kPositionSlots = 256;
+  std::array<std::pair<int64_t, int32_t>, kPositionSlots> positions_{};
+  // the 1 kHz loop and the writer: the newest set-point and how far the writer got
+  std::mutex mutex_;
+  std::condition_variable wanted_cv_, applied_cv_;
+  Wanted wanted_;
+  uint64_t applied_version_ = 0;
+  bool stop_ = false;
+  std::thread writer_;
+  // the writer's own (the accessors read them)
+  int16_t effect_id_ = -1, spring_id_ = -1, spring_coefficient_ = 0, spring_centre_ = 0;
+  std::atomic<int16_t> level_{0};
+  std::atomic<bool> playing_{false}, spring_playing_{false}, unplugged_{false};
+  std::atomic<int64_t> uploads_{0}, spring_uploads_{0}, failed_writes_{0};
 };
 
 }  // namespace pcisim::clients

@@ -23,6 +23,7 @@ ForceGateState gate_force(const ForceGateInput& in, ForceSetpoint* out) {
   // a negative spring would push the hand on: none
   out->axial_stiffness_n_per_mm = std::max(in.axial_stiffness_n_per_mm, 0.0);
   out->torsional_stiffness_nmm_per_rad = std::max(in.torsional_stiffness_nmm_per_rad, 0.0);
+  out->sample_seq = in.instrument_seq;
   return ForceGateState::kRendering;
 }
 

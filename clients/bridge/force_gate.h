@@ -30,6 +30,7 @@ struct ForceGateInput {
   int32_t flags = 0;             // force_command_t.flags
   double axial_n = 0.0, torque_nmm = 0.0;
   double axial_stiffness_n_per_mm = 0.0, torsional_stiffness_nmm_per_rad = 0.0;
+  int64_t instrument_seq = -1;  // force_command_t.instrument_seq
 };
 
 // the set-point (zero unless kRendering) and why

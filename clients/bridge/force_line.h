@@ -19,6 +19,7 @@ struct ForceSetpoint {
   // renders a spring centres it there. The force line does not carry them
   double axial_stiffness_n_per_mm = 0.0;
   double torsional_stiffness_nmm_per_rad = 0.0;
+  int64_t sample_seq = -1;  // the bridge tick (instrument sample) the force answers; -1: none
 };
 
 // the line's ranges (a box clamps to its own actuator's limits after these)

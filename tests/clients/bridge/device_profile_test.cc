@@ -143,6 +143,35 @@ TEST(ForceShaper, ScalesClampsFiltersAndZeroesAtOnce) {
               1e-12);
 }
 
+// the stiffness scales with the force's magnitude (a flipped sign flips the force, not the
+// spring), passes the filter unchanged, is gone on an axis at the limit and in a fault
+TEST(ForceShaper, ScalesTheStiffnessByTheScalesMagnitudeAndDropsItAtTheLimit) {
+  ForceShaping s;
+  s.torque_scale = -2.0;
+  s.max_torque_nmm = 10.0;
+  s.filter_hz = 50.0;
+  ForceShaper shaper(s);
+  ForceSetpoint in;
+  in.torque_nmm = 1.0;
+  in.torsional_stiffness_nmm_per_rad = 3.0;
+  in.axial_stiffness_n_per_mm = 0.5;
+  in.sample_seq = 12;
+  ForceSetpoint out = shaper.step(in, 1e-3, false);
+  EXPECT_DOUBLE_EQ(out.torsional_stiffness_nmm_per_rad, 6.0);
+  EXPECT_DOUBLE_EQ(out.axial_stiffness_n_per_mm, 0.5);
+  EXPECT_EQ(out.sample_seq, 12);
+  EXPECT_LT(out.torque_nmm, 0.0) << "the torque flipped";
+  EXPECT_GT(out.torque_nmm, -2.0) << "and filtered";
+  in.torque_nmm = 6.0;  // 12 N mm after the scale: past the 10 N mm limit
+  out = shaper.step(in, 1e-3, false);
+  EXPECT_EQ(out.torsional_stiffness_nmm_per_rad, 0.0);
+  EXPECT_DOUBLE_EQ(out.axial_stiffness_n_per_mm, 0.5);
+  out = shaper.step(in, 1e-3, true);
+  EXPECT_EQ(out.torsional_stiffness_nmm_per_rad, 0.0);
+  EXPECT_EQ(out.axial_stiffness_n_per_mm, 0.0);
+  EXPECT_EQ(out.sample_seq, -1);
+}
+
 TEST(ForceShaper, TheBridgeHandsItsDeviceTheShapedForce) {
   lcm::LCM lcm("memq://");
   RecordingDevice device;

@@ -146,20 +146,29 @@ TEST_F(UinputTest, TheTorqueIsOneConstantEffectUpdatedInPlaceStoppedAtZeroAndEra
   {
     EvdevDevice dev(wheel.event_path(), cfg);
     EXPECT_TRUE(dev.has_gain());
-    ASSERT_TRUE(dev.render({1.0, 10.0}, 1));
-    ASSERT_TRUE(dev.render({1.0, 10.0}, 2));  // the same level: nothing sent
-    ASSERT_TRUE(dev.render({1.0, -5.0}, 3));
+    // each set-point applied by the device's writer thread before the next (flush)
+    auto render = [&](double torque_nmm, int64_t seq) {
+      ForceSetpoint f;
+      f.torque_nmm = torque_nmm;
+      EXPECT_TRUE(dev.render(f, seq));
+      EXPECT_TRUE(dev.flush());
+    };
+    render(10.0, 1);
+    render(10.0, 2);  // the same level: nothing sent
+    render(-5.0, 3);
     EXPECT_EQ(dev.uploads(), 2);
     EXPECT_TRUE(dev.playing());
-    // allocation-free once playing (a level change each tick)
+    // the 1 kHz loop's side allocates nothing (a level change each tick; the writer takes the newest)
     {
       pcisim::testing::AllocationCount count;
       for (int k = 0; k < 100; ++k) ASSERT_TRUE(dev.render({0.0, 1.0 + 0.1 * k}, 4 + k));
       EXPECT_EQ(count.allocations(), 0);
     }
-    ASSERT_TRUE(dev.render({0.0, 0.0}, 200));  // zero: the effect stops
+    ASSERT_TRUE(dev.flush());
+    EXPECT_EQ(dev.level(), constant_level(1.0 + 0.1 * 99, 20.0)) << "the newest level was applied";
+    render(0.0, 200);  // zero: the effect stops
     EXPECT_FALSE(dev.playing());
-    ASSERT_TRUE(dev.render({0.0, 4.0}, 201));  // and plays again
+    render(4.0, 201);  // and plays again
     EXPECT_TRUE(dev.playing());
   }
   const auto erased = wait_for(wheel, FfRecord::kErase, 1);
@@ -171,6 +180,7 @@ TEST_F(UinputTest, TheTorqueIsOneConstantEffectUpdatedInPlaceStoppedAtZeroAndEra
   EXPECT_EQ(uploads[1].level, -8192);  // -5 / 20 * 32767 = -8191.75
   for (const FfRecord& u : uploads) EXPECT_EQ(u.id, uploads[0].id) << "one effect, updated in place";
   EXPECT_EQ(uploads.back().level, constant_level(4.0, 20.0));
+  EXPECT_EQ(uploads[uploads.size() - 2].level, constant_level(1.0 + 0.1 * 99, 20.0));
   ASSERT_EQ(plays.size(), 2u) << "played at the first torque and again after the zero";
   // stopped at the zero, and on exit by the device and by the kernel as it erases the effect
   ASSERT_EQ(stops.size(), 3u) << "stops";
@@ -185,7 +195,17 @@ TEST_F(UinputTest, TheTorqueIsOneConstantEffectUpdatedInPlaceStoppedAtZeroAndEra
   EXPECT_EQ(centre[0].value, 0) << "the device's own centring spring off";
 }
 
-TEST_F(UinputTest, TheStiffnessIsASpringCentredWhereTheWheelWasRead) {
+TEST_F(UinputTest, AFlippedWheelFlipsTheTorqueSoThatItStillResists) {
+  UinputWheel wheel;
+  EvdevConfig cfg;
+  cfg.wheel_range_deg = -900.0;  // the wheel's axis runs against the wire's rotation
+  EvdevDevice dev(wheel.event_path(), cfg);
+  ASSERT_TRUE(dev.render({0.0, 10.0}, 1));
+  ASSERT_TRUE(dev.flush());
+  EXPECT_EQ(dev.level(), -constant_level(10.0, cfg.full_scale_torque_nmm));
+}
+
+TEST_F(UinputTest, TheStiffnessIsASpringCentredWhereTheWheelStoodAtTheSampleTheTorqueAnswers) {
   UinputWheel wheel;
   EvdevConfig cfg;
   cfg.full_scale_torque_nmm = 20.0;
@@ -197,20 +217,32 @@ TEST_F(UinputTest, TheStiffnessIsASpringCentredWhereTheWheelWasRead) {
     EvdevDevice dev(wheel.event_path(), cfg);
     ASSERT_TRUE(dev.has_spring());
     InstrumentReading r;
+    // a set-point with torque, stiffness and the tick whose sample it answers, applied at tick seq
+    auto render = [&](double stiffness, int64_t answers, int64_t seq) {
+      ForceSetpoint f;
+      f.torque_nmm = 2.0;
+      f.torsional_stiffness_nmm_per_rad = stiffness;
+      f.sample_seq = answers;
+      EXPECT_TRUE(dev.render(f, seq));
+      EXPECT_TRUE(dev.flush());
+    };
     ASSERT_TRUE(dev.read(0.0, r));
-    ASSERT_TRUE(dev.render({0.0, 2.0, 0.0, 1.0}, 1));
+    render(1.0, -1, 1);  // answers no sample: centred where the wheel is (0)
     EXPECT_TRUE(dev.spring_playing());
     wheel.move(ABS_X, 16384);  // a quarter turn of the axis to the right
     usleep(20000);
     ASSERT_TRUE(dev.read(0.020, r));
-    ASSERT_TRUE(dev.render({0.0, 2.0, 0.0, 1.0}, 2));  // re-centred where the wheel now is
-    ASSERT_TRUE(dev.render({0.0, 2.0, 0.0, 1.0}, 3));  // unmoved: nothing sent
+    render(1.0, 1, 2);  // answers tick 1's sample: still centred at 0, so it pushes back the quarter turn
+    EXPECT_EQ(dev.spring_uploads(), 1);
+    render(1.0, 2, 3);  // answers tick 2's: re-centred where the wheel now is
+    render(1.0, 3, 4);  // unmoved: nothing sent
     EXPECT_EQ(dev.spring_uploads(), 2);
-    ASSERT_TRUE(dev.render({0.0, 2.0, 0.0, 0.0}, 4));  // no stiffness: the spring stops
+    render(0.0, 4, 5);  // no stiffness: the spring stops
     EXPECT_FALSE(dev.spring_playing());
     EXPECT_TRUE(dev.playing()) << "the torque goes on";
-    ASSERT_TRUE(dev.render({0.0, 2.0, 0.0, 2.0}, 5));
-    ASSERT_TRUE(dev.render({}, 6));  // zero, as in every fault: both stop
+    render(2.0, 5, 6);
+    ASSERT_TRUE(dev.render({}, 7));  // zero, as in every fault: both stop
+    ASSERT_TRUE(dev.flush());
     EXPECT_FALSE(dev.spring_playing());
     EXPECT_FALSE(dev.playing());
   }

@@ -62,6 +62,31 @@ TEST(ForceLine, WritesMilliNewtonsAndMicroNewtonMetresRoundedAndClamped) {
   EXPECT_EQ(count.allocations(), 0);
 }
 
+// the stiffness and the answered sample ride with the force; a negative stiffness is no spring,
+// a non-finite one a fault, and a fault carries neither
+TEST(ForceGate, PassesTheStiffnessAndTheAnsweredSample) {
+  ForceGateInput in;
+  in.device_ok = true;
+  in.now_ns = 1'000'000'000;
+  in.last_command_ns = in.now_ns - 1'000'000;
+  in.torque_nmm = 2.0;
+  in.axial_stiffness_n_per_mm = 0.4;
+  in.torsional_stiffness_nmm_per_rad = 3.0;
+  in.instrument_seq = 77;
+  ForceSetpoint out;
+  ASSERT_EQ(gate_force(in, &out), ForceGateState::kRendering);
+  EXPECT_EQ(out.axial_stiffness_n_per_mm, 0.4);
+  EXPECT_EQ(out.torsional_stiffness_nmm_per_rad, 3.0);
+  EXPECT_EQ(out.sample_seq, 77);
+  in.torsional_stiffness_nmm_per_rad = -3.0;
+  ASSERT_EQ(gate_force(in, &out), ForceGateState::kRendering);
+  EXPECT_EQ(out.torsional_stiffness_nmm_per_rad, 0.0);
+  in.axial_stiffness_n_per_mm = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(gate_force(in, &out), ForceGateState::kNotFinite);
+  EXPECT_EQ(out.axial_stiffness_n_per_mm, 0.0);
+  EXPECT_EQ(out.sample_seq, -1);
+}
+
 TEST(ForceGate, RendersAFreshHealthyCommandAndZeroesEveryFault) {
   ForceGateInput in;
   in.device_ok = true;

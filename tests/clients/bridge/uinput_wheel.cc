@@ -45,7 +45,7 @@ std::string UinputWheel::unavailable() {
          "these tests in a virtual machine that has them";
 }
 
-UinputWheel::UinputWheel(const std::string& name) {
+UinputWheel::UinputWheel(const std::string& name) try {
   fd_ = ::open("/dev/uinput", O_RDWR | O_NONBLOCK | O_CLOEXEC);
   must(fd_, "open /dev/uinput");
   for (int ev : {EV_KEY, EV_ABS, EV_FF}) must(ioctl(fd_, UI_SET_EVBIT, ev), "UI_SET_EVBIT");
@@ -93,6 +93,13 @@ UinputWheel::UinputWheel(const std::string& name) {
     event_path_ = made_node_;
   }
   thread_ = std::thread([this] { serve(); });
+} catch (...) {
+  // a half-made device goes with its descriptor
+  if (fd_ >= 0) {
+    ioctl(fd_, UI_DEV_DESTROY);
+    ::close(fd_);
+  }
+  throw;
 }
 
 UinputWheel::~UinputWheel() {
@@ -150,16 +157,16 @@ void UinputWheel::serve() {
           r.coeff = c.right_coeff == c.left_coeff ? c.right_coeff : int16_t{-1};
           r.centre = c.center;
         }
+        record(r);  // before the answer: the uploader may look the moment it returns
         up.retval = 0;
         ioctl(fd_, UI_END_FF_UPLOAD, &up);
-        record(r);
       } else if (ev.type == EV_UINPUT && ev.code == UI_FF_ERASE) {
         uinput_ff_erase er{};
         er.request_id = static_cast<uint32_t>(ev.value);
         if (ioctl(fd_, UI_BEGIN_FF_ERASE, &er) < 0) continue;
+        record({FfRecord::kErase, 0, static_cast<int>(er.effect_id)});
         er.retval = 0;
         ioctl(fd_, UI_END_FF_ERASE, &er);
-        record({FfRecord::kErase, 0, static_cast<int>(er.effect_id)});
       } else if (ev.type == EV_FF && ev.code == FF_GAIN) {
         FfRecord r{FfRecord::kGain, 0};
         r.value = ev.value;

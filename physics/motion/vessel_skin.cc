@@ -19,6 +19,16 @@ Eigen::Vector3d ev(const sdf::V3& p) {
   return {p.x, p.y, p.z};
 }
 
+// a triangle's orientation: columns edge 1's direction, the in-plane direction across it, the
+// unit normal (orthonormal)
+Eigen::Matrix3d orientation(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  Eigen::Matrix3d f;
+  f.col(0) = (b - a).normalized();
+  f.col(2) = (b - a).cross(c - a).normalized();
+  f.col(1) = f.col(2).cross(f.col(0));
+  return f;
+}
+
 // a triangle's affine frame: columns edge 1, edge 2, unit normal
 Eigen::Matrix3d frame(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
   Eigen::Matrix3d f;
@@ -62,6 +72,7 @@ VesselSkin::VesselSkin(const anatomy::VesselTree& rest_tree, const Eigen::Matrix
   const int n = point_count();
   binding_.resize(n);
   weight_.assign(n, 0.0);
+  turn_.assign(n, Eigen::Quaterniond::Identity());
 
   // bind each point to its nearest triangle (brute force: built once, ~1e3 points x ~1e3 triangles)
   for (int i = 0; i < n; ++i) {
@@ -82,6 +93,8 @@ VesselSkin::VesselSkin(const anatomy::VesselTree& rest_tree, const Eigen::Matrix
     const auto& tri = triangles_[binding_[i].tri];
     const Eigen::Matrix3d f = frame(rest_surface_m.col(tri[0]), rest_surface_m.col(tri[1]), rest_surface_m.col(tri[2]));
     binding_[i].coords = f.colPivHouseholderQr().solve(rest_[i] - rest_surface_m.col(tri[0]));
+    binding_[i].rest_orientation =
+        orientation(rest_surface_m.col(tri[0]), rest_surface_m.col(tri[1]), rest_surface_m.col(tri[2]));
     const double beyond = std::sqrt(best) - params_.attach_distance_m;
     weight_[i] = beyond <= 0.0 ? 1.0 : std::max(0.0, 1.0 - beyond / std::max(params_.fade_distance_m, 1e-9));
   }
@@ -124,25 +137,31 @@ void VesselSkin::update(const Eigen::Matrix3Xd& surface_m) {
     const Binding& b = binding_[i];
     if (b.tri < 0 || weight_[i] <= 0.0) {
       now_[i] = rest_[i];
+      turn_[i].setIdentity();
       continue;
     }
     now_[i] = rest_[i] + weight_[i] * (skinned(b, surface_m) - rest_[i]);
+    // its triangle's turn since rest, as much of it as the point rides the heart
+    const auto& tri = triangles_[b.tri];
+    const Eigen::Matrix3d now = orientation(surface_m.col(tri[0]), surface_m.col(tri[1]), surface_m.col(tri[2]));
+    const Eigen::Quaterniond q(Eigen::Matrix3d(now * b.rest_orientation.transpose()));
+    turn_[i] = Eigen::Quaterniond::Identity().slerp(weight_[i], q);
   }
 }
 
-Eigen::Vector3d VesselSkin::displacement_m(const Eigen::Vector3d& p, double a) const {
-  if (cell_points_.empty() || !p.allFinite()) return Eigen::Vector3d::Zero();
+template <class F>
+double VesselSkin::blend(const Eigen::Vector3d& p, F&& f) const {
+  if (cell_points_.empty() || !p.allFinite()) return 0.0;
   const Eigen::Vector3d g = (p - grid_origin_m_) / cell_m_;
   Eigen::Vector3i c;
   for (int k = 0; k < 3; ++k) {
-    if (!(g[k] >= 0.0) || g[k] >= grid_dims_[k]) return Eigen::Vector3d::Zero();
+    if (!(g[k] >= 0.0) || g[k] >= grid_dims_[k]) return 0.0;
     c[k] = static_cast<int>(g[k]);
   }
   // inverse squared distance over the centerline points within the blend radius; the softening
   // keeps a point on a centerline from taking one sample's value alone
   const double r2 = params_.blend_radius_m * params_.blend_radius_m;
   const double soft2 = 0.01 * r2;
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   double wsum = 0.0;
   for (int z = std::max(c.z() - 1, 0); z <= std::min(c.z() + 1, grid_dims_.z() - 1); ++z)
     for (int y = std::max(c.y() - 1, 0); y <= std::min(c.y() + 1, grid_dims_.y() - 1); ++y)
@@ -154,21 +173,33 @@ Eigen::Vector3d VesselSkin::displacement_m(const Eigen::Vector3d& p, double a) c
           if (d2 > r2) continue;
           // fades to zero at the blend radius so the field is continuous as points enter it
           const double w = (1.0 - d2 / r2) / (d2 + soft2);
-          sum += w * ((1.0 - a) * before_[i] + a * now_[i] - rest_[i]);
+          f(i, w);
           wsum += w;
         }
       }
+  return wsum;
+}
+
+Eigen::Vector3d VesselSkin::displacement_m(const Eigen::Vector3d& p, double a) const {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  const double wsum = blend(p, [&](int i, double w) { sum += w * ((1.0 - a) * before_[i] + a * now_[i] - rest_[i]); });
   return wsum > 0.0 ? Eigen::Vector3d(sum / wsum) : Eigen::Vector3d::Zero();
 }
 
 Eigen::Vector3d VesselSkin::turn_to_world(const Eigen::Vector3d& rest_p, const Eigen::Vector3d& v) const {
-  const double n = v.norm();
-  if (!(n > 0.0) || !std::isfinite(n)) return v;
-  constexpr double kSegmentM = 1e-4;
-  const Eigen::Vector3d along = kSegmentM / n * v;
-  const Eigen::Vector3d turned = to_world(rest_p + along) - to_world(rest_p - along);
-  const double length = turned.norm();
-  return length > 0.0 && std::isfinite(length) ? Eigen::Vector3d(n / length * turned) : v;
+  if (!v.allFinite() || v.squaredNorm() == 0.0) return v;
+  // the blend of the nearby centerline points' turns (their quaternions on one hemisphere)
+  Eigen::Vector4d sum = Eigen::Vector4d::Zero();
+  const Eigen::Quaterniond* first = nullptr;
+  const double wsum = blend(rest_p, [&](int i, double w) {
+    if (!first) first = &turn_[i];
+    const double sign = first->coeffs().dot(turn_[i].coeffs()) < 0.0 ? -1.0 : 1.0;
+    sum += sign * w * turn_[i].coeffs();
+  });
+  if (!(wsum > 0.0) || !(sum.norm() > 0.0)) return v;
+  Eigen::Quaterniond q;
+  q.coeffs() = sum.normalized();
+  return q * v;
 }
 
 Eigen::Vector3d VesselSkin::to_rest(const Eigen::Vector3d& world_p) const {

@@ -6,6 +6,7 @@
 // Any other rest-frame point (the wire inside a lumen) is carried by a blend of the centerline
 // points around it. Built once; update() and the queries allocate nothing.
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <array>
 #include <span>
 #include <vector>
@@ -42,9 +43,11 @@ class VesselSkin {
   // linearly from where the update before left them (a = 0) to where they are now (a = 1)
   Eigen::Vector3d displacement_m(const Eigen::Vector3d& rest_p_m, double a) const;
   Eigen::Vector3d to_world(const Eigen::Vector3d& rest_p_m) const { return rest_p_m + displacement_m(rest_p_m); }
-  // a vector at a rest-frame point (a force on a node) carried to the world: turned as the skin
-  // turns a short segment along it there, its length kept (the skin's local stretch is small
-  // beside its turn); a zero or non-finite vector comes back as it is
+  // a vector at a rest-frame point (a force on a node) carried to the world: turned as the
+  // epicardial triangles the nearby centerline points ride turned since rest (each as much as the
+  // point rides the heart; blended like the displacement), its length kept, whichever way it
+  // points (a wall's push is across the vessel); a zero or non-finite vector, or one far from
+  // every vessel, comes back as it is
   Eigen::Vector3d turn_to_world(const Eigen::Vector3d& rest_p_m, const Eigen::Vector3d& v) const;
   // the rest-frame point that maps to world_p (fixed-point iteration from the nearest moved
   // centerline point; linear in the tree's size, for tests and benchmarks, not per-node loops)
@@ -56,9 +59,14 @@ class VesselSkin {
  private:
   struct Binding {
     int tri = -1;
-    Eigen::Vector3d coords = Eigen::Vector3d::Zero();  // along edge 1, edge 2, unit normal
+    Eigen::Vector3d coords = Eigen::Vector3d::Zero();                // along edge 1, edge 2, unit normal
+    Eigen::Matrix3d rest_orientation = Eigen::Matrix3d::Identity();  // the triangle's, orthonormal
   };
   Eigen::Vector3d skinned(const Binding& b, const Eigen::Matrix3Xd& surface_m) const;
+  // calls f(i, w) for each centerline point i within the blend radius of rest point p, with its
+  // weight (inverse squared distance, softened, fading to zero at the radius); returns their sum
+  template <class F>
+  double blend(const Eigen::Vector3d& p, F&& f) const;
 
   VesselMotionParams params_;
   std::vector<std::array<int, 3>> triangles_;
@@ -66,6 +74,7 @@ class VesselSkin {
   std::vector<int> offsets_;
   std::vector<Binding> binding_;
   std::vector<double> weight_;
+  std::vector<Eigen::Quaterniond> turn_;  // each point's triangle's turn since rest (times its ride weight)
 
   // rest-frame grid of centerline points: cell -> [cell_start_[c], cell_start_[c + 1]) in cell_points_
   Eigen::Vector3d grid_origin_m_ = Eigen::Vector3d::Zero();

@@ -150,5 +150,38 @@ TEST_F(VesselSkinTest, BadDistancesAreRefusedByName) {
   }
 }
 
+// a force on a node in the lumen, carried to the world: the heart turned rigidly turns it with
+// the heart (its length kept), whatever its direction: along the vessel or across it (the wall's
+// push is across)
+TEST_F(VesselSkinTest, AVectorInTheLumenTurnsWithTheHeart) {
+  const double angle = 0.2;
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(angle, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Vector3d t(0.004, -0.002, 0.003);
+  skin.update(Eigen::Matrix3Xd((r * heart.points_m).colwise() + t));
+  const auto& lad = tree.branches[tree.find("LAD")];
+  double worst_along = 0, worst_across = 0;
+  for (size_t k = 10; k + 10 < lad.points.size(); k += 17) {
+    const Eigen::Vector3d axis = lad.points[k].position_m;
+    const Eigen::Vector3d tangent = (lad.points[k + 1].position_m - lad.points[k - 1].position_m).normalized();
+    const Eigen::Vector3d across = tangent.unitOrthogonal(), across2 = tangent.cross(across);
+    const Eigen::Vector3d p = axis + 0.0005 * across;
+    for (const Eigen::Vector3d& v : {Eigen::Vector3d(0.3 * tangent), Eigen::Vector3d(-0.2 * across),
+                                     Eigen::Vector3d(0.1 * across2), Eigen::Vector3d(0.2 * (across + tangent))}) {
+      const Eigen::Vector3d turned = skin.turn_to_world(p, v);
+      EXPECT_NEAR(turned.norm(), v.norm(), 1e-12) << "its length kept";
+      const double off = std::acos(std::clamp(turned.normalized().dot((r * v).normalized()), -1.0, 1.0));
+      (std::abs(v.normalized().dot(tangent)) > 0.99 ? worst_along : worst_across) =
+          std::max(std::abs(v.normalized().dot(tangent)) > 0.99 ? worst_along : worst_across, off);
+    }
+  }
+  std::printf("turned off the heart's turn (%.1f deg): along the vessel %.3f deg, across %.3f deg\n",
+              angle * 180 / M_PI, worst_along * 180 / M_PI, worst_across * 180 / M_PI);
+  EXPECT_LT(worst_along, 0.02 * angle);
+  EXPECT_LT(worst_across, 0.02 * angle);
+  // a zero or non-finite vector comes back as it is
+  EXPECT_EQ(skin.turn_to_world(lad.points[20].position_m, Eigen::Vector3d::Zero()), Eigen::Vector3d::Zero());
+  EXPECT_TRUE(std::isnan(skin.turn_to_world(lad.points[20].position_m, Eigen::Vector3d(NAN, 0, 0)).x()));
+}
+
 }  // namespace
 }  // namespace pcisim::physics

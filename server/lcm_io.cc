@@ -58,7 +58,7 @@ void LcmIo::publish_zero_force() {
   zero.seq = -1;  // not a haptic tick: the server's last word
   zero.instrument_seq = last_instrument_seq_;
   zero.flags = pcisim_lcm::force_command_t::FLAG_FADED;
-  lcm_.publish(protocol::kForceChannel, &zero);
+  zero_publisher_.publish(lcm_, force_channel_, zero);
   state_.lcm_tx.fetch_add(1, std::memory_order_relaxed);
 }
 
@@ -291,33 +291,37 @@ void LcmIo::publish_wire(const physics::WorldSnapshot& s) {
   for (int k = 0; k < 3; ++k) m.tip_mm[k] = s.tip_m[k] * 1e3;
   m.tip_branch = branch_name_ ? branch_name_(s.tip_branch) : std::string();
   m.heart_phase = s.heart_phase;
-  lcm_.publish(protocol::kWireChannel, &m);
+  tx_publisher_.publish(lcm_, wire_channel_, m);
   state_.lcm_tx.fetch_add(1, std::memory_order_relaxed);
 }
 
-void LcmIo::tx_loop() {
+void LcmIo::publish_forces() {
   ForceSlot slot;
+  while (state_.forces.pop(slot)) {
+    force_msg_.utime = slot.utime;
+    force_msg_.seq = slot.tick;
+    force_msg_.instrument_seq = slot.instrument_seq;
+    force_msg_.axial_force_n = slot.force.axial_force_n;
+    force_msg_.torque_nmm = slot.force.torque_nm * 1e3;
+    force_msg_.axial_stiffness_n_per_mm = slot.force.axial_stiffness_n_per_m * 1e-3;
+    force_msg_.torsional_stiffness_nmm_per_rad = slot.force.torsional_stiffness_nm_per_rad * 1e3;
+    force_msg_.flags = slot.force.flags;
+    tx_publisher_.publish(lcm_, force_channel_, force_msg_);
+    state_.lcm_tx.fetch_add(1, std::memory_order_relaxed);
+  }
+}
+
+void LcmIo::tx_loop() {
   int64_t next_status_us = realtime::monotonic_us() + 1'000'000;
   while (running_.load(std::memory_order_relaxed)) {
     // force commands first: they are the latency-critical stream
-    while (state_.forces.pop(slot)) {
-      force_msg_.utime = slot.utime;
-      force_msg_.seq = slot.tick;
-      force_msg_.instrument_seq = slot.instrument_seq;
-      force_msg_.axial_force_n = slot.force.axial_force_n;
-      force_msg_.torque_nmm = slot.force.torque_nm * 1e3;
-      force_msg_.axial_stiffness_n_per_mm = slot.force.axial_stiffness_n_per_m * 1e-3;
-      force_msg_.torsional_stiffness_nmm_per_rad = slot.force.torsional_stiffness_nm_per_rad * 1e3;
-      force_msg_.flags = slot.force.flags;
-      lcm_.publish(protocol::kForceChannel, &force_msg_);
-      state_.lcm_tx.fetch_add(1, std::memory_order_relaxed);
-    }
+    publish_forces();
     if (state_.snapshot_for_tx.refresh()) publish_wire(state_.snapshot_for_tx.read_slot());
     const int64_t now_us = realtime::monotonic_us();
     if (now_us >= next_status_us && status_) {
       auto status = status_();
       status.seq = status_seq_++;
-      lcm_.publish(protocol::kStatusChannel, &status);
+      tx_publisher_.publish(lcm_, status_channel_, status);
       state_.lcm_tx.fetch_add(1, std::memory_order_relaxed);
       next_status_us += 1'000'000;
     }

@@ -13,6 +13,8 @@
 #include "pcisim_lcm/session_command_t.hpp"
 #include "pcisim_lcm/sim_status_t.hpp"
 #include "pcisim_lcm/wire_state_t.hpp"
+#include "protocol/channels.h"
+#include "protocol/encoded_publisher.h"
 #include "server/session_limits.h"
 #include "server/shared_state.h"
 
@@ -36,6 +38,10 @@ class LcmIo {
   void start();
   void stop();  // joins both threads; publishes a final zero force command
   void publish_zero_force();
+  // the send thread's two streams (public for the test that counts their allocations): the
+  // haptic loop's force commands waiting in the shared queue, and one wire state
+  void publish_forces();
+  void publish_wire(const physics::WorldSnapshot& s);
 
  private:
   void on_instrument(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
@@ -47,7 +53,6 @@ class LcmIo {
   void refuse(const char* what, const std::string& why);
   void rx_loop();
   void tx_loop();
-  void publish_wire(const physics::WorldSnapshot& s);
 
   lcm::LCM& lcm_;
   SharedState& state_;
@@ -58,8 +63,8 @@ class LcmIo {
   std::array<lcm::Subscription*, 2> subscriptions_{};
   std::thread rx_, tx_;
   std::atomic<bool> running_{false};
-  // messages reused every time (lcm::LCM::publish still allocates its encode buffer per call; this
-  // is the LCM thread, never the 1 kHz haptic loop)
+  // messages reused every time, encoded into buffers kept between calls (encoded_publisher.h): one
+  // for the send thread, one for the zero force of stop() (another thread)
   pcisim_lcm::instrument_state_t instrument_msg_{};
   pcisim_lcm::probe_state_t probe_msg_{};
   double last_probe_depth_m_ = 0.0, probe_rate_m_per_s_ = 0.0;
@@ -67,6 +72,9 @@ class LcmIo {
   pcisim_lcm::session_command_t session_msg_{};
   pcisim_lcm::force_command_t force_msg_{};
   pcisim_lcm::wire_state_t wire_msg_{};
+  protocol::EncodedPublisher tx_publisher_, zero_publisher_;
+  const std::string force_channel_{protocol::kForceChannel}, wire_channel_{protocol::kWireChannel},
+      status_channel_{protocol::kStatusChannel};
   int64_t last_instrument_seq_ = -1;
   int64_t status_seq_ = 0;
   // refusals are logged at most once a second (a flood must not flood the log); the rest counted

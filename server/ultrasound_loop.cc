@@ -25,7 +25,6 @@ UltrasoundLoop::UltrasoundLoop(const Scene& scene, const anatomy::Case& anatomy,
   // a frame's size is fixed by its pixel count (depth and gain change what is in it)
   msg_.num_bytes = spec_.settings.width_px * spec_.settings.height_px;
   msg_.data.resize(static_cast<size_t>(msg_.num_bytes));
-  bytes_.resize(static_cast<size_t>(msg_.getEncodedSize()));
 }
 
 void UltrasoundLoop::render_and_publish() {
@@ -78,10 +77,7 @@ void UltrasoundLoop::render_and_publish() {
   m.num_bytes = static_cast<int32_t>(image_->pixels.size());
   m.data.resize(image_->pixels.size());
   std::memcpy(m.data.data(), image_->pixels.data(), m.data.size());
-  const int size = m.getEncodedSize();
-  if (bytes_.size() < static_cast<size_t>(size)) bytes_.resize(static_cast<size_t>(size));
-  if (m.encode(bytes_.data(), 0, size) != size) return;  // cannot happen: sized above
-  images_->publish(channel_, bytes_.data(), static_cast<unsigned>(size));
+  publisher_.publish(*images_, channel_, m);
 }
 
 void UltrasoundLoop::run() {

@@ -10,6 +10,7 @@
 
 #include "anatomy/case/case.h"
 #include "pcisim_lcm/us_frame_t.hpp"
+#include "protocol/encoded_publisher.h"
 #include "server/scene/scene.h"
 #include "server/shared_state.h"
 #include "ultrasound/render/bmode_renderer.h"
@@ -37,8 +38,8 @@ class UltrasoundLoop {
   ultrasound::TetSnapshot mesh_;
   const ultrasound::BModeImage* image_ = nullptr;
   pcisim_lcm::us_frame_t msg_{};
-  const std::string channel_;   // a std::string once: publish() takes one (17 chars: no small-string buffer)
-  std::vector<uint8_t> bytes_;  // msg_ encoded: sized once (lcm-cpp's publish of a message allocates)
+  const std::string channel_;             // a std::string once: publish() takes one (17 chars: no small-string buffer)
+  protocol::EncodedPublisher publisher_;  // msg_ encoded into a buffer sized once
   int64_t seq_ = 0;
 };
 

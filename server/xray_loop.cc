@@ -132,7 +132,7 @@ void XrayLoop::render_and_publish(bool cine) {
   m.num_bytes = static_cast<int32_t>(frame_.pixels.size() * 2);
   m.data.resize(static_cast<size_t>(m.num_bytes));
   std::memcpy(m.data.data(), frame_.pixels.data(), m.data.size());  // little-endian uint16
-  images_->publish(protocol::kXrayChannel, &m);
+  publisher_.publish(*images_, channel_, m);
   // after the frame is out: one more of the pose's phase bins, until it has them all
   renderer_->fill_beat_ahead();
 }

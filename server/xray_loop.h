@@ -8,6 +8,8 @@
 
 #include "anatomy/case/case.h"
 #include "pcisim_lcm/xray_frame_t.hpp"
+#include "protocol/channels.h"
+#include "protocol/encoded_publisher.h"
 #include "server/scene/scene.h"
 #include "server/shared_state.h"
 #include "xray/fluoro/fluoroscopy.h"
@@ -31,6 +33,8 @@ class XrayLoop {
   XraySpec spec_;
   SharedState& state_;
   lcm::LCM* images_;
+  protocol::EncodedPublisher publisher_;  // a frame encoded into a buffer kept between frames
+  const std::string channel_{protocol::kXrayChannel};
   std::unique_ptr<xray::FluoroscopyRenderer> renderer_;
   std::vector<xray::ContrastInjection> injections_;  // reserved for SharedState::kMaxInjections
   xray::FluoroFrame frame_;

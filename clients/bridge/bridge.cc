@@ -31,9 +31,9 @@ Bridge::Bridge(lcm::LCM& lcm, InstrumentDevice* device, const ProbeScript* probe
       probe_(probe),
       options_(options),
       channel_(probe ? protocol::kProbeChannel : protocol::kInstrumentChannel),
-      shaper_(options.force_shaping) {
-  bytes_.resize(probe ? pcisim_lcm::probe_state_t{}.getEncodedSize()
-                      : pcisim_lcm::instrument_state_t{}.getEncodedSize());
+      shaper_(options.force_shaping),
+      publisher_(static_cast<size_t>(probe ? pcisim_lcm::probe_state_t{}.getEncodedSize()
+                                           : pcisim_lcm::instrument_state_t{}.getEncodedSize())) {
   if (!(options.rate_hz >= 1.0 && options.rate_hz <= 1e4))
     throw std::invalid_argument("bridge: rate_hz must be in [1, 10000], got " + std::to_string(options.rate_hz));
   validate(options.force_shaping);
@@ -149,10 +149,7 @@ BridgeStats Bridge::run(const std::atomic<bool>& stop) {
 
 template <class Message>
 void Bridge::publish(const Message& message) {
-  const int size = message.getEncodedSize();
-  if (bytes_.size() < static_cast<size_t>(size)) bytes_.resize(size);  // never: the size is fixed
-  message.encode(bytes_.data(), 0, size);
-  lcm_.publish(channel_, bytes_.data(), static_cast<unsigned>(size));
+  publisher_.publish(lcm_, channel_, message);
 }
 
 void Bridge::publish_instrument(double t_s, int64_t now_ns, int64_t seq, bool log, bool render, InstrumentTick& tick,

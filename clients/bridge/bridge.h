@@ -15,6 +15,7 @@
 #include "clients/bridge/force_gate.h"
 #include "clients/bridge/instrument_device.h"
 #include "clients/bridge/latency_histogram.h"
+#include "protocol/encoded_publisher.h"
 #include "clients/bridge/probe_script.h"
 #include "pcisim_lcm/force_command_t.hpp"
 #include "pcisim_lcm/instrument_state_t.hpp"
@@ -85,8 +86,7 @@ class Bridge {
   InstrumentDevice* device_;  // exactly one of the two
   const ProbeScript* probe_;
   BridgeOptions options_;
-  const std::string channel_;   // PCISIM_PROBE for a probe bridge, else PCISIM_INSTRUMENT
-  std::vector<uint8_t> bytes_;  // one message encoded, sized at construction (both types are of fixed size)
+  const std::string channel_;  // PCISIM_PROBE for a probe bridge, else PCISIM_INSTRUMENT
   pcisim_lcm::force_command_t force_{};
   std::atomic<int64_t> forces_received_{0}, forces_bad_{0};
   std::atomic<double> last_force_n_{0}, last_torque_nmm_{0}, last_axial_stiffness_{0}, last_torsional_stiffness_{0};
@@ -105,6 +105,8 @@ class Bridge {
   int64_t rendered_seq_ = -1;  // publishing thread: the newest answered sample written to the device
   LatencyHistogram sample_to_force_, sample_to_device_, device_write_;
   ForceShaper shaper_;
+  // one message encoded, its buffer sized at construction (both types are of fixed size)
+  protocol::EncodedPublisher publisher_;
 };
 
 }  // namespace pcisim::clients

@@ -16,6 +16,9 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "realtime/clock.h"
+#include "realtime/realtime_setup.h"
+
 namespace pcisim::clients {
 namespace {
 
@@ -160,35 +163,42 @@ EvdevDevice::EvdevDevice(const std::string& event_path, const EvdevConfig& confi
   if (has_autocenter_) set(FF_AUTOCENTER, 0.0);
   resync();
   for (auto& slot : positions_) slot = {-1, 0};
+  wanted_ = applied_ = pack(0, 0, 0, 0);
   writer_ = std::thread([this] { write_loop(); });
 }
 
 EvdevDevice::~EvdevDevice() {
-  {
-    std::lock_guard lock(mutex_);
-    stop_ = true;
-  }
-  wanted_cv_.notify_all();
+  stop_ = true;
+  wanted_.fetch_xor(uint64_t{1} << 63);  // a change, to wake the writer
+  wanted_.notify_all();
   if (writer_.joinable()) writer_.join();
-  for (const int16_t id : {effect_id_, spring_id_}) {
-    if (id < 0) continue;
-    play(id, false);
-    ioctl(fd_, EVIOCRMFF, static_cast<long>(id));
-  }
+  stop_both();
+  for (const int16_t id : {effect_id_, spring_id_})
+    if (id >= 0) ioctl(fd_, EVIOCRMFF, static_cast<long>(id));
   ::close(fd_);
 }
 
-void EvdevDevice::resync() {
-  for (Axis* a : {&insertion_, &rotation_}) {
-    input_absinfo info{};
-    if (ioctl(fd_, EVIOCGABS(a->code), &info) == 0) a->value = std::clamp(info.value, a->min, a->max);
-  }
+bool EvdevDevice::query_state(int32_t& insertion, int32_t& rotation, int32_t& buttons) const {
+  input_absinfo info{};
+  if (ioctl(fd_, EVIOCGABS(insertion_.code), &info) < 0) return false;
+  insertion = info.value;
+  if (ioctl(fd_, EVIOCGABS(rotation_.code), &info) < 0) return false;
+  rotation = info.value;
   unsigned char keys[bytes_for(KEY_CNT)] = {};
-  if (ioctl(fd_, EVIOCGKEY(sizeof keys), keys) < 0) return;
-  buttons_ = 0;
+  if (ioctl(fd_, EVIOCGKEY(sizeof keys), keys) < 0) return false;
+  buttons = 0;
   const int map[3][2] = {{cfg_.fluoro_key, 1}, {cfg_.cine_key, 2}, {cfg_.contrast_key, 4}};
   for (const auto& m : map)
-    if (m[0] >= 0 && bit(keys, m[0])) buttons_ |= m[1];
+    if (m[0] >= 0 && bit(keys, m[0])) buttons |= m[1];
+  return true;
+}
+
+void EvdevDevice::resync() {
+  int32_t insertion = 0, rotation = 0, buttons = 0;
+  if (!query_state(insertion, rotation, buttons)) return;
+  insertion_.value = std::clamp(insertion, insertion_.min, insertion_.max);
+  rotation_.value = std::clamp(rotation, rotation_.min, rotation_.max);
+  buttons_ = buttons;
 }
 
 double EvdevDevice::insertion_mm() const {
@@ -205,6 +215,15 @@ double EvdevDevice::rotation_rad() const {
 bool EvdevDevice::read(double t_s, InstrumentReading& out) {
   input_event events[64];
   bool moved = false;
+  // the writer's answer to a resync asked for below (the kernel's state queries wait for its lock,
+  // which an upload holds)
+  if (const int64_t v = resynced_version_.load(std::memory_order_acquire); v != resync_seen_) {
+    resync_seen_ = v;
+    insertion_.value = std::clamp(resynced_insertion_.load(), insertion_.min, insertion_.max);
+    rotation_.value = std::clamp(resynced_rotation_.load(), rotation_.min, rotation_.max);
+    buttons_ = resynced_buttons_.load();
+    moved = true;
+  }
   while (!unplugged_) {
     const ssize_t n = ::read(fd_, events, sizeof events);
     if (n < 0) {
@@ -219,8 +238,8 @@ bool EvdevDevice::read(double t_s, InstrumentReading& out) {
         dropped_ = true;  // the kernel's buffer overflowed: ask for the state at the next report
       } else if (e.type == EV_SYN && e.code == SYN_REPORT && dropped_) {
         dropped_ = false;
-        resync();
-        moved = true;
+        resync_wanted_ = true;
+        hand_over(last_wanted_);
       } else if (dropped_) {
         continue;
       } else if (e.type == EV_ABS) {
@@ -233,7 +252,7 @@ bool EvdevDevice::read(double t_s, InstrumentReading& out) {
       }
     }
   }
-  if (unplugged_) return false;
+  if (unplugged_ || stuck()) return false;
   const double x = insertion_mm(), r = rotation_rad();
   if (moved) {
     const double dt = last_event_t_s_ >= 0 ? t_s - last_event_t_s_ : 0.0;
@@ -300,7 +319,7 @@ bool EvdevDevice::upload_spring(int16_t coefficient, int16_t centre) {
   return true;
 }
 
-bool EvdevDevice::play(int16_t id, bool on) {
+bool EvdevDevice::play(int16_t id, bool on, std::atomic<bool>& playing) {
   input_event ev{};
   ev.type = EV_FF;
   ev.code = static_cast<uint16_t>(id);
@@ -310,14 +329,42 @@ bool EvdevDevice::play(int16_t id, bool on) {
     ++failed_writes_;
     return false;
   }
-  (id == spring_id_ ? spring_playing_ : playing_) = on;
+  playing = on;
   return true;
+}
+
+void EvdevDevice::stop_both() {
+  if (playing_) play(effect_id_, false, playing_);
+  if (spring_playing_) play(spring_id_, false, spring_playing_);
+  level_ = 0;
+  spring_coefficient_ = 0;
 }
 
 int16_t EvdevDevice::centre_of(int32_t axis_value) const {
   const double mid = 0.5 * (static_cast<double>(rotation_.min) + rotation_.max);
   const double u = (axis_value - mid) / (0.5 * (static_cast<double>(rotation_.max) - rotation_.min));
   return static_cast<int16_t>(std::lround(std::clamp(u, -1.0, 1.0) * 32767.0));
+}
+
+uint64_t EvdevDevice::pack(int16_t level, int16_t coefficient, int16_t centre, uint16_t version) {
+  return uint64_t{static_cast<uint16_t>(level)} | uint64_t{static_cast<uint16_t>(coefficient)} << 16 |
+         uint64_t{static_cast<uint16_t>(centre)} << 32 | uint64_t{version} << 48;
+}
+
+EvdevDevice::Wanted EvdevDevice::unpack(uint64_t w) {
+  return {static_cast<int16_t>(w & 0xffff), static_cast<int16_t>((w >> 16) & 0xffff),
+          static_cast<int16_t>((w >> 32) & 0xffff)};
+}
+
+void EvdevDevice::hand_over(const Wanted& w) {
+  last_wanted_ = w;
+  wanted_.store(pack(w.level, w.coefficient, w.centre, ++version_), std::memory_order_release);
+  wanted_.notify_one();
+}
+
+bool EvdevDevice::stuck() const {
+  const int64_t since = busy_since_ns_.load(std::memory_order_relaxed);
+  return since > 0 && realtime::monotonic_ns() - since > kStuckNs;
 }
 
 // the 1 kHz loop's side: the set-point as levels, handed over. A flipped wheel (negative range)
@@ -335,51 +382,69 @@ bool EvdevDevice::render(const ForceSetpoint& force, int64_t seq) {
     const auto& at = positions_[static_cast<size_t>(std::max<int64_t>(force.sample_seq, 0)) % kPositionSlots];
     w.centre = centre_of(force.sample_seq >= 0 && at.first == force.sample_seq ? at.second : rotation_.value);
   }
-  {
-    std::lock_guard lock(mutex_);
-    if (w.level == wanted_.level && w.coefficient == wanted_.coefficient && w.centre == wanted_.centre) return true;
-    w.version = wanted_.version + 1;
-    wanted_ = w;
-  }
-  wanted_cv_.notify_one();
-  return true;
+  // a zero is sticky: the writer stops both effects before it applies anything newer
+  if (w.level == 0 && w.coefficient == 0) zero_pending_ = true;
+  const bool same =
+      w.level == last_wanted_.level && w.coefficient == last_wanted_.coefficient && w.centre == last_wanted_.centre;
+  if (!same || retry_.exchange(false)) hand_over(w);
+  return !stuck();
 }
 
 bool EvdevDevice::flush(double timeout_s) {
-  std::unique_lock lock(mutex_);
-  return applied_cv_.wait_for(lock, std::chrono::duration<double>(timeout_s),
-                              [&] { return applied_version_ == wanted_.version || unplugged_; });
+  const int64_t until = realtime::monotonic_ns() + static_cast<int64_t>(timeout_s * 1e9);
+  while (applied_.load() != wanted_.load() && !unplugged_) {
+    if (realtime::monotonic_ns() > until) return false;
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  return true;
 }
 
-// the writer: the newest set-point, applied; those in between are skipped
+// the writer: the newest set-point, applied; those in between are skipped, a zero never
 void EvdevDevice::write_loop() {
-  std::unique_lock lock(mutex_);
+  realtime::try_sched_fifo(kWriterFifoPriority);  // where permitted: a fault's zero must not queue
+  uint64_t applied = applied_.load();
   for (;;) {
-    wanted_cv_.wait(lock, [&] { return stop_ || wanted_.version != applied_version_; });
+    wanted_.wait(applied, std::memory_order_acquire);
     if (stop_) return;
-    const Wanted w = wanted_;
-    lock.unlock();
-    apply(w);
-    lock.lock();
-    applied_version_ = w.version;
-    applied_cv_.notify_all();
+    const uint64_t w = wanted_.load(std::memory_order_acquire);
+    busy_since_ns_ = realtime::monotonic_ns();
+    if (resync_wanted_.exchange(false)) {
+      int32_t insertion = 0, rotation = 0, buttons = 0;
+      if (query_state(insertion, rotation, buttons)) {
+        resynced_insertion_ = insertion;
+        resynced_rotation_ = rotation;
+        resynced_buttons_ = buttons;
+        resynced_version_.fetch_add(1, std::memory_order_release);
+      }
+    }
+    apply(unpack(w));
+    busy_since_ns_ = 0;
+    applied = w;
+    applied_.store(w);
   }
 }
 
 void EvdevDevice::apply(const Wanted& w) {
   if (unplugged_) return;
+  if (zero_pending_.exchange(false)) stop_both();
   apply_constant(w.level);
+  // a zero that came meanwhile goes first
+  if (zero_pending_.exchange(false)) {
+    stop_both();
+    return;
+  }
   if (has_spring_) apply_spring(w.coefficient, w.centre);
 }
 
-// zero (every fault sends it) stops the effect: nothing pushes the hand; so does an upload that
-// failed (the old level would play on)
+// zero stops the effect: nothing pushes the hand; so does an upload that failed (the old level
+// would play on), and the loop hands the same set-point over again
 void EvdevDevice::apply_constant(int16_t level) {
   if (level != 0) {
     const bool current = effect_id_ >= 0 && level == level_;
-    if ((current || upload(level)) && (playing_ || play(effect_id_, true))) return;
+    if ((current || upload(level)) && (playing_ || play(effect_id_, true, playing_))) return;
+    retry_ = true;
   }
-  if (playing_) play(effect_id_, false);
+  if (playing_) play(effect_id_, false, playing_);
   level_ = 0;
 }
 
@@ -390,9 +455,11 @@ void EvdevDevice::apply_spring(int16_t coefficient, int16_t centre) {
   if (coefficient != 0) {
     const bool current = spring_id_ >= 0 && coefficient == spring_coefficient_ &&
                          std::abs(centre - spring_centre_) <= kCentreToleranceCounts;
-    if ((current || upload_spring(coefficient, centre)) && (spring_playing_ || play(spring_id_, true))) return;
+    if ((current || upload_spring(coefficient, centre)) && (spring_playing_ || play(spring_id_, true, spring_playing_)))
+      return;
+    retry_ = true;
   }
-  if (spring_playing_) play(spring_id_, false);
+  if (spring_playing_) play(spring_id_, false, spring_playing_);
   spring_coefficient_ = 0;
 }
 

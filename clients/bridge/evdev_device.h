@@ -12,9 +12,7 @@
 // the other way needs the profile's torque_scale negative.
 #include <array>
 #include <atomic>
-#include <condition_variable>
 #include <cstdint>
-#include <mutex>
 #include <thread>
 #include <utility>
 #include <string>
@@ -63,17 +61,23 @@ class EvdevDevice : public InstrumentDevice {
 
   // drains the node's events; false once it is gone (unplugged: ENODEV)
   bool read(double t_s, InstrumentReading& out) override;
-  // hands the set-point to the writer thread and returns: an upload (EVIOCSFF) may wait for the
-  // device (hid-pidff waits for its reports to go out; a uinput device for its maker's answer),
-  // which the 1 kHz loop must not. The writer applies the newest set-point only: the torque as
+  // hands the set-point to the writer thread and returns (one atomic store: no lock, no
+  // allocation): an upload (EVIOCSFF) may wait for the device — hid-pidff waits for its reports to
+  // go out, a uinput device for its maker's answer, and the kernel holds the device's lock all the
+  // while — which the 1 kHz loop must not. The writer applies the newest set-point: the torque as
   // the constant effect (uploaded when its level changes, played from the first non-zero level,
   // stopped at zero or when an upload fails), the torsional stiffness as the spring centred where
   // the wheel stood at the sample the torque answers (re-uploaded when that moved a few counts or
-  // the coefficient changed), stopped at zero. False once the device is unplugged. Allocates nothing
+  // the coefficient changed). A zero (every fault sends one) is never skipped: it stops both
+  // effects before anything newer is applied. False once the device is unplugged, or while the
+  // writer has been stuck on one apply for over kStuckNs (the device is then in fault)
   bool render(const ForceSetpoint& force, int64_t seq) override;
   std::string describe() const override;
-  // waits until the writer has applied the newest set-point (at most timeout_s); false on timeout
+  // waits until the writer has applied the newest set-point, or the device is gone (at most
+  // timeout_s); false on timeout
   bool flush(double timeout_s = 1.0);
+  // the writer busy on one apply this long: the device is in fault
+  static constexpr int64_t kStuckNs = 30'000'000;
 
   int16_t level() const { return level_.load(); }  // as applied
   bool playing() const { return playing_.load(); }
@@ -90,17 +94,27 @@ class EvdevDevice : public InstrumentDevice {
     int code = 0;
     int32_t min = 0, max = 0, value = 0;
   };
-  // what the writer should make the device do
+  // what the writer should make the device do, packed in one word: level, coefficient and
+  // centre (int16 each) and a 16-bit version that changes with every hand-over
+  static uint64_t pack(int16_t level, int16_t coefficient, int16_t centre, uint16_t version);
   struct Wanted {
     int16_t level = 0, coefficient = 0, centre = 0;
-    uint64_t version = 0;
   };
-  void resync();  // after SYN_DROPPED: the axes' and keys' state asked of the kernel
+  static Wanted unpack(uint64_t w);
+  void hand_over(const Wanted& w);  // the loop's side: a new version of w, and a wake-up
+  // the axes' and keys' state asked of the kernel: into the members at start, then by the writer
+  // (after SYN_DROPPED) into the resynced_ atomics, which the loop takes at its next read
+  bool query_state(int32_t& insertion, int32_t& rotation, int32_t& buttons) const;
+  void resync();
+  // the writer's SCHED_FIFO priority where permitted: below the bridge's loop (60)
+  static constexpr int kWriterFifoPriority = 59;
   void write_loop();
   void apply(const Wanted& w);
+  bool stuck() const;
   bool upload(int16_t level);
   bool upload_spring(int16_t coefficient, int16_t centre);
-  bool play(int16_t id, bool on);
+  bool play(int16_t id, bool on, std::atomic<bool>& playing);
+  void stop_both();
   void apply_constant(int16_t level);
   void apply_spring(int16_t coefficient, int16_t centre);
   double insertion_mm() const;
@@ -119,12 +133,15 @@ class EvdevDevice : public InstrumentDevice {
   // the wheel's position at each recent tick (seq % size, tagged with the seq): a spring's centre
   static constexpr int kPositionSlots = 256;
   std::array<std::pair<int64_t, int32_t>, kPositionSlots> positions_{};
-  // the 1 kHz loop and the writer: the newest set-point and how far the writer got
-  std::mutex mutex_;
-  std::condition_variable wanted_cv_, applied_cv_;
-  Wanted wanted_;
-  uint64_t applied_version_ = 0;
-  bool stop_ = false;
+  // the 1 kHz loop and the writer: the newest set-point, what the writer applied, a zero not yet
+  // applied, a resync asked for (after SYN_DROPPED) and its answer, since when the writer is busy
+  std::atomic<uint64_t> wanted_{0}, applied_{0};
+  uint16_t version_ = 0;  // the loop's
+  Wanted last_wanted_;    // the loop's
+  std::atomic<bool> zero_pending_{false}, retry_{false}, resync_wanted_{false}, stop_{false};
+  std::atomic<int32_t> resynced_insertion_{0}, resynced_rotation_{0}, resynced_buttons_{0};
+  std::atomic<int64_t> resynced_version_{0}, busy_since_ns_{0};
+  int64_t resync_seen_ = 0;  // the loop's
   std::thread writer_;
   // the writer's own (the accessors read them)
   int16_t effect_id_ = -1, spring_id_ = -1, spring_coefficient_ = 0, spring_centre_ = 0;

@@ -12,6 +12,7 @@
 #include "protocol/message_checks.h"
 #include "realtime/clock.h"
 #include "fuzz/lcm_mutants.h"
+#include "tests/common/counting_new.h"
 
 namespace pcisim::server {
 namespace {
@@ -382,6 +383,44 @@ TEST_F(LcmIoProbeTest, ANanPoseIsCountedAndDroppedAndTheWireInstrumentIsNotHeard
   EXPECT_EQ(state.lcm_dropped_bad.load(), 1);
   std::this_thread::sleep_for(50ms);
   EXPECT_FALSE(state.instrument_for_haptics.refresh()) << "neither the NaN probe nor the wire reached the loop";
+}
+
+// the send thread's streams allocate nothing once their encode buffer has its size (issue #36
+// item 5: lcm-cpp's publish of a message allocates a buffer per call): 1 010 messages, 0
+// operator new (liblcm's own transport mallocs are not counted: memq copies each message)
+TEST(LcmIoPublish, ForceCommandsAndWireStatesAllocateNothingOnceWarm) {
+  lcm::LCM lcm("memq://");
+  SharedState state;
+  SessionLimits limits;
+  LcmIo io(
+      lcm, state, limits, 8.0, [] { return pcisim_lcm::sim_status_t{}; }, [](int) { return std::string("LAD"); });
+  physics::WorldSnapshot snap;
+  snap.wire_nodes_m.assign(300, Eigen::Vector3d(0.001, 0.002, 0.003));
+  snap.wire_contact.assign(300, 1);
+  snap.wire_contact_force_n.assign(300, Eigen::Vector3d(0.0, 0.01, 0.0));
+  snap.tip_branch = 2;
+  auto push = [&](int n) {
+    for (int k = 0; k < n; ++k) {
+      ForceSlot slot;
+      slot.tick = k;
+      slot.force.axial_force_n = 0.1 * k;
+      EXPECT_TRUE(state.forces.push(slot));
+    }
+  };
+  push(10);  // warm: the messages and the buffer take their sizes
+  io.publish_forces();
+  io.publish_wire(snap);
+  const int64_t sent_before = state.lcm_tx.load();
+  {
+    pcisim::testing::AllocationCount count;
+    for (int round = 0; round < 10; ++round) {
+      push(100);
+      io.publish_forces();
+      io.publish_wire(snap);
+    }
+    EXPECT_EQ(count.allocations(), 0);
+  }
+  EXPECT_EQ(state.lcm_tx.load() - sent_before, 10 * 101);
 }
 
 }  // namespace

@@ -195,6 +195,31 @@ TEST_F(UinputTest, TheTorqueIsOneConstantEffectUpdatedInPlaceStoppedAtZeroAndEra
   EXPECT_EQ(centre[0].value, 0) << "the device's own centring spring off";
 }
 
+// a zero (every fault sends one) handed over and at once replaced by a force is not skipped: the
+// writer stops the effect before it plays the newer force
+TEST_F(UinputTest, AZeroReplacedAtOnceStillStopsTheEffect) {
+  UinputWheel wheel;
+  EvdevDevice dev(wheel.event_path(), EvdevConfig{});
+  ForceSetpoint f;
+  f.torque_nmm = 5.0;
+  ASSERT_TRUE(dev.render(f, 1));
+  ASSERT_TRUE(dev.flush());
+  ASSERT_TRUE(dev.playing());
+  ASSERT_TRUE(dev.render({}, 2));  // a one-tick fault
+  f.torque_nmm = 6.0;
+  ASSERT_TRUE(dev.render(f, 3));  // at once (whether or not the writer got to the zero first)
+  ASSERT_TRUE(dev.flush());
+  EXPECT_TRUE(dev.playing());
+  const auto all = wheel.records();
+  std::vector<FfRecord> plays_and_stops;
+  for (const FfRecord& r : all)
+    if (r.kind == FfRecord::kPlay || r.kind == FfRecord::kStop) plays_and_stops.push_back(r);
+  ASSERT_EQ(plays_and_stops.size(), 3u);
+  EXPECT_EQ(plays_and_stops[0].kind, FfRecord::kPlay);
+  EXPECT_EQ(plays_and_stops[1].kind, FfRecord::kStop) << "the zero reached the device";
+  EXPECT_EQ(plays_and_stops[2].kind, FfRecord::kPlay);
+}
+
 TEST_F(UinputTest, AFlippedWheelFlipsTheTorqueSoThatItStillResists) {
   UinputWheel wheel;
   EvdevConfig cfg;

@@ -513,6 +513,9 @@ const CoulombFriction* World::friction_state() const {
 const LumenQuery* World::lumen() const {
   return impl_->lumen.get();
 }
+std::shared_ptr<const LumenQuery> World::shared_lumen() const {
+  return impl_->lumen;
+}
 const anatomy::VesselTree& World::vessel_tree() const {
   return impl_->tree;
 }

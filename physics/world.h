@@ -103,7 +103,10 @@ class World {
   const RodWire* rod_state() const;              // guidewire.model rod (contact and friction inside it)
   const WallContact* contact_state() const;
   const CoulombFriction* friction_state() const;
-  const LumenQuery* lumen() const;                 // the contact geometry (null without vessel_contact)
+  const LumenQuery* lumen() const;  // the contact geometry (null without vessel_contact)
+  // the same, shared: a world built again around the same case and spec (a reset) takes it
+  // instead of building its field again
+  std::shared_ptr<const LumenQuery> shared_lumen() const;
   const anatomy::VesselTree& vessel_tree() const;  // at rest; empty without guidewire and vessel_motion
   const BeatingHeart* heart_state() const;
   // how the template heart was fitted under this scene's tree (vessel_motion; all zero otherwise)

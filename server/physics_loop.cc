@@ -1,5 +1,9 @@
 #include "server/physics_loop.h"
 
+#include <spdlog/spdlog.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <cmath>
 
 #include "realtime/clock.h"
@@ -13,15 +17,46 @@ PhysicsLoop::PhysicsLoop(const Scene& scene, std::shared_ptr<const anatomy::Case
       state_(state),
       rate_hz_(scene.physics_rate_hz),
       world_(make_world()) {
+  lumen_cache_ = world_->shared_lumen();
   for (const auto& cost : world_->effect_costs()) {
     effects_.push_back(std::make_unique<EffectStats>());
     effects_.back()->name = cost.name;
   }
 }
 
+PhysicsLoop::~PhysicsLoop() {
+  if (builder_.joinable()) builder_.join();
+}
+
 std::unique_ptr<physics::World> PhysicsLoop::make_world() const {
-  return std::make_unique<physics::World>(spec_, case_->vessels, nullptr, case_->heart, case_->heart_vertices_m,
+  return std::make_unique<physics::World>(spec_, case_->vessels, lumen_cache_, case_->heart, case_->heart_vertices_m,
                                           case_->organ ? &*case_->organ : nullptr);
+}
+
+void PhysicsLoop::start_build() {
+  built_ = false;
+  builder_ = std::thread([this] {
+    // below the loops: the build must not take the cores the running world steps on
+    ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 10);
+    try {
+      next_ = make_world();
+    } catch (const std::exception& e) {
+      build_error_ = e.what();
+    }
+    built_.store(true, std::memory_order_release);
+  });
+}
+
+void PhysicsLoop::swap_if_built() {
+  if (!builder_.joinable() || !built_.load(std::memory_order_acquire)) return;
+  builder_.join();
+  if (next_) {
+    world_.swap(next_);
+    resets_done_.fetch_add(1);
+  } else {
+    spdlog::error("physics: the reset's world could not be built ({}); the running one goes on", build_error_);
+  }
+  next_.reset();  // the old world, freed between two steps
 }
 
 void PhysicsLoop::step_once(int64_t now_ns) {
@@ -86,8 +121,10 @@ void PhysicsLoop::run() {
     const int64_t wake_ns = realtime::monotonic_ns();
     state_.physics.mark_wake(wake_ns);
 
-    // a reset rebuilds the world between steps (allocation is fine here, not inside step)
-    if (state_.reset_requested.exchange(false)) world_ = make_world();
+    // a reset: the world built again on the builder thread while this one steps on, swapped in
+    // between two steps (allocation is fine here, not inside step)
+    swap_if_built();
+    if (!builder_.joinable() && state_.reset_requested.exchange(false)) start_build();
     if (!state_.paused.load(std::memory_order_relaxed)) step_once(wake_ns);
 
     const int64_t done_ns = realtime::monotonic_ns();

@@ -78,7 +78,7 @@ struct Row {
   bool blend = false;
   int stride = 1;  // the change's detector: every stride-th pixel, upsampled
   bool cached = true;
-  Errors mean, worst_phase;                    // mean over the test phases; the worst phase's
+  Errors mean{}, worst_phase{};                // mean over the test phases; the worst phase's
   double fill_ms_median = 0, fill_ms_p99 = 0;  // one bin's change projected (per pose)
   double frame_ms_median = 0;                  // the background per frame (blend or copy)
 };

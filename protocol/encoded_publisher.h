@@ -31,6 +31,9 @@ class EncodedPublisher {
     return lcm.publish(channel, buffer_.data(), static_cast<unsigned>(size));
   }
 
+  // room for a message of this size up front (a loop whose first message must not allocate)
+  void reserve(size_t bytes) { buffer_.reserve(bytes); }
+
   // how often the buffer had to grow (a steady stream of one size: once)
   int64_t grown() const { return grown_; }
 

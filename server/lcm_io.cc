@@ -289,7 +289,10 @@ void LcmIo::publish_wire(const physics::WorldSnapshot& s) {
   m.hub_force_n = s.hub_force_n;
   m.hub_torque_nm = s.hub_torque_nm;
   for (int k = 0; k < 3; ++k) m.tip_mm[k] = s.tip_m[k] * 1e3;
-  m.tip_branch = branch_name_ ? branch_name_(s.tip_branch) : std::string();
+  if (branch_name_)
+    m.tip_branch = branch_name_(s.tip_branch);  // into the string's own buffer once it is long enough
+  else
+    m.tip_branch.clear();
   m.heart_phase = s.heart_phase;
   tx_publisher_.publish(lcm_, wire_channel_, m);
   state_.lcm_tx.fetch_add(1, std::memory_order_relaxed);

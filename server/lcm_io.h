@@ -23,7 +23,9 @@ namespace pcisim::server {
 class LcmIo {
  public:
   using StatusSource = std::function<pcisim_lcm::sim_status_t()>;
-  using BranchNamer = std::function<std::string(int)>;
+  // a branch's name by index ("" when unknown): a reference, so that a wire state copies it into
+  // its message's string without a temporary (a name past 15 characters would allocate each step)
+  using BranchNamer = std::function<const std::string&(int)>;
 
   // the instrument the scene is driven by: the wire's (PCISIM_INSTRUMENT) or the ultrasound
   // probe (PCISIM_PROBE, the soft-tissue scene); the other channel is not subscribed
@@ -38,8 +40,9 @@ class LcmIo {
   void start();
   void stop();  // joins both threads; publishes a final zero force command
   void publish_zero_force();
-  // the send thread's two streams (public for the test that counts their allocations): the
-  // haptic loop's force commands waiting in the shared queue, and one wire state
+  // the send thread's two streams (public for the test that counts their allocations, which calls
+  // them before start(); never while the send thread runs): the haptic loop's force commands
+  // waiting in the shared queue, and one wire state
   void publish_forces();
   void publish_wire(const physics::WorldSnapshot& s);
 

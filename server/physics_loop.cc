@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <system_error>
 
 #include "realtime/clock.h"
 #include "realtime/deadline_schedule.h"
@@ -16,6 +17,7 @@ PhysicsLoop::PhysicsLoop(const Scene& scene, std::shared_ptr<const anatomy::Case
       case_(std::move(anatomy)),
       state_(state),
       rate_hz_(scene.physics_rate_hz),
+      lumen_cache_(nullptr),  // (the first world builds its own field)
       world_(make_world()) {
   lumen_cache_ = world_->shared_lumen();
   for (const auto& cost : world_->effect_costs()) {
@@ -35,16 +37,23 @@ std::unique_ptr<physics::World> PhysicsLoop::make_world() const {
 
 void PhysicsLoop::start_build() {
   built_ = false;
-  builder_ = std::thread([this] {
-    // below the loops: the build must not take the cores the running world steps on
-    ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 10);
-    try {
-      next_ = make_world();
-    } catch (const std::exception& e) {
-      build_error_ = e.what();
-    }
-    built_.store(true, std::memory_order_release);
-  });
+  try {
+    builder_ = std::thread([this, retired = std::move(retired_)]() mutable {
+      // below the loops: the build must not take the cores the running world steps on
+      ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 10);
+      retired.reset();  // the world the last reset replaced, freed here rather than between two steps
+      try {
+        next_ = make_world();
+      } catch (const std::exception& e) {
+        build_error_ = e.what();
+      } catch (...) {
+        build_error_ = "an unknown error";
+      }
+      built_.store(true, std::memory_order_release);
+    });
+  } catch (const std::system_error& e) {
+    spdlog::error("physics: no thread to build the reset's world ({}); the running one goes on", e.what());
+  }
 }
 
 void PhysicsLoop::swap_if_built() {
@@ -52,11 +61,13 @@ void PhysicsLoop::swap_if_built() {
   builder_.join();
   if (next_) {
     world_.swap(next_);
+    retired_ = std::move(next_);  // the old world: the next builder (or the loop's end) frees it
+    // a reset asked for while this one was being built is this one
+    state_.reset_requested.store(false);
     resets_done_.fetch_add(1);
   } else {
     spdlog::error("physics: the reset's world could not be built ({}); the running one goes on", build_error_);
   }
-  next_.reset();  // the old world, freed between two steps
 }
 
 void PhysicsLoop::step_once(int64_t now_ns) {

@@ -29,7 +29,7 @@ class PhysicsLoop {
   PhysicsLoop(const Scene& scene, std::shared_ptr<const anatomy::Case> anatomy, SharedState& state);
   ~PhysicsLoop();  // waits for a build in flight
   void run();      // until state.stop
-  // resets asked for and swapped in (a reset asked for during a build is folded into it)
+  // resets swapped in (a reset asked for while one is being built is folded into it)
   int64_t resets_done() const { return resets_done_.load(); }
 
   const std::vector<std::unique_ptr<EffectStats>>& effects() const { return effects_; }
@@ -52,7 +52,8 @@ class PhysicsLoop {
   std::unique_ptr<physics::World> world_;
   std::thread builder_;
   std::atomic<bool> built_{false};
-  std::unique_ptr<physics::World> next_;  // the builder's, read after built_
+  std::unique_ptr<physics::World> next_;     // the builder's, read after built_
+  std::unique_ptr<physics::World> retired_;  // the world a swap replaced: freed by the next builder
   std::string build_error_;
   std::atomic<int64_t> resets_done_{0};
   std::vector<std::unique_ptr<EffectStats>> effects_;

@@ -117,7 +117,10 @@ Server::Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images, SessionL
   // branch names for wire_state_t and the log: the case's tree, the one physics runs on
   std::vector<std::string> names;
   for (const auto& b : anatomy.vessels.branches) names.push_back(b.name);
-  branch_namer = [names](int i) { return i >= 0 && i < static_cast<int>(names.size()) ? names[i] : std::string(); };
+  branch_namer = [names](int i) -> const std::string& {
+    static const std::string unknown;
+    return i >= 0 && i < static_cast<int>(names.size()) ? names[i] : unknown;
+  };
   if (const auto* tissue = impl_->physics->world().tissue_state())
     spdlog::info("{}: {} particles in {} clusters (radius {:.1f} mm), {} tets for the image, {} fiducials; {}",
                  anatomy.organ->name, tissue->body().particle_count(), tissue->model().clusters.size(),
@@ -193,8 +196,8 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
       const int branch = m.state.wire_tip_branch.load();
       spdlog::info("t={:5.1f}s  insertion {:6.1f} mm  rotation {:6.2f} rad  tip in {}  contacts {:3d}  haptic {} ticks",
                    t_s, m.state.wire_insertion_mm.load(), m.state.wire_rotation_rad.load(),
-                   branch_namer && branch >= 0 ? branch_namer(branch) : std::string("-"), m.state.wire_contacts.load(),
-                   m.state.haptic.iterations.load());
+                   branch_namer && branch >= 0 ? std::string(branch_namer(branch)) : std::string("-"),
+                   m.state.wire_contacts.load(), m.state.haptic.iterations.load());
     }
   }
 

@@ -38,7 +38,7 @@ class Server {
   std::optional<Scene> take_requested_scene();
 
   // names of the vessel branches, for wire_state_t (index -> name, "" when unknown)
-  std::function<std::string(int)> branch_namer;
+  std::function<const std::string&(int)> branch_namer;  // (LcmIo::BranchNamer)
 
  private:
   struct Impl;

@@ -25,6 +25,7 @@ UltrasoundLoop::UltrasoundLoop(const Scene& scene, const anatomy::Case& anatomy,
   // a frame's size is fixed by its pixel count (depth and gain change what is in it)
   msg_.num_bytes = spec_.settings.width_px * spec_.settings.height_px;
   msg_.data.resize(static_cast<size_t>(msg_.num_bytes));
+  publisher_.reserve(static_cast<size_t>(msg_.getEncodedSize()));
 }
 
 void UltrasoundLoop::render_and_publish() {

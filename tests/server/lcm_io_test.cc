@@ -68,7 +68,10 @@ class LcmIoTest : public ::testing::Test {
     lcm.subscribe(protocol::kStatusChannel, &Listener::on_status, &listener);
     io = std::make_unique<LcmIo>(
         lcm, state, limits, 8.0, [] { return pcisim_lcm::sim_status_t{}; },
-        [](int b) { return b == 2 ? std::string("LAD") : std::string(); });
+        [](int b) -> const std::string& {
+          static const std::string lad = "LAD", none;
+          return b == 2 ? lad : none;
+        });
     io->start();
   }
 };
@@ -317,7 +320,11 @@ class LcmIoProbeTest : public ::testing::Test {
     // the beam physics linearised at: scene +y (the probe's default pose)
     state.probe_beam_x = 0.0, state.probe_beam_y = 1.0, state.probe_beam_z = 0.0;
     io = std::make_unique<LcmIo>(
-        lcm, state, limits, 8.0, [] { return pcisim_lcm::sim_status_t{}; }, [](int) { return std::string(); },
+        lcm, state, limits, 8.0, [] { return pcisim_lcm::sim_status_t{}; },
+        [](int) -> const std::string& {
+          static const std::string none;
+          return none;
+        },
         LcmIo::Instrument::kProbe);
     io->start();
   }
@@ -393,7 +400,11 @@ TEST(LcmIoPublish, ForceCommandsAndWireStatesAllocateNothingOnceWarm) {
   SharedState state;
   SessionLimits limits;
   LcmIo io(
-      lcm, state, limits, 8.0, [] { return pcisim_lcm::sim_status_t{}; }, [](int) { return std::string("LAD"); });
+      lcm, state, limits, 8.0, [] { return pcisim_lcm::sim_status_t{}; },
+      [](int) -> const std::string& {
+        static const std::string name = "a branch name longer than fifteen characters";
+        return name;
+      });
   physics::WorldSnapshot snap;
   snap.wire_nodes_m.assign(300, Eigen::Vector3d(0.001, 0.002, 0.003));
   snap.wire_contact.assign(300, 1);

@@ -64,7 +64,6 @@ void PhysicsLoop::swap_if_built() {
     retired_ = std::move(next_);  // the old world: the next builder (or the loop's end) frees it
     // a reset asked for while this one was being built is this one
     state_.reset_requested.store(false);
-    resets_done_.fetch_add(1);
   } else {
     spdlog::error("physics: the reset's world could not be built ({}); the running one goes on", build_error_);
   }

@@ -29,8 +29,6 @@ class PhysicsLoop {
   PhysicsLoop(const Scene& scene, std::shared_ptr<const anatomy::Case> anatomy, SharedState& state);
   ~PhysicsLoop();  // waits for a build in flight
   void run();      // until state.stop
-  // resets swapped in (a reset asked for while one is being built is folded into it)
-  int64_t resets_done() const { return resets_done_.load(); }
 
   const std::vector<std::unique_ptr<EffectStats>>& effects() const { return effects_; }
   double rate_hz() const { return rate_hz_; }
@@ -55,7 +53,6 @@ class PhysicsLoop {
   std::unique_ptr<physics::World> next_;     // the builder's, read after built_
   std::unique_ptr<physics::World> retired_;  // the world a swap replaced: freed by the next builder
   std::string build_error_;
-  std::atomic<int64_t> resets_done_{0};
   std::vector<std::unique_ptr<EffectStats>> effects_;
   InstrumentSlot instrument_;
 };

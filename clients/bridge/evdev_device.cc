@@ -278,6 +278,14 @@ bool EvdevDevice::read(double t_s, InstrumentReading& out) {
   return true;
 }
 
+// an effect to the kernel (EVIOCSFF): its id set on success; a refusal counted, ENODEV unplugged
+bool EvdevDevice::send_effect(ff_effect& e) {
+  if (ioctl(fd_, EVIOCSFF, &e) == 0) return true;
+  if (errno == ENODEV) unplugged_ = true;
+  ++failed_writes_;
+  return false;
+}
+
 // one constant effect, infinite, along the wheel (direction 0x4000); a new level replaces the
 // old one under the same id (the kernel updates a playing effect in place)
 bool EvdevDevice::upload(int16_t level) {
@@ -286,11 +294,7 @@ bool EvdevDevice::upload(int16_t level) {
   e.id = effect_id_;
   e.direction = 0x4000;
   e.u.constant.level = level;
-  if (ioctl(fd_, EVIOCSFF, &e) < 0) {
-    if (errno == ENODEV) unplugged_ = true;
-    ++failed_writes_;
-    return false;
-  }
+  if (!send_effect(e)) return false;
   effect_id_ = e.id;
   level_ = level;
   ++uploads_;
@@ -307,11 +311,7 @@ bool EvdevDevice::upload_spring(int16_t coefficient, int16_t centre) {
   e.u.condition[0].right_coeff = e.u.condition[0].left_coeff = coefficient;
   e.u.condition[0].right_saturation = e.u.condition[0].left_saturation = 0xffff;
   e.u.condition[0].center = centre;
-  if (ioctl(fd_, EVIOCSFF, &e) < 0) {
-    if (errno == ENODEV) unplugged_ = true;
-    ++failed_writes_;
-    return false;
-  }
+  if (!send_effect(e)) return false;
   spring_id_ = e.id;
   spring_coefficient_ = coefficient;
   spring_centre_ = centre;

@@ -10,6 +10,8 @@
 // never holds the 1 kHz loop. A wheel renders no axial force: only the torque. A positive level
 // (direction 0x4000) is taken to push the wheel towards lower axis values; a device that pushes
 // the other way needs the profile's torque_scale negative.
+#include <linux/input.h>
+
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -111,6 +113,7 @@ class EvdevDevice : public InstrumentDevice {
   void write_loop();
   void apply(const Wanted& w);
   bool stuck() const;
+  bool send_effect(ff_effect& e);
   bool upload(int16_t level);
   bool upload_spring(int16_t coefficient, int16_t centre);
   bool play(int16_t id, bool on, std::atomic<bool>& playing);

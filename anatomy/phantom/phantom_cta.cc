@@ -143,8 +143,11 @@ void drop_leaf(VesselTree* tree, const std::string& name) {
   }
 }
 
-// a primitive the partial-volume painter draws; priority lumen > plaque > vein > background
-enum class Kind { kLumen = 0, kPlaque = 1, kVein = 2 };
+// a primitive the partial-volume painter draws; priority stent > lumen > plaque > vein > chamber >
+// background. A bloom (max_rule) takes no part in the priority: where it reaches, the value is the
+// larger of its own and what the others gave (a calcium's blooming brightens what it covers).
+enum class Kind { kStent = 0, kLumen = 1, kPlaque = 2, kVein = 3, kChamber = 4 };
+constexpr int kNoKind = 5;
 struct Prim {
   Kind kind;
   // capsule (rounded cone) a -> b, radii ra, rb, HU ha, hb along it
@@ -154,6 +157,8 @@ struct Prim {
   Matrix3d m;
   double min_semi = 0;
   Vector3d lo, hi;  // bounding box (mm)
+  bool is_ellipsoid = false;
+  bool max_rule = false;
 };
 
 Prim capsule(Kind kind, const Vector3d& a, const Vector3d& b, double ra, double rb, double ha, double hb) {
@@ -165,7 +170,7 @@ Prim capsule(Kind kind, const Vector3d& a, const Vector3d& b, double ra, double 
 }
 
 Prim ellipsoid(const Vector3d& c, const Vector3d& semi, const Matrix3d& axes, double hu) {
-  Prim p{Kind::kPlaque, c, c, 0, 0, hu, hu, Matrix3d::Zero(), semi.minCoeff(), {}, {}};
+  Prim p{Kind::kPlaque, c, c, 0, 0, hu, hu, Matrix3d::Zero(), semi.minCoeff(), {}, {}, true};
   p.m = semi.cwiseInverse().asDiagonal() * axes.transpose();
   // the box of a rotated ellipsoid: half-extent along world axis e is |diag(semi) axes^T e|
   const Matrix3d s = semi.asDiagonal() * axes.transpose();
@@ -181,7 +186,7 @@ Prim ellipsoid(const Vector3d& c, const Vector3d& semi, const Matrix3d& axes, do
 // the local radius, for an ellipsoid (|m (q - c)| - 1) * min_semi (a lower bound on |distance|
 // only where it is used with a margin)
 inline bool inside(const Prim& p, const Vector3d& q, double* hu) {
-  if (p.kind == Kind::kPlaque) {
+  if (p.is_ellipsoid) {
     *hu = p.ha;
     return (p.m * (q - p.a)).squaredNorm() <= 1.0;
   }
@@ -194,7 +199,7 @@ inline bool inside(const Prim& p, const Vector3d& q, double* hu) {
 
 // > margin: the voxel is outside; < -margin: wholly inside; between: partly
 inline double clearance(const Prim& p, const Vector3d& q, double* hu) {
-  if (p.kind == Kind::kPlaque) {
+  if (p.is_ellipsoid) {
     *hu = p.ha;
     return ((p.m * (q - p.a)).norm() - 1.0) * p.min_semi;
   }
@@ -246,20 +251,25 @@ void paint_partial_volume(std::vector<float>* hu, const std::array<int64_t, 3>& 
   parallel_for(static_cast<int64_t>(starts.size()) - 1, threads, [&](int64_t c) {
     const int64_t cell = pairs[starts[c]].first;
     const int64_t ci = cell % cells[0], cj = (cell / cells[0]) % cells[1], ck = cell / (cells[0] * cells[1]);
-    std::vector<const Prim*> near;
+    std::vector<const Prim*> near, blooms;
     for (int64_t k = ck * kCell; k < std::min(dims[2], (ck + 1) * kCell); ++k) {
       for (int64_t j = cj * kCell; j < std::min(dims[1], (cj + 1) * kCell); ++j) {
         for (int64_t i = ci * kCell; i < std::min(dims[0], (ci + 1) * kCell); ++i) {
           const Vector3d q = origin + spacing.cwiseProduct(Vector3d(double(i), double(j), double(k)));
           near.clear();
-          int whole = 3;  // the best kind holding the whole voxel; 3: none
+          blooms.clear();
+          int whole = kNoKind;  // the best kind holding the whole voxel
           double whole_hu = 0;
-          int best_partial = 3;
+          int best_partial = kNoKind;
           for (size_t n = starts[c]; n < starts[c + 1]; ++n) {
             const Prim& p = prims[pairs[n].second];
             double v;
             const double d = clearance(p, q, &v);
             if (d > margin) continue;
+            if (p.max_rule) {
+              blooms.push_back(&p);
+              continue;
+            }
             const int kind = static_cast<int>(p.kind);
             if (d < -margin) {
               if (kind < whole) whole = kind, whole_hu = v;
@@ -269,11 +279,11 @@ void paint_partial_volume(std::vector<float>* hu, const std::array<int64_t, 3>& 
             }
           }
           float& out = (*hu)[i + dims[0] * (j + dims[1] * k)];
-          if (whole < 3 && whole <= best_partial) {
+          if (whole < kNoKind && whole <= best_partial && blooms.empty()) {
             out = static_cast<float>(whole_hu);
             continue;
           }
-          if (near.empty()) continue;
+          if (near.empty() && blooms.empty()) continue;
           const double background = out;
           double sum = 0;
           for (int c2 = 0; c2 < kSub; ++c2) {
@@ -282,12 +292,16 @@ void paint_partial_volume(std::vector<float>* hu, const std::array<int64_t, 3>& 
                 const Vector3d f((a2 + 0.5) / kSub - 0.5, (b2 + 0.5) / kSub - 0.5, (c2 + 0.5) / kSub - 0.5);
                 const Vector3d qs = q + spacing.cwiseProduct(f);
                 int best = whole;
-                double value = whole < 3 ? whole_hu : background;
+                double value = whole < kNoKind ? whole_hu : background;
                 for (const Prim* p : near) {
                   const int kind = static_cast<int>(p->kind);
                   if (kind >= best) continue;
                   double v;
                   if (inside(*p, qs, &v)) best = kind, value = v;
+                }
+                for (const Prim* p : blooms) {
+                  double v;
+                  if (inside(*p, qs, &v)) value = std::max(value, v);
                 }
                 sum += value;
               }
@@ -412,10 +426,217 @@ void validate_spec(const PhantomCtaSpec& s) {
                                             kMaxPhantomCtaThreads, s.threads));
 }
 
+// the heart frame of the coronary phantom and the thorax painter (docs/anatomy.md): columns
+// anterior, left, base
+Matrix3d heart_frame() {
+  const Vector3d base = Vector3d(-0.45, 0.35, 0.82).normalized();
+  const Vector3d anterior = (Vector3d(0, -1, 0) - base.dot(Vector3d(0, -1, 0)) * base).normalized();
+  Matrix3d heart;
+  heart.col(0) = anterior;
+  heart.col(1) = base.cross(anterior);
+  heart.col(2) = base;
+  return heart;
+}
+
+// ---- the family's draws (PhantomCtaSpec::family) ----
+
+// a branch's direction over its first `s_mm`: the chord from its first point
+Vector3d chord(const std::vector<CenterlinePoint>& pts, double s_mm) {
+  const auto arc = arc_lengths(pts);
+  return (pts[index_at(arc, s_mm)].position_m - pts.front().position_m).normalized();
+}
+
+double lad_lcx_angle_deg(const VesselTree& tree) {
+  const int lad = tree.find("LAD"), lcx = tree.find("LCx");
+  if (lad < 0 || lcx < 0) return 0;
+  const double c = chord(tree.branches[lad].points, 5).dot(chord(tree.branches[lcx].points, 5));
+  return std::acos(std::clamp(c, -1.0, 1.0)) / kDeg;
+}
+
+// the branch and every branch below it
+std::vector<int> subtree(const VesselTree& tree, int root) {
+  std::vector<int> out{root};
+  for (size_t n = 0; n < out.size(); ++n) {
+    for (size_t b = 0; b < tree.branches.size(); ++b) {
+      if (tree.branches[b].parent == out[n]) out.push_back(static_cast<int>(b));
+    }
+  }
+  return out;
+}
+
+// the least gap between the lumens of two sets of branches (mm), points within `skip_mm` of
+// `near_mm` left out (a fork the two sets share)
+double lumen_gap_mm(const VesselTree& tree, const std::vector<int>& a, const std::vector<int>& b,
+                    const Vector3d& near_mm, double skip_mm) {
+  double gap = 1e300;
+  for (int i : a) {
+    for (const auto& p : tree.branches[i].points) {
+      if ((p.position_m - near_mm).norm() < skip_mm) continue;
+      for (int j : b) {
+        for (const auto& q : tree.branches[j].points) {
+          if ((q.position_m - near_mm).norm() < skip_mm) continue;
+          gap = std::min(gap, (p.position_m - q.position_m).norm() - p.radius_m - q.radius_m);
+        }
+      }
+    }
+  }
+  return gap;
+}
+
+// the LAD-LCx angle drawn over 36..112 deg, the range Sun et al. measured on 50 coronary CTAs
+// (Heart Res Open J 3(1), 2016: 72.9 +- 19.4 deg; Moon et al., PLoS ONE 13(9), 2018: mean 63 deg
+// on 201). Each daughter's whole subtree is turned rigidly by half the change about the heart's
+// normal at the fork, its points then put back at their distance from the heart's centre (on the
+// epicardial shell); a change that brings any lumen within 2 mm of another tree's is halved (up
+// to three times, then none). Heart-centred mm, before the pose.
+void vary_bifurcation(VesselTree* tree, double target_deg) {
+  const int lad = tree->find("LAD"), lcx = tree->find("LCx");
+  if (lad < 0 || lcx < 0) return;
+  const Vector3d fork = tree->branches[lcx].points.front().position_m;
+  const Vector3d n = fork.normalized();
+  const Vector3d a = chord(tree->branches[lad].points, 5), b = chord(tree->branches[lcx].points, 5);
+  const double sign = a.cross(b).dot(n) >= 0 ? 1.0 : -1.0;  // turning the LCx by +sign widens
+  const std::vector<int> lad_tree = subtree(*tree, lad), lcx_tree = subtree(*tree, lcx);
+  std::vector<int> others;
+  for (size_t o = 0; o < tree->branches.size(); ++o) {
+    const int id = static_cast<int>(o);
+    if (tree->branches[o].name == "aorta" || tree->branches[o].name == "LM") continue;
+    if (std::find(lad_tree.begin(), lad_tree.end(), id) == lad_tree.end() &&
+        std::find(lcx_tree.begin(), lcx_tree.end(), id) == lcx_tree.end())
+      others.push_back(id);
+  }
+  double change = (target_deg - lad_lcx_angle_deg(*tree)) * kDeg;
+  for (int attempt = 0; attempt < 4; ++attempt, change *= 0.5) {
+    VesselTree turned = *tree;
+    auto turn = [&](const std::vector<int>& ids, double angle) {
+      const Eigen::AngleAxisd r(angle, n);
+      for (int id : ids) {
+        for (auto& p : turned.branches[id].points) {
+          const double radius = p.position_m.norm();
+          p.position_m = (r * (p.position_m - fork) + fork).normalized() * radius;
+        }
+      }
+    };
+    turn(lcx_tree, sign * change / 2);
+    turn(lad_tree, -sign * change / 2);
+    if (lumen_gap_mm(turned, lad_tree, lcx_tree, fork, 8.0) < 2.0) continue;
+    std::vector<int> both = lad_tree;
+    both.insert(both.end(), lcx_tree.begin(), lcx_tree.end());
+    if (!others.empty() && lumen_gap_mm(turned, both, others, fork, 8.0) < 2.0) continue;
+    *tree = std::move(turned);
+    return;
+  }
+}
+
+// a small side branch: from point `at` of `parent`, leaving it at `angle_deg` (on the side
+// `side`), walking on the epicardial shell (the distance from the heart's centre of its first
+// point) with a constant turn, `length_mm` long; radii set after the pose
+std::vector<CenterlinePoint> side_branch_walk(const std::vector<CenterlinePoint>& parent, int at, double angle_deg,
+                                              double side, double turn_per_mm, double length_mm) {
+  constexpr double kStep = 0.5;
+  Vector3d p = parent[at].position_m;
+  const double shell = p.norm();
+  Vector3d n = p.normalized();
+  const Vector3d along = parent[at + 1].position_m - parent[at - 1].position_m;
+  Vector3d t = (along - n * n.dot(along)).normalized();
+  t = Eigen::AngleAxisd(side * angle_deg * kDeg, n) * t;
+  std::vector<CenterlinePoint> pts;
+  const int steps = static_cast<int>(std::lround(length_mm / kStep));
+  for (int i = 0; i <= steps; ++i) {
+    pts.push_back({p, 0.5});
+    p = (p + kStep * t).normalized() * shell;
+    n = p.normalized();
+    t = Eigen::AngleAxisd(turn_per_mm * kStep, n) * t;
+    t = (t - n * n.dot(t)).normalized();
+  }
+  return pts;
+}
+
+// 2..4 small side branches (septal, diagonal, marginal, right-ventricular twigs: the tree's
+// smallest vessels, tapering to 0.5 mm radius) off the LAD, LCx, RCA, D1 and OM1, clear of every
+// other lumen by 1.5 mm; named SB1.. (heart-centred mm, before the pose). Returns their ids.
+std::vector<int> add_side_branches(VesselTree* tree, Draw& draw) {
+  std::vector<int> added;
+  const int count = 2 + std::min(2, static_cast<int>(draw.u01() * 3));
+  const char* parents[] = {"LAD", "LCx", "RCA", "D1", "OM1"};
+  for (int tries = 0; tries < 60 && static_cast<int>(added.size()) < count; ++tries) {
+    const int parent = tree->find(parents[static_cast<int>(draw.u01() * 5) % 5]);
+    const double unit = draw.u01(), angle = draw.between(35, 80), side = draw.chance(0.5) ? 1.0 : -1.0;
+    const double turn = draw.between(-1.0, 1.0) / 40.0, length = draw.between(15, 35);
+    if (parent < 0) continue;
+    const auto& pts = tree->branches[parent].points;
+    const auto arc = arc_lengths(pts);
+    const double lo = tree->branches[parent].name == "RCA" ? 25.0 : 12.0, hi = arc.back() - 15.0;
+    if (hi <= lo) continue;
+    const int at = std::clamp(index_at(arc, lo + unit * (hi - lo)), 1, static_cast<int>(pts.size()) - 2);
+    bool clear = true;
+    for (const auto& c : tree->branches) {
+      if (c.parent == parent && std::abs(arc[c.parent_point] - arc[at]) < 6.0) clear = false;
+    }
+    if (!clear) continue;
+    const auto walk = side_branch_walk(pts, at, angle, side, turn, length);
+    // its lumen (up to 0.8 mm) clear of every lumen by 1.5 mm, past its own first 3 mm
+    for (size_t i = 0; i < walk.size() && clear; ++i) {
+      if ((walk[i].position_m - pts[at].position_m).norm() < pts[at].radius_m + 3.0) continue;
+      for (const auto& b : tree->branches) {
+        if (b.name == "aorta") continue;
+        for (const auto& q : b.points) {
+          if ((walk[i].position_m - q.position_m).norm() < 0.8 + q.radius_m + 1.5) {
+            clear = false;
+            break;
+          }
+        }
+        if (!clear) break;
+      }
+    }
+    if (!clear) continue;
+    added.push_back(static_cast<int>(tree->branches.size()));
+    tree->branches.push_back({"SB" + std::to_string(added.size()), parent, at, walk});
+  }
+  return added;
+}
+
+// where the epicardial shell lies along unit direction u from the heart's centre, for a heart of
+// this pose (rotation, scale, shape) whose shell is `shell_mm` before it
+double shell_radius_mm(const Matrix3d& rotation, const Matrix3d& heart, double scale, const Vector3d& shape,
+                       double shell_mm, const Vector3d& u) {
+  const Vector3d v = (heart.transpose() * rotation.transpose() * u).cwiseQuotient(shape);
+  return shell_mm * scale / v.norm();
+}
+
 }  // namespace
 
 double distance_to_painted_heart_mm(const PhantomCtaFacts& facts, const Eigen::Vector3d& p_mm) {
-  return std::abs((p_mm - facts.heart_center_mm).norm() - kPhantomHeartRadiusMm * facts.heart_scale);
+  const double r = kPhantomHeartRadiusMm * facts.heart_scale;
+  if (facts.heart_axes_scale == Vector3d::Ones()) return std::abs((p_mm - facts.heart_center_mm).norm() - r);
+  // a shaped heart (an ellipsoid): the first-order distance |g| / |grad g| of g = |y ./ a| - 1
+  // (exact on a sphere; within a few per cent of the gap for the family's 0.9..1.1 shapes)
+  const Vector3d a = r * facts.heart_axes_scale;
+  const Vector3d y = heart_frame().transpose() * facts.heart_rotation.transpose() * (p_mm - facts.heart_center_mm);
+  const Vector3d q = y.cwiseQuotient(a);
+  const double qn = q.norm();
+  if (qn < 1e-12) return a.minCoeff();
+  const double grad = (q.cwiseQuotient(a) / qn).norm();
+  return std::abs(qn - 1.0) / grad;
+}
+
+PhantomCtaSpec family_phantom_cta_spec(uint32_t seed) {
+  // its own stream: the anatomy's draws (make_phantom_cta) do not move with these
+  Draw draw(seed ^ 0x2545f491u);
+  PhantomCtaSpec spec;
+  spec.seed = seed;
+  spec.family = true;
+  const double in_plane = draw.between(0.3, 0.8), slice = draw.between(0.3, 0.8);
+  spec.spacing_mm = Vector3d(in_plane, in_plane, slice);
+  // a 512 matrix, widened where its field would be under 175 mm (the heart, its vessels and the
+  // aortic root with room to spare); 140..160 mm along z
+  const int64_t matrix = std::max<int64_t>(512, static_cast<int64_t>(std::ceil(175.0 / in_plane)));
+  const double z_mm = draw.between(140, 160);
+  spec.dims = {matrix, matrix, static_cast<int64_t>(std::ceil(z_mm / slice))};
+  spec.noise_sigma_hu = draw.between(15, 45);
+  spec.blur_sigma_mm = draw.between(0.3, 0.6);
+  if (draw.chance(0.5)) spec.direction = Vector3d(1, 1, -1).asDiagonal();
+  return spec;
 }
 
 PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
@@ -429,6 +650,10 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
   out.spec = spec;
   PhantomCtaFacts& facts = out.facts;
   Draw draw(spec.seed);
+  // the family's own stream: the classic draws above and below stay as they were
+  Draw fam(spec.seed ^ 0x68e31da4u);
+  facts.family = spec.family;
+  const Matrix3d heart = heart_frame();
 
   // the tree in mm (the fields say metres; here they hold mm until the end), heart centre at
   // the origin, patient LPS
@@ -448,6 +673,19 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
     }
   }
 
+  // the family: the LAD-LCx angle, small side branches, one tortuous trunk in 40 % of hearts
+  // (coronary tortuosity as Li et al. define it, >= 3 bends of >= 45 deg along a trunk, was found
+  // in 39 % of 1010 angiograms: PLoS ONE 6(8), 2011)
+  std::vector<int> side_branches;
+  if (spec.family) {
+    vary_bifurcation(&tree, fam.between(36, 112));
+    side_branches = add_side_branches(&tree, fam);
+    for (int b : side_branches) facts.side_branches.push_back(tree.branches[b].name);
+    const char* trunks[] = {"LAD", "LCx", "RCA"};
+    const int pick = static_cast<int>(fam.u01() * 3) % 3;
+    if (fam.chance(0.4)) facts.tortuous_branch = trunks[pick];
+  }
+
   // extra tortuosity: a lateral sine along the heart's surface, faded in from the branch's start
   // (for the RCA, from where it leaves the aorta); a child carries its parent's displacement at
   // its branch point, faded out over 15 mm. The amplitude is capped so the curvature stays below
@@ -456,9 +694,16 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
     std::vector<std::vector<Vector3d>> disp(tree.branches.size());
     for (size_t b = 0; b < tree.branches.size(); ++b) {
       const auto& br = tree.branches[b];
-      const double wavelength = draw.between(10, 30);
-      const double amplitude = std::min(draw.between(0, 2), (1.0 / 8.0) * std::pow(wavelength / (2 * kPi), 2.0));
+      double wavelength = draw.between(10, 30);
+      double amplitude = std::min(draw.between(0, 2), (1.0 / 8.0) * std::pow(wavelength / (2 * kPi), 2.0));
       const double phase = draw.between(-kPi, kPi);
+      if (br.name == facts.tortuous_branch) {
+        // a sine turns its direction by 2 atan(2 pi A / wavelength) between bends: A >= 0.07
+        // wavelength turns it by >= 47 deg; the curvature cap as above
+        wavelength = fam.between(24, 32);
+        const double cap = 0.98 * (1.0 / 8.0) * std::pow(wavelength / (2 * kPi), 2.0);
+        amplitude = fam.between(0.07 * wavelength, std::min(0.09 * wavelength, cap));
+      }
       disp[b].assign(br.points.size(), Vector3d::Zero());
       if (br.name == "aorta" || br.name == "LM") continue;
       facts.tortuosity.push_back({br.name, amplitude, wavelength});
@@ -491,11 +736,25 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
     facts.heart_rotation = r;
     facts.heart_scale = draw.between(0.9, 1.1);
     facts.radius_scale = draw.between(0.85, 1.15);
+    // the family's hearts are ellipsoids: each axis of the heart frame scaled 0.9..1.1
+    Matrix3d posed = r;
+    if (spec.family) {
+      for (int d = 0; d < 3; ++d) facts.heart_axes_scale[d] = fam.between(0.9, 1.1);
+      posed = r * heart * facts.heart_axes_scale.asDiagonal() * heart.transpose();
+    }
     for (auto& b : tree.branches) {
       for (auto& p : b.points) {
-        p.position_m = facts.heart_scale * (r * p.position_m);
+        p.position_m = facts.heart_scale * (posed * p.position_m);
         if (b.name != "aorta") p.radius_m *= facts.radius_scale;
       }
+    }
+    facts.lad_lcx_angle_deg = lad_lcx_angle_deg(tree);
+    // the side branches taper from at most 0.8 mm (and 3/4 of the parent's) to 0.5 mm
+    for (int b : side_branches) {
+      auto& br = tree.branches[b];
+      const double r0 = std::min(0.8, 0.75 * tree.branches[br.parent].points[br.parent_point].radius_m);
+      for (size_t i = 0; i < br.points.size(); ++i)
+        br.points[i].radius_m = r0 + (0.5 - r0) * static_cast<double>(i) / static_cast<double>(br.points.size() - 1);
     }
   }
 
@@ -510,6 +769,25 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
   facts.myocardium_hu = draw.between(40, 100);
   facts.fat_sleeve_mm = draw.between(1.5, 3.0);
   facts.vein_hu = draw.between(150, 250);
+  if (spec.family) {
+    // the family widens what a scan shows: myocardium 40..150 HU (late or dense enhancement), a
+    // steeper distal fall-off (to 3 HU/mm), the right heart from unenhanced (a saline chaser) to
+    // enhanced, veins up to 300 HU (a later phase), the aortic valve open or closed, the right
+    // ventricle's free wall 2..5 mm (normal RV free wall: 3-5 mm; Radiopaedia "right ventricle") with
+    // a fuller cavity that reaches it
+    facts.myocardium_hu = fam.between(40, 150);
+    facts.fade_hu_per_mm = fam.between(0.5, 3.0);
+    facts.rv_hu = fam.between(40, 400);
+    facts.ra_hu = std::clamp(facts.rv_hu + fam.between(-50, 50), 40.0, 400.0);
+    facts.vein_hu = fam.between(150, 300);
+    facts.open_valve = fam.chance(0.7);
+    facts.rv_wall_mm = fam.between(2, 5);
+    Vector3d rv_semi;  // one draw per statement
+    rv_semi.x() = fam.between(19, 23);
+    rv_semi.y() = fam.between(26, 29);
+    rv_semi.z() = fam.between(30, 33);
+    facts.rv_semi_mm = rv_semi;
+  }
 
   const int aorta_id = tree.find("aorta");
   const auto& aorta = tree.branches[aorta_id].points;
@@ -605,6 +883,111 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
     }
   }
 
+  // the family: veins crossing over arteries (a vein of 0.8..1.8 mm radius on the epicardium
+  // passing over an artery at 45..90 deg, touching it where they cross), and the left atrial
+  // appendage reaching round to the LCx (its tip 0.5..2.5 mm from the LCx's lumen, as the
+  // appendage lies on the proximal circumflex; Radiopaedia, "left atrial appendage")
+  const double shell_mm = kPhantomHeartRadiusMm + 1.5;
+  auto shell_at = [&](const Vector3d& u) {
+    return shell_radius_mm(facts.heart_rotation, heart, facts.heart_scale, facts.heart_axes_scale, shell_mm, u);
+  };
+  // the posed heart's point at heart-frame offset v (mm), heart centre at the origin
+  auto heart_point = [&](const Vector3d& v) {
+    return facts.heart_scale * (facts.heart_rotation * heart * facts.heart_axes_scale.cwiseProduct(v));
+  };
+  if (spec.family) {
+    const int count = fam.chance(0.5) ? 2 : 1;
+    const char* names[] = {"LAD", "LCx", "RCA", "D1", "OM1"};
+    for (int tries = 0; tries < 80 && static_cast<int>(facts.crossing_veins.size()) < count; ++tries) {
+      const int b = tree.find(names[static_cast<int>(fam.u01() * 5) % 5]);
+      const double unit = fam.u01(), rv = fam.between(0.8, 1.8), angle = fam.between(45, 90);
+      const double side = fam.chance(0.5) ? 1.0 : -1.0, length = fam.between(30, 50);
+      if (b < 0) continue;
+      const auto& pts = tree.branches[b].points;
+      const auto arc = arc_lengths(pts);
+      if (arc.back() < 25) continue;
+      const int i = index_at(arc, 10 + unit * (arc.back() - 20));
+      const Vector3d p = pts[i].position_m, u = p.normalized(), t = tangent(pts, i);
+      const Vector3d d = (Eigen::AngleAxisd(side * angle * kDeg, u) * (t - u * u.dot(t))).normalized();
+      // its centre (ra + rv) above the artery's where they cross, as high above the shell
+      // elsewhere; lifted until no point of it is inside the artery (the artery rises and falls
+      // about the shell near the crossing)
+      double above = p.norm() - shell_at(u) + pts[i].radius_m + rv;
+      PhantomCtaFacts::CrossingVein vein{tree.branches[b].name, rv, facts.vein_hu, angle, {}};
+      for (int lift = 0; lift < 4; ++lift) {
+        vein.points_mm.clear();
+        for (double sv = -length / 2; sv <= length / 2 + 1e-9; sv += 0.5) {
+          const double phi = sv / p.norm();
+          const Vector3d dir = (u * std::cos(phi) + d * std::sin(phi)).normalized();
+          vein.points_mm.push_back(dir * (shell_at(dir) + above));
+        }
+        double overlap = 0;
+        for (const auto& v : vein.points_mm) {
+          for (const auto& q : pts) overlap = std::max(overlap, q.radius_m + rv - (v - q.position_m).norm());
+        }
+        if (overlap < 0.02) break;
+        above += overlap;
+      }
+      // clear of every other lumen by 0.5 mm, and of the crossed one away from the crossing
+      bool clear = true;
+      for (size_t o = 0; o < tree.branches.size() && clear; ++o) {
+        if (tree.branches[o].name == "aorta") continue;
+        for (const auto& q : tree.branches[o].points) {
+          if (static_cast<int>(o) == b && (q.position_m - p).norm() < pts[i].radius_m + rv + 4.0) continue;
+          for (const auto& v : vein.points_mm) {
+            if ((v - q.position_m).norm() < q.radius_m + rv + 0.5) clear = false;
+          }
+          if (!clear) break;
+        }
+      }
+      auto clear_of = [&](const std::vector<Vector3d>& other, double r_other) {
+        for (const auto& v : vein.points_mm) {
+          for (const auto& w : other) {
+            if ((v - w).norm() < rv + r_other + 0.5) return false;
+          }
+        }
+        return true;
+      };
+      clear = clear && clear_of(facts.vein_points_mm, facts.vein_radius_mm);
+      for (const auto& other : facts.crossing_veins) clear = clear && clear_of(other.points_mm, other.radius_mm);
+      if (!clear) continue;
+      for (size_t n = 0; n + 1 < vein.points_mm.size(); ++n) {
+        prims.push_back(capsule(Kind::kVein, vein.points_mm[n], vein.points_mm[n + 1], rv, rv, vein.hu, vein.hu));
+      }
+      facts.crossing_veins.push_back(std::move(vein));
+    }
+
+    const int lcx = tree.find("LCx");
+    const Vector3d la = heart_point(Vector3d(-22, 8, 26));
+    for (int tries = 0; lcx >= 0 && tries < 40 && facts.laa_gap_mm < 0; ++tries) {
+      const double at = fam.between(6, 30), gap = fam.between(0.5, 2.5);
+      const double r_tip = fam.between(4, 6), r_base = fam.between(7, 10);
+      const auto& pts = tree.branches[lcx].points;
+      const auto arc = arc_lengths(pts);
+      const int i = index_at(arc, at);
+      const Vector3d p = pts[i].position_m, u = (la - p).normalized();
+      const Vector3d tip = p + u * (pts[i].radius_m + gap + r_tip);
+      const Prim laa = capsule(Kind::kChamber, tip, la, r_tip, r_base, facts.la_hu, facts.la_hu);
+      // its surface clear of every lumen by 0.4 mm at least; the gap recorded is the least over
+      // them (often the LCx further along the groove, nearer than where the tip was aimed)
+      double least = 1e300;
+      for (const auto& br : tree.branches) {
+        if (br.name == "aorta") continue;
+        for (const auto& q : br.points) {
+          double v;
+          least = std::min(least, clearance(laa, q.position_m, &v) - q.radius_m);
+        }
+      }
+      if (least < 0.4) continue;
+      facts.laa_base_mm = la;
+      facts.laa_tip_mm = tip;
+      facts.laa_base_radius_mm = r_base;
+      facts.laa_tip_radius_mm = r_tip;
+      facts.laa_gap_mm = least;
+      prims.push_back(laa);
+    }
+  }
+
   // calcified plaques: 1..3 ellipsoids in the wall of the LAD, LCx or RCA, their inner tip on
   // the lumen's surface (the widest within their length), clear of branch points, of the
   // stenosis, of each other, of the vein and of other branches' lumens
@@ -679,6 +1062,84 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
     }
   }
 
+  // the family: calcium blooms (each plaque's halo, 0.3..0.8 mm wider, at 40..60 % of its HU over
+  // what it covers: the scanner's blur and beam hardening make calcium look larger than it is,
+  // narrowing the lumen beside it; Kalisz et al., RadioGraphics 36(4), 2016, "blooming artefact")
+  // and, in half the hearts, a stent: rings of zig-zag struts of 0.08 mm radius against the lumen's
+  // wall every 1.2 mm over 12..24 mm of the LAD, LCx or RCA, clear of the stenosis and the
+  // plaques. The struts are painted at 50 000..90 000 HU so that after partial volume and blur
+  // they show at 1 500 HU and more, as metal does in a CTA (its HU is clamped at 3 071): a thin
+  // strut's peak after a blur of sigma is HU x its section / (2 pi sigma^2), so the value stands
+  // for the metal's attenuation and its blooming together, not for a material
+  std::vector<Prim> stent_prims;
+  if (spec.family) {
+    facts.bloom_mm = fam.between(0.3, 0.8);
+    facts.bloom_fraction = fam.between(0.4, 0.6);
+    const size_t n_plaques = spec.calcium_blooming ? plaque_prims.size() : 0;
+    for (size_t n = 0; n < n_plaques; ++n) {
+      const auto& pl = facts.plaques[n];
+      Matrix3d axes = plaque_prims[n].m.transpose() * pl.semi_axes_mm.asDiagonal();  // back to unit axes
+      for (int c = 0; c < 3; ++c) axes.col(c).normalize();
+      Prim bloom = ellipsoid(pl.center_mm, pl.semi_axes_mm + Vector3d::Constant(facts.bloom_mm), axes,
+                             facts.bloom_fraction * pl.hu);
+      bloom.max_rule = true;
+      plaque_prims.push_back(bloom);
+    }
+    if (fam.chance(0.5)) {
+      const char* names[] = {"LAD", "LCx", "RCA"};
+      for (int tries = 0; tries < 40 && facts.stent_branch.empty(); ++tries) {
+        const int b = tree.find(names[static_cast<int>(fam.u01() * 3) % 3]);
+        const double len = fam.between(12, 24), unit = fam.u01(), strut_hu = fam.between(50000, 90000);
+        const double phase = fam.between(0, 2 * kPi);
+        if (b < 0) continue;
+        const auto& pts = tree.branches[b].points;
+        const auto arc = arc_lengths(pts);
+        const double lo = tree.branches[b].name == "RCA" ? 22.0 : 6.0, hi = arc.back() - len - 10.0;
+        if (hi <= lo) continue;
+        const double s0 = lo + unit * (hi - lo), s1 = s0 + len;
+        bool clear = true;
+        if (facts.stenosis_branch == tree.branches[b].name &&
+            s1 + 3.0 > facts.stenosis_arc_length_mm - 0.5 * facts.stenosis_length_mm &&
+            s0 - 3.0 < facts.stenosis_arc_length_mm + 0.5 * facts.stenosis_length_mm)
+          clear = false;
+        for (const auto& pl : facts.plaques) {
+          if (pl.branch == tree.branches[b].name && pl.arc_length_mm > s0 - 5.0 && pl.arc_length_mm < s1 + 5.0)
+            clear = false;
+        }
+        if (!clear) continue;
+        constexpr double kStrut = 0.08, kRing = 1.2, kCrown = 0.45;
+        constexpr int kPoints = 12;  // 6 crowns a ring
+        auto strut_point = [&](double s, double angle) {
+          const int i = index_at(arc, s);
+          const Vector3d t = tangent(pts, i), p = pts[i].position_m;
+          const Vector3d e1 = (p.normalized() - t * t.dot(p.normalized())).normalized(), e2 = t.cross(e1);
+          return Vector3d(p + t * (s - arc[i]) +
+                          (pts[i].radius_m + kStrut) * (std::cos(angle) * e1 + std::sin(angle) * e2));
+        };
+        std::vector<Vector3d> previous;
+        for (double s = s0; s <= s1 + 1e-9; s += kRing) {
+          std::vector<Vector3d> ring;
+          for (int k = 0; k <= kPoints; ++k) {
+            ring.push_back(strut_point(s + (k % 2 ? kCrown : -kCrown), phase + 2 * kPi * k / kPoints));
+          }
+          for (int k = 0; k < kPoints; ++k) {
+            stent_prims.push_back(capsule(Kind::kStent, ring[k], ring[k + 1], kStrut, kStrut, strut_hu, strut_hu));
+          }
+          // three links to the ring before, from its crowns to these troughs
+          for (int k = 1; k < kPoints && !previous.empty(); k += 4) {
+            stent_prims.push_back(capsule(Kind::kStent, previous[k], ring[k - 1], kStrut, kStrut, strut_hu, strut_hu));
+          }
+          previous = std::move(ring);
+        }
+        facts.stent_branch = tree.branches[b].name;
+        facts.stent_start_mm = s0;
+        facts.stent_length_mm = len;
+        facts.stent_strut_hu = strut_hu;
+        facts.stent_center_mm = pts[index_at(arc, 0.5 * (s0 + s1))].position_m;
+      }
+    }
+  }
+
   // the field of view: a cardiac CT is centred on the heart; here on the box of the heart (its
   // pericardium), the coronaries and the ascending aorta up to the aortic seed, with a seeded
   // shift (within the room the box leaves) so the heart is not always centred
@@ -688,7 +1149,7 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
     cdims[axis_of[a]] = spec.dims[a];
     cspacing[axis_of[a]] = spec.spacing_mm[a];
   }
-  Vector3d hi = Vector3d::Constant(52.0 * facts.heart_scale), lo = -hi;
+  Vector3d hi = Vector3d::Constant(52.0 * facts.heart_scale * facts.heart_axes_scale.maxCoeff()), lo = -hi;
   const int seed_index = std::min<int>(50, static_cast<int>(tree.branches[aorta_id].points.size()) - 1);
   for (const auto& b : tree.branches) {
     for (size_t i = 0; i < b.points.size(); ++i) {
@@ -728,7 +1189,12 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
   ts.rv_hu = facts.rv_hu;
   ts.ra_hu = facts.ra_hu;
   ts.aorta_hu = facts.aorta_hu;
-  ts.lv_outflow = true;
+  ts.lv_outflow = facts.open_valve;
+  ts.heart_axes_scale = facts.heart_axes_scale;
+  if (spec.family) {
+    ts.rv_wall_mm = facts.rv_wall_mm;
+    ts.rv_semi_mm = facts.rv_semi_mm;
+  }
   ts.coronary_lumens = false;
   ts.coronary_fat_sleeve_mm = spec.with_coronaries ? facts.fat_sleeve_mm : 0.0;
   // chambers behind their walls: 4 mm of myocardium and fat between a chamber and the coronary shell
@@ -742,15 +1208,7 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
   }
   Volume canon = make_thorax_phantom(ts, tree_m);
   // the LV centre as the thorax painter places it (heart frame offset (-2, 14, -8) mm)
-  {
-    const Vector3d base = Vector3d(-0.45, 0.35, 0.82).normalized();
-    const Vector3d anterior = (Vector3d(0, -1, 0) - base.dot(Vector3d(0, -1, 0)) * base).normalized();
-    Matrix3d heart;
-    heart.col(0) = anterior;
-    heart.col(1) = base.cross(anterior);
-    heart.col(2) = base;
-    facts.lv_center_mm = facts.heart_scale * (facts.heart_rotation * heart * Vector3d(-2, 14, -8)) + offset;
-  }
+  facts.lv_center_mm = heart_point(Vector3d(-2, 14, -8)) + offset;
 
   // coronary lumens: HU fading with the path length from the ostium, one capsule per segment
   std::vector<std::vector<double>> path_mm(tree.branches.size());
@@ -786,6 +1244,7 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
       }
     }
     prims.insert(prims.end(), plaque_prims.begin(), plaque_prims.end());
+    prims.insert(prims.end(), stent_prims.begin(), stent_prims.end());
   }
 
   // to float; the partial-volume painter, the blur and the noise work on it
@@ -876,6 +1335,14 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
   facts.stenosis_center_mm += offset;
   for (auto& p : facts.plaques) p.center_mm += offset;
   for (auto& p : facts.vein_points_mm) p += offset;
+  for (auto& v : facts.crossing_veins) {
+    for (auto& p : v.points_mm) p += offset;
+  }
+  if (facts.laa_gap_mm >= 0) {
+    facts.laa_base_mm += offset;
+    facts.laa_tip_mm += offset;
+  }
+  if (!facts.stent_branch.empty()) facts.stent_center_mm += offset;
   out.aortic_seed_mm = aorta[seed_index].position_m + offset;
   auto mark = [&](std::string name, const Vector3d& p_mm) { out.landmarks.push_back({std::move(name), p_mm * 1e-3}); };
   mark("aortic seed", out.aortic_seed_mm);
@@ -888,6 +1355,11 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
     mark("vein start", facts.vein_points_mm.front());
     mark("vein end", facts.vein_points_mm.back());
   }
+  if (facts.laa_gap_mm >= 0) mark("LA appendage tip", facts.laa_tip_mm);
+  for (size_t n = 0; n < facts.crossing_veins.size(); ++n)
+    mark("crossing vein " + std::to_string(n + 1),
+         facts.crossing_veins[n].points_mm[facts.crossing_veins[n].points_mm.size() / 2]);
+  if (!facts.stent_branch.empty()) mark("stent", facts.stent_center_mm);
   mark("LV centre", facts.lv_center_mm);
   mark("heart centre", offset);
   return out;
@@ -927,7 +1399,8 @@ void write_phantom_cta(const PhantomCta& cta, const std::string& dir) {
                 {"blur_sigma_mm", s.blur_sigma_mm},
                 {"scanner_frame", s.scanner_frame},
                 {"stenosis_fraction", s.stenosis_fraction},
-                {"with_coronaries", s.with_coronaries}};
+                {"with_coronaries", s.with_coronaries},
+                {"family", s.family}};
   ojson plaques = ojson::array();
   for (const auto& p : f.plaques) {
     plaques.push_back({{"branch", p.branch},
@@ -976,6 +1449,46 @@ void write_phantom_cta(const PhantomCta& cta, const std::string& dir) {
                  {"dropped_branches", f.dropped_branches},
                  {"clipped_branches", f.clipped_branches},
                  {"tortuosity", std::move(tortuosity)}};
+  if (f.family) {
+    ojson crossing = ojson::array();
+    for (const auto& v : f.crossing_veins) {
+      ojson pts = ojson::array();
+      for (const auto& p : v.points_mm) pts.push_back(vec(p));
+      crossing.push_back({{"crosses", v.crosses},
+                          {"radius_mm", v.radius_mm},
+                          {"hu", v.hu},
+                          {"angle_deg", v.angle_deg},
+                          {"points_mm", std::move(pts)}});
+    }
+    ojson laa = nullptr;
+    if (f.laa_gap_mm >= 0) {
+      laa = {{"base_mm", vec(f.laa_base_mm)},
+             {"tip_mm", vec(f.laa_tip_mm)},
+             {"base_radius_mm", f.laa_base_radius_mm},
+             {"tip_radius_mm", f.laa_tip_radius_mm},
+             {"gap_to_lcx_mm", f.laa_gap_mm}};
+    }
+    ojson stent = nullptr;
+    if (!f.stent_branch.empty()) {
+      stent = {{"branch", f.stent_branch},
+               {"start_mm", f.stent_start_mm},
+               {"length_mm", f.stent_length_mm},
+               {"strut_hu", f.stent_strut_hu},
+               {"center_mm", vec(f.stent_center_mm)}};
+    }
+    facts["family"] = {{"heart_axes_scale", vec(f.heart_axes_scale)},
+                       {"open_valve", f.open_valve},
+                       {"rv_wall_mm", f.rv_wall_mm},
+                       {"rv_semi_mm", vec(f.rv_semi_mm)},
+                       {"lad_lcx_angle_deg", f.lad_lcx_angle_deg},
+                       {"tortuous_branch", f.tortuous_branch},
+                       {"side_branches", f.side_branches},
+                       {"left_atrial_appendage", std::move(laa)},
+                       {"crossing_veins", std::move(crossing)},
+                       {"bloom_mm", f.bloom_mm},
+                       {"bloom_fraction", f.bloom_fraction},
+                       {"stent", std::move(stent)}};
+  }
   ojson landmarks = ojson::array();
   for (const auto& l : cta.landmarks) landmarks.push_back({{"name", l.name}, {"position_m", vec(l.position_m)}});
   const ojson doc = {{"format", "pcisim-phantom-cta"},

@@ -49,7 +49,25 @@ struct PhantomCtaSpec {
   // chambers, the vein and everything else as with them). The truth still holds the tree.
   bool with_coronaries = true;
   int threads = 0;  // 0: std::thread::hardware_concurrency(); the volume does not depend on it
+  // a member of the varied family (family_phantom_cta_spec below) rather than one of the classic
+  // phantoms: the seed also draws the heart's shape, the right heart enhanced or not, an open or a
+  // closed aortic valve, the right ventricle's free wall, the left atrial appendage beside the LCx,
+  // veins crossing arteries, calcium with blooming, a stent, small side branches, the LAD-LCx angle
+  // and a tortuous trunk (ranges and sources in phantom_cta.cc). false: the classic phantoms, as
+  // they were drawn before the family existed
+  bool family = false;
+  // with family: the plaques' blooming halos (false: the same phantom without them, to see it)
+  bool calcium_blooming = true;
 };
+
+// The family's two splits (issue #30; docs/benchmarks/model.md): seeds 1..999 tune the pipeline,
+// seeds from kFamilyHeldOutFirstSeed on are held out (never looked at while developing it).
+inline constexpr uint32_t kFamilyHeldOutFirstSeed = 1001;
+
+// a family member's whole spec, drawn from its seed as a scanner protocol varies: in-plane voxel
+// 0.3..0.8 mm and slices 0.3..0.8 mm (drawn apart: anisotropic), a 512 x 512 matrix, a z range of
+// 120..150 mm, noise 15..45 HU, the scanner's blur 0.3..0.6 mm, slices head- or feet-first
+PhantomCtaSpec family_phantom_cta_spec(uint32_t seed);
 
 struct PhantomCtaPlaque {
   std::string branch;
@@ -95,6 +113,35 @@ struct PhantomCtaFacts {
   // field is common; coronaries need a field of at least ~120 mm each way)
   std::vector<std::string> clipped_branches;
   std::vector<PhantomCtaTortuosity> tortuosity;
+
+  // the family's draws (spec.family; zero, empty or as the classic phantoms otherwise)
+  bool family = false;
+  // the heart's semi-axes along its frame (anterior, left, base) times heart_scale
+  Eigen::Vector3d heart_axes_scale = Eigen::Vector3d::Ones();
+  bool open_valve = true;   // the LV outflow tract joins the LV cavity to the aortic root
+  double rv_wall_mm = 4.0;  // the right ventricle's blood this far inside the myocardium's outline
+  // the right ventricle's cavity semi-axes (heart frame, mm before the scales)
+  Eigen::Vector3d rv_semi_mm = Eigen::Vector3d(11, 24, 28);
+  double lad_lcx_angle_deg = 0;            // between the two daughters' first 5 mm (chords from the fork)
+  std::string tortuous_branch;             // a trunk with >= 3 bends of >= 45 deg (empty: none)
+  std::vector<std::string> side_branches;  // small branches added to the tree (in the truth)
+  // the left atrial appendage: a rounded cone of left-atrial blood from the LA to beside the LCx,
+  // its surface laa_gap_mm from the LCx's lumen (laa_gap_mm < 0: none)
+  Eigen::Vector3d laa_base_mm = Eigen::Vector3d::Zero(), laa_tip_mm = Eigen::Vector3d::Zero();
+  double laa_base_radius_mm = 0, laa_tip_radius_mm = 0, laa_gap_mm = -1;
+  // veins crossing over arteries, touching them where they cross
+  struct CrossingVein {
+    std::string crosses;
+    double radius_mm = 0, hu = 0, angle_deg = 0;
+    std::vector<Eigen::Vector3d> points_mm;
+  };
+  std::vector<CrossingVein> crossing_veins;
+  // blooming: each plaque's halo, bloom_mm wider, at bloom_fraction of its HU (over what it covers)
+  double bloom_mm = 0, bloom_fraction = 0;
+  // a stent's struts (metal) over stent_length_mm of stent_branch from stent_start_mm (empty: none)
+  std::string stent_branch;
+  double stent_start_mm = 0, stent_length_mm = 0, stent_strut_hu = 0;
+  Eigen::Vector3d stent_center_mm = Eigen::Vector3d::Zero();
 };
 
 struct PhantomCta {

@@ -36,9 +36,10 @@ struct Quadric {
   Vector3d c;
   double z_lo = -1e30, z_hi = 1e30;
   int16_t hu;
-  // and, when clip_r > 0, inside the sphere of radius clip_r about clip_c
+  // and, when clipped, inside the ellipsoid |clip_m (p - clip_c)|^2 <= 1
+  bool clipped = false;
+  Matrix3d clip_m = Matrix3d::Zero();
   Vector3d clip_c = Vector3d::Zero();
-  double clip_r = 0;
 };
 
 Quadric ellipsoid(const Vector3d& c, const Vector3d& semi, const Matrix3d& axes, double hu) {
@@ -72,40 +73,41 @@ class Painter {
  public:
   Painter(Volume* v) : v_(v) {}
 
+  // the voxels [i0, i1] of row (j, k) inside |m (p - c)|^2 <= 1; false when none
+  bool x_span(const Matrix3d& m, const Vector3d& c, int64_t j, int64_t k, int64_t* i0, int64_t* i1) const {
+    const double z = v_->origin_mm.z() + k * v_->spacing_mm.z();
+    const double y = v_->origin_mm.y() + j * v_->spacing_mm.y();
+    const double x0 = v_->origin_mm.x();
+    // |q0 + x m_x|^2 <= 1 with q0 at x = x0
+    const Vector3d q0 = m * (Vector3d(x0, y, z) - c);
+    const Vector3d mx = m.col(0);
+    const double a = mx.squaredNorm(), b = q0.dot(mx), cc = q0.squaredNorm() - 1.0;
+    *i0 = 0;
+    *i1 = v_->dims[0] - 1;
+    if (a < 1e-18) return cc <= 0;
+    const double disc = b * b - a * cc;
+    if (disc < 0) return false;
+    const double s = std::sqrt(disc);
+    // mm from x0 to voxel indices, clamped before the cast so no double overflows an int
+    const double n = static_cast<double>(v_->dims[0]);
+    const double t0 = std::clamp(std::ceil((-b - s) / a / v_->spacing_mm.x()), -1.0, n);
+    const double t1 = std::clamp(std::floor((-b + s) / a / v_->spacing_mm.x()), -1.0, n);
+    *i0 = std::max<int64_t>(0, static_cast<int64_t>(t0));
+    *i1 = std::min<int64_t>(v_->dims[0] - 1, static_cast<int64_t>(t1));
+    return *i0 <= *i1;
+  }
+
   // fills the x-span of q on row (j, k); the row pointer is the volume's row
   void span(const Quadric& q, int64_t j, int64_t k) const {
     const double z = v_->origin_mm.z() + k * v_->spacing_mm.z();
     if (z < q.z_lo || z > q.z_hi) return;
-    const double y = v_->origin_mm.y() + j * v_->spacing_mm.y();
-    const double x0 = v_->origin_mm.x();
-    // |q0 + x m_x|^2 <= 1 with q0 at x = x0
-    const Vector3d q0 = q.m * (Vector3d(x0, y, z) - q.c);
-    const Vector3d mx = q.m.col(0);
-    const double a = mx.squaredNorm(), b = q0.dot(mx), cc = q0.squaredNorm() - 1.0;
-    int64_t i0 = 0, i1 = v_->dims[0] - 1;
-    if (a < 1e-18) {
-      if (cc > 0) return;
-    } else {
-      const double disc = b * b - a * cc;
-      if (disc < 0) return;
-      const double s = std::sqrt(disc);
-      // mm from x0 to voxel indices, clamped before the cast so no double overflows an int
-      const double n = static_cast<double>(v_->dims[0]);
-      const double t0 = std::clamp(std::ceil((-b - s) / a / v_->spacing_mm.x()), -1.0, n);
-      const double t1 = std::clamp(std::floor((-b + s) / a / v_->spacing_mm.x()), -1.0, n);
-      i0 = std::max<int64_t>(0, static_cast<int64_t>(t0));
-      i1 = std::min<int64_t>(v_->dims[0] - 1, static_cast<int64_t>(t1));
-    }
-    if (q.clip_r > 0) {
-      // the sphere's x-span on this row
-      const double dy = y - q.clip_c.y(), dz = z - q.clip_c.z();
-      const double h2 = q.clip_r * q.clip_r - dy * dy - dz * dz;
-      if (h2 < 0) return;
-      const double h = std::sqrt(h2), n = static_cast<double>(v_->dims[0]);
-      const double t0 = std::clamp(std::ceil((q.clip_c.x() - h - x0) / v_->spacing_mm.x()), -1.0, n);
-      const double t1 = std::clamp(std::floor((q.clip_c.x() + h - x0) / v_->spacing_mm.x()), -1.0, n);
-      i0 = std::max(i0, static_cast<int64_t>(t0));
-      i1 = std::min(i1, static_cast<int64_t>(t1));
+    int64_t i0, i1;
+    if (!x_span(q.m, q.c, j, k, &i0, &i1)) return;
+    if (q.clipped) {
+      int64_t c0, c1;
+      if (!x_span(q.clip_m, q.clip_c, j, k, &c0, &c1)) return;
+      i0 = std::max(i0, c0);
+      i1 = std::min(i1, c1);
     }
     if (i1 < i0) return;
     int16_t* row = v_->hu_i16.data() + v_->linear_index(0, j, k);
@@ -192,7 +194,14 @@ Volume make_thorax_phantom(const ThoraxPhantomSpec& spec, const VesselTree& tree
   // the heart's pose (identity and 1 by default, which leave every product exact)
   heart = spec.heart_rotation * heart;
   const double k = spec.heart_scale;
-  auto in_heart = [&heart, k](double a, double l, double b) -> Vector3d { return heart * Vector3d(a, l, b) * k; };
+  const Vector3d shape = spec.heart_axes_scale;
+  auto in_heart = [&heart, &shape, k](double a, double l, double b) -> Vector3d {
+    return heart * shape.cwiseProduct(Vector3d(a, l, b)) * k;
+  };
+  // an ellipsoid of the heart, its semi-axes (mm, heart frame) shaped and scaled
+  auto heart_ellipsoid = [&heart, &shape, k](const Vector3d& c, const Vector3d& semi, double hu_value) {
+    return ellipsoid(c, semi.cwiseProduct(shape) * k, heart, hu_value);
+  };
   const double heart_r = kPhantomHeartRadiusMm;
   auto blood_or = [&hu](double v) { return std::isnan(v) ? hu.blood : v; };
 
@@ -209,18 +218,24 @@ Volume make_thorax_phantom(const ThoraxPhantomSpec& spec, const VesselTree& tree
   // liver dome under the right hemidiaphragm
   q.push_back(ellipsoid(Vector3d(bx - 35, by - 5, -150), Vector3d(135, 105, 88), Matrix3d::Identity(), hu.liver));
   // heart: pericardial fat, myocardium, chambers (heart frame offsets in mm)
-  q.push_back(ellipsoid(Vector3d::Zero(), Vector3d(55, 55, 56) * k, heart, hu.fat));
-  q.push_back(ellipsoid(Vector3d::Zero(), Vector3d(heart_r, heart_r, heart_r) * k, heart, hu.myocardium));
+  q.push_back(heart_ellipsoid(Vector3d::Zero(), Vector3d(55, 55, 56), hu.fat));
+  q.push_back(heart_ellipsoid(Vector3d::Zero(), Vector3d(heart_r, heart_r, heart_r), hu.myocardium));
   const Vector3d lv_center = in_heart(-2, 14, -8);
   const size_t first_chamber = q.size();
-  q.push_back(ellipsoid(lv_center, Vector3d(17, 17, 30) * k, heart, blood_or(spec.lv_hu)));              // LV
-  q.push_back(ellipsoid(in_heart(20, -10, -8), Vector3d(11, 24, 28) * k, heart, blood_or(spec.rv_hu)));  // RV
-  q.push_back(ellipsoid(in_heart(-22, 8, 26), Vector3d(15, 18, 14) * k, heart, blood_or(spec.la_hu)));   // LA
-  q.push_back(ellipsoid(in_heart(2, -26, 22), Vector3d(16, 15, 17) * k, heart, blood_or(spec.ra_hu)));   // RA
-  if (spec.chamber_clearance_mm > 0) {
-    // the atria and the right ventricle reach the epicardial surface as ellipsoids; a real chamber's
-    // blood stays behind its wall and the epicardial fat the coronaries run in
-    for (size_t c = first_chamber; c < q.size(); ++c) q[c].clip_r = heart_r * k - spec.chamber_clearance_mm;
+  const Vector3d rv_semi = spec.rv_semi_mm.allFinite() ? spec.rv_semi_mm : Vector3d(11, 24, 28);
+  q.push_back(heart_ellipsoid(lv_center, Vector3d(17, 17, 30), blood_or(spec.lv_hu)));             // LV
+  q.push_back(heart_ellipsoid(in_heart(20, -10, -8), rv_semi, blood_or(spec.rv_hu)));              // RV
+  q.push_back(heart_ellipsoid(in_heart(-22, 8, 26), Vector3d(15, 18, 14), blood_or(spec.la_hu)));  // LA
+  q.push_back(heart_ellipsoid(in_heart(2, -26, 22), Vector3d(16, 15, 17), blood_or(spec.ra_hu)));  // RA
+  // the atria and the right ventricle reach the epicardial surface as ellipsoids; a real chamber's
+  // blood stays behind its wall and the epicardial fat the coronaries run in: each chamber clipped
+  // to the myocardium's outline moved in by its wall
+  const double rv_wall = std::isnan(spec.rv_wall_mm) ? spec.chamber_clearance_mm : spec.rv_wall_mm;
+  for (size_t c = first_chamber; c < q.size(); ++c) {
+    const double wall = c == first_chamber + 1 ? rv_wall : spec.chamber_clearance_mm;
+    if (!(wall > 0)) continue;
+    q[c].clipped = true;
+    q[c].clip_m = (heart_r * k * shape - Vector3d::Constant(wall)).cwiseInverse().asDiagonal() * heart.transpose();
   }
   // sternum
   q.push_back(cylinder_z(bx + 4, by - ay + fat_mm + 9, 15, 7, -60, 110, hu.sternum));

@@ -49,6 +49,14 @@ struct ThoraxPhantomSpec {
   // rotated and scaled so; the tree passed in is expected to carry the same pose
   Eigen::Matrix3d heart_rotation = Eigen::Matrix3d::Identity();
   double heart_scale = 1.0;
+  // the heart's shape: every length along the heart frame's axes (anterior, left, base) scaled by
+  // these on top of heart_scale, chambers and clearances included ((1, 1, 1): the sphere)
+  Eigen::Vector3d heart_axes_scale = Eigen::Vector3d::Ones();
+  // the right ventricle's cavity: semi-axes in the heart frame (mm, before the scales; NaN: 11, 24,
+  // 28) and how far its blood stays inside the myocardium's outer surface, i.e. its free wall (mm;
+  // NaN: chamber_clearance_mm)
+  Eigen::Vector3d rv_semi_mm = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  double rv_wall_mm = std::numeric_limits<double>::quiet_NaN();
   // blood of each chamber and of the aorta (HU); NaN: hu.blood (unenhanced)
   double lv_hu = std::numeric_limits<double>::quiet_NaN();
   double la_hu = std::numeric_limits<double>::quiet_NaN();

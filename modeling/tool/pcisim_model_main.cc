@@ -96,10 +96,13 @@ Eigen::Vector3d parse_voxel_mm(const std::string& s) {
   return p;
 }
 
-int make_phantom(uint32_t seed, const std::string& out, const std::string& voxel, const std::string& dims, double noise,
-                 double stenosis, bool no_coronaries, bool flip_z, bool origin_frame) {
+int make_phantom(uint32_t seed, bool family, const std::string& out, const std::string& voxel, const std::string& dims,
+                 const double* noise, double stenosis, bool no_coronaries, bool flip_z, bool origin_frame) {
   anatomy::PhantomCtaSpec spec;
   spec.seed = seed;
+  // a family member draws its scan (voxels, matrix, noise, blur, slice order) from its seed; an
+  // option given on the command line replaces that draw
+  if (family) spec = anatomy::family_phantom_cta_spec(seed);
   if (!voxel.empty()) spec.spacing_mm = parse_voxel_mm(voxel);
   if (!dims.empty()) spec.dims = parse_dims(dims);
   for (int a = 0; a < 3; ++a) {
@@ -110,20 +113,22 @@ int make_phantom(uint32_t seed, const std::string& out, const std::string& voxel
                       "got {} x {} = {} mm along {}",
                       anatomy::kMaxPhantomCtaExtentMm, spec.dims[a], spec.spacing_mm[a], extent_mm, "xyz"[a]));
   }
-  spec.noise_sigma_hu = noise;
+  if (noise) spec.noise_sigma_hu = *noise;
   spec.stenosis_fraction = stenosis;
   spec.with_coronaries = !no_coronaries;
   spec.scanner_frame = !origin_frame;
   if (flip_z) spec.direction = Eigen::Vector3d(1, 1, -1).asDiagonal();
   const auto t0 = std::chrono::steady_clock::now();
-  std::printf("phantom CTA %u: %lld x %lld x %lld voxels of %.2f x %.2f x %.2f mm, noise %.0f HU ...\n", seed,
-              (long long)spec.dims[0], (long long)spec.dims[1], (long long)spec.dims[2], spec.spacing_mm.x(),
-              spec.spacing_mm.y(), spec.spacing_mm.z(), spec.noise_sigma_hu);
+  std::printf("%s CTA %u: %lld x %lld x %lld voxels of %.2f x %.2f x %.2f mm, noise %.0f HU ...\n",
+              family ? "family phantom" : "phantom", seed, (long long)spec.dims[0], (long long)spec.dims[1],
+              (long long)spec.dims[2], spec.spacing_mm.x(), spec.spacing_mm.y(), spec.spacing_mm.z(),
+              spec.noise_sigma_hu);
   std::fflush(stdout);
   const anatomy::PhantomCta cta = anatomy::make_phantom_cta(spec);
   std::printf("  generated in %.1f s; writing %s\n", seconds_since(t0), out.c_str());
   anatomy::write_phantom_cta(cta, out);
-  modeling::write_model_overview(cta.ct, cta.truth, fmt::format("PHANTOM CTA {} - TRUTH", seed),
+  modeling::write_model_overview(cta.ct, cta.truth,
+                                 fmt::format("{} CTA {} - TRUTH", family ? "FAMILY PHANTOM" : "PHANTOM", seed),
                                  (fs::path(out) / "overview.png").string());
   std::printf("  aortic seed: --seed %.1f,%.1f,%.1f\n", cta.aortic_seed_mm.x(), cta.aortic_seed_mm.y(),
               cta.aortic_seed_mm.z());
@@ -434,9 +439,17 @@ int main(int argc, char** argv) {
   ph->add_option("--dims", dims,
                  "voxels along x,y,z, each 1..4096, at most 2^28 in all and 1000 mm of field along each axis; default "
                  "512,512,250");
-  ph->add_option("--noise-hu", noise_hu, "noise sigma (HU)")->check(CLI::Range(0.0, 200.0));
+  auto* noise_option = ph->add_option("--noise-hu", noise_hu, "noise sigma (HU); default 25 (with --family: drawn)")
+                           ->check(CLI::Range(0.0, 200.0));
   ph->add_option("--stenosis", stenosis, "diameter reduction of the stenosis (0..0.99); default drawn 0.5..0.8")
       ->check(CLI::Range(0.0, 0.99));
+  bool family = false;
+  ph->add_flag("--family", family,
+               "a member of the varied phantom family (issue #30): the seed also draws the scan (voxels 0.3..0.8 mm, "
+               "anisotropic, noise 15..45 HU, slice order), the heart's shape, chambers, valve, right-ventricular "
+               "wall, left atrial appendage, crossing veins, calcium blooming, a stent, small side branches; seeds "
+               "from 1001 are the held-out split (docs/benchmarks/model.md). --voxel-mm, --dims and --noise-hu "
+               "replace what it draws");
   ph->add_flag("--no-coronaries", no_coronaries, "a CTA without coronary arteries");
   ph->add_flag("--flip-z", flip_z, "slices stored feet-first (direction diag(1, 1, -1))");
   ph->add_flag("--origin-frame", origin_frame, "the heart centre at the origin instead of scanner coordinates");
@@ -458,8 +471,9 @@ int main(int argc, char** argv) {
       } catch (const std::exception&) {
         throw CLI::ValidationError("--seed", fmt::format("'{}' is not a phantom number", seeds[0]));
       }
-      return make_phantom(static_cast<uint32_t>(n), out_dir, voxel, dims, noise_hu, stenosis, no_coronaries, flip_z,
-                          origin_frame);
+      const bool noise_given = noise_option->count() > 0 || !family;
+      return make_phantom(static_cast<uint32_t>(n), family, out_dir, voxel, dims, noise_given ? &noise_hu : nullptr,
+                          stenosis, no_coronaries, flip_z, origin_frame);
     }
     if (ct_path.empty()) throw CLI::ValidationError("--ct", "the CTA to model is required (or --make-phantom-cta)");
     std::vector<Eigen::Vector3d> seed_mm;

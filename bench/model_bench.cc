@@ -119,18 +119,40 @@ anatomy::VesselTree outside_aorta(const anatomy::VesselTree& tree, const anatomy
   return out;
 }
 
-// where the false centerline lies (mm): each modelled centerline point farther from every true
-// centerline point than that point's radius is given to the drawn structure it lies in or beside
-// (within 1 mm of its surface): a vein (beside or crossing an artery), the left atrial appendage,
-// the stent, else "elsewhere" (chambers, myocardium, noise). Points are the model's own samples,
-// each standing for the distance to the next (this is a diagnosis; the false length in the tables
-// is the scorer's)
-std::map<std::string, double> false_by_cause(const anatomy::VesselTree& truth, const anatomy::VesselTree& model,
-                                             const anatomy::PhantomCtaFacts& f) {
-  std::map<std::string, double> out;
+// the share of extracted centerline that matches nothing (mm): false positives x the sample step
+double false_mm(const modeling::CenterlineScores& c) {
+  return c.fp * modeling::CenterlineScoreOptions{}.sample_spacing_m * 1e3;
+}
+double missed_mm(const modeling::CenterlineScores& c) {
+  return c.fn * modeling::CenterlineScoreOptions{}.sample_spacing_m * 1e3;
+}
+
+// the model against the truth, point by point (a diagnosis and a picture; the tables' false and
+// missed lengths are the scorer's): a modelled centerline point farther from every true point
+// than that point's radius is false, a true point with no modelled point within its radius is
+// missed. Each false point is given to the drawn structure it lies in or beside (within 1 mm of
+// its surface): a vein (beside or crossing an artery), the left atrial appendage, the stent, else
+// "elsewhere" (chambers, myocardium, noise), with the length to the model's next point
+struct Mismatch {
+  modeling::OverviewMarks marks;
+  std::map<std::string, double> false_by_cause_mm;
+};
+
+Mismatch mismatch(const anatomy::VesselTree& truth, const anatomy::VesselTree& model,
+                  const anatomy::PhantomCtaFacts& f) {
+  Mismatch out;
   auto near_polyline = [](const std::vector<Vector3d>& pts, const Vector3d& q, double r) {
     for (const auto& p : pts) {
       if ((p - q).norm() < r) return true;
+    }
+    return false;
+  };
+  auto within = [](const anatomy::VesselTree& tree, const Vector3d& q, double radius_m, bool use_own_radius) {
+    for (const auto& t : tree.branches) {
+      if (t.name == "aorta") continue;
+      for (const auto& p : t.points) {
+        if ((p.position_m - q).norm() <= (use_own_radius ? p.radius_m : radius_m)) return true;
+      }
     }
     return false;
   };
@@ -138,20 +160,10 @@ std::map<std::string, double> false_by_cause(const anatomy::VesselTree& truth, c
     if (b.name == "aorta") continue;
     for (size_t i = 0; i + 1 < b.points.size(); ++i) {
       const Vector3d q = b.points[i].position_m;
-      bool matched = false;
-      for (const auto& t : truth.branches) {
-        if (t.name == "aorta") continue;
-        for (const auto& p : t.points) {
-          if ((p.position_m - q).norm() <= p.radius_m) {
-            matched = true;
-            break;
-          }
-        }
-        if (matched) break;
-      }
-      if (matched) continue;
+      if (within(truth, q, 0, true)) continue;
       const double step_mm = (b.points[i + 1].position_m - q).norm() * 1e3;
       const Vector3d q_mm = q * 1e3;
+      out.marks.false_mm.push_back(q_mm);
       std::string cause = "elsewhere";
       if (near_polyline(f.vein_points_mm, q_mm, f.vein_radius_mm + 1.0)) cause = "vein beside";
       for (const auto& v : f.crossing_veins) {
@@ -164,7 +176,13 @@ std::map<std::string, double> false_by_cause(const anatomy::VesselTree& truth, c
         if ((q_mm - f.laa_tip_mm - u * ab).norm() < r + 1.0) cause = "appendage";
       }
       if (!f.stent_branch.empty() && (q_mm - f.stent_center_mm).norm() < 0.5 * f.stent_length_mm + 2.0) cause = "stent";
-      out[cause] += step_mm;
+      out.false_by_cause_mm[cause] += step_mm;
+    }
+  }
+  for (const auto& t : truth.branches) {
+    if (t.name == "aorta") continue;
+    for (const auto& p : t.points) {
+      if (!within(model, p.position_m, p.radius_m, false)) out.marks.missed_mm.push_back(p.position_m * 1e3);
     }
   }
   return out;
@@ -203,14 +221,16 @@ Row run_one(const Setting& s, uint32_t phantom, const std::string& overview_png 
     r.lumen =
         modeling::score_lumen(anatomy::loft_lumen(cta.truth, ls), anatomy::loft_lumen(m.model.vessels, ms), 0.2e-3);
     r.dice = modeling::dice_of_trees(cta.truth, m.model.vessels, 0.1e-3);
-    if (s.family) r.false_causes = false_by_cause(cta.truth, m.model.vessels, cta.facts);
-    if (!overview_png.empty()) {
-      // the model over its CT, false pieces and misses left for the eye (the scores in the title)
-      modeling::write_model_overview(
-          cta.ct, m.model.vessels,
-          fmt::format("FAMILY {} - MODEL: OV {:.3f} OT {:.3f} FALSE {:.0f} MM", phantom, r.c.ov, r.c.ot,
-                      r.c.fp * modeling::CenterlineScoreOptions{}.sample_spacing_m * 1e3),
-          overview_png);
+    if (s.family) {
+      const Mismatch mm = mismatch(cta.truth, m.model.vessels, cta.facts);
+      r.false_causes = mm.false_by_cause_mm;
+      if (!overview_png.empty()) {
+        // the model over its CT, its false centerline and the truth it missed marked
+        modeling::write_model_overview(cta.ct, m.model.vessels,
+                                       fmt::format("FAMILY {} - MODEL: OV {:.3f} OT {:.3f} FALSE {:.0f} MM", phantom,
+                                                   r.c.ov, r.c.ot, false_mm(r.c)),
+                                       overview_png, &mm.marks);
+      }
     }
     r.heart_placed = epicardium_error_mm(cta, m.model.heart, anatomy::template_heart_mesh().vertices_m);
     r.heart_was_fitted = m.model.heart_vertices_m.cols() > 0;
@@ -234,15 +254,8 @@ constexpr const char* kUsage =
     "pcisim-bench model --family N [--split tuning|heldout|both] [--no-plot] [--out DIR]\n"
     "  models N members of each split of the varied phantom family (pcisim-model --make-phantom-cta --family;\n"
     "  tuning seeds 1..N, held-out seeds 1001..1000+N) and the classic phantoms 1-7, and reports each split's\n"
-    "  median, 5th percentile and worst (model-family.md, .json, .png and the worst cases' overviews)\n";
-
-// the share of extracted centerline that matches nothing (mm): false positives x the sample step
-double false_mm(const modeling::CenterlineScores& c) {
-  return c.fp * modeling::CenterlineScoreOptions{}.sample_spacing_m * 1e3;
-}
-double missed_mm(const modeling::CenterlineScores& c) {
-  return c.fn * modeling::CenterlineScoreOptions{}.sample_spacing_m * 1e3;
-}
+    "  median, 5th percentile and worst (model-family.md, .json, .png and the worst cases' overviews);\n"
+    "  --seeds a,b,c: those family members alone (no classic phantoms), for a closer look\n";
 
 // "vein beside 120, elsewhere 30" (causes of a millimetre or more)
 std::string causes_text(const std::map<std::string, double>& causes) {
@@ -269,7 +282,7 @@ std::string spread(std::vector<double> v, bool higher_is_better, const char* for
                      percentile(v, q), worst);
 }
 
-int run_family(int n, const std::string& split, const BenchOptions& bo) {
+int run_family(int n, const std::string& split, const std::vector<uint32_t>& only, const BenchOptions& bo) {
   std::vector<Group> groups;
   auto seeds = [&](uint32_t first) {
     std::vector<uint32_t> out;
@@ -277,8 +290,12 @@ int run_family(int n, const std::string& split, const BenchOptions& bo) {
     return out;
   };
   std::vector<std::pair<std::string, std::vector<uint32_t>>> plan;
-  if (split != "heldout") plan.push_back({"tuning", seeds(1)});
-  if (split != "tuning") plan.push_back({"held-out", seeds(anatomy::kFamilyHeldOutFirstSeed)});
+  if (!only.empty()) {
+    plan.push_back({"chosen", only});
+  } else {
+    if (split != "heldout") plan.push_back({"tuning", seeds(1)});
+    if (split != "tuning") plan.push_back({"held-out", seeds(anatomy::kFamilyHeldOutFirstSeed)});
+  }
   const std::string pictures = bo.out_dir + "/model-family", scratch = pictures + "/.all";
   std::filesystem::create_directories(scratch);
   for (const auto& [name, list] : plan) {
@@ -309,7 +326,7 @@ int run_family(int n, const std::string& split, const BenchOptions& bo) {
   }
   // the classic phantoms at the target configuration, in the same run: the tuning split must be
   // no worse than these (issue #30)
-  {
+  if (only.empty()) {
     Group g{"classic 1-7", {}};
     Setting s;
     s.sweep = "classic";
@@ -482,6 +499,7 @@ int run(const std::vector<std::string>& args_in) {
   std::vector<std::string> args;
   int family = 0;
   std::string split = "both";
+  std::vector<uint32_t> only;  // --seeds: these family members alone (a look at a few cases)
   for (size_t i = 0; i < args_in.size(); ++i) {
     if (args_in[i] == "--family" && i + 1 < args_in.size()) {
       family = std::atoi(args_in[++i].c_str());
@@ -490,6 +508,20 @@ int run(const std::vector<std::string>& args_in) {
                      args_in[i].c_str(), kUsage);
         return 2;
       }
+    } else if (args_in[i] == "--seeds" && i + 1 < args_in.size()) {
+      std::string list = args_in[++i];
+      for (size_t at = 0; at <= list.size();) {
+        const size_t comma = std::min(list.find(',', at), list.size());
+        const long v = std::atol(list.substr(at, comma - at).c_str());
+        if (v < 1) {
+          std::fprintf(stderr, "pcisim-bench model: --seeds takes family seeds a,b,c (each >= 1), got '%s'\n%s",
+                       list.c_str(), kUsage);
+          return 2;
+        }
+        only.push_back(static_cast<uint32_t>(v));
+        at = comma + 1;
+      }
+      family = std::max(family, 1);
     } else if (args_in[i] == "--split" && i + 1 < args_in.size()) {
       split = args_in[++i];
       if (split != "tuning" && split != "heldout" && split != "both") {
@@ -503,7 +535,7 @@ int run(const std::vector<std::string>& args_in) {
   }
   BenchOptions bo;
   if (const int rc = parse_bench_options(args, "model", kUsage, &bo); rc >= 0) return rc;
-  if (family > 0) return run_family(family, split, bo);
+  if (family > 0) return run_family(family, split, only, bo);
   const std::vector<uint32_t> phantoms = bo.quick ? std::vector<uint32_t>{1} : std::vector<uint32_t>{1, 2, 3};
   std::vector<Setting> settings;
   // noise x voxel size at the default knobs; the field of view ~205 x 205 x 150 mm each time

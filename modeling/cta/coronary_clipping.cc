@@ -81,6 +81,7 @@ Clipping clip_to_coronaries(const LumenSegmentation& seg, const std::vector<Vect
     if (g.inside(i, j, k)) seed_voxels.push_back(g.index(i, j, k));
   }
   int32_t next_id = 0;
+  std::vector<size_t> dropped_sizes;  // beside out.dropped
   for (int64_t start = 0; start < g.size(); ++start) {
     if (!seg.mask.v[start] || out.large.v[start] || piece_of[start] >= 0) continue;
     CoronaryPiece piece;
@@ -115,6 +116,7 @@ Clipping clip_to_coronaries(const LumenSegmentation& seg, const std::vector<Vect
       if (piece.voxels.size() >= 50) {
         out.dropped.push_back(fmt::format("{} voxels near ({:.1f}, {:.1f}, {:.1f}) mm: {}", piece.voxels.size(),
                                           first.x(), first.y(), first.z(), why));
+        dropped_sizes.push_back(piece.voxels.size());
       }
     };
     if (contact.empty()) {
@@ -168,11 +170,18 @@ Clipping clip_to_coronaries(const LumenSegmentation& seg, const std::vector<Vect
     out.pieces.push_back(std::move(piece));
   }
   if (out.pieces.empty()) {
+    // the largest pieces cut away and why: what a person looks at first
+    std::vector<size_t> order(out.dropped.size());
+    for (size_t n = 0; n < order.size(); ++n) order[n] = n;
+    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return dropped_sizes[a] > dropped_sizes[b]; });
+    std::string largest;
+    for (size_t n = 0; n < std::min<size_t>(3, order.size()); ++n) largest += "; " + out.dropped[order[n]];
     throw ModelingError(
         fmt::format("no coronary artery found: no thin contrast-filled vessel of at least {:.0f} mm leaves the aorta "
                     "within {:.0f} mm "
-                    "of the seed (lumen HU {:.0f}..{:.0f}; {} thin pieces cut away)",
-                    o.min_length_mm, o.max_ostium_distance_mm, seg.lower_hu, seg.upper_hu, out.dropped.size()));
+                    "of the seed (lumen HU {:.0f}..{:.0f}; {} thin pieces cut away{})",
+                    o.min_length_mm, o.max_ostium_distance_mm, seg.lower_hu, seg.upper_hu, out.dropped.size(),
+                    largest.empty() ? "" : ", the largest" + largest));
   }
   std::sort(out.pieces.begin(), out.pieces.end(),
             [](const CoronaryPiece& a, const CoronaryPiece& b) { return a.reach_mm > b.reach_mm; });

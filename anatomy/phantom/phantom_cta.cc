@@ -15,6 +15,8 @@
 
 #include "anatomy/phantom/coronary_phantom.h"
 #include "anatomy/phantom/thorax_phantom.h"
+#include "anatomy/volume/gaussian_blur.h"
+#include "anatomy/volume/parallel_for.h"
 
 #ifdef PCISIM_HAVE_JSON
 #include <filesystem>
@@ -77,19 +79,6 @@ struct SplitMix {
   uint64_t s;
   uint64_t next() { return mix64(s += 0x9e3779b97f4a7c15ull); }
 };
-
-// work items 0..n-1 over the threads; each item writes its own voxels only
-template <typename F>
-void parallel_for(int64_t n, int threads, const F& f) {
-  std::atomic<int64_t> next{0};
-  auto work = [&] {
-    for (int64_t i; (i = next.fetch_add(1)) < n;) f(i);
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < std::min<int64_t>(threads, n); ++t) pool.emplace_back(work);
-  work();
-  for (auto& th : pool) th.join();
-}
 
 double smoothstep(double x) {
   x = std::clamp(x, 0.0, 1.0);
@@ -312,63 +301,6 @@ void paint_partial_volume(std::vector<float>* hu, const std::array<int64_t, 3>& 
       }
     }
   });
-}
-
-// separable Gaussian blur of a float volume, sigma per axis in voxels; edges replicated
-void blur(std::vector<float>* data, const std::array<int64_t, 3>& dims, const Vector3d& sigma_vox, int threads) {
-  const int64_t nx = dims[0], ny = dims[1], nz = dims[2];
-  float* v = data->data();
-  for (int axis = 0; axis < 3; ++axis) {
-    const double s = sigma_vox[axis];
-    if (!(s > 0.05)) continue;
-    const int r = static_cast<int>(std::ceil(3.0 * s));
-    std::vector<float> w(2 * r + 1);
-    double total = 0;
-    for (int t = -r; t <= r; ++t) total += w[t + r] = static_cast<float>(std::exp(-0.5 * t * t / (s * s)));
-    for (auto& x : w) x = static_cast<float>(x / total);
-    if (axis == 0) {
-      parallel_for(nz, threads, [&](int64_t k) {
-        std::vector<float> row(nx + 2 * r);
-        for (int64_t j = 0; j < ny; ++j) {
-          float* out = v + nx * (j + ny * k);
-          for (int64_t i = 0; i < nx + 2 * r; ++i) row[i] = out[std::clamp<int64_t>(i - r, 0, nx - 1)];
-          for (int64_t i = 0; i < nx; ++i) {
-            float acc = 0;
-            for (int t = 0; t <= 2 * r; ++t) acc += w[t] * row[i + t];
-            out[i] = acc;
-          }
-        }
-      });
-    } else if (axis == 1) {
-      parallel_for(nz, threads, [&](int64_t k) {
-        float* slice = v + nx * ny * k;
-        std::vector<float> copy(slice, slice + nx * ny);
-        for (int64_t j = 0; j < ny; ++j) {
-          float* out = slice + nx * j;
-          std::fill(out, out + nx, 0.0f);
-          for (int t = -r; t <= r; ++t) {
-            const float* in = copy.data() + nx * std::clamp<int64_t>(j + t, 0, ny - 1);
-            const float wt = w[t + r];
-            for (int64_t i = 0; i < nx; ++i) out[i] += wt * in[i];
-          }
-        }
-      });
-    } else {
-      parallel_for(ny, threads, [&](int64_t j) {
-        std::vector<float> plane(nx * nz);
-        for (int64_t k = 0; k < nz; ++k) std::copy_n(v + nx * (j + ny * k), nx, plane.data() + nx * k);
-        for (int64_t k = 0; k < nz; ++k) {
-          float* out = v + nx * (j + ny * k);
-          std::fill(out, out + nx, 0.0f);
-          for (int t = -r; t <= r; ++t) {
-            const float* in = plane.data() + nx * std::clamp<int64_t>(k + t, 0, nz - 1);
-            const float wt = w[t + r];
-            for (int64_t i = 0; i < nx; ++i) out[i] += wt * in[i];
-          }
-        }
-      });
-    }
-  }
 }
 
 // the signed permutation behind a direction matrix: index axis a runs along physical axis
@@ -749,12 +681,14 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
       }
     }
     facts.lad_lcx_angle_deg = lad_lcx_angle_deg(tree);
-    // the side branches taper from at most 0.8 mm (and 3/4 of the parent's) to 0.5 mm
+    // the side branches taper from at most 0.8 mm (and 3/4 of the parent's) to 0.5 mm (or keep
+    // the start's radius where that is under 0.5 mm)
     for (int b : side_branches) {
       auto& br = tree.branches[b];
       const double r0 = std::min(0.8, 0.75 * tree.branches[br.parent].points[br.parent_point].radius_m);
+      const double r1 = std::min(0.5, r0);
       for (size_t i = 0; i < br.points.size(); ++i)
-        br.points[i].radius_m = r0 + (0.5 - r0) * static_cast<double>(i) / static_cast<double>(br.points.size() - 1);
+        br.points[i].radius_m = r0 + (r1 - r0) * static_cast<double>(i) / static_cast<double>(br.points.size() - 1);
     }
   }
 
@@ -1072,7 +1006,7 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
   // strut's peak after a blur of sigma is HU x its section / (2 pi sigma^2), so the value stands
   // for the metal's attenuation and its blooming together, not for a material
   std::vector<Prim> stent_prims;
-  if (spec.family) {
+  if (spec.family && spec.with_coronaries) {
     facts.bloom_mm = fam.between(0.3, 0.8);
     facts.bloom_fraction = fam.between(0.4, 0.6);
     const size_t n_plaques = spec.calcium_blooming ? plaque_prims.size() : 0;
@@ -1251,7 +1185,8 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
   std::vector<float> hu(canon.hu_i16.begin(), canon.hu_i16.end());
   std::vector<int16_t>().swap(canon.hu_i16);
   paint_partial_volume(&hu, cdims, canon.origin_mm, cspacing, prims, threads);
-  if (spec.blur_sigma_mm > 0) blur(&hu, cdims, Vector3d::Constant(spec.blur_sigma_mm).cwiseQuotient(cspacing), threads);
+  if (spec.blur_sigma_mm > 0)
+    gaussian_blur(&hu, cdims, Vector3d::Constant(spec.blur_sigma_mm).cwiseQuotient(cspacing), threads);
   if (spec.noise_sigma_hu > 0) {
     const uint64_t seed = 0x243f6a8885a308d3ull ^ (static_cast<uint64_t>(spec.seed) << 20);
     const int64_t slice = cdims[0] * cdims[1];

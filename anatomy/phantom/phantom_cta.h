@@ -50,11 +50,11 @@ struct PhantomCtaSpec {
   bool with_coronaries = true;
   int threads = 0;  // 0: std::thread::hardware_concurrency(); the volume does not depend on it
   // a member of the varied family (family_phantom_cta_spec below) rather than one of the classic
-  // phantoms: the seed also draws the heart's shape, the right heart enhanced or not, an open or a
-  // closed aortic valve, the right ventricle's free wall, the left atrial appendage beside the LCx,
-  // veins crossing arteries, calcium with blooming, a stent, small side branches, the LAD-LCx angle
-  // and a tortuous trunk (ranges and sources in phantom_cta.cc). false: the classic phantoms, as
-  // they were drawn before the family existed
+  // phantoms (with_coronaries false: no stent and no blooms either): the seed also draws the heart's shape, the right
+  // heart enhanced or not, an open or a closed aortic valve, the right ventricle's free wall, the left atrial appendage
+  // beside the LCx, veins crossing arteries, calcium with blooming, a stent, small side branches, the LAD-LCx angle and
+  // a tortuous trunk (ranges and sources in phantom_cta.cc). false: the classic phantoms, as they were drawn before the
+  // family existed
   bool family = false;
   // with family: the plaques' blooming halos (false: the same phantom without them, to see it)
   bool calcium_blooming = true;
@@ -65,8 +65,9 @@ struct PhantomCtaSpec {
 inline constexpr uint32_t kFamilyHeldOutFirstSeed = 1001;
 
 // a family member's whole spec, drawn from its seed as a scanner protocol varies: in-plane voxel
-// 0.3..0.8 mm and slices 0.3..0.8 mm (drawn apart: anisotropic), a 512 x 512 matrix, a z range of
-// 120..150 mm, noise 15..45 HU, the scanner's blur 0.3..0.6 mm, slices head- or feet-first
+// 0.3..0.8 mm and slices 0.3..0.8 mm (drawn apart: anisotropic), a 512 x 512 matrix widened where
+// its field would be under 175 mm, a z range of 140..160 mm, noise 15..45 HU, the scanner's blur
+// 0.3..0.6 mm, slices head- or feet-first
 PhantomCtaSpec family_phantom_cta_spec(uint32_t seed);
 
 struct PhantomCtaPlaque {

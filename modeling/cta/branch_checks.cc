@@ -20,7 +20,107 @@ double median_hu(const ModelBranch& b, const FloatImage& hu, size_t from, size_t
   return realtime::upper_median_in_place(std::span<double>(v));
 }
 
+// removes the branches marked (with everything beyond them) and truncates those given a new end,
+// re-indexing the parents; a child beyond a truncation goes too
+void prune(ModelTree* tree, std::vector<bool> drop, const std::vector<int>& end) {
+  auto& b = tree->branches;
+  for (size_t i = 0; i < b.size(); ++i) {
+    if (b[i].parent >= 0 && (drop[b[i].parent] || b[i].parent_point >= end[b[i].parent])) drop[i] = true;
+  }
+  std::vector<int> index(b.size(), -1);
+  std::vector<ModelBranch> kept;
+  for (size_t i = 0; i < b.size(); ++i) {
+    if (drop[i]) continue;
+    index[i] = static_cast<int>(kept.size());
+    kept.push_back(b[i]);
+    ModelBranch& k = kept.back();
+    if (end[i] < static_cast<int>(k.points_mm.size())) {
+      k.points_mm.resize(end[i]);
+      k.radius_mm.resize(end[i]);
+    }
+    if (k.parent >= 0) k.parent = index[k.parent];
+  }
+  b = std::move(kept);
+}
+
+// the unit direction from sample `from` over `count` samples (forwards, or backwards when count < 0)
+Eigen::Vector3d arm(const ModelBranch& b, int from, int count) {
+  const int n = static_cast<int>(b.points_mm.size());
+  const int to = std::clamp(from + count, 0, n - 1);
+  const Eigen::Vector3d d = b.points_mm[to] - b.points_mm[std::clamp(from, 0, n - 1)];
+  return d.norm() > 1e-9 ? Eigen::Vector3d(d.normalized()) : Eigen::Vector3d::Zero();
+}
+
+double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::acos(std::clamp(a.dot(b), -1.0, 1.0)) * 180.0 / 3.14159265358979;
+}
+
 }  // namespace
+
+std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOptions& o) {
+  std::vector<std::string> notes;
+  auto& b = tree->branches;
+  std::vector<bool> drop(b.size(), false);
+  std::vector<int> end(b.size());
+  for (size_t i = 0; i < b.size(); ++i) end[i] = static_cast<int>(b[i].points_mm.size());
+  const int arm_samples = std::max(2, static_cast<int>(std::lround(o.arm_mm / o.sample_spacing_mm)));
+  const int gap_samples = static_cast<int>(std::lround(o.crossing_gap_mm / o.sample_spacing_mm));
+  for (size_t p = 0; p < b.size(); ++p) {
+    const ModelBranch& parent = b[p];
+    const int n = static_cast<int>(parent.points_mm.size());
+    for (size_t c = 0; c < b.size(); ++c) {
+      if (b[c].parent != static_cast<int>(p) || drop[c]) continue;
+      const int j = b[c].parent_point;
+      if (j < arm_samples) continue;  // no incoming direction to judge by
+      // the arms at this junction: the vessel onwards (if it goes on), the children leaving near j
+      struct Arm {
+        Eigen::Vector3d dir;
+        int child;  // -1: the vessel's own continuation
+      };
+      const Eigen::Vector3d incoming = -arm(parent, j, -arm_samples);
+      std::vector<Arm> arms;
+      if (j + arm_samples < n) arms.push_back({arm(parent, j, arm_samples), -1});
+      for (size_t d = 0; d < b.size(); ++d) {
+        if (b[d].parent == static_cast<int>(p) && !drop[d] && std::abs(b[d].parent_point - j) <= gap_samples &&
+            static_cast<int>(b[d].points_mm.size()) > arm_samples)
+          arms.push_back({arm(b[d], 0, arm_samples), static_cast<int>(d)});
+      }
+      // two opposite arms across the vessel, a third carrying it on
+      for (size_t x = 0; x < arms.size(); ++x) {
+        for (size_t y = x + 1; y < arms.size(); ++y) {
+          if (angle_deg(arms[x].dir, arms[y].dir) < o.opposite_deg) continue;
+          if (angle_deg(incoming, arms[x].dir) < o.across_deg || angle_deg(incoming, arms[y].dir) < o.across_deg)
+            continue;
+          bool goes_on = false;
+          int onward_from = j;  // the last sample an onward arm leaves from
+          for (size_t z = 0; z < arms.size(); ++z) {
+            if (z == x || z == y || angle_deg(incoming, arms[z].dir) >= o.on_deg) continue;
+            goes_on = true;
+            if (arms[z].child >= 0) onward_from = std::max(onward_from, b[arms[z].child].parent_point);
+          }
+          if (!goes_on) continue;
+          for (const Arm* a : {&arms[x], &arms[y]}) {
+            if (a->child >= 0) {
+              drop[a->child] = true;
+            } else {
+              // the vessel's own line went onto the crossing one: cut back to the crossing, keeping
+              // the sample the onward arm leaves from
+              end[p] = std::min(end[p], onward_from + 1);
+            }
+          }
+          const Eigen::Vector3d& at = parent.points_mm[j];
+          notes.push_back(
+              fmt::format("cut away a vessel crossing over the tree at ({:.1f}, {:.1f}, {:.1f}) mm: two arms leave "
+                          "there {:.0f} deg "
+                          "apart, across the vessel, which goes on (a vein crossing an artery)",
+                          at.x(), at.y(), at.z(), angle_deg(arms[x].dir, arms[y].dir)));
+        }
+      }
+    }
+  }
+  if (!notes.empty()) prune(tree, drop, end);
+  return notes;
+}
 
 std::vector<std::string> drop_dark_branches(ModelTree* tree, const FloatImage& hu, const BranchCheckOptions& o) {
   std::vector<std::string> notes;

@@ -4,6 +4,10 @@
 //    artery beside it, so a branch whose lumen is much darker than its parent's where it leaves
 //    (median HU on the centerline, over samples of radius >= min_radius_mm, where partial volume
 //    does not darken the centre) is cut away with everything beyond it;
+//  - a vessel crossing over another (a cardiac vein over an artery, touching it where they cross):
+//    traced as two arms leaving the artery at one point in opposite directions, both at a wide
+//    angle to the artery, while a third arm carries the artery on; the two opposite arms are cut
+//    away (a vein may be as bright as a distal artery, so its contrast cannot tell it);
 //  - a tree that stops while still wide: a leaf whose last samples are wider than
 //    abrupt_end_radius_mm ends at an occlusion or a stenosis too tight to see (not a vessel
 //    tapering out); the report says where.
@@ -19,10 +23,20 @@ struct BranchCheckOptions {
   double tissue_hu = 40;        // contrast is HU above this
   double min_radius_mm = 1.0;   // samples narrower than this are not compared
   double abrupt_end_radius_mm = 0.8;
+  // a crossing: arms leaving within crossing_gap_mm of each other along the vessel, their
+  // directions over their first arm_mm; opposite when more than opposite_deg apart, across the
+  // vessel when more than across_deg from its incoming direction; the vessel goes on along an arm
+  // within on_deg of its incoming direction
+  double crossing_gap_mm = 3.0, arm_mm = 4.0;
+  double opposite_deg = 130, across_deg = 35, on_deg = 45;
+  double sample_spacing_mm = 0.5;  // of the branches' samples (build_cta_model sets the spline's)
 };
 
 // removes the dark branches (and their subtrees) from the tree; one note per branch removed
 std::vector<std::string> drop_dark_branches(ModelTree* tree, const FloatImage& hu, const BranchCheckOptions& options);
+
+// removes vessels crossing over the tree (and what was traced beyond them); one note per crossing
+std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOptions& options);
 
 // one note per leaf that ends wide
 std::vector<std::string> find_abrupt_ends(const ModelTree& tree, const BranchCheckOptions& options);

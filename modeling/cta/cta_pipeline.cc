@@ -44,21 +44,23 @@ std::vector<double> median_filter(const std::vector<double>& v, int window) {
 
 }  // namespace
 
-double estimated_memory_gb(const anatomy::Volume& ct) {
-  return double(ct.voxel_count()) * (2.0 + 1.0 + 0.25 * 28.0) / 1e9;
+double estimated_memory_gb(const anatomy::Volume& ct, bool smoothed) {
+  return double(ct.voxel_count()) * (2.0 + 1.0 + (smoothed ? 4.0 : 0.0) + 0.25 * 28.0) / 1e9;
 }
 
 CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>& seeds_mm,
                          const CtaPipelineOptions& options, const StageProgress& progress) {
-  if (const double need = estimated_memory_gb(ct); need > options.memory_limit_gb) {
+  const bool smoothed = options.segmentation.smoothing_mm > 0;
+  if (const double need = estimated_memory_gb(ct, smoothed); need > options.memory_limit_gb) {
     throw ModelingError(fmt::format(
-        "the CT's {} x {} x {} voxels would need about {:.2f} GB here (10 bytes a voxel), over the bound of {:.2f} GB: "
+        "the CT's {} x {} x {} voxels would need about {:.2f} GB here ({} bytes a voxel), over the bound of {:.2f} GB: "
         "crop it to the heart or resample it",
-        ct.dims[0], ct.dims[1], ct.dims[2], need, options.memory_limit_gb));
+        ct.dims[0], ct.dims[1], ct.dims[2], need, smoothed ? 14 : 10, options.memory_limit_gb));
   }
   CtaPipelineOptions o = options;
   const int threads = o.threads > 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
   o.segmentation.threads = o.clipping.threads = threads;
+  o.checks.sample_spacing_mm = o.spline.sample_spacing_mm;  // the crossing check counts samples
   CtaModel m;
 
   LumenSegmentation seg;
@@ -66,9 +68,14 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
     seg = segment_lumen(ct, seeds_mm, o.segmentation);
     r.figures = {{"seed_hu", seg.seed_hu},
                  {"noise_hu", seg.noise_hu},
+                 {"smoothed_noise_hu", seg.smoothed_noise_hu},
                  {"lower_hu", seg.lower_hu},
                  {"upper_hu", seg.upper_hu},
                  {"region_voxels", double(seg.region_voxels)},
+                 {"tube_voxels", double(seg.tube_voxels)},
+                 {"tube_s", seg.tube_seconds},
+                 {"metal_pieces", double(seg.metal_pieces)},
+                 {"metal_voxels", double(seg.metal_voxels)},
                  {"bridges", double(seg.bridges.size())},
                  {"bridging_s", seg.bridging_seconds},
                  {"level_set_iterations", double(seg.level_set_iterations)},
@@ -163,8 +170,12 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
   });
 
   stage(&m, "checks", progress, [&](StageReport& r) {
-    int cut = 0, abrupt = 0;
+    int cut = 0, abrupt = 0, crossings = 0;
     for (auto& t : trees) {
+      for (auto& n : drop_crossings(&t, o.checks)) {
+        r.notes.push_back(n);
+        ++crossings;
+      }
       for (auto& n : drop_dark_branches(&t, seg.hu, o.checks)) {
         r.notes.push_back(n);
         ++cut;
@@ -174,7 +185,7 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
         ++abrupt;
       }
     }
-    r.figures = {{"veins_cut", double(cut)}, {"abrupt_ends", double(abrupt)}};
+    r.figures = {{"veins_cut", double(cut)}, {"crossings_cut", double(crossings)}, {"abrupt_ends", double(abrupt)}};
   });
 
   stage(&m, "labels", progress, [&](StageReport& r) {

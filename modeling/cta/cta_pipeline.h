@@ -50,7 +50,7 @@ struct CtaPipelineOptions {
   int threads = 0;  // 0: all cores
   // the memory the pipeline may take: a CT whose estimate is over it is refused before any work
   // (estimate: the CT, a mask of it, and work on a crop of at most a quarter of it at ~28 bytes a
-  // voxel, i.e. 10 bytes a voxel of the CT)
+  // voxel, i.e. 10 bytes a voxel of the CT; 14 with the smoothed fill's float copy of the CT)
   double memory_limit_gb = 4.0;
 };
 
@@ -70,8 +70,8 @@ struct CtaModel {
 // called as each stage starts and ends (for a terminal's progress lines)
 using StageProgress = std::function<void(const StageReport& stage, bool finished)>;
 
-// the estimate above, in GB
-double estimated_memory_gb(const anatomy::Volume& ct);
+// the estimate above, in GB (smoothed: the fill sees a smoothed copy of the CT)
+double estimated_memory_gb(const anatomy::Volume& ct, bool smoothed = false);
 
 // throws ModelingError with the input at fault named (a seed, a CTA without coronaries, a CT over
 // the memory bound)

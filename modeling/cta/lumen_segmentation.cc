@@ -4,10 +4,15 @@
 
 #include <chrono>
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <thread>
+#include <unordered_map>
 
+#include "anatomy/volume/gaussian_blur.h"
 #include "modeling/cta/modeling_error.h"
 
 namespace pcisim::modeling {
@@ -27,6 +32,30 @@ std::string extent(const anatomy::Volume& ct) {
   }
   return fmt::format("x {:.1f}..{:.1f}, y {:.1f}..{:.1f}, z {:.1f}..{:.1f} mm", lo.x(), hi.x(), lo.y(), hi.y(), lo.z(),
                      hi.z());
+}
+
+// noise_hu_near on a float image on the CT's grid
+double noise_near(const FloatImage& img, const Eigen::Vector3d& p_mm, double radius_mm) {
+  const ImageGrid& g = img.grid;
+  const Eigen::Vector3d c = g.continuous_index(p_mm);
+  double sum = 0, sum2 = 0;
+  int n = 0;
+  const Eigen::Vector3d r = Eigen::Vector3d::Constant(radius_mm).cwiseQuotient(g.spacing_mm);
+  for (int64_t k = std::llround(c.z() - r.z()); k <= std::llround(c.z() + r.z()); ++k) {
+    for (int64_t j = std::llround(c.y() - r.y()); j <= std::llround(c.y() + r.y()); ++j) {
+      for (int64_t i = std::llround(c.x() - r.x()); i <= std::llround(c.x() + r.x()); ++i) {
+        if (!g.inside(i, j, k)) continue;
+        if ((Eigen::Vector3d(i, j, k) - c).cwiseProduct(g.spacing_mm).norm() > radius_mm) continue;
+        const double h = img.v[g.index(i, j, k)];
+        sum += h;
+        sum2 += h * h;
+        ++n;
+      }
+    }
+  }
+  if (n < 2) return 0.0;
+  const double mean = sum / n;
+  return std::sqrt(std::max(0.0, sum2 / n - mean * mean));
 }
 
 }  // namespace
@@ -100,16 +129,29 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
   // noise_sigmas standard deviations above the tissue lets noise voxels of the myocardium connect
   // into a region spanning the heart (measured: phantom 2 at 0.8 mm and 40 HU, 247 s, OV 0.02)
   out.noise_hu = noise_hu_near(ct, seeds_mm[0], 3.0);
-  out.lower_hu = o.tissue_hu + std::max(o.lower_fraction * (out.seed_hu - o.tissue_hu), o.noise_sigmas * out.noise_hu);
+  const ImageGrid g = ImageGrid::of(ct);
+  // the image the fill sees: the CT smoothed (its noise measured again there), or the CT itself
+  FloatImage smooth;
+  out.smoothed_noise_hu = out.noise_hu;
+  if (o.smoothing_mm > 0) {
+    smooth = crop_hu(ct, {0, 0, 0}, ct.dims);
+    anatomy::gaussian_blur(
+        &smooth.v, ct.dims, Eigen::Vector3d::Constant(o.smoothing_mm).cwiseQuotient(ct.spacing_mm),
+        std::max(1, o.threads > 0 ? o.threads : static_cast<int>(std::thread::hardware_concurrency())));
+    out.smoothed_noise_hu = noise_near(smooth, seeds_mm[0], 3.0);
+  }
+  out.lower_hu =
+      o.tissue_hu + std::max(o.lower_fraction * (out.seed_hu - o.tissue_hu), o.noise_sigmas * out.smoothed_noise_hu);
   out.upper_hu = std::max(o.calcium_hu, out.lower_hu + 50);
 
   // the region within [lower, upper] connected to the seeds (breadth-first fill)
-  const ImageGrid g = ImageGrid::of(ct);
   Mask region = Mask::zeros(g);
   std::vector<int64_t> queue;
   queue.reserve(1 << 20);
   auto in_range = [&](int64_t n) {
-    const float h = ct.type == anatomy::VoxelType::kInt16 ? ct.hu_i16[n] : ct.hu_f32[n];
+    const float h = !smooth.v.empty()                       ? smooth.v[n]
+                    : ct.type == anatomy::VoxelType::kInt16 ? ct.hu_i16[n]
+                                                            : ct.hu_f32[n];
     return h >= out.lower_hu && h <= out.upper_hu;
   };
   for (int64_t n : starts) {
@@ -146,7 +188,215 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
     }
   }
   out.region_voxels = static_cast<int64_t>(queue.size());
+
+  // thin vessels: from the region along bright tubes, within a margin of its box
+  if (o.tubes.enabled) {
+    const auto t0 = std::chrono::steady_clock::now();
+    std::array<int64_t, 3> lo, dims;
+    bounding_box(region, std::llround(o.tubes.margin_mm / g.spacing_mm.minCoeff()), &lo, &dims);
+    const FloatImage hu = crop_hu(ct, lo, dims);
+    const FloatImage tube =
+        tube_measure(hu, o.tubes.sigma_min_mm, o.tubes.sigma_max_mm, o.tubes.sigma_steps, o.tubes.gamma_hu, o.threads);
+    const ImageGrid& cg = hu.grid;
+    auto to_ct = [&](int64_t c) {
+      const auto [i, j, k] = cg.ijk(c);
+      return g.index(lo[0] + i, lo[1] + j, lo[2] + k);
+    };
+
+    // the candidates: tube voxels bright enough, outside the region; their 26-connected pieces
+    Mask in_crop = [&] {
+      Mask m = Mask::zeros(cg);
+      for (int64_t c = 0; c < cg.size(); ++c) m.v[c] = region.v[to_ct(c)];
+      return m;
+    }();
+    // the region's large lumens (aorta, chambers): within large_radius_mm + 1 mm of a voxel
+    // large_radius_mm deep (an opening by a ball, as the clipping's). A thin vessel leaves a vessel,
+    // not these: a tube piece joins only thin parts of the region, and one touching a large lumen
+    // (a vein on a chamber, the soft tissue behind the aorta) does not join at all
+    Mask large = Mask::zeros(cg);
+    {
+      const FloatImage depth = distance_inside_mm(in_crop, o.threads);
+      Mask outside_core = Mask::zeros(cg);
+      for (int64_t c = 0; c < cg.size(); ++c) outside_core.v[c] = depth.v[c] >= o.tubes.large_radius_mm ? 0 : 1;
+      const FloatImage to_core = distance_inside_mm(outside_core, o.threads);
+      const double reach = o.tubes.large_radius_mm + 1.0 + 0.5 * cg.spacing_mm.minCoeff();
+      for (int64_t c = 0; c < cg.size(); ++c) large.v[c] = in_crop.v[c] && to_core.v[c] <= reach ? 1 : 0;
+    }
+    std::vector<int32_t> piece_of(cg.size(), -1);
+    std::vector<std::vector<int64_t>> pieces;
+    std::vector<int64_t> stack;
+    auto candidate = [&](int64_t c) {
+      return !in_crop.v[c] && tube.v[c] >= o.tubes.min_measure && hu.v[c] >= o.tubes.min_hu && hu.v[c] <= out.upper_hu;
+    };
+    for (int64_t c0 = 0; c0 < cg.size(); ++c0) {
+      if (piece_of[c0] >= 0 || !candidate(c0)) continue;
+      const int32_t id = static_cast<int32_t>(pieces.size());
+      pieces.emplace_back();
+      piece_of[c0] = id;
+      stack.assign(1, c0);
+      while (!stack.empty()) {
+        const int64_t c = stack.back();
+        stack.pop_back();
+        pieces.back().push_back(c);
+        const auto [i, j, k] = cg.ijk(c);
+        for (int q : use) {
+          const int64_t a = i + nb.d[q][0], b = j + nb.d[q][1], cc = k + nb.d[q][2];
+          if (!cg.inside(a, b, cc)) continue;
+          const int64_t m = cg.index(a, b, cc);
+          if (piece_of[m] >= 0 || !candidate(m)) continue;
+          piece_of[m] = id;
+          stack.push_back(m);
+        }
+      }
+    }
+    // a piece joins the region when it reaches within join_mm of it through voxels at least
+    // min_hu bright (a vessel leaving a larger one is no tube where it leaves: the larger one's
+    // edge dominates the Hessian there); the voxels crossed join with it. Rounds, as joined pieces
+    // bring others within reach, until none joins.
+    const int layers = std::max(1, static_cast<int>(std::ceil(o.tubes.join_mm / cg.spacing_mm.minCoeff())));
+    std::vector<char> joined(pieces.size(), 0);
+    size_t added = 0;
+    const size_t cap = static_cast<size_t>(o.tubes.max_fraction * double(out.region_voxels));
+    for (int round = 0; round < 8 && added < cap; ++round) {
+      // a shell of up to `layers` steps round the region through bright-enough voxels, each shell
+      // voxel remembering the voxel it was reached from
+      std::unordered_map<int64_t, int64_t> from;
+      std::vector<int64_t> front;
+      for (int64_t c = 0; c < cg.size(); ++c) {
+        if (in_crop.v[c] && !large.v[c]) front.push_back(c);
+      }
+      std::vector<int32_t> reached;
+      std::vector<std::pair<int32_t, int64_t>> touch;  // piece, the shell voxel (or region voxel) it touched
+      for (int layer = 0; layer <= layers && !front.empty(); ++layer) {
+        std::vector<int64_t> next;
+        for (int64_t c : front) {
+          const auto [i, j, k] = cg.ijk(c);
+          for (int q : use) {
+            const int64_t a = i + nb.d[q][0], b = j + nb.d[q][1], cc = k + nb.d[q][2];
+            if (!cg.inside(a, b, cc)) continue;
+            const int64_t m = cg.index(a, b, cc);
+            if (in_crop.v[m] || large.v[m] || from.count(m)) continue;
+            if (piece_of[m] >= 0) {
+              if (!joined[piece_of[m]]) touch.push_back({piece_of[m], c});
+              continue;
+            }
+            if (layer == layers || hu.v[m] < o.tubes.min_hu || hu.v[m] > out.upper_hu) continue;
+            from[m] = c;
+            next.push_back(m);
+          }
+        }
+        front = std::move(next);
+      }
+      bool any = false;
+      for (const auto& [id, via] : touch) {
+        if (joined[id]) continue;
+        // long enough to be a vessel, not a speck of noise; touching no large lumen
+        Eigen::Vector3d lo_mm = Eigen::Vector3d::Constant(1e300), hi_mm = -lo_mm;
+        bool on_large = false;
+        for (int64_t c : pieces[id]) {
+          const auto [i, j, k] = cg.ijk(c);
+          for (int q : use) {
+            const int64_t a = i + nb.d[q][0], b = j + nb.d[q][1], cc = k + nb.d[q][2];
+            if (cg.inside(a, b, cc) && large.v[cg.index(a, b, cc)]) on_large = true;
+          }
+          const Eigen::Vector3d p = cg.physical_mm(Eigen::Vector3d(double(i), double(j), double(k)));
+          lo_mm = lo_mm.cwiseMin(p);
+          hi_mm = hi_mm.cwiseMax(p);
+        }
+        if (on_large || (hi_mm - lo_mm).norm() < o.tubes.min_piece_mm) {
+          joined[id] = 2;  // judged: not joined
+          continue;
+        }
+        if (added >= cap) break;  // a leak: the growth stops at its share of the region
+        joined[id] = 1;
+        any = true;
+        for (int64_t c : pieces[id]) in_crop.v[c] = 1;
+        added += pieces[id].size();
+        for (int64_t c = via; !in_crop.v[c]; c = from.at(c)) {
+          in_crop.v[c] = 1;
+          ++added;
+        }
+      }
+      if (!any) break;
+    }
+    const size_t start = 0;
+    std::vector<int64_t> grow;
+    for (int64_t c = 0; c < cg.size(); ++c) {
+      if (in_crop.v[c] && !region.v[to_ct(c)]) {
+        region.v[to_ct(c)] = 1;
+        grow.push_back(c);
+      }
+    }
+    out.tube_voxels = static_cast<int64_t>(grow.size() - start);
+    out.tube_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  // stents: bright pieces touching the region, small, long and slender, taken in whole
+  if (o.metal.enabled) {
+    auto value = [&](int64_t n) {
+      return !smooth.v.empty() ? smooth.v[n] : ct.type == anatomy::VoxelType::kInt16 ? ct.hu_i16[n] : ct.hu_f32[n];
+    };
+    Mask seen = Mask::zeros(g);
+    const int64_t max_voxels = static_cast<int64_t>(o.metal.max_volume_mm3 / g.spacing_mm.prod()) + 1;
+    std::vector<int64_t> piece, todo;
+    std::vector<int64_t> region_voxels;
+    for (int64_t n = 0; n < g.size(); ++n) {
+      if (region.v[n]) region_voxels.push_back(n);
+    }
+    for (int64_t r : region_voxels) {
+      const auto [ri, rj, rk] = g.ijk(r);
+      for (int q : use) {
+        const int64_t a = ri + nb.d[q][0], b = rj + nb.d[q][1], c = rk + nb.d[q][2];
+        if (!g.inside(a, b, c)) continue;
+        const int64_t start = g.index(a, b, c);
+        if (region.v[start] || seen.v[start] || value(start) <= out.upper_hu) continue;
+        // the bright piece from here, given up once larger than a stent
+        piece.clear();
+        todo.assign(1, start);
+        seen.v[start] = 1;
+        bool too_big = false;
+        while (!todo.empty()) {
+          const int64_t n = todo.back();
+          todo.pop_back();
+          piece.push_back(n);
+          if (static_cast<int64_t>(piece.size()) > max_voxels) too_big = true;
+          const auto [i, j, k] = g.ijk(n);
+          for (int w : use) {
+            const int64_t x = i + nb.d[w][0], y = j + nb.d[w][1], z = k + nb.d[w][2];
+            if (!g.inside(x, y, z)) continue;
+            const int64_t m = g.index(x, y, z);
+            if (seen.v[m] || region.v[m] || value(m) <= out.upper_hu) continue;
+            seen.v[m] = 1;
+            todo.push_back(m);
+          }
+        }
+        if (too_big) continue;
+        // its principal axis: length along it, reach from it
+        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+        std::vector<Eigen::Vector3d> p(piece.size());
+        for (size_t v = 0; v < piece.size(); ++v) {
+          const auto [i, j, k] = g.ijk(piece[v]);
+          p[v] = g.physical_mm(Eigen::Vector3d(double(i), double(j), double(k)));
+          mean += p[v] / double(piece.size());
+        }
+        Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+        for (const auto& x : p) cov += (x - mean) * (x - mean).transpose();
+        const Eigen::Vector3d axis = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(2);
+        double lo_s = 1e300, hi_s = -1e300, reach = 0;
+        for (const auto& x : p) {
+          const double t = (x - mean).dot(axis);
+          lo_s = std::min(lo_s, t);
+          hi_s = std::max(hi_s, t);
+          reach = std::max(reach, (x - mean - t * axis).norm());
+        }
+        if (hi_s - lo_s < o.metal.min_length_mm || reach > o.metal.max_radius_mm) continue;
+        for (int64_t n : piece) region.v[n] = 1;
+        out.metal_voxels += static_cast<int64_t>(piece.size());
+        ++out.metal_pieces;
+      }
+    }
+  }
   std::vector<int64_t>().swap(queue);
+  std::vector<float>().swap(smooth.v);
 
   // vessels the region lost at a stenosis too tight to see
   const auto t0 = std::chrono::steady_clock::now();

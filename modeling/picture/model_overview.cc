@@ -28,7 +28,7 @@ constexpr uint8_t kPalette[][3] = {{255, 80, 80},   {80, 200, 255},  {120, 255, 
 constexpr uint8_t kUnnamed[3] = {130, 140, 160}, kFalse[3] = {255, 30, 30}, kMissed[3] = {255, 230, 0};
 constexpr uint8_t white[3] = {255, 255, 255};
 
-// a label's importance: the trunks first, then the named side branches, proximal first
+// a label's importance: the trunks first, then the named side branches in the tree's order
 int label_priority(const std::string& name) {
   for (const char* trunk : {"LM", "LAD", "LCx", "RCA", "LCA"}) {
     if (name == trunk) return 100;

@@ -1,8 +1,7 @@
 #pragma once
 // The picture beside every model pcisim-model builds (overview.png): three maximum-intensity
 // projections of the CT, front (patient left on the image's right, head up), side (anterior on
-// the left, head up) and from the feet (anterior up, patient left on the right), with every
-// branch's centerline drawn in its own colour and named at its far end, and a title line.
+// the left, head up) and from the feet (anterior up, patient left on the right).
 #include <Eigen/Core>
 #include <string>
 #include <vector>

@@ -427,6 +427,12 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.1, 2.0));
   bool tubes = false;
   knobs->add_flag("--lumen-tubes", tubes, "lumen.stl as one closed tube per branch instead of one stitched surface");
+  bool robust_fill = false;
+  knobs->add_flag("--robust-fill", robust_fill,
+                  "experimental (issue #30): the lumen fill on the CT smoothed by 0.5 mm (no noise sponges through a "
+                  "chamber or the myocardium near the threshold) and thin vessels followed along bright tubes "
+                  "(vesselness); better on varied CTAs at the median, but can trace along a large lumen's rim; "
+                  "docs/modeling.md");
   bool no_heart_fit = false;
   knobs->add_flag("--no-heart-fit", no_heart_fit,
                   "keep the template heart as placed under the vessels (no elastic fit to the CT's heart, no "
@@ -457,6 +463,10 @@ int main(int argc, char** argv) {
   o.stitched_lumen.spacing_m = lumen_spacing_mm * 1e-3;
   o.stitched = !tubes;
   o.heart_fit.enabled = !no_heart_fit;
+  if (robust_fill) {
+    o.segmentation.smoothing_mm = 0.5;
+    o.segmentation.tubes.enabled = true;
+  }
   o.threads = threads;
   o.segmentation.bridging.enabled = o.segmentation.bridging.max_gap_mm > 0;
 

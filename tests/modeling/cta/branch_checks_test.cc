@@ -1,0 +1,95 @@
+// The crossing check on traced trees with exact geometry (issue #30): a vessel crossing over the
+// tree (two arms leaving one point in opposite directions, across it, while it goes on) is cut
+// away, also when the trace ran on along the crossing vessel; real branchings are left alone.
+#include "modeling/cta/branch_checks.h"
+
+#include <gtest/gtest.h>
+
+namespace pcisim::modeling {
+namespace {
+
+using Eigen::Vector3d;
+
+// a straight branch from `from` along `dir` for `length_mm`, samples 0.5 mm apart, radius 1 mm
+ModelBranch line(const Vector3d& from, const Vector3d& dir, double length_mm, int parent = -1, int parent_point = -1) {
+  ModelBranch b;
+  for (double s = 0; s <= length_mm + 1e-9; s += 0.5) {
+    b.points_mm.push_back(from + s * dir.normalized());
+    b.radius_mm.push_back(1.0);
+  }
+  b.parent = parent;
+  b.parent_point = parent_point;
+  return b;
+}
+
+// the vessel along x, 40 mm; at 20 mm (sample 40) a vein crosses it along y
+TEST(BranchChecks, AVesselCrossingOverTheTreeIsCutAway) {
+  ModelTree t;
+  t.branches.push_back(line({0, 0, 0}, {1, 0, 0}, 40));
+  t.branches.push_back(line({20, 0, 0}, {0, 1, 0}, 15, 0, 40));
+  t.branches.push_back(line({20, 0, 0}, {0, -1, 0.1}, 18, 0, 41));
+  t.branches.push_back(line({30, 0, 0}, {1, 1, 0}, 10, 0, 60));  // a real side branch further on
+  const auto notes = drop_crossings(&t, BranchCheckOptions{});
+  ASSERT_EQ(notes.size(), 1u) << (notes.empty() ? "" : notes[0]);
+  EXPECT_NE(notes[0].find("crossing"), std::string::npos);
+  ASSERT_EQ(t.branches.size(), 2u);
+  EXPECT_EQ(t.branches[0].points_mm.size(), 81u);  // the vessel whole
+  EXPECT_EQ(t.branches[1].parent, 0);
+  EXPECT_EQ(t.branches[1].parent_point, 60);  // the side branch kept, re-indexed
+}
+
+// the trace ran from the vessel onto the crossing vein (its own line turns at the crossing) and
+// the vessel's onward part is a child: the line is cut back to the crossing, the vein's other arm
+// goes, the onward vessel stays
+TEST(BranchChecks, ACrossingTheTraceRanOntoIsCutBackToTheVessel) {
+  ModelTree t;
+  ModelBranch main = line({0, 0, 0}, {1, 0, 0}, 20);
+  const ModelBranch vein_arm = line({20, 0, 0}, {0, 1, 0}, 25);
+  main.points_mm.insert(main.points_mm.end(), vein_arm.points_mm.begin() + 1, vein_arm.points_mm.end());
+  main.radius_mm.assign(main.points_mm.size(), 1.0);
+  t.branches.push_back(main);
+  t.branches.push_back(line({20, 0, 0}, {1, 0, 0}, 20, 0, 40));   // the vessel onwards
+  t.branches.push_back(line({20, 0, 0}, {0, -1, 0}, 15, 0, 40));  // the vein's other arm
+  ModelTree later = t;  // the same, the onward vessel leaving two samples (1 mm) past the crossing
+  later.branches[1] = line(main.points_mm[42], {1, 0, 0}, 19, 0, 42);
+  const auto notes = drop_crossings(&t, BranchCheckOptions{});
+  ASSERT_EQ(notes.size(), 1u);
+  ASSERT_EQ(t.branches.size(), 2u);
+  EXPECT_EQ(t.branches[0].points_mm.size(), 41u);  // up to the crossing
+  EXPECT_NEAR(t.branches[1].points_mm.back().x(), 40.0, 1e-9);
+  EXPECT_EQ(t.branches[1].parent, 0);
+  // the cut keeps the sample the onward vessel leaves from: it stays, whole
+  ASSERT_EQ(drop_crossings(&later, BranchCheckOptions{}).size(), 1u);
+  ASSERT_EQ(later.branches.size(), 2u);
+  EXPECT_EQ(later.branches[0].points_mm.size(), 43u);
+  EXPECT_EQ(later.branches[1].parent_point, 42);
+}
+
+// what is not a crossing: a bifurcation (the vessel ends in two daughters 80 deg apart), two side
+// branches leaving one point 90 deg apart (a diagonal and a septal), and opposite arms where the
+// vessel does not go on
+TEST(BranchChecks, BranchingsAreNotCrossings) {
+  ModelTree fork;
+  fork.branches.push_back(line({0, 0, 0}, {1, 0, 0}, 20));
+  fork.branches.push_back(line({20, 0, 0}, {1, 0.84, 0}, 20, 0, 40));
+  fork.branches.push_back(line({20, 0, 0}, {1, -0.84, 0}, 20, 0, 40));
+  EXPECT_TRUE(drop_crossings(&fork, BranchCheckOptions{}).empty());
+  EXPECT_EQ(fork.branches.size(), 3u);
+
+  ModelTree sides;
+  sides.branches.push_back(line({0, 0, 0}, {1, 0, 0}, 40));
+  sides.branches.push_back(line({20, 0, 0}, {0, 1, 0}, 15, 0, 40));
+  sides.branches.push_back(line({20, 0, 0}, {0, 0, -1}, 15, 0, 40));
+  EXPECT_TRUE(drop_crossings(&sides, BranchCheckOptions{}).empty());
+  EXPECT_EQ(sides.branches.size(), 3u);
+
+  ModelTree tee;  // the vessel ends in a T: nothing carries it on
+  tee.branches.push_back(line({0, 0, 0}, {1, 0, 0}, 20));
+  tee.branches.push_back(line({20, 0, 0}, {0, 1, 0}, 15, 0, 40));
+  tee.branches.push_back(line({20, 0, 0}, {0, -1, 0}, 15, 0, 40));
+  EXPECT_TRUE(drop_crossings(&tee, BranchCheckOptions{}).empty());
+  EXPECT_EQ(tee.branches.size(), 3u);
+}
+
+}  // namespace
+}  // namespace pcisim::modeling

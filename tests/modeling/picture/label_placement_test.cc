@@ -19,8 +19,8 @@ void expect_readable(const std::vector<Label>& labels, const std::vector<PlacedL
     EXPECT_LE(b.y + b.h, h);
     EXPECT_EQ(b.w, text_width(labels[placed[a].label].text) + 2);
     for (size_t c = a + 1; c < placed.size(); ++c)
-      EXPECT_FALSE(b.overlaps(placed[c].box)) << labels[placed[a].label].text << " over "
-                                              << labels[placed[c].label].text;
+      EXPECT_FALSE(b.overlaps(placed[c].box))
+          << labels[placed[a].label].text << " over " << labels[placed[c].label].text;
   }
 }
 

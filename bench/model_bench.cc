@@ -258,6 +258,11 @@ constexpr const char* kUsage =
     "  --seeds a,b,c: those family members alone (no classic phantoms), for a closer look;\n"
     "  --robust: the robust fill of pcisim-model --robust-fill (smoothed fill and tube growth)\n";
 
+// a number for JSON: NaN (a model matching nothing has no AI) as null
+std::string json_number(double x) {
+  return std::isfinite(x) ? fmt::format("{}", x) : "null";
+}
+
 // "vein beside 120, elsewhere 30" (causes of a millimetre or more)
 std::string causes_text(const std::map<std::string, double>& causes) {
   std::string out;
@@ -387,8 +392,9 @@ int run_family(int n, const std::string& split, const std::vector<uint32_t>& onl
       }
       ov.push_back(r.c.ov);
       ot.push_back(r.c.ot);
-      ai.push_back(r.c.ai_mm);
-      rad.push_back(r.c.radius_error_mean_mm);
+      // a model that matches nothing has no AI nor radius error (NaN): left out of their spreads
+      if (std::isfinite(r.c.ai_mm)) ai.push_back(r.c.ai_mm);
+      if (std::isfinite(r.c.radius_error_mean_mm)) rad.push_back(r.c.radius_error_mean_mm);
       fa.push_back(false_mm(r.c));
       mi.push_back(missed_mm(r.c));
       sec.push_back(r.seconds);
@@ -406,7 +412,7 @@ int run_family(int n, const std::string& split, const std::vector<uint32_t>& onl
     for (const Row& r : g.rows) {
       ov.push_back(r.failed ? 0.0 : r.c.ov);
       if (r.failed) continue;
-      ai.push_back(r.c.ai_mm);
+      if (std::isfinite(r.c.ai_mm)) ai.push_back(r.c.ai_mm);
       fa.push_back(false_mm(r.c));
       sec.push_back(r.seconds);
       mib.push_back(r.peak_mib);
@@ -489,8 +495,8 @@ int run_family(int n, const std::string& split, const std::vector<uint32_t>& onl
          << fmt::format(
                 "  {{\"group\": \"{}\", \"seed\": {}, \"failed\": {}, \"ov\": {}, \"ot\": {}, \"ai_mm\": {}, "
                 "\"radius_mean_mm\": {}, \"false_mm\": {}, \"missed_mm\": {}, \"seconds\": {}, \"peak_mib\": {}}}",
-                g.name, r.phantom, r.failed ? "true" : "false", r.c.ov, r.c.ot, r.c.ai_mm, r.c.radius_error_mean_mm,
-                false_mm(r.c), missed_mm(r.c), r.seconds, r.peak_mib);
+                g.name, r.phantom, r.failed ? "true" : "false", r.c.ov, r.c.ot, json_number(r.c.ai_mm),
+                json_number(r.c.radius_error_mean_mm), false_mm(r.c), missed_mm(r.c), r.seconds, r.peak_mib);
       first = false;
     }
   }

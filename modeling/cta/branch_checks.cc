@@ -147,16 +147,10 @@ std::vector<std::string> drop_dark_branches(ModelTree* tree, const FloatImage& h
           c.points_mm.size(), at.x(), at.y(), at.z(), child_hu, parent_hu));
     }
   }
-  // keep the rest, re-indexing parents
-  std::vector<int> index(b.size(), -1);
-  std::vector<ModelBranch> kept;
-  for (size_t i = 0; i < b.size(); ++i) {
-    if (drop[i]) continue;
-    index[i] = static_cast<int>(kept.size());
-    kept.push_back(b[i]);
-    if (kept.back().parent >= 0) kept.back().parent = index[kept.back().parent];
-  }
-  b = std::move(kept);
+  // keep the rest, re-indexing parents (no branch shortened)
+  std::vector<int> end(b.size());
+  for (size_t i = 0; i < b.size(); ++i) end[i] = static_cast<int>(b[i].points_mm.size());
+  prune(tree, drop, end);
   return notes;
 }
 

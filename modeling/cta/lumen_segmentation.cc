@@ -34,9 +34,10 @@ std::string extent(const anatomy::Volume& ct) {
                      hi.z());
 }
 
-// noise_hu_near on a float image on the CT's grid
-double noise_near(const FloatImage& img, const Eigen::Vector3d& p_mm, double radius_mm) {
-  const ImageGrid& g = img.grid;
+// the standard deviation of the values within radius_mm of p_mm on grid g, value(i, j, k) each
+// voxel's (0 with fewer than 2 voxels): the CT's noise and the smoothed image's
+template <typename Value>
+double noise_near(const ImageGrid& g, const Value& value, const Eigen::Vector3d& p_mm, double radius_mm) {
   const Eigen::Vector3d c = g.continuous_index(p_mm);
   double sum = 0, sum2 = 0;
   int n = 0;
@@ -46,7 +47,7 @@ double noise_near(const FloatImage& img, const Eigen::Vector3d& p_mm, double rad
       for (int64_t i = std::llround(c.x() - r.x()); i <= std::llround(c.x() + r.x()); ++i) {
         if (!g.inside(i, j, k)) continue;
         if ((Eigen::Vector3d(i, j, k) - c).cwiseProduct(g.spacing_mm).norm() > radius_mm) continue;
-        const double h = img.v[g.index(i, j, k)];
+        const double h = value(i, j, k);
         sum += h;
         sum2 += h * h;
         ++n;
@@ -83,25 +84,8 @@ double mean_hu_near(const anatomy::Volume& ct, const Eigen::Vector3d& p_mm, doub
 }
 
 double noise_hu_near(const anatomy::Volume& ct, const Eigen::Vector3d& p_mm, double radius_mm) {
-  const Eigen::Vector3d c = ct.physical_to_index(p_mm);
-  double sum = 0, sum2 = 0;
-  int n = 0;
-  const Eigen::Vector3d r = Eigen::Vector3d::Constant(radius_mm).cwiseQuotient(ct.spacing_mm);
-  for (int64_t k = std::llround(c.z() - r.z()); k <= std::llround(c.z() + r.z()); ++k) {
-    for (int64_t j = std::llround(c.y() - r.y()); j <= std::llround(c.y() + r.y()); ++j) {
-      for (int64_t i = std::llround(c.x() - r.x()); i <= std::llround(c.x() + r.x()); ++i) {
-        if (i < 0 || j < 0 || k < 0 || i >= ct.dims[0] || j >= ct.dims[1] || k >= ct.dims[2]) continue;
-        if ((Eigen::Vector3d(i, j, k) - c).cwiseProduct(ct.spacing_mm).norm() > radius_mm) continue;
-        const double h = ct.hu(i, j, k);
-        sum += h;
-        sum2 += h * h;
-        ++n;
-      }
-    }
-  }
-  if (n < 2) return 0.0;
-  const double mean = sum / n;
-  return std::sqrt(std::max(0.0, sum2 / n - mean * mean));
+  return noise_near(
+      ImageGrid::of(ct), [&](int64_t i, int64_t j, int64_t k) { return ct.hu(i, j, k); }, p_mm, radius_mm);
 }
 
 LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eigen::Vector3d>& seeds_mm,
@@ -138,7 +122,8 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
     anatomy::gaussian_blur(
         &smooth.v, ct.dims, Eigen::Vector3d::Constant(o.smoothing_mm).cwiseQuotient(ct.spacing_mm),
         std::max(1, o.threads > 0 ? o.threads : static_cast<int>(std::thread::hardware_concurrency())));
-    out.smoothed_noise_hu = noise_near(smooth, seeds_mm[0], 3.0);
+    out.smoothed_noise_hu = noise_near(
+        g, [&](int64_t i, int64_t j, int64_t k) { return smooth.v[g.index(i, j, k)]; }, seeds_mm[0], 3.0);
   }
   out.lower_hu =
       o.tissue_hu + std::max(o.lower_fraction * (out.seed_hu - o.tissue_hu), o.noise_sigmas * out.smoothed_noise_hu);
@@ -148,10 +133,13 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
   Mask region = Mask::zeros(g);
   std::vector<int64_t> queue;
   queue.reserve(1 << 20);
+  // HU as the fill sees it (smoothed or not); the stent stage judges by the same
+  auto fill_value = [&](int64_t n) -> float {
+    if (!smooth.v.empty()) return smooth.v[n];
+    return ct.type == anatomy::VoxelType::kInt16 ? ct.hu_i16[n] : ct.hu_f32[n];
+  };
   auto in_range = [&](int64_t n) {
-    const float h = !smooth.v.empty()                       ? smooth.v[n]
-                    : ct.type == anatomy::VoxelType::kInt16 ? ct.hu_i16[n]
-                                                            : ct.hu_f32[n];
+    const float h = fill_value(n);
     return h >= out.lower_hu && h <= out.upper_hu;
   };
   for (int64_t n : starts) {
@@ -332,9 +320,6 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
   }
   // stents: bright pieces touching the region, small, long and slender, taken in whole
   if (o.metal.enabled) {
-    auto value = [&](int64_t n) {
-      return !smooth.v.empty() ? smooth.v[n] : ct.type == anatomy::VoxelType::kInt16 ? ct.hu_i16[n] : ct.hu_f32[n];
-    };
     Mask seen = Mask::zeros(g);
     const int64_t max_voxels = static_cast<int64_t>(o.metal.max_volume_mm3 / g.spacing_mm.prod()) + 1;
     std::vector<int64_t> piece, todo;
@@ -348,7 +333,7 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
         const int64_t a = ri + nb.d[q][0], b = rj + nb.d[q][1], c = rk + nb.d[q][2];
         if (!g.inside(a, b, c)) continue;
         const int64_t start = g.index(a, b, c);
-        if (region.v[start] || seen.v[start] || value(start) <= out.upper_hu) continue;
+        if (region.v[start] || seen.v[start] || fill_value(start) <= out.upper_hu) continue;
         // the bright piece from here, given up once larger than a stent
         piece.clear();
         todo.assign(1, start);
@@ -364,7 +349,7 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
             const int64_t x = i + nb.d[w][0], y = j + nb.d[w][1], z = k + nb.d[w][2];
             if (!g.inside(x, y, z)) continue;
             const int64_t m = g.index(x, y, z);
-            if (seen.v[m] || region.v[m] || value(m) <= out.upper_hu) continue;
+            if (seen.v[m] || region.v[m] || fill_value(m) <= out.upper_hu) continue;
             seen.v[m] = 1;
             todo.push_back(m);
           }

@@ -87,38 +87,6 @@ void reset_peak_memory() {
   f << "5";
 }
 
-// Schaap et al. score each vessel from its ostium: the points of both trees inside the true
-// aortic lumen (the phantom's trees, and the model's, start on the aortic centerline) are cut off
-anatomy::VesselTree outside_aorta(const anatomy::VesselTree& tree, const anatomy::VesselTree& truth) {
-  const int a = truth.find("aorta");
-  if (a < 0) return tree;
-  const auto& aorta = truth.branches[a];
-  auto inside = [&](const Vector3d& p) {
-    for (size_t i = 0; i + 1 < aorta.points.size(); ++i) {
-      const Vector3d x = aorta.points[i].position_m, ab = aorta.points[i + 1].position_m - x;
-      const double t = std::clamp((p - x).dot(ab) / std::max(ab.squaredNorm(), 1e-18), 0.0, 1.0);
-      const double r = aorta.points[i].radius_m + t * (aorta.points[i + 1].radius_m - aorta.points[i].radius_m);
-      if ((x + t * ab - p).norm() < r) return true;
-    }
-    return false;
-  };
-  anatomy::VesselTree out = tree;
-  for (auto& b : out.branches) {
-    if (b.name == "aorta" || b.parent < 0 || tree.branches[b.parent].name != "aorta") continue;
-    // a tree's first branch: drop its leading points inside the aorta; its children's junction
-    // indices move with it
-    size_t cut = 0;
-    while (cut + 2 < b.points.size() && inside(b.points[cut].position_m)) ++cut;
-    if (cut == 0) continue;
-    const int self = static_cast<int>(&b - out.branches.data());
-    b.points.erase(b.points.begin(), b.points.begin() + cut);
-    for (auto& c : out.branches) {
-      if (c.parent == self) c.parent_point = std::max(0, c.parent_point - static_cast<int>(cut));
-    }
-  }
-  return out;
-}
-
 // the share of extracted centerline that matches nothing (mm): false positives x the sample step
 double false_mm(const modeling::CenterlineScores& c) {
   return c.fp * modeling::CenterlineScoreOptions{}.sample_spacing_m * 1e3;
@@ -213,7 +181,8 @@ Row run_one(const Setting& s, uint32_t phantom, const std::string& overview_png 
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     r.peak_mib = modeling::peak_memory_mib();
     for (const auto& st : m.stages) r.stage_s.push_back({st.name, st.seconds});
-    r.c = modeling::score_centerlines(outside_aorta(cta.truth, cta.truth), outside_aorta(m.model.vessels, cta.truth));
+    r.c = modeling::score_centerlines(modeling::outside_aorta(cta.truth, cta.truth),
+                                      modeling::outside_aorta(m.model.vessels, cta.truth));
     anatomy::LumenMeshSpec ls;
     ls.exclude = {"aorta"};
     anatomy::LumenMeshSpec ms = s.options.lumen;
@@ -688,7 +657,12 @@ int run(const std::vector<std::string>& args_in) {
   for (const Row& r : rows) {
     if (r.s.sweep != "noise x voxel" || r.s.knob != rows.front().s.knob || r.failed) continue;
     md << "| " << r.phantom << " |";
-    for (const auto& [n, t] : r.stage_s) md << fmt::format(" {:.2f} |", t);
+    // by the header's stage names; a second fill's stages ("segmentation (smoothed)") add to theirs
+    for (const auto& [n, unused] : rows.front().stage_s) {
+      double t = 0;
+      for (const auto& [m, tm] : r.stage_s) t += (m == n || m == n + " (smoothed)") ? tm : 0.0;
+      md << fmt::format(" {:.2f} |", t);
+    }
     md << fmt::format(" {:.1f} |\n", r.seconds);
   }
   // the heart: the template's epicardium against the painted heart, placed and fitted

@@ -353,6 +353,25 @@ void validate_spec(const PhantomCtaSpec& s) {
   if (!(s.stenosis_fraction < 1.0) || std::isnan(s.stenosis_fraction)) {
     throw std::invalid_argument("PhantomCtaSpec.stenosis_fraction: expected < 1");
   }
+  // a pin: unset (NaN) or inside the family's range, and only on a family member
+  auto pin_in = [&s](const char* name, double v, double lo, double hi) {
+    if (!std::isnan(v) && !s.family)
+      throw std::invalid_argument(fmt::format("PhantomCtaSpec.pins.{}: pins a family draw, but family is false", name));
+    if (!std::isnan(v) && !(v >= lo && v <= hi))
+      throw std::invalid_argument(
+          fmt::format("PhantomCtaSpec.pins.{}: expected {} to {} (or NaN: drawn), got {}", name, lo, hi, v));
+  };
+  pin_in("contrast_hu_proximal", s.pins.contrast_hu_proximal, 300, 550);
+  pin_in("fade_hu_per_mm", s.pins.fade_hu_per_mm, 0.5, 3);
+  pin_in("myocardium_hu", s.pins.myocardium_hu, 40, 150);
+  pin_in("rv_hu", s.pins.rv_hu, 40, 400);
+  pin_in("rv_wall_mm", s.pins.rv_wall_mm, 2, 5);
+  pin_in("vein_hu", s.pins.vein_hu, 150, 300);
+  if (s.pins.open_valve != -1 && !s.family)
+    throw std::invalid_argument("PhantomCtaSpec.pins.open_valve: pins a family draw, but family is false");
+  if (s.pins.open_valve < -1 || s.pins.open_valve > 1)
+    throw std::invalid_argument(
+        fmt::format("PhantomCtaSpec.pins.open_valve: expected -1 (drawn), 0 or 1, got {}", s.pins.open_valve));
   if (s.threads < 0 || s.threads > kMaxPhantomCtaThreads)
     throw std::invalid_argument(fmt::format("PhantomCtaSpec.threads: expected 0..{} (0: every core), got {}",
                                             kMaxPhantomCtaThreads, s.threads));
@@ -721,6 +740,23 @@ PhantomCta make_phantom_cta(const PhantomCtaSpec& spec) {
     rv_semi.y() = fam.between(26, 29);
     rv_semi.z() = fam.between(30, 33);
     facts.rv_semi_mm = rv_semi;
+    // a test's pins (every draw above was made: the rest of the phantom is as without them)
+    const PhantomCtaSpec::FamilyPins& pin = spec.pins;
+    auto pinned = [](double* value, double to) {
+      if (!std::isnan(to)) *value = to;
+    };
+    pinned(&facts.contrast_hu_proximal, pin.contrast_hu_proximal);
+    if (!std::isnan(pin.contrast_hu_proximal)) {
+      facts.lv_hu += pin.contrast_hu_proximal - facts.aorta_hu;
+      facts.la_hu += pin.contrast_hu_proximal - facts.aorta_hu;
+      facts.aorta_hu = pin.contrast_hu_proximal;
+    }
+    pinned(&facts.fade_hu_per_mm, pin.fade_hu_per_mm);
+    pinned(&facts.myocardium_hu, pin.myocardium_hu);
+    if (!std::isnan(pin.rv_hu)) facts.rv_hu = facts.ra_hu = pin.rv_hu;
+    pinned(&facts.rv_wall_mm, pin.rv_wall_mm);
+    pinned(&facts.vein_hu, pin.vein_hu);
+    if (pin.open_valve >= 0) facts.open_valve = pin.open_valve == 1;
   }
 
   const int aorta_id = tree.find("aorta");

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,18 @@ struct PhantomCtaSpec {
   bool family = false;
   // with family: the plaques' blooming halos (false: the same phantom without them, to see it)
   bool calcium_blooming = true;
+  // with family: draws pinned to a value (a failure class's hard end, for a test); NaN or -1: drawn
+  // from the seed. Every draw is still made, so what is not pinned is as without the pins.
+  struct FamilyPins {
+    double contrast_hu_proximal = kUnpinned;  // the aorta and the coronaries' ostia, 300..550
+    double fade_hu_per_mm = kUnpinned;        // the coronaries' distal fall-off, 0.5..3
+    double myocardium_hu = kUnpinned;         // 40..150
+    double rv_hu = kUnpinned;                 // the right ventricle's blood, 40..400
+    double rv_wall_mm = kUnpinned;            // the right ventricle's free wall, 2..5
+    double vein_hu = kUnpinned;               // every vein, 150..300
+    int open_valve = -1;                      // 1 open, 0 closed
+    static constexpr double kUnpinned = std::numeric_limits<double>::quiet_NaN();
+  } pins;
 };
 
 // The family's two splits (issue #30; docs/benchmarks/model.md): seeds 1..999 tune the pipeline,

@@ -154,6 +154,57 @@ std::vector<std::string> drop_dark_branches(ModelTree* tree, const FloatImage& h
   return notes;
 }
 
+std::vector<std::string> drop_parallel_branches(ModelTree* tree, const BranchCheckOptions& o) {
+  std::vector<std::string> notes;
+  auto& b = tree->branches;
+  std::vector<bool> drop(b.size(), false);
+  for (size_t i = 1; i < b.size(); ++i) {
+    const ModelBranch& c = b[i];
+    if (c.parent < 0) continue;
+    if (drop[c.parent]) {
+      drop[i] = true;  // goes with its parent
+      continue;
+    }
+    const double length_mm = double(c.points_mm.size()) * o.sample_spacing_mm;
+    if (length_mm < o.parallel_min_mm) continue;
+    const ModelBranch& p = b[c.parent];
+    // its course past the first parallel_skip_mm along the parent (either way), not across it: a
+    // side branch leaving at a shallow angle also stays near its parent for a while
+    const size_t skip = static_cast<size_t>(std::ceil(o.parallel_skip_mm / o.sample_spacing_mm));
+    if (skip + 2 > c.points_mm.size() || p.points_mm.size() < 2) continue;
+    const Eigen::Vector3d course = c.points_mm.back() - c.points_mm[skip];
+    const size_t at = std::min(static_cast<size_t>(std::max(0, c.parent_point)), p.points_mm.size() - 1);
+    const Eigen::Vector3d along =
+        p.points_mm[std::min(at + 4, p.points_mm.size() - 1)] - p.points_mm[at > 4 ? at - 4 : 0];
+    if (course.norm() < 1e-9 || along.norm() < 1e-9) continue;
+    if (std::abs(course.normalized().dot(along.normalized())) < std::cos(o.parallel_max_deg * M_PI / 180)) continue;
+    // each sample past the first parallel_skip_mm: is the parent within the two radii and the gap?
+    int beside = 0, counted = 0;
+    for (size_t s = skip; s < c.points_mm.size(); ++s) {
+      ++counted;
+      for (size_t q = 0; q < p.points_mm.size(); ++q) {
+        if ((c.points_mm[s] - p.points_mm[q]).norm() < c.radius_mm[s] + p.radius_mm[q] + o.parallel_gap_mm) {
+          ++beside;
+          break;
+        }
+      }
+    }
+    if (counted > 0 && beside >= o.parallel_fraction * counted) {
+      drop[i] = true;
+      const Eigen::Vector3d& at = c.points_mm.front();
+      notes.push_back(
+          fmt::format("cut away a branch of {:.0f} mm leaving at ({:.1f}, {:.1f}, {:.1f}) mm: {:.0f} % of it runs "
+                      "beside the vessel "
+                      "it leaves, touching it (a vein beside an artery, not a branch)",
+                      length_mm, at.x(), at.y(), at.z(), 100.0 * beside / counted));
+    }
+  }
+  std::vector<int> end(b.size());
+  for (size_t i = 0; i < b.size(); ++i) end[i] = static_cast<int>(b[i].points_mm.size());
+  if (!notes.empty()) prune(tree, drop, end);
+  return notes;
+}
+
 std::vector<std::string> find_abrupt_ends(const ModelTree& tree, const BranchCheckOptions& o) {
   std::vector<std::string> notes;
   const auto& b = tree.branches;

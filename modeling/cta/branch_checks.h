@@ -8,6 +8,12 @@
 //    traced as two arms leaving the artery at one point in opposite directions, both at a wide
 //    angle to the artery, while a third arm carries the artery on; the two opposite arms are cut
 //    away (a vein may be as bright as a distal artery, so its contrast cannot tell it);
+//  - a vessel beside another (a cardiac vein touching an artery along its length, as bright as
+//    the distal artery): the fill joins them into one ribbon and the tracer follows the second
+//    as a branch running back along the first; a branch that runs along its parent (its course
+//    within parallel_max_deg of the parent's direction) and stays beside it (within the two radii
+//    and parallel_gap_mm) over parallel_fraction of its length beyond its first
+//    parallel_skip_mm is cut away with everything beyond it (a side branch leaves at 35-80 deg);
 //  - a tree that stops while still wide: a leaf whose last samples are wider than
 //    abrupt_end_radius_mm ends at an occlusion or a stenosis too tight to see (not a vessel
 //    tapering out); the report says where.
@@ -30,6 +36,12 @@ struct BranchCheckOptions {
   double crossing_gap_mm = 3.0, arm_mm = 4.0;
   double opposite_deg = 130, across_deg = 35, on_deg = 45;
   double sample_spacing_mm = 0.5;  // of the branches' samples (build_cta_model sets the spline's)
+  // a branch beside its parent: at least parallel_min_mm long, its course past its first
+  // parallel_skip_mm within parallel_max_deg of the parent's direction where it leaves (either
+  // way), and parallel_fraction of those samples within the two radii plus parallel_gap_mm of
+  // the parent
+  double parallel_min_mm = 8.0, parallel_skip_mm = 3.0, parallel_fraction = 0.7, parallel_gap_mm = 1.0;
+  double parallel_max_deg = 20.0;
 };
 
 // removes the dark branches (and their subtrees) from the tree; one note per branch removed
@@ -37,6 +49,9 @@ std::vector<std::string> drop_dark_branches(ModelTree* tree, const FloatImage& h
 
 // removes vessels crossing over the tree (and what was traced beyond them); one note per crossing
 std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOptions& options);
+
+// removes branches that run beside their parent (and their subtrees); one note per branch removed
+std::vector<std::string> drop_parallel_branches(ModelTree* tree, const BranchCheckOptions& options);
 
 // one note per leaf that ends wide
 std::vector<std::string> find_abrupt_ends(const ModelTree& tree, const BranchCheckOptions& options);

@@ -41,6 +41,64 @@ int64_t ridge_near(const FloatImage& dist, const Vector3d& p_mm, double radius_m
   return best;
 }
 
+// the ostium of a piece: it may touch the large lumen in several patches (contact voxels within 2
+// voxels of one another): the aortic root, and a left atrial appendage or a chamber it runs
+// beside, or the rim of the aorta it runs along (issue #30's family). The ostium's patch is where
+// the vessel is widest (its trunk enters the root there: the patch's deepest voxel, by the
+// lumen's distance map, within 0.25 mm of the deepest of all; a rim or a side contact is shallow),
+// of those the patch nearest the aortic seed; in it, the voxel nearest the patch's centroid
+int64_t ostium_voxel(const ImageGrid& g, const FloatImage& distance_mm, std::vector<int64_t> contact,
+                     const Vector3d& seed_mm) {
+  std::sort(contact.begin(), contact.end());
+  std::vector<int> patch_of(contact.size(), -1);
+  std::vector<std::vector<size_t>> patches;
+  for (size_t first = 0; first < contact.size(); ++first) {
+    if (patch_of[first] >= 0) continue;
+    const int id = static_cast<int>(patches.size());
+    patches.emplace_back(1, first);
+    patch_of[first] = id;
+    for (size_t t = 0; t < patches[id].size(); ++t) {
+      const auto [i, j, k] = g.ijk(contact[patches[id][t]]);
+      for (int dk = -2; dk <= 2; ++dk) {
+        for (int dj = -2; dj <= 2; ++dj) {
+          for (int di = -2; di <= 2; ++di) {
+            if (!g.inside(i + di, j + dj, k + dk)) continue;
+            const int64_t m = g.index(i + di, j + dj, k + dk);
+            const auto at = std::lower_bound(contact.begin(), contact.end(), m);
+            if (at == contact.end() || *at != m) continue;
+            const size_t n = static_cast<size_t>(at - contact.begin());
+            if (patch_of[n] >= 0) continue;
+            patch_of[n] = id;
+            patches[id].push_back(n);
+          }
+        }
+      }
+    }
+  }
+  std::vector<float> depth(patches.size(), 0);
+  std::vector<double> to_seed(patches.size(), 1e300);
+  for (size_t p = 0; p < patches.size(); ++p) {
+    for (size_t n : patches[p]) {
+      depth[p] = std::max(depth[p], distance_mm.v[contact[n]]);
+      to_seed[p] = std::min(to_seed[p], (physical(g, contact[n]) - seed_mm).norm());
+    }
+  }
+  const float deepest = *std::max_element(depth.begin(), depth.end());
+  size_t pick = 0;
+  for (size_t p = 0; p < patches.size(); ++p) {
+    if (depth[p] >= deepest - 0.25f && (depth[pick] < deepest - 0.25f || to_seed[p] < to_seed[pick])) pick = p;
+  }
+  Vector3d centroid = Vector3d::Zero();
+  for (size_t n : patches[pick]) centroid += physical(g, contact[n]);
+  centroid /= double(patches[pick].size());
+  int64_t best = contact[patches[pick].front()];
+  for (size_t n : patches[pick]) {
+    if ((physical(g, contact[n]) - centroid).squaredNorm() < (physical(g, best) - centroid).squaredNorm())
+      best = contact[n];
+  }
+  return best;
+}
+
 }  // namespace
 
 Clipping clip_to_coronaries(const LumenSegmentation& seg, const std::vector<Vector3d>& seeds_mm,
@@ -123,18 +181,7 @@ Clipping clip_to_coronaries(const LumenSegmentation& seg, const std::vector<Vect
       drop("not attached to the aorta or a chamber");
       continue;
     }
-    // the ostium: the contact voxel nearest the contact's centroid
-    Vector3d centroid = Vector3d::Zero();
-    for (int64_t n : contact) centroid += physical(g, n);
-    centroid /= double(contact.size());
-    double best = 1e300;
-    for (int64_t n : contact) {
-      const double d = (physical(g, n) - centroid).squaredNorm();
-      if (d < best) {
-        best = d;
-        piece.ostium = n;
-      }
-    }
+    piece.ostium = ostium_voxel(g, out.distance_mm, contact, seeds_mm[0]);
     piece.ostium_mm = physical(g, piece.ostium);
     for (int64_t n : piece.voxels) piece.reach_mm = std::max(piece.reach_mm, (physical(g, n) - piece.ostium_mm).norm());
     const double from_seed_mm = (piece.ostium_mm - seeds_mm[0]).norm();
@@ -154,6 +201,7 @@ Clipping clip_to_coronaries(const LumenSegmentation& seg, const std::vector<Vect
     const double volume_mm3 = double(piece.voxels.size()) * g.spacing_mm.prod();
     const double tube_r_mm = std::sqrt(volume_mm3 / (M_PI * std::max(piece.reach_mm, 1e-9)));
     if (!seeded && tube_r_mm > o.max_tree_tube_radius_mm) {
+      out.root_sponges += from_seed_mm <= o.max_ostium_distance_mm;
       drop(
           fmt::format("{:.0f} mm3 within {:.1f} mm of its contact, as much as a tube {:.1f} mm in radius: a chamber's "
                       "noisy contrast, not a vessel tree",
@@ -176,12 +224,13 @@ Clipping clip_to_coronaries(const LumenSegmentation& seg, const std::vector<Vect
     std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return dropped_sizes[a] > dropped_sizes[b]; });
     std::string largest;
     for (size_t n = 0; n < std::min<size_t>(3, order.size()); ++n) largest += "; " + out.dropped[order[n]];
-    throw ModelingError(
-        fmt::format("no coronary artery found: no thin contrast-filled vessel of at least {:.0f} mm leaves the aorta "
-                    "within {:.0f} mm "
-                    "of the seed (lumen HU {:.0f}..{:.0f}; {} thin pieces cut away{})",
-                    o.min_length_mm, o.max_ostium_distance_mm, seg.lower_hu, seg.upper_hu, out.dropped.size(),
-                    largest.empty() ? "" : ", the largest" + largest));
+    out.none_found = fmt::format(
+        "no coronary artery found: no thin contrast-filled vessel of at least {:.0f} mm leaves the aorta "
+        "within {:.0f} mm of the seed (lumen HU {:.0f}..{:.0f}; {} thin pieces cut away{})",
+        o.min_length_mm, o.max_ostium_distance_mm, seg.lower_hu, seg.upper_hu, out.dropped.size(),
+        largest.empty() ? "" : ", the largest" + largest);
+    if (o.throw_when_none) throw ModelingError(out.none_found);
+    return out;
   }
   std::sort(out.pieces.begin(), out.pieces.end(),
             [](const CoronaryPiece& a, const CoronaryPiece& b) { return a.reach_mm > b.reach_mm; });

@@ -44,18 +44,22 @@ std::vector<double> median_filter(const std::vector<double>& v, int window) {
 
 }  // namespace
 
-double estimated_memory_gb(const anatomy::Volume& ct, bool smoothed) {
-  return double(ct.voxel_count()) * (2.0 + 1.0 + (smoothed ? 4.0 : 0.0) + 0.25 * 28.0) / 1e9;
+double memory_bytes_per_voxel(bool smoothed, bool tubes) {
+  return 2.0 + 1.0 + (smoothed ? 4.0 : 0.0) + 0.25 * 28.0 + (tubes ? 0.25 * 28.0 : 0.0);
+}
+
+double estimated_memory_gb(const anatomy::Volume& ct, bool smoothed, bool tubes) {
+  return double(ct.voxel_count()) * memory_bytes_per_voxel(smoothed, tubes) / 1e9;
 }
 
 CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>& seeds_mm,
                          const CtaPipelineOptions& options, const StageProgress& progress) {
-  const bool smoothed = options.segmentation.smoothing_mm > 0;
-  if (const double need = estimated_memory_gb(ct, smoothed); need > options.memory_limit_gb) {
+  const bool smoothed = options.segmentation.smoothing_mm > 0, tubes = options.segmentation.tubes.enabled;
+  if (const double need = estimated_memory_gb(ct, smoothed, tubes); need > options.memory_limit_gb) {
     throw ModelingError(fmt::format(
-        "the CT's {} x {} x {} voxels would need about {:.2f} GB here ({} bytes a voxel), over the bound of {:.2f} GB: "
-        "crop it to the heart or resample it",
-        ct.dims[0], ct.dims[1], ct.dims[2], need, smoothed ? 14 : 10, options.memory_limit_gb));
+        "the CT's {} x {} x {} voxels would need about {:.2f} GB here ({:.0f} bytes a voxel), over the bound of {:.2f} "
+        "GB: crop it to the heart or resample it",
+        ct.dims[0], ct.dims[1], ct.dims[2], need, memory_bytes_per_voxel(smoothed, tubes), options.memory_limit_gb));
   }
   CtaPipelineOptions o = options;
   const int threads = o.threads > 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
@@ -63,46 +67,92 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
   o.checks.sample_spacing_mm = o.spline.sample_spacing_mm;  // the crossing check counts samples
   CtaModel m;
 
+  // (a) and (b): the fill and its clipping, then, where the fill made a sponge at the aortic root,
+  // both again on the smoothed CT (the robust fill)
   LumenSegmentation seg;
-  stage(&m, "segmentation", progress, [&](StageReport& r) {
-    seg = segment_lumen(ct, seeds_mm, o.segmentation);
-    r.figures = {{"seed_hu", seg.seed_hu},
-                 {"noise_hu", seg.noise_hu},
-                 {"smoothed_noise_hu", seg.smoothed_noise_hu},
-                 {"lower_hu", seg.lower_hu},
-                 {"upper_hu", seg.upper_hu},
-                 {"region_voxels", double(seg.region_voxels)},
-                 {"tube_voxels", double(seg.tube_voxels)},
-                 {"tube_s", seg.tube_seconds},
-                 {"metal_pieces", double(seg.metal_pieces)},
-                 {"metal_voxels", double(seg.metal_voxels)},
-                 {"bridges", double(seg.bridges.size())},
-                 {"bridging_s", seg.bridging_seconds},
-                 {"level_set_iterations", double(seg.level_set_iterations)},
-                 {"lumen_voxels", double(seg.mask.count())},
-                 {"crop_voxels", double(seg.mask.grid.size())}};
-    for (const Bridge& b : seg.bridges) {
-      r.notes.push_back(fmt::format(
-          "a gap of {:.1f} mm bridged from ({:.1f}, {:.1f}, {:.1f}) to ({:.1f}, {:.1f}, {:.1f}) mm: the lumen narrows "
-          "there below what the CT resolves (a tight stenosis or an occlusion); the vessel goes on {:.0f} mm beyond",
-          b.gap_mm, b.from_mm.x(), b.from_mm.y(), b.from_mm.z(), b.to_mm.x(), b.to_mm.y(), b.to_mm.z(),
-          b.piece_length_mm));
-    }
-  });
-
   Clipping clip;
-  stage(&m, "clipping", progress, [&](StageReport& r) {
-    clip = clip_to_coronaries(seg, seeds_mm, o.clipping);
-    r.figures = {{"large_voxels", double(clip.large.count())},
-                 {"coronary_trees", double(clip.pieces.size())},
-                 {"aortic_radius_mm", clip.aorta_at_seed.radius_m},
-                 {"pieces_cut_away", double(clip.dropped.size())}};
-    for (const auto& p : clip.pieces) {
-      r.notes.push_back(fmt::format("kept: {} voxels, ostium ({:.1f}, {:.1f}, {:.1f}) mm, reaching {:.1f} mm",
-                                    p.voxels.size(), p.ostium_mm.x(), p.ostium_mm.y(), p.ostium_mm.z(), p.reach_mm));
+  auto fill_and_clip = [&](const SegmentationOptions& so, const std::string& suffix) {
+    stage(&m, "segmentation" + suffix, progress, [&](StageReport& r) {
+      seg = segment_lumen(ct, seeds_mm, so);
+      r.figures = {{"seed_hu", seg.seed_hu},
+                   {"noise_hu", seg.noise_hu},
+                   {"smoothed_noise_hu", seg.smoothed_noise_hu},
+                   {"lower_hu", seg.lower_hu},
+                   {"upper_hu", seg.upper_hu},
+                   {"region_voxels", double(seg.region_voxels)},
+                   {"tube_voxels", double(seg.tube_voxels)},
+                   {"tube_s", seg.tube_seconds},
+                   {"metal_pieces", double(seg.metal_pieces)},
+                   {"metal_voxels", double(seg.metal_voxels)},
+                   {"bridges", double(seg.bridges.size())},
+                   {"bridging_s", seg.bridging_seconds},
+                   {"level_set_iterations", double(seg.level_set_iterations)},
+                   {"lumen_voxels", double(seg.mask.count())},
+                   {"crop_voxels", double(seg.mask.grid.size())}};
+      for (const Bridge& b : seg.bridges) {
+        r.notes.push_back(fmt::format(
+            "a gap of {:.1f} mm bridged from ({:.1f}, {:.1f}, {:.1f}) to ({:.1f}, {:.1f}, {:.1f}) mm: the lumen "
+            "narrows there below what the CT resolves (a tight stenosis or an occlusion); the vessel goes on {:.0f} mm "
+            "beyond",
+            b.gap_mm, b.from_mm.x(), b.from_mm.y(), b.from_mm.z(), b.to_mm.x(), b.to_mm.y(), b.to_mm.z(),
+            b.piece_length_mm));
+      }
+    });
+    stage(&m, "clipping" + suffix, progress, [&](StageReport& r) {
+      ClippingOptions co = o.clipping;
+      co.throw_when_none = false;
+      clip = clip_to_coronaries(seg, seeds_mm, co);
+      r.figures = {{"large_voxels", double(clip.large.count())},
+                   {"coronary_trees", double(clip.pieces.size())},
+                   {"aortic_radius_mm", clip.aorta_at_seed.radius_m},
+                   {"pieces_cut_away", double(clip.dropped.size())},
+                   {"root_sponges", double(clip.root_sponges)}};
+      for (const auto& p : clip.pieces) {
+        r.notes.push_back(fmt::format("kept: {} voxels, ostium ({:.1f}, {:.1f}, {:.1f}) mm, reaching {:.1f} mm",
+                                      p.voxels.size(), p.ostium_mm.x(), p.ostium_mm.y(), p.ostium_mm.z(), p.reach_mm));
+      }
+      for (const auto& d : clip.dropped) r.notes.push_back("cut away: " + d);
+    });
+  };
+  fill_and_clip(o.segmentation, "");
+  const RefillOptions& rf = o.refill;
+  if (rf.enabled && clip.root_sponges > 0 && clip.pieces.size() < 2 && o.segmentation.smoothing_mm <= 0) {
+    // the smoothed copy of the CT must fit the memory bound too, and the first fill's crop beside
+    // the second (7 bytes a voxel of the CT: estimated_memory_gb)
+    if (const double need = estimated_memory_gb(ct, true, true) + double(ct.voxel_count()) * 7.0 / 1e9;
+        need > o.memory_limit_gb) {
+      m.stages.back().notes.push_back(fmt::format(
+          "a sponge at the aortic root, but the fill on the smoothed CT would need {:.2f} GB, over the bound of "
+          "{:.2f} GB: not tried",
+          need, o.memory_limit_gb));
+    } else {
+      m.stages.back().notes.push_back(fmt::format(
+          "{} coronary tree(s) and {} sponge(s) of noise at the aortic root (the CT's noise strung a chamber or the "
+          "myocardium near the lower threshold of {:.0f} HU into the fill, and a tree with it): filled again on the CT "
+          "smoothed by {:.1f} mm{}",
+          clip.pieces.size(), clip.root_sponges, seg.lower_hu, rf.smoothing_mm,
+          o.segmentation.tubes.enabled ? ", thin vessels grown along tubes" : ""));
+      LumenSegmentation first_seg = std::move(seg);
+      Clipping first_clip = std::move(clip);
+      SegmentationOptions so = o.segmentation;
+      so.smoothing_mm = rf.smoothing_mm;
+      std::string second;  // why the second fill is not kept
+      try {
+        fill_and_clip(so, " (smoothed)");
+        // the smoothed fill only where it finds more trees than the first
+        if (clip.pieces.size() <= first_clip.pieces.size())
+          second = fmt::format("the smoothed fill found {} tree(s), no more than the first", clip.pieces.size());
+      } catch (const ModelingError& e) {
+        second = std::string("the smoothed fill failed: ") + e.what();
+      }
+      if (!second.empty()) {
+        m.stages.back().notes.push_back(second + "; the first fill is kept");
+        seg = std::move(first_seg);
+        clip = std::move(first_clip);
+      }
     }
-    for (const auto& d : clip.dropped) r.notes.push_back("cut away: " + d);
-  });
+  }
+  if (clip.pieces.empty()) throw ModelingError(clip.none_found);
 
   // (c) centerlines, then the B-spline of each branch
   std::vector<ModelTree> trees;
@@ -170,7 +220,7 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
   });
 
   stage(&m, "checks", progress, [&](StageReport& r) {
-    int cut = 0, abrupt = 0, crossings = 0;
+    int cut = 0, abrupt = 0, crossings = 0, beside = 0;
     for (auto& t : trees) {
       for (auto& n : drop_crossings(&t, o.checks)) {
         r.notes.push_back(n);
@@ -180,12 +230,19 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
         r.notes.push_back(n);
         ++cut;
       }
+      for (auto& n : drop_parallel_branches(&t, o.checks)) {
+        r.notes.push_back(n);
+        ++beside;
+      }
       for (auto& n : find_abrupt_ends(t, o.checks)) {
         r.notes.push_back(n);
         ++abrupt;
       }
     }
-    r.figures = {{"veins_cut", double(cut)}, {"crossings_cut", double(crossings)}, {"abrupt_ends", double(abrupt)}};
+    r.figures = {{"veins_cut", double(cut)},
+                 {"crossings_cut", double(crossings)},
+                 {"beside_cut", double(beside)},
+                 {"abrupt_ends", double(abrupt)}};
   });
 
   stage(&m, "labels", progress, [&](StageReport& r) {

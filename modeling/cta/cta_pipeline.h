@@ -32,9 +32,24 @@
 
 namespace pcisim::modeling {
 
+// the fill again when the first made a sponge that took a coronary tree (issue #30): noise that
+// strings the voxels of a chamber or of the myocardium near the lower threshold into one region
+// joins it to the aortic root, and a coronary tree that leaves the root there is cut away with it
+// (clipping refuses the sponge by its volume: Clipping::root_sponges). When a sponge touches the
+// root and fewer than two trees were kept, the fill and the clipping run again on the CT smoothed
+// by smoothing_mm (SegmentationOptions::smoothing_mm: the noise averaged away; the tube growth, when
+// on, follows the thin vessels the smoothing loses), and that fill is kept when it finds more
+// trees (and does not fail). Only then: on the other CTs the smoothed fill is the worse one
+// (docs/modeling.md)
+struct RefillOptions {
+  bool enabled = true;
+  double smoothing_mm = 0.5;
+};
+
 struct CtaPipelineOptions {
   SegmentationOptions segmentation;
   ClippingOptions clipping;
+  RefillOptions refill;
   TracingOptions tracing;
   SplineOptions spline;
   RadiusOptions radius;
@@ -50,7 +65,8 @@ struct CtaPipelineOptions {
   int threads = 0;  // 0: all cores
   // the memory the pipeline may take: a CT whose estimate is over it is refused before any work
   // (estimate: the CT, a mask of it, and work on a crop of at most a quarter of it at ~28 bytes a
-  // voxel, i.e. 10 bytes a voxel of the CT; 14 with the smoothed fill's float copy of the CT)
+  // voxel, i.e. 10 bytes a voxel of the CT; 4 more with the smoothed fill's float copy of the CT,
+  // 7 more with the tube growth's work on its crop: 17 at the defaults)
   double memory_limit_gb = 4.0;
 };
 
@@ -70,8 +86,9 @@ struct CtaModel {
 // called as each stage starts and ends (for a terminal's progress lines)
 using StageProgress = std::function<void(const StageReport& stage, bool finished)>;
 
-// the estimate above, in GB (smoothed: the fill sees a smoothed copy of the CT)
-double estimated_memory_gb(const anatomy::Volume& ct, bool smoothed = false);
+// the estimate above, in GB (smoothed: the fill sees a smoothed copy of the CT; tubes: the tube
+// growth runs)
+double estimated_memory_gb(const anatomy::Volume& ct, bool smoothed, bool tubes);
 
 // throws ModelingError with the input at fault named (a seed, a CTA without coronaries, a CT over
 // the memory bound)

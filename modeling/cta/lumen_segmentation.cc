@@ -14,6 +14,7 @@
 
 #include "anatomy/volume/gaussian_blur.h"
 #include "modeling/cta/modeling_error.h"
+#include "modeling/image/vesselness.h"
 
 namespace pcisim::modeling {
 namespace {
@@ -183,20 +184,31 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
     std::array<int64_t, 3> lo, dims;
     bounding_box(region, std::llround(o.tubes.margin_mm / g.spacing_mm.minCoeff()), &lo, &dims);
     const FloatImage hu = crop_hu(ct, lo, dims);
-    const FloatImage tube =
-        tube_measure(hu, o.tubes.sigma_min_mm, o.tubes.sigma_max_mm, o.tubes.sigma_steps, o.tubes.gamma_hu, o.threads);
     const ImageGrid& cg = hu.grid;
     auto to_ct = [&](int64_t c) {
       const auto [i, j, k] = cg.ijk(c);
       return g.index(lo[0] + i, lo[1] + j, lo[2] + k);
     };
-
-    // the candidates: tube voxels bright enough, outside the region; their 26-connected pieces
     Mask in_crop = [&] {
       Mask m = Mask::zeros(cg);
       for (int64_t c = 0; c < cg.size(); ++c) m.v[c] = region.v[to_ct(c)];
       return m;
     }();
+    // the vesselness where a candidate may be: outside the region, bright enough, not metal
+    auto may_be = [&](int64_t c) { return !in_crop.v[c] && hu.v[c] >= o.tubes.min_hu && hu.v[c] <= out.upper_hu; };
+    const FloatImage tube = [&] {
+      Mask where = Mask::zeros(cg);
+      for (int64_t c = 0; c < cg.size(); ++c) where.v[c] = may_be(c);
+      VesselnessOptions vo;
+      vo.sigma_min_mm = o.tubes.sigma_min_mm;
+      vo.sigma_max_mm = o.tubes.sigma_max_mm;
+      vo.sigma_steps = o.tubes.sigma_steps;
+      vo.gamma = o.tubes.gamma_hu;
+      vo.threads = o.threads > 0 ? o.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+      return bright_tube_vesselness(hu, &where, vo);
+    }();
+
+    // the candidates: tube voxels bright enough, outside the region; their 26-connected pieces
     // the region's large lumens (aorta, chambers): within large_radius_mm + 1 mm of a voxel
     // large_radius_mm deep (an opening by a ball, as the clipping's). A thin vessel leaves a vessel,
     // not these: a tube piece joins only thin parts of the region, and one touching a large lumen
@@ -213,9 +225,7 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
     std::vector<int32_t> piece_of(cg.size(), -1);
     std::vector<std::vector<int64_t>> pieces;
     std::vector<int64_t> stack;
-    auto candidate = [&](int64_t c) {
-      return !in_crop.v[c] && tube.v[c] >= o.tubes.min_measure && hu.v[c] >= o.tubes.min_hu && hu.v[c] <= out.upper_hu;
-    };
+    auto candidate = [&](int64_t c) { return may_be(c) && tube.v[c] >= o.tubes.min_measure; };
     for (int64_t c0 = 0; c0 < cg.size(); ++c0) {
       if (piece_of[c0] >= 0 || !candidate(c0)) continue;
       const int32_t id = static_cast<int32_t>(pieces.size());

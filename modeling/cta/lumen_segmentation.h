@@ -20,16 +20,16 @@ namespace pcisim::modeling {
 
 // thin vessels the thresholds lose (their partial-volume peak under the lower threshold, more so
 // after smoothing): the voxels that lie on a bright tube (Frangi's vesselness over scales
-// sigma_min..sigma_max, itk_filters.h tube_measure) and are brighter than min_hu in the CT, within
+// sigma_min..sigma_max, modeling/image/vesselness.h) and are brighter than min_hu in the CT, within
 // margin_mm of the region's box, form 26-connected pieces; a piece at least min_piece_mm long that
 // comes within join_mm of the region (through voxels >= min_hu: where a thin vessel leaves a larger
 // one the larger one's edge makes it no tube) joins it, with the voxels between, in rounds.
 // Sheets (the myocardium's edge), blobs (chambers) and noise are not tubes.
-// Off by default (issue #30, docs/modeling.md): with the smoothed fill it lifts the family's
-// tuning median OV from 0.664 to 0.839 but traces along the rims of large lumens in some cases
-// (over 1 m of false centerline) and follows a vein touching an artery on classic phantom 2.
+// On by default (issue #30, docs/modeling.md): distal vessels whose contrast fades under the
+// lower threshold were cut short (the family's missed centerline); the vesselness is computed at
+// the candidate voxels alone (modeling/image/vesselness.h).
 struct TubeGrowthOptions {
-  bool enabled = false;
+  bool enabled = true;
   double sigma_min_mm = 0.4, sigma_max_mm = 1.0;
   int sigma_steps = 3;
   double gamma_hu = 100;      // Frangi's c: the structure strength that counts as a vessel's

@@ -353,4 +353,34 @@ CenterlineScores score_centerlines(const VesselTree& reference, const VesselTree
   return out;
 }
 
+VesselTree outside_aorta(const VesselTree& tree, const VesselTree& truth) {
+  const int a = truth.find("aorta");
+  if (a < 0) return tree;
+  const auto& aorta = truth.branches[a];
+  auto inside = [&](const Vector3d& p) {
+    for (size_t i = 0; i + 1 < aorta.points.size(); ++i) {
+      const Vector3d x = aorta.points[i].position_m, ab = aorta.points[i + 1].position_m - x;
+      const double t = std::clamp((p - x).dot(ab) / std::max(ab.squaredNorm(), 1e-18), 0.0, 1.0);
+      const double r = aorta.points[i].radius_m + t * (aorta.points[i + 1].radius_m - aorta.points[i].radius_m);
+      if ((x + t * ab - p).norm() < r) return true;
+    }
+    return false;
+  };
+  VesselTree out = tree;
+  for (auto& b : out.branches) {
+    if (b.name == "aorta" || b.parent < 0 || tree.branches[b.parent].name != "aorta") continue;
+    // a tree's first branch: drop its leading points inside the aorta; its children's junction
+    // indices move with it
+    size_t cut = 0;
+    while (cut + 2 < b.points.size() && inside(b.points[cut].position_m)) ++cut;
+    if (cut == 0) continue;
+    const int self = static_cast<int>(&b - out.branches.data());
+    b.points.erase(b.points.begin(), b.points.begin() + cut);
+    for (auto& c : out.branches) {
+      if (c.parent == self) c.parent_point = std::max(0, c.parent_point - static_cast<int>(cut));
+    }
+  }
+  return out;
+}
+
 }  // namespace pcisim::modeling

@@ -66,4 +66,10 @@ struct CenterlineScores {
 CenterlineScores score_centerlines(const anatomy::VesselTree& reference, const anatomy::VesselTree& extracted,
                                    const CenterlineScoreOptions& options = {});
 
+// Schaap et al. score each vessel from its ostium: `tree` with the leading points of each of its
+// trees (a branch whose parent is the aorta) that lie inside the true aortic lumen (`truth`'s
+// "aorta" branch and radii) cut off; the phantoms' trees and the pipeline's start on the aortic
+// centerline. `tree` as it is when `truth` has no aorta.
+anatomy::VesselTree outside_aorta(const anatomy::VesselTree& tree, const anatomy::VesselTree& truth);
+
 }  // namespace pcisim::modeling

@@ -2,9 +2,7 @@
 #include "modeling/image/itk_bridge.h"
 #include "modeling/image/itk_bridge_image.h"
 
-#include <itkHessianToObjectnessMeasureImageFilter.h>
 #include <itkImage.h>
-#include <itkMultiScaleHessianBasedMeasureImageFilter.h>
 #include <itkSymmetricSecondRankTensor.h>
 #include <itkSignedMaurerDistanceMapImageFilter.h>
 #include <itkThresholdSegmentationLevelSetImageFilter.h>
@@ -59,32 +57,6 @@ int threshold_level_set(const Grid& grid, const float* feature, const uint8_t* i
   const float* phi = ls->GetOutput()->GetBufferPointer();
   for (size_t n = 0; n < voxels(grid); ++n) out[n] = phi[n] < 0.0f ? 1 : 0;
   return static_cast<int>(ls->GetElapsedIterations());
-}
-
-void tube_measure(const Grid& grid, const float* image, double sigma_min_mm, double sigma_max_mm, int sigma_steps,
-                  double gamma, int threads, float* out) {
-  using Hessian = itk::SymmetricSecondRankTensor<double, 3>;
-  using HessianImage = itk::Image<Hessian, 3>;
-  auto objectness = itk::HessianToObjectnessMeasureImageFilter<HessianImage, RealImage>::New();
-  objectness->SetObjectDimension(1);  // a line: a tube
-  objectness->SetBrightObject(true);
-  objectness->SetAlpha(0.5);
-  objectness->SetBeta(0.5);
-  objectness->SetGamma(gamma);
-  objectness->SetScaleObjectnessMeasure(false);
-  auto multi = itk::MultiScaleHessianBasedMeasureImageFilter<RealImage, HessianImage, RealImage>::New();
-  multi->SetInput(to_itk<float>(grid, image));
-  multi->SetHessianToMeasureFilter(objectness);
-  multi->SetSigmaMinimum(sigma_min_mm);
-  multi->SetSigmaMaximum(sigma_max_mm);
-  multi->SetNumberOfSigmaSteps(std::max(1, sigma_steps));
-  multi->SetSigmaStepMethodToEquispaced();
-  multi->SetNonNegativeHessianBasedMeasure(true);
-  multi->SetGenerateScalesOutput(false);
-  multi->SetGenerateHessianOutput(false);
-  if (threads > 0) multi->SetNumberOfWorkUnits(threads);
-  multi->Update();
-  std::memcpy(out, multi->GetOutput()->GetBufferPointer(), voxels(grid) * sizeof(float));
 }
 
 }  // namespace pcisim::modeling::itk_bridge

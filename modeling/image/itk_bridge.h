@@ -43,11 +43,4 @@ struct DemonsParams {
 double diffeomorphic_demons(const Grid& grid, const float* fixed, const float* moving, const DemonsParams& p,
                             float* field_mm);
 
-// Frangi's vesselness of bright tubes (Frangi et al., MICCAI 1998; ITK's
-// HessianToObjectnessMeasureImageFilter with object dimension 1, alpha 0.5, beta 0.5 and the given
-// gamma, HU): the largest over sigma_steps scales from sigma_min_mm to sigma_max_mm (equispaced),
-// each scale's Hessian normalised by sigma^2 (MultiScaleHessianBasedMeasureImageFilter)
-void tube_measure(const Grid& grid, const float* image, double sigma_min_mm, double sigma_max_mm, int sigma_steps,
-                  double gamma, int threads, float* out);
-
 }  // namespace pcisim::modeling::itk_bridge

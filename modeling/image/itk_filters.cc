@@ -38,14 +38,6 @@ Mask threshold_level_set(const FloatImage& hu, const Mask& initial, const LevelS
   return out;
 }
 
-FloatImage tube_measure(const FloatImage& hu, double sigma_min_mm, double sigma_max_mm, int steps, double gamma_hu,
-                        int threads) {
-  FloatImage out{hu.grid, std::vector<float>(hu.v.size())};
-  itk_bridge::tube_measure(bridge_grid(hu.grid), hu.v.data(), sigma_min_mm, sigma_max_mm, steps, gamma_hu, threads,
-                           out.v.data());
-  return out;
-}
-
 std::string validate(const DemonsOptions& o) {
   if (o.levels < 1 || o.levels > 8) return "levels: must be 1-8, got " + std::to_string(o.levels);
   if (o.iterations < 1 || o.iterations > 10000)

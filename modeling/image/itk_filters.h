@@ -28,12 +28,6 @@ struct LevelSetOptions {
 Mask threshold_level_set(const FloatImage& hu, const Mask& initial, const LevelSetOptions& options,
                          int* iterations_done = nullptr);
 
-// Frangi's vesselness of bright tubes, the largest over `steps` scales from sigma_min_mm to
-// sigma_max_mm (itk_bridge.h: tube_measure); 0..1, near 1 on the axis of a tube of radius ~sigma
-// brighter than its surroundings by much more than gamma_hu, 0 on sheets, blobs and flat ground
-FloatImage tube_measure(const FloatImage& hu, double sigma_min_mm, double sigma_max_mm, int steps, double gamma_hu,
-                        int threads);
-
 // diffeomorphic demons in a multi-resolution pyramid (itk_bridge.h): the displacement u with
 // fixed(x) ~ moving(x + u(x)), one FloatImage per physical axis, mm
 struct DemonsOptions {

@@ -429,10 +429,13 @@ int main(int argc, char** argv) {
   knobs->add_flag("--lumen-tubes", tubes, "lumen.stl as one closed tube per branch instead of one stitched surface");
   bool robust_fill = false;
   knobs->add_flag("--robust-fill", robust_fill,
-                  "experimental (issue #30): the lumen fill on the CT smoothed by 0.5 mm (no noise sponges through a "
-                  "chamber or the myocardium near the threshold) and thin vessels followed along bright tubes "
-                  "(vesselness); better on varied CTAs at the median, but can trace along a large lumen's rim; "
-                  "docs/modeling.md");
+                  "the lumen fill on the CT smoothed by 0.5 mm from the start (no noise sponges through a chamber or "
+                  "the myocardium near the threshold); without it the pipeline fills the smoothed CT again only when "
+                  "the first fill made such a sponge at the aortic root; docs/modeling.md");
+  bool no_tube_growth = false;
+  knobs->add_flag("--no-tube-growth", no_tube_growth,
+                  "do not follow thin vessels along bright tubes (vesselness) past the lower threshold: faster, loses "
+                  "distal vessels whose contrast fades; docs/modeling.md");
   bool no_heart_fit = false;
   knobs->add_flag("--no-heart-fit", no_heart_fit,
                   "keep the template heart as placed under the vessels (no elastic fit to the CT's heart, no "
@@ -463,10 +466,8 @@ int main(int argc, char** argv) {
   o.stitched_lumen.spacing_m = lumen_spacing_mm * 1e-3;
   o.stitched = !tubes;
   o.heart_fit.enabled = !no_heart_fit;
-  if (robust_fill) {
-    o.segmentation.smoothing_mm = 0.5;
-    o.segmentation.tubes.enabled = true;
-  }
+  if (robust_fill) o.segmentation.smoothing_mm = 0.5;
+  o.segmentation.tubes.enabled = !no_tube_growth;
   o.threads = threads;
   o.segmentation.bridging.enabled = o.segmentation.bridging.max_gap_mm > 0;
 

@@ -300,5 +300,44 @@ TEST(PhantomCtaFamily, TheRightVentricleReachesItsThinWall) {
   }
 }
 
+// a test's pins (PhantomCtaSpec::pins) set the draws they name and nothing else: the rest of the
+// phantom is as drawn without them; a pin outside the family's range, or on a classic phantom, is
+// refused naming it
+TEST(PhantomCtaFamily, PinsSetTheirDrawsAndNothingElse) {
+  const PhantomCta free = make_phantom_cta(coarse(5));
+  PhantomCtaSpec s = coarse(5);
+  s.pins.myocardium_hu = 150;
+  s.pins.vein_hu = 300;
+  s.pins.open_valve = free.facts.open_valve ? 0 : 1;
+  s.pins.contrast_hu_proximal = 300;
+  const PhantomCta pinned = make_phantom_cta(s);
+  EXPECT_EQ(pinned.facts.myocardium_hu, 150);
+  EXPECT_EQ(pinned.facts.vein_hu, 300);
+  EXPECT_NE(pinned.facts.open_valve, free.facts.open_valve);
+  EXPECT_EQ(pinned.facts.contrast_hu_proximal, 300);
+  EXPECT_EQ(pinned.facts.aorta_hu, 300);
+  EXPECT_NEAR(pinned.facts.lv_hu - pinned.facts.aorta_hu, free.facts.lv_hu - free.facts.aorta_hu, 1e-9);
+  // what was not pinned is as drawn
+  EXPECT_EQ(pinned.facts.rv_wall_mm, free.facts.rv_wall_mm);
+  EXPECT_EQ(pinned.facts.fade_hu_per_mm, free.facts.fade_hu_per_mm);
+  EXPECT_EQ(pinned.facts.stent_branch, free.facts.stent_branch);
+  EXPECT_EQ(pinned.facts.side_branches, free.facts.side_branches);
+  ASSERT_EQ(pinned.truth.branches.size(), free.truth.branches.size());
+  // refused: out of range, on a classic phantom
+  PhantomCtaSpec bad = coarse(5);
+  bad.pins.rv_wall_mm = 1.0;
+  try {
+    make_phantom_cta(bad);
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("pins.rv_wall_mm"), std::string::npos) << e.what();
+  }
+  PhantomCtaSpec classic;
+  classic.dims = {10, 10, 10};
+  classic.spacing_mm = {14, 14, 14};
+  classic.pins.myocardium_hu = 100;
+  EXPECT_THROW(make_phantom_cta(classic), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace pcisim::anatomy

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace pcisim::modeling {
 namespace {
 
@@ -89,6 +91,33 @@ TEST(BranchChecks, BranchingsAreNotCrossings) {
   tee.branches.push_back(line({20, 0, 0}, {0, -1, 0}, 15, 0, 40));
   EXPECT_TRUE(drop_crossings(&tee, BranchCheckOptions{}).empty());
   EXPECT_EQ(tee.branches.size(), 3u);
+}
+
+// a vein beside the vessel, touching it (centres 2.2 mm apart): traced as a branch that leaves
+// the vessel and runs back along it for 20 mm; it is cut away. A real side branch leaving at
+// 45 deg, a short branch that starts beside the vessel, and an 8 mm branch leaving at 30 deg
+// (near its parent for most of its length, but not along it) are left alone
+TEST(BranchChecks, AVesselBesideItsParentIsCutAwayAndRealBranchesAreNot) {
+  ModelTree t;
+  t.branches.push_back(line({0, 0, 0}, {1, 0, 0}, 60));
+  ModelBranch vein = line({30, 0, 0}, {0, 1, 0}, 2.2, 0, 60);  // over to the vein
+  const ModelBranch along = line({30, 2.2, 0}, {-1, 0, 0}, 20);
+  vein.points_mm.insert(vein.points_mm.end(), along.points_mm.begin() + 1, along.points_mm.end());
+  vein.radius_mm.assign(vein.points_mm.size(), 1.0);
+  t.branches.push_back(vein);
+  t.branches.push_back(line({45, 0, 0}, {1, 1, 0}, 15, 0, 90));    // a side branch at 45 deg
+  t.branches.push_back(line({50, 0, 0}, {1, 0.3, 0}, 6, 0, 100));  // short, beside at first
+  // an 8 mm branch of 1 mm leaving at 30 deg a parent of 1.75 mm: near it for most of its length
+  ModelBranch shallow = line({55, 0, 0}, {std::cos(0.52), std::sin(0.52), 0}, 8, 0, 110);
+  t.branches.push_back(shallow);
+  for (double& r : t.branches[0].radius_mm) r = 1.75;
+  const auto notes = drop_parallel_branches(&t, BranchCheckOptions{});
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("beside"), std::string::npos) << notes[0];
+  ASSERT_EQ(t.branches.size(), 4u);
+  EXPECT_EQ(t.branches[1].parent_point, 90);
+  EXPECT_EQ(t.branches[2].parent_point, 100);
+  EXPECT_EQ(t.branches[3].parent_point, 110);
 }
 
 }  // namespace

@@ -33,7 +33,10 @@ int main(int argc, char** argv) {
   app.add_option("--link", link, "make LINK a symbolic link to the pseudo-terminal (the bridge's --port)")->required();
   app.add_option("--script", script_path, "trainee script (JSON, docs/trainee-script.md); default: the built-in one");
   app.add_option("--log", log_path, "write every force line received as CSV (t_s, axial_mN, torque_uNm, seq)");
-  app.add_option("--duration", duration_s, "seconds to run; 0 = until SIGINT/SIGTERM")->check(CLI::Range(0.0, 1e7));
+  app.add_option("--duration", duration_s,
+                 "seconds to run; 0 = until SIGINT/SIGTERM. With --hold-until-force, seconds of script from its t=0 "
+                 "(as the bridge's --duration counts from the server's answer), or of waiting while it holds")
+      ->check(CLI::Range(0.0, 1e7));
   app.add_option("--rate-hz", rate_hz, "encoder lines per second")
       ->check(CLI::Range(1.0, 10000.0))
       ->capture_default_str();
@@ -80,7 +83,8 @@ int main(int argc, char** argv) {
     if (script_start_ns < 0 && box->force_lines() > 0) script_start_ns = now_ns;
     t_s = script_start_ns < 0 ? 0.0 : (now_ns - script_start_ns) * 1e-9;
     const double wall_s = (now_ns - start_ns) * 1e-9;
-    if (duration_s > 0 && wall_s >= duration_s) break;
+    // the duration is the script's once it runs (a slow server's start does not shorten it)
+    if (duration_s > 0 && (script_start_ns < 0 ? wall_s : t_s) >= duration_s) break;
     box->step(t_s);
     // the watchdog on the box's own clock (wall time: it runs while the script holds)
     const bool tripped = box->watchdog_tripped(t_s) && script_start_ns >= 0;

@@ -81,7 +81,7 @@ CapstanResult run_capstan(const Capstan& c) {
   mu.body_static = mu.tip_static = mu.body_kinetic = mu.tip_kinetic = c.mu;
   physics::GuidewireParams g;
   g.model = physics::GuidewireModel::kRod;
-  g.rod_contact = physics::RodContactScheme::kSolve;
+  g.rod_contact = contact_scheme();
   g.segment_count = 300;
   g.tip_length_m = 0.0;
   g.tip_angle_deg = 0.0;

@@ -31,7 +31,7 @@ DeadEndResult run_dead_end() {
   mu.body_kinetic = mu.tip_kinetic = 0.2;
   physics::GuidewireParams g;
   g.model = physics::GuidewireModel::kRod;
-  g.rod_contact = physics::RodContactScheme::kSolve;
+  g.rod_contact = contact_scheme();
   g.segment_count = 300;
   g.tip_angle_deg = 0.0;
   physics::RodWire w(g, physics::CatheterPath({Eigen::Vector3d(0, 0, -0.2), Eigen::Vector3d(0, 0, 0)}), &lumen, contact,

@@ -47,7 +47,7 @@ EndOnResult run_end_on(const EndOn& c) {
   const physics::TubeLumen lumen(tree);
   physics::GuidewireParams g;
   g.model = physics::GuidewireModel::kRod;
-  g.rod_contact = physics::RodContactScheme::kSolve;
+  g.rod_contact = contact_scheme();
   g.segment_count = 300;
   g.tip_length_m = 0.0;
   g.tip_angle_deg = 0.0;

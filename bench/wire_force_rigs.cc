@@ -9,6 +9,18 @@
 
 namespace pcisim::bench::wire_force {
 
+namespace {
+physics::RodContactScheme g_scheme = physics::RodContactScheme::kSolve;
+}  // namespace
+
+physics::RodContactScheme contact_scheme() {
+  return g_scheme;
+}
+
+void set_contact_scheme(physics::RodContactScheme scheme) {
+  g_scheme = scheme;
+}
+
 StepCost step_cost(std::vector<double> step_ms, std::vector<int> substeps) {
   StepCost c;
   if (step_ms.empty()) return c;

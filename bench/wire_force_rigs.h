@@ -14,10 +14,16 @@
 #include <string>
 #include <vector>
 
+#include "physics/guidewire/guidewire_params.h"
+
 namespace pcisim::bench::wire_force {
 
 // every rig steps the wire at the scenes' 30 Hz
 inline constexpr double kStepS = 1.0 / 30.0;
+
+// the wall scheme every rig's wire runs (--contact solve|implicit; the bench sets it once)
+physics::RodContactScheme contact_scheme();
+void set_contact_scheme(physics::RodContactScheme scheme);
 
 // one 30 Hz step of the wire: its median and 99th percentile over a run, and the substeps a
 // step took (more than the 8 set where the contact halved them)

@@ -47,7 +47,7 @@ TipOnWallResult run_tip_on_wall(const TipOnWall& c) {
   const double length_m = c.length_mm * 1e-3, d_m = c.deflection_mm * 1e-3;
   physics::GuidewireParams g;
   g.model = physics::GuidewireModel::kRod;
-  g.rod_contact = physics::RodContactScheme::kSolve;
+  g.rod_contact = contact_scheme();
   g.segment_count = c.segments;
   g.rod_substeps = c.substeps;
   g.tip_length_m = 0.0;

@@ -94,7 +94,7 @@ TorqueLagResult run_torque_lag(const TorqueLag& c) {
   if (!c.friction) mu.body_static = mu.body_kinetic = mu.tip_static = mu.tip_kinetic = 0.0;
   physics::GuidewireParams g;
   g.model = physics::GuidewireModel::kRod;
-  g.rod_contact = physics::RodContactScheme::kSolve;
+  g.rod_contact = contact_scheme();
   g.segment_count = 300;
   g.tip_angle_deg = 0.0;  // a straight tip: its spin is the wire's, not the tip swinging round the lumen
   physics::RodWire w(g, physics::CatheterPath({Eigen::Vector3d(0, 0, -0.2), Eigen::Vector3d(0, 0, 0)}), &lumen, contact,

@@ -27,7 +27,9 @@ enum class BeatCoupling { kKinematic, kContact };
 // rod's elasticity, on its contact compliance (physics/rod/contact_pgs.h; issue #33). kSolve is
 // for rigs only: it holds a tip on a wall but is not yet stable in a dead end or a bend, so no
 // scene key selects it
-enum class RodContactScheme { kProjection, kSolve };
+// the rod's wall: a projection after each solve; the contact problem on the rod's compliance
+// after its free solve (PGS); or a stiff one-sided spring taken implicitly inside the solve
+enum class RodContactScheme { kProjection, kSolve, kImplicit };
 
 // where the chain-mail's limits come from: the alpha / beta fields as set, or derived from the
 // rod section's bending stiffness for a nitinol or a stainless-steel core (chain_mail_limits.h)
@@ -78,6 +80,11 @@ struct GuidewireParams {
   // problem is no longer a small linear one (a node near the wall moved far, or the wall turned
   // under it; rod_wire.cc); 0 keeps every substep as rod_substeps sets it
   int rod_substep_halvings = 4;
+  // with rod_contact kImplicit: the wall's stiffness, N/m (1 N leaves a node 0.01 mm into the
+  // wall margin at 1e5), also the stiffness friction holds a stuck node with; and the most
+  // solves of a substep while the contacts settle (the wall placed again where the nodes end)
+  double rod_wall_stiffness_n_per_m = 1e5;
+  int rod_contact_rounds = 6;
   // the hub lets the wire slip (refuses further feed) while the wire pushes back harder than
   // this: the grip of a torque device and the guide catheter's support are finite
   double feed_refuse_force_n = 1.0;
@@ -108,6 +115,8 @@ inline constexpr ParamRange kGuidewireRodDampingPerS{0, 1000};
 inline constexpr ParamRange kGuidewireRodSubsteps{1, 100};
 inline constexpr ParamRange kGuidewireRodIterations{1, 20};
 inline constexpr ParamRange kGuidewireRodSubstepHalvings{0, 6};
+inline constexpr ParamRange kGuidewireRodWallStiffnessNPerM{1e2, 1e8};
+inline constexpr ParamRange kGuidewireRodContactRounds{1, 20};
 inline constexpr ParamRange kGuidewireFeedRefuseForceN{0.01, 100};
 
 struct VesselContactParams {

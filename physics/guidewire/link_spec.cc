@@ -64,6 +64,8 @@ void validate(const GuidewireParams& p) {
   in_range(p.rod_substeps, kGuidewireRodSubsteps, "rod_substeps");
   in_range(p.rod_iterations, kGuidewireRodIterations, "rod_iterations");
   in_range(p.rod_substep_halvings, kGuidewireRodSubstepHalvings, "rod_substep_halvings");
+  in_range(p.rod_wall_stiffness_n_per_m, kGuidewireRodWallStiffnessNPerM, "rod_wall_stiffness_n_per_m");
+  in_range(p.rod_contact_rounds, kGuidewireRodContactRounds, "rod_contact_rounds");
   in_range(p.feed_refuse_force_n, kGuidewireFeedRefuseForceN, "feed_refuse_force_n");
   if (p.model == GuidewireModel::kRod)
     check(p.torsional_rigidity_nm2 > 0.0, "torsional_rigidity_nm2", "above 0 for the rod");

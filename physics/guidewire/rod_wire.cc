@@ -48,6 +48,14 @@ constexpr double kRetryMotionM = 0.25e-3;
 constexpr double kRetryTurnDeg = 20.0;
 constexpr double kRetryResidualM = 0.05e-3;
 constexpr int kGoodSubstepsBeforeLonger = 4;
+// the implicit scheme: the contacts have settled when no node moved more than this between two
+// solves of a substep (at the default wall stiffness, 0.02 N of wall force); a node that begins a
+// substep deeper in the wall than kSpringDeepM (issue #33's penetration bound; the spring holds
+// 1 N at a tenth of it) is moved back to that depth without velocity (the spring would shoot it
+// out at depth / h), and a substep whose last solve leaves a node without a spring deeper than
+// that is taken back and halved
+constexpr double kSpringSettledM = 0.2e-6;
+constexpr double kSpringDeepM = 0.05e-3;
 
 }  // namespace
 
@@ -133,6 +141,10 @@ RodWire::RodWire(const GuidewireParams& params, CatheterPath path, const LumenQu
     contacts_.reserve(kMaxRodContacts);
     contact_impulse_.reserve(kMaxRodContacts);
   }
+  for (auto* v : {&spring_at_m_, &spring_normal_, &spring_force_n_, &anchor_rest_m_})
+    v->assign(n + 1, Eigen::Vector3d::Zero());
+  spring_stuck_.assign(n + 1, 0);
+  anchored_.assign(n + 1, 0);
   node_impulse_.assign(n + 1, Eigen::Vector3d::Zero());
   wall_impulse_vector_n_s_.assign(n + 1, Eigen::Vector3d::Zero());
   wall_force_vector_n_.assign(n + 1, Eigen::Vector3d::Zero());
@@ -140,6 +152,8 @@ RodWire::RodWire(const GuidewireParams& params, CatheterPath path, const LumenQu
   rod_.save_state(saved_rod_);
   saved_impulse_ = node_impulse_;
   saved_touched_ = touched_;
+  saved_anchor_ = anchor_rest_m_;
+  saved_anchored_ = anchored_;
   // start fully inside the catheter, the tip at the exit
   place_in_catheter(0.0, 1.0);
   const auto x = rod_.mutable_nodes_m();
@@ -247,7 +261,7 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
       std::max(params_.rod_substeps, static_cast<int>(std::min(std::ceil(dt_s / kMaxSubstepS - 1e-9), 10000.0)));
   // the step is counted in ticks of the shortest substep allowed; a substep of `halvings_` is
   // 2^(most - halvings_) ticks, so a halved substep and the later longer ones stay on one grid
-  const int most = params_.rod_contact == RodContactScheme::kSolve ? params_.rod_substep_halvings : 0;
+  const int most = params_.rod_contact != RodContactScheme::kProjection ? params_.rod_substep_halvings : 0;
   halvings_ = std::min(halvings_, most);
   const int64_t ticks_per_substep = int64_t{1} << most, ticks = substeps * ticks_per_substep;
   // the moving wall: every node's rest point at the step's start
@@ -263,13 +277,15 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
       saved_impulse_ = node_impulse_;
       saved_touched_ = touched_;
       saved_report_ = report_;
+      saved_anchor_ = anchor_rest_m_;
+      saved_anchored_ = anchored_;
     }
     const double before_m = fed_m_, rotation_before_rad = rotation_rad_;
     // with the wall inside the solve the hub's force is the wall's too, so the grip slips as soon
     // as it exceeds the limit, within the step: a whole step's feed pushed into a jammed wire
     // (4 mm at the fastest feed) is more than one substep's contact problem can answer
-    const bool stop_feed = params_.rod_contact == RodContactScheme::kSolve && !feed_stopped && fed_target_m > fed_m_ &&
-                           substep_hub_axial_n_ > params_.feed_refuse_force_n;
+    const bool stop_feed = params_.rod_contact != RodContactScheme::kProjection && !feed_stopped &&
+                           fed_target_m > fed_m_ && substep_hub_axial_n_ > params_.feed_refuse_force_n;
     if (!feed_stopped) fed_m_ = previous_fed_m + a * (fed_target_m - previous_fed_m);
     if (stop_feed) fed_m_ = before_m;
     rotation_rad_ = previous_rotation_rad + a * (rotation_target_rad - previous_rotation_rad);
@@ -298,6 +314,8 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
       node_impulse_ = saved_impulse_;
       touched_ = saved_touched_;
       report_ = saved_report_;
+      anchor_rest_m_ = saved_anchor_;
+      anchored_ = saved_anchored_;
       ++report_.retried;
       fed_m_ = before_m;
       rotation_rad_ = rotation_before_rad;
@@ -605,6 +623,143 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
   hold_spin(rod);
 }
 
+// The implicit scheme (issue #33): after the prediction (round 0) and after each solve, the
+// springs of every free node, placed where it stands (CosseratRod::set_node_spring):
+//   depth        d = distance to the wall + margin (> 0: inside the margin)
+//   wall         K_n = k n n^T towards the wall point x - d n: force k d along -n where d > 0,
+//                none where d <= 0 (one-sided: a node that ended outside is let go)
+//   friction     K_t = k_t (I - n n^T) towards the anchor b (where the node stuck): the stuck
+//                spring k_t = k holds it while k |x - b|_t <= mu_s N (N = k d); else it slides
+//                and k_t = mu_k N / |x - b|_t, a spring whose force is mu_k N against the slip
+//                (a Coulomb law as a sequence of linear ones: the stiffness found again each round)
+// The springs placed after a solve are the next solve's; the force of those the last solve ran
+// with is kept (spring_force_n_). Returns whether to solve again: a node moved more than
+// kSpringSettledM since its springs were placed, or one came into or out of contact.
+bool RodWire::place_springs(rod::CosseratRod& rod, int round, double h) {
+  const double margin = contact_->wall_margin_m;
+  const double k = params_.rod_wall_stiffness_n_per_m;
+  const auto x = rod.nodes_m();
+  const auto x_start = rod.substep_start_nodes_m();
+  const int first_free = rod.hub_node() + 1;
+  if (round == 0) {
+    // a node that begins the substep deep in the wall: back to kSpringDeepM, without velocity
+    const auto x_begin = rod.substep_start_nodes_m();
+    for (int i = first_free; i < node_count(); ++i) {
+      const WallSample s = lumen_->sample(x_begin[i] - (offset_[i] - h * wall_velocity_[i]));
+      const double too_deep = s.distance_m + margin - kSpringDeepM;
+      if (too_deep > 0.0) rod.shift_node_without_velocity(i, -too_deep * s.normal);
+    }
+    std::fill(stuck_.begin(), stuck_.end(), 0);
+    std::fill(segment_stuck_.begin(), segment_stuck_.end(), 0);
+    std::fill(node_wall_n_.begin(), node_wall_n_.end(), 0.0);
+    for (int i = 0; i < first_free; ++i) {
+      rod.clear_node_spring(i);
+      anchored_[i] = 0;
+    }
+  } else {
+    // what the last solve's springs did: the wall's force on each node, and whether it stuck
+    for (int i = first_free; i < node_count(); ++i) {
+      spring_force_n_[i] = rod.node_spring_force_n(i);
+      const double push = -spring_force_n_[i].dot(spring_normal_[i]);
+      node_wall_n_[i] = rod.has_node_spring(i) && push > 0.0 ? push : 0.0;
+      stuck_[i] = node_wall_n_[i] > 0.0 && spring_stuck_[i];
+    }
+  }
+  // the last round: its solve stands; the spin about the wire's axis as the projection holds it
+  const auto finish = [&] {
+    // a node the last solve left deep in the wall with no spring: the substep is too long here
+    if (halvings_ < params_.rod_substep_halvings) {
+      for (int i = first_free; i < node_count() && !retry_; ++i)
+        retry_ = !rod.has_node_spring(i) && lumen_->sample(x[i] - offset_[i]).distance_m + margin > kSpringDeepM;
+      if (retry_) return false;
+    }
+    int contacts = 0;
+    for (int i = first_free; i < node_count(); ++i) {
+      if (!(node_wall_n_[i] > 0.0)) continue;
+      touched_[i] = 1;
+      normal_[i] = spring_normal_[i];
+      ++contacts;
+      // how deep into the margin the wall's spring holds the node (N / k where it settled)
+      report_.residual_m = std::max(report_.residual_m, node_wall_n_[i] / k);
+    }
+    report_.contacts = contacts;
+    report_.most_contacts = std::max(report_.most_contacts, contacts);
+    report_.most_sweeps = std::max(report_.most_sweeps, round);  // the solves the substep took
+    hold_spin(rod);
+    return false;
+  };
+  if (round >= params_.rod_contact_rounds) return finish();
+  bool again = false;
+  for (int i = first_free; i < node_count(); ++i) {
+    // where the spring is linearised: after a solve, where the node ended; before the first, where
+    // it began the substep (carried with the wall), not its prediction: a light node's prediction
+    // under a dead force may lie far outside (the capstan's leader on the tip: 0.44 m a substep),
+    // which only the rod's constraints bring back
+    const Eigen::Vector3d p = round == 0 ? Eigen::Vector3d(x_start[i] + h * wall_velocity_[i]) : x[i];
+    const WallSample s = lumen_->sample(p - offset_[i]);
+    const double d = s.distance_m + margin;
+    const bool was_on = rod.has_node_spring(i);
+    if (!(d > 0.0)) {
+      if (was_on) {
+        rod.clear_node_spring(i);
+        again = again || (round > 0);
+      }
+      continue;
+    }
+    const bool moved = (p - spring_at_m_[i]).squaredNorm() > kSpringSettledM * kSpringSettledM;
+    again = again || (round > 0 && (!was_on || moved));
+    spring_at_m_[i] = p;
+    const Eigen::Vector3d& n = s.normal;
+    spring_normal_[i] = n;
+    const Eigen::Matrix3d nn = n * n.transpose();
+    const Eigen::Vector3d wall_point = p - d * n;
+    Eigen::Matrix3d stiffness = k * nn;
+    Eigen::Vector3d anchor = wall_point;
+    spring_stuck_[i] = 0;
+    if (friction_) {
+      // a node that comes to the wall sticks where its substep began (relative to the wall)
+      if (!anchored_[i]) {
+        anchor_rest_m_[i] = x_start[i] - (offset_[i] - h * wall_velocity_[i]);
+        anchored_[i] = 1;
+      }
+      const Eigen::Vector3d b = anchor_rest_m_[i] + offset_[i];
+      const Eigen::Vector3d slip = (Eigen::Matrix3d::Identity() - nn) * (p - b);
+      const double wall_n = k * d, slip_m = slip.norm();
+      double k_t = k;
+      if (k * slip_m <= mu_static(i) * wall_n) {
+        spring_stuck_[i] = 1;
+      } else {
+        k_t = mu_kinetic(i) * wall_n / slip_m;
+      }
+      stiffness += k_t * (Eigen::Matrix3d::Identity() - nn);
+      anchor = b + n * n.dot(wall_point - b);
+    }
+    rod.set_node_spring(i, stiffness, anchor);
+  }
+  if (round > 0 && !again) return finish();
+  return round == 0 || again;
+}
+
+// after an implicit substep: a node that slid drags its friction anchor behind it (to where the
+// stuck spring would pull with mu_k N); a node off the wall lets go of its anchor
+void RodWire::commit_anchors(rod::CosseratRod& rod, double /*h*/) {
+  const auto x = rod.nodes_m();
+  const double k = params_.rod_wall_stiffness_n_per_m;
+  for (int i = rod.hub_node() + 1; i < node_count(); ++i) {
+    if (!(node_wall_n_[i] > 0.0)) {
+      anchored_[i] = 0;
+      continue;
+    }
+    if (!friction_ || stuck_[i]) continue;
+    const Eigen::Vector3d& n = spring_normal_[i];
+    const Eigen::Vector3d b = anchor_rest_m_[i] + offset_[i];
+    Eigen::Vector3d slip = x[i] - b;
+    slip -= slip.dot(n) * n;
+    const double slip_m = slip.norm(), behind_m = mu_kinetic(i) * node_wall_n_[i] / k;
+    if (slip_m > behind_m) anchor_rest_m_[i] += (1.0 - behind_m / slip_m) * slip;
+  }
+}
+
 // about the wire's axis: a segment touches where either of its nodes does; its constraints'
 // twisting torque against mu_s N r holds the frame's spin this substep
 void RodWire::hold_spin(rod::CosseratRod& rod) {
@@ -635,7 +790,7 @@ void RodWire::hold_spin(rod::CosseratRod& rod) {
 void RodWire::after_substep(rod::CosseratRod& rod, double h) {
   const int first_free = rod.hub_node() + 1;
   // a substep that went non-finite is taken back too, where it may be
-  if (!retry_ && params_.rod_contact == RodContactScheme::kSolve && halvings_ < params_.rod_substep_halvings &&
+  if (!retry_ && params_.rod_contact != RodContactScheme::kProjection && halvings_ < params_.rod_substep_halvings &&
       !rod.all_finite())
     retry_ = true;
   if (retry_) {
@@ -653,17 +808,20 @@ void RodWire::after_substep(rod::CosseratRod& rod, double h) {
   // the wall's impulse over the substep, for the step's average force: the solve scheme's as its
   // impulse (force h^2: normal and friction), the projection's along the wall's inward normal
   const bool solve = params_.rod_contact == RodContactScheme::kSolve;
+  const bool implicit = params_.rod_contact == RodContactScheme::kImplicit;
   for (int i = first_free; i < node_count(); ++i) {
     if (!(node_wall_n_[i] > 0.0)) continue;
     wall_impulse_n_s_[i] += node_wall_n_[i] * h;
-    wall_impulse_vector_n_s_[i] +=
-        solve ? Eigen::Vector3d(node_impulse_[i] / h) : Eigen::Vector3d(-node_wall_n_[i] * h * normal_[i]);
+    wall_impulse_vector_n_s_[i] += solve      ? Eigen::Vector3d(node_impulse_[i] / h)
+                                   : implicit ? Eigen::Vector3d(spring_force_n_[i] * h)
+                                              : Eigen::Vector3d(-node_wall_n_[i] * h * normal_[i]);
   }
+  if (implicit) commit_anchors(rod, h);
   if (friction_) {
     const auto v = rod.mutable_velocities_m_per_s();
     const auto omega = rod.mutable_angular_velocities_rad_per_s();
-    // (the solve scheme's friction on the nodes is in its impulses)
-    for (int i = first_free; i < node_count() && !solve; ++i) {
+    // (the solve and implicit schemes' friction on the nodes is in their solve)
+    for (int i = first_free; i < node_count() && !solve && !implicit; ++i) {
       if (!(node_wall_n_[i] > 0.0) || stuck_[i]) continue;
       const double mu_k = mu_kinetic(i);
       const Eigen::Vector3d& n = normal_[i];

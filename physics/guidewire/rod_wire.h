@@ -29,6 +29,16 @@
 // length, up to rod_substep_halvings times; a few good short substeps later the length doubles
 // again (step()).
 //
+// With guidewire.rod_contact "implicit" (issue #33) the wall is a stiff one-sided spring inside
+// the rod's own solve (CosseratRod::set_node_spring, backward Euler): a node inside the wall
+// margin is pulled back along the wall's normal by rod_wall_stiffness_n_per_m times its depth,
+// and friction holds it by a tangential spring to where it stuck (the same stiffness) as long as
+// that spring's force is within mu_s N, else drags it with mu_k N against its slip (the spring's
+// stiffness mu_k N / slip, found again each round: a Coulomb law solved as a sequence of linear
+// ones). The springs are placed again where the nodes end (the wall's normal and depth there)
+// and the substep solved again, up to rod_contact_rounds times. Everything the wall does is a
+// force inside the solve, so the rod's multipliers (the hub's force) carry it.
+//
 // Built once; step() allocates nothing.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -51,9 +61,10 @@ struct RodContactReport {
   int contacts = 0;         // in the last substep
   int most_contacts = 0;    // the most in any substep of the step
   int dropped = 0;          // candidates over the cap (kMaxRodContacts) in the step, the shallowest
-  int most_sweeps = 0;      // the contact solve's sweeps, the most in a substep
+  int most_sweeps = 0;      // the contact solve's sweeps, the most in a substep (implicit: its solves)
   int unconverged = 0;      // substeps whose solve stopped at the sweep cap
-  double residual_m = 0.0;  // the deepest a node was left inside the wall after the solve (then moved out)
+  double residual_m = 0.0;  // the deepest a node was left inside the wall after the solve (then moved out;
+                            // implicit: the deepest into the margin its spring holds a node)
   int substeps = 0;         // substeps taken in the step (more than rod_substeps where some were halved)
   int retried = 0;          // substeps taken back and tried again at half the length
   int finest_halvings = 0;  // the shortest substep of the step: rod_substeps' halved this many times
@@ -127,6 +138,8 @@ class RodWire final : public rod::RodContact {
   // RodContact: wall contact and friction of the free nodes
   void project(rod::CosseratRod& rod, int iteration, double substep_s) override;
   void after_substep(rod::CosseratRod& rod, double substep_s) override;
+  bool uses_springs() const override { return params_.rod_contact == RodContactScheme::kImplicit; }
+  bool place_springs(rod::CosseratRod& rod, int round, double substep_s) override;
 
  private:
   void place_in_catheter(double previous_fed_m, double dt_s);
@@ -138,6 +151,8 @@ class RodWire final : public rod::RodContact {
   void solve_contact(rod::CosseratRod& rod, double h);
   // the spin about the wire's axis of touching segments held by static friction (both schemes)
   void hold_spin(rod::CosseratRod& rod);
+  // the implicit scheme's friction anchors after an accepted substep
+  void commit_anchors(rod::CosseratRod& rod, double h);
   double mu_static(int node) const;
   double mu_kinetic(int node) const;
 
@@ -190,6 +205,13 @@ class RodWire final : public rod::RodContact {
   double substep_hub_axial_n_ = 0.0;  // the rod's push-back on the hub after the last accepted substep
   int halvings_ = 0, good_in_a_row_ = 0;
   double last_substep_s_ = 0.0;
+  // the implicit scheme: per node, where its springs were last placed, their normal and whether
+  // friction held it, the force of the springs the last solve ran with, and the point friction
+  // holds it to (rest frame; anchored_ while it touches)
+  std::vector<Eigen::Vector3d> spring_at_m_, spring_normal_, spring_force_n_, anchor_rest_m_;
+  std::vector<uint8_t> spring_stuck_, anchored_;
+  std::vector<Eigen::Vector3d> saved_anchor_;  // (the halved substeps' copies)
+  std::vector<uint8_t> saved_anchored_;
 };
 
 // the rod's section as CosseratRodParams (stiffness, mass, tip, substeps), documented in

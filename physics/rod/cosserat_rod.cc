@@ -80,6 +80,13 @@ CosseratRod::CosseratRod(const CosseratRodParams& params, const Eigen::Vector3d&
     bt_jacobian_.assign(n_, Eigen::Matrix3d::Zero());
   }
 
+  spring_on_.assign(nodes, 0);
+  spring_k_.assign(nodes, Eigen::Matrix3d::Zero());
+  spring_w_.assign(nodes, Eigen::Matrix3d::Zero());
+  spring_anchor_.assign(nodes, Eigen::Vector3d::Zero());
+  x_pred_.assign(nodes, Eigen::Vector3d::Zero());
+  q_pred_.assign(n_, clamp_q_);
+
   const Eigen::Vector3d tangent = clamp_q_ * Eigen::Vector3d::UnitZ();
   const double mu = params_.mass_per_length_kg_per_m;
   const double r = 0.5 * params_.outer_diameter_m;
@@ -112,6 +119,28 @@ void CosseratRod::set_node_force_n(int node, const Eigen::Vector3d& force_n) {
 
 void CosseratRod::clear_node_forces() {
   std::fill(force_.begin(), force_.end(), Eigen::Vector3d::Zero());
+}
+
+void CosseratRod::set_node_spring(int node, const Eigen::Matrix3d& k_n_per_m, const Eigen::Vector3d& anchor_m) {
+  if (node < 0 || node > n_) throw std::out_of_range("rod: node index out of range");
+  spring_on_[node] = 1;
+  spring_k_[node] = 0.5 * (k_n_per_m + k_n_per_m.transpose());
+  spring_anchor_[node] = anchor_m;
+}
+
+void CosseratRod::clear_node_spring(int node) {
+  if (node < 0 || node > n_) throw std::out_of_range("rod: node index out of range");
+  spring_on_[node] = 0;
+}
+
+Eigen::Vector3d CosseratRod::node_spring_force_n(int node) const {
+  if (node <= hub_ || node > n_ || !spring_on_[node]) return Eigen::Vector3d::Zero();
+  return -spring_k_[node] * (x_[node] - spring_anchor_[node]);
+}
+
+Eigen::Matrix3d CosseratRod::node_inverse_mass(int i) const {
+  if (springs_in_solve_ && spring_on_[i] && inv_mass_[i] > 0.0) return spring_w_[i];
+  return inv_mass_[i] * Eigen::Matrix3d::Identity();
 }
 
 void CosseratRod::set_clamp(const Eigen::Vector3d& position_m, const Eigen::Quaterniond& orientation) {
@@ -169,7 +198,9 @@ void CosseratRod::step(double dt_s, RodContact* contact) {
   last_h_ = h;
   for (int sub = 0; sub < substeps; ++sub) {
     predict(h);
-    if (params_.solver != RodSolver::kDirect || !solve_constraints_direct(h, contact)) {
+    const bool springs = params_.solver == RodSolver::kDirect && contact && contact->uses_springs();
+    if (params_.solver != RodSolver::kDirect ||
+        !(springs ? solve_with_springs(h, contact) : solve_constraints_direct(h, contact))) {
       direct_ran_ = false;  // the multipliers are Gauss-Seidel's now (material frame)
       solve_constraints(h, contact);
     }
@@ -230,51 +261,94 @@ void CosseratRod::solve_constraints(double h, RodContact* contact) {
 // constraints share node j + 1 and frame j with segment j + 1's and nothing further. Then
 //   dx = W J^T dlambda,  q <- normalise(q + 1/2 (0, dtheta) q).
 bool CosseratRod::solve_constraints_direct(double h, RodContact* contact) {
-  const double inv_h2 = 1.0 / (h * h);
-  const double inv_l = 1.0 / l_, inv_l2 = inv_l * inv_l;
-  const Eigen::Matrix3d eye = Eigen::Matrix3d::Identity();
   for (int j = 0; j < n_; ++j) {
     ss_lambda_[j].setZero();
     bt_lambda_[j].setZero();
   }
-  const int f = hub_;  // segments before it are kinematic
   direct_ran_ = true;  // for the contact hook's force queries below
   for (int it = 0; it < params_.iterations; ++it) {
-    // assemble the blocks at the current iterate
-    for (int j = f; j < n_; ++j) {
-      const Eigen::Matrix3d r = q_[j].toRotationMatrix();
-      const Eigen::Vector3d gamma = (x_[j + 1] - x_[j]) * inv_l - r.col(2);
-      const Eigen::Matrix3d alpha_ss = r * (ss_compliance_[j] * inv_h2).asDiagonal() * r.transpose();
-      const Eigen::Vector3d alpha_bt = bt_compliance_[j] * (inv_h2 / dual_length_m(j));
-      Eigen::Vector3d omega;
-      const Eigen::Matrix3d& c = ss_jacobian_[j] = stretch_shear_rotation_jacobian(q_[j]);
-      const Eigen::Matrix3d& b = bt_jacobian_[j] =
-          bend_twist_jacobian(pair_first_frame(j), q_[j], dual_length_m(j), rest_darboux_[j], &omega);
-      const double wi = 4.0 * inv_inertia_q_[j];
-      const double wi_prev = j > f ? 4.0 * inv_inertia_q_[j - 1] : 0.0;  // the hub's frame does not turn
-      BlockTridiagonal6::Block& d = system_.diagonal(j);
-      d.topLeftCorner<3, 3>() = (inv_mass_[j] + inv_mass_[j + 1]) * inv_l2 * eye + wi * c * c.transpose() + alpha_ss;
-      d.topRightCorner<3, 3>() = wi * c * b.transpose();
-      d.bottomLeftCorner<3, 3>() = d.topRightCorner<3, 3>().transpose();
-      d.bottomRightCorner<3, 3>() = (wi_prev + wi) * b * b.transpose();
-      d.bottomRightCorner<3, 3>().diagonal() += alpha_bt;
-      rhs_[j].head<3>() = -(gamma + alpha_ss * ss_lambda_[j]);
-      rhs_[j].tail<3>() = -(omega + alpha_bt.cwiseProduct(bt_lambda_[j]));
-      if (j > f) {
-        // segment j - 1 and j share node j (stretch-shear) and frame j - 1 (bend-twist j turns it by -B_j)
-        BlockTridiagonal6::Block& u = system_.upper(j - 1);
-        u.topLeftCorner<3, 3>() = -inv_mass_[j] * inv_l2 * eye;
-        u.topRightCorner<3, 3>() = -wi_prev * ss_jacobian_[j - 1] * b.transpose();
-        u.bottomLeftCorner<3, 3>().setZero();
-        u.bottomRightCorner<3, 3>() = -wi_prev * bt_jacobian_[j - 1] * b.transpose();
-      }
-    }
-    if (!system_.factor(f)) return false;
-    system_.solve(rhs_, &dlambda_, f);
-    apply_multiplier_change();
+    if (!direct_iteration(h)) return false;
     if (contact) contact->project(*this, it, h);
   }
   return true;
+}
+
+// one Newton iteration of the direct solve: the blocks assembled at the current iterate, the
+// multipliers' change solved and applied
+bool CosseratRod::direct_iteration(double h) {
+  const double inv_h2 = 1.0 / (h * h);
+  const double inv_l = 1.0 / l_, inv_l2 = inv_l * inv_l;
+  const int f = hub_;  // segments before it are kinematic
+  for (int j = f; j < n_; ++j) {
+    const Eigen::Matrix3d r = q_[j].toRotationMatrix();
+    const Eigen::Vector3d gamma = (x_[j + 1] - x_[j]) * inv_l - r.col(2);
+    const Eigen::Matrix3d alpha_ss = r * (ss_compliance_[j] * inv_h2).asDiagonal() * r.transpose();
+    const Eigen::Vector3d alpha_bt = bt_compliance_[j] * (inv_h2 / dual_length_m(j));
+    Eigen::Vector3d omega;
+    const Eigen::Matrix3d& c = ss_jacobian_[j] = stretch_shear_rotation_jacobian(q_[j]);
+    const Eigen::Matrix3d& b = bt_jacobian_[j] =
+        bend_twist_jacobian(pair_first_frame(j), q_[j], dual_length_m(j), rest_darboux_[j], &omega);
+    const double wi = 4.0 * inv_inertia_q_[j];
+    const double wi_prev = j > f ? 4.0 * inv_inertia_q_[j - 1] : 0.0;  // the hub's frame does not turn
+    BlockTridiagonal6::Block& d = system_.diagonal(j);
+    d.topLeftCorner<3, 3>() =
+        (node_inverse_mass(j) + node_inverse_mass(j + 1)) * inv_l2 + wi * c * c.transpose() + alpha_ss;
+    d.topRightCorner<3, 3>() = wi * c * b.transpose();
+    d.bottomLeftCorner<3, 3>() = d.topRightCorner<3, 3>().transpose();
+    d.bottomRightCorner<3, 3>() = (wi_prev + wi) * b * b.transpose();
+    d.bottomRightCorner<3, 3>().diagonal() += alpha_bt;
+    rhs_[j].head<3>() = -(gamma + alpha_ss * ss_lambda_[j]);
+    rhs_[j].tail<3>() = -(omega + alpha_bt.cwiseProduct(bt_lambda_[j]));
+    if (j > f) {
+      // segment j - 1 and j share node j (stretch-shear) and frame j - 1 (bend-twist j turns it by -B_j)
+      BlockTridiagonal6::Block& u = system_.upper(j - 1);
+      u.topLeftCorner<3, 3>() = -node_inverse_mass(j) * inv_l2;
+      u.topRightCorner<3, 3>() = -wi_prev * ss_jacobian_[j - 1] * b.transpose();
+      u.bottomLeftCorner<3, 3>().setZero();
+      u.bottomRightCorner<3, 3>() = -wi_prev * bt_jacobian_[j - 1] * b.transpose();
+    }
+  }
+  if (!system_.factor(f)) return false;
+  system_.solve(rhs_, &dlambda_, f);
+  apply_multiplier_change();
+  return true;
+}
+
+// Springs on nodes (a contact hook's wall and friction, issue #33), taken with the rod in one
+// backward-Euler step: M (x - x~) = J^T lambda - h^2 K (x - a) gives
+//   x = x^ + W J^T lambda,  W = (M + h^2 K)^-1,  x^ = W (M x~ + h^2 K a)
+// so the solve above runs unchanged with W as the node's inverse mass, from x^. The hook may
+// move the springs after a solve (a one-sided wall: on where the node ends inside, off where it
+// would pull; friction's stiffness from the slip): the substep is then solved again from its
+// prediction, up to the hook's say. (Newton on rod and springs together, each iteration
+// continuing from the last with the springs moved, was tried: it blew the dead end up at the
+// first bend, hub forces of hundreds of N)
+bool CosseratRod::solve_with_springs(double h, RodContact* contact) {
+  const int nodes = n_ + 1;
+  // (round 0 may move nodes without velocity: before the prediction is kept)
+  contact->place_springs(*this, 0, h);
+  std::copy(x_.begin(), x_.end(), x_pred_.begin());
+  std::copy(q_.begin(), q_.end(), q_pred_.begin());
+  springs_in_solve_ = true;
+  bool ok = true;
+  for (int round = 1;; ++round) {
+    for (int i = hub_ + 1; i < nodes; ++i) {
+      if (!spring_on_[i]) continue;
+      spring_w_[i] = (mass_[i] * Eigen::Matrix3d::Identity() + h * h * spring_k_[i]).inverse();
+      x_[i] = spring_w_[i] * (mass_[i] * x_pred_[i] + h * h * (spring_k_[i] * spring_anchor_[i]));
+    }
+    ok = solve_constraints_direct(h, nullptr);
+    if (!ok || !contact->place_springs(*this, round, h)) break;
+    std::copy(x_pred_.begin(), x_pred_.end(), x_.begin());
+    std::copy(q_pred_.begin(), q_pred_.end(), q_.begin());
+  }
+  springs_in_solve_ = false;
+  if (!ok) {
+    // the Gauss-Seidel fallback starts from the prediction
+    std::copy(x_pred_.begin(), x_pred_.end(), x_.begin());
+    std::copy(q_pred_.begin(), q_pred_.end(), q_.begin());
+  }
+  return ok;
 }
 
 // dx = W J^T dlambda, dtheta likewise, over the free units
@@ -288,7 +362,10 @@ void CosseratRod::apply_multiplier_change() {
   for (int i = f + 1; i <= n_; ++i) {
     Eigen::Vector3d g = dlambda_[i - 1].head<3>();
     if (i < n_) g -= dlambda_[i].head<3>();
-    x_[i] += inv_mass_[i] * inv_l * g;
+    if (springs_in_solve_ && spring_on_[i])
+      x_[i] += spring_w_[i] * (inv_l * g);
+    else
+      x_[i] += inv_mass_[i] * inv_l * g;
   }
   for (int j = f; j < n_; ++j) {
     Eigen::Vector3d g =

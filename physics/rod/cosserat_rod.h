@@ -20,6 +20,7 @@
 // Everything is allocated at construction; step() allocates nothing.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -38,6 +39,13 @@ class RodContact {
   virtual void project(CosseratRod& rod, int iteration, double substep_s) = 0;
   // after the substep's velocities are known (e.g. kinetic friction on them)
   virtual void after_substep(CosseratRod& /*rod*/, double /*substep_s*/) {}
+  // springs instead of project() (direct solver only): place_springs is called after the
+  // prediction (round 0) and after each solve of the substep (round 1, 2, ...) with the nodes
+  // where they stand; it sets or clears the nodes' springs (set_node_spring) and returns true to
+  // solve the substep again from its prediction with them (round 0's answer is not read; round 0
+  // may move nodes with shift_node_without_velocity, which the rounds then start from)
+  virtual bool uses_springs() const { return false; }
+  virtual bool place_springs(CosseratRod& /*rod*/, int /*round*/, double /*substep_s*/) { return false; }
 };
 
 // what a substep changes of the rod (positions, frames, velocities, the hub and its clamp), so a
@@ -95,6 +103,16 @@ class CosseratRod {
   // dl = -S^-1 J W_z H^T L (so the hub's force includes the wall's reaction) and the nodes and
   // frames move by W_z (J^T dl + H^T L)
   bool apply_contact_impulses(std::span<const int> nodes, std::span<const Eigen::Vector3d> impulses_n_s2);
+  // --- implicit springs on free nodes (a RodContact that uses_springs; issue #33) ---
+  // force -K (x - anchor) on the node through the substep's solve, taken implicitly with the
+  // rod (backward Euler): the node's mass matrix becomes M + h^2 K and its prediction moves
+  // towards the anchor, x^ = (M + h^2 K)^-1 (M x~ + h^2 K anchor). K symmetric positive
+  // semidefinite, N/m. Kept until cleared; ignored on kinematic nodes
+  void set_node_spring(int node, const Eigen::Matrix3d& k_n_per_m, const Eigen::Vector3d& anchor_m);
+  void clear_node_spring(int node);
+  bool has_node_spring(int node) const { return spring_on_[node] != 0; }
+  // the spring's force on the node where it stands now (zero without one)
+  Eigen::Vector3d node_spring_force_n(int node) const;
   // moves a free node, and where its substep began, by d: a position fix that makes no velocity
   void shift_node_without_velocity(int node, const Eigen::Vector3d& d_m);
   // where the nodes and frames were when the current substep began
@@ -143,6 +161,13 @@ class CosseratRod {
   void solve_constraints(double h, RodContact* contact);
   // returns false (and leaves the state as the last good iteration) when the system is singular
   bool solve_constraints_direct(double h, RodContact* contact);
+  bool direct_iteration(double h);
+  // the substep with a spring hook: rounds of the direct solve (params.iterations each) from the
+  // prediction, the hook placing the springs before each (RodContact::place_springs); false as
+  // the direct solve
+  bool solve_with_springs(double h, RodContact* contact);
+  // the inverse mass of a node as the solve sees it: 1 / m, or (M + h^2 K)^-1 with a spring
+  Eigen::Matrix3d node_inverse_mass(int i) const;
   // after a direct solve of dlambda_: lambda += dlambda, x += W_z J^T dlambda, frames likewise
   void apply_multiplier_change();
   bool contact_nodes_fit(std::span<const int> nodes) const;
@@ -170,6 +195,12 @@ class CosseratRod {
   std::vector<BlockTridiagonal6::Vector> rhs_, dlambda_;
   std::vector<BlockTridiagonal6::Vector> column_rhs_, column_;  // contact_compliance's columns
   std::vector<Eigen::Matrix3d> ss_jacobian_, bt_jacobian_;
+  // the springs, and the substep's prediction the rounds start from
+  std::vector<uint8_t> spring_on_;
+  std::vector<Eigen::Matrix3d> spring_k_, spring_w_;
+  std::vector<Eigen::Vector3d> spring_anchor_, x_pred_;
+  std::vector<Eigen::Quaterniond> q_pred_;
+  bool springs_in_solve_ = false;  // inside solve_with_springs: the solve reads the springs
 };
 
 }  // namespace pcisim::physics::rod

@@ -24,11 +24,10 @@ enum class BeatCoupling { kKinematic, kContact };
 // how the rod meets the wall (docs/guidewire.md): kProjection, the scenes' scheme, moves nodes
 // out of the wall after each solve and decides friction on the rod's forces (the wall has the
 // last word, so a pushed wire crumples); kSolve solves contact and Coulomb friction with the
-// rod's elasticity, on its contact compliance (physics/rod/contact_pgs.h; issue #33). kSolve is
-// for rigs only: it holds a tip on a wall but is not yet stable in a dead end or a bend, so no
-// scene key selects it
-// the rod's wall: a projection after each solve; the contact problem on the rod's compliance
-// after its free solve (PGS); or a stiff one-sided spring taken implicitly inside the solve
+// rod's elasticity on its contact compliance after the free solve (physics/rod/contact_pgs.h);
+// kImplicit makes the wall and friction stiff springs inside the rod's own solve (issue #33).
+// kSolve and kImplicit are for rigs only (each misses some of pcisim-bench wire-force's
+// checks), so no scene key selects them
 enum class RodContactScheme { kProjection, kSolve, kImplicit };
 
 // where the chain-mail's limits come from: the alpha / beta fields as set, or derived from the
@@ -76,9 +75,10 @@ struct GuidewireParams {
   int rod_substeps = 8;    // XPBD substeps per physics step (more when a step is long)
   int rod_iterations = 1;  // direct solves per substep, each followed by wall contact and friction
   RodContactScheme rod_contact = RodContactScheme::kProjection;
-  // with rod_contact kSolve: how many times a substep may be halved and retried when its contact
-  // problem is no longer a small linear one (a node near the wall moved far, or the wall turned
-  // under it; rod_wire.cc); 0 keeps every substep as rod_substeps sets it
+  // with rod_contact kSolve or kImplicit: how many times a substep may be halved and retried when
+  // its contact is no longer a small linear problem (kSolve: a node near the wall moved far, or
+  // the wall turned under it; kImplicit: a node left deep in the wall; rod_wire.cc); 0 keeps
+  // every substep as rod_substeps sets it
   int rod_substep_halvings = 4;
   // with rod_contact kImplicit: the wall's stiffness, N/m (1 N leaves a node 0.01 mm into the
   // wall margin at 1e5), also the stiffness friction holds a stuck node with; and the most

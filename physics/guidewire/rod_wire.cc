@@ -51,7 +51,7 @@ constexpr int kGoodSubstepsBeforeLonger = 4;
 // the implicit scheme: the contacts have settled when no node moved more than this between two
 // solves of a substep (at the default wall stiffness, 0.02 N of wall force); a node that begins a
 // substep deeper in the wall than kSpringDeepM (issue #33's penetration bound; the spring holds
-// 1 N at a tenth of it) is moved back to that depth without velocity (the spring would shoot it
+// 1 N at a fifth of it) is moved back to that depth without velocity (the spring would shoot it
 // out at depth / h), and a substep whose last solve leaves a node without a spring deeper than
 // that is taken back and halved
 constexpr double kSpringSettledM = 0.2e-6;
@@ -382,6 +382,8 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
 // feed says, the free rod laid straight out of the exit, everything at rest
 void RodWire::recover() {
   ++recoveries_;
+  // nor friction anchors: the wire is laid out afresh
+  std::fill(anchored_.begin(), anchored_.end(), 0);
   // the solve scheme's impulses belong to the state that failed: none carried into the next
   std::fill(node_impulse_.begin(), node_impulse_.end(), Eigen::Vector3d::Zero());
   const int hub = rod_.hub_node();
@@ -424,6 +426,20 @@ void RodWire::recover() {
 // each node, so a displacement test (|dx_t| <= mu_s dn, as for particles) held every touching
 // node for ever and the fed wire folded up behind the first bend.
 void RodWire::project(rod::CosseratRod& rod, int iteration, double h) {
+  if (params_.rod_contact == RodContactScheme::kImplicit) {
+    // here only when the direct solve failed and the rod fell back to Gauss-Seidel: the substep
+    // is taken back and halved where it may be; else it is finished by the projection (its
+    // forces and friction as the projection scheme books them: after_substep)
+    if (halvings_ < params_.rod_substep_halvings) {
+      retry_ = true;
+      return;
+    }
+    if (iteration == 0) {
+      fell_back_ = true;
+      std::fill(node_wall_n_.begin(), node_wall_n_.end(), 0.0);
+      std::fill(anchored_.begin(), anchored_.end(), 0);
+    }
+  }
   if (params_.rod_contact == RodContactScheme::kSolve) {
     // the contact problem is not one of the rod's constraints: a further Newton iteration would
     // undo it, so it follows the last one
@@ -642,6 +658,7 @@ bool RodWire::place_springs(rod::CosseratRod& rod, int round, double h) {
   const auto x_start = rod.substep_start_nodes_m();
   const int first_free = rod.hub_node() + 1;
   if (round == 0) {
+    fell_back_ = false;
     // a node that begins the substep deep in the wall: back to kSpringDeepM, without velocity
     const auto x_begin = rod.substep_start_nodes_m();
     for (int i = first_free; i < node_count(); ++i) {
@@ -688,7 +705,20 @@ bool RodWire::place_springs(rod::CosseratRod& rod, int round, double h) {
     hold_spin(rod);
     return false;
   };
-  if (round >= params_.rod_contact_rounds) return finish();
+  if (round >= params_.rod_contact_rounds) {
+    // the springs have not settled: a spring that pulls its node (it ended off the wall) is let
+    // go and the substep solved once more without it (left in, it pulled the hub: a 6 N step in
+    // the dead end); then the last solve stands
+    bool pulling = false;
+    for (int i = first_free; i < node_count() && round == params_.rod_contact_rounds; ++i) {
+      if (!rod.has_node_spring(i) || node_wall_n_[i] > 0.0) continue;
+      rod.clear_node_spring(i);
+      pulling = true;
+    }
+    if (pulling) return true;
+    ++report_.unconverged;
+    return finish();
+  }
   bool again = false;
   for (int i = first_free; i < node_count(); ++i) {
     // where the spring is linearised: after a solve, where the node ended; before the first, where
@@ -729,7 +759,9 @@ bool RodWire::place_springs(rod::CosseratRod& rod, int round, double h) {
       if (k * slip_m <= mu_static(i) * wall_n) {
         spring_stuck_[i] = 1;
       } else {
-        k_t = mu_kinetic(i) * wall_n / slip_m;
+        k_t = std::min(
+            k, mu_kinetic(i) * wall_n /
+                   slip_m);  // (mu_k above mu_s: no stiffer than stuck)  // (mu_k above mu_s: no stiffer than stuck)
       }
       stiffness += k_t * (Eigen::Matrix3d::Identity() - nn);
       anchor = b + n * n.dot(wall_point - b);
@@ -808,7 +840,8 @@ void RodWire::after_substep(rod::CosseratRod& rod, double h) {
   // the wall's impulse over the substep, for the step's average force: the solve scheme's as its
   // impulse (force h^2: normal and friction), the projection's along the wall's inward normal
   const bool solve = params_.rod_contact == RodContactScheme::kSolve;
-  const bool implicit = params_.rod_contact == RodContactScheme::kImplicit;
+  // (an implicit substep that fell back to the projection is booked as the projection's)
+  const bool implicit = params_.rod_contact == RodContactScheme::kImplicit && !fell_back_;
   for (int i = first_free; i < node_count(); ++i) {
     if (!(node_wall_n_[i] > 0.0)) continue;
     wall_impulse_n_s_[i] += node_wall_n_[i] * h;
@@ -820,7 +853,7 @@ void RodWire::after_substep(rod::CosseratRod& rod, double h) {
   if (friction_) {
     const auto v = rod.mutable_velocities_m_per_s();
     const auto omega = rod.mutable_angular_velocities_rad_per_s();
-    // (the solve and implicit schemes' friction on the nodes is in their solve)
+    // (the solve and implicit schemes' friction on the nodes is in their solves)
     for (int i = first_free; i < node_count() && !solve && !implicit; ++i) {
       if (!(node_wall_n_[i] > 0.0) || stuck_[i]) continue;
       const double mu_k = mu_kinetic(i);

@@ -29,7 +29,7 @@
 // length, up to rod_substep_halvings times; a few good short substeps later the length doubles
 // again (step()).
 //
-// With guidewire.rod_contact "implicit" (issue #33) the wall is a stiff one-sided spring inside
+// With rod_contact kImplicit (issue #33; rigs only, no scene key) the wall is a stiff one-sided spring inside
 // the rod's own solve (CosseratRod::set_node_spring, backward Euler): a node inside the wall
 // margin is pulled back along the wall's normal by rod_wall_stiffness_n_per_m times its depth,
 // and friction holds it by a tangential spring to where it stuck (the same stiffness) as long as
@@ -149,7 +149,7 @@ class RodWire final : public rod::RodContact {
   // the solve scheme's contact after the rod's last solve of a substep; sets retry_ instead
   // where the substep should be taken back and tried shorter
   void solve_contact(rod::CosseratRod& rod, double h);
-  // the spin about the wire's axis of touching segments held by static friction (both schemes)
+  // the spin about the wire's axis of touching segments held by static friction (every scheme)
   void hold_spin(rod::CosseratRod& rod);
   // the implicit scheme's friction anchors after an accepted substep
   void commit_anchors(rod::CosseratRod& rod, double h);
@@ -210,6 +210,7 @@ class RodWire final : public rod::RodContact {
   // holds it to (rest frame; anchored_ while it touches)
   std::vector<Eigen::Vector3d> spring_at_m_, spring_normal_, spring_force_n_, anchor_rest_m_;
   std::vector<uint8_t> spring_stuck_, anchored_;
+  bool fell_back_ = false;                     // this substep's direct solve failed: the projection finished it
   std::vector<Eigen::Vector3d> saved_anchor_;  // (the halved substeps' copies)
   std::vector<uint8_t> saved_anchored_;
 };

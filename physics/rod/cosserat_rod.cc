@@ -291,8 +291,13 @@ bool CosseratRod::direct_iteration(double h) {
     const double wi = 4.0 * inv_inertia_q_[j];
     const double wi_prev = j > f ? 4.0 * inv_inertia_q_[j - 1] : 0.0;  // the hub's frame does not turn
     BlockTridiagonal6::Block& d = system_.diagonal(j);
-    d.topLeftCorner<3, 3>() =
-        (node_inverse_mass(j) + node_inverse_mass(j + 1)) * inv_l2 + wi * c * c.transpose() + alpha_ss;
+    // (without springs the scalar inverse masses, as before the springs: the same operations)
+    if (springs_in_solve_)
+      d.topLeftCorner<3, 3>() =
+          (node_inverse_mass(j) + node_inverse_mass(j + 1)) * inv_l2 + wi * c * c.transpose() + alpha_ss;
+    else
+      d.topLeftCorner<3, 3>() =
+          (inv_mass_[j] + inv_mass_[j + 1]) * inv_l2 * Eigen::Matrix3d::Identity() + wi * c * c.transpose() + alpha_ss;
     d.topRightCorner<3, 3>() = wi * c * b.transpose();
     d.bottomLeftCorner<3, 3>() = d.topRightCorner<3, 3>().transpose();
     d.bottomRightCorner<3, 3>() = (wi_prev + wi) * b * b.transpose();
@@ -302,7 +307,10 @@ bool CosseratRod::direct_iteration(double h) {
     if (j > f) {
       // segment j - 1 and j share node j (stretch-shear) and frame j - 1 (bend-twist j turns it by -B_j)
       BlockTridiagonal6::Block& u = system_.upper(j - 1);
-      u.topLeftCorner<3, 3>() = -node_inverse_mass(j) * inv_l2;
+      if (springs_in_solve_)
+        u.topLeftCorner<3, 3>() = -node_inverse_mass(j) * inv_l2;
+      else
+        u.topLeftCorner<3, 3>() = -inv_mass_[j] * inv_l2 * Eigen::Matrix3d::Identity();
       u.topRightCorner<3, 3>() = -wi_prev * ss_jacobian_[j - 1] * b.transpose();
       u.bottomLeftCorner<3, 3>().setZero();
       u.bottomRightCorner<3, 3>() = -wi_prev * bt_jacobian_[j - 1] * b.transpose();

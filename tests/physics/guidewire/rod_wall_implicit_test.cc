@@ -31,23 +31,6 @@ GuidewireParams implicit_rod() {
   return g;
 }
 
-// the deepest any free node stands inside the wall margin (<= 0: none), and past the wall itself
-double into_margin_m(const RodWire& w, const LumenQuery& lumen) {
-  double worst = -1.0;
-  for (int i = w.first_free_node(); i < w.node_count(); ++i)
-    worst = std::max(worst, lumen.sample(w.nodes_m()[i]).distance_m + VesselContactParams{}.wall_margin_m);
-  return worst;
-}
-
-// a flat wall x = wall_x_m that only the wire's last half millimetre can meet (z beyond z0)
-struct TipWall final : LumenQuery {
-  double z0_m = 0.0, wall_x_m = 1.0;
-  WallSample sample(const Eigen::Vector3d& p) const override {
-    if (p.z() < z0_m) return {-1.0, Eigen::Vector3d::UnitX()};
-    return {p.x() - wall_x_m, Eigen::Vector3d::UnitX()};
-  }
-};
-
 // a clamped wire of free length L (a uniform section) whose tip a frictionless wall moves
 // sideways by D presses with the cantilever's 3 EI D / L^3 (small D); its spring holds the tip
 // F / k into the margin (4e-9 m at most here); a step with its wall in the solve allocates nothing
@@ -58,7 +41,7 @@ TEST(RodWallImplicit, AWallPushingTheTipSidewaysFeelsTheCantileversStiffness) {
   g.tip_angle_deg = 0.0;
   const double ei = g.bending_stiffness_nm2;
   for (const double d_m : {0.25e-3, 1e-3}) {
-    TipWall wall;
+    test::TipWall wall;
     wall.z0_m = length_m - 0.5e-3;
     const VesselContactParams contact;
     RodWire w(g, CatheterPath({Eigen::Vector3d(0, 0, -0.2), Eigen::Vector3d(0, 0, 0)}), &wall, contact);
@@ -86,20 +69,11 @@ TEST(RodWallImplicit, AWallPushingTheTipSidewaysFeelsTheCantileversStiffness) {
   }
 }
 
-// a flat-walled slot |x| < 1.5 mm
-struct Slot final : LumenQuery {
-  double half_m = 1.5e-3;
-  WallSample sample(const Eigen::Vector3d& p) const override {
-    if (p.x() > 0.0) return {p.x() - half_m, Eigen::Vector3d::UnitX()};
-    return {-p.x() - half_m, -Eigen::Vector3d::UnitX()};
-  }
-};
-
 // the catheter's exit turned 10 degrees towards a flat wall: the fed wire bends onto the wall and
 // rests on it; the wall pushes with the beam's force and the hub holds what the wall pushes (one
 // solve carries both), with friction and without
 TEST(RodWallImplicit, AWireLeaningOnAFlatWallRestsAndTheHubHoldsWhatTheWallPushes) {
-  const Slot slot;
+  const test::Slot slot;
   const Eigen::Vector3d exit_dir(std::sin(0.17), 0.0, std::cos(0.17));
   for (const bool friction : {false, true}) {
     std::optional<FrictionParams> mu;
@@ -112,7 +86,7 @@ TEST(RodWallImplicit, AWireLeaningOnAFlatWallRestsAndTheHubHoldsWhatTheWallPushe
     for (double t = 0.0; t < 4.0; t += kDt) {
       w.step(0.06 * std::min(t / 2.0, 1.0), 0.0, kDt);
       ASSERT_TRUE(w.rod().all_finite()) << t;
-      deepest_m = std::max(deepest_m, into_margin_m(w, slot));
+      deepest_m = std::max(deepest_m, test::deepest_into_margin_m(w, slot));
     }
     Eigen::Vector3d wall_n = Eigen::Vector3d::Zero();
     for (const Eigen::Vector3d& f : w.wall_force_vector_n()) wall_n += f;
@@ -162,7 +136,7 @@ TEST(RodWallImplicit, AWireRoundABendRestsForAMinuteWithoutGainingEnergy) {
   for (double t = 0.0; t < 4.0; t += kDt) {
     w.step(0.09 * std::min(t / 3.0, 1.0), 0.0, kDt);
     ASSERT_TRUE(w.rod().all_finite()) << t;
-    deepest_m = std::max(deepest_m, into_margin_m(w, lumen));
+    deepest_m = std::max(deepest_m, test::deepest_into_margin_m(w, lumen));
   }
   // the hold: the largest kinetic energy of its first and last 10 s
   double first_j = 0.0, last_j = 0.0;
@@ -170,7 +144,7 @@ TEST(RodWallImplicit, AWireRoundABendRestsForAMinuteWithoutGainingEnergy) {
   for (int k = 0; k < steps; ++k) {
     w.step(0.09, 0.0, kDt);
     ASSERT_TRUE(w.rod().all_finite()) << k;
-    deepest_m = std::max(deepest_m, into_margin_m(w, lumen));
+    deepest_m = std::max(deepest_m, test::deepest_into_margin_m(w, lumen));
     const double e = kinetic_energy_j(w);
     if (k < steps / 6) first_j = std::max(first_j, e);
     if (k >= steps - steps / 6) last_j = std::max(last_j, e);
@@ -204,7 +178,7 @@ TEST(RodWallImplicit, PushedIntoADeadEndTheWireKeepsItsLengthAndTheGripSlips) {
   for (double t = 0.0; t < 1.5; t += kDt) {
     w.step(0.11 + 0.04 * std::min(t / 1.0, 1.0), 0.0, kDt);
     ASSERT_TRUE(w.rod().all_finite()) << t;
-    deepest_m = std::max(deepest_m, into_margin_m(w, lumen));
+    deepest_m = std::max(deepest_m, test::deepest_into_margin_m(w, lumen));
     most_crumpled_m = std::max(most_crumpled_m, w.compression_m());
     most_hub_n = std::max(most_hub_n, w.hub_axial_force_n());
     most_tip_n = std::max(most_tip_n, w.tip_contact_force_n());

@@ -40,16 +40,6 @@ double free_length_m(const RodWire& w) {
   return s;
 }
 
-// a flat wall x = wall_x_m that only the wire's last half millimetre can meet (z beyond z0):
-// the lumen is x < wall_x_m there, everywhere else far from any wall
-struct TipWall final : LumenQuery {
-  double z0_m = 0.0, wall_x_m = 1.0;
-  WallSample sample(const Eigen::Vector3d& p) const override {
-    if (p.z() < z0_m) return {-1.0, Eigen::Vector3d::UnitX()};
-    return {p.x() - wall_x_m, Eigen::Vector3d::UnitX()};
-  }
-};
-
 // a clamped wire of free length L (a uniform section: no soft tip) whose tip a frictionless wall
 // moves sideways by D: it presses with the cantilever's 3 EI D / L^3 (small D, Euler-Bernoulli)
 TEST(RodWallSolve, AWallPushingTheTipSidewaysFeelsTheCantileversStiffness) {
@@ -59,7 +49,7 @@ TEST(RodWallSolve, AWallPushingTheTipSidewaysFeelsTheCantileversStiffness) {
   g.tip_angle_deg = 0.0;
   const double ei = g.bending_stiffness_nm2;
   for (const double d_m : {0.25e-3, 1e-3}) {
-    TipWall wall;
+    test::TipWall wall;
     wall.z0_m = length_m - 0.5e-3;
     const VesselContactParams contact;
     RodWire w(g, CatheterPath({Eigen::Vector3d(0, 0, -0.2), Eigen::Vector3d(0, 0, 0)}), &wall, contact);
@@ -91,21 +81,12 @@ TEST(RodWallSolve, AWallPushingTheTipSidewaysFeelsTheCantileversStiffness) {
   }
 }
 
-// a flat-walled slot |x| < 1.5 mm (no curvature: the wall's linearisation is exact)
-struct Slot final : LumenQuery {
-  double half_m = 1.5e-3;
-  WallSample sample(const Eigen::Vector3d& p) const override {
-    if (p.x() > 0.0) return {p.x() - half_m, Eigen::Vector3d::UnitX()};
-    return {-p.x() - half_m, -Eigen::Vector3d::UnitX()};
-  }
-};
-
 // the catheter's exit turned 10 degrees towards a flat wall: the fed wire (a uniform section)
 // bends onto the wall and comes to rest on it. The wall pushes with the beam's force; at rest the
 // hub holds the wire with what the wall pushes (the forces come out of one solve: the projection
 // scheme's hub never sees its wall); nothing is left inside the wall and nothing moves
 TEST(RodWallSolve, AWireLeaningOnAFlatWallRestsAndTheHubHoldsWhatTheWallPushes) {
-  const Slot slot;
+  const test::Slot slot;
   const Eigen::Vector3d exit_dir(std::sin(0.17), 0.0, std::cos(0.17));
   for (const bool friction : {false, true}) {
     std::optional<FrictionParams> mu;
@@ -155,14 +136,6 @@ RodWire bend_wire(const TubeLumen& lumen, int halvings = GuidewireParams{}.rod_s
   g.rod_substep_halvings = halvings;
   return RodWire(g, CatheterPath({Eigen::Vector3d(0, 0, -0.2), Eigen::Vector3d(0, 0, 0)}), &lumen,
                  VesselContactParams{}, mu);
-}
-
-// the deepest any free node stands past the wall margin (<= 0: none)
-double past_margin_m(const RodWire& w, const LumenQuery& lumen) {
-  double worst = -1.0;
-  for (int i = w.first_free_node(); i < w.node_count(); ++i)
-    worst = std::max(worst, lumen.sample(w.nodes_m()[i]).distance_m + VesselContactParams{}.wall_margin_m);
-  return worst;
 }
 
 // The contact problem is linearised where the nodes stand after the free solve; the soft tip
@@ -220,7 +193,7 @@ TEST(RodWallSolve, AWireFedRoundABendComesToRestInsideTheLumen) {
   for (double t = 0.0; t < 6.0; t += kDt) {
     w.step(0.09 * std::min(t / 3.0, 1.0), 0.0, kDt);
     ASSERT_TRUE(w.rod().all_finite()) << t;
-    worst_m = std::max(worst_m, past_margin_m(w, lumen));
+    worst_m = std::max(worst_m, test::deepest_into_margin_m(w, lumen));
     most_residual_m = std::max(most_residual_m, w.contact_report().residual_m);
     most_hub_n = std::max(most_hub_n, std::abs(w.hub_axial_force_n()));
   }
@@ -262,7 +235,7 @@ TEST(RodWallSolve, PushedIntoADeadEndTheWireKeepsItsLengthAndTheGripSlips) {
   for (double t = 0.0; t < 1.5; t += kDt) {
     w.step(0.11 + 0.04 * std::min(t / 1.0, 1.0), 0.0, kDt);
     ASSERT_TRUE(w.rod().all_finite()) << t;
-    worst_m = std::max(worst_m, past_margin_m(w, lumen));
+    worst_m = std::max(worst_m, test::deepest_into_margin_m(w, lumen));
     most_crumpled_m = std::max(most_crumpled_m, w.compression_m());
     most_hub_n = std::max(most_hub_n, w.hub_axial_force_n());
     most_tip_n = std::max(most_tip_n, w.tip_contact_force_n());

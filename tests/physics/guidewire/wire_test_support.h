@@ -9,6 +9,7 @@
 #include "anatomy/phantom/tube_phantoms.h"
 #include "physics/guidewire/chain_mail_wire.h"
 #include "physics/guidewire/lumen_query.h"
+#include "physics/guidewire/rod_wire.h"
 #include "physics/world.h"
 
 namespace pcisim::physics::test {
@@ -25,6 +26,33 @@ inline WorldSpec default_scene() {
   s.friction = FrictionParams{};
   s.blood_flow = BloodFlowParams{};
   return s;
+}
+
+// a flat wall x = wall_x_m that only the wire's last half millimetre can meet (z beyond z0):
+// the lumen is x < wall_x_m there, everywhere else far from any wall (the rod wall tests)
+struct TipWall final : LumenQuery {
+  double z0_m = 0.0, wall_x_m = 1.0;
+  WallSample sample(const Eigen::Vector3d& p) const override {
+    if (p.z() < z0_m) return {-1.0, Eigen::Vector3d::UnitX()};
+    return {p.x() - wall_x_m, Eigen::Vector3d::UnitX()};
+  }
+};
+
+// a flat-walled slot |x| < 1.5 mm (no curvature: a wall's linearisation is exact)
+struct Slot final : LumenQuery {
+  double half_m = 1.5e-3;
+  WallSample sample(const Eigen::Vector3d& p) const override {
+    if (p.x() > 0.0) return {p.x() - half_m, Eigen::Vector3d::UnitX()};
+    return {-p.x() - half_m, -Eigen::Vector3d::UnitX()};
+  }
+};
+
+// the deepest any free rod node stands past the wall margin, into it (<= 0: none)
+inline double deepest_into_margin_m(const RodWire& w, const LumenQuery& lumen) {
+  double worst = -1.0;
+  for (int i = w.first_free_node(); i < w.node_count(); ++i)
+    worst = std::max(worst, lumen.sample(w.nodes_m()[i]).distance_m + VesselContactParams{}.wall_margin_m);
+  return worst;
 }
 
 // the rod tests' curved tube (anatomy/phantom/tube_phantoms.h): 40 mm straight from the

@@ -183,7 +183,9 @@ class DicomHostile : public ::testing::Test {
   void all_explicit() {
     for (auto& [k, b] : pristine_) put(file(k), b = to_explicit(b));
   }
-  // the refusal of reading the folder, which must come within a second
+  // the refusal of reading the folder. The clock is a hang guard, not a speed target: a refusal takes
+  // milliseconds, a hostile length that made the reader loop took minutes; 10 s leaves room for a busy
+  // machine under ASan (docs/benchmarks hold speed, not unit tests)
   std::string refusal() const {
     const auto start = std::chrono::steady_clock::now();
     std::string why;
@@ -193,7 +195,7 @@ class DicomHostile : public ::testing::Test {
       why = e.what();
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    EXPECT_LT(seconds, 1.0) << why;
+    EXPECT_LT(seconds, 10.0) << why;
     EXPECT_FALSE(why.empty()) << "the series was read";
     return why;
   }

@@ -3,6 +3,9 @@
 // keeps the tip on the axis), it first buckles at the clamped-pinned Euler load
 // P = x1^2 EI / L^2, x1 = 4.4934 the first root of tan x = x (Timoshenko & Gere, Theory of
 // Elastic Stability, 2.6: the effective length 0.699 L). Afterwards the tube's wall holds it.
+// The buckling is found by load, not by a rigid push: a straight column answers a push by its
+// axial stiffness alone (EA / L, 2e5 N/m at 30 mm), so a push of 5 mm/s overshoots Euler's load
+// several times within one substep in any solver, before the column can bow.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -25,10 +28,17 @@ double clamped_pinned_root() {
   return x;
 }
 
-// fed to 1 mm short of the end at kApproachSpeed, then kMoreM further at kPushSpeed; the lateral
-// gravity is the imperfection (its own sag at 50 mm is 0.1 um)
+// fed to 1 mm short of the end at kApproachSpeed, on to the end at kPushSpeed, loaded until it
+// buckles (below), then kMoreM further at kPushSpeed; the lateral gravity is the imperfection (its
+// own sag at 50 mm is 0.1 um)
 constexpr double kApproachSpeedMPerS = 0.05, kPushSpeedMPerS = 0.005, kMoreM = 20e-3;
 constexpr double kLateralGravityMPerS2 = 0.05;
+// the load: raised by this fraction of EI / L^2 a step (Euler's load is 20.2 EI / L^2: about 0.1 %
+// of it a step), at most kMaxLoadSteps; the feed moves kLoadGain of the column's axial compliance
+// times the shortfall, at most kMaxLoadFeedM a step
+constexpr double kLoadRateFraction = 0.02;
+constexpr int kMaxLoadSteps = 3000;
+constexpr double kLoadGain = 0.5, kMaxLoadFeedM = 0.05e-3;
 // the run stops as blown up beyond this hub force (about 400 times the Euler load at 50 mm)
 constexpr double kBlownUpN = 50.0;
 
@@ -65,14 +75,13 @@ EndOnResult run_end_on(const EndOn& c) {
   }
   std::vector<double> step_ms;
   std::vector<int> substeps;
-  const int steps = static_cast<int>(std::ceil((1e-3 + kMoreM) / (kPushSpeedMPerS * kStepS)));
-  for (int k = 1; k <= steps; ++k) {
-    fed_m += kPushSpeedMPerS * kStepS;
+  // one step, timed; false where the wire blew up (the run stops)
+  auto step = [&]() {
     const int64_t start = realtime::monotonic_ns();
     w.step(fed_m, 0.0, kStepS);
     step_ms.push_back((realtime::monotonic_ns() - start) * 1e-6);
     substeps.push_back(w.contact_report().substeps);
-    if (!w.rod().all_finite()) break;
+    if (!w.rod().all_finite()) return false;
     double lateral_m = 0.0;
     for (int i = w.first_free_node(); i < w.node_count(); ++i) {
       const Eigen::Vector3d& p = w.nodes_m()[i];
@@ -85,7 +94,7 @@ EndOnResult run_end_on(const EndOn& c) {
     // blown up: a force no wire of this section carries, or the tip thrown out of the tube's end
     if (std::abs(hub_n) > kBlownUpN || w.nodes_m().back().z() < 0.5 * length_m) {
       r.blew_up_at_mm = 1e3 * (fed_m - length_m);
-      break;
+      return false;
     }
     if (!r.buckled && lateral_m >= 0.5 * clearance_m) {
       r.buckled = true;
@@ -96,6 +105,31 @@ EndOnResult run_end_on(const EndOn& c) {
       r.column_mm = 1e3 * column_m;
       r.euler_n = x1 * x1 * ei / (column_m * column_m);
     }
+    return true;
+  };
+  // up to the end at the push's speed; then, by load: the hub's force raised at kLoadRateN a
+  // step, the feed moved by what the column's axial compliance gives for the shortfall (a
+  // straight column answers a rigid push by its axial stiffness EA / L alone: 1 um of feed is
+  // 0.3-1 N here, Euler's load several times, before it can bow), until it buckles
+  bool alive = true;
+  while (alive && fed_m < length_m && !(w.wall_force_n().back() > 0.0)) {
+    fed_m = std::min(fed_m + kPushSpeedMPerS * kStepS, length_m);
+    alive = step();
+  }
+  const double axial_compliance_m_per_n = length_m / physics::kWireAxialStiffnessN;
+  double target_n = std::max(w.hub_axial_force_n(), 0.0);
+  const double load_rate_n = kLoadRateFraction * ei / (length_m * length_m);
+  for (int j = 0; alive && !r.buckled && j < kMaxLoadSteps; ++j) {
+    target_n += load_rate_n;
+    const double shortfall_n = target_n - w.hub_axial_force_n();
+    fed_m += std::clamp(kLoadGain * axial_compliance_m_per_n * shortfall_n, -kMaxLoadFeedM, kMaxLoadFeedM);
+    alive = step();
+  }
+  // then kMoreM further by the rigid push
+  const double more_from_m = fed_m;
+  while (alive && fed_m < more_from_m + kMoreM) {
+    fed_m += kPushSpeedMPerS * kStepS;
+    alive = step();
   }
   r.cost = step_cost(step_ms, substeps);
   return r;

@@ -77,8 +77,9 @@ std::string json_line(const Capstan& c, const CapstanResult& r);
 // a straight tube closed at the far end, the catheter's exit on its axis, its lumen radius the
 // clearance plus the wall margin (the wire's centerline may move clearance_mm off the axis). The
 // wire (default section, no soft tip, no friction) is fed until its tip meets the end at free
-// length length_mm, then 20 mm more at 5 mm/s; a lateral gravity of 0.05 m/s^2 is the
-// imperfection that picks the buckling direction
+// length length_mm, loaded (the hub's force raised step by step, the feed following) until it
+// buckles, then pushed 20 mm more at 5 mm/s; a lateral gravity of 0.05 m/s^2 is the imperfection
+// that picks the buckling direction
 struct EndOn {
   double length_mm = 50, clearance_mm = 0.5;
 };

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <Eigen/Eigenvalues>
 #include <numbers>
 
 #include "physics/guidewire/link_spec.h"
@@ -47,6 +48,9 @@ constexpr double kStuckM = 1e-8;
 constexpr double kRetryMotionM = 0.25e-3;
 constexpr double kRetryTurnDeg = 20.0;
 constexpr double kRetryResidualM = 0.05e-3;
+// the wall's curvature in the contact problem: the normal sampled this far either side of a node
+// along the wall
+constexpr double kShapeStepM = 0.02e-3;
 constexpr int kGoodSubstepsBeforeLonger = 4;
 // the implicit scheme: the contacts have settled when no node moved more than this between two
 // solves of a substep (at the default wall stiffness, 0.02 N of wall force); a node that begins a
@@ -134,6 +138,9 @@ RodWire::RodWire(const GuidewireParams& params, CatheterPath path, const LumenQu
   if (params_.rod_contact == RodContactScheme::kSolve) {
     pgs_ = rod::ContactPgs(kMaxRodContacts);
     compliance_.setZero(3 * kMaxRodContacts, 3 * kMaxRodContacts);
+    curvature_impulse_.assign(n + 1, Eigen::Vector3d::Zero());
+    warm_total_.assign(n + 1, Eigen::Vector3d::Zero());
+    saved_warm_total_ = warm_total_;
     candidates_.assign(n + 1, 0);
     candidate_gap_m_.assign(n + 1, 0.0);
     candidate_wall_.assign(n + 1, WallSample{});
@@ -275,6 +282,7 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
     if (most > 0) {
       rod_.save_state(saved_rod_);
       saved_impulse_ = node_impulse_;
+      saved_warm_total_ = warm_total_;
       saved_touched_ = touched_;
       saved_report_ = report_;
       saved_anchor_ = anchor_rest_m_;
@@ -304,14 +312,21 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
     if (last_substep_s_ > 0.0 && h != last_substep_s_) {
       const double scale = (h / last_substep_s_) * (h / last_substep_s_);
       for (Eigen::Vector3d& p : node_impulse_) p *= scale;
+      for (Eigen::Vector3d& p : warm_total_) p *= scale;
     }
     place_in_catheter(before_m, h);
+    // the solve scheme's warm start: the last substep's wall force in the prediction
+    if (params_.rod_contact == RodContactScheme::kSolve)
+      for (int i = 0; i < node_count(); ++i)
+        rod_.set_node_contact_force_n(
+            i, i > rod_.hub_node() ? Eigen::Vector3d(warm_total_[i] / (h * h)) : Eigen::Vector3d::Zero());
     retry_ = false;
     rod_.step(h, lumen_ && contact_ ? this : nullptr);
     if ((retry_ || !rod_.all_finite()) && halvings_ < most) {
       // taken back: the state before it, and half the length
       rod_.restore_state(saved_rod_);
       node_impulse_ = saved_impulse_;
+      warm_total_ = saved_warm_total_;
       touched_ = saved_touched_;
       report_ = saved_report_;
       anchor_rest_m_ = saved_anchor_;
@@ -386,6 +401,7 @@ void RodWire::recover() {
   std::fill(anchored_.begin(), anchored_.end(), 0);
   // the solve scheme's impulses belong to the state that failed: none carried into the next
   std::fill(node_impulse_.begin(), node_impulse_.end(), Eigen::Vector3d::Zero());
+  std::fill(warm_total_.begin(), warm_total_.end(), Eigen::Vector3d::Zero());
   const int hub = rod_.hub_node();
   const auto x = rod_.mutable_nodes_m();
   const auto v = rod_.mutable_velocities_m_per_s();
@@ -500,19 +516,41 @@ double RodWire::mu_kinetic(int node) const {
   return !friction_ ? 0.0 : node_in_tip(node) ? friction_->tip_kinetic : friction_->body_kinetic;
 }
 
+// the wall's shape operator at a node, S = dn/dx along the wall (central differences of the
+// normal in two directions of the tangent plane), symmetric, its convex part dropped (a negative
+// stiffness would make the contact problem indefinite)
+Eigen::Matrix3d RodWire::wall_shape(int node, const Eigen::Vector3d& n, std::span<const Eigen::Vector3d> x) const {
+  const Eigen::Vector3d p = x[node] - offset_[node];
+  const Eigen::Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);
+  Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
+  for (const Eigen::Vector3d& t : {t1, t2}) {
+    const Eigen::Vector3d dn =
+        (lumen_->sample(p + kShapeStepM * t).normal - lumen_->sample(p - kShapeStepM * t).normal) / (2.0 * kShapeStepM);
+    s += (dn - dn.dot(n) * n) * t.transpose();
+  }
+  s = 0.5 * (s + s.transpose()).eval();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(s);
+  return eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
+}
+
 // The solve scheme (issue #33), after the rod's last solve of a substep:
-//   0. the last substep's impulses are applied first (the free solve dropped the wall's forces)
+//   0. the last substep's wall force was in this substep's prediction (the rod's contact forces,
+//      set by step()), so the free solve ends about where the wall holds the rod. (Applied after
+//      the free solve instead, a straight wire's tip in a rounded end answered in a growing
+//      two-cycle: the linearisation was made where the wire had sprung back off the wall)
 //   1. contacts: the free nodes within kContactBandM of the wall there, and those the wall pushed
 //      in the last substep (the deepest kMaxRodContacts), each with its wall normal, gap (distance
-//      + margin, > 0 inside the wall) and its motion along the wall over the substep relative to
-//      the wall, less what step 0 moved it (the problem is posed from the free solve)
+//      + margin, > 0 inside the wall), its motion along the wall over the substep relative to
+//      the wall and the wall's shape operator; the problem is posed as if without the last
+//      substep's force (its motion through W taken off the gap and slip)
 //   2. W = H A^-1 H^T for them, from the rod's factor
-//   3. the contact problem on W (rod::ContactPgs), starting from the last substep's impulses
+//   3. the contact problem on W (rod::ContactPgs) with the walls' curvature, starting from the
+//      last substep's impulses
 //   4. the rod's response to the change of impulses: multipliers, nodes and frames move together
 //   5. what the linearisation leaves inside is moved out along the normal without velocity and
 //      reported (a curved wall, or a node the response pushed in that was no contact)
-//   6. forces: the wall's on a node is its impulse / h^2; the spin rule of the projection scheme
-//      is fed with the normal force
+//   6. forces: the wall's on a node is its impulse (curved wall's included) / h^2; the spin rule
+//      of the projection scheme is fed with the normal force
 void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
   const double margin = contact_->wall_margin_m;
   const auto x = rod.mutable_nodes_m();
@@ -522,27 +560,26 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
   std::fill(segment_stuck_.begin(), segment_stuck_.end(), 0);
   std::fill(stuck_.begin(), stuck_.end(), 0);
   std::fill(node_wall_n_.begin(), node_wall_n_.end(), 0.0);
-  // 0. the last substep's impulses first: the free solve dropped the wall's forces, so a wire held
-  //    by a wall sprang back by its whole elastic deflection; answered by the same impulses it is
-  //    back about where the wall holds it, and the contacts are found and linearised there
-  int warm = 0;
-  for (int i = 0; i < first_free; ++i) node_impulse_[i].setZero();  // back in the catheter
-  for (int i = first_free; i < node_count(); ++i) {
-    if (!node_impulse_[i].allFinite()) node_impulse_[i].setZero();
-    if (node_impulse_[i].squaredNorm() > 0.0) {
-      contact_nodes_.resize(warm + 1);
-      contact_impulse_.resize(warm + 1);
-      contact_nodes_[warm] = i;
-      contact_impulse_[warm++] = node_impulse_[i];
-    }
+  // 0. the last substep's answer was in the prediction (warm_total_ as the rod's contact
+  //    forces: step()), so the free solve starts where the wall held the rod and the contacts are
+  //    linearised there; the problem is posed as if without it (its motion d_w = W L_w taken off)
+  for (int i = 0; i < first_free; ++i) {
+    node_impulse_[i].setZero();  // back in the catheter
+    warm_total_[i].setZero();
   }
-  if (warm > 0) rod.apply_contact_impulses(contact_nodes_, contact_impulse_);
+  for (int i = first_free; i < node_count(); ++i) {
+    if (!node_impulse_[i].allFinite() || !warm_total_[i].allFinite()) {
+      node_impulse_[i].setZero();
+      warm_total_[i].setZero();
+    }
+    curvature_impulse_[i].setZero();
+  }
   // 1. candidates, then the deepest kMaxRodContacts of them in the rod's order
   int count = 0;
   for (int i = first_free; i < node_count(); ++i) {
     const WallSample s = lumen_->sample(x[i] - offset_[i]);
     const double gap = s.distance_m + margin;
-    if (!(gap > -kContactBandM) && node_impulse_[i].squaredNorm() == 0.0) continue;
+    if (!(gap > -kContactBandM) && warm_total_[i].squaredNorm() == 0.0) continue;
     candidates_[count++] = i;
     candidate_gap_m_[i] = gap;
     candidate_wall_[i] = s;
@@ -552,8 +589,8 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
     std::nth_element(candidates_.begin(), candidates_.begin() + kMaxRodContacts, candidates_.begin() + count,
                      [&](int a, int b) {
                        // the warm nodes first (their impulses are applied already), then the deepest
-                       const bool warm_a = node_impulse_[a].squaredNorm() > 0.0;
-                       const bool warm_b = node_impulse_[b].squaredNorm() > 0.0;
+                       const bool warm_a = warm_total_[a].squaredNorm() > 0.0;
+                       const bool warm_b = warm_total_[b].squaredNorm() > 0.0;
                        return warm_a != warm_b ? warm_a : candidate_gap_m_[a] > candidate_gap_m_[b];
                      });
     count = kMaxRodContacts;
@@ -570,9 +607,12 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
     // the problem is posed from the free solve: what the warm impulses moved the node comes off
     // its gap and slip (the wall linearised where the node stands now)
     Eigen::Vector3d warm_motion = Eigen::Vector3d::Zero();
-    for (int b = 0; b < count; ++b) warm_motion += w.block<3, 3>(3 * a, 3 * b) * node_impulse_[contact_nodes_[b]];
+    for (int b = 0; b < count; ++b) warm_motion += w.block<3, 3>(3 * a, 3 * b) * warm_total_[contact_nodes_[b]];
     const Eigen::Vector3d moved = x[i] - x_start[i] - h * wall_velocity_[i] - warm_motion;
     contacts_[a] = {n, candidate_gap_m_[i] - n.dot(warm_motion), moved - moved.dot(n) * n, mu_static(i), mu_kinetic(i)};
+    // the wall's curvature where the node stands, linearised there (the curved-wall impulse)
+    contacts_[a].shape_per_m = wall_shape(i, n, x);
+    contacts_[a].linearised_at_m = warm_motion;
     contact_impulse_[a] = node_impulse_[i];  // the solver starts from the warm impulse
   }
   // the linearisation is a short substep's: a contact that moved far relative to its wall, or
@@ -596,23 +636,31 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
     const rod::ContactSolveStats st = pgs_.solve(w, contacts_, contact_impulse_, kContactSweeps, kContactToleranceM);
     report_.most_sweeps = std::max(report_.most_sweeps, st.sweeps);
     report_.unconverged += st.converged ? 0 : 1;
+    // applied: the answer and the curved wall's impulse, less what the prediction had of them
     for (int a = 0; a < count; ++a) {
       const int i = contact_nodes_[a];
-      const Eigen::Vector3d answer = contact_impulse_[a];
-      contact_impulse_[a] -= node_impulse_[i];
-      node_impulse_[i] = answer;
+      node_impulse_[i] = contact_impulse_[a];
+      curvature_impulse_[i] = pgs_.curvature_impulses()[a];
+      contact_impulse_[a] += curvature_impulse_[i] - warm_total_[i];
     }
     rod.apply_contact_impulses(contact_nodes_, contact_impulse_);
     for (int a = 0; a < count; ++a) contact_impulse_[a] = node_impulse_[contact_nodes_[a]];
   }
+  // kept for the next substep: the answer (the contact problem's warm start) and with the
+  // curvature's impulse (the prediction's force); the wall's force on a node is both (after_substep)
   std::fill(node_impulse_.begin(), node_impulse_.end(), Eigen::Vector3d::Zero());
+  std::fill(warm_total_.begin(), warm_total_.end(), Eigen::Vector3d::Zero());
   if (have_w) {
     for (int a = 0; a < count; ++a) {
       const int i = contact_nodes_[a];
       const Eigen::Vector3d& n = contacts_[a].normal;
       const double push = -n.dot(contact_impulse_[a]);
-      if (!(push > 0.0)) continue;
+      if (!(push > 0.0)) {
+        curvature_impulse_[i].setZero();
+        continue;
+      }
       node_impulse_[i] = contact_impulse_[a];
+      warm_total_[i] = node_impulse_[i] + curvature_impulse_[i];
       touched_[i] = 1;
       normal_[i] = n;
       node_wall_n_[i] = push * inv_h2;  // after_substep adds it (and node_impulse_) to the step's impulse
@@ -845,7 +893,7 @@ void RodWire::after_substep(rod::CosseratRod& rod, double h) {
   for (int i = first_free; i < node_count(); ++i) {
     if (!(node_wall_n_[i] > 0.0)) continue;
     wall_impulse_n_s_[i] += node_wall_n_[i] * h;
-    wall_impulse_vector_n_s_[i] += solve      ? Eigen::Vector3d(node_impulse_[i] / h)
+    wall_impulse_vector_n_s_[i] += solve      ? Eigen::Vector3d((node_impulse_[i] + curvature_impulse_[i]) / h)
                                    : implicit ? Eigen::Vector3d(spring_force_n_[i] * h)
                                               : Eigen::Vector3d(-node_wall_n_[i] * h * normal_[i]);
   }

@@ -149,6 +149,9 @@ class RodWire final : public rod::RodContact {
   // the solve scheme's contact after the rod's last solve of a substep; sets retry_ instead
   // where the substep should be taken back and tried shorter
   void solve_contact(rod::CosseratRod& rod, double h);
+  // the lumen's shape operator (1/m) at a node whose wall normal is n: dn/dx in the tangent plane,
+  // its concave part
+  Eigen::Matrix3d wall_shape(int node, const Eigen::Vector3d& n, std::span<const Eigen::Vector3d> x) const;
   // the spin about the wire's axis of touching segments held by static friction (every scheme)
   void hold_spin(rod::CosseratRod& rod);
   // the implicit scheme's friction anchors after an accepted substep
@@ -187,6 +190,9 @@ class RodWire final : public rod::RodContact {
   // impulse of the last substep (the next one's warm start)
   rod::ContactPgs pgs_{0};
   Eigen::MatrixXd compliance_;
+  // the solve scheme's curved-wall impulse per node this substep, and the answer with it (the
+  // next substep's prediction takes it as the rod's contact force)
+  std::vector<Eigen::Vector3d> curvature_impulse_, warm_total_, saved_warm_total_;
   std::vector<int> candidates_, contact_nodes_;
   std::vector<double> candidate_gap_m_;
   std::vector<WallSample> candidate_wall_;

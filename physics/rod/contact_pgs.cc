@@ -57,6 +57,7 @@ Eigen::Vector2d slide_on_cone(const Eigen::Matrix2d& m, const Eigen::Vector2d& s
 ContactPgs::ContactPgs(int max_contacts) {
   if (max_contacts < 0) throw std::invalid_argument("contact solve: max_contacts must be >= 0");
   motion_.assign(max_contacts, Eigen::Vector3d::Zero());
+  curvature_.assign(max_contacts, Eigen::Vector3d::Zero());
 }
 
 ContactSolveStats ContactPgs::solve(const Eigen::Ref<const Eigen::MatrixXd>& w, std::span<const NodeContact> c,
@@ -65,7 +66,8 @@ ContactSolveStats ContactPgs::solve(const Eigen::Ref<const Eigen::MatrixXd>& w, 
   ContactSolveStats stats;
   if (k > max_contacts() || static_cast<int>(impulses.size()) != k || w.rows() != 3 * k || w.cols() != 3 * k)
     throw std::invalid_argument("contact solve: sizes do not match");
-  // d = W L from the warm start
+  // d = W L from the warm start (the curved walls' impulses start from none)
+  for (int a = 0; a < k; ++a) curvature_[a].setZero();
   for (int a = 0; a < k; ++a) {
     motion_[a].setZero();
     for (int b = 0; b < k; ++b) motion_[a] += w.block<3, 3>(3 * a, 3 * b) * impulses[b];
@@ -115,9 +117,27 @@ ContactSolveStats ContactPgs::solve(const Eigen::Ref<const Eigen::MatrixXd>& w, 
         impulses[a] += t * dl_t;
         change = std::max(change, (w_tt * dl_t).norm());
       }
-      const Eigen::Vector3d dl = impulses[a] - start;
+      // the curved wall: C = -L_n S_tt t'(d - d_0), its own motion taken implicitly (W_tt K can be
+      // thousands: a tip pressed into a rounded end is far stiffer sideways there than its rod)
+      Eigen::Vector3d dc = Eigen::Vector3d::Zero();
+      if (l_n_new > 0.0 || curvature_[a].squaredNorm() > 0.0) {
+        const Eigen::Matrix2d k_tt = l_n_new * (t.transpose() * ca.shape_per_m * t);
+        if (k_tt.squaredNorm() > 0.0 || curvature_[a].squaredNorm() > 0.0) {
+          const Eigen::Vector3d moved = motion_[a] + waa * (impulses[a] - start);
+          const Eigen::Vector2d c_old = t.transpose() * curvature_[a];
+          const Eigen::Vector2d s_c = t.transpose() * (moved - ca.linearised_at_m) - w_tt * c_old;
+          const Eigen::Vector2d c_new = -(Eigen::Matrix2d::Identity() + k_tt * w_tt).inverse() * (k_tt * s_c);
+          dc = t * (c_new - c_old);
+          curvature_[a] += dc;
+          change = std::max(change, (w_tt * (c_new - c_old)).norm());
+        }
+      }
+      const Eigen::Vector3d dl = impulses[a] - start + dc;
       impulses[a] = start;
-      if (dl.squaredNorm() > 0.0) apply(a, dl);
+      if (dl.squaredNorm() > 0.0) {
+        apply(a, dl);
+        impulses[a] -= dc;
+      }
     }
     return change;
   };

@@ -8,6 +8,10 @@
 //   non-penetration   gap + n.d <= 0,  L_n = -n.L >= 0,  L_n (gap + n.d) = 0
 //   stick             slip + P d = 0 (P: the wall's tangent plane) while |L_t| <= mu_s L_n
 //   slide             otherwise |L_t| = mu_k L_n, against the slip
+//   curved wall       C = -L_n P S P (d - d_0): the normal turns by S (d - d_0) as the node moves
+//                     along a wall of shape operator S linearised where the node moved d_0 (a
+//                     push L_n along a turned normal: a tangent impulse that holds a node pressed
+//                     into a rounded end or a tube's groove where the tangent plane lets it slide)
 // Each sweep takes each contact's normal row (a scalar, clamped at 0), then its two tangent rows
 // (a 2 x 2 solve, projected on the cone); the other nodes' motion follows once per contact.
 // (Accelerating the sweeps as a nonsmooth nonlinear conjugate gradient, Silcowitz et al. 2010,
@@ -24,6 +28,10 @@ struct NodeContact {
   double gap_m = 0.0;                                 // after the free solve: > 0 is inside the wall
   Eigen::Vector3d slip_m = Eigen::Vector3d::Zero();   // the node's motion along the wall over the substep, free solve
   double mu_static = 0.0, mu_kinetic = 0.0;
+  // the wall's shape operator (the normal's turn per metre along the wall, symmetric, in the
+  // tangent plane; zero: a plane) and the motion d_0 where the wall was linearised
+  Eigen::Matrix3d shape_per_m = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d linearised_at_m = Eigen::Vector3d::Zero();
 };
 
 struct ContactSolveStats {
@@ -36,15 +44,18 @@ class ContactPgs {
  public:
   explicit ContactPgs(int max_contacts);
   int max_contacts() const { return static_cast<int>(motion_.size()); }
-  // impulses: one per contact, the warm start on entry and the answer on return. Sweeps until no
+  // impulses: one per contact, the warm start on entry and the answer on return (normal and
+  // friction; the curved wall's impulse apart: curvature_impulses()). Sweeps until no
   // update moves its node more than tolerance_m, at most max_sweeps. w is 3k x 3k, k <= max_contacts.
   ContactSolveStats solve(const Eigen::Ref<const Eigen::MatrixXd>& w, std::span<const NodeContact> contacts,
                           std::span<Eigen::Vector3d> impulses, int max_sweeps, double tolerance_m);
   // the nodes' motion W L under the last answer
   std::span<const Eigen::Vector3d> motion_m() const { return motion_; }
+  // each contact's curved-wall impulse C under the last answer (world frame, in its tangent plane)
+  std::span<const Eigen::Vector3d> curvature_impulses() const { return curvature_; }
 
  private:
-  std::vector<Eigen::Vector3d> motion_;
+  std::vector<Eigen::Vector3d> motion_, curvature_;
 };
 
 }  // namespace pcisim::physics::rod

@@ -58,6 +58,7 @@ CosseratRod::CosseratRod(const CosseratRodParams& params, const Eigen::Vector3d&
   x_old_.resize(nodes);
   v_.assign(nodes, Eigen::Vector3d::Zero());
   force_.assign(nodes, Eigen::Vector3d::Zero());
+  contact_force_.assign(nodes, Eigen::Vector3d::Zero());
   mass_.resize(nodes);
   inv_mass_.resize(nodes);
   q_.assign(n_, clamp_q_);
@@ -115,6 +116,11 @@ CosseratRod::CosseratRod(const CosseratRodParams& params, const Eigen::Vector3d&
 void CosseratRod::set_node_force_n(int node, const Eigen::Vector3d& force_n) {
   if (node < 0 || node > n_) throw std::out_of_range("rod: node index out of range");
   force_[node] = force_n;
+}
+
+void CosseratRod::set_node_contact_force_n(int node, const Eigen::Vector3d& force_n) {
+  if (node < 0 || node > n_) throw std::out_of_range("rod: node index out of range");
+  contact_force_[node] = force_n;
 }
 
 void CosseratRod::clear_node_forces() {
@@ -215,7 +221,7 @@ void CosseratRod::predict(double h) {
   for (int i = 0; i <= n_; ++i) {
     x_old_[i] = x_[i];
     if (inv_mass_[i] == 0.0) continue;
-    v_[i] += h * (params_.gravity_m_per_s2 + inv_mass_[i] * force_[i]);
+    v_[i] += h * (params_.gravity_m_per_s2 + inv_mass_[i] * (force_[i] + contact_force_[i]));
     x_[i] += h * v_[i];
   }
   for (int j = 0; j < n_; ++j) {

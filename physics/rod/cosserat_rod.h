@@ -73,6 +73,10 @@ class CosseratRod {
   // a dead force on a node (kept until changed); node 0 is clamped and ignores it
   void set_node_force_n(int node, const Eigen::Vector3d& force_n);
   void clear_node_forces();
+  // a contact hook's force on a node for the next substeps' prediction, beside the dead force
+  // above (RodWire's wall: the last substep's answer, so the solve starts where the wall held
+  // the rod); node 0 and the hub's nodes ignore it
+  void set_node_contact_force_n(int node, const Eigen::Vector3d& force_n);
   void set_gravity_m_per_s2(const Eigen::Vector3d& gravity) { params_.gravity_m_per_s2 = gravity; }
   // moves the hub: the clamped node and the clamp frame (insertion and rotation)
   void set_clamp(const Eigen::Vector3d& position_m, const Eigen::Quaterniond& orientation);
@@ -177,7 +181,7 @@ class CosseratRod {
   CosseratRodParams params_;
   int n_;
   double l_;
-  std::vector<Eigen::Vector3d> x_, x_old_, v_, force_;
+  std::vector<Eigen::Vector3d> x_, x_old_, v_, force_, contact_force_;
   std::vector<double> mass_, inv_mass_;
   std::vector<Eigen::Quaterniond> q_, q_old_;
   std::vector<Eigen::Vector3d> omega_;  // angular velocity per segment, material frame

@@ -2,7 +2,8 @@
 // one already clear, two coupled contacts (both pushing, and one lifting off), a block that
 // sticks exactly while its slip needs no more than mu_s N and otherwise slides with mu_k N
 // against its slip, and a random coupled problem whose answer meets every condition of Coulomb
-// contact (Signorini's, the cone, sliding against the slip).
+// contact (Signorini's, the cone, sliding against the slip), and a node pressed into a curved
+// wall, whose turned normal holds it towards where the wall was linearised (solved by hand).
 #include "physics/rod/contact_pgs.h"
 
 #include <gtest/gtest.h>
@@ -42,6 +43,31 @@ TEST(ContactPgs, PushesOneNodeExactlyOutOfTheWallAndLeavesAClearOneAlone) {
   s = pgs.solve(w, {&clear, 1}, l, 10, kTolerance);
   EXPECT_TRUE(s.converged);
   EXPECT_EQ(l[0], Eigen::Vector3d::Zero());
+}
+
+// a node of mass m pressed into a floor curved like a bowl (shape operator kappa in both tangent
+// directions), linearised where the node had moved delta aside. Its push is m gap; along the
+// floor the turned normal gives C = -L_n kappa (d - delta) and d = C / m, so
+// d = delta s / (1 + s) with s = L_n kappa / m: half way at s = 1, nearly all the way when the
+// bowl is far stiffer than the node (s = 999), none on a plane
+TEST(ContactPgs, ACurvedWallHoldsAPressedNodeTowardsWhereItWasLinearised) {
+  ContactPgs pgs(1);
+  const double mass = 0.5, gap = 1e-3, delta = 1e-4, push = mass * gap;
+  const Eigen::MatrixXd w = Eigen::MatrixXd::Identity(3, 3) / mass;
+  for (const double s : {0.0, 1.0, 999.0}) {
+    NodeContact c = floor_contact(gap);
+    c.shape_per_m = (s * mass / push) * Eigen::Vector3d(1.0, 1.0, 0.0).asDiagonal();
+    c.linearised_at_m = Eigen::Vector3d(delta, 0.0, 0.0);
+    std::vector<Eigen::Vector3d> l(1, Eigen::Vector3d::Zero());
+    const ContactSolveStats st = pgs.solve(w, {&c, 1}, l, 100, kTolerance);
+    EXPECT_TRUE(st.converged) << s;
+    EXPECT_NEAR(l[0].z(), push, 1e-15) << s;  // the push is the plane's
+    const double d = delta * s / (1.0 + s);
+    EXPECT_NEAR(pgs.motion_m()[0].x(), d, 1e-12) << s;
+    EXPECT_NEAR(pgs.motion_m()[0].y(), 0.0, 1e-15) << s;
+    EXPECT_NEAR(pgs.curvature_impulses()[0].x(), mass * d, 1e-12) << s;
+    EXPECT_EQ(l[0].x(), 0.0) << "no friction: the curved wall's impulse is kept apart";
+  }
 }
 
 // two nodes on a floor coupled through W = [[2, 1], [1, 2]] (normal rows; tangents decoupled)

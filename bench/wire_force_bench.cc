@@ -315,8 +315,10 @@ int run(const std::vector<std::string>& given) {
         "hub's force when the wire's largest lateral deflection first reaches half the clearance. Reference: the "
         "clamped (catheter) – pinned (the end's cap) Euler load 4.4934² EI / L² = π² EI / (0.699 L)² (Timoshenko & "
         "Gere 2.6), L the column from the hub node (the rod's clamp, up to a segment behind the exit) to the end's "
-        "stop; the post-buckling elastica adds under 0.1 % at these deflections. max hub: over the 20 mm, "
-        "where the tube holds the buckled wire; worst: the furthest a node went past the wall margin.\n\n"
+        "stop; the post-buckling elastica adds under 0.1 % at these deflections. max hub, crumpled and worst: "
+        "over the whole run (approach, load and the 20 mm push) up to where it blew up (blew up: a hub force over "
+        "50 N, the tip thrown back out of the tube's end, or the rod recovered after going non-finite); worst: the "
+        "furthest a node went past the wall margin.\n\n"
      << "| L mm | clearance mm | buckling N | Euler N | error % | target | max hub N | crumpled mm | blew up at mm | "
         "worst mm | ms p50 / p99 | substeps |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& [e, r] : ends) {

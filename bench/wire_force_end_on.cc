@@ -75,13 +75,18 @@ EndOnResult run_end_on(const EndOn& c) {
   }
   std::vector<double> step_ms;
   std::vector<int> substeps;
+  bool loading = false;  // the buckle counts only while loaded
   // one step, timed; false where the wire blew up (the run stops)
   auto step = [&]() {
     const int64_t start = realtime::monotonic_ns();
     w.step(fed_m, 0.0, kStepS);
     step_ms.push_back((realtime::monotonic_ns() - start) * 1e-6);
     substeps.push_back(w.contact_report().substeps);
-    if (!w.rod().all_finite()) return false;
+    // a recovery (the rod went non-finite and was laid out afresh) is a blow-up too
+    if (!w.rod().all_finite() || w.recoveries() > 0) {
+      r.blew_up_at_mm = 1e3 * (fed_m - length_m);
+      return false;
+    }
     double lateral_m = 0.0;
     for (int i = w.first_free_node(); i < w.node_count(); ++i) {
       const Eigen::Vector3d& p = w.nodes_m()[i];
@@ -96,7 +101,7 @@ EndOnResult run_end_on(const EndOn& c) {
       r.blew_up_at_mm = 1e3 * (fed_m - length_m);
       return false;
     }
-    if (!r.buckled && lateral_m >= 0.5 * clearance_m) {
+    if (loading && !r.buckled && lateral_m >= 0.5 * clearance_m) {
       r.buckled = true;
       r.buckling_n = hub_n;
       // the column: from the hub node (the rod's clamp: a node, so up to a segment behind the
@@ -107,15 +112,17 @@ EndOnResult run_end_on(const EndOn& c) {
     }
     return true;
   };
-  // up to the end at the push's speed; then, by load: the hub's force raised at kLoadRateN a
-  // step, the feed moved by what the column's axial compliance gives for the shortfall (a
-  // straight column answers a rigid push by its axial stiffness EA / L alone: 1 um of feed is
-  // 0.3-1 N here, Euler's load several times, before it can bow), until it buckles
+  // up to the end at the push's speed; then, by load: the hub's force raised by
+  // kLoadRateFraction EI / L^2 a step, the feed moved by what the column's axial compliance gives
+  // for the shortfall (a straight column answers a rigid push by its axial stiffness EA / L
+  // alone: 1 um of feed is 0.06-0.2 N at 100-30 mm, Euler's load or more, before it can bow),
+  // until it buckles (a buckle is counted only here)
   bool alive = true;
   while (alive && fed_m < length_m && !(w.wall_force_n().back() > 0.0)) {
     fed_m = std::min(fed_m + kPushSpeedMPerS * kStepS, length_m);
     alive = step();
   }
+  loading = true;
   const double axial_compliance_m_per_n = length_m / physics::kWireAxialStiffnessN;
   double target_n = std::max(w.hub_axial_force_n(), 0.0);
   const double load_rate_n = kLoadRateFraction * ei / (length_m * length_m);
@@ -125,6 +132,7 @@ EndOnResult run_end_on(const EndOn& c) {
     fed_m += std::clamp(kLoadGain * axial_compliance_m_per_n * shortfall_n, -kMaxLoadFeedM, kMaxLoadFeedM);
     alive = step();
   }
+  loading = false;
   // then kMoreM further by the rigid push
   const double more_from_m = fed_m;
   while (alive && fed_m < more_from_m + kMoreM) {

@@ -99,17 +99,29 @@ ContactSolveStats ContactPgs::solve(const Eigen::Ref<const Eigen::MatrixXd>& w, 
         change = std::max(change, std::abs(l_n_new - l_n) * w_nn);
       }
       // tangent: the impulse that stops the slip, inside the static cone; else the kinetic one
-      // against the slip that is left
+      // against the slip that is left. A curved wall's impulse C = -L_n S_tt t'(d - d_0) shares
+      // the plane: stuck, the node's motion along the wall is known (it stops the slip), so C is
+      // too and friction holds the rest; sliding, C is found after friction with its own motion
+      // taken implicitly (W_tt K reaches thousands: a tip pressed into a rounded end is far
+      // stiffer sideways there than its rod, and alternating the two rules crept by 1 / (1 + W_tt K)
+      // a sweep)
       Eigen::Vector3d t1, t2;
       tangent_basis(n, &t1, &t2);
       Eigen::Matrix<double, 3, 2> t;
       t << t1, t2;
       const Eigen::Vector2d l_t = t.transpose() * impulses[a];
+      const Eigen::Vector2d c_old = t.transpose() * curvature_[a];
       const Eigen::Matrix2d w_tt = t.transpose() * waa * t;
-      const Eigen::Vector2d slip_without = t.transpose() * (ca.slip_m + own_motion) - w_tt * l_t;
+      const Eigen::Matrix2d k_tt = l_n_new * (t.transpose() * ca.shape_per_m * t);
       const Eigen::Matrix2d m = w_tt.inverse();
-      Eigen::Vector2d l_t_new = -(m * slip_without);
-      if (l_t_new.norm() > l_n_new * ca.mu_static)
+      // the slip without this contact's friction (the curved wall's impulse as it stands)
+      const Eigen::Vector2d slip_without = t.transpose() * (ca.slip_m + own_motion) - w_tt * l_t;
+      // stuck: d_t = -t' slip, C = -K (d_t - t' d_0), friction = what stops the slip less C
+      const Eigen::Vector2d c_stuck = -k_tt * (-t.transpose() * ca.slip_m - t.transpose() * ca.linearised_at_m);
+      Eigen::Vector2d l_t_new = -(m * (slip_without - w_tt * c_old)) - c_stuck;
+      Eigen::Vector2d c_new = c_stuck;
+      const bool stuck = l_t_new.norm() <= l_n_new * ca.mu_static;
+      if (!stuck)
         l_t_new = l_n_new > 0.0 && ca.mu_kinetic > 0.0 ? slide_on_cone(m, slip_without, l_n_new * ca.mu_kinetic)
                                                        : Eigen::Vector2d::Zero();
       const Eigen::Vector2d dl_t = l_t_new - l_t;
@@ -117,27 +129,21 @@ ContactSolveStats ContactPgs::solve(const Eigen::Ref<const Eigen::MatrixXd>& w, 
         impulses[a] += t * dl_t;
         change = std::max(change, (w_tt * dl_t).norm());
       }
-      // the curved wall: C = -L_n S_tt t'(d - d_0), its own motion taken implicitly (W_tt K can be
-      // thousands: a tip pressed into a rounded end is far stiffer sideways there than its rod)
-      Eigen::Vector3d dc = Eigen::Vector3d::Zero();
-      if (l_n_new > 0.0 || curvature_[a].squaredNorm() > 0.0) {
-        const Eigen::Matrix2d k_tt = l_n_new * (t.transpose() * ca.shape_per_m * t);
-        if (k_tt.squaredNorm() > 0.0 || curvature_[a].squaredNorm() > 0.0) {
-          const Eigen::Vector3d moved = motion_[a] + waa * (impulses[a] - start);
-          const Eigen::Vector2d c_old = t.transpose() * curvature_[a];
-          const Eigen::Vector2d s_c = t.transpose() * (moved - ca.linearised_at_m) - w_tt * c_old;
-          const Eigen::Vector2d c_new = -(Eigen::Matrix2d::Identity() + k_tt * w_tt).inverse() * (k_tt * s_c);
-          dc = t * (c_new - c_old);
-          curvature_[a] += dc;
-          change = std::max(change, (w_tt * (c_new - c_old)).norm());
-        }
+      if (!stuck) {
+        // sliding: C with its own motion taken implicitly, the node's other motion as it stands
+        const Eigen::Vector3d moved = motion_[a] + waa * (impulses[a] - start);
+        const Eigen::Vector2d s_c = t.transpose() * (moved - ca.linearised_at_m) - w_tt * c_old;
+        c_new = -(Eigen::Matrix2d::Identity() + k_tt * w_tt).inverse() * (k_tt * s_c);
+      }
+      const Eigen::Vector3d dc = t * (c_new - c_old);
+      if (dc.squaredNorm() > 0.0) {
+        curvature_[a] += dc;
+        change = std::max(change, (w_tt * (c_new - c_old)).norm());
       }
       const Eigen::Vector3d dl = impulses[a] - start + dc;
       impulses[a] = start;
-      if (dl.squaredNorm() > 0.0) {
-        apply(a, dl);
-        impulses[a] -= dc;
-      }
+      if (dl.squaredNorm() > 0.0) apply(a, dl);
+      impulses[a] -= dc;
     }
     return change;
   };

@@ -3,7 +3,8 @@
 // sticks exactly while its slip needs no more than mu_s N and otherwise slides with mu_k N
 // against its slip, and a random coupled problem whose answer meets every condition of Coulomb
 // contact (Signorini's, the cone, sliding against the slip), and a node pressed into a curved
-// wall, whose turned normal holds it towards where the wall was linearised (solved by hand).
+// wall, whose turned normal holds it towards where the wall was linearised, alone and beside static
+// friction (solved by hand).
 #include "physics/rod/contact_pgs.h"
 
 #include <gtest/gtest.h>
@@ -67,6 +68,30 @@ TEST(ContactPgs, ACurvedWallHoldsAPressedNodeTowardsWhereItWasLinearised) {
     EXPECT_NEAR(pgs.motion_m()[0].y(), 0.0, 1e-15) << s;
     EXPECT_NEAR(pgs.curvature_impulses()[0].x(), mass * d, 1e-12) << s;
     EXPECT_EQ(l[0].x(), 0.0) << "no friction: the curved wall's impulse is kept apart";
+  }
+}
+
+// the same bowl with static friction enough to hold the node where the free solve left it slipping
+// sigma along the floor: stuck, its motion stops the slip (d = -sigma), the curved wall's impulse
+// is -L_n kappa (d - delta) and friction holds the rest of m d. Found in one sweep for a stiff bowl
+// (s = 999), where alternating the two rules crept towards it by 1 / (1 + s) a sweep
+TEST(ContactPgs, OnACurvedWallStaticFrictionHoldsWhatTheTurnedNormalDoesNot) {
+  ContactPgs pgs(1);
+  const double mass = 0.5, gap = 1e-3, delta = 1e-4, sigma = 3e-5, push = mass * gap;
+  const Eigen::MatrixXd w = Eigen::MatrixXd::Identity(3, 3) / mass;
+  for (const double s : {1.0, 999.0}) {
+    NodeContact c = floor_contact(gap, Eigen::Vector3d(sigma, 0.0, 0.0), 1e3, 1e3);
+    const double kappa = s * mass / push;
+    c.shape_per_m = kappa * Eigen::Vector3d(1.0, 1.0, 0.0).asDiagonal();
+    c.linearised_at_m = Eigen::Vector3d(delta, 0.0, 0.0);
+    std::vector<Eigen::Vector3d> l(1, Eigen::Vector3d::Zero());
+    const ContactSolveStats st = pgs.solve(w, {&c, 1}, l, 100, kTolerance);
+    EXPECT_TRUE(st.converged) << s;
+    EXPECT_LE(st.sweeps, 3) << s;
+    const double curved = -push * kappa * (-sigma - delta);
+    EXPECT_NEAR(pgs.motion_m()[0].x(), -sigma, 1e-15) << s;
+    EXPECT_NEAR(pgs.curvature_impulses()[0].x(), curved, 1e-12 * std::abs(curved)) << s;
+    EXPECT_NEAR(l[0].x(), -mass * sigma - curved, 1e-12 * std::abs(curved)) << s;
   }
 }
 

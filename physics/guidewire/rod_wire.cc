@@ -588,7 +588,7 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
     report_.dropped += count - kMaxRodContacts;
     std::nth_element(candidates_.begin(), candidates_.begin() + kMaxRodContacts, candidates_.begin() + count,
                      [&](int a, int b) {
-                       // the warm nodes first (their impulses are applied already), then the deepest
+                       // the warm nodes first (their force is in the prediction), then the deepest
                        const bool warm_a = warm_total_[a].squaredNorm() > 0.0;
                        const bool warm_b = warm_total_[b].squaredNorm() > 0.0;
                        return warm_a != warm_b ? warm_a : candidate_gap_m_[a] > candidate_gap_m_[b];
@@ -604,8 +604,8 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
   for (int a = 0; a < count && have_w; ++a) {
     const int i = contact_nodes_[a];
     const Eigen::Vector3d& n = candidate_wall_[i].normal;
-    // the problem is posed from the free solve: what the warm impulses moved the node comes off
-    // its gap and slip (the wall linearised where the node stands now)
+    // the problem is posed as if without the last substep's force: what it moved the node through
+    // W comes off its gap and slip (the wall linearised where the node stands now)
     Eigen::Vector3d warm_motion = Eigen::Vector3d::Zero();
     for (int b = 0; b < count; ++b) warm_motion += w.block<3, 3>(3 * a, 3 * b) * warm_total_[contact_nodes_[b]];
     const Eigen::Vector3d moved = x[i] - x_start[i] - h * wall_velocity_[i] - warm_motion;

@@ -47,6 +47,7 @@ struct Forces {
   std::mutex mutex;
   std::vector<double> axial_n;
   std::vector<int32_t> flags;
+  std::vector<int64_t> utime;
   std::atomic<bool> running{false};
   void on(const lcm::ReceiveBuffer* r, const std::string&) {
     pcisim_lcm::force_command_t f;
@@ -55,6 +56,7 @@ struct Forces {
     std::lock_guard lock(mutex);
     axial_n.push_back(f.axial_force_n);
     flags.push_back(f.flags);
+    utime.push_back(f.utime);
   }
 };
 
@@ -95,7 +97,10 @@ TEST(KidneyRun, AProbeOverLcmPressesTheKidneyFeelsItAndImagesIt) {
   probe.join();
 
   EXPECT_EQ(r.effects, (std::vector<std::string>{"soft_tissue", "probe_contact", "ultrasound"}));
-  EXPECT_GT(r.haptic_ticks, 3000);
+  // the haptic loop ran throughout. Its rate is a benchmark's business: CI's Release run (two tests
+  // at once, beside the ultrasound) once managed 2977 ticks in 4 s, so the windows below are read on
+  // the commands' own clock, not counted in ticks
+  EXPECT_GT(r.haptic_ticks, 2000);
   {
     // the force resists the press once pressed (from 2.3 s on), and is zero before. A loaded
     // machine may make a physics step late: its model goes stale and the force fades (the safety
@@ -105,13 +110,18 @@ TEST(KidneyRun, AProbeOverLcmPressesTheKidneyFeelsItAndImagesIt) {
     // is the whole hold)
     using F = pcisim_lcm::force_command_t;
     std::lock_guard lock(forces.mutex);
-    ASSERT_GT(forces.axial_n.size(), 3000u);
-    const size_t n = forces.axial_n.size();
-    double held_sum = 0;
+    ASSERT_GT(forces.axial_n.size(), 2000u);
+    // seconds since the first command, which is when the probe's clock started
+    auto t_s = [&](size_t i) { return static_cast<double>(forces.utime[i] - forces.utime[0]) * 1e-6; };
+    const double end_s = t_s(forces.utime.size() - 1);
+    ASSERT_GT(end_s, 3.5) << "the run lasted its 4 s";
+    double held_sum = 0, early_max = 0;
     int held = 0;
-    for (size_t i = n - 1700; i < n - 50; ++i) {
+    for (size_t i = 0; i < forces.axial_n.size(); ++i) {
+      const double t = t_s(i);
+      if (t > 0.2 && t < 0.8) early_max = std::max(early_max, std::abs(forces.axial_n[i]));
       constexpr int32_t kNotClean = int32_t{F::FLAG_FADED} | F::FLAG_STALE | F::FLAG_RAMPING | F::FLAG_FAULT;
-      if (forces.flags[i] & kNotClean) continue;
+      if (t < 2.3 || t > end_s - 0.05 || (forces.flags[i] & kNotClean)) continue;
       held_sum += forces.axial_n[i];
       ++held;
     }
@@ -119,8 +129,6 @@ TEST(KidneyRun, AProbeOverLcmPressesTheKidneyFeelsItAndImagesIt) {
     const double held_mean = held_sum / held;
     EXPECT_GT(held_mean, 0.1) << "pressed 8 mm into the kidney, the hand feels it push back";
     EXPECT_LT(held_mean, 10.0);
-    double early_max = 0;
-    for (size_t i = 200; i < 800; ++i) early_max = std::max(early_max, std::abs(forces.axial_n[i]));
     EXPECT_LT(early_max, 0.01) << "nothing while the probe is in the air";
     std::printf("force along the probe: %.2f N pressed (%d clean ticks of the hold), %.4f N before\n", held_mean, held,
                 early_max);

@@ -17,13 +17,16 @@ class BlockTridiagonal {
  public:
   using Block = Eigen::Matrix<double, N, N>;
   using Vector = Eigen::Matrix<double, N, 1>;
+  using Columns3 = Eigen::Matrix<double, N, 3>;
 
   explicit BlockTridiagonal(int units)
       : diagonal_(units, Block::Zero()),
         upper_(units > 0 ? units - 1 : 0, Block::Zero()),
         pivot_(units),
+        pivot_inverse_(units, Block::Zero()),
         reduced_upper_(units > 0 ? units - 1 : 0, Block::Zero()),
-        forward_(units, Vector::Zero()) {}
+        forward_(units, Vector::Zero()),
+        forward3_(units, Columns3::Zero()) {}
 
   int units() const { return static_cast<int>(diagonal_.size()); }
   Block& diagonal(int j) { return diagonal_[j]; }
@@ -40,6 +43,7 @@ class BlockTridiagonal {
       if (!s.allFinite()) return false;  // Eigen's Cholesky passes a NaN pivot
       pivot_[j].compute(s);
       if (pivot_[j].info() != Eigen::Success) return false;
+      pivot_inverse_[j] = pivot_[j].solve(Block::Identity());
       if (j + 1 < n) reduced_upper_[j] = pivot_[j].solve(upper_[j]);
     }
     return true;
@@ -53,26 +57,42 @@ class BlockTridiagonal {
   // units before it stay zero) and the back sweep stops at lowest_wanted, so a column of A^-1 whose b sits near the
   // chain's end costs what is left of the chain. Both in [first, units).
   void solve_partial(const std::vector<Vector>& b, std::vector<Vector>* x, int nonzero_from, int lowest_wanted) {
-    const int n = units();
-    if (nonzero_from >= n || lowest_wanted >= n) return;
-    for (int j = nonzero_from; j < n; ++j) {
-      Vector y = b[j];
-      if (j > nonzero_from) y.noalias() -= upper_[j - 1].transpose() * forward_[j - 1];
-      forward_[j] = pivot_[j].solve(y);
-    }
-    std::vector<Vector>& out = *x;
-    out[n - 1] = forward_[n - 1];
-    for (int j = n - 2; j >= lowest_wanted; --j) {
-      out[j] = -(reduced_upper_[j] * out[j + 1]);
-      if (j >= nonzero_from) out[j] += forward_[j];
-    }
+    sweep(b, &forward_, x, nonzero_from, lowest_wanted);
+  }
+
+  // the same for three right-hand sides at once (a node's three axes: contact compliance columns)
+  void solve_partial(const std::vector<Columns3>& b, std::vector<Columns3>* x, int nonzero_from, int lowest_wanted) {
+    sweep(b, &forward3_, x, nonzero_from, lowest_wanted);
   }
 
  private:
+  template <typename Rhs>
+  void sweep(const std::vector<Rhs>& b, std::vector<Rhs>* forward, std::vector<Rhs>* x, int nonzero_from,
+             int lowest_wanted) const {
+    const int n = units();
+    if (nonzero_from >= n || lowest_wanted >= n) return;
+    std::vector<Rhs>& f = *forward;
+    for (int j = nonzero_from; j < n; ++j) {
+      Rhs y = b[j];
+      if (j > nonzero_from) y.noalias() -= upper_[j - 1].transpose() * f[j - 1];
+      f[j].noalias() = pivot_inverse_[j] * y;
+    }
+    std::vector<Rhs>& out = *x;
+    out[n - 1] = f[n - 1];
+    for (int j = n - 2; j >= lowest_wanted; --j) {
+      out[j].noalias() = -(reduced_upper_[j] * out[j + 1]);
+      if (j >= nonzero_from) out[j] += f[j];
+    }
+  }
+
   std::vector<Block> diagonal_, upper_;
-  std::vector<Eigen::LLT<Block>> pivot_;  // Cholesky of S_j
-  std::vector<Block> reduced_upper_;      // X_j = S_j^-1 U_j
-  std::vector<Vector> forward_;           // S_j^-1 y_j
+  std::vector<Eigen::LLT<Block>> pivot_;  // Cholesky of S_j (it says whether S_j is positive definite)
+  // S_j^-1: a solve is then a product (the triangular solves with a 6 x 6 factor took 40 % of a
+  // rod in contact's time, issue #33's dead end; the rod bench's elastica figures did not move in 8 digits)
+  std::vector<Block> pivot_inverse_;
+  std::vector<Block> reduced_upper_;  // X_j = S_j^-1 U_j
+  std::vector<Vector> forward_;       // S_j^-1 y_j
+  std::vector<Columns3> forward3_;    // (for three at once)
 };
 
 using BlockTridiagonal6 = BlockTridiagonal<6>;

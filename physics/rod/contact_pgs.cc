@@ -67,15 +67,16 @@ ContactSolveStats ContactPgs::solve(const Eigen::Ref<const Eigen::MatrixXd>& w, 
   if (k > max_contacts() || static_cast<int>(impulses.size()) != k || w.rows() != 3 * k || w.cols() != 3 * k)
     throw std::invalid_argument("contact solve: sizes do not match");
   // d = W L from the warm start (the curved walls' impulses start from none)
+  // (the 3-vectors lie back to back: seen as one column of 3k, the products are matrix-vector
+  // ones, which is where a sweep spends its time)
+  static_assert(sizeof(Eigen::Vector3d) == 3 * sizeof(double));
+  Eigen::Map<Eigen::VectorXd> motion(motion_.data()->data(), 3 * k);
   for (int a = 0; a < k; ++a) curvature_[a].setZero();
-  for (int a = 0; a < k; ++a) {
-    motion_[a].setZero();
-    for (int b = 0; b < k; ++b) motion_[a] += w.block<3, 3>(3 * a, 3 * b) * impulses[b];
-  }
+  if (k > 0) motion.noalias() = w * Eigen::Map<const Eigen::VectorXd>(impulses.data()->data(), 3 * k);
   // one contact's impulse changes by dl: every node's motion follows its column of W
   auto apply = [&](int a, const Eigen::Vector3d& dl) {
     impulses[a] += dl;
-    for (int b = 0; b < k; ++b) motion_[b] += w.block<3, 3>(3 * b, 3 * a) * dl;
+    motion.noalias() += w.middleCols<3>(3 * a) * dl;
   };
   // one sweep over the contacts; returns the largest motion an update made. Each contact's
   // normal row, then its tangent rows against its own motion so far; the other nodes' motion

@@ -75,8 +75,8 @@ CosseratRod::CosseratRod(const CosseratRodParams& params, const Eigen::Vector3d&
   if (params_.solver == RodSolver::kDirect) {
     rhs_.assign(n_, BlockTridiagonal6::Vector::Zero());
     dlambda_.assign(n_, BlockTridiagonal6::Vector::Zero());
-    column_rhs_.assign(n_, BlockTridiagonal6::Vector::Zero());
-    column_.assign(n_, BlockTridiagonal6::Vector::Zero());
+    column_rhs_.assign(n_, BlockTridiagonal6::Columns3::Zero());
+    column_.assign(n_, BlockTridiagonal6::Columns3::Zero());
     ss_jacobian_.assign(n_, Eigen::Matrix3d::Zero());
     bt_jacobian_.assign(n_, Eigen::Matrix3d::Zero());
   }
@@ -410,26 +410,25 @@ bool CosseratRod::contact_compliance(std::span<const int> nodes, Eigen::Ref<Eige
   if (!contact_nodes_fit(nodes) || w.rows() != 3 * k || w.cols() != 3 * k) return false;
   if (k == 0) return true;
   const double inv_l = 1.0 / l_;
-  const int lowest = nodes.front() - 1;  // the lowest unit any listed node reads
+  // the three axes of node p at once; W is symmetric, so the column of node p is needed only for
+  // the nodes from p on (their units from p - 1), and the rest is its mirror
   for (int a = 0; a < k; ++a) {
     const int p = nodes[a];
     const double s = inv_mass_[p] * inv_l;
-    for (int d = 0; d < 3; ++d) {
-      const Eigen::Vector3d e = Eigen::Vector3d::Unit(d);
-      // node p ends segment p - 1 (J = I / l) and starts segment p (J = -I / l)
-      column_rhs_[p - 1].head<3>() = -s * e;
-      if (p < n_) column_rhs_[p].head<3>() = s * e;
-      system_.solve_partial(column_rhs_, &column_, p - 1, lowest);
-      column_rhs_[p - 1].setZero();
-      if (p < n_) column_rhs_[p].setZero();
-      for (int b = 0; b < k; ++b) {
-        const int q = nodes[b];
-        Eigen::Vector3d g = column_[q - 1].head<3>();
-        if (q < n_) g -= column_[q].head<3>();
-        Eigen::Vector3d dx = inv_mass_[q] * inv_l * g;
-        if (q == p) dx += inv_mass_[p] * e;
-        w.block<3, 1>(3 * b, 3 * a + d) = dx;
-      }
+    // node p ends segment p - 1 (J = I / l) and starts segment p (J = -I / l)
+    column_rhs_[p - 1].topRows<3>() = -s * Eigen::Matrix3d::Identity();
+    if (p < n_) column_rhs_[p].topRows<3>() = s * Eigen::Matrix3d::Identity();
+    system_.solve_partial(column_rhs_, &column_, p - 1, p - 1);
+    column_rhs_[p - 1].setZero();
+    if (p < n_) column_rhs_[p].setZero();
+    for (int b = a; b < k; ++b) {
+      const int q = nodes[b];
+      Eigen::Matrix3d g = column_[q - 1].topRows<3>();
+      if (q < n_) g -= column_[q].topRows<3>();
+      Eigen::Matrix3d dx = inv_mass_[q] * inv_l * g;
+      if (q == p) dx.diagonal().array() += inv_mass_[p];
+      w.block<3, 3>(3 * b, 3 * a) = dx;
+      if (b != a) w.block<3, 3>(3 * a, 3 * b) = dx.transpose();
     }
   }
   return true;

@@ -197,7 +197,7 @@ class CosseratRod {
   // in the world frame, then bend-twist of the pair ending at that segment)
   BlockTridiagonal6 system_;
   std::vector<BlockTridiagonal6::Vector> rhs_, dlambda_;
-  std::vector<BlockTridiagonal6::Vector> column_rhs_, column_;  // contact_compliance's columns
+  std::vector<BlockTridiagonal6::Columns3> column_rhs_, column_;  // contact_compliance's columns
   std::vector<Eigen::Matrix3d> ss_jacobian_, bt_jacobian_;
   // the springs, and the substep's prediction the rounds start from
   std::vector<uint8_t> spring_on_;

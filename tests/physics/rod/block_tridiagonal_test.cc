@@ -115,6 +115,39 @@ TEST(BlockTridiagonal6, APartialSolveGivesTheDenseSolvesUnitsAtAndBelowWhatIsWan
   for (int j = 0; j < lowest; ++j) EXPECT_EQ(x[j](0), 42.0) << "unit " << j << " was written";
 }
 
+TEST(BlockTridiagonal6, ThreeRightHandSidesAtOnceAreThreeDenseSolves) {
+  // the contact compliance's form: a node's three axes, b zero before unit 4, x wanted from 4 on
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const int n = 8, from = 4;
+  BlockTridiagonal6 chain(n);
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(6 * n, 6 * n);
+  for (int j = 0; j < n; ++j) {
+    BlockTridiagonal6::Block m;
+    for (int k = 0; k < 36; ++k) m(k) = u(rng);
+    const double scale = std::pow(10.0, j % 4);  // over decades, as a rod's blocks are
+    chain.diagonal(j) = scale * (m * m.transpose() + 20.0 * BlockTridiagonal6::Block::Identity());
+    dense.block<6, 6>(6 * j, 6 * j) = chain.diagonal(j);
+    if (j + 1 < n) {
+      for (int k = 0; k < 36; ++k) m(k) = u(rng);
+      chain.upper(j) = std::sqrt(scale) * m;
+      dense.block<6, 6>(6 * j, 6 * j + 6) = chain.upper(j);
+      dense.block<6, 6>(6 * j + 6, 6 * j) = chain.upper(j).transpose();
+    }
+  }
+  std::vector<BlockTridiagonal6::Columns3> b(n, BlockTridiagonal6::Columns3::Constant(std::nan("")));
+  std::vector<BlockTridiagonal6::Columns3> x(n, BlockTridiagonal6::Columns3::Zero());
+  Eigen::MatrixXd bd = Eigen::MatrixXd::Zero(6 * n, 3);
+  for (int j = from; j < n; ++j) {
+    for (int k = 0; k < 18; ++k) b[j](k) = u(rng);
+    bd.middleRows<6>(6 * j) = b[j];
+  }
+  ASSERT_TRUE(chain.factor());
+  chain.solve_partial(b, &x, from, from);
+  const Eigen::MatrixXd xd = dense.llt().solve(bd);
+  for (int j = from; j < n; ++j) EXPECT_LT((x[j] - xd.middleRows<6>(6 * j)).norm(), 1e-12 * xd.norm()) << "unit " << j;
+}
+
 TEST(BlockTridiagonal6, RefusesASingularPivot) {
   BlockTridiagonal6 chain(3);
   for (int j = 0; j < 3; ++j) chain.diagonal(j) = BlockTridiagonal6::Block::Identity();

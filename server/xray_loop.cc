@@ -41,12 +41,12 @@ XrayLoop::XrayLoop(const Scene& scene, const anatomy::Case& anatomy, SharedState
   warm_up.pose = spec_.initial_pose;
   warm_up.heart_phase = beat ? 0.0 : NAN;
   renderer_->render(warm_up, frame_);
-  if (beat) {
-    while (renderer_->fill_beat_ahead() > 0) {}
-  }
+  while (renderer_->work_ahead() > 0) {}
+  // from here on a C-arm move shows a quick projection first (the pose above is whole)
+  renderer_->set_move_preview(xray::MovePreview{});
 }
 
-// a move re-projects the whole background (a fraction of a second of CPU): a flood of targets
+// a move re-projects the background (quick, then whole over the next frames): a flood of targets
 // moves the C-arm at most once per interval, to the newest target; the rest are coalesced
 void XrayLoop::apply_carm_target() {
   const int64_t seq = state_.carm_target_seq.load(std::memory_order_acquire);
@@ -89,7 +89,7 @@ void XrayLoop::render_and_publish(bool cine) {
   state_.xray_render_ns.record(realtime::monotonic_ns() - t0);
   state_.xray_frames.fetch_add(1, std::memory_order_relaxed);
   if (!images_) {
-    renderer_->fill_beat_ahead();
+    renderer_->work_ahead();
     return;
   }
 
@@ -134,7 +134,7 @@ void XrayLoop::render_and_publish(bool cine) {
   std::memcpy(m.data.data(), frame_.pixels.data(), m.data.size());  // little-endian uint16
   publisher_.publish(*images_, channel_, m);
   // after the frame is out: one more of the pose's phase bins, until it has them all
-  renderer_->fill_beat_ahead();
+  renderer_->work_ahead();
 }
 
 void XrayLoop::run() {

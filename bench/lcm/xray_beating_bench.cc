@@ -226,7 +226,7 @@ int run(const std::vector<std::string>& args) {
     auto f0 = Clock::now();
     beating_renderer.render(in, frame);
     first_frame_ms.push_back(ms_since(f0));
-    while (beating_renderer.fill_beat_ahead() > 0) {}
+    while (beating_renderer.work_ahead() > 0) {}
     all_bins_ms.push_back(ms_since(f0));
   }
   const int frames = opt.quick ? 15 : 60;
@@ -240,7 +240,7 @@ int run(const std::vector<std::string>& args) {
     beating_renderer.render(in, frame);
     if (i > 0) frame_beat_ms.push_back(ms_since(f0));
     if (i == 0)  // the pose's bins, before the timed frames
-      while (beating_renderer.fill_beat_ahead() > 0) {}
+      while (beating_renderer.work_ahead() > 0) {}
   }
   // four phases, noise-free, for a person to look at
   std::vector<std::string> pngs;

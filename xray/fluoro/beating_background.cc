@@ -92,15 +92,7 @@ void BeatingBackground::set_pose(const DetectorGeometry& g, const Image& static_
     std::copy(static_projection.pixels.begin(), static_projection.pixels.end(), im.pixels.begin());
   }
   if (scratch_.width != g.width || scratch_.height != g.height) scratch_.resize(g.width, g.height);
-  // the coarse detector: pixel (C, R) centred on fine pixel (s C + (s - 1) / 2, s R + (s - 1) / 2)
-  const int s = options_.change_stride;
-  coarse_geometry_ = g;
-  coarse_geometry_.width = (g.width + s - 1) / s;
-  coarse_geometry_.height = (g.height + s - 1) / s;
-  coarse_geometry_.pixel_mm = g.pixel_mm * s;
-  const double dc = 0.5 * (coarse_geometry_.width - 1) * s + 0.5 * (s - 1) - 0.5 * (g.width - 1);
-  const double dr = 0.5 * (coarse_geometry_.height - 1) * s + 0.5 * (s - 1) - 0.5 * (g.height - 1);
-  coarse_geometry_.center_mm = g.center_mm + (dc * g.pixel_mm) * g.u + (dr * g.pixel_mm) * g.v;
+  coarse_geometry_ = coarse_detector(g, options_.change_stride);
   if (coarse_.width != coarse_geometry_.width || coarse_.height != coarse_geometry_.height)
     coarse_.resize(coarse_geometry_.width, coarse_geometry_.height);
   std::fill(filled_.begin(), filled_.end(), 0);
@@ -125,25 +117,19 @@ void BeatingBackground::fill(int bin) {
     project(geometry_, &scratch_);
     for (size_t i = 0; i < p.size(); ++i) p[i] += scratch_.pixels[i];
   } else {
-    // bilinear from the coarse detector: fine pixel c sits at coarse coordinate (c - (s - 1) / 2) / s
     project(coarse_geometry_, &coarse_);
-    const int cw = coarse_.width, ch = coarse_.height;
-    for (int r = 0; r < geometry_.height; ++r) {
-      const float y = std::clamp((r - 0.5f * (s - 1)) / s, 0.0f, float(ch - 1));
-      const int y0 = std::min(static_cast<int>(y), std::max(ch - 2, 0)), y1 = std::min(y0 + 1, ch - 1);
-      const float fy = y - y0;
-      for (int c = 0; c < geometry_.width; ++c) {
-        const float x = std::clamp((c - 0.5f * (s - 1)) / s, 0.0f, float(cw - 1));
-        const int x0 = std::min(static_cast<int>(x), std::max(cw - 2, 0)), x1 = std::min(x0 + 1, cw - 1);
-        const float fx = x - x0;
-        const float a = coarse_.at(x0, y0) + fx * (coarse_.at(x1, y0) - coarse_.at(x0, y0));
-        const float b = coarse_.at(x0, y1) + fx * (coarse_.at(x1, y1) - coarse_.at(x0, y1));
-        p[size_t(r) * geometry_.width + c] += a + fy * (b - a);
-      }
-    }
+    upsample_bilinear(coarse_, s, &bin_images_[bin], /*add=*/true);
   }
   filled_[bin] = 1;
   ++bin_projections_;
+}
+
+void BeatingBackground::replace_static(const Image& old_projection, const Image& new_projection) {
+  if (old_projection.pixels.size() != new_projection.pixels.size() ||
+      (!bin_images_.empty() && bin_images_[0].pixels.size() != new_projection.pixels.size()))
+    throw std::invalid_argument("BeatingBackground::replace_static: the projections' sizes differ from the pose's");
+  for (Image& im : bin_images_)
+    for (size_t i = 0; i < im.pixels.size(); ++i) im.pixels[i] += new_projection.pixels[i] - old_projection.pixels[i];
 }
 
 void BeatingBackground::at_phase(double phase, Image* out) {

@@ -50,6 +50,9 @@ class BeatingBackground {
   // a new pose: `static_projection` is the static CT's line integrals for g (copied); every bin
   // is projected again when needed
   void set_pose(const DetectorGeometry& g, const Image& static_projection);
+  // the same pose's static projection made again (a move's quick one refined): every bin, filled
+  // or not, takes the difference; the changes are not projected again
+  void replace_static(const Image& old_projection, const Image& new_projection);
 
   // the background's line integrals at `phase` (any real; taken mod 1) into out (sized like the
   // pose's image); projects the bins it needs that the pose lacks. Allocates nothing once every

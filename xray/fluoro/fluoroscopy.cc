@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "xray/overlay/tube_overlay.h"
 #include "xray/overlay/wire_overlay.h"
@@ -40,6 +41,18 @@ struct FluoroscopyRenderer::Impl {
   std::vector<Eigen::Vector3d> wire_mm;
   WireSpec wire;
   FluoroFrameCost cost;
+  // a move's quick projection and its refinement (set_move_preview)
+  int preview_stride = 1, refine_rows = 64;
+  int refine_next_row = -1;  // the next band's first row; -1: the background is whole
+  Image preview, fine, band;
+
+  // the range-compression offset of the background as it stands (the display's window is set
+  // once per pose, from the first projection, so that refining it shifts no brightness)
+  void compress_background(const DetectorGeometry& g) {
+    const int radius_px = static_cast<int>(std::lround(spec.range_compression_mm / g.pixel_mm));
+    range_compression_offset(background, radius_px, spec.range_compression, &compression_tmp, &compression);
+    chain.set_offset(&compression);
+  }
 
   Impl(const anatomy::VesselTree& t, anatomy::Volume background, const FluoroSpec& s)
       : tree(t),
@@ -72,13 +85,20 @@ void FluoroscopyRenderer::render(const FluoroInput& in, FluoroFrame& out) {
   m.cost = {};
   // 1. the static anatomy, re-projected only for a new geometry (or when invalidated)
   if (!m.background_valid || !same_geometry(g, m.background_geometry)) {
-    m.drr.render(g, &m.background);
+    if (m.preview_stride > 1) {
+      // quick: every stride-th pixel, upsampled; refined by work_ahead()
+      m.drr.render(coarse_detector(g, m.preview_stride), &m.preview);
+      if (m.background.width != g.width || m.background.height != g.height) m.background.resize(g.width, g.height);
+      upsample_bilinear(m.preview, m.preview_stride, &m.background);
+      m.refine_next_row = 0;
+    } else {
+      m.drr.render(g, &m.background);
+      m.refine_next_row = -1;
+    }
     m.background_geometry = g;
     m.background_valid = true;
     ++m.background_renders;
-    const int radius_px = static_cast<int>(std::lround(m.spec.range_compression_mm / g.pixel_mm));
-    range_compression_offset(m.background, radius_px, m.spec.range_compression, &m.compression_tmp, &m.compression);
-    m.chain.set_offset(&m.compression);
+    m.compress_background(g);
     // window on the compressed background
     for (size_t i = 0; i < m.compression_tmp.pixels.size(); ++i) {
       m.compression_tmp.pixels[i] = m.background.pixels[i] - m.compression.pixels[i];
@@ -166,8 +186,39 @@ void FluoroscopyRenderer::set_beat(const BeatSamples& samples, const BeatingBack
 const BeatingBackground* FluoroscopyRenderer::beat() const {
   return impl_->beat.get();
 }
-int FluoroscopyRenderer::fill_beat_ahead() {
-  return impl_->beat && impl_->background_valid ? impl_->beat->fill_ahead() : 0;
+int FluoroscopyRenderer::work_ahead() {
+  Impl& m = *impl_;
+  if (!m.background_valid) return 0;
+  if (m.refine_next_row >= 0) {
+    // one band of the whole projection; the last one swaps it in
+    const DetectorGeometry& g = m.background_geometry;
+    if (m.fine.width != g.width || m.fine.height != g.height) m.fine.resize(g.width, g.height);
+    const int rows = std::min(m.refine_rows, g.height - m.refine_next_row);
+    m.drr.render(detector_rows(g, m.refine_next_row, rows), &m.band);
+    std::copy(m.band.pixels.begin(), m.band.pixels.end(),
+              m.fine.pixels.begin() + static_cast<std::ptrdiff_t>(m.refine_next_row) * g.width);
+    m.refine_next_row += rows;
+    if (m.refine_next_row >= g.height) {
+      if (m.beat) m.beat->replace_static(m.background, m.fine);
+      std::swap(m.background, m.fine);
+      m.compress_background(g);
+      m.refine_next_row = -1;
+    }
+    return 1;
+  }
+  return m.beat ? m.beat->fill_ahead() : 0;
+}
+void FluoroscopyRenderer::set_move_preview(const MovePreview& preview) {
+  if (preview.stride < 1 || preview.stride > 8)
+    throw std::invalid_argument("move preview: stride must be 1-8, not " + std::to_string(preview.stride));
+  if (preview.rows_per_step < 1)
+    throw std::invalid_argument("move preview: rows_per_step must be >= 1, not " +
+                                std::to_string(preview.rows_per_step));
+  impl_->preview_stride = preview.stride;
+  impl_->refine_rows = preview.rows_per_step;
+}
+bool FluoroscopyRenderer::background_refined() const {
+  return impl_->refine_next_row < 0;
 }
 void FluoroscopyRenderer::set_c_arm(const CArmSpec& c_arm) {
   impl_->spec.c_arm = c_arm;

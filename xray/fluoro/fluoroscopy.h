@@ -89,6 +89,14 @@ struct FluoroFrameCost {
   double detector_ms = 0;    // quanta, noise, blur, log, window
 };
 
+// a C-arm move's quick first frame (FluoroscopyRenderer::set_move_preview): the interactive
+// loops' setting. Stride 4 projects 1/16 of the rays (the first frame after a move on 2 cores:
+// docs/benchmarks/xray-beating.md); 64 rows of 512 are an eighth of the whole projection per frame
+struct MovePreview {
+  int stride = 4;          // 1-8; 1: no quick projection
+  int rows_per_step = 64;  // >= 1
+};
+
 class FluoroscopyRenderer {
  public:
   // builds the thorax phantom around `tree` and prepares the projector (seconds at most)
@@ -111,11 +119,19 @@ class FluoroscopyRenderer {
   // samples or options are bad (naming the field)
   void set_beat(const BeatSamples& samples, const BeatingBackgroundOptions& options = {});
   const BeatingBackground* beat() const;  // null while the background stands still
-  // projects up to the beat's fill_per_frame phase bins the current pose still lacks; the caller
-  // does this after publishing a frame (render() projects only the bins its own frame needs), so
-  // a frame after a C-arm move is not held up by bins it does not show. How many it projected,
-  // 0 when none is missing or there is no beat
-  int fill_beat_ahead();
+  // a C-arm move's first frame from a quick projection (issue #36: the whole one held the picture
+  // for ~390 ms on 2 cores): the static background projected on the detector of every stride-th
+  // pixel (coarse_detector) and upsampled, then projected whole in bands of rows_per_step rows,
+  // one band per work_ahead(), swapped in once complete. Every frame is the true projection of
+  // its pose, at the resolution reached. Until this is called, stride 1: the whole projection at once, as
+  // datasets want. Throws std::invalid_argument naming the field out of its range
+  void set_move_preview(const MovePreview& preview);
+  bool background_refined() const;  // false while a move's quick projection is shown
+  // the work a frame leaves for after it is out: one band of a move's projection while one is
+  // pending, else up to the beat's fill_per_frame phase bins the current pose still lacks (render()
+  // projects only the bins its own frame needs, so a frame after a C-arm move is not held up by
+  // bins it does not show). How many pieces it did, 0 when nothing is left
+  int work_ahead();
   // a new detector or SID/SAD; the next frame re-projects the background if the geometry changed
   void set_c_arm(const CArmSpec& c_arm);
   // a fresh run over the same background volume and projector (a dataset's next sample): every

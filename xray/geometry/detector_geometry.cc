@@ -36,4 +36,24 @@ std::string validate(const DetectorGeometry& g) {
   return {};
 }
 
+DetectorGeometry coarse_detector(const DetectorGeometry& g, int stride) {
+  const int s = stride;
+  DetectorGeometry c = g;
+  c.width = (g.width + s - 1) / s;
+  c.height = (g.height + s - 1) / s;
+  c.pixel_mm = g.pixel_mm * s;
+  // the coarse centre: where its pixel ((W_c - 1) / 2, (H_c - 1) / 2) falls on g
+  const double dc = 0.5 * (c.width - 1) * s + 0.5 * (s - 1) - 0.5 * (g.width - 1);
+  const double dr = 0.5 * (c.height - 1) * s + 0.5 * (s - 1) - 0.5 * (g.height - 1);
+  c.center_mm = g.center_mm + (dc * g.pixel_mm) * g.u + (dr * g.pixel_mm) * g.v;
+  return c;
+}
+
+DetectorGeometry detector_rows(const DetectorGeometry& g, int first_row, int rows) {
+  DetectorGeometry b = g;
+  b.height = rows;
+  b.center_mm = g.pixel_center_mm(0.5 * (g.width - 1), first_row + 0.5 * (rows - 1));
+  return b;
+}
+
 }  // namespace pcisim::xray

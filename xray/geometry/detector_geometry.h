@@ -27,6 +27,13 @@ struct DetectorGeometry {
   bool project(const Eigen::Vector3d& p_mm, Eigen::Vector2d* cr) const;
 };
 
+// the detector of every stride-th pixel of g, each coarse pixel a stride x stride block's: coarse
+// pixel (C, R) is centred on g's pixel (s C + (s - 1) / 2, s R + (s - 1) / 2) (the last row and
+// column reach past g's edge when its size is not a multiple of s)
+DetectorGeometry coarse_detector(const DetectorGeometry& g, int stride);
+// rows [first_row, first_row + rows) of g as a detector of their own (a band of the image)
+DetectorGeometry detector_rows(const DetectorGeometry& g, int first_row, int rows);
+
 // empty when usable: finite entries, unit and orthogonal u and v, pixel_mm > 0, sizes >= 1,
 // and the source off the detector plane; otherwise what is wrong
 std::string validate(const DetectorGeometry& g);

@@ -20,4 +20,9 @@ struct Image {
   float at(int c, int r) const { return pixels[static_cast<size_t>(r) * width + c]; }
 };
 
+// fine (its size kept) from the image of coarse_detector(fine's detector, stride), bilinear:
+// fine pixel c sits at coarse coordinate (c - (s - 1) / 2) / s, clamped at the edges. add: adds
+// to fine's pixels instead of writing them
+void upsample_bilinear(const Image& coarse, int stride, Image* fine, bool add = false);
+
 }  // namespace pcisim::xray

@@ -343,6 +343,38 @@ TEST(BeatingBackground, BlendsTheTwoBinsAroundThePhaseOrTakesTheNearer) {
   EXPECT_EQ(nearest.filled_bins(), 4);
 }
 
+TEST(BeatingBackground, ANewStaticProjectionOfThePoseReplacesTheOldInEveryBin) {
+  // a C-arm move's quick static projection refined: each bin, filled or not, is what setting the
+  // pose with the refined projection would have given (its change is not projected again)
+  const AttenuationVolume mu(ct(Eigen::Vector3d::Zero()));
+  const DetectorGeometry g = ap();
+  const Image whole = still_projection(mu, g, 1.0);
+  Image quick = whole;
+  for (size_t i = 0; i < quick.pixels.size(); ++i) quick.pixels[i] *= 0.9f + 0.0001f * (i % 7);
+  const BeatingBackgroundOptions o{.interpolate = false, .projector = {.step_voxels = 1.0, .threads = 1}};
+  BeatingBackground refined(mu, rigid_beat(4), o), direct(mu, rigid_beat(4), o);
+  refined.set_pose(g, quick);
+  direct.set_pose(g, whole);
+  Image a, b;
+  refined.at_phase(0.0, &a);  // bin 0 filled on the quick projection, the others not yet
+  const int64_t projected = refined.bin_projections();
+  refined.replace_static(quick, whole);
+  EXPECT_EQ(refined.bin_projections(), projected) << "no change projected again";
+  for (const double phase : {0.0, 0.25, 0.5}) {
+    refined.at_phase(phase, &a);
+    direct.at_phase(phase, &b);
+    float top = 0, worst = 0;
+    for (size_t i = 0; i < a.pixels.size(); ++i) {
+      top = std::max(top, std::abs(b.pixels[i]));
+      worst = std::max(worst, std::abs(a.pixels[i] - b.pixels[i]));
+    }
+    EXPECT_LT(worst, 1e-5f * top) << "phase " << phase;
+  }
+  Image wrong;
+  wrong.resize(3, 3);
+  EXPECT_THROW(refined.replace_static(wrong, wrong), std::invalid_argument);
+}
+
 TEST(BeatingBackground, RefusesBadSamplesNamingWhatIsWrong) {
   const AttenuationVolume mu(ct(Eigen::Vector3d::Zero()));
   BeatSamples one_bin = rigid_beat(1);

@@ -57,7 +57,7 @@ TEST(FluoroscopyNoAllocation, BeatingFramesAllocateNothingOnceThePoseHasEveryBin
   FluoroInput in{.time_s = 0, .pose = testing::lao30_cra20()};
   in.heart_phase = 0.1;
   fr.render(in, f);
-  while (fr.fill_beat_ahead() > 0) {}
+  while (fr.work_ahead() > 0) {}
   ASSERT_EQ(fr.beat()->filled_bins(), 8);
   long allocations = -1;
   {

@@ -250,6 +250,55 @@ TEST(Fluoroscopy, BackgroundIsReusedForTheSamePoseOnly) {
   EXPECT_EQ(f.pixels, g.pixels);
 }
 
+// relative RMS difference of two line-integral images (relative to b's largest value)
+double relative_rms(const Image& a, const Image& b) {
+  double sum = 0, top = 0;
+  for (size_t i = 0; i < a.pixels.size(); ++i) {
+    sum += std::pow(double(a.pixels[i]) - b.pixels[i], 2);
+    top = std::max(top, std::abs(double(b.pixels[i])));
+  }
+  return std::sqrt(sum / a.pixels.size()) / top;
+}
+
+TEST(Fluoroscopy, AMoveShowsAQuickProjectionOfTheNewPoseThenTheWholeOne) {
+  const CArmPose before = lao30_cra20(), after{-30, 0, Eigen::Vector3d::Zero()};
+  // the references: whole projections of both poses by a renderer without the quick one
+  FluoroscopyRenderer whole(tree(), noiseless());
+  FluoroFrame f;
+  whole.render({.pose = before}, f);
+  const Image at_before = whole.line_integrals();
+  whole.render({.pose = after}, f);
+  const Image at_after = whole.line_integrals();
+  EXPECT_EQ(whole.work_ahead(), 0) << "without set_move_preview the projection is whole at once";
+
+  FluoroscopyRenderer fr(tree(), noiseless());
+  fr.set_move_preview({.stride = 4, .rows_per_step = 64});
+  fr.render({.pose = before}, f);
+  while (fr.work_ahead() > 0) {}
+  fr.render({.pose = after}, f);
+  EXPECT_FALSE(fr.background_refined());
+  // the first frame after the move: the new pose, coarser (1/16 of the rays), not the old pose
+  const double quick_err = relative_rms(fr.line_integrals(), at_after);
+  const double stale_err = relative_rms(fr.line_integrals(), at_before);
+  std::printf("quick projection against the whole one: %.3g %% RMS (the pose before: %.3g %%)\n", 100 * quick_err,
+              100 * stale_err);
+  EXPECT_LT(quick_err, 0.02);
+  EXPECT_LT(quick_err, 0.25 * stale_err);
+  // then one band of 64 rows per call: the 256 rows in four, the last swapping the whole one in
+  for (int band = 0; band < 4; ++band) {
+    EXPECT_FALSE(fr.background_refined()) << band;
+    EXPECT_EQ(fr.work_ahead(), 1) << band;
+  }
+  EXPECT_TRUE(fr.background_refined());
+  EXPECT_EQ(fr.work_ahead(), 0);
+  fr.render({.pose = after}, f);
+  // the bands' rays are the whole detector's (their pixel centres computed from another centre)
+  EXPECT_LT(relative_rms(fr.line_integrals(), at_after), 1e-6);
+  EXPECT_EQ(fr.background_renders(), 2) << "a refinement is not another pose";
+  EXPECT_THROW(fr.set_move_preview({.stride = 0, .rows_per_step = 64}), std::invalid_argument);
+  EXPECT_THROW(fr.set_move_preview({.stride = 4, .rows_per_step = 0}), std::invalid_argument);
+}
+
 TEST(Fluoroscopy, QuantumNoiseIsPoisson) {
   FluoroSpec s = small_fluoro_spec();
   s.photons_per_pixel = 2000;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <exception>
 #include <stdexcept>
+#include <string>
 #include <thread>
 
 #ifdef PCISIM_HAVE_CUDA
@@ -82,27 +83,38 @@ const AttenuationVolume& BeatingBackground::change(int bin) {
 
 BeatingBackground::~BeatingBackground() = default;
 
-void BeatingBackground::set_pose(const DetectorGeometry& g, const Image& static_projection) {
+void BeatingBackground::set_pose(const DetectorGeometry& g, const Image& static_projection, int quick_stride) {
   if (static_projection.width != g.width || static_projection.height != g.height)
     throw std::invalid_argument(
         "BeatingBackground::set_pose: the static projection's size differs from the detector's");
+  if (quick_stride < 0 || quick_stride > 8)
+    throw std::invalid_argument("BeatingBackground::set_pose: quick_stride must be 0-8, not " +
+                                std::to_string(quick_stride));
   geometry_ = g;
   for (Image& im : bin_images_) {
     if (im.width != g.width || im.height != g.height) im.resize(g.width, g.height);
     std::copy(static_projection.pixels.begin(), static_projection.pixels.end(), im.pixels.begin());
   }
+  static_ = static_projection;  // (the same size from pose to pose: no allocation)
   if (scratch_.width != g.width || scratch_.height != g.height) scratch_.resize(g.width, g.height);
   coarse_geometry_ = coarse_detector(g, options_.change_stride);
   if (coarse_.width != coarse_geometry_.width || coarse_.height != coarse_geometry_.height)
     coarse_.resize(coarse_geometry_.width, coarse_geometry_.height);
-  std::fill(filled_.begin(), filled_.end(), 0);
+  quick_stride_ = quick_stride > options_.change_stride ? quick_stride : 0;
+  if (quick_stride_) {
+    quick_geometry_ = coarse_detector(g, quick_stride_);
+    if (quick_.width != quick_geometry_.width || quick_.height != quick_geometry_.height)
+      quick_.resize(quick_geometry_.width, quick_geometry_.height);
+  }
+  std::fill(filled_.begin(), filled_.end(), kEmpty);
 }
 
-// bin image = static projection (already there) + the projection of the bin's change
+// bin image = static projection + the projection of the bin's change: on the change detector,
+// or (while the pose's static projection is a quick one) on the quick one
 void BeatingBackground::fill(int bin) {
   const AttenuationVolume& dmu = change(bin);
   std::vector<float>& p = bin_images_[bin].pixels;
-  const int s = options_.change_stride;
+  if (filled_[bin] != kEmpty) std::copy(static_.pixels.begin(), static_.pixels.end(), p.begin());
   // project the change: the GPU's copy of it, or this projector on the CPU
   auto project = [&](const DetectorGeometry& g, Image* out) {
 #ifdef PCISIM_HAVE_CUDA
@@ -113,23 +125,30 @@ void BeatingBackground::fill(int bin) {
 #endif
     projector_.project(dmu, g, out);
   };
-  if (s == 1) {
+  const int s = options_.change_stride;
+  if (quick_stride_) {
+    project(quick_geometry_, &quick_);
+    upsample_bilinear(quick_, quick_stride_, &bin_images_[bin], /*add=*/true);
+  } else if (s == 1) {
     project(geometry_, &scratch_);
     for (size_t i = 0; i < p.size(); ++i) p[i] += scratch_.pixels[i];
   } else {
     project(coarse_geometry_, &coarse_);
     upsample_bilinear(coarse_, s, &bin_images_[bin], /*add=*/true);
   }
-  filled_[bin] = 1;
+  filled_[bin] = quick_stride_ ? kQuick : kWhole;
   ++bin_projections_;
 }
 
 void BeatingBackground::replace_static(const Image& old_projection, const Image& new_projection) {
   if (old_projection.pixels.size() != new_projection.pixels.size() ||
-      (!bin_images_.empty() && bin_images_[0].pixels.size() != new_projection.pixels.size()))
+      static_.pixels.size() != new_projection.pixels.size())
     throw std::invalid_argument("BeatingBackground::replace_static: the projections' sizes differ from the pose's");
   for (Image& im : bin_images_)
     for (size_t i = 0; i < im.pixels.size(); ++i) im.pixels[i] += new_projection.pixels[i] - old_projection.pixels[i];
+  std::copy(new_projection.pixels.begin(), new_projection.pixels.end(), static_.pixels.begin());
+  // the bins filled quickly stay in use until fill_ahead() projects them again
+  quick_stride_ = 0;
 }
 
 void BeatingBackground::at_phase(double phase, Image* out) {
@@ -146,14 +165,14 @@ void BeatingBackground::at_phase(double phase, Image* out) {
     if (t >= 0.5) a = b;
     t = 0;
   }
-  if (!filled_[a]) fill(a);
+  if (filled_[a] == kEmpty) fill(a);
   if (out->width != geometry_.width || out->height != geometry_.height) out->resize(geometry_.width, geometry_.height);
   const std::vector<float>& pa = bin_images_[a].pixels;
   if (t == 0) {
     std::copy(pa.begin(), pa.end(), out->pixels.begin());
     return;
   }
-  if (!filled_[b]) fill(b);
+  if (filled_[b] == kEmpty) fill(b);
   const std::vector<float>& pb = bin_images_[b].pixels;
   // a + t (b - a): exactly a wherever the two bins agree (off the heart's box, bit for bit)
   const float wb = static_cast<float>(t);
@@ -162,17 +181,19 @@ void BeatingBackground::at_phase(double phase, Image* out) {
 
 int BeatingBackground::fill_ahead() {
   int done = 0;
-  for (int bin = 0; bin < bins() && done < options_.fill_per_frame; ++bin) {
-    if (filled_[bin]) continue;
-    fill(bin);
-    ++done;
-  }
+  // the bins the pose lacks, then (once its static projection is whole) those filled quickly
+  for (const char state : {kEmpty, kQuick})
+    for (int bin = 0; bin < bins() && done < options_.fill_per_frame; ++bin) {
+      if (filled_[bin] != state || (state == kQuick && quick_stride_)) continue;
+      fill(bin);
+      ++done;
+    }
   return done;
 }
 
 int BeatingBackground::filled_bins() const {
   int k = 0;
-  for (const char f : filled_) k += f ? 1 : 0;
+  for (const char f : filled_) k += f == kWhole ? 1 : 0;
   return k;
 }
 

@@ -48,20 +48,25 @@ class BeatingBackground {
   const HeartWarp& warp() const { return warp_; }
 
   // a new pose: `static_projection` is the static CT's line integrals for g (copied); every bin
-  // is projected again when needed
-  void set_pose(const DetectorGeometry& g, const Image& static_projection);
-  // the same pose's static projection made again (a move's quick one refined): every bin, filled
-  // or not, takes the difference; the changes are not projected again
+  // is projected again when needed. quick_stride (0-8; used when coarser than change_stride): the
+  // static projection is a quick one (a C-arm move's), and so are the bins filled until
+  // replace_static() gives the whole one: their changes on the detector of every quick_stride-th
+  // pixel, projected again afterwards by fill_ahead()
+  void set_pose(const DetectorGeometry& g, const Image& static_projection, int quick_stride = 0);
+  // the same pose's static projection made again (a move's quick one made whole): every bin,
+  // filled or not, takes the difference; the changes are not projected again (the quick bins'
+  // are, by fill_ahead())
   void replace_static(const Image& old_projection, const Image& new_projection);
 
   // the background's line integrals at `phase` (any real; taken mod 1) into out (sized like the
   // pose's image); projects the bins it needs that the pose lacks. Allocates nothing once every
   // bin of the first pose is filled.
   void at_phase(double phase, Image* out);
-  // projects up to fill_per_frame bins the pose still lacks; returns how many it projected
+  // projects up to fill_per_frame bins the pose still lacks (then, once its static projection is
+  // whole, those filled quickly); returns how many it projected
   int fill_ahead();
 
-  int filled_bins() const;
+  int filled_bins() const;  // the bins filled at the change detector's resolution
   bool changes_cached() const { return !changes_.empty(); }
   bool on_gpu() const { return gpu_ != nullptr; }
   int64_t bin_projections() const { return bin_projections_; }
@@ -78,10 +83,13 @@ class BeatingBackground {
   std::unique_ptr<Gpu> gpu_;
   TrilinearProjector projector_;
   DetectorGeometry geometry_;
-  std::vector<Image> bin_images_;  // static + change, per bin
+  std::vector<Image> bin_images_;                            // static + change, per bin
+  static constexpr char kEmpty = 0, kWhole = 1, kQuick = 2;  // a bin's state (filled_)
   std::vector<char> filled_;
-  Image scratch_, coarse_;
-  DetectorGeometry coarse_geometry_;
+  Image static_;  // the pose's static projection
+  Image scratch_, coarse_, quick_;
+  DetectorGeometry coarse_geometry_, quick_geometry_;
+  int quick_stride_ = 0;  // > 0 while the static projection is a quick one
   int64_t bin_projections_ = 0;
 };
 

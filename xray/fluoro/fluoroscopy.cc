@@ -106,7 +106,7 @@ void FluoroscopyRenderer::render(const FluoroInput& in, FluoroFrame& out) {
     double lo = 0, hi = 1;
     display_window_for(m.compression_tmp, &m.window_scratch, &lo, &hi);
     m.chain.set_window(lo, hi);  // fixed per pose, so contrast never shifts the brightness
-    if (m.beat) m.beat->set_pose(g, m.background);
+    if (m.beat) m.beat->set_pose(g, m.background, m.refine_next_row >= 0 ? m.preview_stride : 0);
     m.cost.background_ms = ms_since(t0);
   }
   t0 = std::chrono::steady_clock::now();

@@ -343,14 +343,20 @@ TEST(BeatingBackground, BlendsTheTwoBinsAroundThePhaseOrTakesTheNearer) {
   EXPECT_EQ(nearest.filled_bins(), 4);
 }
 
+// a stand-in for a quick static projection: the whole one, a little off
+Image quick_projection_of(const Image& whole) {
+  Image quick = whole;
+  for (size_t i = 0; i < quick.pixels.size(); ++i) quick.pixels[i] *= 0.9f + 0.0001f * (i % 7);
+  return quick;
+}
+
 TEST(BeatingBackground, ANewStaticProjectionOfThePoseReplacesTheOldInEveryBin) {
   // a C-arm move's quick static projection refined: each bin, filled or not, is what setting the
   // pose with the refined projection would have given (its change is not projected again)
   const AttenuationVolume mu(ct(Eigen::Vector3d::Zero()));
   const DetectorGeometry g = ap();
   const Image whole = still_projection(mu, g, 1.0);
-  Image quick = whole;
-  for (size_t i = 0; i < quick.pixels.size(); ++i) quick.pixels[i] *= 0.9f + 0.0001f * (i % 7);
+  const Image quick = quick_projection_of(whole);
   const BeatingBackgroundOptions o{.interpolate = false, .projector = {.step_voxels = 1.0, .threads = 1}};
   BeatingBackground refined(mu, rigid_beat(4), o), direct(mu, rigid_beat(4), o);
   refined.set_pose(g, quick);
@@ -373,6 +379,29 @@ TEST(BeatingBackground, ANewStaticProjectionOfThePoseReplacesTheOldInEveryBin) {
   Image wrong;
   wrong.resize(3, 3);
   EXPECT_THROW(refined.replace_static(wrong, wrong), std::invalid_argument);
+
+  // a quick pose (a C-arm move's first frame): the bins it fills before the whole projection
+  // arrives have their change on the coarser detector, and are projected again afterwards
+  BeatingBackground moved(mu, rigid_beat(4), o);
+  moved.set_pose(g, quick_projection_of(whole), 4);
+  moved.at_phase(0.25, &a);
+  EXPECT_EQ(moved.filled_bins(), 0) << "bin 1 filled quickly";
+  EXPECT_EQ(moved.fill_ahead(), 1) << "bin 0, quickly too";
+  EXPECT_EQ(moved.filled_bins(), 0);
+  moved.replace_static(quick_projection_of(whole), whole);
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(moved.fill_ahead(), 1) << k;  // bins 2, 3, then 0 and 1 again
+  EXPECT_EQ(moved.fill_ahead(), 0);
+  EXPECT_EQ(moved.filled_bins(), 4);
+  for (const double phase : {0.0, 0.25, 0.5}) {
+    moved.at_phase(phase, &a);
+    direct.at_phase(phase, &b);
+    float top = 0, worst = 0;
+    for (size_t i = 0; i < a.pixels.size(); ++i) {
+      top = std::max(top, std::abs(b.pixels[i]));
+      worst = std::max(worst, std::abs(a.pixels[i] - b.pixels[i]));
+    }
+    EXPECT_LT(worst, 1e-5f * top) << "phase " << phase << ", after the quick pose";
+  }
 }
 
 TEST(BeatingBackground, RefusesBadSamplesNamingWhatIsWrong) {

@@ -70,9 +70,9 @@ ContactSolveStats ContactPgs::solve(const Eigen::Ref<const Eigen::MatrixXd>& w, 
   // (the 3-vectors lie back to back: seen as one column of 3k, the products are matrix-vector
   // ones, which is where a sweep spends its time)
   static_assert(sizeof(Eigen::Vector3d) == 3 * sizeof(double));
-  Eigen::Map<Eigen::VectorXd> motion(motion_.data()->data(), 3 * k);
+  Eigen::Map<Eigen::VectorXd> motion(k > 0 ? motion_.front().data() : nullptr, 3 * k);
   for (int a = 0; a < k; ++a) curvature_[a].setZero();
-  if (k > 0) motion.noalias() = w * Eigen::Map<const Eigen::VectorXd>(impulses.data()->data(), 3 * k);
+  if (k > 0) motion.noalias() = w * Eigen::Map<const Eigen::VectorXd>(impulses.front().data(), 3 * k);
   // one contact's impulse changes by dl: every node's motion follows its column of W
   auto apply = [&](int a, const Eigen::Vector3d& dl) {
     impulses[a] += dl;

@@ -144,8 +144,16 @@ void BeatingBackground::replace_static(const Image& old_projection, const Image&
   if (old_projection.pixels.size() != new_projection.pixels.size() ||
       static_.pixels.size() != new_projection.pixels.size())
     throw std::invalid_argument("BeatingBackground::replace_static: the projections' sizes differ from the pose's");
-  for (Image& im : bin_images_)
-    for (size_t i = 0; i < im.pixels.size(); ++i) im.pixels[i] += new_projection.pixels[i] - old_projection.pixels[i];
+  // a bin not yet filled is the static projection itself (bit for bit, as set_pose leaves it:
+  // bins agree exactly off the heart's box); a filled one takes the difference
+  for (int bin = 0; bin < bins(); ++bin) {
+    std::vector<float>& p = bin_images_[bin].pixels;
+    if (filled_[bin] == kEmpty) {
+      std::copy(new_projection.pixels.begin(), new_projection.pixels.end(), p.begin());
+      continue;
+    }
+    for (size_t i = 0; i < p.size(); ++i) p[i] += new_projection.pixels[i] - old_projection.pixels[i];
+  }
   std::copy(new_projection.pixels.begin(), new_projection.pixels.end(), static_.pixels.begin());
   // the bins filled quickly stay in use until fill_ahead() projects them again
   quick_stride_ = 0;

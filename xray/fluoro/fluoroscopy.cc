@@ -178,10 +178,12 @@ int64_t FluoroscopyRenderer::background_renders() const {
 }
 void FluoroscopyRenderer::invalidate_background() {
   impl_->background_valid = false;
+  impl_->refine_next_row = -1;  // the next frame projects again
 }
 void FluoroscopyRenderer::set_beat(const BeatSamples& samples, const BeatingBackgroundOptions& options) {
   impl_->beat = std::make_unique<BeatingBackground>(impl_->drr.attenuation(), samples, options);
   impl_->background_valid = false;
+  impl_->refine_next_row = -1;
 }
 const BeatingBackground* FluoroscopyRenderer::beat() const {
   return impl_->beat.get();
@@ -246,7 +248,10 @@ void FluoroscopyRenderer::restart(const FluoroSpec& spec, bool keep_beat) {
   m.wire = {.radius_mm = spec.wire_radius_mm, .mu_per_mm = spec.wire_mu_per_mm};
   m.frames = 0;
   if (!keep_beat) m.beat.reset();
-  if (!keep) m.background_valid = false;
+  if (!keep) {
+    m.background_valid = false;
+    m.refine_next_row = -1;
+  }
 }
 const FluoroFrameCost& FluoroscopyRenderer::last_frame_cost() const {
   return impl_->cost;

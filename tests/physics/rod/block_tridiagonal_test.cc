@@ -10,26 +10,34 @@
 namespace pcisim::physics::rod {
 namespace {
 
+// a random symmetric positive definite chain and its dense matrix: diagonally dominant blocks
+// scaled over `decades` decades (10^(j % decades)), as a rod's are
+void fill_random_chain(std::mt19937& rng, int decades, BlockTridiagonal6* chain, Eigen::MatrixXd* dense) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const int n = chain->units();
+  *dense = Eigen::MatrixXd::Zero(6 * n, 6 * n);
+  for (int j = 0; j < n; ++j) {
+    BlockTridiagonal6::Block m;
+    for (int k = 0; k < 36; ++k) m(k) = u(rng);
+    const double scale = std::pow(10.0, j % decades);
+    chain->diagonal(j) = scale * (m * m.transpose() + 20.0 * BlockTridiagonal6::Block::Identity());
+    dense->block<6, 6>(6 * j, 6 * j) = chain->diagonal(j);
+    if (j + 1 < n) {
+      for (int k = 0; k < 36; ++k) m(k) = u(rng);
+      chain->upper(j) = std::sqrt(scale) * m;
+      dense->block<6, 6>(6 * j, 6 * j + 6) = chain->upper(j);
+      dense->block<6, 6>(6 * j + 6, 6 * j) = chain->upper(j).transpose();
+    }
+  }
+}
+
 TEST(BlockTridiagonal6, SolvesARandomSpdChainAsADenseSolveDoes) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const int n = 9;
   BlockTridiagonal6 chain(n);
-  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(6 * n, 6 * n);
-  for (int j = 0; j < n; ++j) {
-    BlockTridiagonal6::Block m;
-    for (int k = 0; k < 36; ++k) m(k) = u(rng);
-    // diagonally dominant, scaled over decades as a rod's blocks are
-    const double scale = std::pow(10.0, j % 5);
-    chain.diagonal(j) = scale * (m * m.transpose() + 20.0 * BlockTridiagonal6::Block::Identity());
-    dense.block<6, 6>(6 * j, 6 * j) = chain.diagonal(j);
-    if (j + 1 < n) {
-      for (int k = 0; k < 36; ++k) m(k) = u(rng);
-      chain.upper(j) = std::sqrt(scale) * m;
-      dense.block<6, 6>(6 * j, 6 * j + 6) = chain.upper(j);
-      dense.block<6, 6>(6 * j + 6, 6 * j) = chain.upper(j).transpose();
-    }
-  }
+  Eigen::MatrixXd dense;
+  fill_random_chain(rng, 5, &chain, &dense);
   std::vector<BlockTridiagonal6::Vector> b(n), x(n);
   Eigen::VectorXd bd(6 * n);
   for (int j = 0; j < n; ++j) {
@@ -121,20 +129,8 @@ TEST(BlockTridiagonal6, ThreeRightHandSidesAtOnceAreThreeDenseSolves) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const int n = 8, from = 4;
   BlockTridiagonal6 chain(n);
-  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(6 * n, 6 * n);
-  for (int j = 0; j < n; ++j) {
-    BlockTridiagonal6::Block m;
-    for (int k = 0; k < 36; ++k) m(k) = u(rng);
-    const double scale = std::pow(10.0, j % 4);  // over decades, as a rod's blocks are
-    chain.diagonal(j) = scale * (m * m.transpose() + 20.0 * BlockTridiagonal6::Block::Identity());
-    dense.block<6, 6>(6 * j, 6 * j) = chain.diagonal(j);
-    if (j + 1 < n) {
-      for (int k = 0; k < 36; ++k) m(k) = u(rng);
-      chain.upper(j) = std::sqrt(scale) * m;
-      dense.block<6, 6>(6 * j, 6 * j + 6) = chain.upper(j);
-      dense.block<6, 6>(6 * j + 6, 6 * j) = chain.upper(j).transpose();
-    }
-  }
+  Eigen::MatrixXd dense;
+  fill_random_chain(rng, 4, &chain, &dense);
   std::vector<BlockTridiagonal6::Columns3> b(n, BlockTridiagonal6::Columns3::Constant(std::nan("")));
   std::vector<BlockTridiagonal6::Columns3> x(n, BlockTridiagonal6::Columns3::Zero());
   Eigen::MatrixXd bd = Eigen::MatrixXd::Zero(6 * n, 3);

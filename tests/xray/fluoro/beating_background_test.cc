@@ -343,6 +343,17 @@ TEST(BeatingBackground, BlendsTheTwoBinsAroundThePhaseOrTakesTheNearer) {
   EXPECT_EQ(nearest.filled_bins(), 4);
 }
 
+float largest(const Image& im) {
+  float top = 0;
+  for (const float p : im.pixels) top = std::max(top, std::abs(p));
+  return top;
+}
+float worst_difference(const Image& a, const Image& b) {
+  float worst = 0;
+  for (size_t i = 0; i < a.pixels.size(); ++i) worst = std::max(worst, std::abs(a.pixels[i] - b.pixels[i]));
+  return worst;
+}
+
 // a stand-in for a quick static projection: the whole one, a little off
 Image quick_projection_of(const Image& whole) {
   Image quick = whole;
@@ -369,12 +380,7 @@ TEST(BeatingBackground, ANewStaticProjectionOfThePoseReplacesTheOldInEveryBin) {
   for (const double phase : {0.0, 0.25, 0.5}) {
     refined.at_phase(phase, &a);
     direct.at_phase(phase, &b);
-    float top = 0, worst = 0;
-    for (size_t i = 0; i < a.pixels.size(); ++i) {
-      top = std::max(top, std::abs(b.pixels[i]));
-      worst = std::max(worst, std::abs(a.pixels[i] - b.pixels[i]));
-    }
-    EXPECT_LT(worst, 1e-5f * top) << "phase " << phase;
+    EXPECT_LT(worst_difference(a, b), 1e-5f * largest(b)) << "phase " << phase;
   }
   Image wrong;
   wrong.resize(3, 3);
@@ -395,12 +401,7 @@ TEST(BeatingBackground, ANewStaticProjectionOfThePoseReplacesTheOldInEveryBin) {
   for (const double phase : {0.0, 0.25, 0.5}) {
     moved.at_phase(phase, &a);
     direct.at_phase(phase, &b);
-    float top = 0, worst = 0;
-    for (size_t i = 0; i < a.pixels.size(); ++i) {
-      top = std::max(top, std::abs(b.pixels[i]));
-      worst = std::max(worst, std::abs(a.pixels[i] - b.pixels[i]));
-    }
-    EXPECT_LT(worst, 1e-5f * top) << "phase " << phase << ", after the quick pose";
+    EXPECT_LT(worst_difference(a, b), 1e-5f * largest(b)) << "phase " << phase << ", after the quick pose";
   }
 }
 

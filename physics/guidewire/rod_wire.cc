@@ -131,6 +131,7 @@ RodWire::RodWire(const GuidewireParams& params, CatheterPath path, const LumenQu
   node_wall_n_.assign(n + 1, 0.0);
   normal_.assign(n + 1, Eigen::Vector3d::Zero());
   stuck_.assign(n + 1, 0);
+  held_.assign(n + 1, 0);
   wall_impulse_n_s_.assign(n + 1, 0.0);
   wall_force_n_.assign(n + 1, 0.0);
   for (auto* v : {&rest_point_m_, &offset_from_, &offset_to_, &offset_, &wall_velocity_})
@@ -159,6 +160,7 @@ RodWire::RodWire(const GuidewireParams& params, CatheterPath path, const LumenQu
   rod_.save_state(saved_rod_);
   saved_impulse_ = node_impulse_;
   saved_touched_ = touched_;
+  saved_held_ = held_;
   saved_anchor_ = anchor_rest_m_;
   saved_anchored_ = anchored_;
   // start fully inside the catheter, the tip at the exit
@@ -284,6 +286,7 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
       saved_impulse_ = node_impulse_;
       saved_warm_total_ = warm_total_;
       saved_touched_ = touched_;
+      saved_held_ = held_;
       saved_report_ = report_;
       saved_anchor_ = anchor_rest_m_;
       saved_anchored_ = anchored_;
@@ -328,6 +331,7 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
       node_impulse_ = saved_impulse_;
       warm_total_ = saved_warm_total_;
       touched_ = saved_touched_;
+      held_ = saved_held_;
       report_ = saved_report_;
       anchor_rest_m_ = saved_anchor_;
       anchored_ = saved_anchored_;
@@ -400,6 +404,7 @@ void RodWire::recover() {
   // nor friction anchors: the wire is laid out afresh
   std::fill(anchored_.begin(), anchored_.end(), 0);
   // the solve scheme's impulses belong to the state that failed: none carried into the next
+  std::fill(held_.begin(), held_.end(), 0);
   std::fill(node_impulse_.begin(), node_impulse_.end(), Eigen::Vector3d::Zero());
   std::fill(warm_total_.begin(), warm_total_.end(), Eigen::Vector3d::Zero());
   const int hub = rod_.hub_node();
@@ -545,7 +550,11 @@ Eigen::Matrix3d RodWire::wall_shape(int node, const Eigen::Vector3d& n, std::spa
 //      substep's force (its motion through W taken off the gap and slip)
 //   2. W = H A^-1 H^T for them, from the rod's factor
 //   3. the contact problem on W (rod::ContactPgs) with the walls' curvature, starting from the
-//      last substep's impulses
+//      last substep's impulses. Each contact has one cone: the static one where static friction
+//      held the node in the last accepted substep, else the kinetic one (a node breaks loose on
+//      the static cone and slides on the kinetic one from the next substep). Both in one solve,
+//      stick within mu_s and slide at mu_k, had no fixed point the sweeps could reach: on the dead
+//      end 97 % of substeps cycled at the sweep cap, the same contacts flipping stick <-> slip
 //   4. the rod's response to the change of impulses: multipliers, nodes and frames move together
 //   5. what the linearisation leaves inside is moved out along the normal without velocity and
 //      reported (a curved wall, or a node the response pushed in that was no contact)
@@ -609,7 +618,8 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
     Eigen::Vector3d warm_motion = Eigen::Vector3d::Zero();
     for (int b = 0; b < count; ++b) warm_motion += w.block<3, 3>(3 * a, 3 * b) * warm_total_[contact_nodes_[b]];
     const Eigen::Vector3d moved = x[i] - x_start[i] - h * wall_velocity_[i] - warm_motion;
-    contacts_[a] = {n, candidate_gap_m_[i] - n.dot(warm_motion), moved - moved.dot(n) * n, mu_static(i), mu_kinetic(i)};
+    const double mu = held_[i] ? mu_static(i) : mu_kinetic(i);
+    contacts_[a] = {n, candidate_gap_m_[i] - n.dot(warm_motion), moved - moved.dot(n) * n, mu, mu};
     // the wall's curvature where the node stands, linearised there (the curved-wall impulse)
     contacts_[a].shape_per_m = wall_shape(i, n, x);
     contacts_[a].linearised_at_m = warm_motion;
@@ -683,6 +693,7 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
     return;
   }
   report_.residual_m = std::max(report_.residual_m, residual_m);
+  std::copy(stuck_.begin(), stuck_.end(), held_.begin());
   // 6. the spin about the wire's axis
   hold_spin(rod);
 }

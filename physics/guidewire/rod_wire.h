@@ -168,6 +168,9 @@ class RodWire final : public rod::RodContact {
   Eigen::Quaterniond exit_frame_;  // e3 along the exit, fixed in the world
   int tip_first_node_ = 0;
   std::vector<uint8_t> touched_, stuck_;
+  // the solve scheme: static friction held the node in the last accepted substep, so its cone in
+  // the next contact problem is the static one (else the kinetic one)
+  std::vector<uint8_t> held_, saved_held_;
   std::vector<double> wall_impulse_n_s_, wall_force_n_;
   std::vector<double> substep_dn_m_;     // normal corrections so far in this substep
   std::vector<uint8_t> segment_stuck_;   // held about its axis by static friction this substep

@@ -4,11 +4,15 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 
 namespace pcisim::physics::rod {
 namespace {
+
+// the subspace step's solves: each lets go of the push that would turn into a pull first
+constexpr int kSubspaceRounds = 8;
 
 // two unit vectors spanning the plane normal to n
 void tangent_basis(const Eigen::Vector3d& n, Eigen::Vector3d* t1, Eigen::Vector3d* t2) {
@@ -58,6 +62,75 @@ ContactPgs::ContactPgs(int max_contacts) {
   if (max_contacts < 0) throw std::invalid_argument("contact solve: max_contacts must be >= 0");
   motion_.assign(max_contacts, Eigen::Vector3d::Zero());
   curvature_.assign(max_contacts, Eigen::Vector3d::Zero());
+  pushing_.assign(max_contacts, 0);
+  subspace_.setZero(max_contacts, max_contacts);
+  subspace_rhs_.setZero(max_contacts);
+  sum_.setZero(3 * max_contacts);
+}
+
+// The subspace step, on the pushes alone: with every friction and curved-wall impulse held as
+// the last sweep left it, the pushing contacts' gaps close together. With x the pushes' changes
+// (the impulse change -n x per contact) and d the motion now:
+//   n_a'(d_a - sum_b W_ab n_b x_b) + gap_a = 0   for every pushing contact a
+// i.e. N' W N x = N' d + gap: symmetric, positive definite where the rows are independent
+// (Cholesky in place; a relative 1e-10 on the diagonal keeps near-dependent rows solvable). The
+// step goes along x as far as no push turns into a pull: along that segment the pushes' quadratic
+// falls all the way to its minimum at 1. (Solving the stuck contacts' whole motion too, or the
+// sliding ones' friction with their push, left sweeps that did not settle; projecting the whole
+// answer on the cones instead of stopping short left them far worse off than before the step.)
+bool ContactPgs::subspace_step(const Eigen::Ref<const Eigen::MatrixXd>& w, std::span<const NodeContact> c,
+                               std::span<Eigen::Vector3d> impulses) {
+  const int k = static_cast<int>(c.size());
+  // (a push far below the largest, 1e-160 N s^2 seen, would stop the step before it began: held)
+  double largest = 0.0;
+  for (int a = 0; a < k; ++a) largest = std::max(largest, -c[a].normal.dot(impulses[a]));
+  int pushing = 0;
+  for (int a = 0; a < k; ++a)
+    if (-c[a].normal.dot(impulses[a]) > 1e-9 * largest) pushing_[pushing++] = a;
+  if (pushing == 0) return false;
+  Eigen::Map<Eigen::VectorXd> motion(motion_.front().data(), 3 * k);
+  bool moved = false;
+  for (int round = 0; round < kSubspaceRounds && pushing > 0; ++round) {
+    double diagonal = 0.0;
+    for (int p = 0; p < pushing; ++p) {
+      const int a = pushing_[p];
+      const Eigen::Vector3d& n = c[a].normal;
+      for (int q = 0; q <= p; ++q)
+        subspace_(p, q) = n.dot(w.block<3, 3>(3 * a, 3 * pushing_[q]) * c[pushing_[q]].normal);
+      subspace_rhs_(p) = n.dot(motion_[a]) + c[a].gap_m;
+      diagonal = std::max(diagonal, subspace_(p, p));
+    }
+    Eigen::Ref<Eigen::MatrixXd> system(subspace_.topLeftCorner(pushing, pushing));
+    system.diagonal().array() += 1e-10 * diagonal;
+    Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>, Eigen::Lower> llt(system);
+    if (llt.info() != Eigen::Success) break;
+    auto x = subspace_rhs_.head(pushing);
+    llt.solveInPlace(x);
+    if (!x.allFinite()) break;
+    // as far as no push turns into a pull; the one that would is let go and the rest solved again
+    double step = 1.0;
+    int blocking = -1;
+    for (int p = 0; p < pushing; ++p) {
+      const double push = -c[pushing_[p]].normal.dot(impulses[pushing_[p]]);
+      if (x(p) < 0.0 && push < step * -x(p)) {
+        step = push / -x(p);
+        blocking = p;
+      }
+    }
+    for (int p = 0; p < pushing; ++p) impulses[pushing_[p]] -= step * x(p) * c[pushing_[p]].normal;
+    if (blocking >= 0) {
+      const int a = pushing_[blocking];
+      impulses[a] -= c[a].normal.dot(impulses[a]) * c[a].normal;  // exactly no push
+      pushing_[blocking] = pushing_[--pushing];
+      std::sort(pushing_.begin(), pushing_.begin() + pushing);
+    }
+    // every node's motion from the impulses and the curved walls' ones
+    for (int a = 0; a < k; ++a) sum_.segment<3>(3 * a) = impulses[a] + curvature_[a];
+    motion.noalias() = w * sum_.head(3 * k);
+    moved = true;
+    if (blocking < 0) break;
+  }
+  return moved;
 }
 
 ContactSolveStats ContactPgs::solve(const Eigen::Ref<const Eigen::MatrixXd>& w, std::span<const NodeContact> c,
@@ -99,6 +172,10 @@ ContactSolveStats ContactPgs::solve(const Eigen::Ref<const Eigen::MatrixXd>& w, 
         own_motion += waa * dl;
         change = std::max(change, std::abs(l_n_new - l_n) * w_nn);
       }
+      // apart, and no friction or curved wall's impulse left to take back: nothing more changes
+      // (most candidates of a wire along a wall, each sweep)
+      if (l_n_new == 0.0 && l_n == 0.0 && impulses[a].squaredNorm() == 0.0 && curvature_[a].squaredNorm() == 0.0)
+        continue;
       // tangent: the impulse that stops the slip, inside the static cone; else the kinetic one
       // against the slip that is left. A curved wall's impulse C = -L_n S_tt t'(d - d_0) shares
       // the plane: stuck, the node's motion along the wall is known (it stops the slip), so C is
@@ -156,6 +233,8 @@ ContactSolveStats ContactPgs::solve(const Eigen::Ref<const Eigen::MatrixXd>& w, 
       stats.converged = true;
       break;
     }
+    if (sweeps_per_subspace_ > 0 && (sweep_count + 1) % sweeps_per_subspace_ == 0 && sweep_count + 1 < max_sweeps)
+      stats.subspace_steps += subspace_step(w, c, impulses) ? 1 : 0;
   }
   return stats;
 }

@@ -11,6 +11,7 @@
 //                the feed (a curve for the report's plot), what crumples, what is left in the wall
 //   torque_lag   the hub turned a whole turn at a constant rate: the tip's rotation against time in
 //                a tortuous tube with friction, beside a straight frictionless tube (the tip follows)
+//   default_scene  no textbook: the default beating scene with the rod, what its steps cost there
 #include <string>
 #include <vector>
 
@@ -140,5 +141,20 @@ struct TorqueLagResult {
 };
 TorqueLagResult run_torque_lag(const TorqueLag& c);
 std::string json_line(const TorqueLag& c, const TorqueLagResult& r);
+
+// --- default_scene ---
+// the default beating scene driven by the built-in trainee's session (19.5 s down the LAD), its
+// wire the rod (200 segments, the moving wall pushing it) with the given wall scheme; the cost is
+// the world's guidewire effect (the rod's step with its contact and friction), per 30 Hz step
+struct DefaultSceneResult {
+  physics::RodContactScheme scheme = physics::RodContactScheme::kProjection;
+  double max_ms = 0;           // the slowest step
+  double max_residual_mm = 0;  // the deepest a node was left in the wall before it was moved out
+  double max_hub_n = 0;
+  int recoveries = 0;  // times the rod went non-finite and was laid out afresh
+  StepCost cost;
+};
+DefaultSceneResult run_default_scene(physics::RodContactScheme scheme);
+std::string json_line(const DefaultSceneResult& r);
 
 }  // namespace pcisim::bench::wire_force

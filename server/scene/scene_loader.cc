@@ -56,6 +56,14 @@ physics::GuidewireParams read_guidewire(json::JsonReader r) {
   if (!rod && p.beat_coupling == physics::BeatCoupling::kContact)
     r.fail("beat_coupling",
            "\"contact\" needs guidewire.model \"rod\" (the chain-mail rides the vessels: \"kinematic\")");
+  // where the wall enters the rod's substep: after its solve (projection) or inside it (solve:
+  // contact and friction on the rod's compliance; issue #33, docs/guidewire.md)
+  p.rod_contact = r.text("rod_contact", "projection", {"projection", "solve"}) == "solve"
+                      ? physics::RodContactScheme::kSolve
+                      : physics::RodContactScheme::kProjection;
+  if (!rod && p.rod_contact == physics::RodContactScheme::kSolve)
+    r.fail("rod_contact",
+           "\"solve\" needs guidewire.model \"rod\" (the chain-mail has no solve for the wall to enter)");
   p.length_m = in_range(r, "length_mm", p.length_m, physics::kGuidewireLengthM, kMm);
   p.segment_count = in_range(r, "segments", p.segment_count, physics::kGuidewireSegments);
   p.optimisation_passes =

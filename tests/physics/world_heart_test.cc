@@ -229,13 +229,15 @@ struct HeldRod {
   double worst_outside_m = -1.0;  // over the free nodes (every 2nd), feed and hold
   double peak_to_peak_m = 0.0;    // the tip's excursion while held
   double wall_force_n = 0.0;      // the wall's largest total force on the wire while held
+  double hub_n = 0.0;             // the hub's largest axial force, feed and hold
   std::vector<Eigen::Vector3d> held_tip_m;
 };
-HeldRod run_held_rod(BeatCoupling coupling) {
+HeldRod run_held_rod(BeatCoupling coupling, RodContactScheme scheme = RodContactScheme::kProjection) {
   WorldSpec spec = beating_spec();
   spec.guidewire->model = GuidewireModel::kRod;
   spec.guidewire->segment_count = 300;
   spec.guidewire->beat_coupling = coupling;
+  spec.guidewire->rod_contact = scheme;
   World w = test::make_world(spec);
   WorldSnapshot snap;
   InstrumentInput in;
@@ -248,6 +250,7 @@ HeldRod run_held_rod(BeatCoupling coupling) {
     w.write_snapshot(snap);
     const RodWire& wire = *w.rod_state();
     EXPECT_EQ(wire.recoveries(), 0);
+    r.hub_n = std::max(r.hub_n, std::abs(wire.hub_axial_force_n()));
     for (int i = wire.first_free_node(); i < wire.node_count(); i += 2)
       r.worst_outside_m =
           std::max(r.worst_outside_m, outside_lumen(w.vessel_tree(), *w.vessel_skin(), snap.wire_nodes_m[i]));
@@ -292,6 +295,23 @@ TEST(WorldHeart, TheBeatingWallPushesTheRod) {
   EXPECT_NEAR(contact.peak_to_peak_m, kinematic.peak_to_peak_m, 0.25 * kinematic.peak_to_peak_m);
   EXPECT_LT(rms, 3e-3);
   EXPECT_GT(contact.wall_force_n, 0.0);
+}
+
+// The same with the wall inside the rod's solve (guidewire.rod_contact "solve", issue #33): the
+// contact problem keeps the wire in the moving lumen, and the forces it gives stay a wire's. Bounds
+// (measured in session 28): nothing more than 0.15 mm outside the moving lumen (+0.108 mm; the
+// lumen here is the skin-moved tree, the contact field an SDF sampled at 0.2 mm, and the projection
+// scheme's +0.075 above); the wall's total force on a 0.014" wire lying in a beating LAD under
+// 1 N (0.25 N); the hub's force under the grip's 1 N refusal plus a step's change (0.31 N)
+TEST(WorldHeart, WithTheWallInsideItsSolveTheRodStaysInTheBeatingLumenAndItsForcesStayAWires) {
+  const HeldRod solve = run_held_rod(BeatCoupling::kContact, RodContactScheme::kSolve);
+  std::printf("held rod, wall inside the solve: worst outside %+.3f mm, wall force up to %.3g N, hub up to %.3g N\n",
+              1e3 * solve.worst_outside_m, solve.wall_force_n, solve.hub_n);
+  EXPECT_LT(solve.worst_outside_m, 0.15e-3);
+  EXPECT_GT(solve.wall_force_n, 0.0);
+  EXPECT_LT(solve.wall_force_n, 1.0);
+  EXPECT_LT(solve.hub_n, 1.5);
+  EXPECT_GT(solve.peak_to_peak_m, 5e-3) << "the wall carries the wire as the vessel moves";
 }
 
 TEST(WorldHeart, BloodDragMovesAnUnconstrainedWireDownstream) {

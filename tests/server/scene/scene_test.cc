@@ -108,6 +108,16 @@ TEST(Scene, TheGuidewireModelIsChosenByTheScene) {
   EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"beat_coupling": "contact"}}})"),
             "test.json: effects.guidewire.beat_coupling: \"contact\" needs guidewire.model \"rod\" (the chain-mail "
             "rides the vessels: \"kinematic\")");
+  // the rod's wall after its solve unless told to go inside it; the chain-mail has no such solve
+  EXPECT_EQ(s.world.guidewire->rod_contact, physics::RodContactScheme::kProjection);
+  EXPECT_EQ(parse_scene(R"({"effects": {"guidewire": {"model": "rod", "rod_contact": "solve"}}})", "t")
+                .world.guidewire->rod_contact,
+            physics::RodContactScheme::kSolve);
+  EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"rod_contact": "solve"}}})"),
+            "test.json: effects.guidewire.rod_contact: \"solve\" needs guidewire.model \"rod\" (the chain-mail has no "
+            "solve for the wall to enter)");
+  EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"model": "rod", "rod_contact": "implicit"}}})"),
+            "test.json: effects.guidewire.rod_contact: expected one of \"projection\", \"solve\", got \"implicit\"");
   // the chain-mail's limits as set or from the section
   EXPECT_EQ(parse_scene(R"({"effects": {"guidewire": {"chain_mail_limits": "nitinol_core"}}})", "t")
                 .world.guidewire->chain_mail_limits,
@@ -124,7 +134,8 @@ TEST(Scene, EachBadInputNamesItsJsonPathAndWhatWasExpected) {
             "body_beta_deg_per_mm, "
             "chain_mail_limits, feed_refuse_force_n, internal_force, length_mm, mass_per_length_kg_per_m, model, "
             "optimisation_passes, "
-            "outer_diameter_mm, preset, rod_damping_per_s, rod_iterations, rod_substeps, segments, tip_alpha_max, "
+            "outer_diameter_mm, preset, rod_contact, rod_damping_per_s, rod_iterations, rod_substeps, segments, "
+            "tip_alpha_max, "
             "tip_alpha_min, tip_angle_deg, tip_bending_stiffness_nm2, tip_beta_deg_per_mm, tip_length_mm, "
             "torsion_damping_nm_s_per_rad, torsional_rigidity_nm2)");
   EXPECT_EQ(error_of(R"({"effects": {"guidewire": {"model": "spring"}}})"),

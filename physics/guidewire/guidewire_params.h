@@ -21,13 +21,13 @@ enum class InternalForce { kRefusedFeed, kEq20 };
 // through contact and friction (rod model only)
 enum class BeatCoupling { kKinematic, kContact };
 
-// how the rod meets the wall (docs/guidewire.md): kProjection, the scenes' scheme, moves nodes
+// how the rod meets the wall (docs/guidewire.md): kProjection, the scenes' default, moves nodes
 // out of the wall after each solve and decides friction on the rod's forces (the wall has the
 // last word, so a pushed wire crumples); kSolve solves contact and Coulomb friction with the
 // rod's elasticity on its contact compliance after the free solve (physics/rod/contact_pgs.h);
 // kImplicit makes the wall and friction stiff springs inside the rod's own solve (issue #33).
-// kSolve and kImplicit are for rigs only (each misses some of pcisim-bench wire-force's
-// checks), so no scene key selects them
+// A scene picks kProjection (its default) or kSolve (guidewire.rod_contact); kImplicit is for
+// the rigs only (each misses some of pcisim-bench wire-force's checks)
 enum class RodContactScheme { kProjection, kSolve, kImplicit };
 
 // where the chain-mail's limits come from: the alpha / beta fields as set, or derived from the

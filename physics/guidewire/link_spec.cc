@@ -56,6 +56,8 @@ void validate(const GuidewireParams& p) {
   check(p.beat_coupling == BeatCoupling::kKinematic ||
             (p.beat_coupling == BeatCoupling::kContact && p.model == GuidewireModel::kRod),
         "beat_coupling", "kinematic, or contact with the rod model (the chain-mail rides the vessels kinematically)");
+  check(p.rod_contact == RodContactScheme::kProjection || p.model == GuidewireModel::kRod, "rod_contact",
+        "projection with the chain-mail (solve and implicit are the rod's)");
   in_range(p.bending_stiffness_nm2, kGuidewireBendingStiffnessNm2, "bending_stiffness_nm2");
   in_range(p.tip_bending_stiffness_nm2, kGuidewireBendingStiffnessNm2, "tip_bending_stiffness_nm2");
   in_range(p.mass_per_length_kg_per_m, kGuidewireMassPerLengthKgPerM, "mass_per_length_kg_per_m");

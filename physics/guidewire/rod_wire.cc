@@ -551,10 +551,11 @@ Eigen::Matrix3d RodWire::wall_shape(int node, const Eigen::Vector3d& n, std::spa
 //   2. W = H A^-1 H^T for them, from the rod's factor
 //   3. the contact problem on W (rod::ContactPgs) with the walls' curvature, starting from the
 //      last substep's impulses. Each contact has one cone: the static one where static friction
-//      held the node in the last accepted substep, else the kinetic one (a node breaks loose on
-//      the static cone and slides on the kinetic one from the next substep). Both in one solve,
-//      stick within mu_s and slide at mu_k, had no fixed point the sweeps could reach: on the dead
-//      end 97 % of substeps cycled at the sweep cap, the same contacts flipping stick <-> slip
+//      held the node in the last accepted substep (its friction strictly inside the cone), else
+//      the kinetic one (a node breaks loose on the static cone and slides on the kinetic one from
+//      the next substep). Both in one solve, stick within mu_s and slide at mu_k, had no fixed
+//      point: the sweeps cycled at their cap, the same contacts flipping stick <-> slip (one cone
+//      leaves them converging, though still slowly where W couples a node's normal and tangent)
 //   4. the rod's response to the change of impulses: multipliers, nodes and frames move together
 //   5. what the linearisation leaves inside is moved out along the normal without velocity and
 //      reported (a curved wall, or a node the response pushed in that was no contact)
@@ -660,6 +661,7 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
   // curvature's impulse (the prediction's force); the wall's force on a node is both (after_substep)
   std::fill(node_impulse_.begin(), node_impulse_.end(), Eigen::Vector3d::Zero());
   std::fill(warm_total_.begin(), warm_total_.end(), Eigen::Vector3d::Zero());
+  std::fill(held_.begin(), held_.end(), 0);  // (a retried substep restores them)
   if (have_w) {
     for (int a = 0; a < count; ++a) {
       const int i = contact_nodes_[a];
@@ -676,6 +678,9 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
       node_wall_n_[i] = push * inv_h2;  // after_substep adds it (and node_impulse_) to the step's impulse
       const Eigen::Vector3d slip = contacts_[a].slip_m + pgs_.motion_m()[a];
       stuck_[i] = (slip - slip.dot(n) * n).norm() < kStuckM;
+      // held by static friction: the answer's friction strictly inside this substep's cone
+      const Eigen::Vector3d friction = node_impulse_[i] + push * n;
+      held_[i] = friction.norm() < (1.0 - 1e-6) * contacts_[a].mu_static * push;
     }
   }
   // 5. the linearisation's leftovers, out along the normal, without velocity (or, where a node
@@ -693,7 +698,6 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
     return;
   }
   report_.residual_m = std::max(report_.residual_m, residual_m);
-  std::copy(stuck_.begin(), stuck_.end(), held_.begin());
   // 6. the spin about the wire's axis
   hold_spin(rod);
 }

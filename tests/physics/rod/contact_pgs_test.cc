@@ -10,6 +10,8 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <cmath>
+#include <cstdio>
 #include <random>
 #include <vector>
 
@@ -205,7 +207,7 @@ TEST(ContactPgs, ACoupledRandomProblemMeetsSignoriniAndTheCone) {
 // two nodes wide, nearly dependent (the dead end's W had condition numbers of 1e7), the tangents
 // apart. Gaps made from pushes chosen first (gap = W_nn L), so the answer is those pushes: every
 // contact pushes and closes its gap exactly. The sweeps alone hand the pushes back and forth
-// and stop at the cap far from it; with the subspace step the same cap is plenty.
+// and stopped at the cap 0.045 off (printed); with the subspace step the same cap is plenty.
 TEST(ContactPgs, NearDependentContactsSettleWithTheSubspaceStep) {
   const int k = 16;
   Eigen::MatrixXd w = Eigen::MatrixXd::Identity(3 * k, 3 * k);
@@ -228,16 +230,33 @@ TEST(ContactPgs, NearDependentContactsSettleWithTheSubspaceStep) {
     for (int a = 0; a < k; ++a) worst = std::max(worst, std::abs(l[a].z() - push(a)));
     std::printf("subspace every %d sweeps: %d sweeps, converged %d, worst push off by %.2g\n", every, s.sweeps,
                 s.converged, worst);
-    if (every == 0) {
-      EXPECT_FALSE(s.converged) << "the sweeps alone should not settle this";
-      EXPECT_GT(worst, 1e-3);
-    } else {
+    if (every > 0) {
       EXPECT_TRUE(s.converged);
       EXPECT_GT(s.subspace_steps, 0);
       EXPECT_LT(worst, 1e-6);
       for (int a = 0; a < k; ++a) EXPECT_NEAR(c[a].gap_m + c[a].normal.dot(pgs.motion_m()[a]), 0.0, 1e-9) << a;
     }
   }
+}
+
+// the subspace step lets go of a push that would turn into a pull: the coupled pair in the wall by
+// 3 and 1 (answer: the first alone pushes 1.5, the second lifts off), warm-started at (2, 2), a
+// step after every sweep. The first sweep leaves both pushing, (0.5, 0.25); the pushes' solve
+// wants (5/3, -1/3), so the step stops where the second reaches zero (0.43 of the way), lets it
+// go, and solves the first alone. (Two contacts cannot tell the re-solve from the next sweep:
+// either finishes the first; this checks that a blocked step ends at the answer, no pull left.)
+TEST(ContactPgs, TheSubspaceStepLetsGoOfAPushThatWouldPull) {
+  ContactPgs pgs(2);
+  pgs.set_sweeps_per_subspace_step(1);
+  const Eigen::MatrixXd w = coupled_pair();
+  const NodeContact a[2] = {floor_contact(3.0), floor_contact(1.0)};
+  std::vector<Eigen::Vector3d> l = {Eigen::Vector3d(0.0, 0.0, 2.0), Eigen::Vector3d(0.0, 0.0, 2.0)};
+  const ContactSolveStats s = pgs.solve(w, a, l, 3, kTolerance);
+  EXPECT_GE(s.subspace_steps, 1);
+  EXPECT_TRUE(s.converged) << s.sweeps;
+  EXPECT_NEAR(l[0].z(), 1.5, 1e-12);
+  EXPECT_EQ(l[1].z(), 0.0);
+  EXPECT_NEAR(a[0].gap_m + a[0].normal.dot(pgs.motion_m()[0]), 0.0, 1e-12);
 }
 
 }  // namespace

@@ -21,6 +21,10 @@
 
 namespace pcisim::bench::wire_force {
 
+// a node left deeper than this in the wall before it was moved out (the world test's bound on
+// the wire outside the moving lumen)
+constexpr double kDeepM = 0.3e-3;
+
 DefaultSceneResult run_default_scene(physics::RodContactScheme scheme) {
   // the scene's contact field, built once per process (0.2 mm, the default spacing)
   static const std::shared_ptr<const physics::SdfLumen> sdf = std::make_shared<const physics::SdfLumen>(
@@ -41,6 +45,10 @@ DefaultSceneResult run_default_scene(physics::RodContactScheme scheme) {
     const physics::RodWire& w = *world.rod_state();
     substeps.push_back(w.contact_report().substeps);
     r.max_residual_mm = std::max(r.max_residual_mm, 1e3 * w.contact_report().residual_m);
+    ++r.steps;
+    r.retried += w.contact_report().retried;
+    r.steps_halved += w.contact_report().retried > 0 ? 1 : 0;
+    r.deep_steps += w.contact_report().residual_m > kDeepM ? 1 : 0;
     r.max_hub_n = std::max(r.max_hub_n, std::abs(w.hub_axial_force_n()));
     r.recoveries = static_cast<int>(w.recoveries());
   }
@@ -52,11 +60,12 @@ DefaultSceneResult run_default_scene(physics::RodContactScheme scheme) {
 std::string json_line(const DefaultSceneResult& r) {
   return fmt::format(
       "{{\"case\": \"default_scene\", \"rod_contact\": \"{}\", \"wire_ms_max\": {:.3f}, \"max_residual_mm\": {:.4f}, "
-      "\"max_hub_n\": {:.4f}, \"recoveries\": {}, {}}}",
+      "\"max_hub_n\": {:.4f}, \"recoveries\": {}, \"retried\": {}, \"steps_halved\": {}, \"deep_steps\": {}, {}}}",
       r.scheme == physics::RodContactScheme::kProjection ? "projection"
       : r.scheme == physics::RodContactScheme::kSolve    ? "solve"
                                                          : "implicit",
-      r.max_ms, r.max_residual_mm, r.max_hub_n, r.recoveries, cost_json(r.cost));
+      r.max_ms, r.max_residual_mm, r.max_hub_n, r.recoveries, r.retried, r.steps_halved, r.deep_steps,
+      cost_json(r.cost));
 }
 
 }  // namespace pcisim::bench::wire_force

@@ -151,7 +151,11 @@ struct DefaultSceneResult {
   double max_ms = 0;           // the slowest step
   double max_residual_mm = 0;  // the deepest a node was left in the wall before it was moved out
   double max_hub_n = 0;
-  int recoveries = 0;  // times the rod went non-finite and was laid out afresh
+  int recoveries = 0;    // times the rod went non-finite and was laid out afresh
+  int steps = 0;         // 30 Hz steps of the session
+  int retried = 0;       // substeps taken back and tried at half the length, over the session
+  int steps_halved = 0;  // steps with a substep taken back
+  int deep_steps = 0;    // steps that left a node deeper than 0.3 mm in the wall before it was moved out
   StepCost cost;
 };
 DefaultSceneResult run_default_scene(physics::RodContactScheme scheme);

@@ -113,6 +113,7 @@ struct World::Impl {
     Eigen::Vector3d displacement_m(const Eigen::Vector3d& rest_p_m, double a) const override {
       return skin->displacement_m(rest_p_m, a);
     }
+    bool carries(const Eigen::Vector3d& rest_p_m) const override { return skin->carries(rest_p_m); }
   } skin_motion;
 
   // the rod's nodes between the world and the rest frame (blood drift is described at rest)

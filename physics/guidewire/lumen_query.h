@@ -25,6 +25,9 @@ class LumenMotion {
   virtual ~LumenMotion() = default;
   // finite for every finite point; allocates nothing
   virtual Eigen::Vector3d displacement_m(const Eigen::Vector3d& rest_p_m, double a) const = 0;
+  // whether the motion reaches a rest-frame point at all (the vessel skin's blend: a point beyond
+  // every centerline's blend radius stands still by default, not because its vessel does)
+  virtual bool carries(const Eigen::Vector3d& rest_p_m) const { return rest_p_m.allFinite(); }
 };
 
 }  // namespace pcisim::physics

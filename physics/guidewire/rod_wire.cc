@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "physics/guidewire/link_spec.h"
+#include "physics/guidewire/rest_point.h"
 
 namespace pcisim::physics {
 namespace {
@@ -14,12 +15,9 @@ namespace {
 // steps (not refused: the hand feels nothing for it), so nodes leave the catheter a few at a
 // time and meet the wall
 constexpr double kMaxFeedSpeedMPerS = 0.12;
-// the moving wall: at most this many fixed-point steps to a node's rest point, stopping once a
-// step moves it less than the tolerance; and how far a node may move through its vessel within a
-// step before its rest point is found again (the offset is a node's own: the vessels' motion
-// differs by millimetres across the LM's ostium, where the aortic root stands still)
-constexpr int kRestPointIterations = 4;
-constexpr double kRestPointToleranceM = 1e-6;
+// the moving wall: how far a node may move through its vessel within a step before its rest
+// point is found again (rest_point.h; the offset is a node's own: the vessels' motion differs by
+// millimetres across the LM's ostium, where the aortic root stands still)
 constexpr double kRestPointRefreshM = 0.5e-3;
 // the longest substep (a longer physics step takes more substeps, as the rod itself does)
 constexpr double kMaxSubstepS = 1.0 / 60.0;
@@ -223,18 +221,15 @@ void RodWire::set_lumen_motion(const LumenMotion* motion) {
     std::fill(v->begin(), v->end(), Eigen::Vector3d::Zero());
 }
 
-// node i's rest point r (x = r + d(r, a), a few fixed-point steps from its last offset; the
-// vessels' motion is smooth on the scale of the wire's motion in a substep) and the wall's
-// offset there at the step's start and end
+// node i's rest point r (x = r + d(r, a): rest_point.h; a free node's checked against its
+// neighbour's nearer the hub, found first) and the wall's offset there at the step's start and end
 void RodWire::find_rest_point(int i, double a, double dt_s) {
   const Eigen::Vector3d& x = rod_.nodes_m()[i];
-  Eigen::Vector3d r = x - offset_[i];
-  for (int k = 0; k < kRestPointIterations; ++k) {
-    const Eigen::Vector3d next = x - motion_->displacement_m(r, a);
-    const bool settled = (next - r).squaredNorm() < kRestPointToleranceM * kRestPointToleranceM;
-    r = next;
-    if (settled) break;
-  }
+  const bool free = i > rod_.hub_node();
+  const Eigen::Vector3d neighbour =
+      free ? Eigen::Vector3d(offset_from_[i - 1] + a * (offset_to_[i - 1] - offset_from_[i - 1]))
+           : Eigen::Vector3d::Zero();
+  const Eigen::Vector3d r = wire_node_rest_point(*motion_, x, offset_[i], free ? &neighbour : nullptr, a);
   rest_point_m_[i] = r;
   offset_from_[i] = motion_->displacement_m(r, 0.0);
   offset_to_[i] = motion_->displacement_m(r, 1.0);

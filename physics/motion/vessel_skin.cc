@@ -186,6 +186,10 @@ Eigen::Vector3d VesselSkin::displacement_m(const Eigen::Vector3d& p, double a) c
   return wsum > 0.0 ? Eigen::Vector3d(sum / wsum) : Eigen::Vector3d::Zero();
 }
 
+bool VesselSkin::carries(const Eigen::Vector3d& p) const {
+  return blend(p, [](int, double) {}) > 0.0;
+}
+
 Eigen::Vector3d VesselSkin::turn_to_world(const Eigen::Vector3d& rest_p, const Eigen::Vector3d& v) const {
   if (!v.allFinite() || v.squaredNorm() == 0.0) return v;
   // the blend of the nearby centerline points' turns (their quaternions on one hemisphere)

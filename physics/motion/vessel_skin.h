@@ -43,6 +43,9 @@ class VesselSkin {
   // linearly from where the update before left them (a = 0) to where they are now (a = 1)
   Eigen::Vector3d displacement_m(const Eigen::Vector3d& rest_p_m, double a) const;
   Eigen::Vector3d to_world(const Eigen::Vector3d& rest_p_m) const { return rest_p_m + displacement_m(rest_p_m); }
+  // whether a rest-frame point lies within the blend radius of some centerline point (beyond
+  // them all, displacement_m is zero because nothing carries it)
+  bool carries(const Eigen::Vector3d& rest_p_m) const;
   // a vector at a rest-frame point (a force on a node) carried to the world: turned as the
   // epicardial triangles the nearby centerline points ride turned since rest (each as much as the
   // point rides the heart; blended like the displacement), its length kept, whichever way it

@@ -300,7 +300,8 @@ TEST(WorldHeart, TheBeatingWallPushesTheRod) {
 // The same with the wall inside the rod's solve (guidewire.rod_contact "solve", issue #33): the
 // contact problem keeps the wire in the moving lumen, and the forces it gives stay a wire's. Bounds
 // (measured in session 28, three builds: the run is chaotic at round-off): nothing more than the
-// kinematic scheme's 0.3 mm outside the moving lumen (+0.108, -0.017, +0.269 mm; the lumen here is
+// kinematic scheme's 0.3 mm outside the moving lumen (+0.108, -0.017, +0.269 mm; -0.022 mm once a
+// node's rest point keeps to its vessel, rest_point.h, 2026-11-30; the lumen here is
 // the skin-moved tree, the contact field an SDF sampled at 0.2 mm; the projection scheme's +0.075
 // above); the wall's total force on a 0.014" wire lying in a beating LAD under 1 N (0.25, 0.49,
 // 0.27 N); the hub's force under the grip's 1 N refusal plus a step's change (0.31, 0.17, 0.90 N)

@@ -118,9 +118,12 @@ TEST_F(VesselSkinTest, PointsInsideTheLumenMoveWithTheirVessel) {
     // the blend takes the centerline's motion; off the axis a rotation adds |w| x offset
     EXPECT_LT((skin.to_world(p) - exact).norm(), 1e-4) << k;
     EXPECT_LT((skin.to_rest(skin.to_world(p)) - p).norm(), 1e-6) << k;
+    EXPECT_TRUE(skin.carries(p)) << k;
   }
-  // far from every vessel nothing moves
+  // far from every vessel nothing moves: nothing carries it
   EXPECT_EQ(skin.displacement_m(Eigen::Vector3d(0.3, 0.3, 0.3)), Eigen::Vector3d::Zero());
+  EXPECT_FALSE(skin.carries(Eigen::Vector3d(0.3, 0.3, 0.3)));
+  EXPECT_FALSE(skin.carries(Eigen::Vector3d(std::nan(""), 0, 0)));
   EXPECT_EQ(skin.displacement_m(Eigen::Vector3d(std::nan(""), 0, 0)), Eigen::Vector3d::Zero());
 }
 

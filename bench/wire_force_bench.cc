@@ -388,7 +388,7 @@ int run(const std::vector<std::string>& given) {
         "`guidewire` effect: the rod's substeps with their contact and friction). Issue #33's target: 3 ms at p99 "
         "with the contact inside (`rod_contact` `solve`).\n\n"
      << "Halved: the steps with a substep taken back and tried at half the length, and how many substeps "
-        "were; deep: steps that left a node more than 0.3 mm in the wall before it was moved out.\n\n"
+        "were retried; deep: steps that left a node more than 0.3 mm in the wall before it was moved out.\n\n"
      << "| wall | ms p50 / p99 / max | target | substeps p50 / max | halved steps / retried substeps | deepest left in "
         "the "
         "wall mm | deep steps | most hub N | recoveries |\n|---|---|---|---|---|---|---|---|---|\n";

@@ -30,14 +30,15 @@ Eigen::Vector3d wire_node_rest_point(const LumenMotion& motion, const Eigen::Vec
   const bool carried = motion.carries(r);
   if (carried && !(off > kRestPointJumpM)) return r;
   const Eigen::Vector3d other = rest_point_from(motion, x, x - *neighbour_offset, a);
-  // a rest point the motion carries before one it does not (a point no vessel reaches stands
-  // still by default: where another answer lies in a vessel, the node is in that vessel), then
-  // one that is a fixed point before one that is not, then the one nearer the neighbour's offset
-  const bool other_carried = motion.carries(other);
-  if (carried != other_carried) return carried ? r : other;
+  // a fixed point before one that is not (the steps may stop short, or cycle where the field
+  // folds); then one the motion carries before one it does not (a point no vessel's motion
+  // reaches stands still by default, not because its vessel does); then the one nearer the
+  // neighbour's offset (two vessels' reach: continuity along the wire)
   const auto fixed = [&](const Eigen::Vector3d& p) { return (x - p - motion.displacement_m(p, a)).norm() < kFixedM; };
   const bool own_fixed = fixed(r), other_fixed = fixed(other);
   if (own_fixed != other_fixed) return own_fixed ? r : other;
+  const bool other_carried = motion.carries(other);
+  if (carried != other_carried) return carried ? r : other;
   return ((x - other) - *neighbour_offset).norm() < off ? other : r;
 }
 

@@ -21,13 +21,15 @@ namespace pcisim::physics {
 Eigen::Vector3d rest_point_from(const LumenMotion& motion, const Eigen::Vector3d& x_m, Eigen::Vector3d r_m, double a);
 
 // a node's rest point from its own last offset (x - offset as the guess); where that answer is
-// not carried by the motion (LumenMotion::carries), or its offset lies further than
-// kRestPointJumpM from the offset of the neighbour nearer the hub (null: none, and the first
-// answer stands), the fixed point from the neighbour's offset too. Of the two: a carried one
-// before one that is not (nothing moves a point no vessel reaches, so it is a fixed point of
-// every world position there: a node in the wide aortic root is one, a node in a coronary is
-// not), then one with x = r + d(r) within 10 um, then the one whose offset is nearer the
-// neighbour's
+// not carried by the motion (LumenMotion::carries: some vessel's motion reaches it, which is not
+// the same as lying in its lumen: the skin's blend reaches 4 mm from a centerline), or its offset
+// lies further than kRestPointJumpM from the offset of the neighbour nearer the hub (null: none,
+// and the first answer stands), the fixed point from the neighbour's offset too. Of the two: one
+// with x = r + d(r) within 10 um before one without; then a carried one before one that is not
+// (where nothing reaches, every world position is its own fixed point: a node in the wide aortic
+// root is legitimately there, a node in a coronary is not); then the one whose offset is nearer
+// the neighbour's. Costs one more fixed-point search where the first answer is doubted (at the
+// LM's ostium, where neighbouring offsets differ by millimetres, every step)
 Eigen::Vector3d wire_node_rest_point(const LumenMotion& motion, const Eigen::Vector3d& x_m,
                                      const Eigen::Vector3d& own_offset_m, const Eigen::Vector3d* neighbour_offset_m,
                                      double a);

@@ -70,12 +70,42 @@ TEST(RestPoint, TheNeighboursOffsetChoosesTheRestPointTheWireIsContinuousWith) {
 TEST(RestPoint, PartWayThroughTheStepTheNodeIsCarriedByThatFractionOfTheMotion) {
   CoveredShift motion;
   motion.whole_step = false;
-  const Eigen::Vector3d truth(-0.0003, 0.0011, 0.01);
-  for (double a : {0.25, 0.5, 1.0}) {
+  const Eigen::Vector3d truth(0.0003, 0.0011, 0.01);
+  // far enough through the step that the vessel has left its own reach (a shift over 3.7 mm)
+  for (double a : {0.7, 0.85, 1.0}) {
     const Eigen::Vector3d x = truth + a * kShift;
+    EXPECT_LT((rest_point_from(motion, x, x, a) - x).norm(), 1e-12) << a << ": the stale guess stops at x";
     const Eigen::Vector3d neighbour = a * kShift;
     EXPECT_LT((wire_node_rest_point(motion, x, Eigen::Vector3d::Zero(), &neighbour, a) - truth).norm(), 1e-12) << a;
   }
+}
+
+// two vessels within reach of one world point: the first (at the origin) moved 6 mm towards the
+// second (at x = 10 mm), which stands still. A point of the moved first vessel lies within the
+// second's reach too, so both answers are fixed points the motion carries: the neighbour's offset
+// decides (the wire is continuous)
+struct TwoVessels final : LumenMotion {
+  static bool near_second(const Eigen::Vector3d& r) {
+    return (r.head<2>() - Eigen::Vector2d(0.01, 0.0)).norm() <= kCoverM;
+  }
+  Eigen::Vector3d displacement_m(const Eigen::Vector3d& r, double) const override {
+    return r.head<2>().norm() <= kCoverM ? kShift : Eigen::Vector3d::Zero();
+  }
+  bool carries(const Eigen::Vector3d& r) const override { return r.head<2>().norm() <= kCoverM || near_second(r); }
+};
+
+TEST(RestPoint, WhereTwoVesselsReachThePointTheNeighbourDecides) {
+  const TwoVessels motion;
+  const Eigen::Vector3d truth(0.0005, 0.0002, 0.03);
+  const Eigen::Vector3d x = truth + kShift;  // 3.5 mm from the second vessel's axis
+  ASSERT_TRUE(TwoVessels::near_second(x));
+  const Eigen::Vector3d moved_neighbour = kShift - Eigen::Vector3d(0.0001, 0.0, 0.0);
+  const Eigen::Vector3d still_neighbour = Eigen::Vector3d::Zero();
+  // from the stale guess the node stops at x (carried by the second vessel, standing); its
+  // neighbour moved with the first vessel: so did the node
+  EXPECT_LT((wire_node_rest_point(motion, x, Eigen::Vector3d::Zero(), &moved_neighbour, 1.0) - truth).norm(), 1e-12);
+  // its neighbour stands in the second vessel: so does the node, whatever its own guess
+  EXPECT_LT((wire_node_rest_point(motion, x, kShift, &still_neighbour, 1.0) - x).norm(), 1e-12);
 }
 
 TEST(RestPoint, WhereTheMotionIsSmoothTheNeighbourChangesNothing) {

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <Eigen/Geometry>
 #include <cmath>
 #include <map>
@@ -120,6 +122,23 @@ TEST_F(VesselSkinTest, PointsInsideTheLumenMoveWithTheirVessel) {
     EXPECT_LT((skin.to_rest(skin.to_world(p)) - p).norm(), 1e-6) << k;
     EXPECT_TRUE(skin.carries(p)) << k;
   }
+  // inside the tree's grid but beyond every centerline's blend radius: nothing carries it
+  const Eigen::Vector3d axis = lad.points[lad.points.size() / 2].position_m;
+  const Eigen::Vector3d tangent =
+      (lad.points[lad.points.size() / 2 + 1].position_m - lad.points[lad.points.size() / 2 - 1].position_m)
+          .normalized();
+  int beyond = 0;
+  for (double off_m : {0.0045, 0.006, 0.008}) {
+    const Eigen::Vector3d q = axis + off_m * tangent.unitOrthogonal();
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const Eigen::Vector3d& c : skin.rest_points_m()) nearest = std::min(nearest, (c - q).norm());
+    EXPECT_EQ(skin.carries(q), nearest < VesselMotionParams{}.blend_radius_m) << off_m << " m off, nearest " << nearest;
+    if (!skin.carries(q)) {
+      ++beyond;
+      EXPECT_EQ(skin.displacement_m(q), Eigen::Vector3d::Zero()) << off_m;
+    }
+  }
+  EXPECT_GT(beyond, 0) << "a probe beyond every blend radius";
   // far from every vessel nothing moves: nothing carries it
   EXPECT_EQ(skin.displacement_m(Eigen::Vector3d(0.3, 0.3, 0.3)), Eigen::Vector3d::Zero());
   EXPECT_FALSE(skin.carries(Eigen::Vector3d(0.3, 0.3, 0.3)));

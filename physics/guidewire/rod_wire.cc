@@ -45,6 +45,13 @@ constexpr double kStuckM = 1e-8;
 // kGoodSubstepsBeforeLonger good substeps in a row
 constexpr double kRetryMotionM = 0.25e-3;
 constexpr double kRetryTurnDeg = 20.0;
+// the solve scheme's soft-tip mass scale (CosseratRodParams::tip_mass_scale): the last substep's
+// wall force is in each substep's prediction and taken back through W where a contact lets go; on
+// a 1.2 mg soft-tip node pressed with 0.05-0.09 N that linear take-back moved it 15-589 mm at the
+// shortest substep. Ten times heavier (measured 2026-11-30, three substep counts): the default
+// scene's retried substeps 2 397 / 959 / 974 -> 544-624, the dead end 57 -> 7.4 ms a step p50,
+// the torque lag 7 -> 8 deg (all nodes ten times heavier moved it to 45 deg and the capstan -37 %)
+constexpr double kSolveTipMassScale = 10.0;
 constexpr double kRetryResidualM = 0.05e-3;
 // the wall's curvature in the contact problem: the normal sampled this far either side of a node
 // along the wall
@@ -74,6 +81,8 @@ rod::CosseratRodParams rod_params_of(const GuidewireParams& g) {
   p.mass_per_length_kg_per_m = g.mass_per_length_kg_per_m;
   p.outer_diameter_m = g.outer_diameter_m;
   p.damping_per_s = g.rod_damping_per_s;
+  // the wall inside the solve: the soft tip's nodes kSolveTipMassScale heavier for their motion
+  if (g.rod_contact == RodContactScheme::kSolve) p.tip_mass_scale = kSolveTipMassScale;
   p.solver = rod::RodSolver::kDirect;
   // the follow-the-leader guard is for unconverged Gauss-Seidel sweeps; after the direct solve
   // and the wall projection it only moved nodes back out of the wall

@@ -29,6 +29,8 @@ void validate(const CosseratRodParams& p) {
   require(positive(p.shear_stiffness_n), "shear_stiffness_n", "(0, inf)");
   require(positive(p.mass_per_length_kg_per_m), "mass_per_length_kg_per_m", "(0, inf)");
   require(std::isfinite(p.outer_diameter_m) && p.outer_diameter_m >= 0.0, "outer_diameter_m", "[0, inf)");
+  require(std::isfinite(p.tip_mass_scale) && p.tip_mass_scale >= 1.0 && p.tip_mass_scale <= 1e6, "tip_mass_scale",
+          "[1, 1e6]");
   require(std::isfinite(p.rotational_inertia_scale) && p.rotational_inertia_scale >= 1.0 &&
               p.rotational_inertia_scale <= 1e9,
           "rotational_inertia_scale", "[1, 1e9]");
@@ -91,13 +93,19 @@ CosseratRod::CosseratRod(const CosseratRodParams& params, const Eigen::Vector3d&
   const Eigen::Vector3d tangent = clamp_q_ * Eigen::Vector3d::UnitZ();
   const double mu = params_.mass_per_length_kg_per_m;
   const double r = 0.5 * params_.outer_diameter_m;
+  const double tip_start_m = params_.length_m - params_.tip_length_m;
+  gravity_share_.assign(nodes, 1.0);
   for (int i = 0; i < nodes; ++i) {
     x_[i] = clamp_position_m + (i * l_) * tangent;
     mass_[i] = (i == n_ ? 0.5 : 1.0) * mu * l_;
+    // the soft tip's nodes, from the one where it begins: heavier for their motion, not their weight
+    if (params_.tip_length_m > 0.0 && i * l_ >= tip_start_m - 1e-12 * params_.length_m) {
+      mass_[i] *= params_.tip_mass_scale;
+      gravity_share_[i] = 1.0 / params_.tip_mass_scale;
+    }
     inv_mass_[i] = i == 0 ? 0.0 : 1.0 / mass_[i];  // node 0 is clamped
   }
   const double inertia = params_.rotational_inertia_scale * mu * l_ * (l_ * l_ / 12.0 + r * r / 4.0);
-  const double tip_start_m = params_.length_m - params_.tip_length_m;
   for (int j = 0; j < n_; ++j) {
     inv_inertia_q_[j] = 1.0 / (4.0 * inertia);
     const double ga = params_.shear_stiffness_n, ea = params_.axial_stiffness_n;
@@ -221,7 +229,7 @@ void CosseratRod::predict(double h) {
   for (int i = 0; i <= n_; ++i) {
     x_old_[i] = x_[i];
     if (inv_mass_[i] == 0.0) continue;
-    v_[i] += h * (params_.gravity_m_per_s2 + inv_mass_[i] * (force_[i] + contact_force_[i]));
+    v_[i] += h * (gravity_share_[i] * params_.gravity_m_per_s2 + inv_mass_[i] * (force_[i] + contact_force_[i]));
     x_[i] += h * v_[i];
   }
   for (int j = 0; j < n_; ++j) {

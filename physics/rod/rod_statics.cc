@@ -93,7 +93,7 @@ double term_energy(const CosseratRod& rod, const Term& t, const double* delta) {
 }
 
 Eigen::Vector3d node_load_n(const CosseratRod& rod, int node, double scale) {
-  return scale * (rod.node_force_n(node) + rod.node_mass_kg(node) * rod.params().gravity_m_per_s2);
+  return scale * (rod.node_force_n(node) + rod.node_own_mass_kg(node) * rod.params().gravity_m_per_s2);
 }
 
 // Newton update, geometrically exact in the rotations: each segment's strain in its material

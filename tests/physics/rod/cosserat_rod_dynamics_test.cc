@@ -345,6 +345,39 @@ TEST(CosseratRodDynamics, ACurvedRestShapeIsWhereTheRodRests) {
   EXPECT_LT((still.nodes_m().back() - expected).norm(), 1e-7);
 }
 
+TEST(CosseratRodDynamics, AHeavierSoftTipSagsAsMuchAndWeighsItsOwn) {
+  // a quarter of the rod a soft tip (stiffness x 0.2) under its own weight: its nodes ten times
+  // heavier for their motion (tip_mass_scale) rest where the unscaled rod rests and the static
+  // solve finds (the weight is the rod's own), and only the tip's nodes are heavier
+  const int n = 20;
+  Eigen::Vector3d tips[2];
+  for (int k = 0; k < 2; ++k) {
+    CosseratRodParams p = unit_cantilever(n);
+    p.tip_length_m = 0.25;
+    p.tip_stiffness_ratio = 0.2;
+    p.gravity_m_per_s2 = Eigen::Vector3d(0.0, -0.5, 0.0);
+    p.damping_per_s = 5.0;
+    p.tip_mass_scale = k ? 10.0 : 1.0;
+    CosseratRod rod = make_unit_cantilever(p);
+    EXPECT_DOUBLE_EQ(rod.node_mass_kg(n - 6), 1.0 / n);  // (the body)
+    EXPECT_DOUBLE_EQ(rod.node_mass_kg(n - 2), p.tip_mass_scale / n);
+    EXPECT_DOUBLE_EQ(rod.node_own_mass_kg(n - 2), 1.0 / n);
+    for (int i = 0; i < 600; ++i) rod.step(kDt);
+    EXPECT_LT(rod.max_speed_m_per_s(), 1e-4) << k;
+    tips[k] = rod.nodes_m().back();
+  }
+  CosseratRodParams p = unit_cantilever(n);
+  p.tip_length_m = 0.25;
+  p.tip_stiffness_ratio = 0.2;
+  p.gravity_m_per_s2 = Eigen::Vector3d(0.0, -0.5, 0.0);
+  p.tip_mass_scale = 10.0;
+  CosseratRod still = make_unit_cantilever(p);
+  ASSERT_TRUE(solve_static(still).converged);
+  ASSERT_GT(-still.nodes_m().back().y(), 0.05);  // it sags
+  EXPECT_LT((tips[0] - still.nodes_m().back()).norm(), 1e-4);
+  EXPECT_LT((tips[1] - still.nodes_m().back()).norm(), 1e-4);
+}
+
 TEST(CosseratRodDynamics, AHubInsideTheRodSolvesAsGaussSeidelConverged) {
   // nodes 0..5 kinematic: one substep under gravity, the direct solve and Gauss-Seidel swept to
   // convergence reach the same state (the direct solve once turned the kinematic frames too)

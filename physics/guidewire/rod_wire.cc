@@ -45,14 +45,15 @@ constexpr double kStuckM = 1e-8;
 // kGoodSubstepsBeforeLonger good substeps in a row
 constexpr double kRetryMotionM = 0.25e-3;
 constexpr double kRetryTurnDeg = 20.0;
+constexpr double kRetryResidualM = 0.05e-3;
 // the solve scheme's soft-tip mass scale (CosseratRodParams::tip_mass_scale): the last substep's
 // wall force is in each substep's prediction and taken back through W where a contact lets go; on
 // a 1.2 mg soft-tip node pressed with 0.05-0.09 N that linear take-back moved it 15-589 mm at the
 // shortest substep. Ten times heavier (measured 2026-11-30, three substep counts): the default
-// scene's retried substeps 2 397 / 959 / 974 -> 544-624, the dead end 57 -> 7.4 ms a step p50,
-// the torque lag 7 -> 8 deg (all nodes ten times heavier moved it to 45 deg and the capstan -37 %)
+// scene's retried substeps 959-2 397 -> 544-624, the dead end 57 -> 7.7 ms a step p50 (9.4 in
+// the report after the drag fix: noise), the torque lag with friction 7 -> 6.7 deg (all nodes
+// ten times heavier moved it to 45 deg and the capstan -37 %)
 constexpr double kSolveTipMassScale = 10.0;
-constexpr double kRetryResidualM = 0.05e-3;
 // the wall's curvature in the contact problem: the normal sampled this far either side of a node
 // along the wall
 constexpr double kShapeStepM = 0.02e-3;

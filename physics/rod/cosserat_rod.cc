@@ -94,14 +94,14 @@ CosseratRod::CosseratRod(const CosseratRodParams& params, const Eigen::Vector3d&
   const double mu = params_.mass_per_length_kg_per_m;
   const double r = 0.5 * params_.outer_diameter_m;
   const double tip_start_m = params_.length_m - params_.tip_length_m;
-  gravity_share_.assign(nodes, 1.0);
+  own_mass_share_.assign(nodes, 1.0);
   for (int i = 0; i < nodes; ++i) {
     x_[i] = clamp_position_m + (i * l_) * tangent;
     mass_[i] = (i == n_ ? 0.5 : 1.0) * mu * l_;
     // the soft tip's nodes, from the one where it begins: heavier for their motion, not their weight
     if (params_.tip_length_m > 0.0 && i * l_ >= tip_start_m - 1e-12 * params_.length_m) {
       mass_[i] *= params_.tip_mass_scale;
-      gravity_share_[i] = 1.0 / params_.tip_mass_scale;
+      own_mass_share_[i] = 1.0 / params_.tip_mass_scale;
     }
     inv_mass_[i] = i == 0 ? 0.0 : 1.0 / mass_[i];  // node 0 is clamped
   }
@@ -229,7 +229,7 @@ void CosseratRod::predict(double h) {
   for (int i = 0; i <= n_; ++i) {
     x_old_[i] = x_[i];
     if (inv_mass_[i] == 0.0) continue;
-    v_[i] += h * (gravity_share_[i] * params_.gravity_m_per_s2 + inv_mass_[i] * (force_[i] + contact_force_[i]));
+    v_[i] += h * (own_mass_share_[i] * params_.gravity_m_per_s2 + inv_mass_[i] * (force_[i] + contact_force_[i]));
     x_[i] += h * v_[i];
   }
   for (int j = 0; j < n_; ++j) {
@@ -487,8 +487,13 @@ void CosseratRod::guard_stretch() {
 }
 
 void CosseratRod::update_velocities(double h) {
-  const double keep = 1.0 / (1.0 + params_.damping_per_s * h);  // implicit linear damping
-  for (int i = 0; i <= n_; ++i) v_[i] = (i <= hub_ ? 1.0 : keep) * (x_[i] - x_old_[i]) / h;
+  // implicit linear damping: a drag force m c v on the node's own mass, so a node heavier for
+  // its motion (tip_mass_scale) takes its share of the rate, as it does of gravity
+  for (int i = 0; i <= n_; ++i) {
+    const double keep_i = 1.0 / (1.0 + own_mass_share_[i] * params_.damping_per_s * h);
+    v_[i] = (i <= hub_ ? 1.0 : keep_i) * (x_[i] - x_old_[i]) / h;
+  }
+  const double keep = 1.0 / (1.0 + params_.damping_per_s * h);  // the segments' inertia is not scaled
   for (int j = 0; j < n_; ++j) {
     Eigen::Quaterniond dq = q_old_[j].conjugate() * q_[j];
     if (dq.w() < 0.0) dq.coeffs() = -dq.coeffs();

@@ -140,7 +140,7 @@ class CosseratRod {
   const Eigen::Vector3d& node_force_n(int node) const { return force_[node]; }
   // the node's mass as its motion sees it (params' tip_mass_scale included), and its own (its weight's)
   double node_mass_kg(int node) const { return mass_[node]; }
-  double node_own_mass_kg(int node) const { return gravity_share_[node] * mass_[node]; }
+  double node_own_mass_kg(int node) const { return own_mass_share_[node] * mass_[node]; }
   // stiffness per material component: stretch-shear (GA, GA, EA) of a segment, bend-twist
   // (EI, EI, GJ) of a pair. Pair 0 joins the clamp frame and segment 0, pair j segments j-1, j.
   const Eigen::Vector3d& stretch_shear_stiffness(int segment) const { return ss_stiffness_[segment]; }
@@ -185,7 +185,7 @@ class CosseratRod {
   double l_;
   std::vector<Eigen::Vector3d> x_, x_old_, v_, force_, contact_force_;
   std::vector<double> mass_, inv_mass_;
-  std::vector<double> gravity_share_;  // own mass over the mass the motion sees (tip_mass_scale)
+  std::vector<double> own_mass_share_;  // own mass over the mass the motion sees (tip_mass_scale)
   std::vector<Eigen::Quaterniond> q_, q_old_;
   std::vector<Eigen::Vector3d> omega_;  // angular velocity per segment, material frame
   std::vector<double> inv_inertia_q_;   // inverse "mass" of the quaternion as a 4-vector, 1 / (4 I)

@@ -30,10 +30,10 @@ struct CosseratRodParams {
   // answers do not depend on it; bending and twisting waves are slowed. [1, 1e9]
   double rotational_inertia_scale = 100.0;
   // the soft tip's nodes' mass times this for their motion (from the node where the tip begins;
-  // their weight stays the rod's own: gravity's acceleration on them divided by it). A tip node
-  // pressed on a wall carries as much force as a body node with as little mass; the substep's
-  // linearised answer must cover its motion under that force, h^2 F / m, and at 1.2 mg it
-  // covered centimetres (issue #33, docs/guidewire.md). 10 x a 12 mm tip's 9.5 mg puts its first
+  // their weight and their drag stay the rod's own: gravity's acceleration and damping_per_s on
+  // them divided by it). A tip node pressed on a wall carries as much force as a body node with
+  // as little mass; the substep's linearised answer must cover its motion under that force,
+  // h^2 F / m, and at 1.2 mg it covered centimetres (issue #33, docs/guidewire.md). 10 x a 12 mm tip's 9.5 mg puts its first
   // bending mode at 27 Hz instead of 87; static answers do not depend on it. [1, 1e6]
   double tip_mass_scale = 1.0;
   double damping_per_s = 0.0;  // velocity damping rate (linear and angular), [0, inf)

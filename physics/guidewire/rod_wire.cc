@@ -33,7 +33,10 @@ constexpr double kMaxCompressionM = 0.02;
 // the wall is below kStuckM over a substep counts as held by static friction
 constexpr double kContactBandM = 0.1e-3;
 constexpr int kContactSweeps = 100;
-constexpr double kContactToleranceM = 1e-7;
+// what a substep leaves unresolved is a speed of it over the substep: at 1e-7 m a wire resting
+// round a bend with friction buzzed at 2.4e-5 m/s for ever (kinetic energy 1e-16-1e-13 J, the
+// hub +-0.006 N); at 1e-10 m it rests (7.6e-23 J; RodWallSolve.AWireRoundABendRests...)
+constexpr double kContactToleranceM = 1e-10;
 constexpr double kStuckM = 1e-8;
 // halved substeps (the solve scheme): a substep is taken back when a contact moved more than
 // kRetryMotionM relative to its wall (a third of a coronary lumen's radius would cross it; only

@@ -117,14 +117,6 @@ RodWire bend_wire(const TubeLumen& lumen) {
                  VesselContactParams{}, mu);
 }
 
-// the sum over free nodes of m v^2 / 2
-double kinetic_energy_j(const RodWire& w) {
-  double e = 0.0;
-  for (int i = w.first_free_node(); i < w.node_count(); ++i)
-    e += 0.5 * w.rod().node_mass_kg(i) * w.rod().velocities_m_per_s()[i].squaredNorm();
-  return e;
-}
-
 // round the bend, then a minute at rest: fed 90 mm over 3 s the wire comes round the bend; held
 // 60 s it comes to rest and stays there (issue #33: energy must not grow), nothing deeper in the
 // wall than 0.05 mm, its length kept
@@ -145,7 +137,7 @@ TEST(RodWallImplicit, AWireRoundABendRestsForAMinuteWithoutGainingEnergy) {
     w.step(0.09, 0.0, kDt);
     ASSERT_TRUE(w.rod().all_finite()) << k;
     deepest_m = std::max(deepest_m, test::deepest_into_margin_m(w, lumen));
-    const double e = kinetic_energy_j(w);
+    const double e = test::kinetic_energy_j(w);
     if (k < steps / 6) first_j = std::max(first_j, e);
     if (k >= steps - steps / 6) last_j = std::max(last_j, e);
   }

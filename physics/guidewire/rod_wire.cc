@@ -33,9 +33,11 @@ constexpr double kMaxCompressionM = 0.02;
 // the wall is below kStuckM over a substep counts as held by static friction
 constexpr double kContactBandM = 0.1e-3;
 constexpr int kContactSweeps = 100;
-// what a substep leaves unresolved is a speed of it over the substep: at 1e-7 m a wire resting
-// round a bend with friction buzzed at 2.4e-5 m/s for ever (kinetic energy 1e-16-1e-13 J, the
-// hub +-0.006 N); at 1e-10 m it rests (7.6e-23 J; RodWallSolve.AWireRoundABendRests...)
+// the sweeps stop once no update moves a node more than the tolerance; what is left unresolved
+// is a speed over the substep: at 1e-7 m a wire resting round a bend with friction buzzed at
+// 2.4e-5 m/s for ever (kinetic energy 1e-16-1e-13 J, the hub 0.008-0.020 N step to step); at
+// 1e-10 m it rests (7.6e-23 J; RodWallSolve.AWireRoundABendRests...). Where the sweeps do not
+// converge they now run to the cap: the capstan's rows 20-70 % slower a step
 constexpr double kContactToleranceM = 1e-10;
 constexpr double kStuckM = 1e-8;
 // halved substeps (the solve scheme): a substep is taken back when a contact moved more than
@@ -53,9 +55,9 @@ constexpr double kRetryResidualM = 0.05e-3;
 // wall force is in each substep's prediction and taken back through W where a contact lets go; on
 // a 1.2 mg soft-tip node pressed with 0.05-0.09 N that linear take-back moved it 15-589 mm at the
 // shortest substep. Ten times heavier (measured 2026-11-30, three substep counts): the default
-// scene's retried substeps 959-2 397 -> 544-624, the dead end 57 -> 7.7 ms a step p50 (9.4 in
-// the report after the drag fix: noise), the torque lag with friction 7 -> 6.7 deg (all nodes
-// ten times heavier moved it to 45 deg and the capstan -37 %)
+// scene's retried substeps 959-2 397 -> 544-624, the dead end 57 -> 7.7 ms a step p50, the
+// torque lag with friction 7.1 -> 8.1 deg (all nodes ten times heavier moved it to 45 deg and
+// the capstan -37 %)
 constexpr double kSolveTipMassScale = 10.0;
 // the wall's curvature in the contact problem: the normal sampled this far either side of a node
 // along the wall
@@ -902,11 +904,12 @@ void RodWire::after_substep(rod::CosseratRod& rod, double h) {
     return;
   }
   // the rod's damping is blood's drag, and the blood moves with its vessel: relative to a moving
-  // wall, v = wall + keep (v - wall), where the rod applied v = keep v
+  // wall, v = wall + keep (v - wall), where the rod applied v = keep v (keep: the node's own, a
+  // heavier soft tip's included)
   if (motion_) {
     const auto v = rod.mutable_velocities_m_per_s();
-    const double pass = 1.0 - 1.0 / (1.0 + params_.rod_damping_per_s * h);
-    for (int i = first_free; i < node_count(); ++i) v[i] += pass * wall_velocity_[i];
+    for (int i = first_free; i < node_count(); ++i)
+      v[i] += (1.0 - 1.0 / (1.0 + rod.node_damping_per_s(i) * h)) * wall_velocity_[i];
   }
   // the wall's impulse over the substep, for the step's average force: the solve scheme's as its
   // impulse (force h^2: normal and friction), the projection's along the wall's inward normal

@@ -490,10 +490,10 @@ void CosseratRod::update_velocities(double h) {
   // implicit linear damping: a drag force m c v on the node's own mass, so a node heavier for
   // its motion (tip_mass_scale) takes its share of the rate, as it does of gravity
   for (int i = 0; i <= n_; ++i) {
-    const double keep_i = 1.0 / (1.0 + own_mass_share_[i] * params_.damping_per_s * h);
+    const double keep_i = 1.0 / (1.0 + node_damping_per_s(i) * h);
     v_[i] = (i <= hub_ ? 1.0 : keep_i) * (x_[i] - x_old_[i]) / h;
   }
-  const double keep = 1.0 / (1.0 + params_.damping_per_s * h);  // the segments' inertia is not scaled
+  const double keep = 1.0 / (1.0 + params_.damping_per_s * h);  // (tip_mass_scale leaves the frames' inertia)
   for (int j = 0; j < n_; ++j) {
     Eigen::Quaterniond dq = q_old_[j].conjugate() * q_[j];
     if (dq.w() < 0.0) dq.coeffs() = -dq.coeffs();

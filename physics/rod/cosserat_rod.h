@@ -141,6 +141,9 @@ class CosseratRod {
   // the node's mass as its motion sees it (params' tip_mass_scale included), and its own (its weight's)
   double node_mass_kg(int node) const { return mass_[node]; }
   double node_own_mass_kg(int node) const { return own_mass_share_[node] * mass_[node]; }
+  // the node's drag rate: damping_per_s on its own mass (a node heavier for its motion takes its
+  // share), the rate its velocity relaxes at
+  double node_damping_per_s(int node) const { return own_mass_share_[node] * params_.damping_per_s; }
   // stiffness per material component: stretch-shear (GA, GA, EA) of a segment, bend-twist
   // (EI, EI, GJ) of a pair. Pair 0 joins the clamp frame and segment 0, pair j segments j-1, j.
   const Eigen::Vector3d& stretch_shear_stiffness(int segment) const { return ss_stiffness_[segment]; }

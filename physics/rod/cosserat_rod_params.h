@@ -33,10 +33,12 @@ struct CosseratRodParams {
   // their weight and their drag stay the rod's own: gravity's acceleration and damping_per_s on
   // them divided by it). A tip node pressed on a wall carries as much force as a body node with
   // as little mass; the substep's linearised answer must cover its motion under that force,
-  // h^2 F / m, and at 1.2 mg it covered centimetres (issue #33, docs/guidewire.md). 10 x a 12 mm tip's 9.5 mg puts its
-  // first bending mode at 27 Hz instead of 87; static answers do not depend on it. [1, 1e6]
+  // h^2 F / m, and at 1.2 mg it covered centimetres (issue #33, docs/guidewire.md). 10 x a
+  // 12 mm tip's 9.5 mg puts its first bending mode at 27 Hz instead of 87; static answers do not
+  // depend on it. [1, 1e6]
   double tip_mass_scale = 1.0;
-  double damping_per_s = 0.0;  // velocity damping rate (linear and angular), [0, inf)
+  // velocity damping rate, linear (on each node's own mass: node_damping_per_s) and angular, [0, inf)
+  double damping_per_s = 0.0;
   // defaults: the direct solve at 2 x 1 is within 0.05 % of the elastica at 50 segments and
   // 0.01 % at 100 (docs/benchmarks/rod.md); Gauss-Seidel needs about 40 x 10 for 0.1 % at 50
   RodSolver solver = RodSolver::kDirect;

@@ -55,8 +55,6 @@ inline double deepest_into_margin_m(const RodWire& w, const LumenQuery& lumen) {
   return worst;
 }
 
-// the rod tests' curved tube (anatomy/phantom/tube_phantoms.h): 40 mm straight from the
-// catheter's exit along +z, 90 degrees of 15 mm radius, 60 mm straight along +x; 1.5 mm lumen
 // the sum over the free nodes of m v^2 / 2 (the motion's mass: a heavier soft tip's included)
 inline double kinetic_energy_j(const RodWire& w) {
   double e = 0.0;
@@ -65,6 +63,8 @@ inline double kinetic_energy_j(const RodWire& w) {
   return e;
 }
 
+// the rod tests' curved tube (anatomy/phantom/tube_phantoms.h): 40 mm straight from the
+// catheter's exit along +z, 90 degrees of 15 mm radius, 60 mm straight along +x; 1.5 mm lumen
 inline anatomy::VesselTree curved_tube() {
   return anatomy::bent_tube_phantom();
 }

@@ -234,32 +234,7 @@ TEST(RodWallSolve, AWireRoundABendRestsForAMinuteWithoutGainingEnergy) {
   const anatomy::VesselTree tree = test::curved_tube();
   const TubeLumen lumen(tree);
   RodWire w = bend_wire(lumen);
-  for (double t = 0.0; t < 4.0; t += kDt) {
-    w.step(0.09 * std::min(t / 3.0, 1.0), 0.0, kDt);
-    ASSERT_TRUE(w.rod().all_finite()) << t;
-  }
-  double deepest_m = -1.0, first_j = 0.0, last_j = 0.0;
-  const int steps = static_cast<int>(std::lround(60.0 / kDt));
-  for (int k = 0; k < steps; ++k) {
-    w.step(0.09, 0.0, kDt);
-    ASSERT_TRUE(w.rod().all_finite()) << k;
-    deepest_m = std::max(deepest_m, test::deepest_into_margin_m(w, lumen));
-    const double e = test::kinetic_energy_j(w);
-    if (k < steps / 6) first_j = std::max(first_j, e);
-    if (k >= steps - steps / 6) last_j = std::max(last_j, e);
-  }
-  std::printf(
-      "round the bend, held 60 s: kinetic energy at most %.3g J in the first 10 s, %.3g J in the last; speed %.2g "
-      "m/s; deepest %.4f mm into the margin; crumpled %.3f mm; hub %.4f N\n",
-      first_j, last_j, w.rod().max_speed_m_per_s(), 1e3 * deepest_m, 1e3 * w.compression_m(), w.hub_axial_force_n());
-  EXPECT_GT(w.nodes_m().back().x(), 0.02);  // round the bend
-  EXPECT_EQ(w.recoveries(), 0);
-  // 1e-20 J is one body node at 1.6e-7 m/s
-  EXPECT_LT(last_j, 1e-20);
-  EXPECT_LE(last_j, std::max(first_j, 1e-20));
-  EXPECT_LT(w.rod().max_speed_m_per_s(), 1e-3);
-  EXPECT_LT(deepest_m, 0.05e-3);
-  EXPECT_LT(w.compression_m(), 0.01 * 0.09);  // issue #33: the free wire's length within 1 %
+  test::expect_round_a_bend_and_a_minute_at_rest(w, lumen, kDt);
 }
 
 // a wide straight tube carried sideways at a constant 0.1 m/s, the blood with it: nothing in

@@ -297,27 +297,33 @@ int run(const std::vector<std::string>& given) {
   }
   md << "\n## capstan\n\nA wire of negligible bending stiffness (EI and GJ 1e-9, the range's floor; no soft tip; "
         "300 segments) drawn by a 0.01 N leader force on its tip through a tube (1.5 mm lumen radius) that runs 30 mm "
-        "straight, bends by the angle at 15 mm radius (beyond 180° a helix rising 5 mm a turn) and runs 40 mm "
-        "straight; the catheter's exit on the bend's inner side, so the taut wire wraps the whole bend. Its tip then "
+        "straight, bends by the angle at 15 mm radius (beyond 180° a helix rising 5 mm a turn, the entry straight "
+        "along its start: no kink for the wire to wrap) and runs 40 mm straight; the catheter's exit on the bend's "
+        "inner side, so the taut wire wraps the whole bend. Its tip then "
         "held by 0.05 N along the last straight while the hub pulls it back at 10 mm/s for 1.5 s; pull: the hub's "
-        "force, mean over the last 0.75 s (spread: its largest departure from the mean there). Reference: Euler's "
+        "force averaged over every substep of the last 0.75 s (spread: the largest departure of one step's average "
+        "from it; at step ends: the force at each step's last substep, what a 30 Hz reader of the hub's force sees, "
+        "mean over those steps: where successive substeps alternate it differs from the average). Reference: Euler's "
         "capstan equation, pull = hold e^(μ θ), θ the angle the wire's tangent turns (the bend's; on the helix "
         "θ a / √(a² + c²), a the wire's helix radius, c its rise per radian: 0.2 % less at 360°). The trivial "
         "model, a wire without friction, pulls with the hold. Tuned at 90° with μ 0.1 and 0.3; the rest are held "
         "out.\n\n"
-     << "| angle ° | μ | hold N | pull N | spread N | e^(μθ) hold N | error % | target | residual mm | ms p50 / p99 | "
-        "substeps |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+     << "| angle ° | μ | hold N | pull N | spread N | at step ends N | e^(μθ) hold N | error % | target | residual mm "
+        "| "
+        "ms p50 / p99 | substeps |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& [c, r] : caps) {
     const double err = 100.0 * (r.pull_n / r.capstan_n - 1.0);
     if (!r.drawn_through) {
-      md << fmt::format("| {:.0f} | {:.2f} | {:.2f} | not drawn through | | | | missed | | | |\n", c.angle_deg, c.mu,
+      md << fmt::format("| {:.0f} | {:.2f} | {:.2f} | not drawn through | | | | | missed | | | |\n", c.angle_deg, c.mu,
                         c.hold_n);
       continue;
     }
     md << fmt::format(
-        "| {:.0f} | {:.2f} | {:.2f} | {:.5f} | {:.2g} | {:.5f} | {:+.2f} | {} | {:.3f} | {:.1f} / {:.1f} | {} / {} |\n",
-        c.angle_deg, c.mu, c.hold_n, r.pull_n, r.pull_spread_n, r.capstan_n, err, met(err), r.residual_mm,
-        r.cost.ms_p50, r.cost.ms_p99, r.cost.substeps_p50, r.cost.substeps_max);
+        "| {:.0f} | {:.2f} | {:.2f} | {:.5f} | {:.2g} | {:.5f} | {:.5f} | {:+.2f} | {} | {:.3f} | {:.1f} / {:.1f} | {} "
+        "/ {} "
+        "|\n",
+        c.angle_deg, c.mu, c.hold_n, r.pull_n, r.pull_spread_n, r.pull_step_end_n, r.capstan_n, err, met(err),
+        r.residual_mm, r.cost.ms_p50, r.cost.ms_p99, r.cost.substeps_p50, r.cost.substeps_max);
   }
   md << "\n## end_on\n\nA straight wire (EI 1.56e-5 N m², no soft tip, no friction) in a straight tube closed at the "
         "far end, the catheter's exit on its axis; the lumen radius is the clearance plus the wall margin (0.05 mm), "

@@ -27,15 +27,18 @@ constexpr double kEntryM = 30e-3, kExitM = 40e-3, kHelixRisePerTurnM = 5e-3;
 constexpr double kLeaderN = 0.01, kDrawSpeedMPerS = 0.03, kPastBendM = 25e-3;
 constexpr double kPullSpeedMPerS = 0.01, kPullS = 1.5;
 
-// the tube's centerline, sampled every 0.5 mm: +z from the exit, then the bend turning towards
-// +x about an axis along y (rising along y beyond 180 degrees), then straight along its tangent
+// the tube's centerline, sampled every 0.5 mm: straight from the exit, then the bend turning
+// towards +x about an axis along y (rising along y beyond 180 degrees), then straight along its
+// tangent. The entry straight runs along the helix's start, as the wire on its inner side
+// (radius wire_radius_m) leaves it: a wire pulled round a kink there would wrap it too (3.4
+// degrees at 5 mm a turn, +1.2 % on the capstan at mu 0.2)
 struct CapstanTube {
   std::vector<Eigen::Vector3d> points, tangents;
   double bend_end_arc_m = 0.0;  // arc length where the bend ends
-  Eigen::Vector3d exit_tangent = Eigen::Vector3d::UnitX();
+  Eigen::Vector3d entry_tangent = Eigen::Vector3d::UnitZ(), exit_tangent = Eigen::Vector3d::UnitX();
 };
 
-CapstanTube capstan_tube(double angle_rad) {
+CapstanTube capstan_tube(double angle_rad, double wire_radius_m) {
   CapstanTube t;
   const double rise_per_rad = angle_rad > std::numbers::pi ? kHelixRisePerTurnM / (2.0 * std::numbers::pi) : 0.0;
   const double ds = 0.5e-3;
@@ -43,9 +46,10 @@ CapstanTube capstan_tube(double angle_rad) {
     t.points.push_back(p);
     t.tangents.push_back(d.normalized());
   };
+  t.entry_tangent = Eigen::Vector3d(0.0, rise_per_rad, wire_radius_m).normalized();
   // from a little behind the exit, so the catheter's exit is inside the lumen
-  for (double z = -2e-3; z < kEntryM; z += ds) add({0.0, 0.0, z}, Eigen::Vector3d::UnitZ());
-  const Eigen::Vector3d centre(kBendRadiusM, 0.0, kEntryM);
+  for (double z = -2e-3; z < kEntryM; z += ds) add(z * t.entry_tangent, t.entry_tangent);
+  const Eigen::Vector3d centre = kEntryM * t.entry_tangent + Eigen::Vector3d(kBendRadiusM, 0.0, 0.0);
   const int bend_samples = static_cast<int>(std::ceil(angle_rad * kBendRadiusM / ds));
   for (int k = 0; k <= bend_samples; ++k) {
     const double a = angle_rad * k / bend_samples;
@@ -73,10 +77,12 @@ std::pair<Eigen::Vector3d, double> nearest_tangent(const CapstanTube& t, const E
 
 CapstanResult run_capstan(const Capstan& c) {
   const double angle_rad = c.angle_deg * std::numbers::pi / 180.0;
-  const CapstanTube tube = capstan_tube(angle_rad);
+  const physics::VesselContactParams contact;
+  // the wire's helix: on the bend's inner side, at the wall margin
+  const double inner_m = kLumenRadiusM - contact.wall_margin_m;
+  const CapstanTube tube = capstan_tube(angle_rad, kBendRadiusM - inner_m);
   const anatomy::VesselTree tree = anatomy::tube_through(tube.points, kLumenRadiusM);
   const physics::TubeLumen lumen(tree);
-  const physics::VesselContactParams contact;
   physics::FrictionParams mu;
   mu.body_static = mu.tip_static = mu.body_kinetic = mu.tip_kinetic = c.mu;
   physics::GuidewireParams g;
@@ -89,9 +95,8 @@ CapstanResult run_capstan(const Capstan& c) {
   g.torsional_rigidity_nm2 = 1e-9;
   // the catheter's exit on the bend's inner side of the entry straight, at the wall margin: the
   // taut wire runs along that side into the bend, so the bend's whole angle is wrapped
-  const double inner_m = kLumenRadiusM - contact.wall_margin_m;
-  physics::RodWire w(g, physics::CatheterPath({Eigen::Vector3d(inner_m, 0, -0.2), Eigen::Vector3d(inner_m, 0, 0)}),
-                     &lumen, contact, mu);
+  const Eigen::Vector3d exit_m(inner_m, 0, 0);
+  physics::RodWire w(g, physics::CatheterPath({exit_m - 0.2 * tube.entry_tangent, exit_m}), &lumen, contact, mu);
   const int tip = w.node_count() - 1;
   CapstanResult r;
   const double a = kBendRadiusM - inner_m,
@@ -115,7 +120,7 @@ CapstanResult run_capstan(const Capstan& c) {
   if (!r.drawn_through) return r;
   // held at the tip, pulled back at the hub
   w.set_node_force_n(tip, c.hold_n * tube.exit_tangent);
-  std::vector<double> step_ms, pulls;
+  std::vector<double> step_ms, pulls, step_end_pulls;
   std::vector<int> substeps;
   const int steps = static_cast<int>(std::lround(kPullS / kStepS));
   for (int k = 1; k <= steps; ++k) {
@@ -125,12 +130,16 @@ CapstanResult run_capstan(const Capstan& c) {
     substeps.push_back(w.contact_report().substeps);
     r.residual_mm = std::max(r.residual_mm, 1e3 * w.contact_report().residual_m);
     // the wire pulls the hub distally: against insertion, so the push-back is negative
-    if (k > steps / 2) pulls.push_back(-w.hub_axial_force_n());
+    if (k > steps / 2) {
+      pulls.push_back(-w.mean_hub_axial_force_n());
+      step_end_pulls.push_back(-w.hub_axial_force_n());
+    }
   }
   double sum = 0.0;
   for (double p : pulls) sum += p;
   r.pull_n = sum / static_cast<double>(pulls.size());
   for (double p : pulls) r.pull_spread_n = std::max(r.pull_spread_n, std::abs(p - r.pull_n));
+  for (double p : step_end_pulls) r.pull_step_end_n += p / static_cast<double>(step_end_pulls.size());
   r.cost = step_cost(step_ms, substeps);
   return r;
 }
@@ -138,10 +147,11 @@ CapstanResult run_capstan(const Capstan& c) {
 std::string json_line(const Capstan& c, const CapstanResult& r) {
   return fmt::format(
       "{{\"case\": \"capstan\", \"mu\": {}, \"angle_deg\": {}, \"hold_n\": {}, \"drawn_through\": {}, "
-      "\"pull_n\": {:.6g}, \"pull_spread_n\": {:.3g}, \"wrap_rad\": {:.6g}, \"capstan_n\": {:.6g}, \"error_pct\": "
+      "\"pull_n\": {:.6g}, \"pull_spread_n\": {:.3g}, \"pull_step_end_n\": {:.6g}, \"wrap_rad\": {:.6g}, "
+      "\"capstan_n\": {:.6g}, \"error_pct\": "
       "{:.3f}, \"residual_mm\": {:.3g}, {}}}",
-      c.mu, c.angle_deg, c.hold_n, r.drawn_through, r.pull_n, r.pull_spread_n, r.wrap_rad, r.capstan_n,
-      100.0 * (r.pull_n / r.capstan_n - 1.0), r.residual_mm, cost_json(r.cost));
+      c.mu, c.angle_deg, c.hold_n, r.drawn_through, r.pull_n, r.pull_spread_n, r.pull_step_end_n, r.wrap_rad,
+      r.capstan_n, 100.0 * (r.pull_n / r.capstan_n - 1.0), r.residual_mm, cost_json(r.cost));
 }
 
 }  // namespace pcisim::bench::wire_force

@@ -63,11 +63,12 @@ struct Capstan {
   double mu = 0.2, angle_deg = 90, hold_n = 0.05;
 };
 struct CapstanResult {
-  double pull_n = 0;         // the hub's pull, mean over the last 0.75 s of the 1.5 s pull
-  double pull_spread_n = 0;  // its largest departure from that mean in those steps
-  double wrap_rad = 0;       // the angle the wire wraps: the bend, less the helix's rise
-  double capstan_n = 0;      // hold e^(mu wrap)
-  double residual_mm = 0;    // the deepest a node was left in the wall while pulled
+  double pull_n = 0;           // the hub's pull averaged over every substep of the last 0.75 s of the 1.5 s pull
+  double pull_spread_n = 0;    // the largest departure of one step's average from it
+  double pull_step_end_n = 0;  // the pull at the steps' ends (their last substeps), mean over those steps
+  double wrap_rad = 0;         // the angle the wire wraps: the bend, less the helix's rise
+  double capstan_n = 0;        // hold e^(mu wrap)
+  double residual_mm = 0;      // the deepest a node was left in the wall while pulled
   bool drawn_through = false;
   StepCost cost;
 };

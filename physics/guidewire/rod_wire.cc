@@ -287,6 +287,7 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
   if (motion_)
     for (int i = 0; i < node_count(); ++i) find_rest_point(i, 0.0, dt_s);
   bool feed_stopped = refusing_;
+  double hub_impulse_n_s = 0.0;  // the hub's push-back over the accepted substeps
   for (int64_t done = 0; done < ticks;) {
     const int64_t span = ticks_per_substep >> halvings_;
     const double a0 = static_cast<double>(done) / ticks, a = static_cast<double>(done + span) / ticks;
@@ -360,6 +361,7 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
     }
     substep_hub_axial_n_ = -rod_.hub_force_n().dot(path_.exit_direction());
     if (!std::isfinite(substep_hub_axial_n_)) substep_hub_axial_n_ = 0.0;
+    hub_impulse_n_s += substep_hub_axial_n_ * h;
     done += span;
     last_substep_s_ = h;
     ++report_.substeps;
@@ -396,6 +398,7 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
   const double previous_axial_n = hub_axial_n_;
   // the rod's force on the hub, against the direction of feed, resists insertion
   hub_axial_n_ = -rod_.hub_force_n().dot(dir);
+  mean_hub_axial_n_ = dt_s > 0.0 ? hub_impulse_n_s / dt_s : hub_axial_n_;
   hub_torque_nm_ = -rod_.hub_torque_nm().dot(dir);
   if (!std::isfinite(hub_axial_n_)) hub_axial_n_ = 0.0;
   if (!std::isfinite(hub_torque_nm_)) hub_torque_nm_ = 0.0;

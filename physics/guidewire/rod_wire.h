@@ -70,8 +70,9 @@ struct RodContactReport {
   int finest_halvings = 0;  // the shortest substep of the step: rod_substeps' halved this many times
 };
 
-// the most contacts one substep solves (the deepest are kept)
-inline constexpr int kMaxRodContacts = 96;
+// the most contacts one substep solves (the deepest are kept). A wire wrapped once round a 15 mm
+// bend at 1 mm segments has 126-140 candidates; at 96 some 40 a substep were dropped
+inline constexpr int kMaxRodContacts = 192;
 
 class RodWire final : public rod::RodContact {
  public:
@@ -117,6 +118,9 @@ class RodWire final : public rod::RodContact {
   // torque it turns back with (positive resists positive rotation), from the rod's multipliers
   double hub_axial_force_n() const { return hub_axial_n_; }
   double hub_torque_nm() const { return hub_torque_nm_; }
+  // the axial push-back averaged over the last step's substeps (hub_axial_force_n is its last
+  // substep's: where the substeps alternate, the two differ)
+  double mean_hub_axial_force_n() const { return mean_hub_axial_n_; }
   // how much shorter the free wire is than its rest length (a dead end crumples it), m
   double compression_m() const { return compression_m_; }
   // the tip segment's material frame turned about the wire, against the hub's turn: radians of
@@ -183,7 +187,7 @@ class RodWire final : public rod::RodContact {
   std::vector<Eigen::Vector3d> offset_from_, offset_to_, offset_, wall_velocity_;
   double commanded_feed_m_ = 0.0, fed_m_ = 0.0, rotation_rad_ = 0.0;
   double rotation_before_step_rad_ = 0.0;
-  double hub_axial_n_ = 0.0, hub_torque_nm_ = 0.0;
+  double hub_axial_n_ = 0.0, hub_torque_nm_ = 0.0, mean_hub_axial_n_ = 0.0;
   double compression_m_ = 0.0;            // free wire shorter than its rest length, at the last step's end
   bool refusing_ = false;                 // feed held back this step
   bool tip_held_ = false;                 // the tip segment held about its axis by static friction

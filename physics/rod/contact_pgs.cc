@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <Eigen/Cholesky>
@@ -14,6 +15,11 @@ namespace {
 // the subspace step's solves, at most: each after the first lets go of the push that would have
 // turned into a pull
 constexpr int kSubspaceRounds = 8;
+
+// under-relaxation of cycling sweeps: judged every kRelaxationWindow sweeps, halved down to
+// kLeastRelaxation
+constexpr int kRelaxationWindow = 8;
+constexpr double kLeastRelaxation = 0.25;
 
 // two unit vectors spanning the plane normal to n
 void tangent_basis(const Eigen::Vector3d& n, Eigen::Vector3d* t1, Eigen::Vector3d* t2) {
@@ -149,6 +155,12 @@ ContactSolveStats ContactPgs::solve(const Eigen::Ref<const Eigen::MatrixXd>& w, 
   Eigen::Map<Eigen::VectorXd> motion(k > 0 ? motion_.front().data() : nullptr, 3 * k);
   for (int a = 0; a < k; ++a) curvature_[a].setZero();
   if (k > 0) motion.noalias() = w * Eigen::Map<const Eigen::VectorXd>(impulses.front().data(), 3 * k);
+  // (without friction the sweeps minimise a convex quadratic, contact by contact: they cannot
+  // cycle, and under-relaxing them only slows them; end on, it buckled a column 10 % early)
+  bool may_relax = false;
+  for (int a = 0; a < k; ++a) may_relax = may_relax || c[a].mu_static > 0.0 || c[a].mu_kinetic > 0.0;
+  may_relax = may_relax && relax_;
+  double relaxation = 1.0;
   // one contact's impulse changes by dl: every node's motion follows its column of W
   auto apply = [&](int a, const Eigen::Vector3d& dl) {
     impulses[a] += dl;
@@ -221,13 +233,21 @@ ContactSolveStats ContactPgs::solve(const Eigen::Ref<const Eigen::MatrixXd>& w, 
         curvature_[a] += dc;
         change = std::max(change, (w_tt * (c_new - c_old)).norm());
       }
-      const Eigen::Vector3d dl = impulses[a] - start + dc;
+      // (under-relaxed, the contact's impulses move that part of the way towards their update. A
+      // push that lets go then shrinks geometrically instead of vanishing, its friction with it;
+      // letting it go whole, or taking every push whole and relaxing friction alone, cycled on
+      // ContactPgs.SweepsThatCycleConvergeUnderRelaxed's problem, and the former made the dead end
+      // 2-3 times slower)
+      const Eigen::Vector3d dl = relaxation * (impulses[a] - start + dc);
       impulses[a] = start;
       if (dl.squaredNorm() > 0.0) apply(a, dl);
-      impulses[a] -= dc;
+      impulses[a] -= relaxation * dc;
+      curvature_[a] -= (1.0 - relaxation) * dc;
     }
     return change;
   };
+  // the largest change over the last kRelaxationWindow sweeps, and over the window before
+  double window_change = 0.0, previous_window = std::numeric_limits<double>::infinity();
   for (int sweep_count = 0; sweep_count < max_sweeps; ++sweep_count) {
     const double change = sweep();
     stats.sweeps = sweep_count + 1;
@@ -236,9 +256,17 @@ ContactSolveStats ContactPgs::solve(const Eigen::Ref<const Eigen::MatrixXd>& w, 
       stats.converged = true;
       break;
     }
+    // a window that changed as much as the one before: the sweeps cycle; under-relax them
+    window_change = std::max(window_change, change);
+    if ((sweep_count + 1) % kRelaxationWindow == 0) {
+      if (may_relax && window_change >= previous_window && relaxation > kLeastRelaxation) relaxation *= 0.5;
+      previous_window = window_change;
+      window_change = 0.0;
+    }
     if (sweeps_per_subspace_ > 0 && (sweep_count + 1) % sweeps_per_subspace_ == 0 && sweep_count + 1 < max_sweeps)
       stats.subspace_steps += subspace_step(w, c, impulses) ? 1 : 0;
   }
+  stats.relaxation = relaxation;
   return stats;
 }
 

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -157,50 +158,94 @@ TEST(ContactPgs, ASlidingNodesFrictionOpposesItsSlipInTheWallsPlane) {
   EXPECT_NEAR(tangent.normalized().dot(-slip.normalized()), 1.0, 1e-12);
 }
 
-// a coupled problem as a rod gives: random SPD W, random normals, gaps and slips. Every
-// condition of Coulomb contact holds at the answer (to the sweep tolerance)
-TEST(ContactPgs, ACoupledRandomProblemMeetsSignoriniAndTheCone) {
-  std::mt19937 rng(5);
+// a coupled problem as a rod gives: random SPD W (a A' / 3k plus `floor` on the diagonal), random
+// normals, gaps 1e-3 (centre + half u) and slips, one friction coefficient (the answer is a fixed
+// point of the cone projection)
+struct RandomProblem {
+  Eigen::MatrixXd w;
+  std::vector<NodeContact> c;
+};
+
+RandomProblem random_problem(unsigned seed, int k, double mu, double floor, double gap_centre, double gap_half) {
+  std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  const int k = 12;
   Eigen::MatrixXd a(3 * k, 3 * k);
   for (int i = 0; i < a.size(); ++i) a(i) = u(rng);
-  const Eigen::MatrixXd w = a * a.transpose() / (3 * k) + 0.2 * Eigen::MatrixXd::Identity(3 * k, 3 * k);
-  std::vector<NodeContact> c(k);
-  for (NodeContact& ci : c) {
+  RandomProblem p;
+  p.w = a * a.transpose() / (3 * k) + floor * Eigen::MatrixXd::Identity(3 * k, 3 * k);
+  p.c.resize(k);
+  for (NodeContact& ci : p.c) {
     ci.normal = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
-    ci.gap_m = 1e-3 * u(rng);
+    ci.gap_m = 1e-3 * (gap_centre + gap_half * u(rng));
     ci.slip_m = 1e-3 * Eigen::Vector3d(u(rng), u(rng), u(rng));
     ci.slip_m -= ci.slip_m.dot(ci.normal) * ci.normal;
-    ci.mu_static = 0.3;
-    ci.mu_kinetic = 0.3;  // one coefficient: the answer is a fixed point of the cone projection
+    ci.mu_static = mu;
+    ci.mu_kinetic = mu;
   }
-  ContactPgs pgs(k);
-  std::vector<Eigen::Vector3d> l(k, Eigen::Vector3d::Zero());
-  const ContactSolveStats s = pgs.solve(w, c, l, 2000, 1e-13);
-  ASSERT_TRUE(s.converged) << s.sweeps << " sweeps, last change " << s.last_change_m;
-  const double tol = 1e-9;
+  return p;
+}
+
+// every condition of Coulomb contact at the answer l (to tol): Signorini's, the cone, and a
+// sliding contact's friction on the cone against its slip (where its push is more than round-off
+// of the largest: a push of 1e-160 has no direction to check). Returns how many contacts push
+int expect_coulomb_answer(const RandomProblem& p, const ContactPgs& pgs, const std::vector<Eigen::Vector3d>& l,
+                          double tol) {
   int pushing = 0, sliding = 0;
-  for (int i = 0; i < k; ++i) {
-    const Eigen::Vector3d& n = c[i].normal;
+  double largest = 0.0;
+  for (int i = 0; i < static_cast<int>(p.c.size()); ++i) largest = std::max(largest, -p.c[i].normal.dot(l[i]));
+  for (int i = 0; i < static_cast<int>(p.c.size()); ++i) {
+    const NodeContact& c = p.c[i];
+    const Eigen::Vector3d& n = c.normal;
     const Eigen::Vector3d d = pgs.motion_m()[i];
     const double l_n = -n.dot(l[i]);
-    const double gap = c[i].gap_m + n.dot(d);
+    const double gap = c.gap_m + n.dot(d);
     const Eigen::Vector3d l_t = l[i] + l_n * n;
-    const Eigen::Vector3d slip = c[i].slip_m + d - n.dot(d) * n;
-    EXPECT_GE(l_n, 0.0) << i;
+    const Eigen::Vector3d slip = c.slip_m + d - n.dot(d) * n;
+    EXPECT_GE(l_n, -1e-12 * largest) << i;  // (a push of 1e-175 may round to -1e-175)
     EXPECT_LE(gap, tol) << i;
     EXPECT_LT(std::abs(l_n * gap), tol * std::max(l_n, 1.0)) << i;
-    EXPECT_LE(l_t.norm(), 0.3 * l_n + tol) << i;
-    if (slip.norm() > 1e-9 && l_n > 0.0) {  // sliding: on the cone, against the slip
+    EXPECT_LE(l_t.norm(), c.mu_kinetic * l_n + tol) << i;
+    if (slip.norm() > 1e-9 && l_n > 1e-12 * largest) {  // sliding: on the cone, against the slip
       ++sliding;
-      EXPECT_NEAR(l_t.norm(), 0.3 * l_n, tol) << i;
+      EXPECT_NEAR(l_t.norm(), c.mu_kinetic * l_n, tol) << i;
       EXPECT_NEAR(l_t.normalized().dot(-slip.normalized()), 1.0, 1e-6) << i;
     }
     pushing += l_n > 0.0;
   }
-  std::printf("%d sweeps: %d of %d contacts push, %d slide\n", s.sweeps, pushing, k, sliding);
-  EXPECT_GT(pushing, 0);
+  std::printf("%d of %zu contacts push, %d slide\n", pushing, p.c.size(), sliding);
+  return pushing;
+}
+
+TEST(ContactPgs, ACoupledRandomProblemMeetsSignoriniAndTheCone) {
+  const RandomProblem p = random_problem(5, 12, 0.3, 0.2, 0.0, 1.0);
+  ContactPgs pgs(12);
+  std::vector<Eigen::Vector3d> l(12, Eigen::Vector3d::Zero());
+  const ContactSolveStats s = pgs.solve(p.w, p.c, l, 2000, 1e-13);
+  ASSERT_TRUE(s.converged) << s.sweeps << " sweeps, last change " << s.last_change_m;
+  std::printf("%d sweeps\n", s.sweeps);
+  EXPECT_GT(expect_coulomb_answer(p, pgs, l, 1e-9), 0);
+}
+
+// Where friction couples the contacts strongly (mu 1, every contact in the wall, a weakly
+// regularised W: 20 contacts, the first of 3000 seeds found so) the plain sweeps cycle: 2000 of
+// them still move a contact by ~1 mm. A taut wire wrapped round a bend with mu 0.2 cycled the
+// same way in pcisim-bench wire-force's capstan (a 135-contact problem: cycling at 1e-5 m after
+// 10 000 sweeps, converged in 402 under-relaxed). Under-relaxed once they cycle, they converge to
+// an answer that meets every condition
+TEST(ContactPgs, SweepsThatCycleConvergeUnderRelaxed) {
+  const RandomProblem p = random_problem(524, 20, 1.0, 0.01, 0.5, 0.5);
+  ContactPgs plain(20), relaxed(20);
+  plain.set_under_relaxation(false);
+  std::vector<Eigen::Vector3d> l_plain(20, Eigen::Vector3d::Zero()), l(20, Eigen::Vector3d::Zero());
+  const ContactSolveStats s_plain = plain.solve(p.w, p.c, l_plain, 2000, 1e-13);
+  std::printf("plain: %d sweeps, last change %.2g m\n", s_plain.sweeps, s_plain.last_change_m);
+  EXPECT_FALSE(s_plain.converged);
+  EXPECT_EQ(s_plain.relaxation, 1.0);
+  const ContactSolveStats s = relaxed.solve(p.w, p.c, l, 2000, 1e-13);
+  std::printf("under-relaxed: %d sweeps, relaxation %.3g\n", s.sweeps, s.relaxation);
+  ASSERT_TRUE(s.converged) << s.sweeps << " sweeps, last change " << s.last_change_m;
+  EXPECT_LT(s.relaxation, 1.0);
+  EXPECT_GT(expect_coulomb_answer(p, relaxed, l, 1e-9), 0);
 }
 
 // Neighbouring nodes of a stiff wire on a floor: their normal rows of W overlap like a Gaussian

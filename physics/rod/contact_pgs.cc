@@ -155,8 +155,9 @@ ContactSolveStats ContactPgs::solve(const Eigen::Ref<const Eigen::MatrixXd>& w, 
   Eigen::Map<Eigen::VectorXd> motion(k > 0 ? motion_.front().data() : nullptr, 3 * k);
   for (int a = 0; a < k; ++a) curvature_[a].setZero();
   if (k > 0) motion.noalias() = w * Eigen::Map<const Eigen::VectorXd>(impulses.front().data(), 3 * k);
-  // (without friction the sweeps minimise a convex quadratic, contact by contact: they cannot
-  // cycle, and under-relaxing them only slows them; end on, it buckled a column 10 % early)
+  // (without friction the sweeps minimise a convex quadratic, contact by contact, but for a
+  // curved wall's impulse: under-relaxing them only slowed them; end on, it buckled a column 10 %
+  // early)
   bool may_relax = false;
   for (int a = 0; a < k; ++a) may_relax = may_relax || c[a].mu_static > 0.0 || c[a].mu_kinetic > 0.0;
   may_relax = may_relax && relax_;

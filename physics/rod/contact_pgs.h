@@ -24,10 +24,11 @@
 // Where the sweeps cycle (a window of kRelaxationWindow sweeps changes a contact as much as the
 // window before) and any contact has friction, they are under-relaxed: each contact's impulses
 // move half as far towards their update, halved again while they still cycle, down to a quarter.
-// (Without friction they minimise a convex quadratic and cannot cycle.) A wire of negligible
-// bending stiffness wrapped round a bend with mu 0.2 cycled so: one of its 135-contact problems
-// still moved a contact 1e-5 m a sweep after 10 000 sweeps, and converged in 402 under-relaxed
-// (pcisim-bench wire-force's capstan, issue #33, session 31).
+// (Without friction, but for a curved wall's impulse, they minimise a convex quadratic: no
+// cycling to cure.) A wire of negligible bending stiffness wrapped round a bend with mu 0.2
+// cycled so: one of its 135-contact problems, dumped from pcisim-bench wire-force's capstan, still
+// moved a contact 1e-5 m a sweep after 10 000 sweeps and converged in 402 under-relaxed (without
+// the wire's 100-sweep cap; in the rig, capped, that row still misses: issue #33, session 31).
 // Sized once; solve() allocates nothing.
 #include <Eigen/Core>
 #include <span>

@@ -308,9 +308,8 @@ int run(const std::vector<std::string>& given) {
         "θ a / √(a² + c²), a the wire's helix radius, c its rise per radian: 0.2 % less at 360°). The trivial "
         "model, a wire without friction, pulls with the hold. Tuned at 90° with μ 0.1 and 0.3; the rest are held "
         "out.\n\n"
-     << "| angle ° | μ | hold N | pull N | spread N | at step ends N | e^(μθ) hold N | error % | target | residual mm "
-        "| "
-        "ms p50 / p99 | substeps |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+     << "| angle ° | μ | hold N | pull N | spread N | at step ends N | e^(μθ) hold N | error % | target | "
+        "residual mm | ms p50 / p99 | substeps |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& [c, r] : caps) {
     const double err = 100.0 * (r.pull_n / r.capstan_n - 1.0);
     if (!r.drawn_through) {
@@ -319,9 +318,8 @@ int run(const std::vector<std::string>& given) {
       continue;
     }
     md << fmt::format(
-        "| {:.0f} | {:.2f} | {:.2f} | {:.5f} | {:.2g} | {:.5f} | {:.5f} | {:+.2f} | {} | {:.3f} | {:.1f} / {:.1f} | {} "
-        "/ {} "
-        "|\n",
+        "| {:.0f} | {:.2f} | {:.2f} | {:.5f} | {:.2g} | {:.5f} | {:.5f} | {:+.2f} | {} | {:.3f} | {:.1f} / {:.1f} | "
+        "{} / {} |\n",
         c.angle_deg, c.mu, c.hold_n, r.pull_n, r.pull_spread_n, r.pull_step_end_n, r.capstan_n, err, met(err),
         r.residual_mm, r.cost.ms_p50, r.cost.ms_p99, r.cost.substeps_p50, r.cost.substeps_max);
   }

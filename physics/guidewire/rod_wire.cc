@@ -398,7 +398,7 @@ void RodWire::step(double insertion_m, double rotation_rad, double dt_s) {
   const double previous_axial_n = hub_axial_n_;
   // the rod's force on the hub, against the direction of feed, resists insertion
   hub_axial_n_ = -rod_.hub_force_n().dot(dir);
-  mean_hub_axial_n_ = dt_s > 0.0 ? hub_impulse_n_s / dt_s : hub_axial_n_;
+  mean_hub_axial_n_ = hub_impulse_n_s / dt_s;  // (dt_s > 0: step() returned early otherwise)
   hub_torque_nm_ = -rod_.hub_torque_nm().dot(dir);
   if (!std::isfinite(hub_axial_n_)) hub_axial_n_ = 0.0;
   if (!std::isfinite(hub_torque_nm_)) hub_torque_nm_ = 0.0;

@@ -21,6 +21,7 @@
 #include "bench/bench_registry.h"
 #include "bench/bench_stats.h"
 #include "bench/machine_info.h"
+#include "bench/xray_plastimatch.h"
 #include "anatomy/phantom/coronary_phantom.h"
 #include "physics/world.h"
 #include "xray/fluoro/beating_background.h"
@@ -49,6 +50,9 @@ struct Options {
   bool fluoro_only = false;  // only the fluoroscopy section, printed (no files but its PNGs)
   std::string out_dir = "docs/benchmarks";
   int threads = 0;
+  std::string plastimatch = "auto";  // the program, "auto" (the first on PATH) or "none"
+  int plastimatch_images = 5;
+  bool plastimatch_only = false;  // only the comparison with plastimatch, printed
 };
 
 struct Row {
@@ -314,6 +318,37 @@ FluoroResult run_fluoro(const Options& o) {
   return res;
 }
 
+// pcisim's exact and trilinear projectors against plastimatch's exact one, same run (issue #36)
+void write_plastimatch_section(std::ofstream& f, const PlastimatchRun& pm, const Row* exact, const Row* trilinear) {
+  f << "\n## Against plastimatch (same run, same machine)\n\n";
+  if (!pm.ran) {
+    f << "Not run: " << pm.why << ".\n";
+    return;
+  }
+  f << fmt::format(
+      "`plastimatch drr -i exact` ({}) on the same 512^2 geometry: the volume's attenuation as pcisim computes it, "
+      "written as a float MetaImage and projected with `-P none`, so both programs integrate the same values "
+      "(plastimatch's own HU conversion differs: on the HU volume the two images correlate 0.989). Its time is what "
+      "it prints as \"Total time\" for the image (after it has read the volume), median of {} runs; the whole "
+      "process took {:.0f} ms (median), reading 256 MiB included. Both use every core.\n\n",
+      pm.version, pm.images, pm.process_ms);
+  f << fmt::format(
+      "Images: correlation {:.6f}; plastimatch's line integrals are in cm (scale {:.5f} to pcisim's mm); after "
+      "that scale the RMSE is {:.4f} % of the largest line integral, {:.0f} % of the squared differences in the "
+      "detector's first row.\n\n",
+      pm.correlation, pm.scale, 100 * pm.rmse_rel, 100 * pm.first_row_share);
+  f << "| projector | ms per 512^2 image | / plastimatch exact | target | met? |\n|---|---|---|---|---|\n";
+  f << fmt::format("| plastimatch exact | {:.0f} | 1 | - | - |\n", pm.per_image_ms);
+  if (exact) {
+    const double ratio = exact->median_ms / pm.per_image_ms;
+    f << fmt::format("| pcisim exact | {:.0f} | {:.2f} | <= 0.5 | {} |\n", exact->median_ms, ratio,
+                     ratio <= 0.5 ? "yes" : "**no**");
+  }
+  if (trilinear)
+    f << fmt::format("| pcisim trilinear, 1 voxel | {:.0f} | {:.2f} | <= 100 ms | {} |\n", trilinear->median_ms,
+                     trilinear->median_ms / pm.per_image_ms, trilinear->median_ms <= 100 ? "yes" : "**no**");
+}
+
 void write_fluoro_section(std::ofstream& f, const FluoroResult& fl) {
   f << fmt::format(
       "\n## Fluoroscopy frames: cached background + analytic overlays vs full re-projection\n\n"
@@ -443,16 +478,29 @@ int run(const std::vector<std::string>& args) {
       o.out_dir = args[++i];
     } else if (args[i] == "--threads" && i + 1 < args.size()) {
       o.threads = std::atoi(args[++i].c_str());
+    } else if (args[i] == "--plastimatch" && i + 1 < args.size()) {
+      o.plastimatch = args[++i];
+    } else if (args[i] == "--plastimatch-images" && i + 1 < args.size()) {
+      o.plastimatch_images = std::max(1, std::atoi(args[++i].c_str()));
+    } else if (args[i] == "--plastimatch-only") {
+      o.plastimatch_only = true;
     } else {
       std::printf(
           "pcisim-bench xray [--quick] [--fluoro-only] [--out DIR (docs/benchmarks)] [--threads N (all cores)]\n"
+          "                  [--plastimatch PROGRAM|none (the first on PATH)] [--plastimatch-images N (5)]\n"
+          "                  [--plastimatch-only]\n"
           "  full: 512^2 and 1024^2 detectors, steps 2, 1, 0.5, 0.25 voxel on CPU and GPU\n"
           "  --quick: CPU on 512^2 only with steps 1 and 0.5, fewer frames; the GPU sweep stays full\n"
           "  then fluoroscopy at 512^2: cached background + analytic overlays vs full re-projection\n"
-          "  --fluoro-only: only that section, printed; writes its example PNGs, not xray.md/json\n");
+          "  --fluoro-only: only that section, printed; writes its example PNGs, not xray.md/json\n"
+          "  plastimatch (Debian package plastimatch), when installed: `plastimatch drr -i exact` on the same\n"
+          "    volume and 512^2 geometry in the same run, its time per image (a run of 1 + N images less a run\n"
+          "    of 1) against pcisim's exact projector, and its image against pcisim's (correlation, scale)\n"
+          "  --plastimatch-only: only pcisim's exact 512^2 row and that comparison, printed\n");
       return args[i] == "--help" ? 0 : 2;
     }
   }
+  if (o.plastimatch_only) o.quick = true;
   std::filesystem::create_directories(o.out_dir);
   const std::string machine = machine_info();
   std::printf("xray: %s\n", machine.c_str());
@@ -476,6 +524,7 @@ int run(const std::vector<std::string>& args) {
   const std::vector<double> gpu_steps = {2, 1, 0.5, 0.25};
   const int cpu_frames = o.quick ? 3 : 5;
   std::vector<Row> rows;
+  PlastimatchRun pm;
   std::string gpu_name;
   int cpu_threads = 0;
 
@@ -510,6 +559,21 @@ int run(const std::vector<std::string>& args) {
       rows.push_back(r);
       std::printf("xray: %4d^2 exact          %9.1f ms (p99 %.1f, cpu %.1f)\n", n, r.median_ms, r.p99_ms, r.cpu_ms);
     }
+    if (n == 512 && o.plastimatch != "none") {
+      const std::string program = o.plastimatch == "auto" ? find_plastimatch() : o.plastimatch;
+      pm = run_plastimatch_drr(program, att, volume, c, pose, ref, o.out_dir + "/.plastimatch-work",
+                               o.plastimatch_images);
+      if (pm.ran) {
+        std::printf(
+            "xray: %4d^2 plastimatch exact %6.1f ms an image (median of %d; its process %.0f ms); correlation with "
+            "pcisim's exact %.6f, scale %.6g, RMSE after it %.4f %% of max\n",
+            n, pm.per_image_ms, pm.images, pm.process_ms, pm.correlation, pm.scale, 100 * pm.rmse_rel);
+      } else {
+        std::printf("xray: plastimatch comparison skipped: %s\n", pm.why.c_str());
+      }
+      std::filesystem::remove_all(o.out_dir + "/.plastimatch-work");  // 256 MiB of mu
+    }
+    if (o.plastimatch_only) return 0;
     const bool cpu_here = !o.quick || n == 512;
     // one CPU trilinear row: the marcher with `options`, timed, compared with exact
     auto cpu_row = [&](const char* name, const TrilinearOptions& options) {
@@ -598,6 +662,16 @@ int run(const std::vector<std::string>& args) {
           i + 1 < rows.size() ? "," : "");
     }
     f << "  ],\n";
+    if (pm.ran) {
+      f << fmt::format(
+          "  \"plastimatch\": {{\"version\": \"{}\", \"detector\": 512, \"images\": {}, \"exact_ms\": {:.2f}, "
+          "\"process_ms\": {:.1f}, \"correlation\": {:.8f}, \"scale\": {:.6g}, \"rmse_rel\": {:.6g}, "
+          "\"first_row_share\": {:.4f}}},\n",
+          pm.version, pm.images, pm.per_image_ms, pm.process_ms, pm.correlation, pm.scale, pm.rmse_rel,
+          pm.first_row_share);
+    } else {
+      f << "  \"plastimatch\": null,\n";
+    }
     f << fmt::format(
         "  \"fluoro\": {{\"detector\": {}, \"frames\": {}, \"build_ms\": {:.1f}, \"background_ms\": {:.2f}, "
         "\"frame_median_ms\": {:.3f}, \"frame_p99_ms\": {:.3f}, \"frame_cpu_ms\": {:.3f}, \"chain_median_ms\": {:.3f}, "
@@ -656,6 +730,7 @@ int run(const std::vector<std::string>& args) {
       f << fmt::format("| exact <= 200 ms | {:.0f} ms median | {} |\n", ex->median_ms,
                        ex->median_ms <= 200 ? "yes" : "**no**");
     }
+    write_plastimatch_section(f, pm, find("exact", 0), tri);
     write_fluoro_section(f, fl);
     // hand-kept notes and the GPU machine's figures from earlier runs, appended unchanged
     std::ifstream earlier(o.out_dir + "/xray.earlier.md");

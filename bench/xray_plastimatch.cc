@@ -32,7 +32,7 @@ bool read_pfm(const std::string& path, xray::Image* img, std::string* why) {
   double scale = 0;
   f >> magic >> w >> h >> scale;
   f.get();  // the one whitespace character before the data
-  if (magic != "Pf" || w <= 0 || h <= 0 || scale >= 0) {
+  if (magic != "Pf" || w <= 0 || h <= 0 || w > 16384 || h > 16384 || scale >= 0) {
     *why = path + ": not a little-endian one-channel PFM";
     return false;
   }
@@ -55,6 +55,13 @@ bool timed_system(const std::string& cmd, double* seconds) {
 
 std::string quoted(const Eigen::Vector3d& v) {
   return fmt::format("\"{:.9g} {:.9g} {:.9g}\"", v.x(), v.y(), v.z());
+}
+
+// a word for the shell: in single quotes, each single quote closed, escaped and opened again
+std::string shell_word(const std::string& s) {
+  std::string out = "'";
+  for (const char ch : s) out += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+  return out + "'";
 }
 
 }  // namespace
@@ -88,11 +95,12 @@ PlastimatchRun run_plastimatch_drr(const std::string& plastimatch, const xray::A
         for (int64_t i = 0; i < grid.dims[0]; ++i)
           v.hu_f32[v.linear_index(i, j, k)] = mu.mu(static_cast<int>(i), static_cast<int>(j), static_cast<int>(k));
     anatomy::write_metaimage(v, mha);
+    r.volume_mib = static_cast<double>(v.voxel_count()) * sizeof(float) / (1024.0 * 1024.0);
   }
   {
     const std::string version_file = work_dir + "/version.txt";
     double s = 0;
-    if (timed_system(fmt::format("'{}' --version > '{}' 2>&1", plastimatch, version_file), &s)) {
+    if (timed_system(fmt::format("{} --version > {} 2>&1", shell_word(plastimatch), shell_word(version_file)), &s)) {
       std::ifstream v(version_file);
       std::getline(v, r.version);
     }
@@ -107,16 +115,16 @@ PlastimatchRun run_plastimatch_drr(const std::string& plastimatch, const xray::A
   const Eigen::Vector3d d = xray::c_arm_beam_direction(pose.primary_deg, pose.secondary_deg);
   const std::string prefix = work_dir + "/drr_";
   r.command = fmt::format(
-      "'{}' drr -P none -i exact -t pfm -r \"{} {}\" -z \"{:.9g} {:.9g}\" --sad {:.9g} --sid {:.9g} -o {} -n {} "
-      "--vup {} -O '{}' '{}'",
-      plastimatch, c_arm.height, c_arm.width, c_arm.height * c_arm.pixel_mm, c_arm.width * c_arm.pixel_mm,
-      c_arm.source_to_axis_mm, c_arm.source_to_image_mm, quoted(pose.isocenter_mm), quoted(-d), quoted(-g.v), prefix,
-      mha);
+      "{} drr -P none -i exact -t pfm -r \"{} {}\" -z \"{:.9g} {:.9g}\" --sad {:.9g} --sid {:.9g} -o {} -n {} "
+      "--vup {} -O {} {}",
+      shell_word(plastimatch), c_arm.height, c_arm.width, c_arm.height * c_arm.pixel_mm, c_arm.width * c_arm.pixel_mm,
+      c_arm.source_to_axis_mm, c_arm.source_to_image_mm, quoted(pose.isocenter_mm), quoted(-d), quoted(-g.v),
+      shell_word(prefix), shell_word(mha));
   std::vector<double> projection_ms, process_ms;
   for (int run = 0; run < images; ++run) {
     std::remove(log.c_str());
     double s = 0;
-    if (!timed_system(r.command + " > '" + log + "' 2>&1", &s)) {
+    if (!timed_system(r.command + " > " + shell_word(log) + " 2>&1", &s)) {
       r.why = "plastimatch drr failed (" + log + ")";
       return r;
     }

@@ -20,6 +20,7 @@ struct PlastimatchRun {
   // median ms per image: plastimatch's own "Total time" (the projection, after it has read the
   // volume), and the whole process's wall time (reading the 256 MiB volume included)
   double per_image_ms = 0, process_ms = 0;
+  double volume_mib = 0;  // the float mu volume plastimatch reads
   // plastimatch's image against pcisim's exact one (pcisim's pixel order): Pearson correlation,
   // the least-squares scale plastimatch's line integrals need to match pcisim's (their HU -> mu
   // conversions differ), and the RMSE after that scale, relative to pcisim's largest value

@@ -153,9 +153,14 @@ class RodWire final : public rod::RodContact {
   // the solve scheme's contact after the rod's last solve of a substep; sets retry_ instead
   // where the substep should be taken back and tried shorter
   void solve_contact(rod::CosseratRod& rod, double h);
-  // the lumen's shape operator (1/m) at a node whose wall normal is n: dn/dx in the tangent plane,
-  // its concave part
-  Eigen::Matrix3d wall_shape(int node, const Eigen::Vector3d& n, std::span<const Eigen::Vector3d> x) const;
+  // the lumen's shape operator (1/m) at p (the lumen's frame) whose wall normal is n: dn/dx in
+  // the tangent plane, its concave part
+  Eigen::Matrix3d wall_shape(const Eigen::Vector3d& p, const Eigen::Vector3d& n) const;
+  // contact a (node i) posed on the wall where the node stands after moving d_m in the problem's
+  // terms (from where it would be without the last substep's force), its motion along the wall
+  // over the substep so far `moved_m`
+  void pose_contact(int a, int i, const Eigen::Vector3d& at_m, const Eigen::Vector3d& d_m,
+                    const Eigen::Vector3d& moved_m, double mu);
   // the spin about the wire's axis of touching segments held by static friction (every scheme)
   void hold_spin(rod::CosseratRod& rod);
   // the implicit scheme's friction anchors after an accepted substep
@@ -204,6 +209,7 @@ class RodWire final : public rod::RodContact {
   std::vector<double> candidate_gap_m_;
   std::vector<WallSample> candidate_wall_;
   std::vector<rod::NodeContact> contacts_;
+  std::vector<Eigen::Vector3d> contact_warm_motion_m_, contact_moved_m_;  // per contact, for re-posing
   std::vector<Eigen::Vector3d> contact_impulse_, node_impulse_, wall_impulse_vector_n_s_, wall_force_vector_n_;
   RodContactReport report_;
   // halved substeps (the solve scheme): the state before the substep being tried, whether the

@@ -63,6 +63,53 @@ Eigen::Vector2d slide_on_cone(const Eigen::Matrix2d& m, const Eigen::Vector2d& s
   return -c * s.normalized();
 }
 
+// A frictionless contact on a curved wall: its push L and its curved wall's impulse c (in the
+// tangent basis t) found together, the rest of the problem held. With m0 the node's motion
+// without its own impulses, e = t'(m0 - d_0), S = t' S t and the blocks of W_aa in (n, t):
+//   c(L) = -(I + L S w_tt)^-1 L S (e - L w_tn)       (the curved-wall law, C = -L S (d_t - d_0))
+//   phi(L) = gap + n'm0 - L w_nn + w_nt c(L) = 0     (the gap closed), L >= 0
+// Newton on L inside a bracket that halves where a step would leave it. Solved one after the
+// other, the push and c can alternate without settling where the wall turns fast (a tip in a
+// rounded end: L S w_tt reaches thousands), as one end-on column's single contact did for 100
+// sweeps (issue #33, session 32). Returns L and sets *c.
+double push_on_curved_wall(double phi0, double w_nn, const Eigen::Vector2d& w_nt, const Eigen::Vector2d& w_tn,
+                           const Eigen::Matrix2d& w_tt, const Eigen::Matrix2d& s, const Eigen::Vector2d& e,
+                           Eigen::Vector2d* c) {
+  c->setZero();
+  if (!(phi0 > 0.0)) return 0.0;  // apart without a push
+  // phi and its slope at l (c and dc/dl from differentiating A c = -l S (e - l w_tn), A = I + l S w_tt)
+  auto eval = [&](double l, Eigen::Vector2d* c_out, double* slope) {
+    const Eigen::Matrix2d a = Eigen::Matrix2d::Identity() + l * s * w_tt;
+    const Eigen::Matrix2d a_inv = a.inverse();
+    const Eigen::Vector2d r = e - l * w_tn;
+    *c_out = -a_inv * (l * (s * r));
+    const Eigen::Vector2d dc = a_inv * (-(s * r) + l * (s * w_tn) - s * (w_tt * *c_out));
+    *slope = -w_nn + w_nt.dot(dc);
+    return phi0 - l * w_nn + w_nt.dot(*c_out);
+  };
+  double lo = 0.0, hi = phi0 / w_nn;
+  Eigen::Vector2d c_hi;
+  double slope = 0.0;
+  // an upper end where the gap is closed
+  for (int k = 0; k < 60 && eval(hi, &c_hi, &slope) > 0.0; ++k) {
+    lo = hi;
+    hi *= 2.0;
+  }
+  double l = hi;
+  for (int it = 0; it < 60; ++it) {
+    const double phi = eval(l, c, &slope);
+    if (phi > 0.0)
+      lo = l;
+    else
+      hi = l;
+    if (std::abs(phi) <= 1e-15 * phi0 || hi - lo <= 1e-15 * hi) break;
+    double next = slope < 0.0 ? l - phi / slope : 0.5 * (lo + hi);
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    l = next;
+  }
+  return l;
+}
+
 }  // namespace
 
 ContactPgs::ContactPgs(int max_contacts) {
@@ -177,6 +224,27 @@ ContactSolveStats ContactPgs::solve(const Eigen::Ref<const Eigen::MatrixXd>& w, 
       const Eigen::Vector3d& n = ca.normal;
       const Eigen::Matrix3d waa = w.block<3, 3>(3 * a, 3 * a);
       const Eigen::Vector3d start = impulses[a];
+      // frictionless on a curved wall: the push and the wall's impulse together
+      if (ca.mu_static == 0.0 && ca.mu_kinetic == 0.0 && !ca.shape_per_m.isZero(0.0)) {
+        Eigen::Vector3d t1, t2;
+        tangent_basis(n, &t1, &t2);
+        Eigen::Matrix<double, 3, 2> t;
+        t << t1, t2;
+        const Eigen::Vector3d own = impulses[a] + curvature_[a];
+        const Eigen::Vector3d m0 = motion_[a] - waa * own;
+        Eigen::Vector2d c_t;
+        const double l_n =
+            push_on_curved_wall(ca.gap_m + n.dot(m0), n.dot(waa * n), t.transpose() * (waa.transpose() * n),
+                                t.transpose() * (waa * n), t.transpose() * waa * t, t.transpose() * ca.shape_per_m * t,
+                                t.transpose() * (m0 - ca.linearised_at_m), &c_t);
+        const Eigen::Vector3d push_new = -l_n * n, c_new = t * c_t;
+        const Eigen::Vector3d dl = relaxation * (push_new + c_new - own);
+        change = std::max(change, (waa * (push_new + c_new - own)).norm());
+        impulses[a] += relaxation * (push_new - impulses[a]);
+        curvature_[a] += relaxation * (c_new - curvature_[a]);
+        if (dl.squaredNorm() > 0.0) motion.noalias() += w.middleCols<3>(3 * a) * dl;
+        continue;
+      }
       // normal: the push that closes the gap, never a pull
       const double w_nn = n.dot(waa * n);
       const double l_n = -n.dot(impulses[a]);

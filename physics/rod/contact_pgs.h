@@ -14,6 +14,9 @@
 //                     into a rounded end or a tube's groove where the tangent plane lets it slide)
 // Each sweep takes each contact's normal row (a scalar, clamped at 0), then its two tangent rows
 // (a 2 x 2 solve, projected on the cone); the other nodes' motion follows once per contact.
+// A frictionless contact on a curved wall takes its push and its curved wall's impulse together
+// (Newton on the push: one after the other they chased each other where W couples the node's
+// motion along the wall with its motion into it).
 // (Accelerating the sweeps as a nonsmooth nonlinear conjugate gradient, Silcowitz et al. 2010,
 // made a wire driven into a dead end blow up: tried 2026-11-28, not kept.)
 // Every few sweeps a subspace step (after Silcowitz, Niebe & Erleben 2009, "Projected

@@ -3,7 +3,8 @@
 // volume by incremental voxel traversal (Siddon 1985, Med. Phys. 12:252; Jacobs et al. 1998,
 // "A fast algorithm to calculate the exact radiological path through a pixel or voxel space"),
 // in double precision, 16 x 16 pixel tiles spread over a thread pool. A ray walks only the
-// stretches through bricks of 32 voxels that hold some attenuation (the rest add exactly 0).
+// stretches through bricks (4^3 of the volume's: 32 voxels at its default 8) that hold some
+// attenuation (the rest add exactly 0). One projection at a time per projector.
 #include <Eigen/Core>
 
 #include <vector>

@@ -76,7 +76,7 @@ double push_on_curved_wall(double phi0, double w_nn, const Eigen::Vector2d& w_nt
                            const Eigen::Matrix2d& w_tt, const Eigen::Matrix2d& s, const Eigen::Vector2d& e,
                            Eigen::Vector2d* c) {
   c->setZero();
-  if (!(phi0 > 0.0)) return 0.0;  // apart without a push
+  if (!(phi0 > 0.0) || !(w_nn > 0.0) || !std::isfinite(phi0)) return 0.0;  // apart, or nothing to push
   // phi and its slope at l (c and dc/dl from differentiating A c = -l S (e - l w_tn), A = I + l S w_tt)
   auto eval = [&](double l, Eigen::Vector2d* c_out, double* slope) {
     const Eigen::Matrix2d a = Eigen::Matrix2d::Identity() + l * s * w_tt;
@@ -95,6 +95,7 @@ double push_on_curved_wall(double phi0, double w_nn, const Eigen::Vector2d& w_nt
     lo = hi;
     hi *= 2.0;
   }
+  if (!std::isfinite(hi)) return 0.0;
   double l = hi;
   for (int it = 0; it < 60; ++it) {
     const double phi = eval(l, c, &slope);
@@ -102,11 +103,12 @@ double push_on_curved_wall(double phi0, double w_nn, const Eigen::Vector2d& w_nt
       lo = l;
     else
       hi = l;
-    if (std::abs(phi) <= 1e-15 * phi0 || hi - lo <= 1e-15 * hi) break;
+    if (std::abs(phi) <= 1e-15 * phi0 || hi - lo <= 1e-15 * hi) return l;
     double next = slope < 0.0 ? l - phi / slope : 0.5 * (lo + hi);
     if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
     l = next;
   }
+  eval(l, c, &slope);  // (*c at the push returned)
   return l;
 }
 

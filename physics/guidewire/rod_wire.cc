@@ -564,11 +564,11 @@ Eigen::Matrix3d RodWire::wall_shape(const Eigen::Vector3d& p, const Eigen::Vecto
   return eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
 }
 
-// contact a on the wall where its node stands once moved d_m from where it would be without the
-// last substep's force: the tangent plane there, gap(d) = distance + margin + n.(d - d_m)
-void RodWire::pose_contact(int a, int i, const Eigen::Vector3d& at_m, const Eigen::Vector3d& d_m,
+// contact a on the wall where its node stands (at_m, the wall sampled there: s) once moved d_m
+// from where it would be without the last substep's force: the tangent plane there,
+// gap(d) = distance + margin + n.(d - d_m)
+void RodWire::pose_contact(int a, int i, const WallSample& s, const Eigen::Vector3d& at_m, const Eigen::Vector3d& d_m,
                            const Eigen::Vector3d& moved_m, double mu) {
-  const WallSample s = lumen_->sample(at_m - offset_[i]);
   const Eigen::Vector3d& n = s.normal;
   contacts_[a] = {n, s.distance_m + contact_->wall_margin_m - n.dot(d_m), moved_m - moved_m.dot(n) * n, mu, mu};
   contacts_[a].shape_per_m = wall_shape(at_m - offset_[i], n);
@@ -655,17 +655,12 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
   const bool have_w = count > 0 && rod.contact_compliance(contact_nodes_, w);
   for (int a = 0; a < count && have_w; ++a) {
     const int i = contact_nodes_[a];
-    const Eigen::Vector3d& n = candidate_wall_[i].normal;
     // the problem is posed as if without the last substep's force: what it moved the node through
-    // W comes off its gap and slip (the wall linearised where the node stands now)
+    // W comes off its gap and slip (the wall, and its curvature, linearised where the node stands now)
     Eigen::Vector3d warm_motion = Eigen::Vector3d::Zero();
     for (int b = 0; b < count; ++b) warm_motion += w.block<3, 3>(3 * a, 3 * b) * warm_total_[contact_nodes_[b]];
     const Eigen::Vector3d moved = x[i] - x_start[i] - h * wall_velocity_[i] - warm_motion;
-    const double mu = held_[i] ? mu_static(i) : mu_kinetic(i);
-    contacts_[a] = {n, candidate_gap_m_[i] - n.dot(warm_motion), moved - moved.dot(n) * n, mu, mu};
-    // the wall's curvature where the node stands, linearised there (the curved-wall impulse)
-    contacts_[a].shape_per_m = wall_shape(x[i] - offset_[i], n);
-    contacts_[a].linearised_at_m = warm_motion;
+    pose_contact(a, i, candidate_wall_[i], x[i], warm_motion, moved, held_[i] ? mu_static(i) : mu_kinetic(i));
     contact_warm_motion_m_[a] = warm_motion;
     contact_moved_m_[a] = moved;
     contact_impulse_[a] = node_impulse_[i];  // the solver starts from the warm impulse
@@ -704,7 +699,8 @@ void RodWire::solve_contact(rod::CosseratRod& rod, double h) {
           continue;
         far = true;
         const int i = contact_nodes_[a];
-        pose_contact(a, i, x[i] + d - contact_warm_motion_m_[a], d, contact_moved_m_[a], contacts_[a].mu_static);
+        const Eigen::Vector3d at = x[i] + d - contact_warm_motion_m_[a];
+        pose_contact(a, i, lumen_->sample(at - offset_[i]), at, d, contact_moved_m_[a], contacts_[a].mu_static);
       }
       if (!far) break;
       report_.most_sweeps = std::max(report_.most_sweeps, st.sweeps);

@@ -156,10 +156,10 @@ class RodWire final : public rod::RodContact {
   // the lumen's shape operator (1/m) at p (the lumen's frame) whose wall normal is n: dn/dx in
   // the tangent plane, its concave part
   Eigen::Matrix3d wall_shape(const Eigen::Vector3d& p, const Eigen::Vector3d& n) const;
-  // contact a (node i) posed on the wall where the node stands after moving d_m in the problem's
-  // terms (from where it would be without the last substep's force), its motion along the wall
-  // over the substep so far `moved_m`
-  void pose_contact(int a, int i, const Eigen::Vector3d& at_m, const Eigen::Vector3d& d_m,
+  // contact a (node i) posed on the wall s sampled where the node stands (at_m) after moving d_m
+  // in the problem's terms (from where it would be without the last substep's force), its motion
+  // along the wall over the substep so far `moved_m`
+  void pose_contact(int a, int i, const WallSample& s, const Eigen::Vector3d& at_m, const Eigen::Vector3d& d_m,
                     const Eigen::Vector3d& moved_m, double mu);
   // the spin about the wire's axis of touching segments held by static friction (every scheme)
   void hold_spin(rod::CosseratRod& rod);

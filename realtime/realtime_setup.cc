@@ -6,6 +6,7 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cstdint>
 
 namespace pcisim::realtime {
@@ -16,8 +17,14 @@ bool try_sched_fifo(int priority) {
   return pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp) == 0;
 }
 
+// once locked, MCL_FUTURE keeps every later mapping locked: a second call (the next scene's
+// pipeline) would only walk the whole process again
 bool try_mlockall() {
-  return mlockall(MCL_CURRENT | MCL_FUTURE) == 0;
+  static std::atomic<bool> locked{false};
+  if (locked.load()) return true;
+  if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0) return false;
+  locked = true;
+  return true;
 }
 
 CpuLatencyRequest::CpuLatencyRequest(int latency_us) {

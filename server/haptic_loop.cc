@@ -15,7 +15,7 @@ bool run_haptic_loop(const HapticLoopConfig& config, SharedState& state) {
 
   realtime::DeadlineSchedule schedule(realtime::monotonic_ns(), config.period_ns);
   int64_t last_wake_ns = 0;
-  while (!state.stop.load(std::memory_order_relaxed)) {
+  while (!state.stop_haptic.load(std::memory_order_relaxed)) {
     const int64_t deadline_ns = schedule.deadline_ns();
     realtime::sleep_until_ns(deadline_ns);
     const int64_t wake_ns = realtime::monotonic_ns();

@@ -12,7 +12,7 @@ struct HapticLoopConfig {
   int fifo_priority = 80;
 };
 
-// runs until state.stop; returns whether SCHED_FIFO was granted
+// runs until state.stop_haptic; returns whether SCHED_FIFO was granted
 bool run_haptic_loop(const HapticLoopConfig& config, SharedState& state);
 
 }  // namespace pcisim::server

@@ -1,6 +1,8 @@
 #include "server/server.h"
 
 #include <spdlog/spdlog.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <optional>
@@ -36,10 +38,63 @@ struct Server::Impl {
   std::atomic<bool> haptic_fifo{false};
   // status rates are over the last second, not since start
   int64_t last_status_ns = 0, last_haptic_ticks = 0, last_physics_steps = 0;
+  // the next scene's server, built on `builder` while this one runs (set_successor_builder)
+  SuccessorBuilder build_successor;
+  std::thread builder;
+  std::atomic<bool> successor_built{false};
+  std::unique_ptr<Server> successor;  // the builder's, read after successor_built
+  std::string successor_error;
 
+  // (the session's limits take this scene's bounds when it starts running: a server built while
+  // another runs must not change the running one's)
   Impl(const Scene& s, lcm::LCM& l, lcm::LCM* i, SessionLimits* lim)
-      : scene(s), lcm(l), images(i), limits(lim ? lim : &own_limits) {
-    limits->configure(scene.session);
+      : scene(s), lcm(l), images(i), limits(lim ? lim : &own_limits) {}
+  ~Impl() {
+    if (builder.joinable()) builder.join();
+  }
+
+  // a scene asked for over LCM: its server built on the builder thread, below the loops' priority
+  void start_successor(Scene next) {
+    successor_built = false;
+    successor_error.clear();
+    builder = std::thread([this, next = std::move(next)]() mutable {
+      ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 10);
+      try {
+        successor = build_successor(std::move(next));
+      } catch (const std::exception& e) {
+        successor_error = e.what();
+      } catch (...) {
+        successor_error = "an unknown error";
+      }
+      successor_built.store(true, std::memory_order_release);
+    });
+  }
+
+  // the main thread's watch over a reload: true once the successor is built and should take
+  // over (a failed build is refused and this server runs on)
+  bool successor_ready(const std::string& source) {
+    if (!build_successor) return state.scene_requested.load();  // run() returns for the caller to rebuild
+    if (!builder.joinable()) {
+      if (!state.scene_requested.load()) return false;
+      std::optional<Scene> next;
+      {
+        std::lock_guard lock(state.scene_mutex);
+        next = std::move(state.requested_scene);
+        state.requested_scene.reset();
+        state.scene_requested = false;
+      }
+      if (next) {
+        spdlog::info("session: building {} while {} runs", next->source, source);
+        start_successor(std::move(*next));
+      }
+      return false;
+    }
+    if (!successor_built.load(std::memory_order_acquire)) return false;
+    builder.join();
+    if (successor) return true;
+    limits->count_scene_rejected();
+    spdlog::error("session: refused the scene: it cannot be built: {}; {} runs on", successor_error, source);
+    return false;
   }
 
   StatsReport stats(double elapsed_s) {
@@ -155,6 +210,7 @@ Server::~Server() = default;
 
 StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   Impl& m = *impl_;
+  m.limits->configure(m.scene.session);
   const bool locked = realtime::try_mlockall();
   const realtime::CpuLatencyRequest latency(cpu_latency_us);
   LcmIo io(
@@ -180,7 +236,7 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   // 0, or anything past ~290 years (inf included), runs until stopped
   const int64_t end_ns =
       duration_s > 0 && duration_s < 9e9 ? m.start_ns + static_cast<int64_t>(duration_s * 1e9) : INT64_MAX;
-  while (!stop.load() && !m.state.scene_requested.load() && realtime::monotonic_ns() < end_ns) {
+  while (!stop.load() && !m.successor_ready(m.scene.source) && realtime::monotonic_ns() < end_ns) {
     realtime::sleep_until_ns(std::min(end_ns, realtime::monotonic_ns() + 20'000'000));
     if (realtime::monotonic_ns() >= next_log_ns) {
       next_log_ns += 1'000'000'000;
@@ -202,11 +258,14 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   }
 
   // stop the loops first, then the I/O, which sends the zero force command last
+  // (the haptic loop last: the physics thread may sleep a period before it sees the stop, and the
+  // force it feeds the hand stays fresh meanwhile)
   m.state.stop = true;
-  haptic.join();
   physics.join();
   if (xray.joinable()) xray.join();
   if (ultrasound.joinable()) ultrasound.join();
+  m.state.stop_haptic = true;
+  haptic.join();
   const double elapsed_s = (realtime::monotonic_ns() - m.start_ns) * 1e-9;
   io.stop();
   StatsReport r = m.stats(elapsed_s);
@@ -218,6 +277,28 @@ void Server::inject_physics_stall(double seconds) {
   if (!std::isfinite(seconds) || seconds < 0.0 || seconds > 3600.0)
     throw std::invalid_argument("inject_physics_stall: seconds must be in [0, 3600]");
   impl_->state.inject_stall_us = static_cast<int64_t>(seconds * 1e6);
+}
+
+void Server::set_successor_builder(SuccessorBuilder build) {
+  impl_->build_successor = std::move(build);
+}
+
+// the successor built while this server ran, with a scene asked for meanwhile passed on to it
+std::unique_ptr<Server> Server::take_successor() {
+  Impl& m = *impl_;
+  if (m.builder.joinable()) return nullptr;  // (still building: run() stopped for another reason)
+  std::unique_ptr<Server> next = std::move(m.successor);
+  if (next) {
+    std::lock_guard lock(m.state.scene_mutex);
+    if (m.state.requested_scene) {
+      std::lock_guard next_lock(next->impl_->state.scene_mutex);
+      next->impl_->state.requested_scene = std::move(m.state.requested_scene);
+      next->impl_->state.scene_requested = true;
+      m.state.requested_scene.reset();
+      m.state.scene_requested = false;
+    }
+  }
+  return next;
 }
 
 std::optional<Scene> Server::take_requested_scene() {

@@ -34,8 +34,19 @@ class Server {
   // fault injection for tests and benchmarks: the next physics step takes seconds longer
   void inject_physics_stall(double seconds);
 
-  // a scene a session command asked for while running (run() returned early for it)
+  // a scene a session command asked for while running (run() returned early for it; without a
+  // successor builder)
   std::optional<Scene> take_requested_scene();
+
+  // with a successor builder, a scene asked for is built on a builder thread while this server
+  // keeps running (issue #36: a reload stopped physics and the force for the whole build); run()
+  // returns once it is built, and take_successor() hands it over. A scene that cannot be built is
+  // refused (logged, counted in the session's limits) and this one runs on. A scene asked for
+  // while another builds is kept for the one being built, which builds it next. A stop while a
+  // scene builds waits for that build when the server is destroyed.
+  using SuccessorBuilder = std::function<std::unique_ptr<Server>(Scene)>;
+  void set_successor_builder(SuccessorBuilder build);
+  std::unique_ptr<Server> take_successor();
 
   // names of the vessel branches, for wire_state_t (index -> name, "" when unknown)
   std::function<const std::string&(int)> branch_namer;  // (LcmIo::BranchNamer)

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <functional>
 #include <optional>
 #include <stdexcept>
 
@@ -15,47 +16,37 @@ namespace pcisim::server {
 StatsReport run_session(Scene scene, lcm::LCM& control, const SessionOptions& options, const std::atomic<bool>& stop,
                         SessionLimits& limits) {
   std::unique_ptr<lcm::LCM> images;  // frames get their own LCM instance, once a scene shows them
-  std::optional<Scene> fallback;     // the last scene that was built
-  double ran_s = 0;                  // running time so far (scene builds do not count)
-  bool rebuilding_fallback = false;
-  for (;;) {
-    // building a scene is a start no loop watches: a signal during it ends the program at once
-    // (realtime/stop_signal.h; nothing happens where no handler is installed, as in tests)
-    realtime::mark_starting();
+  // a scene's server; the first is built here, the next ones on the running server's builder
+  // thread while it runs (Server::set_successor_builder), so a reload stops nothing until the
+  // new pipeline is ready
+  std::function<std::unique_ptr<Server>(Scene)> build = [&](Scene next) {
     // --case replaces the anatomy of every scene, the first and each one loaded over LCM (a
     // soft-tissue scene's procedural organ too: it runs on the case's organ)
-    if (!options.case_dir.empty()) use_case_folder(scene, options.case_dir);
-    if ((scene.xray || scene.ultrasound) && !images) {
-      images = std::make_unique<lcm::LCM>(options.image_url);
-      if (!images->good()) throw std::runtime_error("cannot open the image LCM at " + options.image_url);
+    if (!options.case_dir.empty()) use_case_folder(next, options.case_dir);
+    if ((next.xray || next.ultrasound) && !images) {
+      auto opened = std::make_unique<lcm::LCM>(options.image_url);
+      if (!opened->good()) throw std::runtime_error("cannot open the image LCM at " + options.image_url);
+      images = std::move(opened);
     }
-    std::unique_ptr<Server> server;
-    try {
-      server = std::make_unique<Server>(scene, control, images.get(), &limits);
-    } catch (const std::exception& e) {
-      // nothing to fall back to, or the fallback itself no longer builds (its files changed):
-      // trying it again would loop for ever
-      if (!fallback || rebuilding_fallback) throw;
-      limits.count_scene_rejected();
-      spdlog::error("session: refused scene {}: it cannot be built: {}; back to {}", scene.source, e.what(),
-                    fallback->source);
-      scene = *fallback;
-      rebuilding_fallback = true;
-      continue;
-    }
-    rebuilding_fallback = false;
-    fallback = scene;
+    auto server = std::make_unique<Server>(next, control, images.get(), &limits);
     server->cpu_latency_us = options.cpu_latency_us;
+    server->set_successor_builder(build);
+    return server;
+  };
+  // building the first scene is a start no loop watches: a signal during it ends the program at
+  // once (realtime/stop_signal.h; nothing happens where no handler is installed, as in tests)
+  realtime::mark_starting();
+  std::unique_ptr<Server> server = build(std::move(scene));
+  double ran_s = 0;  // running time so far (the first build does not count)
+  for (;;) {
     const double left_s = options.duration_s > 0 ? std::max(options.duration_s - ran_s, 1e-3) : 0.0;
     realtime::mark_running(options.stop_within_s);
     StatsReport stats = server->run(left_s, stop);
     realtime::mark_stopped();  // the watchdog leaves the stats to be written
     ran_s += stats.elapsed_s;
-    if (auto next = server->take_requested_scene(); next && !stop) {
-      scene = std::move(*next);
-      continue;
-    }
-    return stats;
+    std::unique_ptr<Server> next = server->take_successor();
+    if (!next || stop) return stats;
+    server = std::move(next);  // (the old pipeline freed first: its loops have stopped)
   }
 }
 

@@ -1,9 +1,9 @@
 #pragma once
 // A training session: one scene after another on the same LCM buses. A scene asked for over LCM
-// restarts the pipeline with it; one that parses but cannot be built is refused (counted in the
-// status) and the scene that ran before runs again (if that cannot be rebuilt either, the session
-// ends with its error). The session's command bounds (contrast used, refusals) and its options
-// (--case) carry across every pipeline.
+// is built while the running pipeline goes on (physics, force and frames do not stop for the
+// build), then takes over; one that parses but cannot be built is refused (counted in the status)
+// and the running scene simply goes on. The session's command bounds (contrast used, refusals)
+// and its options (--case) carry across every pipeline.
 #include <atomic>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>

@@ -81,7 +81,10 @@ struct SharedState {
   // session control from lcm rx, read by physics
   std::atomic<bool> paused{false};
   std::atomic<bool> reset_requested{false};
-  std::atomic<bool> stop{false};
+  std::atomic<bool> stop{false};  // the physics, x-ray and ultrasound loops
+  // the haptic loop's own stop, set after the loops that feed its model have stopped: its force
+  // stays fresh while they wind down (a reload hands over to the next pipeline meanwhile)
+  std::atomic<bool> stop_haptic{false};
   std::atomic<int64_t> inject_stall_us{0};  // fault injection: the next physics step takes this long
 
   // a validated scene asked for over LCM; the server restarts its pipeline with it

@@ -53,7 +53,7 @@ TEST(SessionBounds, ASceneThatCannotBeBuiltIsRefusedAndTheSessionGoesOn) {
       r = run_session(load_scene_file(PCISIM_SOURCE_DIR "/scenes/minimal.json"), lcm, options, stop, limits));
   console.join();
   EXPECT_EQ(limits.scenes_rejected(), 1);
-  EXPECT_GT(r.physics_steps, 0) << "the scene from before runs again";
+  EXPECT_GT(r.physics_steps, 0) << "the scene from before runs on";
   EXPECT_EQ(r.scenes_rejected, 1) << "and its report says what was refused";
   std::filesystem::remove_all(dir);
 }

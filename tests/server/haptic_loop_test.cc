@@ -44,7 +44,7 @@ TEST(HapticLoop, TicksWithoutAllocatingAndAnswersTheNewestSample) {
       peak_n = std::max(peak_n, out.force.axial_force_n);
     }
   }
-  state.stop = true;
+  state.stop_haptic = true;
   haptic.join();
   EXPECT_EQ(allocations, 0) << "the loop allocated";
   // the forces answered the samples as they came (the newest seen is recent), and once the

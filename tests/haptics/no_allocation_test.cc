@@ -1,9 +1,9 @@
-// Proves the 1 kHz tick allocates nothing (tests/common/counting_new.h counts this thread's
+// Proves the 1 kHz tick allocates nothing (realtime/allocation_count.h counts this thread's
 // allocations).
 #include <gtest/gtest.h>
 
 #include "haptics/force_evaluator.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 
 namespace pcisim::haptics {
 namespace {
@@ -11,7 +11,7 @@ namespace {
 TEST(NoAllocation, CounterSeesAnAllocation) {
   long n = 0;
   {
-    pcisim::testing::AllocationCount count;
+    pcisim::realtime::AllocationCount count;
     void* p = ::operator new(16);  // a direct call, which the compiler may not elide
     ::operator delete(p);
     n = count.allocations();
@@ -32,7 +32,7 @@ TEST(NoAllocation, TenThousandTicksAllocateNothing) {
     m.b_n_s_per_m = -3;  // active: exercise the passivity controller too
     InstrumentSample s;
     int64_t t = 1'000'000;
-    pcisim::testing::AllocationCount count;
+    pcisim::realtime::AllocationCount count;
     for (int i = 0; i < 10000; ++i) {
       t += 1000;
       if (i % 33 == 0) {

@@ -14,7 +14,7 @@
 #include "physics/motion/vessel_skin.h"
 #include "physics/sdf/sdf_kernels.h"
 #include "physics/world.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 #include "tests/common/shared_lumen.h"
 
 namespace pcisim::physics {
@@ -361,7 +361,7 @@ TEST(WorldHeart, BeatingStepAllocatesNothing) {
   InstrumentInput in;
   w.step(in);
   w.write_snapshot(snap);
-  pcisim::testing::AllocationCount count;
+  pcisim::realtime::AllocationCount count;
   for (int k = 0; k < 30; ++k) {
     in.insertion_m = 0.001 * k;
     w.step(in);

@@ -10,7 +10,7 @@
 
 #include "anatomy/phantom/coronary_phantom.h"
 #include "anatomy/vessel/vessel_tree.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 #include "tests/common/shared_lumen.h"
 
 namespace pcisim::physics {
@@ -114,7 +114,7 @@ TEST(World, StepAllocatesNothing) {
   InstrumentInput in;
   w.step(in);
   w.write_snapshot(snap);  // sizes the snapshot once
-  pcisim::testing::AllocationCount count;
+  pcisim::realtime::AllocationCount count;
   for (int k = 0; k < 60; ++k) {
     in.insertion_m = 0.002 * k;
     in.rotation_rad = 0.1 * k;

@@ -9,7 +9,7 @@
 #include "pcisim_lcm/xray_frame_t.hpp"
 #include "protocol/channels.h"
 #include "protocol/message_checks.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 
 namespace pcisim::protocol {
 namespace {
@@ -51,7 +51,7 @@ TEST(EncodedPublisher, AFrameAndForcesAllocateNothingOnceTheBufferHasGrownAndArr
   ASSERT_EQ(publisher.publish(lcm, xray, frame), 0);  // the buffer grows to the frame
   EXPECT_EQ(publisher.grown(), 1);
   {
-    pcisim::testing::AllocationCount count;
+    pcisim::realtime::AllocationCount count;
     for (int k = 1; k <= 20; ++k) {
       frame.seq = k;
       frame.data.back() = static_cast<uint8_t>(k);

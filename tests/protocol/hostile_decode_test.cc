@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "protocol/message_checks.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 #include "fuzz/lcm_mutants.h"
 
 namespace pcisim::protocol {
@@ -19,7 +19,7 @@ void expect_refused(const MessageCase& c) {
   ASSERT_GT(c.mutants.size(), c.good.size()) << c.type;
   for (const auto& m : c.mutants) {
     M fresh;
-    pcisim::testing::AllocationCount alloc;
+    pcisim::realtime::AllocationCount alloc;
     bool ok = true;
     EXPECT_NO_THROW(ok = decode_checked(m.bytes.data(), static_cast<int64_t>(m.bytes.size()), fresh))
         << c.type << ": " << m.what;

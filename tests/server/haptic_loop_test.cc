@@ -7,7 +7,7 @@
 #include <thread>
 
 #include "realtime/clock.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 
 namespace pcisim::server {
 namespace {
@@ -19,7 +19,7 @@ TEST(HapticLoop, TicksWithoutAllocatingAndAnswersTheNewestSample) {
   int64_t newest_seq = -1;
   double peak_n = 0.0;
   std::thread haptic([&] {
-    pcisim::testing::AllocationCount count;
+    pcisim::realtime::AllocationCount count;
     run_haptic_loop(config, state);
     allocations = count.allocations();
   });

@@ -12,7 +12,7 @@
 #include "protocol/message_checks.h"
 #include "realtime/clock.h"
 #include "fuzz/lcm_mutants.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 
 namespace pcisim::server {
 namespace {
@@ -423,7 +423,7 @@ TEST(LcmIoPublish, ForceCommandsAndWireStatesAllocateNothingOnceWarm) {
   io.publish_wire(snap);
   const int64_t sent_before = state.lcm_tx.load();
   {
-    pcisim::testing::AllocationCount count;
+    pcisim::realtime::AllocationCount count;
     for (int round = 0; round < 10; ++round) {
       push(100);
       io.publish_forces();

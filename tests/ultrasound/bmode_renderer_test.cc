@@ -14,7 +14,7 @@
 
 #include "anatomy/mesh/kuhn_tetrahedra.h"
 #include "anatomy/organ/kidney_phantom.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 #include "ultrasound/echo/acoustic_model.h"
 #include "ultrasound/render/bmode_renderer.h"
 
@@ -224,7 +224,7 @@ TEST(BModeRenderer, SameSeedSameImageAndNothingAllocatedPerFrame) {
   mesh.current_mm.row(1) *= 0.9;
   long allocations = -1;
   {
-    testing::AllocationCount count;
+    realtime::AllocationCount count;
     r.render(probe_at_top(), 42, &mesh);
     mesh.current_mm = mesh.rest_mm;
     r.render(probe_at_top(), 42, &mesh);
@@ -247,7 +247,7 @@ TEST(BModeRenderer, DepthAndGainTurnedAtRunTimeGiveTheFrameOfThoseSettings) {
     shallow.gain_db = 12.0;
     long allocations = -1;
     {
-      testing::AllocationCount count;
+      realtime::AllocationCount count;
       r.set_imaging(shallow.depth_mm, shallow.gain_db);
       r.render(probe_at_top(), 7);
       allocations = count.allocations();

@@ -18,7 +18,7 @@
 #include <string>
 #include <utility>
 
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 
 namespace pcisim::anatomy {
 namespace {
@@ -56,7 +56,7 @@ TEST_F(MeshIo, AFileOverTheMeshLimitIsRefusedUnreadNamingItsSizeAndTheLimit) {
   std::string why;
   long long largest = 0;
   {
-    testing::AllocationCount count;
+    realtime::AllocationCount count;
     why = refusal([&] { read_mesh(big); });
     largest = count.largest();
   }
@@ -98,7 +98,7 @@ TEST_F(MeshIo, TextMeshesAreParsedWithoutCopyingTheFile) {
     TriangleMesh mesh;
     long long largest = 0;
     {
-      testing::AllocationCount count;
+      realtime::AllocationCount count;
       mesh = parse_mesh(std::string("t") + format, format, *bytes);
       largest = count.largest();
     }

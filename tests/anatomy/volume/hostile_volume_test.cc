@@ -14,7 +14,7 @@
 #include <string>
 #include <thread>
 
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 #include "anatomy/volume/volume_io.h"
 
 namespace pcisim::anatomy {
@@ -36,7 +36,7 @@ class HostileVolume : public ::testing::Test {
   }
   // the refusal's message; fails the test when the file is accepted or allocates its claim
   std::string refusal(const std::string& path) {
-    pcisim::testing::AllocationCount alloc;
+    pcisim::realtime::AllocationCount alloc;
     try {
       read_volume(path);
     } catch (const VolumeIoError& e) {

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "anatomy/volume/volume_io.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 
 namespace pcisim::anatomy {
 namespace {
@@ -196,7 +196,7 @@ TEST_F(NrrdSequence, HostileSizesAndVoxelsAreRefusedBeforeAllocatingTheirClaim) 
   // each axis fine, the product over the limit (and over int64 for the first)
   for (const char* sizes : {"4294967296 4294967296 2 4294967296", "1024 1024 512 3"}) {
     const std::string path = write("big.nrrd", head4(sizes, "\n") + kSixShorts);
-    pcisim::testing::AllocationCount alloc;
+    pcisim::realtime::AllocationCount alloc;
     const std::string m = sequence_error(path);
     EXPECT_LT(alloc.largest(), 1 << 20) << sizes;
     EXPECT_EQ(m.rfind("big.nrrd: sizes: ", 0), 0u) << m;

@@ -10,7 +10,7 @@
 #include "pcisim_lcm/probe_state_t.hpp"
 #include "protocol/channels.h"
 #include "protocol/message_checks.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 
 namespace pcisim::clients {
 namespace {
@@ -144,7 +144,7 @@ TEST(Bridge, AProbeBridgePublishesTheScriptsPoseAndNoInstrument) {
 // the publishing thread's allocations over one run (its start allocates: the receive thread)
 long allocations_of_a_run(lcm::LCM& lcm, Bridge& bridge) {
   std::atomic<bool> stop{false};
-  pcisim::testing::AllocationCount count;
+  pcisim::realtime::AllocationCount count;
   bridge.run(stop);
   const long n = count.allocations();
   while (lcm.handleTimeout(0) > 0) {}

@@ -18,7 +18,7 @@
 #include "clients/bridge/bridge.h"
 #include "pcisim_lcm/force_command_t.hpp"
 #include "protocol/channels.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 
 namespace pcisim::clients {
 namespace {
@@ -130,7 +130,7 @@ TEST(ForceShaper, ScalesClampsFiltersAndZeroesAtOnce) {
   s = ForceShaping{};
   s.filter_hz = 50.0;
   ForceShaper filtered(s);
-  testing::AllocationCount count;
+  realtime::AllocationCount count;
   double y = 0.0;
   for (int k = 1; k <= 10; ++k) y = filtered.step({1.0, 0.0}, 1e-3, false).axial_n;
   EXPECT_EQ(count.allocations(), 0);

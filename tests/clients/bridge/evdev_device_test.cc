@@ -19,7 +19,7 @@
 #include "protocol/channels.h"
 #include "realtime/clock.h"
 #include "tests/clients/bridge/uinput_wheel.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 
 namespace pcisim::clients {
 namespace {
@@ -160,7 +160,7 @@ TEST_F(UinputTest, TheTorqueIsOneConstantEffectUpdatedInPlaceStoppedAtZeroAndEra
     EXPECT_TRUE(dev.playing());
     // the 1 kHz loop's side allocates nothing (a level change each tick; the writer takes the newest)
     {
-      pcisim::testing::AllocationCount count;
+      pcisim::realtime::AllocationCount count;
       for (int k = 0; k < 100; ++k) ASSERT_TRUE(dev.render({0.0, 1.0 + 0.1 * k}, 4 + k));
       EXPECT_EQ(count.allocations(), 0);
     }

@@ -26,7 +26,7 @@
 #include "pcisim_lcm/instrument_state_t.hpp"
 #include "protocol/channels.h"
 #include "realtime/clock.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 
 namespace pcisim::clients {
 namespace {
@@ -56,7 +56,7 @@ TEST(ForceLine, WritesMilliNewtonsAndMicroNewtonMetresRoundedAndClamped) {
        {"", "F", "F 1 2", "F 1 2 3 4", "E 1 2 3", "F1 2 3", "F 1.5 2 3", "F 20001 0 1", "F 0 -1000001 1", "F a b c"})
     EXPECT_FALSE(parse_force_line(bad, f)) << "'" << bad << "'";
   // formatting allocates nothing
-  testing::AllocationCount count;
+  realtime::AllocationCount count;
   char buf[kForceLineMaxBytes];
   for (int i = 0; i < 100; ++i) format_force_line({0.1 * i, -0.2 * i}, i, buf);
   EXPECT_EQ(count.allocations(), 0);
@@ -174,7 +174,7 @@ TEST(BoxSimulator, ForceLinesAllocateNothingAndAnUnpluggedBoxTakesNoMore) {
   ASSERT_TRUE(device.render({0.1, 0.1}, 0));  // the first write warms up what libc keeps
   long allocations = -1;
   {
-    testing::AllocationCount count;
+    realtime::AllocationCount count;
     for (int i = 1; i <= 200; ++i) device.render({0.001 * i, -0.002 * i}, i);
     allocations = count.allocations();
   }
@@ -292,7 +292,7 @@ TEST(ForceOut, EachFaultIsZeroForceAtTheBoxWithin50Ms) {
 TEST(LatencyHistogram, PercentilesAreTheUpperEdgeOfTheirBinAndNothingIsAllocated) {
   LatencyHistogram h;
   EXPECT_EQ(h.percentile_us(0.5), 0.0);
-  testing::AllocationCount count;
+  realtime::AllocationCount count;
   for (int i = 0; i < 1000; ++i) h.add(i < 990 ? 105.0 : 3000.0);  // 99 % at 105 us, 1 % at 3 ms
   h.add(25000.0);                                                  // beyond the bins
   EXPECT_EQ(count.allocations(), 0);

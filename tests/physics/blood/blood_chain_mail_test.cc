@@ -9,7 +9,7 @@
 
 #include "physics/guidewire/catheter_path.h"
 #include "anatomy/phantom/coronary_phantom.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 
 namespace pcisim::physics {
 namespace {
@@ -204,7 +204,7 @@ TEST_F(BloodChainMailTest, StepAndApplyAllocateNothing) {
   wire.restore_limits();
   long n = -1;
   {
-    pcisim::testing::AllocationCount count;
+    pcisim::realtime::AllocationCount count;
     for (int k = 0; k < 10; ++k) {
       blood.step(1.0 / 30, 0.1 * k);
       blood.apply(wire, 1.0 / 30);

@@ -15,7 +15,7 @@
 
 #include "physics/guidewire/rod_wire.h"
 #include "physics/guidewire/tube_lumen.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 #include "tests/physics/guidewire/wire_test_support.h"
 
 namespace pcisim::physics {
@@ -60,7 +60,7 @@ TEST(RodWallImplicit, AWallPushingTheTipSidewaysFeelsTheCantileversStiffness) {
     EXPECT_NEAR(force_n, beam_n, 0.01 * beam_n);
     long allocations = -1;
     {
-      testing::AllocationCount count;
+      realtime::AllocationCount count;
       w.step(length_m, 0.0, kDt);
       allocations = count.allocations();
     }

@@ -18,7 +18,7 @@
 #include "anatomy/phantom/tube_phantoms.h"
 #include "physics/guidewire/rod_wire.h"
 #include "physics/guidewire/tube_lumen.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 #include "tests/physics/guidewire/wire_test_support.h"
 
 namespace pcisim::physics {
@@ -74,7 +74,7 @@ TEST(RodWallSolve, AWallPushingTheTipSidewaysFeelsTheCantileversStiffness) {
     // and a step with its contact solved allocates nothing
     long allocations = -1;
     {
-      testing::AllocationCount count;
+      realtime::AllocationCount count;
       w.step(length_m, 0.0, kDt);
       allocations = count.allocations();
     }
@@ -158,7 +158,7 @@ TEST(RodWallSolve, ASubstepIsHalvedWhereANodeMovesFarAlongTheWallAndTheLengthCom
     long allocations = -1;
     {
       // stepping allocates nothing, substeps taken back included
-      pcisim::testing::AllocationCount count;
+      pcisim::realtime::AllocationCount count;
       for (double t = 0.0; t < 3.0; t += kDt) {
         w.step(0.055 * std::min(t / 0.6, 1.0), 0.0, kDt);
         ASSERT_TRUE(w.rod().all_finite()) << t;

@@ -20,7 +20,7 @@
 #include "physics/guidewire/link_spec.h"
 #include "physics/guidewire/rod_wire.h"
 #include "physics/guidewire/tube_lumen.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 #include "tests/physics/guidewire/wire_test_support.h"
 #include "tests/common/shared_lumen.h"
 
@@ -305,7 +305,7 @@ TEST(RodWireWorld, StepAllocatesNothing) {
   world.write_snapshot(snap);
   long allocations = -1;
   {
-    pcisim::testing::AllocationCount count;
+    pcisim::realtime::AllocationCount count;
     for (int i = 0; i < 30; ++i, t += dt) {
       world.step(script.at(t));
       world.write_snapshot(snap);

@@ -12,7 +12,7 @@
 #include "anatomy/heart/heart_frame.h"
 #include "anatomy/heart/heart_motion.h"
 #include "anatomy/heart/synthetic_heart_motion.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 #include "tests/physics/heart/heart_health.h"
 
 namespace pcisim::physics {
@@ -175,7 +175,7 @@ TEST(HeartBeating, StepAllocatesNothing) {
     h.step(1.0 / 30);
     long allocations = -1;
     {
-      pcisim::testing::AllocationCount count;
+      pcisim::realtime::AllocationCount count;
       for (int k = 0; k < 30; ++k) h.step(1.0 / 30);
       h.set_rate_bpm(90);
       for (int k = 0; k < 5; ++k) h.step(1.0 / 30);

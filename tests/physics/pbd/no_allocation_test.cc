@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "physics/pbd/procedural_ventricle.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 
 namespace pcisim::physics::pbd {
 namespace {
@@ -24,7 +24,7 @@ TEST(PbdNoAllocation, StepAllocatesNothing) {
     v.system.step(1.0 / 30, p);  // the first step may touch lazily sized state
     long allocations = -1;
     {
-      pcisim::testing::AllocationCount count;
+      pcisim::realtime::AllocationCount count;
       for (int k = 0; k < 20; ++k) {
         const double squeeze = 1.0 - 0.1 * std::sin(0.4 * k);
         for (int i : v.driven) v.system.set_driven_target(i, v.rest_m.col(i) * squeeze);

@@ -18,7 +18,7 @@
 
 #include "physics/pbd/pbd_cuda_solver.h"
 #include "physics/pbd/procedural_ventricle.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 #include "tests/physics/pbd/pbd_test_bodies.h"
 
 namespace pcisim::physics::pbd {
@@ -274,7 +274,7 @@ TEST(PbdCudaSolver, StepsAllocateNothingOnTheHost) {
   v.system.step(kDtS, p);  // builds the solver and captures the step's graph
   long allocations = 0;
   {
-    pcisim::testing::AllocationCount count;
+    pcisim::realtime::AllocationCount count;
     for (int k = 2; k <= 10; ++k) {
       drive(v, k);
       v.system.step(kDtS, p);

@@ -13,7 +13,7 @@
 
 #include "physics/rod/elastica.h"
 #include "physics/rod/rod_statics.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 #include "physics/rod/unit_cantilever.h"
 
 namespace pcisim::physics::rod {
@@ -245,7 +245,7 @@ TEST(CosseratRodDynamics, StepAllocatesNothing) {
     rod.step(kDt);
     long allocations = -1;
     {
-      pcisim::testing::AllocationCount count;
+      pcisim::realtime::AllocationCount count;
       for (int i = 0; i < 10; ++i) {
         rod.set_node_force_n(p.segments, Eigen::Vector3d(0.0, 0.0, -1e-3));
         rod.step(kDt);
@@ -278,7 +278,7 @@ TEST(CosseratRodDynamics, ARestoredStateStepsExactlyAsTheSavedOne) {
   for (int i = 0; i <= 20; ++i) EXPECT_EQ(rod.nodes_m()[i], once[i]) << i;
   long allocations = -1;
   {
-    pcisim::testing::AllocationCount count;
+    pcisim::realtime::AllocationCount count;
     rod.save_state(saved);
     rod.restore_state(saved);
     allocations = count.allocations();

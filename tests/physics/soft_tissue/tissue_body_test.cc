@@ -16,7 +16,7 @@
 
 #include "anatomy/organ/kidney_phantom.h"
 #include "physics/soft_tissue/contact_rules.h"
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 #include "tests/common/fixture_file.h"
 
 namespace pcisim::physics::soft_tissue {
@@ -492,7 +492,7 @@ TEST(TissueBody, StepAllocatesNothing) {
   b.step(kDt);
   long allocations = -1;
   {
-    pcisim::testing::AllocationCount count;
+    pcisim::realtime::AllocationCount count;
     for (int n = 1; n <= 5; ++n) {
       b.set_probe_pose(probe_at(top + 1e-3 * n));
       b.step(kDt);
@@ -515,7 +515,7 @@ TEST(TissueBody, JacobiRestsOnTheSupportAndAllocatesNothing) {
   b.step(kDt);
   long allocations = -1;
   {
-    pcisim::testing::AllocationCount count;
+    pcisim::realtime::AllocationCount count;
     for (int n = 0; n < 5; ++n) b.step(kDt);
     allocations = count.allocations();
   }
@@ -592,14 +592,14 @@ TEST(TissueBody, SkinContactMeetsTheProbeAtTheSkinAndAllocatesNothing) {
     // the allocation check needs only one surface (the volume path is the same under either):
     // Gauss-Seidel on the body above, pressed, then Jacobi on a second
     {
-      pcisim::testing::AllocationCount count;
+      pcisim::realtime::AllocationCount count;
       for (int n = 0; n < 3; ++n) b.step(kDt);
       EXPECT_EQ(count.allocations(), 0) << "Gauss-Seidel";
     }
     p.solver = pbd::SolverKind::kJacobi;
     TissueBody c(k.model, p, table(far_table_y), box_probe(kProbeHalf_m, probe_at(skin_top_y + 0.3e-3)));
     c.step(kDt);
-    pcisim::testing::AllocationCount count;
+    pcisim::realtime::AllocationCount count;
     for (int n = 0; n < 3; ++n) c.step(kDt);
     EXPECT_EQ(count.allocations(), 0) << "Jacobi";
   }

@@ -1,10 +1,10 @@
 // Proves a fluoroscopy frame allocates nothing once the frame size is known
-// (tests/common/counting_new.h counts this thread's allocations).
+// (realtime/allocation_count.h counts this thread's allocations).
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 #include "tests/xray/fluoro/fluoro_test_util.h"
 
 namespace pcisim::xray {
@@ -24,7 +24,7 @@ TEST(FluoroscopyNoAllocation, SecondAndLaterFramesAllocateNothing) {
   fr.render({.time_s = 0, .pose = testing::lao30_cra20(), .wire_m = wire_m, .injections = inj}, f);
   long allocations = -1;
   {
-    pcisim::testing::AllocationCount count;
+    pcisim::realtime::AllocationCount count;
     for (int i = 1; i <= 6; ++i) {  // the bolus spreads, more branches become visible, the wire moves
       for (auto& p : wire_m) p.x() += 1e-4;
       fr.render({.time_s = 0.3 * i, .pose = testing::lao30_cra20(), .wire_m = wire_m, .injections = inj}, f);
@@ -61,7 +61,7 @@ TEST(FluoroscopyNoAllocation, BeatingFramesAllocateNothingOnceThePoseHasEveryBin
   ASSERT_EQ(fr.beat()->filled_bins(), 8);
   long allocations = -1;
   {
-    pcisim::testing::AllocationCount count;
+    pcisim::realtime::AllocationCount count;
     for (int i = 1; i <= 6; ++i) {
       in.time_s = 0.1 * i;
       in.heart_phase = 0.17 * i;

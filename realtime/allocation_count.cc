@@ -1,4 +1,4 @@
-#include "tests/common/counting_new.h"
+#include "realtime/allocation_count.h"
 
 #include <cstdlib>
 #include <new>
@@ -34,7 +34,7 @@ void operator delete[](void* p, std::size_t) noexcept {
   std::free(p);
 }
 
-namespace pcisim::testing {
+namespace pcisim::realtime {
 
 AllocationCount::AllocationCount() {
   g_allocations = 0;
@@ -54,4 +54,4 @@ long long AllocationCount::largest() const {
   return g_largest;
 }
 
-}  // namespace pcisim::testing
+}  // namespace pcisim::realtime

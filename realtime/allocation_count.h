@@ -1,8 +1,9 @@
 #pragma once
 // Counts heap allocations (and their bytes) made by the calling thread, to prove a hot loop allocates nothing.
-// Linking tests/common/counting_new.cc into a test binary replaces global operator new there;
-// counting is off until a scope asks for it.
-namespace pcisim::testing {
+// Linking the object library pcisim_allocation_count (realtime/allocation_count.cc, kept out of
+// pcisim_realtime so no program gets it by accident) into a test or benchmark binary replaces
+// global operator new there; counting is off until a scope asks for it.
+namespace pcisim::realtime {
 
 class AllocationCount {
  public:
@@ -13,4 +14,4 @@ class AllocationCount {
   long long largest() const;  // the biggest single request
 };
 
-}  // namespace pcisim::testing
+}  // namespace pcisim::realtime

@@ -13,6 +13,10 @@
 #include "realtime/deadline_schedule.h"
 
 namespace pcisim::server {
+namespace {
+// how often the loop looks for a C-arm move between pulses while the beam is on
+constexpr int64_t kMoveWatchNs = 5'000'000;
+}  // namespace
 
 XrayLoop::XrayLoop(const Scene& scene, const anatomy::Case& anatomy, SharedState& state, lcm::LCM* images,
                    const xray::BeatSamples* beat)
@@ -48,10 +52,15 @@ XrayLoop::XrayLoop(const Scene& scene, const anatomy::Case& anatomy, SharedState
 
 // a move re-projects the background (quick, then whole over the next frames): a flood of targets
 // moves the C-arm at most once per interval, to the newest target; the rest are coalesced
+bool XrayLoop::move_due(int64_t now_ns) const {
+  const int64_t seq = state_.carm_target_seq.load(std::memory_order_acquire);
+  return (seq & 1) == 0 && seq != applied_target_seq_ && now_ns - last_move_ns_ >= min_move_interval_ns_;
+}
+
 void XrayLoop::apply_carm_target() {
   const int64_t seq = state_.carm_target_seq.load(std::memory_order_acquire);
   const int64_t now_ns = realtime::monotonic_ns();
-  if ((seq & 1) != 0 || seq == applied_target_seq_ || now_ns - last_move_ns_ < min_move_interval_ns_) return;
+  if (!move_due(now_ns)) return;
   const double primary = state_.carm_target_primary_deg.load(), secondary = state_.carm_target_secondary_deg.load();
   if (state_.carm_target_seq.load(std::memory_order_acquire) != seq) return;  // torn: the next frame retries
   applied_target_seq_ = seq;
@@ -142,12 +151,19 @@ void XrayLoop::run() {
   const double tick_hz = std::max(spec_.pulse_rate_fps, spec_.cine_rate_fps);
   realtime::DeadlineSchedule schedule(realtime::monotonic_ns(), static_cast<int64_t>(std::llround(1e9 / tick_hz)));
   int64_t tick = 0, last_on_ns = 0;
+  bool on = false;
   while (!state_.stop.load(std::memory_order_relaxed)) {
-    realtime::sleep_until_ns(schedule.deadline_ns());
+    // while the beam is on, a C-arm move is shown at once rather than at the next pulse (up to a
+    // pulse period later, 67 ms at 15/s; issue #36): the wait is cut into naps that look for one
+    bool moved = false;
+    for (int64_t now_ns = realtime::monotonic_ns(); now_ns < schedule.deadline_ns() && !moved;
+         now_ns = realtime::monotonic_ns()) {
+      moved = on && move_due(now_ns);
+      if (!moved) realtime::sleep_until_ns(std::min(schedule.deadline_ns(), now_ns + kMoveWatchNs));
+    }
     const int64_t wake_ns = realtime::monotonic_ns();
     const bool cine = state_.instrument_pedal_down(state_.cine_instrument, wake_ns) || state_.cine_console;
-    const bool on =
-        cine || state_.instrument_pedal_down(state_.fluoro_pedal_instrument, wake_ns) || state_.fluoro_pedal_console;
+    on = cine || state_.instrument_pedal_down(state_.fluoro_pedal_instrument, wake_ns) || state_.fluoro_pedal_console;
     if (cine && !was_cine_) ++cine_run_;
     was_cine_ = cine;
     const double rate = cine ? spec_.cine_rate_fps : spec_.pulse_rate_fps;
@@ -155,10 +171,11 @@ void XrayLoop::run() {
     if (on) {
       if (last_on_ns) state_.xray_on_ns.fetch_add(wake_ns - last_on_ns, std::memory_order_relaxed);
       last_on_ns = wake_ns;
-      if (tick % every == 0) render_and_publish(cine);
+      if (moved || tick % every == 0) render_and_publish(cine);
     } else {
       last_on_ns = 0;
     }
+    if (moved) continue;  // (an extra frame: the pulse it came before still comes on time)
     ++tick;
     schedule.complete(realtime::monotonic_ns());
   }

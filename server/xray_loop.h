@@ -29,6 +29,8 @@ class XrayLoop {
  private:
   void render_and_publish(bool cine);
   void apply_carm_target();
+  // a C-arm target waits that apply_carm_target() would move to now
+  bool move_due(int64_t now_ns) const;
 
   XraySpec spec_;
   SharedState& state_;

@@ -17,7 +17,7 @@ CudaTrilinearProjector::CudaTrilinearProjector(const AttenuationVolume& volume, 
   std::string why;
   if (!available(&why)) throw std::runtime_error("CudaTrilinearProjector: " + why);
   set_options(options);
-  grid_ = cuda::upload(grid_view(volume), volume.padded_count(), volume.brick_max().size());
+  grid_ = cuda::upload(grid_view(volume), volume.padded_count(), volume.brick_max().size(), /*texture=*/true);
   device_name_ = cuda::device_name();
 }
 
@@ -46,13 +46,13 @@ void CudaTrilinearProjector::project(const DetectorGeometry& g, Image* image) {
     throw std::invalid_argument("CudaTrilinearProjector: image size differs from the detector's");
   }
   float* dev = image_for(g);
-  cuda::render(grid_, detector_view(g), static_cast<float>(options_.step_voxels), options_.skip_empty, dev);
+  cuda::render(grid_, detector_view(g), static_cast<float>(options_.step_voxels), options_.skip_empty, read(), dev);
   cuda::download(dev, image->pixels.data(), image->pixels.size());
 }
 
 std::vector<float> CudaTrilinearProjector::time_kernel_ms(const DetectorGeometry& g, int warmup, int runs) {
   return cuda::time_render(grid_, detector_view(g), static_cast<float>(options_.step_voxels), options_.skip_empty,
-                           image_for(g), warmup, runs);
+                           read(), image_for(g), warmup, runs);
 }
 
 }  // namespace pcisim::xray

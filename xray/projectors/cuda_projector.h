@@ -1,6 +1,7 @@
 #pragma once
 // The trilinear projector on the GPU (built when CUDA is found: PCISIM_HAVE_CUDA). The volume
-// is uploaded once at construction; the device image is allocated once per detector size.
+// is uploaded once at construction (as an array and as a 3-D texture: options.texture picks the
+// read); the device image is allocated once per detector size.
 #ifdef PCISIM_HAVE_CUDA
 #include <string>
 #include <vector>
@@ -35,6 +36,7 @@ class CudaTrilinearProjector {
 
  private:
   float* image_for(const DetectorGeometry& g);
+  cuda::Read read() const { return options_.texture ? cuda::Read::kTexture : cuda::Read::kTwin; }
 
   TrilinearOptions options_;
   cuda::DeviceGrid grid_;

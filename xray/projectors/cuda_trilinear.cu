@@ -1,5 +1,6 @@
 // CUDA twin of the CPU trilinear marcher: one thread per detector pixel running the same
-// ray::trilinear_ray as TrilinearProjector.
+// ray::trilinear_ray as TrilinearProjector; or the same rays and samples read through the texture
+// unit's trilinear filter (issue #36 item 4: not the twin, its weights have 8 fractional bits).
 #include <cuda_runtime.h>
 
 #include <stdexcept>
@@ -21,10 +22,39 @@ __global__ void project_kernel(ray::GridView g, ray::DetectorView d, float step,
   image[static_cast<size_t>(r) * d.width + c] = ray::trilinear_ray(g, d, c, r, step, skip);
 }
 
-void launch(const DeviceGrid& grid, const ray::DetectorView& d, float step, bool skip, float* image) {
+// the same ray (setup_ray, for_each_run: the same samples), each sample read by the texture
+// unit: padded voxel centres at integers are texel centres at +0.5; outside reads the border, 0
+__global__ void project_texture_kernel(ray::GridView g, cudaTextureObject_t mu, ray::DetectorView d, float step,
+                                       bool skip, float* image) {
+  const int c = blockIdx.x * blockDim.x + threadIdx.x;
+  const int r = blockIdx.y * blockDim.y + threadIdx.y;
+  if (c >= d.width || r >= d.height) return;
+  ray::RaySetup s;
+  float acc = 0.f;
+  if (ray::setup_ray(g, d, c, r, step, &s)) {
+    auto run = [&](int lo, int hi) {
+      for (int k = lo; k < hi; ++k) {
+        const float t = s.t0 + (k + 0.5f) * s.dt;
+        acc +=
+            tex3D<float>(mu, s.x0[0] + t * s.dx[0] + 0.5f, s.x0[1] + t * s.dx[1] + 0.5f, s.x0[2] + t * s.dx[2] + 0.5f);
+      }
+    };
+    ray::for_each_run(g, s, skip, run);
+    acc *= s.dt * s.len_mm;
+  }
+  image[static_cast<size_t>(r) * d.width + c] = acc;
+}
+
+void launch(const DeviceGrid& grid, const ray::DetectorView& d, float step, bool skip, Read read, float* image) {
   const dim3 block(16, 8);
   const dim3 blocks((d.width + block.x - 1) / block.x, (d.height + block.y - 1) / block.y);
-  project_kernel<<<blocks, block>>>(grid.view, d, step, skip, image);
+  if (read == Read::kTexture) {
+    if (!grid.texture) throw std::runtime_error("CUDA projection: the grid was uploaded without its texture");
+    project_texture_kernel<<<blocks, block>>>(grid.view, static_cast<cudaTextureObject_t>(grid.texture), d, step, skip,
+                                              image);
+  } else {
+    project_kernel<<<blocks, block>>>(grid.view, d, step, skip, image);
+  }
   check(cudaGetLastError(), "project_kernel launch");
 }
 
@@ -45,7 +75,7 @@ std::string device_name() {
   return std::string(p.name) + " (sm_" + std::to_string(p.major) + std::to_string(p.minor) + ")";
 }
 
-DeviceGrid upload(const ray::GridView& host, size_t mu_count, size_t brick_count) {
+DeviceGrid upload(const ray::GridView& host, size_t mu_count, size_t brick_count, bool texture) {
   DeviceGrid g;
   g.view = host;
   check(cudaMalloc(&g.mu, mu_count * sizeof(float)), "cudaMalloc(mu)");
@@ -55,13 +85,42 @@ DeviceGrid upload(const ray::GridView& host, size_t mu_count, size_t brick_count
         "cudaMemcpy(brick_max)");
   g.view.mu = g.mu;
   g.view.brick_max = g.brick_max;
+  if (texture) {
+    // mu as a float 3-D array: trilinear filtering, unnormalised coordinates, zero border
+    const cudaExtent extent = make_cudaExtent(host.nx, host.ny, host.nz);
+    const cudaChannelFormatDesc format = cudaCreateChannelDesc<float>();
+    cudaArray_t array = nullptr;
+    check(cudaMalloc3DArray(&array, &format, extent), "cudaMalloc3DArray(mu)");
+    g.texture_array = array;
+    cudaMemcpy3DParms copy{};
+    copy.srcPtr = make_cudaPitchedPtr(const_cast<float*>(host.mu), host.nx * sizeof(float), host.nx, host.ny);
+    copy.dstArray = array;
+    copy.extent = extent;
+    copy.kind = cudaMemcpyHostToDevice;
+    check(cudaMemcpy3D(&copy), "cudaMemcpy3D(mu)");
+    cudaResourceDesc resource{};
+    resource.resType = cudaResourceTypeArray;
+    resource.res.array.array = array;
+    cudaTextureDesc sampling{};
+    for (int a = 0; a < 3; ++a) sampling.addressMode[a] = cudaAddressModeBorder;
+    sampling.filterMode = cudaFilterModeLinear;
+    sampling.readMode = cudaReadModeElementType;
+    sampling.normalizedCoords = 0;
+    cudaTextureObject_t object = 0;
+    check(cudaCreateTextureObject(&object, &resource, &sampling, nullptr), "cudaCreateTextureObject(mu)");
+    g.texture = static_cast<unsigned long long>(object);
+  }
   return g;
 }
 
 void release(DeviceGrid* g) {
+  if (g->texture) cudaDestroyTextureObject(static_cast<cudaTextureObject_t>(g->texture));
+  if (g->texture_array) cudaFreeArray(static_cast<cudaArray_t>(g->texture_array));
   cudaFree(g->mu);
   cudaFree(g->brick_max);
   g->mu = g->brick_max = nullptr;
+  g->texture = 0;
+  g->texture_array = nullptr;
 }
 
 float* alloc_image(size_t pixels) {
@@ -74,8 +133,8 @@ void free_image(float* image) {
   cudaFree(image);
 }
 
-void render(const DeviceGrid& grid, const ray::DetectorView& d, float step, bool skip, float* image) {
-  launch(grid, d, step, skip, image);
+void render(const DeviceGrid& grid, const ray::DetectorView& d, float step, bool skip, Read read, float* image) {
+  launch(grid, d, step, skip, read, image);
   check(cudaDeviceSynchronize(), "project_kernel");
 }
 
@@ -83,9 +142,9 @@ void download(const float* device_image, float* host, size_t pixels) {
   check(cudaMemcpy(host, device_image, pixels * sizeof(float), cudaMemcpyDeviceToHost), "cudaMemcpy(image)");
 }
 
-std::vector<float> time_render(const DeviceGrid& grid, const ray::DetectorView& d, float step, bool skip, float* image,
-                               int warmup, int runs) {
-  for (int i = 0; i < warmup; ++i) launch(grid, d, step, skip, image);
+std::vector<float> time_render(const DeviceGrid& grid, const ray::DetectorView& d, float step, bool skip, Read read,
+                               float* image, int warmup, int runs) {
+  for (int i = 0; i < warmup; ++i) launch(grid, d, step, skip, read, image);
   check(cudaDeviceSynchronize(), "warm-up");
   cudaEvent_t start, stop;
   check(cudaEventCreate(&start), "cudaEventCreate");
@@ -93,7 +152,7 @@ std::vector<float> time_render(const DeviceGrid& grid, const ray::DetectorView& 
   std::vector<float> ms(runs);
   for (int i = 0; i < runs; ++i) {
     check(cudaEventRecord(start), "cudaEventRecord");
-    launch(grid, d, step, skip, image);
+    launch(grid, d, step, skip, read, image);
     check(cudaEventRecord(stop), "cudaEventRecord");
     check(cudaEventSynchronize(stop), "cudaEventSynchronize");
     check(cudaEventElapsedTime(&ms[i], start, stop), "cudaEventElapsedTime");

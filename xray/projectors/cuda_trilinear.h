@@ -19,21 +19,32 @@ struct DeviceGrid {
   float* mu = nullptr;
   float* brick_max = nullptr;
   ray::GridView view;  // device pointers
+  // the same padded mu as a 3-D texture with the hardware's trilinear filtering (a
+  // cudaTextureObject_t and its cudaArray_t, kept as plain integers here: no CUDA types)
+  unsigned long long texture = 0;
+  void* texture_array = nullptr;
 };
 
-// copies the padded mu and the brick maxima of a host view to device 0
-DeviceGrid upload(const ray::GridView& host, size_t mu_count, size_t brick_count);
+// copies the padded mu and the brick maxima of a host view to device 0, and mu into a 3-D
+// texture too when `texture`
+DeviceGrid upload(const ray::GridView& host, size_t mu_count, size_t brick_count, bool texture);
 void release(DeviceGrid* grid);
 
 float* alloc_image(size_t pixels);
 void free_image(float* image);
 
+// how a projection reads mu: ray::trilinear on global memory (the CPU marcher's twin), or the
+// texture unit's trilinear filter (its weights have 8 fractional bits: not the twin; the grid
+// must have been uploaded with its texture)
+enum class Read { kTwin, kTexture };
+
 // launches the projection of d into image (device, width x height) and waits for it
-void render(const DeviceGrid& grid, const ray::DetectorView& d, float step_voxels, bool skip_empty, float* image);
+void render(const DeviceGrid& grid, const ray::DetectorView& d, float step_voxels, bool skip_empty, Read read,
+            float* image);
 void download(const float* device_image, float* host, size_t pixels);
 
 // kernel times (ms, CUDA events around each launch) of runs launches after warmup launches
 std::vector<float> time_render(const DeviceGrid& grid, const ray::DetectorView& d, float step_voxels, bool skip_empty,
-                               float* image, int warmup, int runs);
+                               Read read, float* image, int warmup, int runs);
 
 }  // namespace pcisim::xray::cuda

@@ -21,6 +21,9 @@ struct TrilinearOptions {
   // CPU only: eight neighbouring rays at once with AVX2 where the CPU has it (ray_packet.h),
   // the same samples to the last bits; false: one ray at a time (ray::trilinear_ray)
   bool packets = true;
+  // CUDA only: read mu through the texture unit's trilinear filter (8 fractional bits in its
+  // weights: not the CPU marcher's twin; issue #36 item 4) instead of ray::trilinear
+  bool texture = false;
 };
 
 class TrilinearProjector {

@@ -33,7 +33,7 @@ LcmIo::~LcmIo() {
 }
 
 void LcmIo::start() {
-  running_ = true;
+  running_ = receiving_ = true;
   // below the haptic loop (80), above everything else: a CPU hog must not delay force commands
   rx_ = std::thread([this] {
     realtime::try_sched_fifo(70);
@@ -45,9 +45,14 @@ void LcmIo::start() {
   });
 }
 
+void LcmIo::stop_receiving() {
+  receiving_ = false;
+  if (rx_.joinable()) rx_.join();
+}
+
 void LcmIo::stop() {
   if (!running_.exchange(false)) return;
-  if (rx_.joinable()) rx_.join();
+  stop_receiving();
   if (tx_.joinable()) tx_.join();
   publish_zero_force();
 }
@@ -263,7 +268,7 @@ void LcmIo::request_scene(const std::string& path) {
 }
 
 void LcmIo::rx_loop() {
-  while (running_.load(std::memory_order_relaxed)) lcm_.handleTimeout(20);
+  while (receiving_.load(std::memory_order_relaxed)) lcm_.handleTimeout(20);
 }
 
 void LcmIo::publish_wire(const physics::WorldSnapshot& s) {

@@ -38,6 +38,9 @@ class LcmIo {
   ~LcmIo();
 
   void start();
+  // the receive thread alone (it may wait 20 ms in LCM's handle): the send thread goes on
+  // publishing the haptic loop's force commands meanwhile
+  void stop_receiving();
   void stop();  // joins both threads; publishes a final zero force command
   void publish_zero_force();
   // the send thread's two streams (public for the test that counts their allocations, which calls
@@ -65,7 +68,7 @@ class LcmIo {
   BranchNamer branch_name_;
   std::array<lcm::Subscription*, 2> subscriptions_{};
   std::thread rx_, tx_;
-  std::atomic<bool> running_{false};
+  std::atomic<bool> running_{false}, receiving_{false};
   // messages reused every time, encoded into buffers kept between calls (encoded_publisher.h): one
   // for the send thread, one for the zero force of stop() (another thread)
   pcisim_lcm::instrument_state_t instrument_msg_{};

@@ -110,18 +110,30 @@ void PhysicsLoop::step_once(int64_t now_ns) {
     state_.snapshot_for_ultrasound.publish();
   }
 
-  // the model is stamped on the haptic thread's clock; two physics periods of validity
-  physics::LocalForceModel model = world_->force_model();
-  model.made_utime = now_ns / 1000;
-  state_.force_model.write_slot() = model;
-  state_.force_model.publish();
+  publish_model(now_ns);
 
   const auto costs = world_->effect_costs();
   for (size_t i = 0; i < costs.size() && i < effects_.size(); ++i)
     effects_[i]->step_ns.record(static_cast<int64_t>(costs[i].last_step_ms * 1e6));
 }
 
+// the model is stamped on the haptic thread's clock; two physics periods of validity. Before the
+// world's first step its model is invalid (valid_for_us 0); where the world will feed the hand (a
+// wire or a probe) it stands in as a zero force valid for two periods, so that a pipeline taking
+// over after a reload answers at once instead of flagging stale until its first step is done
+void PhysicsLoop::publish_model(int64_t now_ns) {
+  physics::LocalForceModel model = world_->force_model();
+  if (model.valid_for_us == 0 && world_->time_s() == 0.0 && (spec_.guidewire || spec_.soft_tissue))
+    model.valid_for_us = static_cast<int64_t>(std::llround(2e6 / rate_hz_));
+  model.made_utime = now_ns / 1000;
+  state_.force_model.write_slot() = model;
+  state_.force_model.publish();
+}
+
 void PhysicsLoop::run() {
+  // the world as built, before its first step: the haptic loop has a fresh model at once (after a
+  // reload this pipeline takes over from the last, and its first step may take a while)
+  publish_model(realtime::monotonic_ns());
   const auto period_ns = static_cast<int64_t>(std::llround(1e9 / rate_hz_));
   realtime::DeadlineSchedule schedule(realtime::monotonic_ns(), period_ns);
   int64_t last_wake_ns = 0;

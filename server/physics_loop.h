@@ -36,6 +36,7 @@ class PhysicsLoop {
 
  private:
   void step_once(int64_t now_ns);
+  void publish_model(int64_t now_ns);
   std::unique_ptr<physics::World> make_world() const;
   // the reset's builder: started on a request, swapped in once built (or its error logged and
   // the running world kept)

@@ -264,6 +264,7 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   physics.join();
   if (xray.joinable()) xray.join();
   if (ultrasound.joinable()) ultrasound.join();
+  io.stop_receiving();
   m.state.stop_haptic = true;
   haptic.join();
   const double elapsed_s = (realtime::monotonic_ns() - m.start_ns) * 1e-9;

@@ -6,6 +6,7 @@
 #include <functional>
 #include <optional>
 #include <stdexcept>
+#include <thread>
 
 #include "realtime/stop_signal.h"
 #include "server/case_builder.h"
@@ -38,15 +39,20 @@ StatsReport run_session(Scene scene, lcm::LCM& control, const SessionOptions& op
   realtime::mark_starting();
   std::unique_ptr<Server> server = build(std::move(scene));
   double ran_s = 0;  // running time so far (the first build does not count)
+  // the pipeline a reload replaced, freed on a thread of its own while the next one starts (its
+  // world, contact field and x-ray caches take tens of ms to give back)
+  std::jthread reaper;
   for (;;) {
     const double left_s = options.duration_s > 0 ? std::max(options.duration_s - ran_s, 1e-3) : 0.0;
     realtime::mark_running(options.stop_within_s);
     StatsReport stats = server->run(left_s, stop);
     realtime::mark_stopped();  // the watchdog leaves the stats to be written
+    if (reaper.joinable()) reaper.join();
     ran_s += stats.elapsed_s;
     std::unique_ptr<Server> next = server->take_successor();
     if (!next || stop) return stats;
-    server = std::move(next);  // (the old pipeline freed first: its loops have stopped)
+    reaper = std::jthread([old = std::move(server)]() mutable { old.reset(); });
+    server = std::move(next);
   }
 }
 

@@ -260,7 +260,7 @@ void LcmIo::request_scene(const std::string& path) {
     state_.requested_scene = std::move(scene);
     state_.scene_requested = true;
     limits_.book_scene_load(realtime::monotonic_ns());
-    spdlog::info("session: scene {} accepted, restarting the pipeline", path);
+    spdlog::info("session: scene {} accepted, building its pipeline", path);
   } catch (const std::exception& e) {  // json::JsonError, or anything else a path can provoke
     limits_.count_scene_rejected();
     refuse("scene", e.what());

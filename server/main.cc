@@ -110,8 +110,8 @@ int main(int argc, char** argv) {
     return 3;
   }
 
-  // a scene loaded over LCM restarts the pipeline with it; --duration counts the running time of
-  // the whole session, not the time spent building scenes
+  // a scene loaded over LCM is built while the running one goes on, then takes over; --duration
+  // counts the running time of the whole session (the first scene's build aside)
   SessionLimits limits;
   SessionOptions options;
   options.duration_s = duration_s;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <optional>
 #include <stdexcept>
+#include <system_error>
 #include <thread>
 
 #include "physics/heart/heart_fit.h"
@@ -57,17 +58,22 @@ struct Server::Impl {
   void start_successor(Scene next) {
     successor_built = false;
     successor_error.clear();
-    builder = std::thread([this, next = std::move(next)]() mutable {
-      ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 10);
-      try {
-        successor = build_successor(std::move(next));
-      } catch (const std::exception& e) {
-        successor_error = e.what();
-      } catch (...) {
-        successor_error = "an unknown error";
-      }
-      successor_built.store(true, std::memory_order_release);
-    });
+    try {
+      builder = std::thread([this, next = std::move(next)]() mutable {
+        ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 10);
+        try {
+          successor = build_successor(std::move(next));
+        } catch (const std::exception& e) {
+          successor_error = e.what();
+        } catch (...) {
+          successor_error = "an unknown error";
+        }
+        successor_built.store(true, std::memory_order_release);
+      });
+    } catch (const std::system_error& e) {
+      limits->count_scene_rejected();
+      spdlog::error("session: no thread to build the scene ({}); the running one goes on", e.what());
+    }
   }
 
   // the main thread's watch over a reload: true once the successor is built and should take
@@ -285,6 +291,10 @@ void Server::set_successor_builder(SuccessorBuilder build) {
 }
 
 // the successor built while this server ran, with a scene asked for meanwhile passed on to it
+bool Server::building_successor() const {
+  return impl_->builder.joinable();
+}
+
 std::unique_ptr<Server> Server::take_successor() {
   Impl& m = *impl_;
   if (m.builder.joinable()) return nullptr;  // (still building: run() stopped for another reason)

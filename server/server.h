@@ -43,10 +43,14 @@ class Server {
   // returns once it is built, and take_successor() hands it over. A scene that cannot be built is
   // refused (logged, counted in the session's limits) and this one runs on. A scene asked for
   // while another builds is kept for the one being built, which builds it next. A stop while a
-  // scene builds waits for that build when the server is destroyed.
+  // scene builds waits for that build when the server is destroyed (run_session keeps the stop
+  // watchdog armed meanwhile).
   using SuccessorBuilder = std::function<std::unique_ptr<Server>(Scene)>;
   void set_successor_builder(SuccessorBuilder build);
   std::unique_ptr<Server> take_successor();
+  // a successor is being built (run() returned for a stop meanwhile: destroying this server waits
+  // for that build)
+  bool building_successor() const;
 
   // names of the vessel branches, for wire_state_t (index -> name, "" when unknown)
   std::function<const std::string&(int)> branch_namer;  // (LcmIo::BranchNamer)

@@ -6,6 +6,7 @@
 #include <functional>
 #include <optional>
 #include <stdexcept>
+#include <system_error>
 #include <thread>
 
 #include "realtime/stop_signal.h"
@@ -46,12 +47,19 @@ StatsReport run_session(Scene scene, lcm::LCM& control, const SessionOptions& op
     const double left_s = options.duration_s > 0 ? std::max(options.duration_s - ran_s, 1e-3) : 0.0;
     realtime::mark_running(options.stop_within_s);
     StatsReport stats = server->run(left_s, stop);
-    realtime::mark_stopped();  // the watchdog leaves the stats to be written
+    // the watchdog leaves the stats to be written; but a stop while the next scene builds waits
+    // for that build (it cannot be cut short) when the server goes: the watchdog stays armed, and
+    // ends the process within stop_within_s as a signal during a build always did
+    if (!server->building_successor()) realtime::mark_stopped();
     if (reaper.joinable()) reaper.join();
     ran_s += stats.elapsed_s;
     std::unique_ptr<Server> next = server->take_successor();
     if (!next || stop) return stats;
-    reaper = std::jthread([old = std::move(server)]() mutable { old.reset(); });
+    try {
+      reaper = std::jthread([old = std::move(server)]() mutable { old.reset(); });
+    } catch (const std::system_error&) {
+      server.reset();  // no thread to spare: freed here
+    }
     server = std::move(next);
   }
 }

@@ -21,8 +21,9 @@ struct SessionOptions {
   std::string image_url;   // the frames' LCM URL, opened when a scene has x-ray
   std::string case_dir;    // --case: every scene of the session runs on this case folder ("": its own anatomy)
   // once a scene runs, how long its clean stop (loops joined, zero force sent, stats written) may
-  // take after SIGINT/SIGTERM before the process is ended (the bound is 1 s); while a
-  // scene builds, a signal ends the process at once (realtime/stop_signal.h)
+  // take after SIGINT/SIGTERM before the process is ended (the bound is 1 s); while the
+  // first scene builds, a signal ends the process at once (realtime/stop_signal.h); one that comes
+  // while a reloaded scene builds ends it within this bound (that build cannot be cut short)
   double stop_within_s = 0.9;
 };
 

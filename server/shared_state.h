@@ -87,7 +87,7 @@ struct SharedState {
   std::atomic<bool> stop_haptic{false};
   std::atomic<int64_t> inject_stall_us{0};  // fault injection: the next physics step takes this long
 
-  // a validated scene asked for over LCM; the server restarts its pipeline with it
+  // a validated scene asked for over LCM; its pipeline is built while this one runs, then takes over
   std::mutex scene_mutex;
   std::optional<Scene> requested_scene;
   std::atomic<bool> scene_requested{false};

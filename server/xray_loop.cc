@@ -175,7 +175,9 @@ void XrayLoop::run() {
     } else {
       last_on_ns = 0;
     }
-    if (moved) continue;  // (an extra frame: the pulse it came before still comes on time)
+    // an extra frame: the pulse it came before still comes on time, unless the move's frame ran
+    // past it (then that pulse's frame is the move's)
+    if (moved && realtime::monotonic_ns() < schedule.deadline_ns()) continue;
     ++tick;
     schedule.complete(realtime::monotonic_ns());
   }

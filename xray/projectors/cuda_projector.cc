@@ -13,12 +13,13 @@ bool CudaTrilinearProjector::available(std::string* why_not) {
   return false;
 }
 
-CudaTrilinearProjector::CudaTrilinearProjector(const AttenuationVolume& volume, const TrilinearOptions& options) {
+CudaTrilinearProjector::CudaTrilinearProjector(const AttenuationVolume& volume, const TrilinearOptions& options)
+    : volume_(volume) {
   std::string why;
   if (!available(&why)) throw std::runtime_error("CudaTrilinearProjector: " + why);
-  set_options(options);
-  grid_ = cuda::upload(grid_view(volume), volume.padded_count(), volume.brick_max().size(), /*texture=*/true);
+  grid_ = cuda::upload(grid_view(volume), volume.padded_count(), volume.brick_max().size());
   device_name_ = cuda::device_name();
+  set_options(options);
 }
 
 CudaTrilinearProjector::~CudaTrilinearProjector() {
@@ -28,6 +29,8 @@ CudaTrilinearProjector::~CudaTrilinearProjector() {
 
 void CudaTrilinearProjector::set_options(const TrilinearOptions& options) {
   if (!(options.step_voxels > 0)) throw std::invalid_argument("CudaTrilinearProjector: step_voxels must be > 0");
+  // the texture's copy of mu only once a read through it is asked for
+  if (options.texture && !grid_.texture) cuda::upload_texture(&grid_, grid_view(volume_));
   options_ = options;
 }
 

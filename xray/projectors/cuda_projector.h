@@ -1,7 +1,8 @@
 #pragma once
 // The trilinear projector on the GPU (built when CUDA is found: PCISIM_HAVE_CUDA). The volume
-// is uploaded once at construction (as an array and as a 3-D texture: options.texture picks the
-// read); the device image is allocated once per detector size.
+// is uploaded once at construction (and once more as a 3-D texture when options.texture first
+// asks for that read; the volume must outlive the projector); the device image is allocated once
+// per detector size.
 #ifdef PCISIM_HAVE_CUDA
 #include <string>
 #include <vector>
@@ -38,6 +39,7 @@ class CudaTrilinearProjector {
   float* image_for(const DetectorGeometry& g);
   cuda::Read read() const { return options_.texture ? cuda::Read::kTexture : cuda::Read::kTwin; }
 
+  const AttenuationVolume& volume_;  // for the texture, uploaded when options first ask for it
   TrilinearOptions options_;
   cuda::DeviceGrid grid_;
   float* device_image_ = nullptr;

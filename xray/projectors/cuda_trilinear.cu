@@ -75,23 +75,31 @@ std::string device_name() {
   return std::string(p.name) + " (sm_" + std::to_string(p.major) + std::to_string(p.minor) + ")";
 }
 
-DeviceGrid upload(const ray::GridView& host, size_t mu_count, size_t brick_count, bool texture) {
+DeviceGrid upload(const ray::GridView& host, size_t mu_count, size_t brick_count) {
   DeviceGrid g;
   g.view = host;
-  check(cudaMalloc(&g.mu, mu_count * sizeof(float)), "cudaMalloc(mu)");
-  check(cudaMalloc(&g.brick_max, brick_count * sizeof(float)), "cudaMalloc(brick_max)");
-  check(cudaMemcpy(g.mu, host.mu, mu_count * sizeof(float), cudaMemcpyHostToDevice), "cudaMemcpy(mu)");
-  check(cudaMemcpy(g.brick_max, host.brick_max, brick_count * sizeof(float), cudaMemcpyHostToDevice),
-        "cudaMemcpy(brick_max)");
+  try {
+    check(cudaMalloc(&g.mu, mu_count * sizeof(float)), "cudaMalloc(mu)");
+    check(cudaMalloc(&g.brick_max, brick_count * sizeof(float)), "cudaMalloc(brick_max)");
+    check(cudaMemcpy(g.mu, host.mu, mu_count * sizeof(float), cudaMemcpyHostToDevice), "cudaMemcpy(mu)");
+    check(cudaMemcpy(g.brick_max, host.brick_max, brick_count * sizeof(float), cudaMemcpyHostToDevice),
+          "cudaMemcpy(brick_max)");
+  } catch (...) {
+    release(&g);
+    throw;
+  }
   g.view.mu = g.mu;
   g.view.brick_max = g.brick_max;
-  if (texture) {
-    // mu as a float 3-D array: trilinear filtering, unnormalised coordinates, zero border
-    const cudaExtent extent = make_cudaExtent(host.nx, host.ny, host.nz);
-    const cudaChannelFormatDesc format = cudaCreateChannelDesc<float>();
-    cudaArray_t array = nullptr;
-    check(cudaMalloc3DArray(&array, &format, extent), "cudaMalloc3DArray(mu)");
-    g.texture_array = array;
+  return g;
+}
+
+void upload_texture(DeviceGrid* g, const ray::GridView& host) {
+  // mu as a float 3-D array: trilinear filtering, unnormalised coordinates, zero border
+  const cudaExtent extent = make_cudaExtent(host.nx, host.ny, host.nz);
+  const cudaChannelFormatDesc format = cudaCreateChannelDesc<float>();
+  cudaArray_t array = nullptr;
+  check(cudaMalloc3DArray(&array, &format, extent), "cudaMalloc3DArray(mu)");
+  try {
     cudaMemcpy3DParms copy{};
     copy.srcPtr = make_cudaPitchedPtr(const_cast<float*>(host.mu), host.nx * sizeof(float), host.nx, host.ny);
     copy.dstArray = array;
@@ -108,9 +116,12 @@ DeviceGrid upload(const ray::GridView& host, size_t mu_count, size_t brick_count
     sampling.normalizedCoords = 0;
     cudaTextureObject_t object = 0;
     check(cudaCreateTextureObject(&object, &resource, &sampling, nullptr), "cudaCreateTextureObject(mu)");
-    g.texture = static_cast<unsigned long long>(object);
+    g->texture = static_cast<unsigned long long>(object);
+    g->texture_array = array;
+  } catch (...) {
+    cudaFreeArray(array);
+    throw;
   }
-  return g;
 }
 
 void release(DeviceGrid* g) {

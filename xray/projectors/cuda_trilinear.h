@@ -25,9 +25,10 @@ struct DeviceGrid {
   void* texture_array = nullptr;
 };
 
-// copies the padded mu and the brick maxima of a host view to device 0, and mu into a 3-D
-// texture too when `texture`
-DeviceGrid upload(const ray::GridView& host, size_t mu_count, size_t brick_count, bool texture);
+// copies the padded mu and the brick maxima of a host view to device 0
+DeviceGrid upload(const ray::GridView& host, size_t mu_count, size_t brick_count);
+// and mu into a 3-D texture too (a second copy on the device), for Read::kTexture
+void upload_texture(DeviceGrid* grid, const ray::GridView& host);
 void release(DeviceGrid* grid);
 
 float* alloc_image(size_t pixels);

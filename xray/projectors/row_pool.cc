@@ -1,5 +1,8 @@
 #include "xray/projectors/row_pool.h"
 
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <algorithm>
 
 namespace pcisim::xray {
@@ -7,7 +10,15 @@ namespace pcisim::xray {
 RowPool::RowPool(int threads) {
   if (threads <= 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   workers_.reserve(threads - 1);
-  for (int t = 1; t < threads; ++t) workers_.emplace_back([this] { work(); });
+  // a worker inherits the nice value of the thread that made the pool: one made while a scene is
+  // built below the loops' priority (the next scene's, on the server's builder thread) would keep
+  // it for good, so each takes the main thread's (best effort: lowering needs CAP_SYS_NICE)
+  const int nice = ::getpriority(PRIO_PROCESS, static_cast<id_t>(::getpid()));
+  for (int t = 1; t < threads; ++t)
+    workers_.emplace_back([this, nice] {
+      ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), nice);
+      work();
+    });
 }
 
 RowPool::~RowPool() {

@@ -76,6 +76,20 @@ struct Instrument {
   }
 };
 
+// the default scene's test rig: memq, a recorder of wire states and force commands, and a 1 kHz
+// instrument
+struct DefaultSceneOverMemq {
+  lcm::LCM lcm{"memq://"};
+  Recorder rec;
+  Instrument instrument{lcm};
+  Scene scene = load_scene_file(PCISIM_SOURCE_DIR "/scenes/default.json");
+  double period_s = 1.0 / scene.physics_rate_hz;
+  DefaultSceneOverMemq() {
+    lcm.subscribe(protocol::kWireChannel, &Recorder::on_wire, &rec);
+    lcm.subscribe(protocol::kForceChannel, &Recorder::on_force, &rec);
+  }
+};
+
 Scene minimal() {
   return load_scene_file(PCISIM_SOURCE_DIR "/scenes/minimal.json");
 }
@@ -147,13 +161,8 @@ TEST(SessionCommands, ResetRestartsTheWorld) {
 // takes 25-40 ms of wall time with or without a reset (a plain 11 ms loop measured up to 72 ms
 // there), and one overrun leaves the model (valid two periods) stale for a few ms
 TEST(SessionCommands, ResetOfTheDefaultSceneKeepsPhysicsSteppingAndTheForceFresh) {
-  lcm::LCM lcm("memq://");
-  Recorder rec;
-  lcm.subscribe(protocol::kWireChannel, &Recorder::on_wire, &rec);
-  lcm.subscribe(protocol::kForceChannel, &Recorder::on_force, &rec);
-  Instrument instrument(lcm);
-  const Scene scene = load_scene_file(PCISIM_SOURCE_DIR "/scenes/default.json");
-  const double period_s = 1.0 / scene.physics_rate_hz;
+  DefaultSceneOverMemq rig;
+  auto& [lcm, rec, instrument, scene, period_s] = rig;
   Server server(scene, lcm);
   double reset_at_s = 0;
   std::thread console([&] {
@@ -201,13 +210,8 @@ TEST(SessionCommands, ResetOfTheDefaultSceneKeepsPhysicsSteppingAndTheForceFresh
 // then takes over (issue #36; before, the session stopped every loop for the whole build, about
 // 2 s for the default scene, and the force went stale for as long). The same bounds as the reset's
 TEST(SessionCommands, ReloadBuildsTheNextSceneWhileTheRunningOneStepsAndTheForceStaysFresh) {
-  lcm::LCM lcm("memq://");
-  Recorder rec;
-  lcm.subscribe(protocol::kWireChannel, &Recorder::on_wire, &rec);
-  lcm.subscribe(protocol::kForceChannel, &Recorder::on_force, &rec);
-  Instrument instrument(lcm);
-  const Scene scene = load_scene_file(PCISIM_SOURCE_DIR "/scenes/default.json");
-  const double period_s = 1.0 / scene.physics_rate_hz;
+  DefaultSceneOverMemq rig;
+  auto& [lcm, rec, instrument, scene, period_s] = rig;
   SessionLimits limits;
   SessionOptions options;
   options.duration_s = 120.0;  // (the console stops it a second after the handover)

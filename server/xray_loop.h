@@ -25,9 +25,11 @@ class XrayLoop {
   XrayLoop(const Scene& scene, const anatomy::Case& anatomy, SharedState& state, lcm::LCM* images,
            const xray::BeatSamples* beat = nullptr);
   void run();  // until state.stop
+  // one frame of the newest snapshot, published (public for the test that counts its allocations;
+  // never while run() runs)
+  void render_and_publish(bool cine);
 
  private:
-  void render_and_publish(bool cine);
   void apply_carm_target();
   // a C-arm target waits that apply_carm_target() would move to now
   bool move_due(int64_t now_ns) const;

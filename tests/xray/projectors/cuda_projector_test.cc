@@ -15,6 +15,22 @@ namespace pcisim::xray {
 namespace {
 
 #ifdef PCISIM_HAVE_CUDA
+// a coarse thorax phantom, and a 96 x 80 detector seeing it at LAO 30 / CRA 20
+anatomy::Volume coarse_thorax() {
+  anatomy::ThoraxPhantomSpec s;
+  s.dims = {128, 128, 64};
+  s.spacing_mm = 2.8;
+  return anatomy::make_thorax_phantom(s);
+}
+
+DetectorGeometry lao30_cra20() {
+  CArmSpec c;
+  c.width = 96;
+  c.height = 80;
+  c.pixel_mm = 2.0;
+  return c_arm_geometry(c, CArmPose{30, 20, Eigen::Vector3d::Zero()});
+}
+
 // the GPU runs the CPU marcher's code; only float rounding (FMA contraction) may differ:
 // every pixel within 1e-4 of the image's largest line integral
 void expect_twins(const AttenuationVolume& a, const DetectorGeometry& g, double step, bool skip) {
@@ -50,16 +66,8 @@ TEST(CudaProjector, MatchesCpuTrilinearTwin) {
     expect_twins(a, g, 1.0, false);
   }
   // a coarse thorax phantom through a C-arm at LAO 30 / CRA 20
-  anatomy::ThoraxPhantomSpec s;
-  s.dims = {128, 128, 64};
-  s.spacing_mm = 2.8;
-  const anatomy::Volume v = anatomy::make_thorax_phantom(s);
-  const AttenuationVolume a(v);
-  CArmSpec c;
-  c.width = 96;
-  c.height = 80;
-  c.pixel_mm = 2.0;
-  expect_twins(a, c_arm_geometry(c, CArmPose{30, 20, Eigen::Vector3d::Zero()}), 0.5, true);
+  const AttenuationVolume a(coarse_thorax());
+  expect_twins(a, lao30_cra20(), 0.5, true);
 #endif
 }
 
@@ -93,15 +101,7 @@ TEST(CudaProjector, TheTextureReadStaysCloseToTheTwin) {
   std::mt19937 rng(37);
   const anatomy::Volume v = testing::random_volume(rng, /*smooth=*/true);
   compare(AttenuationVolume(v), testing::random_geometry(rng, v, 40, 33), 0.5);
-  anatomy::ThoraxPhantomSpec s;
-  s.dims = {128, 128, 64};
-  s.spacing_mm = 2.8;
-  const anatomy::Volume thorax = anatomy::make_thorax_phantom(s);
-  CArmSpec c;
-  c.width = 96;
-  c.height = 80;
-  c.pixel_mm = 2.0;
-  compare(AttenuationVolume(thorax), c_arm_geometry(c, CArmPose{30, 20, Eigen::Vector3d::Zero()}), 1.0);
+  compare(AttenuationVolume(coarse_thorax()), lao30_cra20(), 1.0);
 #endif
 }
 

@@ -55,11 +55,14 @@ TEST(Bridge, AFaultyDeviceIsPublishedAsFaultWithNoMotion) {
   std::atomic<bool> stop{false};
   const BridgeStats s = bridge.run(stop);
   while (lcm.handleTimeout(50) > 0) {}
-  EXPECT_GT(s.fault_samples, 50);
+  // the fault lasts a third of the run; a loaded machine skips ticks (missed periods are not
+  // published late), so counts are checked against what was published, not against 1 kHz
+  EXPECT_GE(s.fault_samples, 3);
+  EXPECT_GE(5 * s.fault_samples, s.published) << "about a third of the samples are in fault";
   std::lock_guard lock(sink.mutex);
   EXPECT_EQ(sink.bad, 0);
   ASSERT_EQ(static_cast<int64_t>(sink.samples.size()), s.published);
-  double held = -1;
+  double held = -1, last_ok = -1;
   int faults = 0, ok_after = 0;
   for (const auto& m : sink.samples) {
     if (m.status == I::STATUS_FAULT) {
@@ -69,11 +72,16 @@ TEST(Bridge, AFaultyDeviceIsPublishedAsFaultWithNoMotion) {
       EXPECT_EQ(m.insertion_rate_mm_s, 0.0);
     } else if (faults > 0) {
       ++ok_after;
+    } else {
+      last_ok = m.insertion_mm;
     }
   }
   EXPECT_EQ(faults, s.fault_samples);
-  EXPECT_NEAR(held, 10.0, 0.5) << "the last good position before the fault";
-  EXPECT_GT(ok_after, 50) << "the device came back";
+  EXPECT_DOUBLE_EQ(held, last_ok) << "the fault holds the last good position";
+  EXPECT_LE(held, 10.0 + 1e-9) << "read before the fault began at 0.1 s";
+  EXPECT_GT(held, 5.0);
+  EXPECT_GE(ok_after, 3) << "the device came back";
+  EXPECT_GE(5 * ok_after, s.published) << "for about a third of the run";
   for (size_t i = 1; i < sink.samples.size(); ++i) EXPECT_EQ(sink.samples[i].seq, sink.samples[i - 1].seq + 1);
 }
 
@@ -103,7 +111,8 @@ TEST(Bridge, AProbeBridgePublishesTheScriptsPoseAndNoInstrument) {
   std::lock_guard lock(probes.mutex);
   EXPECT_EQ(probes.bad, 0) << "every message passes decode_checked";
   ASSERT_EQ(static_cast<int64_t>(probes.samples.size()), s.published);
-  EXPECT_GT(s.published, 100) << "about 300 at 1 kHz";
+  // about 300 at 1 kHz; a loaded machine skips ticks, so the counts below are shares of these
+  EXPECT_GE(s.published, 30);
   EXPECT_TRUE(instruments.samples.empty() && instruments.bad == 0) << "a probe bridge publishes no instrument";
 
   // the bridge's clock starts just before the first message: its utime is the script's t = 0
@@ -137,8 +146,8 @@ TEST(Bridge, AProbeBridgePublishesTheScriptsPoseAndNoInstrument) {
       EXPECT_EQ(m.buttons, P::BUTTON_FREEZE);
     }
   }
-  EXPECT_GT(moving, 50);
-  EXPECT_GT(held, 25);
+  EXPECT_GE(2 * moving, s.published) << "moving for two thirds of the run";
+  EXPECT_GE(5 * held, s.published) << "held for the last third";
 }
 
 // the publishing thread's allocations over one run (its start allocates: the receive thread)

@@ -225,21 +225,43 @@ int run(const std::vector<std::string>& args) {
   // moment, and the moment every bin is filled. Interleaved, so both meet the same machine
   struct MoveCost {
     std::vector<double> first_ms, background_ms, beat_ms, band_ms, whole_ms, all_bins_ms;
-  } quick_move;
+    std::vector<double> rmse;  // the first frame's pixels against the whole projection's, / 65535
+  } quick_move, stride4_move;
   FluoroscopyRenderer quick_renderer(tree, spec);
   quick_renderer.set_beat(every_kth_bin(fine, kFine / 16), o16);
   quick_renderer.set_move_preview(MovePreview{});
+  // the quick projection at every 4th pixel (the server's until session 34), beside it
+  constexpr MovePreview kStride4{.stride = 4, .rows_per_step = 64};
+  FluoroscopyRenderer stride4_renderer(tree, spec);
+  stride4_renderer.set_beat(every_kth_bin(fine, kFine / 16), o16);
+  stride4_renderer.set_move_preview(kStride4);
+  std::vector<uint16_t> whole_pixels;
+  auto pixel_rmse = [&](const FluoroFrame& f) {
+    double sum = 0;
+    for (size_t i = 0; i < whole_pixels.size(); ++i) {
+      const double d = (double(f.pixels[i]) - double(whole_pixels[i])) / 65535.0;
+      sum += d * d;
+    }
+    return whole_pixels.empty() ? 0.0 : std::sqrt(sum / whole_pixels.size());
+  };
   for (int m = 0; m < moves; ++m) {
     FluoroInput in{.time_s = 0.1 * m, .pose = CArmPose{30.0 + 5 * m, 20, Eigen::Vector3d::Zero()}};
     in.heart_phase = 0.3;
     auto f0 = Clock::now();
     beating_renderer.render(in, frame);
     first_frame_ms.push_back(ms_since(f0));
+    whole_pixels = frame.pixels;
     while (beating_renderer.work_ahead() > 0) {}
     all_bins_ms.push_back(ms_since(f0));
     f0 = Clock::now();
+    stride4_renderer.render(in, frame);
+    stride4_move.first_ms.push_back(ms_since(f0));
+    stride4_move.rmse.push_back(pixel_rmse(frame));
+    while (stride4_renderer.work_ahead() > 0) {}
+    f0 = Clock::now();
     quick_renderer.render(in, frame);
     quick_move.first_ms.push_back(ms_since(f0));
+    quick_move.rmse.push_back(pixel_rmse(frame));
     quick_move.background_ms.push_back(quick_renderer.last_frame_cost().background_ms);
     quick_move.beat_ms.push_back(quick_renderer.last_frame_cost().beat_ms);
     while (!quick_renderer.background_refined()) {
@@ -338,11 +360,16 @@ int run(const std::vector<std::string>& args) {
       "  \"all_bins_ms_median\": {:.4g},\n  \"frame_still_ms_median\": {:.4g},\n"
       "  \"frame_beat_ms_median\": {:.4g},\n  \"frame_beat_ms_p99\": {:.4g},\n"
       "  \"quick_first_frame_ms_median\": {:.4g},\n  \"quick_first_frame_ms_p99\": {:.4g},\n"
-      "  \"quick_band_ms_p99\": {:.4g},\n  \"quick_whole_ms_median\": {:.4g}\n}}\n",
+      "  \"quick_band_ms_p99\": {:.4g},\n  \"quick_whole_ms_median\": {:.4g},\n"
+      "  \"quick_stride\": {},\n  \"quick_first_frame_rmse_median\": {:.4g},\n"
+      "  \"stride4_first_frame_ms_median\": {:.4g},\n  \"stride4_first_frame_ms_p99\": {:.4g},\n"
+      "  \"stride4_first_frame_rmse_median\": {:.4g}\n}}\n",
       percentile(reproject_ms, 0.5), percentile(first_frame_ms, 0.5), percentile(all_bins_ms, 0.5),
       percentile(frame_still_ms, 0.5), percentile(frame_beat_ms, 0.5), percentile(frame_beat_ms, 0.99),
       percentile(quick_move.first_ms, 0.5), percentile(quick_move.first_ms, 0.99), percentile(quick_move.band_ms, 0.99),
-      percentile(quick_move.whole_ms, 0.5));
+      percentile(quick_move.whole_ms, 0.5), MovePreview{}.stride, percentile(quick_move.rmse, 0.5),
+      percentile(stride4_move.first_ms, 0.5), percentile(stride4_move.first_ms, 0.99),
+      percentile(stride4_move.rmse, 0.5));
   md << fmt::format(
       "\n## The renderer with the default (16 bins, blended, the change at 1/2 per axis)\n\n"
       "`FluoroscopyRenderer` at {}^2, noise-free, no wire or contrast, 15 frames/s simulation time at 72 bpm:\n\n"
@@ -356,21 +383,26 @@ int run(const std::vector<std::string>& args) {
       "2 bins) | {:.0f} | {:.0f} |\n"
       "| of which the static projection with its range compression and window | {:.0f} | {:.0f} |\n"
       "| of which the 2 bins (their changes on the quick detector too) | {:.0f} | {:.0f} |\n"
+      "| the same first frame at every 4th pixel (the server's until session 34) | {:.0f} | {:.0f} |\n"
       "| the work after each frame until the projection is whole (one band of {} rows) | {:.0f} | {:.0f} |\n"
       "| after such a move, until the projection is whole ({} bands, no frames between them here) | {:.0f} | {:.0f} "
       "|\n"
       "| after such a move, until all 16 bins are filled | {:.0f} | {:.0f} |\n\n"
-      "{} moves each, interleaved.\n\n",
+      "{} moves each, interleaved. What the quick first frame shows: its pixels against the first frame of the whole "
+      "projection at the same pose and phase (noise-free, each with its own window), RMSE / 65535: every {}th pixel "
+      "{:.4f} median, {:.4f} worst; every 4th {:.4f} median, {:.4f} worst. The frames after it refine a band each.\n\n",
       g.width, percentile(frame_still_ms, 0.5), percentile(frame_still_ms, 0.99), percentile(frame_beat_ms, 0.5),
       percentile(frame_beat_ms, 0.99), percentile(first_frame_ms, 0.5), percentile(first_frame_ms, 0.99),
       percentile(all_bins_ms, 0.5), percentile(all_bins_ms, 0.99), MovePreview{}.stride,
       percentile(quick_move.first_ms, 0.5), percentile(quick_move.first_ms, 0.99),
       percentile(quick_move.background_ms, 0.5), percentile(quick_move.background_ms, 0.99),
-      percentile(quick_move.beat_ms, 0.5), percentile(quick_move.beat_ms, 0.99), MovePreview{}.rows_per_step,
-      percentile(quick_move.band_ms, 0.5), percentile(quick_move.band_ms, 0.99),
-      (g.height + MovePreview{}.rows_per_step - 1) / MovePreview{}.rows_per_step, percentile(quick_move.whole_ms, 0.5),
-      percentile(quick_move.whole_ms, 0.99), percentile(quick_move.all_bins_ms, 0.5),
-      percentile(quick_move.all_bins_ms, 0.99), moves);
+      percentile(quick_move.beat_ms, 0.5), percentile(quick_move.beat_ms, 0.99), percentile(stride4_move.first_ms, 0.5),
+      percentile(stride4_move.first_ms, 0.99), MovePreview{}.rows_per_step, percentile(quick_move.band_ms, 0.5),
+      percentile(quick_move.band_ms, 0.99), (g.height + MovePreview{}.rows_per_step - 1) / MovePreview{}.rows_per_step,
+      percentile(quick_move.whole_ms, 0.5), percentile(quick_move.whole_ms, 0.99),
+      percentile(quick_move.all_bins_ms, 0.5), percentile(quick_move.all_bins_ms, 0.99), moves, MovePreview{}.stride,
+      percentile(quick_move.rmse, 0.5), percentile(quick_move.rmse, 1.0), percentile(stride4_move.rmse, 0.5),
+      percentile(stride4_move.rmse, 1.0));
   const double first = percentile(quick_move.first_ms, 0.5), frame_p99 = percentile(frame_beat_ms, 0.99);
   const double first_p99 = percentile(quick_move.first_ms, 0.99);
   md << "Targets (issues #14 and #36, 2-core machine):\n\n| target | measured | met? |\n|---|---|---|\n";

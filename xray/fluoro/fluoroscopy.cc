@@ -46,12 +46,19 @@ struct FluoroscopyRenderer::Impl {
   int refine_next_row = -1;  // the next band's first row; -1: the background is whole
   Image preview, fine, band;
 
-  // the range-compression offset of the background as it stands (the display's window is set
-  // once per pose, from the first projection, so that refining it shifts no brightness)
+  // the range-compression offset of the background as it stands
   void compress_background(const DetectorGeometry& g) {
     const int radius_px = static_cast<int>(std::lround(spec.range_compression_mm / g.pixel_mm));
     range_compression_offset(background, radius_px, spec.range_compression, &compression_tmp, &compression);
     chain.set_offset(&compression);
+  }
+  // the display's window on the compressed background: set per pose from its first projection,
+  // and once more when a quick one has been refined (never from contrast, so it never shifts
+  // with an injection)
+  void window_of_background(double* lo, double* hi) {
+    for (size_t i = 0; i < compression_tmp.pixels.size(); ++i)
+      compression_tmp.pixels[i] = background.pixels[i] - compression.pixels[i];
+    display_window_for(compression_tmp, &window_scratch, lo, hi);
   }
 
   Impl(const anatomy::VesselTree& t, anatomy::Volume background, const FluoroSpec& s)
@@ -99,13 +106,9 @@ void FluoroscopyRenderer::render(const FluoroInput& in, FluoroFrame& out) {
     m.background_valid = true;
     ++m.background_renders;
     m.compress_background(g);
-    // window on the compressed background
-    for (size_t i = 0; i < m.compression_tmp.pixels.size(); ++i) {
-      m.compression_tmp.pixels[i] = m.background.pixels[i] - m.compression.pixels[i];
-    }
     double lo = 0, hi = 1;
-    display_window_for(m.compression_tmp, &m.window_scratch, &lo, &hi);
-    m.chain.set_window(lo, hi);  // fixed per pose, so contrast never shifts the brightness
+    m.window_of_background(&lo, &hi);
+    m.chain.set_window(lo, hi);  // from the background alone: contrast never shifts the brightness
     if (m.beat) m.beat->set_pose(g, m.background, m.refine_next_row >= 0 ? m.preview_stride : 0);
     m.cost.background_ms = ms_since(t0);
   }
@@ -205,6 +208,11 @@ int FluoroscopyRenderer::work_ahead() {
       std::swap(m.background, m.fine);
       m.compress_background(g);
       m.refine_next_row = -1;
+      // the window found again on the whole projection: the settled frame is the one a whole
+      // projection would show (one step in brightness, with the sharpening; contrast plays no part)
+      double lo = 0, hi = 1;
+      m.window_of_background(&lo, &hi);
+      m.chain.set_window(lo, hi);
     }
     return 1;
   }

@@ -90,10 +90,12 @@ struct FluoroFrameCost {
 };
 
 // a C-arm move's quick first frame (FluoroscopyRenderer::set_move_preview): the interactive
-// loops' setting. Stride 4 projects 1/16 of the rays (the first frame after a move on 2 cores:
-// docs/benchmarks/xray-beating.md); 64 rows of 512 are an eighth of the whole projection per frame
+// loops' setting. Stride 8 projects 1/64 of the rays: in a running session on 2 cores stride 4's
+// first frame reached 101 ms p99 against issue #36's 100 ms (docs/benchmarks/stalls.md; the
+// renderer alone and what the coarser frame costs in pixels: docs/benchmarks/xray-beating.md);
+// 64 rows of 512 are an eighth of the whole projection per frame
 struct MovePreview {
-  int stride = 4;          // 1-8; 1: no quick projection
+  int stride = 8;          // 1-8; 1: no quick projection
   int rows_per_step = 64;  // >= 1
 };
 

@@ -299,6 +299,41 @@ TEST(Fluoroscopy, AMoveShowsAQuickProjectionOfTheNewPoseThenTheWholeOne) {
   EXPECT_THROW(fr.set_move_preview({.stride = 4, .rows_per_step = 0}), std::invalid_argument);
 }
 
+// the displayed frame, not only the line integrals: the quick frame (1/64 of the rays at the
+// default stride 8; here a 32^2 grid under 256^2) is windowed on itself and stays close to the
+// whole projection's frame; once refined, its window is found again and the frame is the whole one's
+double display_rms(const FluoroFrame& a, const FluoroFrame& b) {
+  double sum = 0;
+  for (size_t i = 0; i < a.pixels.size(); ++i) sum += std::pow((double(a.pixels[i]) - b.pixels[i]) / 65535.0, 2);
+  return std::sqrt(sum / a.pixels.size());
+}
+
+TEST(Fluoroscopy, TheQuickFrameIsWindowedAsTheWholeOne) {
+  const CArmPose before = lao30_cra20(), after{-30, 0, Eigen::Vector3d::Zero()};
+  FluoroscopyRenderer whole(tree(), noiseless());
+  FluoroFrame at_before, at_after, f;
+  whole.render({.pose = before}, at_before);
+  whole.render({.pose = after}, at_after);
+  // as the x-ray loop does: the first pose whole, the quick projection from the first move on
+  FluoroscopyRenderer fr(tree(), noiseless());
+  fr.render({.pose = before}, f);
+  EXPECT_LT(display_rms(f, at_before), 1e-6);
+  fr.set_move_preview(MovePreview{});
+  ASSERT_EQ(MovePreview{}.stride, 8);
+  fr.render({.pose = after}, f);
+  const double quick = display_rms(f, at_after), stale = display_rms(f, at_before);
+  while (fr.work_ahead() > 0) {}
+  fr.render({.pose = after}, f);
+  const double refined = display_rms(f, at_after);
+  std::printf(
+      "displayed frame against the whole projection's, RMS of full scale: quick %.4f (the pose before "
+      "%.4f), refined %.4f\n",
+      quick, stale, refined);
+  EXPECT_LT(quick, 0.03);
+  EXPECT_LT(quick, 0.25 * stale);
+  EXPECT_LT(refined, 1e-6);
+}
+
 TEST(Fluoroscopy, QuantumNoiseIsPoisson) {
   FluoroSpec s = small_fluoro_spec();
   s.photons_per_pixel = 2000;

@@ -319,6 +319,14 @@ void LcmIo::publish_forces() {
   }
 }
 
+void LcmIo::publish_status() {
+  if (!status_) return;
+  status_(status_msg_);
+  status_msg_.seq = status_seq_++;
+  tx_publisher_.publish(lcm_, status_channel_, status_msg_);
+  state_.lcm_tx.fetch_add(1, std::memory_order_relaxed);
+}
+
 void LcmIo::tx_loop() {
   int64_t next_status_us = realtime::monotonic_us() + 1'000'000;
   while (running_.load(std::memory_order_relaxed)) {
@@ -326,11 +334,8 @@ void LcmIo::tx_loop() {
     publish_forces();
     if (state_.snapshot_for_tx.refresh()) publish_wire(state_.snapshot_for_tx.read_slot());
     const int64_t now_us = realtime::monotonic_us();
-    if (now_us >= next_status_us && status_) {
-      auto status = status_();
-      status.seq = status_seq_++;
-      tx_publisher_.publish(lcm_, status_channel_, status);
-      state_.lcm_tx.fetch_add(1, std::memory_order_relaxed);
+    if (now_us >= next_status_us) {
+      publish_status();
       next_status_us += 1'000'000;
     }
     realtime::sleep_until_ns(realtime::monotonic_ns() + 200'000);

@@ -22,7 +22,9 @@ namespace pcisim::server {
 
 class LcmIo {
  public:
-  using StatusSource = std::function<pcisim_lcm::sim_status_t()>;
+  // fills the status message in place (the send thread's, kept between calls: a source that
+  // keeps its own storage allocates nothing)
+  using StatusSource = std::function<void(pcisim_lcm::sim_status_t&)>;
   // a branch's name by index ("" when unknown): a reference, so that a wire state copies it into
   // its message's string without a temporary (a name past 15 characters would allocate each step)
   using BranchNamer = std::function<const std::string&(int)>;
@@ -31,7 +33,7 @@ class LcmIo {
   // probe (PCISIM_PROBE, the soft-tissue scene); the other channel is not subscribed
   enum class Instrument { kWire, kProbe };
 
-  // `lcm` and `limits` must outlive this object; status() is called once a second from the send
+  // `lcm` and `limits` must outlive this object; status is called once a second from the send
   // thread. `scene_injection_ml` is what an injection that names no volume injects.
   LcmIo(lcm::LCM& lcm, SharedState& state, SessionLimits& limits, double scene_injection_ml, StatusSource status,
         BranchNamer branch_name, Instrument instrument = Instrument::kWire);
@@ -43,11 +45,13 @@ class LcmIo {
   void stop_receiving();
   void stop();  // joins both threads; publishes a final zero force command
   void publish_zero_force();
-  // the send thread's two streams (public for the test that counts their allocations, which calls
+  // the send thread's streams (public for the test that counts their allocations, which calls
   // them before start(); never while the send thread runs): the haptic loop's force commands
   // waiting in the shared queue, and one wire state
   void publish_forces();
   void publish_wire(const physics::WorldSnapshot& s);
+  // the status message (once a second from the send thread; public for the same test)
+  void publish_status();
 
  private:
   void on_instrument(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
@@ -78,6 +82,7 @@ class LcmIo {
   pcisim_lcm::session_command_t session_msg_{};
   pcisim_lcm::force_command_t force_msg_{};
   pcisim_lcm::wire_state_t wire_msg_{};
+  pcisim_lcm::sim_status_t status_msg_{};
   protocol::EncodedPublisher tx_publisher_, zero_publisher_;
   const std::string force_channel_{protocol::kForceChannel}, wire_channel_{protocol::kWireChannel},
       status_channel_{protocol::kStatusChannel};

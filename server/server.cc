@@ -103,8 +103,10 @@ struct Server::Impl {
     return false;
   }
 
-  StatsReport stats(double elapsed_s) {
-    StatsReport r = collect_stats(state, *physics, elapsed_s, haptic_fifo);
+  // in place (the status's report keeps its storage: nothing allocated once warm)
+  void fill_stats(double elapsed_s, StatsReport* out) {
+    StatsReport& r = *out;
+    collect_stats(state, *physics, elapsed_s, haptic_fifo, &r);
     r.effects = scene.effects;
     r.xray_frames = state.xray_frames.load();
     const double on_s = state.xray_on_ns.load() * 1e-9;
@@ -119,12 +121,19 @@ struct Server::Impl {
     r.scenes_rejected = limits->scenes_rejected();
     r.injections_refused = limits->injections_refused();
     r.carm_moves_coalesced = xray ? state.carm_requests.load() - state.carm_moves.load() : 0;
+  }
+  StatsReport stats(double elapsed_s) {
+    StatsReport r;
+    fill_stats(elapsed_s, &r);
     return r;
   }
 
-  pcisim_lcm::sim_status_t status() {
+  // the once-a-second status, into the send thread's message
+  StatsReport status_report;
+  void status(pcisim_lcm::sim_status_t* out) {
     const int64_t now = realtime::monotonic_ns();
-    StatsReport r = stats((now - start_ns) * 1e-9);
+    StatsReport& r = status_report;
+    fill_stats((now - start_ns) * 1e-9, &r);
     const double window_s = (now - last_status_ns) * 1e-9;
     if (window_s > 0) {
       r.haptic_rate_hz = (r.haptic_ticks - last_haptic_ticks) / window_s;
@@ -133,7 +142,8 @@ struct Server::Impl {
     last_status_ns = now;
     last_haptic_ticks = r.haptic_ticks;
     last_physics_steps = r.physics_steps;
-    pcisim_lcm::sim_status_t m = to_message(r, now / 1000, 0, state.paused);
+    pcisim_lcm::sim_status_t& m = *out;
+    to_message(r, now / 1000, 0, state.paused, &m);
     // the session's cath-lab figures, so a client that joins late reports them whole
     m.fluoro_on = state.fluoro_pedal_console || state.instrument_pedal_down(state.fluoro_pedal_instrument, now) ? 1 : 0;
     m.cine_on = state.cine_console || state.instrument_pedal_down(state.cine_instrument, now) ? 1 : 0;
@@ -149,9 +159,12 @@ struct Server::Impl {
     m.scenes_rejected = r.scenes_rejected;
     m.injections_refused = r.injections_refused;
     m.carm_moves_coalesced = r.carm_moves_coalesced;
-    return m;
   }
 };
+
+void Server::fill_status(pcisim_lcm::sim_status_t* m) {
+  impl_->status(m);
+}
 
 Server::Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images, SessionLimits* limits)
     : impl_(std::make_unique<Impl>(scene, control, images, limits)) {
@@ -220,8 +233,9 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   const bool locked = realtime::try_mlockall();
   const realtime::CpuLatencyRequest latency(cpu_latency_us);
   LcmIo io(
-      m.lcm, m.state, *m.limits, m.scene.xray ? m.scene.xray->injection_volume_ml : 0.0, [&m] { return m.status(); },
-      branch_namer, m.scene.world.probe_contact ? LcmIo::Instrument::kProbe : LcmIo::Instrument::kWire);
+      m.lcm, m.state, *m.limits, m.scene.xray ? m.scene.xray->injection_volume_ml : 0.0,
+      [this](pcisim_lcm::sim_status_t& s) { fill_status(&s); }, branch_namer,
+      m.scene.world.probe_contact ? LcmIo::Instrument::kProbe : LcmIo::Instrument::kWire);
 
   m.start_ns = m.last_status_ns = realtime::monotonic_ns();
   io.start();

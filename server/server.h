@@ -52,6 +52,10 @@ class Server {
   // for that build)
   bool building_successor() const;
 
+  // the status message run() publishes once a second (sim_status_t), filled in place: its rates
+  // are over the time since the last call (public for the test that counts its allocations:
+  // none once warm, issue #36 item 5)
+  void fill_status(pcisim_lcm::sim_status_t* m);
   // names of the vessel branches, for wire_state_t (index -> name, "" when unknown)
   std::function<const std::string&(int)> branch_namer;  // (LcmIo::BranchNamer)
 

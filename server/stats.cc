@@ -8,8 +8,9 @@ Percentiles percentiles(const realtime::LatencyHistogram& h, double scale) {
   return {h.quantile_ns(0.5) * scale, h.quantile_ns(0.99) * scale, h.quantile_ns(0.999) * scale, h.max_ns() * scale};
 }
 
-StatsReport collect_stats(const SharedState& state, const PhysicsLoop& physics, double elapsed_s, bool haptic_fifo) {
-  StatsReport r;
+void collect_stats(const SharedState& state, const PhysicsLoop& physics, double elapsed_s, bool haptic_fifo,
+                   StatsReport* out) {
+  StatsReport& r = *out;
   r.elapsed_s = elapsed_s;
   r.haptic_ticks = state.haptic.iterations.load();
   r.haptic_rate_hz = state.haptic.rate_hz();
@@ -25,11 +26,20 @@ StatsReport collect_stats(const SharedState& state, const PhysicsLoop& physics, 
   r.physics_step_ms = percentiles(state.physics.compute_ns, 1e-6);
   r.physics_period_ms = percentiles(state.physics.period_ns, 1e-6);
   r.physics_overruns = state.physics.overruns.load();
-  for (const auto& e : physics.effects())
-    r.effect_step_ms_p50.emplace_back(e->name, e->step_ns.quantile_ns(0.5) * 1e-6);
+  const auto& effects = physics.effects();
+  r.effect_step_ms_p50.resize(effects.size());
+  for (size_t i = 0; i < effects.size(); ++i) {
+    r.effect_step_ms_p50[i].first = effects[i]->name;  // (the same name again: its storage kept)
+    r.effect_step_ms_p50[i].second = effects[i]->step_ns.quantile_ns(0.5) * 1e-6;
+  }
   r.lcm_rx = state.lcm_rx.load();
   r.lcm_tx = state.lcm_tx.load();
   r.lcm_dropped_bad = state.lcm_dropped_bad.load();
+}
+
+StatsReport collect_stats(const SharedState& state, const PhysicsLoop& physics, double elapsed_s, bool haptic_fifo) {
+  StatsReport r;
+  collect_stats(state, physics, elapsed_s, haptic_fifo, &r);
   return r;
 }
 
@@ -76,8 +86,8 @@ nlohmann::json to_json(const StatsReport& r) {
   };
 }
 
-pcisim_lcm::sim_status_t to_message(const StatsReport& r, int64_t utime, int64_t seq, bool paused) {
-  pcisim_lcm::sim_status_t m{};
+void to_message(const StatsReport& r, int64_t utime, int64_t seq, bool paused, pcisim_lcm::sim_status_t* out) {
+  pcisim_lcm::sim_status_t& m = *out;
   m.utime = utime;
   m.seq = seq;
   m.haptic_rate_hz = r.haptic_rate_hz;
@@ -94,10 +104,13 @@ pcisim_lcm::sim_status_t to_message(const StatsReport& r, int64_t utime, int64_t
   m.physics_step_ms_p99 = r.physics_step_ms.p99;
   m.physics_step_ms_max = r.physics_step_ms.max;
   m.physics_overruns = r.physics_overruns;
-  m.num_effects = static_cast<int32_t>(r.effect_step_ms_p50.size());
-  for (const auto& [name, ms] : r.effect_step_ms_p50) {
-    m.effect_name.push_back(name);
-    m.effect_step_ms_p50.push_back(ms);
+  const size_t n = r.effect_step_ms_p50.size();
+  m.num_effects = static_cast<int32_t>(n);
+  m.effect_name.resize(n);
+  m.effect_step_ms_p50.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    m.effect_name[i] = r.effect_step_ms_p50[i].first;
+    m.effect_step_ms_p50[i] = r.effect_step_ms_p50[i].second;
   }
   m.xray_frames = r.xray_frames;
   m.xray_fps = r.xray_fps;
@@ -105,6 +118,11 @@ pcisim_lcm::sim_status_t to_message(const StatsReport& r, int64_t utime, int64_t
   m.lcm_tx = r.lcm_tx;
   m.lcm_dropped_bad = r.lcm_dropped_bad;
   m.paused = paused ? 1 : 0;
+}
+
+pcisim_lcm::sim_status_t to_message(const StatsReport& r, int64_t utime, int64_t seq, bool paused) {
+  pcisim_lcm::sim_status_t m{};
+  to_message(r, utime, seq, paused, &m);
   return m;
 }
 

@@ -41,9 +41,16 @@ struct StatsReport {
 
 Percentiles percentiles(const realtime::LatencyHistogram& h, double scale);
 
-// rates are those the loops achieved while running; elapsed_s is the whole run
+// rates are those the loops achieved while running; elapsed_s is the whole run. Into `r` in
+// place: its vectors and strings keep their storage, so the once-a-second status allocates
+// nothing once warm (issue #36 item 5)
+void collect_stats(const SharedState& state, const PhysicsLoop& physics, double elapsed_s, bool haptic_fifo,
+                   StatsReport* r);
 StatsReport collect_stats(const SharedState& state, const PhysicsLoop& physics, double elapsed_s, bool haptic_fifo);
 nlohmann::json to_json(const StatsReport& r);
+// into `m` in place (its effect names keep their storage); seq and the session's cath-lab fields
+// are the caller's
+void to_message(const StatsReport& r, int64_t utime, int64_t seq, bool paused, pcisim_lcm::sim_status_t* m);
 pcisim_lcm::sim_status_t to_message(const StatsReport& r, int64_t utime, int64_t seq, bool paused);
 std::string human_summary(const StatsReport& r);
 

@@ -67,7 +67,7 @@ class LcmIoTest : public ::testing::Test {
     lcm.subscribe(protocol::kWireChannel, &Listener::on_wire, &listener);
     lcm.subscribe(protocol::kStatusChannel, &Listener::on_status, &listener);
     io = std::make_unique<LcmIo>(
-        lcm, state, limits, 8.0, [] { return pcisim_lcm::sim_status_t{}; },
+        lcm, state, limits, 8.0, [](pcisim_lcm::sim_status_t&) {},
         [](int b) -> const std::string& {
           static const std::string lad = "LAD", none;
           return b == 2 ? lad : none;
@@ -210,7 +210,7 @@ TEST_F(LcmIoTest, ASecondLcmIoOnTheSameLcmHandlesEachMessageOnce) {
   io.reset();
   SharedState second;
   auto next = std::make_unique<LcmIo>(
-      lcm, second, limits, 8.0, [] { return pcisim_lcm::sim_status_t{}; }, nullptr);
+      lcm, second, limits, 8.0, [](pcisim_lcm::sim_status_t&) {}, nullptr);
   next->start();
   pcisim_lcm::session_command_t contrast{};
   contrast.command = pcisim_lcm::session_command_t::CMD_CONTRAST;
@@ -320,7 +320,7 @@ class LcmIoProbeTest : public ::testing::Test {
     // the beam physics linearised at: scene +y (the probe's default pose)
     state.probe_beam_x = 0.0, state.probe_beam_y = 1.0, state.probe_beam_z = 0.0;
     io = std::make_unique<LcmIo>(
-        lcm, state, limits, 8.0, [] { return pcisim_lcm::sim_status_t{}; },
+        lcm, state, limits, 8.0, [](pcisim_lcm::sim_status_t&) {},
         [](int) -> const std::string& {
           static const std::string none;
           return none;
@@ -400,7 +400,7 @@ TEST(LcmIoPublish, ForceCommandsAndWireStatesAllocateNothingOnceWarm) {
   SharedState state;
   SessionLimits limits;
   LcmIo io(
-      lcm, state, limits, 8.0, [] { return pcisim_lcm::sim_status_t{}; },
+      lcm, state, limits, 8.0, [](pcisim_lcm::sim_status_t&) {},
       [](int) -> const std::string& {
         static const std::string name = "a branch name longer than fifteen characters";
         return name;

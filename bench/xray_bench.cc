@@ -597,6 +597,12 @@ int run(const std::vector<std::string>& args) {
     }
     // the same marcher one ray at a time (no AVX2 packets), at 1 voxel: the packets' gain in this run
     if (cpu_here) cpu_row("cpu-1ray", {.step_voxels = 1.0, .skip_empty = true, .packets = false});
+    // Joseph's method: one sample per voxel plane of the ray's major axis, bilinear in the plane
+    // (issue #36 item 3), with packets and one ray at a time; its step is the planes' (shown as 1)
+    if (cpu_here) {
+      cpu_row("cpu-slices", {.step_voxels = 1.0, .skip_empty = true, .slices = true});
+      cpu_row("cpu-slices-1ray", {.step_voxels = 1.0, .skip_empty = true, .packets = false, .slices = true});
+    }
 #ifdef PCISIM_HAVE_OSMESA
     // the OSMesa GL projector (software GL here: Mesa llvmpipe), same steps as the CPU marcher
     for (const double step : cpu_steps) {

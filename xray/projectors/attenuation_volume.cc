@@ -70,6 +70,18 @@ void AttenuationVolume::rebuild_bricks() {
       }
     }
   }
+  // the same dilated by one brick
+  const auto& n = brick_dims_;
+  brick_near_.assign(brick_max_.size(), 0);
+  for (int bk = 0; bk < n[2]; ++bk)
+    for (int bj = 0; bj < n[1]; ++bj)
+      for (int bi = 0; bi < n[0]; ++bi) {
+        if (!(brick_max_[bi + n[0] * (bj + int64_t(n[1]) * bk)] > 0.0f)) continue;
+        for (int k = std::max(bk - 1, 0); k <= std::min(bk + 1, n[2] - 1); ++k)
+          for (int j = std::max(bj - 1, 0); j <= std::min(bj + 1, n[1] - 1); ++j)
+            for (int i = std::max(bi - 1, 0); i <= std::min(bi + 1, n[0] - 1); ++i)
+              brick_near_[i + n[0] * (j + int64_t(n[1]) * k)] = 1;
+      }
 }
 
 }  // namespace pcisim::xray

@@ -50,6 +50,9 @@ class AttenuationVolume {
   int brick_voxels() const { return params_.brick_voxels; }
   const std::array<int, 3>& brick_dims() const { return brick_dims_; }
   const std::vector<float>& brick_max() const { return brick_max_; }
+  // 1 where the brick or one of its 26 neighbours holds some mu: a walk of one ray over it covers
+  // every non-empty brick of rays that stay within a brick of it (ray::slice_rays_x8)
+  const std::vector<uint8_t>& brick_near() const { return brick_near_; }
 
   // writing mu in place (the beating background reuses one change volume for every phase): the
   // border must stay zero, and rebuild_bricks() must run before the next projection; a GPU
@@ -70,6 +73,7 @@ class AttenuationVolume {
   std::unique_ptr<float[], FreeMu> mu_;
   size_t mu_count_ = 0;
   std::vector<float> brick_max_;
+  std::vector<uint8_t> brick_near_;
   Eigen::Matrix3d index_from_physical_;
   Eigen::Vector3d index_offset_;
 };

@@ -90,6 +90,7 @@ DeviceGrid upload(const ray::GridView& host, size_t mu_count, size_t brick_count
   }
   g.view.mu = g.mu;
   g.view.brick_max = g.brick_max;
+  g.view.brick_near = nullptr;  // (the CPU's packets alone walk it)
   return g;
 }
 

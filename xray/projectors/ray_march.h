@@ -19,6 +19,7 @@ struct GridView {
   int nx = 0, ny = 0, nz = 0;  // padded dims
   float m[12] = {};
   const float* brick_max = nullptr;
+  const uint8_t* brick_near = nullptr;  // CPU only (AttenuationVolume::brick_near)
   int bnx = 0, bny = 0, bnz = 0;
   int brick = 8;
 };
@@ -178,6 +179,9 @@ PCISIM_XRAY_HD void for_each_run(const GridView& g, const RaySetup& s, bool skip
   const float dq[3] = {s.dx[0] * inv_b, s.dx[1] * inv_b, s.dx[2] * inv_b};
   const int nb[3] = {g.bnx, g.bny, g.bnz};
   float run_start = -1.f, run_end = -1.f;
+  // (a sample on a brick's face, as every plane sample of slice_ray where a brick begins, reads
+  // that face alone, which both bricks' maxima include: on whichever side it rounds, it is
+  // skipped only where it reads zeros)
   auto flush = [&]() {
     if (run_start >= 0.f) {
       const int lo = first_sample_at_or_after(s, run_start);
@@ -208,6 +212,77 @@ PCISIM_XRAY_HD float trilinear_ray(const GridView& g, const DetectorView& d, int
   if (!setup_ray(g, d, c, r, step_voxels, &s)) return 0.f;
   float acc = 0.f;
   auto run = [&](int lo, int hi) { acc += sum_samples(g, s.x0, s.dx, s.t0, s.dt, lo, hi); };
+  for_each_run(g, s, skip_empty, run);
+  return acc * s.dt * s.len_mm;
+}
+
+// Joseph's method (Joseph 1982, IEEE TMI 1(3)): a ray is sampled where it crosses the voxel
+// planes x_a = j (j whole) of one axis a (its major one), mu read bilinearly in that plane, each
+// sample weighted by the ray's length between planes. Where trilinear steps of one voxel read 8
+// voxels a sample, this reads 4, and takes one sample per plane (a ray's length in voxels times
+// |dx_a| / |dx| <= 1 of them).
+
+// the axis along which dx is longest
+PCISIM_XRAY_HD int major_axis(const float dx[3]) {
+  const float ax = fabsf(dx[0]), ay = fabsf(dx[1]), az = fabsf(dx[2]);
+  return ax >= ay ? (ax >= az ? 0 : 2) : (ay >= az ? 1 : 2);
+}
+
+// a setup_ray RaySetup (any step) moved onto the planes of `axis`: dt = 1 / |dx_axis| and t0
+// placed so that sample k lies on plane j0 + k sign(dx_axis) (*j0 set); the same RaySetup, so
+// for_each_run skips empty bricks alike. False (k_end 0) when the ray runs along the planes or
+// crosses none inside the grid
+PCISIM_XRAY_HD bool to_planes(int axis, RaySetup* s, int* j0) {
+  const float da = s->dx[axis];
+  if (s->k_end <= 0 || fabsf(da) < 1e-6f) {
+    s->k_end = 0;
+    return false;
+  }
+  const float at = s->x0[axis] + s->t0 * da;  // where the ray enters the grid, along the axis
+  *j0 = static_cast<int>(da > 0.f ? ceilf(at) : floorf(at));
+  s->dt = 1.0f / fabsf(da);
+  s->t0 = (static_cast<float>(*j0) - s->x0[axis]) / da - 0.5f * s->dt;
+  s->k_end = first_sample_at_or_after(*s, s->t1);
+  if (s->k_end < 0) s->k_end = 0;
+  return s->k_end > 0;
+}
+
+// bilinear mu in plane ia of `axis` at (pb, pc), the other two axes in increasing order;
+// indices and fractions clamped as trilinear() clamps them (the zero border outside)
+PCISIM_XRAY_HD float bilinear_in_plane(const GridView& g, int axis, int ia, float pb, float pc) {
+  const int n[3] = {g.nx, g.ny, g.nz};
+  const int64_t stride[3] = {1, g.nx, int64_t(g.nx) * g.ny};
+  const int b = axis == 0 ? 1 : 0, c = axis == 2 ? 1 : 2;
+  ia = ia < 0 ? 0 : (ia > n[axis] - 1 ? n[axis] - 1 : ia);
+  int ib = static_cast<int>(pb), ic = static_cast<int>(pc);
+  ib = ib < 0 ? 0 : (ib > n[b] - 2 ? n[b] - 2 : ib);
+  ic = ic < 0 ? 0 : (ic > n[c] - 2 ? n[c] - 2 : ic);
+  float fb = pb - ib, fc = pc - ic;
+  fb = fb < 0.f ? 0.f : (fb > 1.f ? 1.f : fb);
+  fc = fc < 0.f ? 0.f : (fc > 1.f ? 1.f : fc);
+  const float* p = g.mu + ia * stride[axis] + ib * stride[b] + ic * stride[c];
+  const float c0 = p[0] + fb * (p[stride[b]] - p[0]);
+  const float c1 = p[stride[c]] + fb * (p[stride[c] + stride[b]] - p[stride[c]]);
+  return c0 + fc * (c1 - c0);
+}
+
+// the line integral to pixel (c, r) by Joseph's method along the ray's major axis; skip_empty as
+// trilinear_ray's
+PCISIM_XRAY_HD float slice_ray(const GridView& g, const DetectorView& d, int c, int r, bool skip_empty) {
+  RaySetup s;
+  if (!setup_ray(g, d, c, r, 1.0f, &s)) return 0.f;
+  const int axis = major_axis(s.dx);
+  int j0 = 0;
+  if (!to_planes(axis, &s, &j0)) return 0.f;
+  const int b = axis == 0 ? 1 : 0, cc = axis == 2 ? 1 : 2;
+  const int sign = s.dx[axis] > 0.f ? 1 : -1;
+  float acc = 0.f;
+  auto run = [&](int lo, int hi) {
+    for (int k = lo; k < hi; ++k) {
+      const float t = s.t0 + (k + 0.5f) * s.dt;
+      acc += bilinear_in_plane(g, axis, j0 + sign * k, s.x0[b] + t * s.dx[b], s.x0[cc] + t * s.dx[cc]);
+    }
+  };
   for_each_run(g, s, skip_empty, run);
   return acc * s.dt * s.len_mm;
 }

@@ -20,4 +20,9 @@ bool packet_supported();
 void trilinear_rays_x8(const GridView& g, const DetectorView& d, int c0, int r, float step_voxels, bool skip_empty,
                        float out[8]);
 
+// the same eight pixels by Joseph's method (ray_march.h: slice_ray), on the planes of the middle
+// ray's major axis; four bilinear reads a sample gathered side by side. Sums differ from
+// slice_ray's in the last bits (positions stepped)
+void slice_rays_x8(const GridView& g, const DetectorView& d, int c0, int r, bool skip_empty, float out[8]);
+
 }  // namespace pcisim::xray::ray

@@ -28,8 +28,14 @@ void TrilinearProjector::project(const AttenuationVolume& volume, const Detector
   // the packets gather with 32-bit indices: grids past 2^31 voxels go one ray at a time
   const bool small_enough = volume.padded_count() < (size_t(1) << 31) - 1;
   const int packed = options_.packets && small_enough && ray::packet_supported() ? g.width / 8 * 8 : 0;
+  const bool slices = options_.slices;
   auto row = [&](int r) {
     float* out = image->pixels.data() + static_cast<size_t>(r) * g.width;
+    if (slices) {
+      for (int c = 0; c < packed; c += 8) ray::slice_rays_x8(grid, det, c, r, skip, out + c);
+      for (int c = packed; c < g.width; ++c) out[c] = ray::slice_ray(grid, det, c, r, skip);
+      return;
+    }
     for (int c = 0; c < packed; c += 8) ray::trilinear_rays_x8(grid, det, c, r, step, skip, out + c);
     for (int c = packed; c < g.width; ++c) out[c] = ray::trilinear_ray(grid, det, c, r, step, skip);
   };

@@ -15,6 +15,7 @@ ray::GridView grid_view(const AttenuationVolume& volume) {
     g.m[4 * r + 3] = static_cast<float>(b[r]);
   }
   g.brick_max = volume.brick_max().data();
+  g.brick_near = volume.brick_near().data();
   g.bnx = volume.brick_dims()[0];
   g.bny = volume.brick_dims()[1];
   g.bnz = volume.brick_dims()[2];

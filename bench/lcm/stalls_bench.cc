@@ -7,7 +7,7 @@
 //                            (stale-flagged commands, or none at all while pipelines hand over)
 //   carm_first_frame_p99_ms  CMD_CARM to the first frame at the new pose arriving (fluoroscopy on:
 //                            the wait for the next pulse is part of it)
-//   cpu_exact_ms, cpu_trilinear_ms, plastimatch_exact_ms
+//   cpu_exact_ms, cpu_trilinear_ms, cpu_planes_ms, plastimatch_exact_ms
 //                            512^2 from the thorax phantom (pcisim-bench xray's view), medians;
 //                            plastimatch's null where it is not installed (or --plastimatch none)
 //   publish_allocations      operator new calls on the publish path once warm: the send thread's
@@ -212,7 +212,7 @@ struct Figures {
   std::vector<double> reset_periods_ms, reload_periods_ms, carm_ms, reset_swap_ms, reload_swap_ms;
   double force_stale_max_ms = 0, reset_stale_ms = 0, reload_stale_ms = 0, reload_ramp_ms = 0;
   int resets_done = 0, reloads_done = 0, moves_done = 0;
-  std::optional<double> cpu_exact_ms, cpu_trilinear_ms, plastimatch_exact_ms;
+  std::optional<double> cpu_exact_ms, cpu_trilinear_ms, cpu_planes_ms, plastimatch_exact_ms;
   std::string plastimatch_why;
   long publish_allocations = -1;
   int publish_messages = 0;
@@ -398,8 +398,12 @@ void measure_projectors(const Options& o, Figures* f) {
   f->cpu_exact_ms = median_ms(5, [&] { exact.project(g, &exact_image); });
   TrilinearProjector trilinear(att, {.step_voxels = 1.0, .skip_empty = true});
   f->cpu_trilinear_ms = median_ms(5, [&] { trilinear.project(g, &img); });
-  std::fprintf(stderr, "stalls: 512^2 exact %.0f ms, trilinear (1 voxel) %.0f ms\n", *f->cpu_exact_ms,
-               *f->cpu_trilinear_ms);
+  // the scenes' CPU projector: one sample per voxel plane (Joseph's method; its error against
+  // exact: docs/benchmarks/xray.md)
+  TrilinearProjector planes(att, {.skip_empty = true, .slices = true});
+  f->cpu_planes_ms = median_ms(5, [&] { planes.project(g, &img); });
+  std::fprintf(stderr, "stalls: 512^2 exact %.0f ms, trilinear (1 voxel) %.0f ms, voxel planes %.0f ms\n",
+               *f->cpu_exact_ms, *f->cpu_trilinear_ms, *f->cpu_planes_ms);
   const std::string program = o.plastimatch == "auto" ? find_plastimatch() : o.plastimatch;
   if (o.plastimatch == "none" || program.empty()) {
     f->plastimatch_why = o.plastimatch == "none" ? "--plastimatch none" : "plastimatch is not installed";
@@ -473,6 +477,10 @@ void write_report(const Options& o, const Figures& f, const json& line, const st
         f.plastimatch_exact_ms ? fmt::format("{:.0f} ms", *f.plastimatch_exact_ms) : "not run: " + f.plastimatch_why);
     md << fmt::format("| CPU trilinear DRR at a 1-voxel step, median of 5 | {:.0f} ms | <= 100 ms | {} |\n",
                       *f.cpu_trilinear_ms, met(*f.cpu_trilinear_ms <= 100));
+    md << fmt::format(
+        "| the same DRR one sample per voxel plane (Joseph's method, the scenes' CPU projector; its error against "
+        "exact beside trilinear's: docs/benchmarks/xray.md), median of 5 | {:.0f} ms | <= 100 ms | {} |\n",
+        *f.cpu_planes_ms, met(*f.cpu_planes_ms <= 100));
   }
   md << fmt::format(
       "| operator new on the publish path (force commands, wire states and the status of the send thread, and the "
@@ -504,7 +512,8 @@ int run(const std::vector<std::string>& args) {
           "                    [--plastimatch PROGRAM|none (the first on PATH)] [--out DIR (docs/benchmarks)]\n"
           "  issue #36's pauses in one run on this machine, one JSON line: reset_period_p99_ms,\n"
           "  reload_period_p99_ms, force_stale_max_ms, carm_first_frame_p99_ms, cpu_exact_ms,\n"
-          "  cpu_trilinear_ms, plastimatch_exact_ms (null without plastimatch), publish_allocations;\n"
+          "  cpu_trilinear_ms, cpu_planes_ms, plastimatch_exact_ms (null without plastimatch),\n"
+          "  publish_allocations;\n"
           "  writes DIR/stalls.{md,json}. The default scene runs in this process over memq (~1 min),\n"
           "  the projectors on the thorax phantom (~1 min more; --no-projectors skips them)\n");
       return args[i] == "--help" ? 0 : 2;
@@ -536,6 +545,7 @@ int run(const std::vector<std::string>& args) {
                      {"carm_first_frame_p99_ms", rounded(p99_or_nan(f.carm_ms))},
                      {"cpu_exact_ms", or_null(f.cpu_exact_ms)},
                      {"cpu_trilinear_ms", or_null(f.cpu_trilinear_ms)},
+                     {"cpu_planes_ms", or_null(f.cpu_planes_ms)},
                      {"plastimatch_exact_ms", or_null(f.plastimatch_exact_ms)},
                      {"publish_allocations", f.publish_allocations},
                      {"resets", f.resets_done},

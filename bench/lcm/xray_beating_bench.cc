@@ -311,11 +311,13 @@ int run(const std::vector<std::string>& args) {
       "(particles and coronary centerline, {} points) sampled at {} phases in {:.0f} ms (world built in {:.0f} ms); "
       "the largest motion of a sample is {:.1f} mm. Background CT: the thorax phantom, {} x {} x {} at {} mm (built "
       "and turned into attenuation twice in {:.0f} ms); the warp's box is {} x {} x {} voxels. C-arm LAO 30 / CRA 20, "
-      "{}^2 detector at {} mm; trilinear projection at {} voxel. The 64-phase warp (every field and its inverse) took "
+      "{}^2 detector at {} mm; projection {}. The 64-phase warp (every field and its inverse) took "
       "{:.0f} ms to build, the 16-bin one inside the renderer {:.0f} ms.\n\n",
       scene.world.anatomy.seed, scene.world.heart_beat ? scene.world.heart_beat->rate_bpm : 0.0, fine.rest_mm.size(),
       kFine, sample_ms, world_ms, max_motion_mm, ct.dims[0], ct.dims[1], ct.dims[2], spec.volume_spacing_mm, ct_ms,
-      hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], g.width, g.pixel_mm, spec.projector.trilinear.step_voxels,
+      hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], g.width, g.pixel_mm,
+      spec.projector.trilinear.slices ? std::string("one sample per voxel plane (Joseph's method)")
+                                      : fmt::format("trilinear at {} voxel", spec.projector.trilinear.step_voxels),
       fine_warp_ms, warp16_ms);
   md << fmt::format(
       "Reference: at each of {} test phases (bins 1, 11, 21, ... of the 64: bins of no cache), the CT warped by that "

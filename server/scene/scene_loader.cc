@@ -316,6 +316,13 @@ XraySpec read_xray(json::JsonReader r) {
                           : projector == "cuda" ? xray::ProjectorKind::kCudaTrilinear
                           : projector == "gl"   ? xray::ProjectorKind::kGl
                                                 : xray::ProjectorKind::kCpuTrilinear;
+  // "planes": one sample where a ray crosses each voxel plane (the default); "steps": trilinear
+  // samples every step_voxels (a scene that gives step_voxels asks for steps)
+  const std::string sampling = r.text("sampling", r.has("step_voxels") ? "steps" : "planes", {"planes", "steps"});
+  if (sampling == "planes" && r.has("step_voxels"))
+    r.fail("step_voxels",
+           "no step_voxels with sampling \"planes\" (one sample per voxel plane); use sampling \"steps\"");
+  f.projector.trilinear.slices = sampling == "planes";
   f.projector.trilinear.step_voxels =
       r.number("step_voxels", f.projector.trilinear.step_voxels, xray::kMinSceneStepVoxels, xray::kMaxSceneStepVoxels);
   const int px = r.integer("detector_px", f.c_arm.width, 16, 2048);

@@ -29,6 +29,8 @@ CudaTrilinearProjector::~CudaTrilinearProjector() {
 
 void CudaTrilinearProjector::set_options(const TrilinearOptions& options) {
   if (!(options.step_voxels > 0)) throw std::invalid_argument("CudaTrilinearProjector: step_voxels must be > 0");
+  if (options.slices && options.texture)
+    throw std::invalid_argument("CudaTrilinearProjector: slices and texture are two ways to read mu; ask for one");
   // the texture's copy of mu only once a read through it is asked for
   if (options.texture && !grid_.texture) cuda::upload_texture(&grid_, grid_view(volume_));
   options_ = options;

@@ -37,7 +37,9 @@ class CudaTrilinearProjector {
 
  private:
   float* image_for(const DetectorGeometry& g);
-  cuda::Read read() const { return options_.texture ? cuda::Read::kTexture : cuda::Read::kTwin; }
+  cuda::Read read() const {
+    return options_.slices ? cuda::Read::kSlices : options_.texture ? cuda::Read::kTexture : cuda::Read::kTwin;
+  }
 
   const AttenuationVolume& volume_;  // for the texture, uploaded when options first ask for it
   TrilinearOptions options_;

@@ -22,6 +22,14 @@ __global__ void project_kernel(ray::GridView g, ray::DetectorView d, float step,
   image[static_cast<size_t>(r) * d.width + c] = ray::trilinear_ray(g, d, c, r, step, skip);
 }
 
+// Joseph's method: the CPU's ray::slice_ray, one thread a pixel
+__global__ void project_slices_kernel(ray::GridView g, ray::DetectorView d, bool skip, float* image) {
+  const int c = blockIdx.x * blockDim.x + threadIdx.x;
+  const int r = blockIdx.y * blockDim.y + threadIdx.y;
+  if (c >= d.width || r >= d.height) return;
+  image[static_cast<size_t>(r) * d.width + c] = ray::slice_ray(g, d, c, r, skip);
+}
+
 // the same ray (setup_ray, for_each_run: the same samples), each sample read by the texture
 // unit: padded voxel centres at integers are texel centres at +0.5; outside reads the border, 0
 __global__ void project_texture_kernel(ray::GridView g, cudaTextureObject_t mu, ray::DetectorView d, float step,
@@ -52,6 +60,8 @@ void launch(const DeviceGrid& grid, const ray::DetectorView& d, float step, bool
     if (!grid.texture) throw std::runtime_error("CUDA projection: the grid was uploaded without its texture");
     project_texture_kernel<<<blocks, block>>>(grid.view, static_cast<cudaTextureObject_t>(grid.texture), d, step, skip,
                                               image);
+  } else if (read == Read::kSlices) {
+    project_slices_kernel<<<blocks, block>>>(grid.view, d, skip, image);
   } else {
     project_kernel<<<blocks, block>>>(grid.view, d, step, skip, image);
   }

@@ -34,10 +34,11 @@ void release(DeviceGrid* grid);
 float* alloc_image(size_t pixels);
 void free_image(float* image);
 
-// how a projection reads mu: ray::trilinear on global memory (the CPU marcher's twin), or the
+// how a projection reads mu: ray::trilinear on global memory (the CPU marcher's twin), the
 // texture unit's trilinear filter (its weights have 8 fractional bits: not the twin; the grid
-// must have been uploaded with its texture)
-enum class Read { kTwin, kTexture };
+// must have been uploaded with its texture), or Joseph's method, ray::slice_ray (the twin of the
+// CPU's TrilinearOptions::slices; step_voxels unused)
+enum class Read { kTwin, kTexture, kSlices };
 
 // launches the projection of d into image (device, width x height) and waits for it
 void render(const DeviceGrid& grid, const ray::DetectorView& d, float step_voxels, bool skip_empty, Read read,

@@ -24,9 +24,9 @@ struct TrilinearOptions {
   // CUDA only: read mu through the texture unit's trilinear filter (8 fractional bits in its
   // weights: not the CPU marcher's twin; issue #36 item 4) instead of ray::trilinear
   bool texture = false;
-  // CPU only: sample where each ray crosses the voxel planes of its major axis, mu bilinear in the
-  // plane (Joseph's method, ray::slice_ray): 4 reads a sample instead of 8, and one sample per
-  // plane; step_voxels is then unused (issue #36 item 3: docs/xray.md)
+  // sample where each ray crosses the voxel planes of its major axis, mu bilinear in the plane
+  // (Joseph's method, ray::slice_ray, the CUDA kernel's too): 4 reads a sample instead of 8, and
+  // one sample per plane; step_voxels is then unused (issue #36 item 3: docs/xray.md)
   bool slices = false;
 };
 

@@ -257,6 +257,23 @@ TEST(Scene, AFluoroscopyStepFinerThanAQuarterVoxelIsRefused) {
             "test.json: effects.xray.step_voxels: expected a number in [0.25, 4], got 0.05");
 }
 
+// the background's sampling: one sample per voxel plane by default; a scene that gives a step
+// asks for trilinear steps; both at once is refused naming the key
+TEST(Scene, TheFluoroscopySamplesVoxelPlanesUnlessAStepIsAskedFor) {
+  const auto projector_of = [](const char* text) { return parse_scene(text, "test.json").xray->fluoro.projector; };
+  const auto planes = projector_of(R"({"effects": {"xray": {}}})");
+  EXPECT_TRUE(planes.trilinear.slices);
+  const auto steps = projector_of(R"({"effects": {"xray": {"step_voxels": 0.5}}})");
+  EXPECT_FALSE(steps.trilinear.slices);
+  EXPECT_EQ(steps.trilinear.step_voxels, 0.5);
+  EXPECT_FALSE(projector_of(R"({"effects": {"xray": {"sampling": "steps"}}})").trilinear.slices);
+  EXPECT_EQ(error_of(R"({"effects": {"xray": {"sampling": "planes", "step_voxels": 2}}})"),
+            "test.json: effects.xray.step_voxels: no step_voxels with sampling \"planes\" (one sample per voxel "
+            "plane); use sampling \"steps\"");
+  EXPECT_EQ(error_of(R"({"effects": {"xray": {"sampling": "rays"}}})").rfind("test.json: effects.xray.sampling", 0),
+            0u);
+}
+
 TEST(Scene, TheBeatingBackgroundIsOnByDefaultAndItsBinsAreChecked) {
   const Scene d = default_scene();
   ASSERT_TRUE(d.xray && d.world.vessel_motion);

@@ -33,11 +33,11 @@ DetectorGeometry lao30_cra20() {
 
 // the GPU runs the CPU marcher's code; only float rounding (FMA contraction) may differ:
 // every pixel within 1e-4 of the image's largest line integral
-void expect_twins(const AttenuationVolume& a, const DetectorGeometry& g, double step, bool skip) {
+void expect_twins(const AttenuationVolume& a, const DetectorGeometry& g, double step, bool skip, bool slices = false) {
   Image cpu, gpu;
   cpu.resize(g.width, g.height);
   gpu.resize(g.width, g.height);
-  TrilinearOptions o{.step_voxels = step, .skip_empty = skip, .threads = 2};
+  TrilinearOptions o{.step_voxels = step, .skip_empty = skip, .threads = 2, .slices = slices};
   TrilinearProjector(a, o).project(g, &cpu);
   CudaTrilinearProjector cuda(a, o);
   cuda.project(g, &gpu);
@@ -47,7 +47,7 @@ void expect_twins(const AttenuationVolume& a, const DetectorGeometry& g, double 
     worst = std::max(worst, double(std::abs(gpu.pixels[n] - cpu.pixels[n])));
   }
   EXPECT_GT(peak, 0.0) << "the comparison needs a non-empty projection";
-  EXPECT_LE(worst, 1e-4 * peak) << "step " << step << " skip " << skip;
+  EXPECT_LE(worst, 1e-4 * peak) << "step " << step << " skip " << skip << " slices " << slices;
 }
 #endif
 
@@ -68,6 +68,29 @@ TEST(CudaProjector, MatchesCpuTrilinearTwin) {
   // a coarse thorax phantom through a C-arm at LAO 30 / CRA 20
   const AttenuationVolume a(coarse_thorax());
   expect_twins(a, lao30_cra20(), 0.5, true);
+#endif
+}
+
+// Joseph's method (TrilinearOptions::slices) on the GPU runs the CPU's ray::slice_ray: the same
+// planes and reads as the CPU's eight-ray packets, within the twins' 1e-4
+TEST(CudaProjector, TheSlicesAreTheCpuSlicesTwin) {
+#ifndef PCISIM_HAVE_CUDA
+  GTEST_SKIP() << "built without CUDA (nvcc not found at configure time): no GPU projector to compare";
+#else
+  std::string why;
+  if (!CudaTrilinearProjector::available(&why)) GTEST_SKIP() << "CUDA projector not compared: " << why;
+  std::mt19937 rng(32);
+  for (int trial = 0; trial < 3; ++trial) {
+    const anatomy::Volume v = testing::random_volume(rng, /*smooth=*/true);
+    const AttenuationVolume a(v);
+    const DetectorGeometry g = testing::random_geometry(rng, v, 40, 33);
+    expect_twins(a, g, 1.0, true, true);
+    expect_twins(a, g, 1.0, false, true);
+  }
+  const AttenuationVolume a(coarse_thorax());
+  expect_twins(a, lao30_cra20(), 1.0, true, true);
+  CudaTrilinearProjector cuda(a);
+  EXPECT_THROW(cuda.set_options({.texture = true, .slices = true}), std::invalid_argument);
 #endif
 }
 

@@ -135,11 +135,19 @@ int run(const std::vector<std::string>& args) {
         "scene's physics built per sample; beat: one heart cycle sampled and the CT's warp built (kept while the next "
         "sample's heart is the same); projection: the background's static and phase-bin projections (per pose); "
         "noise: quanta, Poisson noise, blur, log and window.\n\n";
-  double best = 0;
-  for (const auto& r : rows) best = std::max(best, r.frames_per_s);
+  // the target is the beating background's (issue #36: the product's frames beat); the still
+  // one's best beside it
+  double best_beating = 0, best_still = 0;
+  for (const auto& r : rows) {
+    double& best = r.variant == "beating" ? best_beating : best_still;
+    best = std::max(best, r.frames_per_s);
+  }
   const double target = gpu ? 200 : 20;
-  md << fmt::format("Target ({}): >= {:.0f} frames/s. Best here: {:.1f} frames/s: **{}**.\n",
-                    gpu ? "one H100/H200" : "2 CPU cores", target, best, best >= target ? "met" : "missed");
+  md << fmt::format(
+      "Target ({}, issue #36): >= {:.0f} frames/s with the beating background. Best here: {:.1f} frames/s: **{}** "
+      "(still background: {:.1f}).\n",
+      gpu ? "one H100/H200" : "2 CPU cores", target, best_beating, best_beating >= target ? "met" : "missed",
+      best_still);
   md.close();
   std::printf("wrote %s\n", md_path.c_str());
   return 0;

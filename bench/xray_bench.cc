@@ -32,6 +32,7 @@
 #include "anatomy/phantom/thorax_phantom.h"
 #include "xray/projectors/attenuation_volume.h"
 #include "xray/projectors/siddon_projector.h"
+#include "xray/projectors/ray_packet.h"
 #include "xray/projectors/trilinear_projector.h"
 #ifdef PCISIM_HAVE_OSMESA
 #include "xray/projectors/gl/gl_projector.h"
@@ -474,6 +475,7 @@ void run_beating_gpu() {
 #endif
 
 int run(const std::vector<std::string>& args) {
+  double slice_row_share = 0, slice_shared_share = 0;  // the voxel-plane packets' paths at 512^2
   Options o;
   for (size_t i = 0; i < args.size(); ++i) {
     if (args[i] == "--quick") {
@@ -604,7 +606,15 @@ int run(const std::vector<std::string>& args) {
     // Joseph's method: one sample per voxel plane of the ray's major axis, bilinear in the plane
     // (issue #36 item 3), with packets and one ray at a time; its step is the planes' (shown as 1)
     if (cpu_here) {
+      const ray::SlicePacketCounts before = ray::slice_packet_counts();
       cpu_row("cpu-slices", {.step_voxels = 1.0, .skip_empty = true, .slices = true});
+      const ray::SlicePacketCounts after = ray::slice_packet_counts();
+      const double steps = double(after.row_steps - before.row_steps + after.gathered_steps - before.gathered_steps);
+      const double packets = double(after.shared_walks - before.shared_walks + after.lane_walks - before.lane_walks);
+      if (n == 512 && steps > 0 && packets > 0) {
+        slice_row_share = (after.row_steps - before.row_steps) / steps;
+        slice_shared_share = (after.shared_walks - before.shared_walks) / packets;
+      }
       cpu_row("cpu-slices-1ray", {.step_voxels = 1.0, .skip_empty = true, .packets = false, .slices = true});
     }
 #ifdef PCISIM_HAVE_OSMESA
@@ -629,13 +639,17 @@ int run(const std::vector<std::string>& args) {
     }
 #endif
 #ifdef PCISIM_HAVE_CUDA
-    // the twin (ray::trilinear on global memory), then the texture unit's filter on the same samples
-    for (const bool texture : {false, true}) {
+    // the twin (ray::trilinear on global memory), the texture unit's filter on the same samples,
+    // and Joseph's method (the CPU's ray::slice_ray; one sample a plane: shown at step 1)
+    enum Read { kTwin, kTexture, kSlices };
+    for (const Read read : {kTwin, kTexture, kSlices}) {
       if (!gpu) break;
-      for (const double step : gpu_steps) {
-        gpu->set_options({.step_voxels = step, .skip_empty = true, .texture = texture});
+      const std::vector<double> steps = read == kSlices ? std::vector<double>{1.0} : gpu_steps;
+      for (const double step : steps) {
+        gpu->set_options(
+            {.step_voxels = step, .skip_empty = true, .texture = read == kTexture, .slices = read == kSlices});
         gpu->project(g, &img);  // the image for the error; also a warm-up
-        Row r{texture ? "cuda-tex" : "cuda", n, step};
+        Row r{read == kTexture ? "cuda-tex" : read == kSlices ? "cuda-slices" : "cuda", n, step};
         const int runs = o.quick ? 100 : 200;
         const auto ms_f = gpu->time_kernel_ms(g, 10, runs);
         const std::vector<double> ms(ms_f.begin(), ms_f.end());
@@ -647,22 +661,6 @@ int run(const std::vector<std::string>& args) {
         std::printf("xray: %4d^2 %s step %.2f %9.3f ms (p99 %.3f)  rmse %.4f %%  max %.4f %%\n", n, r.projector.c_str(),
                     step, r.median_ms, r.p99_ms, 100 * r.rmse_rel, 100 * r.max_rel);
       }
-    }
-    // Joseph's method, the CPU's ray::slice_ray (one sample a plane: shown at step 1)
-    if (gpu) {
-      gpu->set_options({.step_voxels = 1.0, .skip_empty = true, .slices = true});
-      gpu->project(g, &img);
-      Row r{"cuda-slices", n, 1.0};
-      const int runs = o.quick ? 100 : 200;
-      const auto ms_f = gpu->time_kernel_ms(g, 10, runs);
-      const std::vector<double> ms(ms_f.begin(), ms_f.end());
-      r.median_ms = percentile(ms, 0.5);
-      r.p99_ms = percentile(ms, 0.99);
-      r.frames = runs;
-      errors(img, ref, &r);
-      rows.push_back(r);
-      std::printf("xray: %4d^2 cuda-slices %9.3f ms (p99 %.3f)  rmse %.4f %%  max %.4f %%\n", n, r.median_ms, r.p99_ms,
-                  100 * r.rmse_rel, 100 * r.max_rel);
     }
 #endif
   }
@@ -760,9 +758,10 @@ int run(const std::vector<std::string>& args) {
                        tri->median_ms <= 100 ? "yes" : "**no**");
       if (const Row* planes = find("cpu-slices", 1.0))
         f << fmt::format(
-            "| the same at no more error, one sample per voxel plane (Joseph's method, the scenes' CPU projector) "
+            "| the same at no more error, one sample per voxel plane (Joseph's method, the scenes' CPU projector; "
+            "{:.2f} % of its packets' steps read whole rows, {:.1f} % of its packets walked the bricks once for eight) "
             "<= 100 ms | {:.0f} ms median ({:.4f} % RMSE) | {} |\n",
-            planes->median_ms, 100 * planes->rmse_rel,
+            100 * slice_row_share, 100 * slice_shared_share, planes->median_ms, 100 * planes->rmse_rel,
             planes->median_ms <= 100 && planes->rmse_rel <= tri->rmse_rel ? "yes" : "**no**");
       f << fmt::format("| exact <= 200 ms | {:.0f} ms median | {} |\n", ex->median_ms,
                        ex->median_ms <= 200 ? "yes" : "**no**");

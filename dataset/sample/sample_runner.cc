@@ -72,8 +72,8 @@ nlohmann::json SampleRunner::run(const SamplePlan& plan, FrameSink& sink) {
   xray::CArmPose pose = xs.initial_pose;
   pose.isocenter_mm = anatomy::heart_center_mm(c);
   const auto& f = xs.fluoro;
-  const std::string renderer_key =
-      fmt::format("{}|{}", static_cast<int>(f.projector.projector), f.projector.trilinear.step_voxels);
+  const std::string renderer_key = fmt::format("{}|{}|{}", static_cast<int>(f.projector.projector),
+                                               f.projector.trilinear.step_voxels, f.projector.trilinear.slices);
   if (!a.renderer || a.renderer_key != renderer_key) {
     // built with the scene's seed (the thorax phantom's), restarted at once with the sample's
     // noise seed, as every later sample on this anatomy is

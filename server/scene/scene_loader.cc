@@ -317,8 +317,13 @@ XraySpec read_xray(json::JsonReader r) {
                           : projector == "gl"   ? xray::ProjectorKind::kGl
                                                 : xray::ProjectorKind::kCpuTrilinear;
   // "planes": one sample where a ray crosses each voxel plane (the default); "steps": trilinear
-  // samples every step_voxels (a scene that gives step_voxels asks for steps)
-  const std::string sampling = r.text("sampling", r.has("step_voxels") ? "steps" : "planes", {"planes", "steps"});
+  // samples every step_voxels (a scene that gives step_voxels asks for steps). The cpu and cuda
+  // projectors only: exact integrates each voxel, gl steps by step_voxels
+  const bool samples = projector == "cpu" || projector == "cuda";
+  if (!samples && r.has("sampling"))
+    r.fail("sampling", "only with projector \"cpu\" or \"cuda\" (\"" + projector + "\" has its own)");
+  const std::string sampling =
+      samples ? r.text("sampling", r.has("step_voxels") ? "steps" : "planes", {"planes", "steps"}) : "steps";
   if (sampling == "planes" && r.has("step_voxels"))
     r.fail("step_voxels",
            "no step_voxels with sampling \"planes\" (one sample per voxel plane); use sampling \"steps\"");

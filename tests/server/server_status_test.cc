@@ -2,6 +2,7 @@
 // gathered into the send thread's message in place, and published through LcmIo's encoded buffer
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <lcm/lcm-cpp.hpp>
 #include <mutex>
 #include <string>
@@ -71,7 +72,7 @@ TEST(ServerStatus, TheStatusMessageAllocatesNothingOnceWarm) {
     ASSERT_EQ(m.effect_name.size(), m.effect_step_ms_p50.size());
     EXPECT_GE(m.num_effects, 3);
     EXPECT_EQ(m.effect_name, sink.got.front().effect_name);
-    for (const std::string& name : {"guidewire", "blood_flow", "heart_beat"})
+    for (const char* name : {"guidewire", "blood_flow", "heart_beat"})
       EXPECT_NE(std::find(m.effect_name.begin(), m.effect_name.end(), name), m.effect_name.end()) << name;
   }
 }

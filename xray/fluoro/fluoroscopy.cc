@@ -238,7 +238,8 @@ void FluoroscopyRenderer::restart(const FluoroSpec& spec, bool keep_beat) {
   const FluoroSpec& old = m.spec;
   if (spec.volume_dims != old.volume_dims || spec.volume_spacing_mm != old.volume_spacing_mm ||
       spec.projector.projector != old.projector.projector ||
-      spec.projector.trilinear.step_voxels != old.projector.trilinear.step_voxels)
+      spec.projector.trilinear.step_voxels != old.projector.trilinear.step_voxels ||
+      spec.projector.trilinear.slices != old.projector.trilinear.slices)
     throw std::invalid_argument(
         "FluoroscopyRenderer::restart: another background volume or projector needs a new renderer");
   // the pose's projection, its range compression and window stay valid when none of their inputs moved

@@ -164,16 +164,11 @@ PCISIM_XRAY_HD bool setup_ray(const GridView& g, const DetectorView& d, int c, i
   return true;
 }
 
-// calls run(k_lo, k_hi) for the sample ranges to sum, in order: [0, k_end) whole, or with
-// skip_empty the runs of bricks holding some mu (walking the brick grid; the same samples' sum)
-template <class Run>
-PCISIM_XRAY_HD void for_each_run(const GridView& g, const RaySetup& s, bool skip_empty, Run& run) {
+// calls run(k_lo, k_hi) for the runs of samples inside the bricks where on(i, j, k) holds, in
+// order (walking the brick grid; runs of such bricks merged)
+template <class On, class Run>
+PCISIM_XRAY_HD void for_each_run_where(const GridView& g, const RaySetup& s, On& on, Run& run) {
   if (s.k_end <= 0) return;
-  if (!skip_empty) {
-    run(0, s.k_end);
-    return;
-  }
-  // walk the bricks; merge runs of non-empty ones
   const float inv_b = 1.0f / g.brick;
   const float q0[3] = {s.x0[0] * inv_b, s.x0[1] * inv_b, s.x0[2] * inv_b};
   const float dq[3] = {s.dx[0] * inv_b, s.dx[1] * inv_b, s.dx[2] * inv_b};
@@ -191,7 +186,7 @@ PCISIM_XRAY_HD void for_each_run(const GridView& g, const RaySetup& s, bool skip
     }
   };
   auto visit = [&](int i, int j, int k, float ta, float tb) {
-    if (g.brick_max[i + g.bnx * (j + int64_t(g.bny) * k)] > 0.f) {
+    if (on(i, j, k)) {
       if (run_start < 0.f) run_start = ta;
       run_end = tb;
     } else {
@@ -201,6 +196,19 @@ PCISIM_XRAY_HD void for_each_run(const GridView& g, const RaySetup& s, bool skip
   };
   traverse_cells(q0, dq, s.t0, s.t1, nb, visit);
   flush();
+}
+
+// calls run(k_lo, k_hi) for the sample ranges to sum, in order: [0, k_end) whole, or with
+// skip_empty the runs of bricks holding some mu (walking the brick grid; the same samples' sum)
+template <class Run>
+PCISIM_XRAY_HD void for_each_run(const GridView& g, const RaySetup& s, bool skip_empty, Run& run) {
+  if (s.k_end <= 0) return;
+  if (!skip_empty) {
+    run(0, s.k_end);
+    return;
+  }
+  auto holds_mu = [&](int i, int j, int k) { return g.brick_max[i + g.bnx * (j + int64_t(g.bny) * k)] > 0.f; };
+  for_each_run_where(g, s, holds_mu, run);
 }
 
 // the line integral (mu in 1/mm times mm) from the source to pixel (c, r) by trilinear ray

@@ -3,6 +3,7 @@
 #include <immintrin.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 namespace pcisim::xray::ray {
@@ -74,45 +75,16 @@ __attribute__((target("avx2,fma"))) void march_x8(const GridView& g, const RaySe
   for (int i = 0; i < 8; ++i) out[i] = s[i].k_end > 0 ? sum[i] * s[i].dt * s[i].len_mm : 0.f;
 }
 
-// for_each_run over the bricks near mu (GridView::brick_near) instead of those holding it
-template <class Run>
-void for_each_near_run(const GridView& g, const RaySetup& s, Run& run) {
-  if (s.k_end <= 0) return;
-  const float inv_b = 1.0f / g.brick;
-  const float q0[3] = {s.x0[0] * inv_b, s.x0[1] * inv_b, s.x0[2] * inv_b};
-  const float dq[3] = {s.dx[0] * inv_b, s.dx[1] * inv_b, s.dx[2] * inv_b};
-  const int nb[3] = {g.bnx, g.bny, g.bnz};
-  float run_start = -1.f, run_end = -1.f;
-  auto flush = [&]() {
-    if (run_start >= 0.f) {
-      const int lo = first_sample_at_or_after(s, run_start);
-      const int hi = first_sample_at_or_after(s, run_end);
-      if ((hi < s.k_end ? hi : s.k_end) > (lo > 0 ? lo : 0)) run(lo > 0 ? lo : 0, hi < s.k_end ? hi : s.k_end);
-      run_start = -1.f;
-    }
-  };
-  auto visit = [&](int i, int j, int k, float ta, float tb) {
-    if (g.brick_near[i + g.bnx * (j + int64_t(g.bny) * k)]) {
-      if (run_start < 0.f) run_start = ta;
-      run_end = tb;
-    } else {
-      flush();
-    }
-    return true;
-  };
-  traverse_cells(q0, dq, s.t0, s.t1, nb, visit);
-  flush();
-}
-
 // Joseph's method for eight rays on the planes of one axis (ray_march.h: slice_ray), all on the
 // same plane at each step: plane j_first + k sign, lane i at (base_b + k step_b, base_c + k
 // step_c) in it. Four bilinear reads a sample. Where the plane's other axis b is the grid's rows
 // (axis y or z) and the eight points lie within 8 voxels along b and 2 along c, the reads are
-// whole rows loaded once and spread to the lanes by permutes (99.97 % of the steps of
-// pcisim-bench xray's view); else they are gathered
+// whole rows loaded once and spread to the lanes by permutes (slice_packet_counts: nearly every
+// step of pcisim-bench xray's view); else they are gathered
 __attribute__((target("avx2,fma"))) void slice_march_x8(const GridView& g, int axis, int sign, int j_first,
                                                         const float (&base)[2][8], const float (&step)[2][8], int k_max,
-                                                        const uint8_t* active, float sum[8]) {
+                                                        const uint8_t* active, float sum[8], int64_t* row_steps,
+                                                        int64_t* gathered_steps) {
   const int b = axis == 0 ? 1 : 0, c = axis == 2 ? 1 : 2;
   const int n[3] = {g.nx, g.ny, g.nz};
   const int stride[3] = {1, g.nx, g.nx * g.ny};  // < 2^31: the caller checks the padded count
@@ -174,9 +146,11 @@ __attribute__((target("avx2,fma"))) void slice_march_x8(const GridView& g, int a
           p11 = _mm256_blendv_ps(p11, q11, up);
         }
         loaded = true;
+        ++*row_steps;
       }
     }
     if (!loaded) {
+      ++*gathered_steps;
       const __m256i at =
           _mm256_add_epi32(_mm256_set1_epi32(ia * stride[axis]),
                            _mm256_add_epi32(_mm256_mullo_epi32(ib, stride_b), _mm256_mullo_epi32(ic, stride_c)));
@@ -195,6 +169,15 @@ __attribute__((target("avx2,fma"))) void slice_march_x8(const GridView& g, int a
 }
 
 }  // namespace
+
+namespace {
+std::atomic<int64_t> counts_row_steps{0}, counts_gathered_steps{0}, counts_shared_walks{0}, counts_lane_walks{0};
+}  // namespace
+
+SlicePacketCounts slice_packet_counts() {
+  return {counts_row_steps.load(std::memory_order_relaxed), counts_gathered_steps.load(std::memory_order_relaxed),
+          counts_shared_walks.load(std::memory_order_relaxed), counts_lane_walks.load(std::memory_order_relaxed)};
+}
 
 void slice_rays_x8(const GridView& g, const DetectorView& d, int c0, int r, bool skip_empty, float out[8]) {
   // the packet's axis: its middle ray's major one; a lane whose own major axis is another (a
@@ -244,7 +227,8 @@ void slice_rays_x8(const GridView& g, const DetectorView& d, int c0, int r, bool
       step[1][i] = s[l].dt * s[l].dx[c];
     }
     // which lanes take each step. Where every lane stays within a brick of the middle one (at the
-    // first and last steps: positions are linear between), one walk of the middle ray over the
+    // first and last steps: positions are linear between; a voxel short of it, for the rounding
+    // between the walk's crossings and the stepped positions), one walk of the middle ray over the
     // bricks near mu (AttenuationVolume::brick_near) covers every brick the others meet that holds
     // mu, and they sample there and within their own range: a superset of their own runs, whose
     // extra samples read only zeros and add exactly nothing. Else each lane walks its own bricks
@@ -256,7 +240,8 @@ void slice_rays_x8(const GridView& g, const DetectorView& d, int c0, int r, bool
       if (!hit[i] || alone[i] || s[i].k_end <= 0) continue;
       for (const int k : {0, k_max - 1})
         for (int e = 0; e < 2; ++e)
-          if (!(fabsf((base[e][i] - base[e][mid]) + k * (step[e][i] - step[e][mid])) < float(g.brick))) shared = false;
+          if (!(fabsf((base[e][i] - base[e][mid]) + k * (step[e][i] - step[e][mid])) < float(g.brick - 1)))
+            shared = false;
     }
     if (shared) {
       for (int i = 0; i < 8; ++i) {
@@ -270,7 +255,8 @@ void slice_rays_x8(const GridView& g, const DetectorView& d, int c0, int r, bool
       const int m_lo = o[mid], m_hi = o[mid] + s[mid].k_end;
       std::fill(keep + m_lo, keep + m_hi, uint8_t(0));
       auto near_run = [&](int lo, int hi) { std::fill(keep + m_lo + lo, keep + m_lo + hi, uint8_t(0xff)); };
-      for_each_near_run(g, s[mid], near_run);
+      auto near_mu = [&](int x, int y, int z) { return g.brick_near[x + g.bnx * (y + int64_t(g.bny) * z)] != 0; };
+      for_each_run_where(g, s[mid], near_mu, near_run);
       for (int k = 0; k < k_max; ++k) active[k] &= keep[k];
     } else {
       for (int i = 0; i < 8; ++i) {
@@ -284,7 +270,11 @@ void slice_rays_x8(const GridView& g, const DetectorView& d, int c0, int r, bool
       }
     }
     float sum[8];
-    slice_march_x8(g, axis, sign, j_first, base, step, k_max, active, sum);
+    int64_t rows = 0, gathered = 0;
+    slice_march_x8(g, axis, sign, j_first, base, step, k_max, active, sum, &rows, &gathered);
+    counts_row_steps.fetch_add(rows, std::memory_order_relaxed);
+    counts_gathered_steps.fetch_add(gathered, std::memory_order_relaxed);
+    (shared ? counts_shared_walks : counts_lane_walks).fetch_add(1, std::memory_order_relaxed);
     for (int i = 0; i < 8; ++i)
       if (hit[i] && !alone[i] && s[i].k_end > 0) out[i] = sum[i] * s[i].dt * s[i].len_mm;
   } else {

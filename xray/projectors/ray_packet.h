@@ -4,7 +4,10 @@
 // eight trilinear reads of a step gathered side by side. Neighbouring rays read neighbouring
 // voxels, so a step's gathers mostly hit the lines the previous rays brought in. Positions are
 // stepped as x(k) = x(t0 + dt/2) + k dt dx, so sums differ from trilinear_ray's in the last bits.
-// CPU only; the CUDA kernel runs trilinear_ray per pixel.
+// The same for Joseph's method (slice_rays_x8). CPU only; the CUDA kernel runs trilinear_ray or
+// slice_ray per pixel.
+#include <cstdint>
+
 #include "xray/projectors/ray_march.h"
 
 namespace pcisim::xray::ray {
@@ -20,9 +23,19 @@ bool packet_supported();
 void trilinear_rays_x8(const GridView& g, const DetectorView& d, int c0, int r, float step_voxels, bool skip_empty,
                        float out[8]);
 
-// the same eight pixels by Joseph's method (ray_march.h: slice_ray), on the planes of the middle
-// ray's major axis; four bilinear reads a sample gathered side by side. Sums differ from
-// slice_ray's in the last bits (positions stepped)
+// the same eight pixels by Joseph's method (ray_march.h: slice_ray), the eight on one plane of the
+// middle ray's major axis a step; four bilinear reads a sample, whole rows loaded and spread to
+// the lanes where the eight points lie close (else gathered), and one brick walk for the eight
+// where they stay within a brick of the middle ray. Sums differ from slice_ray's in the last bits
+// (positions stepped). The same preconditions as trilinear_rays_x8
 void slice_rays_x8(const GridView& g, const DetectorView& d, int c0, int r, bool skip_empty, float out[8]);
+
+// what slice_rays_x8 did since the process started (all threads; relaxed counts, for tests and
+// benchmarks): steps whose reads were row loads or gathers, and packets that walked the bricks
+// once for the eight or lane by lane
+struct SlicePacketCounts {
+  int64_t row_steps = 0, gathered_steps = 0, shared_walks = 0, lane_walks = 0;
+};
+SlicePacketCounts slice_packet_counts();
 
 }  // namespace pcisim::xray::ray

@@ -272,6 +272,9 @@ TEST(Scene, TheFluoroscopySamplesVoxelPlanesUnlessAStepIsAskedFor) {
             "plane); use sampling \"steps\"");
   EXPECT_EQ(error_of(R"({"effects": {"xray": {"sampling": "rays"}}})").rfind("test.json: effects.xray.sampling", 0),
             0u);
+  EXPECT_FALSE(projector_of(R"({"effects": {"xray": {"projector": "exact"}}})").trilinear.slices);
+  EXPECT_EQ(error_of(R"({"effects": {"xray": {"projector": "gl", "sampling": "planes"}}})"),
+            "test.json: effects.xray.sampling: only with projector \"cpu\" or \"cuda\" (\"gl\" has its own)");
 }
 
 TEST(Scene, TheBeatingBackgroundIsOnByDefaultAndItsBinsAreChecked) {

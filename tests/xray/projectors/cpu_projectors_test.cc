@@ -134,32 +134,44 @@ TEST(SiddonProjector, PlansWithTheBricksAsTheyAreWhenItProjects) {
 
 // a water box (HU 0 -> mu_water) with faces on voxel boundaries: the exact integral of any ray
 // is mu_water times the length of its chord through the box, in closed form by slab clipping
-TEST(Projectors, WaterBoxMatchesClosedForm) {
-  anatomy::Volume v = anatomy::Volume::make({40, 36, 30}, Vector3d(0.5, 0.75, 1.0), Vector3d(-10, -13, -15),
-                                            anatomy::VoxelType::kInt16);
-  std::fill(v.hu_i16.begin(), v.hu_i16.end(), int16_t(-1000));
-  const int lo[3] = {8, 6, 5}, hi[3] = {31, 27, 24};  // inclusive voxel ranges
-  for (int k = lo[2]; k <= hi[2]; ++k)
-    for (int j = lo[1]; j <= hi[1]; ++j)
-      for (int i = lo[0]; i <= hi[0]; ++i) v.hu_i16[v.linear_index(i, j, k)] = 0;
-  const AttenuationVolume a(v);
-  const Vector3d box_lo = v.index_to_physical_mm(Vector3d(lo[0] - 0.5, lo[1] - 0.5, lo[2] - 0.5));
-  const Vector3d box_hi = v.index_to_physical_mm(Vector3d(hi[0] + 0.5, hi[1] + 0.5, hi[2] + 0.5));
-  auto chord = [&](const Vector3d& p0, const Vector3d& p1) {
+// water (0 HU) on voxel boundaries in air, anisotropic voxels; chord_mm: the segment's length
+// inside it, in closed form
+struct WaterBox {
+  anatomy::Volume v;
+  Vector3d lo_mm, hi_mm;
+  WaterBox()
+      : v(anatomy::Volume::make({40, 36, 30}, Vector3d(0.5, 0.75, 1.0), Vector3d(-10, -13, -15),
+                                anatomy::VoxelType::kInt16)) {
+    std::fill(v.hu_i16.begin(), v.hu_i16.end(), int16_t(-1000));
+    const int lo[3] = {8, 6, 5}, hi[3] = {31, 27, 24};  // inclusive voxel ranges
+    for (int k = lo[2]; k <= hi[2]; ++k)
+      for (int j = lo[1]; j <= hi[1]; ++j)
+        for (int i = lo[0]; i <= hi[0]; ++i) v.hu_i16[v.linear_index(i, j, k)] = 0;
+    lo_mm = v.index_to_physical_mm(Vector3d(lo[0] - 0.5, lo[1] - 0.5, lo[2] - 0.5));
+    hi_mm = v.index_to_physical_mm(Vector3d(hi[0] + 0.5, hi[1] + 0.5, hi[2] + 0.5));
+  }
+  double chord_mm(const Vector3d& p0, const Vector3d& p1) const {
     double t0 = 0, t1 = 1;
     for (int ax = 0; ax < 3; ++ax) {
       const double d = p1[ax] - p0[ax];
       if (std::abs(d) < 1e-15) {
-        if (p0[ax] < box_lo[ax] || p0[ax] > box_hi[ax]) return 0.0;
+        if (p0[ax] < lo_mm[ax] || p0[ax] > hi_mm[ax]) return 0.0;
         continue;
       }
-      double ta = (box_lo[ax] - p0[ax]) / d, tb = (box_hi[ax] - p0[ax]) / d;
+      double ta = (lo_mm[ax] - p0[ax]) / d, tb = (hi_mm[ax] - p0[ax]) / d;
       if (ta > tb) std::swap(ta, tb);
       t0 = std::max(t0, ta);
       t1 = std::min(t1, tb);
     }
     return std::max(0.0, t1 - t0) * (p1 - p0).norm();
-  };
+  }
+};
+
+TEST(Projectors, WaterBoxMatchesClosedForm) {
+  const WaterBox box;
+  const anatomy::Volume& v = box.v;
+  const AttenuationVolume a(v);
+  auto chord = [&](const Vector3d& p0, const Vector3d& p1) { return box.chord_mm(p0, p1); };
   std::mt19937 rng(5);
   DetectorGeometry g = random_geometry(rng, v, 24, 20);
   g.pixel_mm *= 0.5;  // keep most rays on the box
@@ -309,16 +321,9 @@ TEST(TrilinearProjector, EightRaysAtOnceTakeTheSameSamplesAsOneAtATime) {
 // axis, against the closed-form chord of a water box; trilinear at 1 voxel beside it, the marcher
 // the scenes ran before
 TEST(SliceProjector, WaterBoxMatchesClosedFormAsTrilinearDoes) {
-  anatomy::Volume v = anatomy::Volume::make({40, 36, 30}, Vector3d(0.5, 0.75, 1.0), Vector3d(-10, -13, -15),
-                                            anatomy::VoxelType::kInt16);
-  std::fill(v.hu_i16.begin(), v.hu_i16.end(), int16_t(-1000));
-  const int lo[3] = {8, 6, 5}, hi[3] = {31, 27, 24};
-  for (int k = lo[2]; k <= hi[2]; ++k)
-    for (int j = lo[1]; j <= hi[1]; ++j)
-      for (int i = lo[0]; i <= hi[0]; ++i) v.hu_i16[v.linear_index(i, j, k)] = 0;
+  const WaterBox box;
+  const anatomy::Volume& v = box.v;
   const AttenuationVolume a(v);
-  const Vector3d box_lo = v.index_to_physical_mm(Vector3d(lo[0] - 0.5, lo[1] - 0.5, lo[2] - 0.5));
-  const Vector3d box_hi = v.index_to_physical_mm(Vector3d(hi[0] + 0.5, hi[1] + 0.5, hi[2] + 0.5));
   std::mt19937 rng(5);
   for (int view = 0; view < 3; ++view) {
     DetectorGeometry g = random_geometry(rng, v, 24, 20);
@@ -332,16 +337,7 @@ TEST(SliceProjector, WaterBoxMatchesClosedFormAsTrilinearDoes) {
     int hits = 0;
     for (int r = 0; r < g.height; ++r) {
       for (int c = 0; c < g.width; ++c) {
-        const Vector3d p0 = g.source_mm, p1 = g.pixel_center_mm(c, r);
-        double t0 = 0, t1 = 1;
-        for (int ax = 0; ax < 3; ++ax) {
-          const double d = p1[ax] - p0[ax];
-          double ta = (box_lo[ax] - p0[ax]) / d, tb = (box_hi[ax] - p0[ax]) / d;
-          if (ta > tb) std::swap(ta, tb);
-          t0 = std::max(t0, ta);
-          t1 = std::min(t1, tb);
-        }
-        const double want = 0.02 * std::max(0.0, t1 - t0) * (p1 - p0).norm();
+        const double want = 0.02 * box.chord_mm(g.source_mm, g.pixel_center_mm(c, r));
         peak = std::max(peak, want);
         hits += want > 0;
         slice_sq += std::pow(slices.at(c, r) - want, 2);
@@ -385,9 +381,26 @@ TEST(SliceProjector, IsAsCloseToExactAsTrilinearAtOneVoxelOnSmoothRandomVolumes)
   }
 }
 
-// empty bricks skipped (per lane, or for a packet by one walk over the bricks near mu) add only
-// zeros: the same sums as sampling every plane; one ray at a time the same samples as eight
+// the packets and their skipping against one ray at a time and against every plane sampled; the
+// packets' paths each run: wide pixels (lanes many voxels apart) gather and walk lane by lane,
+// narrow ones (a zoomed detector, lanes within a voxel or two) load rows and walk once for eight
+void expect_slices_take_the_same_samples(const AttenuationVolume& a, const DetectorGeometry& g, const char* what) {
+  Image skip, full, single;
+  for (Image* im : {&skip, &full, &single}) im->resize(g.width, g.height);
+  TrilinearProjector(a, {.skip_empty = true, .threads = 2, .slices = true}).project(g, &skip);
+  TrilinearProjector(a, {.skip_empty = false, .threads = 2, .slices = true}).project(g, &full);
+  TrilinearProjector(a, {.skip_empty = true, .threads = 2, .packets = false, .slices = true}).project(g, &single);
+  double top = 0;
+  for (const float p : full.pixels) top = std::max<double>(top, p);
+  ASSERT_GT(top, 0) << what << ": the rays must cross the volume";
+  // empty bricks skipped (per lane, or for a packet by one walk over the bricks near mu) add only
+  // zeros; one ray at a time takes the same samples as eight (positions stepped: the last bits)
+  EXPECT_LT(compare(skip, full).max_rel, 1e-6) << what;
+  EXPECT_LT(compare(single, full).max_rel, 2e-5) << what << ", one ray at a time";
+}
+
 TEST(SliceProjector, SkippingAndPacketsTakeTheSameSamples) {
+  const ray::SlicePacketCounts before = ray::slice_packet_counts();
   std::mt19937 rng(31);
   for (int trial = 0; trial < 4; ++trial) {
     const anatomy::Volume v = random_volume(rng, /*smooth=*/true);
@@ -399,18 +412,29 @@ TEST(SliceProjector, SkippingAndPacketsTakeTheSameSamples) {
     ASSERT_GT(empty, 0) << "the test needs empty bricks";
     DetectorGeometry g = random_geometry(rng, v, 37, 11);
     if (trial >= 2) g.pixel_mm *= 2.5;
-    Image skip, full, single;
-    for (Image* im : {&skip, &full, &single}) im->resize(g.width, g.height);
-    TrilinearProjector(a, {.skip_empty = true, .threads = 2, .slices = true}).project(g, &skip);
-    TrilinearProjector(a, {.skip_empty = false, .threads = 2, .slices = true}).project(g, &full);
-    TrilinearProjector(a, {.skip_empty = true, .threads = 2, .packets = false, .slices = true}).project(g, &single);
-    double top = 0;
-    for (const float p : full.pixels) top = std::max<double>(top, p);
-    ASSERT_GT(top, 0) << "the rays must cross the volume";
-    EXPECT_LT(compare(skip, full).max_rel, 1e-6) << trial;
-    EXPECT_LT(compare(single, full).max_rel, 2e-5) << trial << " one ray at a time";
-    if (ray::packet_supported()) EXPECT_LT(compare(skip, single).max_rel, 2e-5) << trial;
+    expect_slices_take_the_same_samples(a, g, ("wide pixels, trial " + std::to_string(trial)).c_str());
   }
+  const ray::SlicePacketCounts wide = ray::slice_packet_counts();
+  for (int trial = 0; trial < 6; ++trial) {
+    const anatomy::Volume v = random_volume(rng, /*smooth=*/true);
+    AttenuationParams params;
+    params.brick_voxels = 4;
+    const AttenuationVolume a(v, params);
+    DetectorGeometry g = random_geometry(rng, v, 64, 8);
+    g.pixel_mm *= 0.04;
+    expect_slices_take_the_same_samples(a, g, ("narrow pixels, trial " + std::to_string(trial)).c_str());
+  }
+  const ray::SlicePacketCounts narrow = ray::slice_packet_counts();
+  if (!ray::packet_supported()) GTEST_SKIP() << "this CPU has no AVX2: the packets' paths are not used";
+  EXPECT_GT(wide.gathered_steps - before.gathered_steps, 0);
+  EXPECT_GT(wide.lane_walks - before.lane_walks, 0);
+  EXPECT_GT(narrow.row_steps - wide.row_steps, 0);
+  EXPECT_GT(narrow.shared_walks - wide.shared_walks, 0);
+  std::printf("narrow pixels: %lld steps loaded rows, %lld gathered; %lld packets walked once, %lld lane by lane\n",
+              static_cast<long long>(narrow.row_steps - wide.row_steps),
+              static_cast<long long>(narrow.gathered_steps - wide.gathered_steps),
+              static_cast<long long>(narrow.shared_walks - wide.shared_walks),
+              static_cast<long long>(narrow.lane_walks - wide.lane_walks));
 }
 
 // the bricks near mu are the bricks holding it dilated by one

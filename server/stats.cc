@@ -37,12 +37,6 @@ void collect_stats(const SharedState& state, const PhysicsLoop& physics, double 
   r.lcm_dropped_bad = state.lcm_dropped_bad.load();
 }
 
-StatsReport collect_stats(const SharedState& state, const PhysicsLoop& physics, double elapsed_s, bool haptic_fifo) {
-  StatsReport r;
-  collect_stats(state, physics, elapsed_s, haptic_fifo, &r);
-  return r;
-}
-
 nlohmann::json to_json(const StatsReport& r) {
   auto pct = [](const Percentiles& p, bool with_p999) {
     nlohmann::json j = {{"p50", p.p50}, {"p99", p.p99}, {"max", p.max}};
@@ -118,12 +112,6 @@ void to_message(const StatsReport& r, int64_t utime, int64_t seq, bool paused, p
   m.lcm_tx = r.lcm_tx;
   m.lcm_dropped_bad = r.lcm_dropped_bad;
   m.paused = paused ? 1 : 0;
-}
-
-pcisim_lcm::sim_status_t to_message(const StatsReport& r, int64_t utime, int64_t seq, bool paused) {
-  pcisim_lcm::sim_status_t m{};
-  to_message(r, utime, seq, paused, &m);
-  return m;
 }
 
 std::string human_summary(const StatsReport& r) {

@@ -46,12 +46,10 @@ Percentiles percentiles(const realtime::LatencyHistogram& h, double scale);
 // nothing once warm (issue #36 item 5)
 void collect_stats(const SharedState& state, const PhysicsLoop& physics, double elapsed_s, bool haptic_fifo,
                    StatsReport* r);
-StatsReport collect_stats(const SharedState& state, const PhysicsLoop& physics, double elapsed_s, bool haptic_fifo);
 nlohmann::json to_json(const StatsReport& r);
 // into `m` in place (its effect names keep their storage); seq and the session's cath-lab fields
 // are the caller's
 void to_message(const StatsReport& r, int64_t utime, int64_t seq, bool paused, pcisim_lcm::sim_status_t* m);
-pcisim_lcm::sim_status_t to_message(const StatsReport& r, int64_t utime, int64_t seq, bool paused);
 std::string human_summary(const StatsReport& r);
 
 }  // namespace pcisim::server

@@ -105,7 +105,7 @@ struct Listener {
     // fresh: the loop's own force from a model in date (not stale, fading or faulted, not the
     // closing zero a stopping pipeline sends with seq -1); ramping in is fresh, counted apart
     using F = pcisim_lcm::force_command_t;
-    const bool fresh = (m.flags & (F::FLAG_STALE | F::FLAG_FADED | F::FLAG_FAULT)) == 0 && m.seq >= 0;
+    const bool fresh = (m.flags & (int{F::FLAG_STALE} | int{F::FLAG_FADED} | int{F::FLAG_FAULT})) == 0 && m.seq >= 0;
     forces.push_back({now_s(), fresh, (m.flags & F::FLAG_RAMPING) != 0});
   }
   void on_frame(const lcm::ReceiveBuffer* r, const std::string&) {

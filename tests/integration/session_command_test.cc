@@ -259,7 +259,7 @@ TEST(SessionCommands, ReloadBuildsTheNextSceneWhileTheRunningOneStepsAndTheForce
     if (f.t_s < load_at_s) continue;
     ++after_load;
     if (f.flags & F::FLAG_RAMPING) ramp_s += 1e-3;
-    if ((f.flags & (F::FLAG_STALE | F::FLAG_FADED | F::FLAG_FAULT)) || f.seq < 0) continue;
+    if ((f.flags & (int{F::FLAG_STALE} | int{F::FLAG_FADED} | int{F::FLAG_FAULT})) || f.seq < 0) continue;
     longest_stale_s = std::max(longest_stale_s, f.t_s - last_fresh_s);
     last_fresh_s = f.t_s;
   }

@@ -195,14 +195,16 @@ void slice_rays_x8(const GridView& g, const DetectorView& d, int c0, int r, bool
   const int axis = major_axis(s[mid].dx);
   const int sign = s[mid].dx[axis] > 0.f ? 1 : -1;
   const int b = axis == 0 ? 1 : 0, c = axis == 2 ? 1 : 2;
-  bool alone[8] = {};
+  // marched: the lanes the packet samples (the others give 0, or slice_ray's answer when alone)
+  bool alone[8] = {}, marched[8] = {};
   int j0[8] = {};
   bool any = false;
   int j_first = 0;
   for (int i = 0; i < 8; ++i) {
     if (!hit[i]) continue;
     alone[i] = major_axis(s[i].dx) != axis || !(s[i].dx[axis] * sign > 0.f);
-    if (alone[i] || !to_planes(axis, &s[i], &j0[i])) continue;
+    marched[i] = !alone[i] && to_planes(axis, &s[i], &j0[i]);
+    if (!marched[i]) continue;
     j_first = !any ? j0[i] : (sign > 0 ? std::min(j_first, j0[i]) : std::max(j_first, j0[i]));
     any = true;
   }
@@ -210,16 +212,16 @@ void slice_rays_x8(const GridView& g, const DetectorView& d, int c0, int r, bool
   alignas(32) float base[2][8], step[2][8];
   int k_max = 0, o[8] = {};
   for (int i = 0; i < 8; ++i) {
-    if (!hit[i] || alone[i] || s[i].k_end <= 0) continue;
+    if (!marched[i]) continue;
     o[i] = (j0[i] - j_first) * sign;
     k_max = std::max(k_max, s[i].k_end + o[i]);
   }
   if (any && k_max <= kPacketMaxSamples && packet_supported()) {
-    int ref = -1;  // a lane with samples, whose path the others without stand on (masked out)
+    int ref = -1;  // a marched lane, whose path the others stand on (masked out)
     for (int i = 0; i < 8 && ref < 0; ++i)
-      if (hit[i] && !alone[i] && s[i].k_end > 0) ref = i;
+      if (marched[i]) ref = i;
     for (int i = 0; i < 8; ++i) {
-      const int l = hit[i] && !alone[i] && s[i].k_end > 0 ? i : ref;
+      const int l = marched[i] ? i : ref;
       const float t = (static_cast<float>(j_first) - s[l].x0[axis]) / s[l].dx[axis];  // on plane j_first
       base[0][i] = s[l].x0[b] + t * s[l].dx[b];
       base[1][i] = s[l].x0[c] + t * s[l].dx[c];
@@ -234,10 +236,9 @@ void slice_rays_x8(const GridView& g, const DetectorView& d, int c0, int r, bool
     // extra samples read only zeros and add exactly nothing. Else each lane walks its own bricks
     uint8_t active[kPacketMaxSamples];
     std::fill(active, active + k_max, uint8_t(0));
-    const bool mid_ok = hit[mid] && !alone[mid] && s[mid].k_end > 0;
-    bool shared = skip_empty && g.brick_near != nullptr && mid_ok;
+    bool shared = skip_empty && g.brick_near != nullptr && marched[mid];
     for (int i = 0; i < 8 && shared; ++i) {
-      if (!hit[i] || alone[i] || s[i].k_end <= 0) continue;
+      if (!marched[i]) continue;
       for (const int k : {0, k_max - 1})
         for (int e = 0; e < 2; ++e)
           if (!(fabsf((base[e][i] - base[e][mid]) + k * (step[e][i] - step[e][mid])) < float(g.brick - 1)))
@@ -245,7 +246,7 @@ void slice_rays_x8(const GridView& g, const DetectorView& d, int c0, int r, bool
     }
     if (shared) {
       for (int i = 0; i < 8; ++i) {
-        if (!hit[i] || alone[i] || s[i].k_end <= 0) continue;
+        if (!marched[i]) continue;
         const uint8_t bit = static_cast<uint8_t>(1u << i);
         for (int k = o[i]; k < o[i] + s[i].k_end; ++k) active[k] |= bit;
       }
@@ -260,7 +261,7 @@ void slice_rays_x8(const GridView& g, const DetectorView& d, int c0, int r, bool
       for (int k = 0; k < k_max; ++k) active[k] &= keep[k];
     } else {
       for (int i = 0; i < 8; ++i) {
-        if (!hit[i] || alone[i] || s[i].k_end <= 0) continue;
+        if (!marched[i]) continue;
         const uint8_t bit = static_cast<uint8_t>(1u << i);
         uint8_t* lane = active + o[i];
         auto run = [&](int lo, int hi) {
@@ -276,10 +277,10 @@ void slice_rays_x8(const GridView& g, const DetectorView& d, int c0, int r, bool
     counts_gathered_steps.fetch_add(gathered, std::memory_order_relaxed);
     (shared ? counts_shared_walks : counts_lane_walks).fetch_add(1, std::memory_order_relaxed);
     for (int i = 0; i < 8; ++i)
-      if (hit[i] && !alone[i] && s[i].k_end > 0) out[i] = sum[i] * s[i].dt * s[i].len_mm;
+      if (marched[i]) out[i] = sum[i] * s[i].dt * s[i].len_mm;
   } else {
     for (int i = 0; i < 8; ++i)
-      if (hit[i] && !alone[i]) out[i] = slice_ray(g, d, c0 + i, r, skip_empty);
+      if (marched[i]) out[i] = slice_ray(g, d, c0 + i, r, skip_empty);
   }
   for (int i = 0; i < 8; ++i)
     if (alone[i]) out[i] = slice_ray(g, d, c0 + i, r, skip_empty);

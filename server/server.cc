@@ -110,7 +110,8 @@ struct Server::Impl {
     r.effects = scene.effects;
     r.xray_frames = state.xray_frames.load();
     const double on_s = state.xray_on_ns.load() * 1e-9;
-    r.xray_fps = on_s > 0 ? r.xray_frames / on_s : 0.0;
+    // the pulse rate: a C-arm move's extra frame is a refresh, not a pulse
+    r.xray_fps = on_s > 0 ? state.xray_pulses.load() / on_s : 0.0;
     r.xray_render_ms = percentiles(state.xray_render_ns, 1e-6);
     r.ultrasound_frames = state.ultrasound_frames.load();
     r.ultrasound_render_ms = percentiles(state.ultrasound_render_ns, 1e-6);

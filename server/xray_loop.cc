@@ -168,16 +168,22 @@ void XrayLoop::run() {
     was_cine_ = cine;
     const double rate = cine ? spec_.cine_rate_fps : spec_.pulse_rate_fps;
     const auto every = std::max<int64_t>(1, std::llround(tick_hz / rate));
+    const bool pulse = tick % every == 0;
     if (on) {
-      if (last_on_ns) state_.xray_on_ns.fetch_add(wake_ns - last_on_ns, std::memory_order_relaxed);
+      // beam time: n pulses stand for n periods (the first one's period counted at pedal-down,
+      // then wake to wake, so that ticks a busy machine skipped still count as beam time)
+      const int64_t since_ns = last_on_ns ? wake_ns - last_on_ns : every * schedule.period_ns();
+      state_.xray_on_ns.fetch_add(since_ns, std::memory_order_relaxed);
       last_on_ns = wake_ns;
-      if (moved || tick % every == 0) render_and_publish(cine);
+      if (moved || pulse) render_and_publish(cine);
     } else {
       last_on_ns = 0;
     }
     // an extra frame: the pulse it came before still comes on time, unless the move's frame ran
     // past it (then that pulse's frame is the move's)
-    if (moved && realtime::monotonic_ns() < schedule.deadline_ns()) continue;
+    const bool extra = moved && realtime::monotonic_ns() < schedule.deadline_ns();
+    if (on && pulse && !extra) state_.xray_pulses.fetch_add(1, std::memory_order_relaxed);
+    if (extra) continue;
     ++tick;
     schedule.complete(realtime::monotonic_ns());
   }

@@ -213,15 +213,29 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
     // large_radius_mm deep (an opening by a ball, as the clipping's). A thin vessel leaves a vessel,
     // not these: a tube piece joins only thin parts of the region, and one touching a large lumen
     // (a vein on a chamber, the soft tissue behind the aorta) does not join at all
-    Mask large = Mask::zeros(cg);
-    {
-      const FloatImage depth = distance_inside_mm(in_crop, o.threads);
+    auto large_of = [&](const Mask& m) {
+      const FloatImage depth = distance_inside_mm(m, o.threads);
       Mask outside_core = Mask::zeros(cg);
       for (int64_t c = 0; c < cg.size(); ++c) outside_core.v[c] = depth.v[c] >= o.tubes.large_radius_mm ? 0 : 1;
       const FloatImage to_core = distance_inside_mm(outside_core, o.threads);
       const double reach = o.tubes.large_radius_mm + 1.0 + 0.5 * cg.spacing_mm.minCoeff();
-      for (int64_t c = 0; c < cg.size(); ++c) large.v[c] = in_crop.v[c] && to_core.v[c] <= reach ? 1 : 0;
-    }
+      Mask out_large = Mask::zeros(cg);
+      for (int64_t c = 0; c < cg.size(); ++c) out_large.v[c] = m.v[c] && to_core.v[c] <= reach ? 1 : 0;
+      return out_large;
+    };
+    const Mask large = large_of(in_crop);
+    // and those of the bright structures the fill did not reach (the descending aorta, where the
+    // CT's field of view cuts the arch off): bright halfway from tissue to the seed's contrast.
+    // How far each voxel lies from any large lumen
+    const FloatImage to_large = [&] {
+      const double bright_hu = o.tissue_hu + 0.5 * (out.seed_hu - o.tissue_hu);
+      Mask apart = Mask::zeros(cg);
+      for (int64_t c = 0; c < cg.size(); ++c)
+        apart.v[c] = !in_crop.v[c] && hu.v[c] >= bright_hu && hu.v[c] <= out.upper_hu ? 1 : 0;
+      Mask not_large = large_of(apart);
+      for (int64_t c = 0; c < cg.size(); ++c) not_large.v[c] = large.v[c] || not_large.v[c] ? 0 : 1;
+      return distance_inside_mm(not_large, o.threads);
+    }();
     std::vector<int32_t> piece_of(cg.size(), -1);
     std::vector<std::vector<int64_t>> pieces;
     std::vector<int64_t> stack;
@@ -288,10 +302,13 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
       bool any = false;
       for (const auto& [id, via] : touch) {
         if (joined[id]) continue;
-        // long enough to be a vessel, not a speck of noise; touching no large lumen
+        // long enough to be a vessel, not a speck of noise; touching no large lumen, nor running
+        // along one
         Eigen::Vector3d lo_mm = Eigen::Vector3d::Constant(1e300), hi_mm = -lo_mm;
         bool on_large = false;
+        size_t along = 0;
         for (int64_t c : pieces[id]) {
+          if (to_large.v[c] <= o.tubes.along_large_mm) ++along;
           const auto [i, j, k] = cg.ijk(c);
           for (int q : use) {
             const int64_t a = i + nb.d[q][0], b = j + nb.d[q][1], cc = k + nb.d[q][2];
@@ -301,6 +318,7 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
           lo_mm = lo_mm.cwiseMin(p);
           hi_mm = hi_mm.cwiseMax(p);
         }
+        on_large = on_large || double(along) > o.tubes.along_large_fraction * double(pieces[id].size());
         if (on_large || (hi_mm - lo_mm).norm() < o.tubes.min_piece_mm) {
           joined[id] = 2;  // judged: not joined
           continue;

@@ -40,6 +40,12 @@ struct TubeGrowthOptions {
   // the region's large lumens (an opening by a ball of this radius, as the clipping's) are no
   // anchors: pieces join thin parts only, and a piece touching a large lumen joins nowhere
   double large_radius_mm = 3.0;
+  // nor does a piece that runs along a large lumen: more than along_large_fraction of its voxels
+  // within along_large_mm of it (the blurred edge of the descending aorta beside the lung made a
+  // tube 130 mm long, a voxel off the edge, that a circumflex passing by took into its tree:
+  // family seed 20, issue #30)
+  double along_large_mm = 1.5;
+  double along_large_fraction = 0.5;
   double margin_mm = 12;      // around the region's box
   double max_fraction = 0.5;  // the growth stops at this share of the region's voxels (a leak)
 };

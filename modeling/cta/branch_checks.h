@@ -34,6 +34,10 @@ struct BranchCheckOptions {
   // vessel when more than across_deg from its incoming direction; the vessel goes on along an arm
   // within on_deg of its incoming direction
   double crossing_gap_mm = 3.0, arm_mm = 4.0;
+  // each arm's direction is taken past its first arm_skip_mm: there the traced lines bend into
+  // the junction's blob of lumen (family seed 2: a vein crossing the RCA, its arms 117 deg apart
+  // over their first 4 mm, 167 deg from 2 to 6 mm)
+  double arm_skip_mm = 2.0;
   double opposite_deg = 130, across_deg = 35, on_deg = 45;
   double sample_spacing_mm = 0.5;  // of the branches' samples (build_cta_model sets the spline's)
   // a branch beside its parent: at least parallel_min_mm long, its course past its first

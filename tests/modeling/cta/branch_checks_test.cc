@@ -67,6 +67,42 @@ TEST(BranchChecks, ACrossingTheTraceRanOntoIsCutBackToTheVessel) {
   EXPECT_EQ(later.branches[1].parent_point, 42);
 }
 
+// a crossing as the tracer leaves it: each vein arm bends through the junction's blob of lumen
+// over its first 2 mm (there 55 deg off its course: over 4 mm from the junction the two arms are
+// 125 deg apart, under the 130 that makes a pair opposite); judged past that bend, 180 deg apart,
+// and cut. A side branch (D) leaves the vessel 1 mm before the crossing, 15 deg off one vein arm's
+// course: with the other arm it is a pair too, but the vein's is the more nearly opposite, and D
+// stays
+TEST(BranchChecks, ACrossingIsJudgedPastTheJunctionsBendAndTakesItsMostOppositePair) {
+  // an arm leaving (20, 0, 0): its first 2 mm at 55 deg off `dir` towards +x, then along dir
+  auto bent_arm = [](const Vector3d& dir, int parent_point) {
+    const Vector3d off = std::cos(0.96) * dir + std::sin(0.96) * Vector3d::UnitX();
+    ModelBranch b = line({20, 0, 0}, off, 2.0, 0, parent_point);
+    const ModelBranch on = line(b.points_mm.back(), dir, 14);
+    b.points_mm.insert(b.points_mm.end(), on.points_mm.begin() + 1, on.points_mm.end());
+    b.radius_mm.assign(b.points_mm.size(), 1.0);
+    return b;
+  };
+  ModelTree vein;
+  vein.branches.push_back(line({0, 0, 0}, {1, 0, 0}, 40));
+  vein.branches.push_back(bent_arm({0, 1, 0}, 40));
+  vein.branches.push_back(bent_arm({0, -1, 0}, 40));
+  BranchCheckOptions at_the_junction;
+  at_the_junction.arm_skip_mm = 0;
+  ModelTree unskipped = vein;
+  EXPECT_TRUE(drop_crossings(&unskipped, at_the_junction).empty());
+  ModelTree t = vein;
+  const Vector3d d_dir(std::sin(0.26), -std::cos(0.26), 0);  // 15 deg off the lower arm, towards +x
+  t.branches.push_back(line({19, 0, 0}, d_dir, 15, 0, 38));  // D
+  EXPECT_EQ(drop_crossings(&vein, BranchCheckOptions{}).size(), 1u);
+  EXPECT_EQ(vein.branches.size(), 1u);
+  const auto notes = drop_crossings(&t, BranchCheckOptions{});
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("180 deg"), std::string::npos) << notes[0];
+  ASSERT_EQ(t.branches.size(), 2u);
+  EXPECT_EQ(t.branches[1].parent_point, 38);  // D
+}
+
 // what is not a crossing: a bifurcation (the vessel ends in two daughters 80 deg apart), two side
 // branches leaving one point 90 deg apart (a diagonal and a septal), and opposite arms where the
 // vessel does not go on

@@ -394,14 +394,20 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
         Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
         for (const auto& x : p) cov += (x - mean) * (x - mean).transpose();
         const Eigen::Vector3d axis = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(2);
-        double lo_s = 1e300, hi_s = -1e300, reach = 0;
-        for (const auto& x : p) {
-          const double t = (x - mean).dot(axis);
+        // the reach of 95 % of its voxels: a stent on a curving artery bows off the straight axis
+        // (family seed 6: 22 mm of stent with blooming, 3.1 mm at the 95th percentile, 4.4 mm at
+        // the farthest voxel)
+        double lo_s = 1e300, hi_s = -1e300;
+        std::vector<double> reach(p.size());
+        for (size_t v = 0; v < p.size(); ++v) {
+          const double t = (p[v] - mean).dot(axis);
           lo_s = std::min(lo_s, t);
           hi_s = std::max(hi_s, t);
-          reach = std::max(reach, (x - mean - t * axis).norm());
+          reach[v] = (p[v] - mean - t * axis).norm();
         }
-        if (hi_s - lo_s < o.metal.min_length_mm || reach > o.metal.max_radius_mm) continue;
+        const auto at95 = reach.begin() + static_cast<std::ptrdiff_t>(0.95 * double(reach.size() - 1));
+        std::nth_element(reach.begin(), at95, reach.end());
+        if (hi_s - lo_s < o.metal.min_length_mm || *at95 > o.metal.max_radius_mm) continue;
         for (int64_t n : piece) region.v[n] = 1;
         out.metal_voxels += static_cast<int64_t>(piece.size());
         ++out.metal_pieces;

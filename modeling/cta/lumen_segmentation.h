@@ -55,12 +55,12 @@ struct TubeGrowthOptions {
 // piece (26-connected, above the upper threshold in the image the fill sees) touching the region
 // is taken into it when it is stent-like: at most max_volume_mm3 (a rib, a vertebra or the
 // sternum is far larger), at least min_length_mm along its principal axis (a calcified plaque is
-// shorter) and within max_radius_mm of that axis (a coronary stent is at most ~4 mm across).
+// shorter) and 95 % of it within max_radius_mm of that axis (a coronary stent is at most ~4 mm across).
 struct MetalOptions {
   bool enabled = true;
   double max_volume_mm3 = 600;
   double min_length_mm = 8;
-  double max_radius_mm = 4;  // its voxels within this of its principal axis (a coronary stent is <= 4 mm)
+  double max_radius_mm = 4;  // 95 % of its voxels within this of its principal axis (a coronary stent is <= 4 mm)
 };
 
 struct SegmentationOptions {

@@ -239,7 +239,10 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
     std::vector<int32_t> piece_of(cg.size(), -1);
     std::vector<std::vector<int64_t>> pieces;
     std::vector<int64_t> stack;
-    auto candidate = [&](int64_t c) { return may_be(c) && tube.v[c] >= o.tubes.min_measure; };
+    auto candidate = [&](int64_t c) {
+      return may_be(c) && tube.v[c] >= o.tubes.min_measure &&
+             (o.tubes.clear_of_large_mm < 0 || to_large.v[c] > o.tubes.clear_of_large_mm);
+    };
     for (int64_t c0 = 0; c0 < cg.size(); ++c0) {
       if (piece_of[c0] >= 0 || !candidate(c0)) continue;
       const int32_t id = static_cast<int32_t>(pieces.size());

@@ -250,7 +250,8 @@ TEST(LumenSegmentation, AStentOnACurvingVesselIsTakenIn) {
 // descending aorta where the CT's field of view cuts the arch off), edges blurred as a scanner
 // blurs them (0.45 mm), 40 HU of noise. The tube growth takes none of that cylinder's edge, which
 // runs the cube's whole height beside the coronary's end (family seed 20 traced 460 mm of such an
-// edge; issue #30); without the rule for bright structures apart from the fill it takes it
+// edge; issue #30); without the rules for large lumens, bright structures apart from the fill
+// included, it takes it
 TEST(LumenSegmentation, TheBlurredEdgeOfABrightStructureTheFillDidNotReachIsNoTube) {
   const Vector3d a(17.5, 10, 20), b(27, 10, 20);
   const Vector3d apart(27, 19.5, 0);  // its axis: x = 27, y = 19.5; its edge 1 mm from the coronary's
@@ -267,17 +268,29 @@ TEST(LumenSegmentation, TheBlurredEdgeOfABrightStructureTheFillDidNotReachIsNoTu
         return background + (400.0 - background) * step(to_coronary) + (450.0 - background) * step(to_apart);
       },
       40);
+  // each of the two rules alone keeps the edge out: no candidates within clear_of_large_mm of a
+  // large lumen, no piece mostly within along_large_mm of one
   SegmentationOptions o;
   o.metal.enabled = false;
   const LumenSegmentation s = segment_lumen(v, {kSeed}, o);
-  o.tubes.along_large_fraction = 2.0;  // the rule off
-  const LumenSegmentation without = segment_lumen(v, {kSeed}, o);
+  SegmentationOptions clear_only = o, along_only = o, without_rules = o;
+  clear_only.tubes.along_large_fraction = 2.0;
+  along_only.tubes.clear_of_large_mm = -1;
+  without_rules.tubes.along_large_fraction = 2.0;
+  without_rules.tubes.clear_of_large_mm = -1;
+  const LumenSegmentation without = segment_lumen(v, {kSeed}, without_rules);
   const int64_t rim = count_in(s, near_apart_edge), rim_without = count_in(without, near_apart_edge);
-  std::printf("tube voxels %lld / %lld without the rule; the far cylinder's edge: %lld / %lld\n",
-              static_cast<long long>(s.tube_voxels), static_cast<long long>(without.tube_voxels),
-              static_cast<long long>(rim), static_cast<long long>(rim_without));
+  const int64_t rim_clear = count_in(segment_lumen(v, {kSeed}, clear_only), near_apart_edge);
+  const int64_t rim_along = count_in(segment_lumen(v, {kSeed}, along_only), near_apart_edge);
+  std::printf(
+      "tube voxels %lld / %lld without the rules; the far cylinder's edge: %lld, %lld clear of it only, %lld "
+      "not along it only, %lld without either\n",
+      static_cast<long long>(s.tube_voxels), static_cast<long long>(without.tube_voxels), static_cast<long long>(rim),
+      static_cast<long long>(rim_clear), static_cast<long long>(rim_along), static_cast<long long>(rim_without));
   EXPECT_LT(rim, 50);
-  EXPECT_GT(rim_without, 500);  // the failure the rule is for: the edge's length, z 0-40 mm
+  EXPECT_LT(rim_clear, 50);
+  EXPECT_LT(rim_along, 50);
+  EXPECT_GT(rim_without, 500);  // the failure the rules are for: the edge's length, z 0-40 mm
   // the coronary itself is whole
   EXPECT_GT(
       count_in(s, [&](const Vector3d& p) { return distance_to_segment(p, a, b) <= 1.0 && p.x() > 19; }),

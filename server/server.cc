@@ -109,9 +109,11 @@ struct Server::Impl {
     collect_stats(state, *physics, elapsed_s, haptic_fifo, &r);
     r.effects = scene.effects;
     r.xray_frames = state.xray_frames.load();
+    // the pulse rate: a C-arm move's extra frame is a refresh, not a pulse (the pulses read
+    // first: a pulse counted after its beam time was read would overstate the rate)
+    const auto pulses = static_cast<double>(state.xray_pulses.load());
     const double on_s = state.xray_on_ns.load() * 1e-9;
-    // the pulse rate: a C-arm move's extra frame is a refresh, not a pulse
-    r.xray_fps = on_s > 0 ? state.xray_pulses.load() / on_s : 0.0;
+    r.xray_fps = on_s > 0 ? pulses / on_s : 0.0;
     r.xray_render_ms = percentiles(state.xray_render_ns, 1e-6);
     r.ultrasound_frames = state.ultrasound_frames.load();
     r.ultrasound_render_ms = percentiles(state.ultrasound_render_ns, 1e-6);

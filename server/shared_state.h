@@ -118,7 +118,7 @@ struct SharedState {
   realtime::LatencyHistogram xray_render_ns;
   std::atomic<int64_t> xray_frames{0};  // every frame published, the C-arm moves' extra ones too
   std::atomic<int64_t> xray_pulses{0};  // the frames on the pulse schedule
-  std::atomic<int64_t> xray_on_ns{0};   // beam time: a pulse period for each pulse
+  std::atomic<int64_t> xray_on_ns{0};   // beam time: pedal-down wall time, plus each press's first pulse period
 
   // a few figures of the newest step for the once-a-second log line
   std::atomic<double> wire_insertion_mm{0}, wire_rotation_rad{0};

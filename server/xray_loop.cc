@@ -151,7 +151,7 @@ void XrayLoop::run() {
   const double tick_hz = std::max(spec_.pulse_rate_fps, spec_.cine_rate_fps);
   realtime::DeadlineSchedule schedule(realtime::monotonic_ns(), static_cast<int64_t>(std::llround(1e9 / tick_hz)));
   int64_t tick = 0, last_on_ns = 0;
-  bool on = false;
+  bool on = false, first_pulse_counted = false;
   while (!state_.stop.load(std::memory_order_relaxed)) {
     // while the beam is on, a C-arm move is shown at once rather than at the next pulse (up to a
     // pulse period later, 67 ms at 15/s; issue #36): the wait is cut into naps that look for one
@@ -170,14 +170,18 @@ void XrayLoop::run() {
     const auto every = std::max<int64_t>(1, std::llround(tick_hz / rate));
     const bool pulse = tick % every == 0;
     if (on) {
-      // beam time: n pulses stand for n periods (the first one's period counted at pedal-down,
-      // then wake to wake, so that ticks a busy machine skipped still count as beam time)
-      const int64_t since_ns = last_on_ns ? wake_ns - last_on_ns : every * schedule.period_ns();
-      state_.xray_on_ns.fetch_add(since_ns, std::memory_order_relaxed);
+      // beam time: wall time with the pedal down, wake to wake (ticks a busy machine skipped still
+      // count), and the first pulse of each press its period, so that n pulses stand for n periods
+      if (last_on_ns) state_.xray_on_ns.fetch_add(wake_ns - last_on_ns, std::memory_order_relaxed);
       last_on_ns = wake_ns;
+      if (pulse && !first_pulse_counted) {
+        state_.xray_on_ns.fetch_add(every * schedule.period_ns(), std::memory_order_relaxed);
+        first_pulse_counted = true;
+      }
       if (moved || pulse) render_and_publish(cine);
     } else {
       last_on_ns = 0;
+      first_pulse_counted = false;
     }
     // an extra frame: the pulse it came before still comes on time, unless the move's frame ran
     // past it (then that pulse's frame is the move's)

@@ -80,7 +80,9 @@ std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOption
       };
       const Eigen::Vector3d incoming = -arm(parent, j - skip, -arm_samples);
       std::vector<Arm> arms;
-      if (j + skip + arm_samples < n) arms.push_back({arm(parent, j + skip, arm_samples), -1});
+      // (against the vessel's end as a cut at this junction left it: a second child near it is no
+      // pair with the onward line already cut back)
+      if (j + skip + arm_samples < std::min(n, end[p])) arms.push_back({arm(parent, j + skip, arm_samples), -1});
       for (size_t d = 0; d < b.size(); ++d) {
         if (b[d].parent == static_cast<int>(p) && !drop[d] && std::abs(b[d].parent_point - j) <= gap_samples &&
             static_cast<int>(b[d].points_mm.size()) > skip + arm_samples)

@@ -6,8 +6,9 @@
 //    does not darken the centre) is cut away with everything beyond it;
 //  - a vessel crossing over another (a cardiac vein over an artery, touching it where they cross):
 //    traced as two arms leaving the artery at one point in opposite directions, both at a wide
-//    angle to the artery, while a third arm carries the artery on; the two opposite arms are cut
-//    away (a vein may be as bright as a distal artery, so its contrast cannot tell it);
+//    angle to the artery, while a third arm carries the artery on; the most nearly opposite such
+//    pair of a junction is cut away (a vein may be as bright as a distal artery, so its contrast
+//    cannot tell it);
 //  - a vessel beside another (a cardiac vein touching an artery along its length, as bright as
 //    the distal artery): the fill joins them into one ribbon and the tracer follows the second
 //    as a branch running back along the first; a branch that runs along its parent (its course
@@ -30,7 +31,8 @@ struct BranchCheckOptions {
   double min_radius_mm = 1.0;   // samples narrower than this are not compared
   double abrupt_end_radius_mm = 0.8;
   // a crossing: arms leaving within crossing_gap_mm of each other along the vessel, their
-  // directions over their first arm_mm; opposite when more than opposite_deg apart, across the
+  // directions over arm_mm past their first arm_skip_mm (an arm, the incoming vessel included,
+  // shorter than both together is not judged); opposite when more than opposite_deg apart, across the
   // vessel when more than across_deg from its incoming direction; the vessel goes on along an arm
   // within on_deg of its incoming direction
   double crossing_gap_mm = 3.0, arm_mm = 4.0;

@@ -408,7 +408,7 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
           hi_s = std::max(hi_s, t);
           reach[v] = (p[v] - mean - t * axis).norm();
         }
-        const auto at95 = reach.begin() + static_cast<std::ptrdiff_t>(0.95 * double(reach.size() - 1));
+        const auto at95 = reach.begin() + static_cast<std::ptrdiff_t>(std::ceil(0.95 * double(reach.size())) - 1);
         std::nth_element(reach.begin(), at95, reach.end());
         if (hi_s - lo_s < o.metal.min_length_mm || *at95 > o.metal.max_radius_mm) continue;
         for (int64_t n : piece) region.v[n] = 1;

@@ -38,13 +38,16 @@ struct TubeGrowthOptions {
   double join_mm = 2.0;       // a tube piece this near the region (through voxels >= min_hu) joins it
   double min_piece_mm = 3.0;  // a piece shorter than this (its box's diagonal) is noise
   // the region's large lumens (an opening by a ball of this radius, as the clipping's) are no
-  // anchors: pieces join thin parts only, and a piece touching a large lumen joins nowhere
+  // anchors: pieces join thin parts only. Large lumens of bright structures the fill never reached
+  // count below too. Distances to a large lumen are measured to the layer of voxels touching it
+  // (distance_inside_mm: its zero is a mask's boundary), so they read about a voxel short
   double large_radius_mm = 3.0;
-  // tube voxels this near a large lumen are no candidates: a chamber's or the aorta's blurred edge
-  // is no tube, and the rest of a vessel that comes this near one is no longer refused whole for
-  // touching it (family seed 8's distal right coronary, its piece touching the right atrium at
-  // one end: 40 mm missed; on the tuning split 1.0 mm raised five cases' OV, seed 3's 0.764 ->
-  // 0.855, and the 5th percentile 0.756 -> 0.814; 1.5 mm no better). Negative: off
+  // tube voxels within this of a large lumen are no candidates: a chamber's or the aorta's blurred
+  // edge is no tube, and the rest of a vessel that comes this near one is no longer refused whole
+  // for touching it (family seed 8's distal right coronary, its piece touching the right atrium
+  // at one end: 40 mm missed; on the tuning split 1.0 mm raised five cases' OV, seed 3's 0.764 ->
+  // 0.855, and the 5th percentile 0.756 -> 0.814; 1.5 mm no better). Negative: off; then a piece
+  // touching a large lumen joins nowhere (with the rule on, no candidate touches one)
   double clear_of_large_mm = 1.0;
   // nor does a piece that runs along a large lumen: more than along_large_fraction of its voxels
   // within along_large_mm of it (the blurred edge of the descending aorta beside the lung made a

@@ -7,8 +7,10 @@
 
 namespace pcisim::modeling {
 
-// distance (mm) from each voxel of the mask to the nearest voxel outside it (Maurer's exact
-// Euclidean distance transform, spacing-aware; ITK SignedMaurerDistanceMapImageFilter); 0 outside
+// distance (mm) from each voxel of the mask to the nearest voxel of its boundary (a mask voxel
+// with a face neighbour outside it: 0 there, about a voxel less than the distance to the nearest
+// voxel outside; Maurer's exact Euclidean distance transform, spacing-aware; ITK
+// SignedMaurerDistanceMapImageFilter measures to the mask's contour); 0 outside
 FloatImage distance_inside_mm(const Mask& mask, int threads);
 
 // the level-set evolution of [heart eq 1], Phi(t) = Phi(t - dt) + dt F |grad Phi|, with ITK's

@@ -60,6 +60,14 @@ TEST(BranchChecks, ACrossingTheTraceRanOntoIsCutBackToTheVessel) {
   EXPECT_EQ(t.branches[0].points_mm.size(), 41u);  // up to the crossing
   EXPECT_NEAR(t.branches[1].points_mm.back().x(), 40.0, 1e-9);
   EXPECT_EQ(t.branches[1].parent, 0);
+  // a side branch leaving 1 mm before the crossing, 15 deg off the vein's other arm: no second
+  // pair with the vessel's line once that is cut back (it was judged against the line as it was)
+  ModelTree with_side = later;
+  const Vector3d side_dir(std::sin(0.26), -std::cos(0.26), 0);
+  with_side.branches.push_back(line({19, 0, 0}, side_dir, 15, 0, 38));
+  ASSERT_EQ(drop_crossings(&with_side, BranchCheckOptions{}).size(), 1u);
+  ASSERT_EQ(with_side.branches.size(), 3u);
+  EXPECT_EQ(with_side.branches[2].parent_point, 38);
   // the cut keeps the sample the onward vessel leaves from: it stays, whole
   ASSERT_EQ(drop_crossings(&later, BranchCheckOptions{}).size(), 1u);
   ASSERT_EQ(later.branches.size(), 2u);

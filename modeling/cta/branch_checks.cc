@@ -68,7 +68,6 @@ std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOption
   const int skip = static_cast<int>(std::lround(o.arm_skip_mm / o.sample_spacing_mm));
   for (size_t p = 0; p < b.size(); ++p) {
     const ModelBranch& parent = b[p];
-    const int n = static_cast<int>(parent.points_mm.size());
     for (size_t c = 0; c < b.size(); ++c) {
       if (b[c].parent != static_cast<int>(p) || drop[c]) continue;
       const int j = b[c].parent_point;
@@ -82,7 +81,7 @@ std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOption
       std::vector<Arm> arms;
       // (against the vessel's end as a cut at this junction left it: a second child near it is no
       // pair with the onward line already cut back)
-      if (j + skip + arm_samples < std::min(n, end[p])) arms.push_back({arm(parent, j + skip, arm_samples), -1});
+      if (j + skip + arm_samples < end[p]) arms.push_back({arm(parent, j + skip, arm_samples), -1});
       for (size_t d = 0; d < b.size(); ++d) {
         if (b[d].parent == static_cast<int>(p) && !drop[d] && std::abs(b[d].parent_point - j) <= gap_samples &&
             static_cast<int>(b[d].points_mm.size()) > skip + arm_samples)

@@ -208,11 +208,12 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
       return bright_tube_vesselness(hu, &where, vo);
     }();
 
-    // the candidates: tube voxels bright enough, outside the region; their 26-connected pieces
-    // the region's large lumens (aorta, chambers): within large_radius_mm + 1 mm of a voxel
-    // large_radius_mm deep (an opening by a ball, as the clipping's). A thin vessel leaves a vessel,
-    // not these: a tube piece joins only thin parts of the region, and one touching a large lumen
-    // (a vein on a chamber, the soft tissue behind the aorta) does not join at all
+    // the candidates: tube voxels bright enough, outside the region, clear of the large lumens;
+    // their 26-connected pieces. The region's large lumens (aorta, chambers): within
+    // large_radius_mm + 1 mm of a voxel large_radius_mm deep (an opening by a ball, as the
+    // clipping's). A thin vessel leaves a vessel, not these: a tube piece joins only thin parts of
+    // the region, and one touching a large lumen (a vein on a chamber, the soft tissue behind the
+    // aorta; with clear_of_large_mm off) or running along one does not join at all
     auto large_of = [&](const Mask& m) {
       const FloatImage depth = distance_inside_mm(m, o.threads);
       Mask outside_core = Mask::zeros(cg);
@@ -232,9 +233,9 @@ LumenSegmentation segment_lumen(const anatomy::Volume& ct, const std::vector<Eig
       Mask apart = Mask::zeros(cg);
       for (int64_t c = 0; c < cg.size(); ++c)
         apart.v[c] = !in_crop.v[c] && hu.v[c] >= bright_hu && hu.v[c] <= out.upper_hu ? 1 : 0;
-      Mask not_large = large_of(apart);
-      for (int64_t c = 0; c < cg.size(); ++c) not_large.v[c] = large.v[c] || not_large.v[c] ? 0 : 1;
-      return distance_inside_mm(not_large, o.threads);
+      Mask outside_large = large_of(apart);
+      for (int64_t c = 0; c < cg.size(); ++c) outside_large.v[c] = large.v[c] || outside_large.v[c] ? 0 : 1;
+      return distance_inside_mm(outside_large, o.threads);
     }();
     std::vector<int32_t> piece_of(cg.size(), -1);
     std::vector<std::vector<int64_t>> pieces;

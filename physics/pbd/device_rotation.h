@@ -13,15 +13,37 @@
 
 namespace pcisim::physics::pbd::device {
 
-PCISIM_HD inline Mat3 extract_rotation(const Mat3& a, const Mat3& previous, double rest_moment_kg_m2) {
+// Started from the plane rotations V that orthogonalised the columns last time (*right, in and
+// out: M's right singular vectors change little between a cluster's solves, so its columns are
+// nearly orthogonal already and a sweep or two finish them). Any orthonormal start gives the same
+// R to rounding; the identity is the cold start.
+PCISIM_HD inline Mat3 extract_rotation_from(const Mat3& a, const Mat3& previous, double rest_moment_kg_m2,
+                                            Mat3* right) {
   // same regulariser as the CPU (kRotationRegularisation = 1e-9)
   const double reg = 1e-9 * rest_moment_kg_m2;
   const double scale = reg > 1e-300 ? reg : 1e-300;
-  Mat3 w;
-  for (int k = 0; k < 9; ++k) w.m[k] = a.m[k] + scale * previous.m[k];
-  if (!finite(w)) return previous;
+  Mat3 m;
+  for (int k = 0; k < 9; ++k) m.m[k] = a.m[k] + scale * previous.m[k];
   Mat3 v;
   v(0, 0) = v(1, 1) = v(2, 2) = 1.0;
+  if (!finite(m)) {
+    *right = v;
+    return previous;
+  }
+  // the start made orthonormal again (Gram-Schmidt: rounding drifts over many solves); W = M V
+  {
+    const Vec3 v1 = right->col(0) / norm(right->col(0));
+    Vec3 v2 = right->col(1) - dot(v1, right->col(1)) * v1;
+    v2 = v2 / norm(v2);
+    const Vec3 v3 = cross(v1, v2);
+    if (finite(v1) && finite(v2) && finite(v3)) {
+      v.set_col(0, v1);
+      v.set_col(1, v2);
+      v.set_col(2, v3);
+    }
+  }
+  Mat3 w;
+  for (int col = 0; col < 3; ++col) w.set_col(col, m * v.col(col));
   constexpr int kPairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
   for (int sweep = 0; sweep < 20; ++sweep) {
     bool rotated = false;
@@ -64,7 +86,21 @@ PCISIM_HD inline Mat3 extract_rotation(const Mat3& a, const Mat3& previous, doub
     const double c3 = col == 0 ? v3.x : col == 1 ? v3.y : v3.z;
     r.set_col(col, c1 * u1 + c2 * u2 + c3 * u3);
   }
-  return finite(r) ? r : previous;
+  if (!finite(r)) {
+    Mat3 identity;
+    identity(0, 0) = identity(1, 1) = identity(2, 2) = 1.0;
+    *right = identity;
+    return previous;
+  }
+  *right = v;
+  return r;
+}
+
+// the cold start: the plane rotations from the identity
+PCISIM_HD inline Mat3 extract_rotation(const Mat3& a, const Mat3& previous, double rest_moment_kg_m2) {
+  Mat3 right;
+  right(0, 0) = right(1, 1) = right(2, 2) = 1.0;
+  return extract_rotation_from(a, previous, rest_moment_kg_m2, &right);
 }
 
 }  // namespace pcisim::physics::pbd::device

@@ -267,12 +267,15 @@ void PbdSystem::solve_gauss_seidel(double h_s) {
     for (int m = 0; m < 4; ++m) x.col(idx[m]) += dx[m];
   }
   for (int cl = 0; cl < clusters_.count(); ++cl) {
-    clusters_.goals(cl, x, particles_.mass_kg, goal_scratch_m_.data());
+    Eigen::Vector3d t;
+    clusters_.fit(cl, x, particles_.mass_kg, &t);
+    const Eigen::Matrix3d& r = clusters_.rotation(cl);
     for (int s = clusters_.begin(cl); s < clusters_.end(cl); ++s) {
       const int i = clusters_.member(s);
+      const Eigen::Vector3d goal = r * clusters_.rest_offsets_m().col(s) + t;
       Eigen::Vector3d dl, dx;
-      if (!project_to_goal(x.col(i), goal_scratch_m_[s - clusters_.begin(cl)], w[i], particles_.mass_kg[i],
-                           clusters_.compliance_s2(cl), h_s, cluster_lambda_.col(s), &dl, &dx))
+      if (!project_to_goal(x.col(i), goal, w[i], particles_.mass_kg[i], clusters_.compliance_s2(cl), h_s,
+                           cluster_lambda_.col(s), &dl, &dx))
         continue;
       cluster_lambda_.col(s) += dl;
       x.col(i) += dx;

@@ -19,4 +19,17 @@ Eigen::Matrix3d extract_rotation(const Eigen::Matrix3d& a, const Eigen::Matrix3d
   return out;
 }
 
+Eigen::Matrix3d extract_rotation(const Eigen::Matrix3d& a, const Eigen::Matrix3d& previous, double rest_moment_kg_m2,
+                                 Eigen::Matrix3d* right_vectors) {
+  device::Mat3 da, dp, dv;
+  std::copy(a.data(), a.data() + 9, da.m);
+  std::copy(previous.data(), previous.data() + 9, dp.m);
+  std::copy(right_vectors->data(), right_vectors->data() + 9, dv.m);
+  const device::Mat3 r = device::extract_rotation_from(da, dp, rest_moment_kg_m2, &dv);
+  std::copy(dv.m, dv.m + 9, right_vectors->data());
+  Eigen::Matrix3d out;
+  std::copy(r.m, r.m + 9, out.data());
+  return out;
+}
+
 }  // namespace pcisim::physics::pbd

@@ -24,6 +24,7 @@ void ShapeMatchingClusters::finalize(const Eigen::Matrix3Xd& rest_m, const Eigen
   rest_offset_m_.setZero(3, slot_count());
   rest_moment_kg_m2_.assign(count(), 0.0);
   rotation_.assign(count(), Eigen::Matrix3d::Identity());
+  right_.assign(count(), Eigen::Matrix3d::Identity());
   rest_aqq_inverse_.assign(count(), Eigen::Matrix3d::Zero());
   any_volume_ = false;
   for (int c = 0; c < count(); ++c) {
@@ -57,29 +58,43 @@ void ShapeMatchingClusters::finalize(const Eigen::Matrix3Xd& rest_m, const Eigen
 }
 
 // eq 8: the current centre of mass t (nominal masses, so pinned and driven members still count);
-// eq 9: A_pq = sum m p q^T (A_qq only matters for the linear blend and the volume)
+// eq 9: A_pq = sum m p q^T (A_qq only matters for the linear blend and the volume). One pass over
+// the members: with y = x - x_first (the first member's position, so the sums stay small),
+// t = x_first + sum m y / M and A_pq = sum m y q^T - (t - x_first) sum m q^T (sum m q is zero
+// up to rounding: q is measured from the rest centre)
 void ShapeMatchingClusters::centre_and_moment(int c, const Eigen::Matrix3Xd& x_m, const Eigen::VectorXd& mass_kg,
                                               Eigen::Vector3d* t, Eigen::Matrix3d* a_pq) const {
+  const Eigen::Vector3d origin = x_m.col(member_[begin(c)]);
   double m_sum = 0.0;
-  t->setZero();
-  for (int s = begin(c); s < end(c); ++s) {
-    m_sum += mass_kg[member_[s]];
-    *t += mass_kg[member_[s]] * x_m.col(member_[s]);
-  }
-  *t /= m_sum;
+  Eigen::Vector3d my = Eigen::Vector3d::Zero(), mq = Eigen::Vector3d::Zero();
   a_pq->setZero();
-  for (int s = begin(c); s < end(c); ++s)
-    a_pq->noalias() += mass_kg[member_[s]] * (x_m.col(member_[s]) - *t) * rest_offset_m_.col(s).transpose();
+  for (int s = begin(c); s < end(c); ++s) {
+    const double m = mass_kg[member_[s]];
+    const Eigen::Vector3d y = m * (x_m.col(member_[s]) - origin);
+    const auto q = rest_offset_m_.col(s);
+    m_sum += m;
+    my += y;
+    mq += m * q;
+    a_pq->noalias() += y * q.transpose();
+  }
+  const Eigen::Vector3d shift = my / m_sum;
+  *t = origin + shift;
+  a_pq->noalias() -= shift * mq.transpose();
 }
 
 void ShapeMatchingClusters::goals(int c, const Eigen::Matrix3Xd& x_m, const Eigen::VectorXd& mass_kg,
                                   Eigen::Vector3d* goals_m) const {
   Eigen::Vector3d t;
-  Eigen::Matrix3d a_pq;
-  centre_and_moment(c, x_m, mass_kg, &t, &a_pq);
-  rotation_[c] = extract_rotation(a_pq, rotation_[c], rest_moment_kg_m2_[c]);
+  fit(c, x_m, mass_kg, &t);
   // eq 10: g_i = R (x0_i - x0_cm) + x_cm
   for (int s = begin(c); s < end(c); ++s) goals_m[s - begin(c)] = rotation_[c] * rest_offset_m_.col(s) + t;
+}
+
+void ShapeMatchingClusters::fit(int c, const Eigen::Matrix3Xd& x_m, const Eigen::VectorXd& mass_kg,
+                                Eigen::Vector3d* t) const {
+  Eigen::Matrix3d a_pq;
+  centre_and_moment(c, x_m, mass_kg, t, &a_pq);
+  rotation_[c] = extract_rotation(a_pq, rotation_[c], rest_moment_kg_m2_[c], &right_[c]);
 }
 
 double ShapeMatchingClusters::volume_correction(int c, const Eigen::Matrix3Xd& x_m, const Eigen::VectorXd& mass_kg,
@@ -102,10 +117,13 @@ double ShapeMatchingClusters::volume_correction(int c, const Eigen::Matrix3Xd& x
   cof.col(2) = f.col(0).cross(f.col(1));
   const double constraint = f.col(0).dot(cof.col(0)) - 1.0;
   const Eigen::Matrix3d g = cof * rest_aqq_inverse_[c];
+  // dx_m holds each member's grad C / m_i = G q_i until the multiplier is known
   double denom = alpha / (dt_s * dt_s);
   for (int s = begin(c); s < end(c); ++s) {
     const int i = member_[s];
-    denom += inv_mass_per_kg[i] * mass_kg[i] * mass_kg[i] * (g * rest_offset_m_.col(s)).squaredNorm();
+    const Eigen::Vector3d gq = g * rest_offset_m_.col(s);
+    dx_m[s - begin(c)] = gq;
+    denom += inv_mass_per_kg[i] * mass_kg[i] * mass_kg[i] * gq.squaredNorm();
   }
   if (!(denom > 0.0) || !std::isfinite(denom) || !std::isfinite(constraint)) {
     for (int s = begin(c); s < end(c); ++s) dx_m[s - begin(c)].setZero();
@@ -114,7 +132,7 @@ double ShapeMatchingClusters::volume_correction(int c, const Eigen::Matrix3Xd& x
   const double dl = (-constraint - alpha / (dt_s * dt_s) * lambda) / denom;
   for (int s = begin(c); s < end(c); ++s) {
     const int i = member_[s];
-    dx_m[s - begin(c)] = (inv_mass_per_kg[i] * mass_kg[i] * dl) * (g * rest_offset_m_.col(s));
+    dx_m[s - begin(c)] *= inv_mass_per_kg[i] * mass_kg[i] * dl;
   }
   return dl;
 }

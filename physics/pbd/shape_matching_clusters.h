@@ -36,6 +36,9 @@ class ShapeMatchingClusters {
   // eqs 8-10: centre of mass t, A_pq = sum m p q^T, its rotation R, goals g = R q + t for the
   // members of c, written to goals_m[0 .. size). Updates the cluster's remembered rotation.
   void goals(int c, const Eigen::Matrix3Xd& x_m, const Eigen::VectorXd& mass_kg, Eigen::Vector3d* goals_m) const;
+  // the same without writing the goals: the centre t and the rotation (rotation(c)); member slot
+  // s's goal is rotation(c) * rest_offsets_m().col(s) + t
+  void fit(int c, const Eigen::Matrix3Xd& x_m, const Eigen::VectorXd& mass_kg, Eigen::Vector3d* t) const;
 
   // The cluster's volume, C = det(F) - 1 with F = A_pq A_qq^-1 its best linear fit (Mueller et al.
   // 2005, "Meshless deformations based on shape matching", eq 7), an XPBD constraint of compliance
@@ -61,6 +64,7 @@ class ShapeMatchingClusters {
   std::vector<Eigen::Matrix3d> rest_aqq_inverse_;  // (sum m q q^T)^-1 per cluster
   bool any_volume_ = false;
   mutable std::vector<Eigen::Matrix3d> rotation_;  // a warm-start cache, not part of the state
+  mutable std::vector<Eigen::Matrix3d> right_;     // the rotation's SVD warm start (its right vectors)
 };
 
 // Soft-tissue paper eq 12 as an XPBD constraint C = x_i - g_i with g held fixed, compliance

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -126,6 +127,33 @@ TEST(RotationExtraction, NonFiniteInputKeepsThePreviousRotation) {
   EXPECT_EQ(extract_rotation(a, previous, 1.0), previous);
   a(1, 2) = std::numeric_limits<double>::infinity();
   EXPECT_EQ(extract_rotation(a, previous, 1.0), previous);
+}
+
+// The SVD started from the right vectors a cluster's last solve found gives the cold start's R:
+// a cluster stretched and turned a little more each solve (as between PBD iterations), inverted
+// once on the way, then a non-finite moment (the start goes back to the identity)
+TEST(RotationExtraction, AWarmStartedSvdGivesTheColdStartsRotation) {
+  const Eigen::Matrix3Xd q = solid_cluster();
+  Eigen::Matrix3d right = Eigen::Matrix3d::Identity(), previous_warm = Eigen::Matrix3d::Identity(),
+                  previous_cold = Eigen::Matrix3d::Identity();
+  double worst = 0.0;
+  for (int k = 0; k < 200; ++k) {
+    const double s = 0.01 * k;
+    Eigen::Matrix3d f = Eigen::AngleAxisd(s, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix() *
+                        Eigen::Vector3d(1.0 + 0.5 * std::sin(s), 1.0 - 0.3 * s / 2.0, 0.8 + 0.1 * s).asDiagonal();
+    if (k == 150) f.col(2) = -f.col(2);  // inverted: det R stays +1
+    const Moments m = moments(q, [&](const Eigen::Vector3d& x) { return f * x; });
+    previous_warm = extract_rotation(m.a, previous_warm, m.rest_moment, &right);
+    previous_cold = extract_rotation(m.a, previous_cold, m.rest_moment);
+    expect_proper_rotation(previous_warm);
+    worst = std::max(worst, (previous_warm - previous_cold).cwiseAbs().maxCoeff());
+    EXPECT_LT((right.transpose() * right - Eigen::Matrix3d::Identity()).norm(), 1e-12) << "the start stays orthonormal";
+  }
+  EXPECT_LT(worst, 1e-13);
+  Eigen::Matrix3d a = Eigen::Matrix3d::Identity();
+  a(0, 1) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(extract_rotation(a, previous_warm, 1.0, &right), previous_warm);
+  EXPECT_EQ(right, Eigen::Matrix3d::Identity()) << "a failed solve leaves no start behind";
 }
 
 }  // namespace

@@ -53,12 +53,18 @@ double objective(const st::PbdRun& run) {
 nlohmann::json stages_json(const st::PbdRun& run) {
   nlohmann::json stages = nlohmann::json::array();
   for (const auto& e : run.stages)
-    stages.push_back({{"travel_mm", e.depth_m * 1e3},
-                      {"mean_mm", e.mean_m * 1e3},
-                      {"std_mm", e.std_m * 1e3},
-                      {"max_mm", e.max_m * 1e3},
-                      {"reference_displacement_mm", e.mean_displacement_m * 1e3},
-                      {"explained", e.mean_displacement_m > 0.0 ? 1.0 - e.mean_m / e.mean_displacement_m : 0.0}});
+    stages.push_back(
+        {{"travel_mm", e.depth_m * 1e3},
+         {"mean_mm", e.mean_m * 1e3},
+         {"std_mm", e.std_m * 1e3},
+         {"max_mm", e.max_m * 1e3},
+         {"reference_displacement_mm", e.mean_displacement_m * 1e3},
+         {"explained", e.mean_displacement_m > 0.0 ? 1.0 - e.mean_m / e.mean_displacement_m : 0.0},
+         {"mean_error_vector_mm", {e.mean_error_m.x() * 1e3, e.mean_error_m.y() * 1e3, e.mean_error_m.z() * 1e3}},
+         {"shape_error_mm", e.shape_error_m * 1e3},
+         {"response_ratio", e.response_ratio},
+         {"reference_from_unloaded_mm", e.reference_from_unloaded_m * 1e3},
+         {"model_from_unloaded_mm", e.model_from_unloaded_m * 1e3}});
   return stages;
 }
 
@@ -350,6 +356,27 @@ int main(int argc, char** argv) {
                   labels);
       stage_table("The paper's model, held-out kidney", paper_moved, labels);
     }
+    // where the fields part (issue #31 item 1)
+    md +=
+        "**Where the model departs from the reference, each radius's optimum** (mm). *Shift*: the mean of the "
+        "error vectors (x y z: what moving the whole model would take away); *shape*: the mean error once it is "
+        "taken off; *response*: the model's bead motion from its rest along the reference's, over the "
+        "reference's (1: as far; below 1: stiffer); *sag*: each side's mean bead displacement from the unloaded "
+        "organ (at rest the reference's is the error of a model that does not sag under gravity).\n\n"
+        "| kidney | setting | travel | error | shift x / y / z | shape | response | sag: reference / model |\n"
+        "|---|---|---|---|---|---|---|---|\n";
+    for (size_t ri = 0; ri < radii_mm.size(); ++ri)
+      for (int side = 0; side < 2; ++side) {
+        const st::PbdRun& r = side == 0 ? best[ri].run : transfer[ri];
+        for (const st::StageError& e : r.stages)
+          md += fmt::format(
+              "| {} | {} | {:.0f} | {:.2f} | {:+.2f} / {:+.2f} / {:+.2f} | {:.2f} | {} | {:.2f} / {:.2f} |\n",
+              side == 0 ? "tuning" : "held-out", describe(best[ri].setting), e.depth_m * 1e3, e.mean_m * 1e3,
+              e.mean_error_m.x() * 1e3, e.mean_error_m.y() * 1e3, e.mean_error_m.z() * 1e3, e.shape_error_m * 1e3,
+              e.depth_m > 0.0 ? fmt::format("{:.2f}", e.response_ratio) : std::string("-"),
+              e.reference_from_unloaded_m * 1e3, e.model_from_unloaded_m * 1e3);
+      }
+    md += "\n";
     md += "**Objective (mm) over the search, tuning kidney**\n\n| radius (mm) | contact | bulk (kPa) |";
     for (double c : compliances) md += fmt::format(" c {:.0e} |", c);
     md += "\n|---|---|---|";

@@ -154,6 +154,23 @@ FemReference solve_fem_reference(const CalibrationSetup& s, fem::FemMesh mesh) {
   return ref;
 }
 
+void compare_fields(const Eigen::Matrix3Xd& model_m, const Eigen::Matrix3Xd& reference_m,
+                    const Eigen::Matrix3Xd& model_rest_m, const Eigen::Matrix3Xd& reference_rest_m,
+                    const Eigen::Matrix3Xd& unloaded_m, StageError* e) {
+  const Eigen::Index n = reference_m.cols();
+  if (n == 0 || model_m.cols() != n || model_rest_m.cols() != n || reference_rest_m.cols() != n ||
+      unloaded_m.cols() != n)
+    throw std::invalid_argument("calibration: the fields to compare have different fiducials");
+  const Eigen::Matrix3Xd error = model_m - reference_m;
+  e->mean_error_m = error.rowwise().mean();
+  e->shape_error_m = (error.colwise() - e->mean_error_m).colwise().norm().mean();
+  const Eigen::Matrix3Xd d_model = model_m - model_rest_m, d_ref = reference_m - reference_rest_m;
+  const double ref_sq = d_ref.squaredNorm();
+  e->response_ratio = ref_sq > 0.0 ? (d_model.array() * d_ref.array()).sum() / ref_sq : 0.0;
+  e->reference_from_unloaded_m = (reference_m - unloaded_m).colwise().norm().mean();
+  e->model_from_unloaded_m = (model_m - unloaded_m).colwise().norm().mean();
+}
+
 PbdRun run_pbd_protocol(const CalibrationSetup& s, const SoftTissueSpec& spec_in, const FemReference& ref) {
   if (ref.fiducials_m.size() != s.stage_depths_m.size() + 1)
     throw std::invalid_argument("calibration: the reference does not have one result per stage");
@@ -165,6 +182,9 @@ PbdRun run_pbd_protocol(const CalibrationSetup& s, const SoftTissueSpec& spec_in
   TissueScene tissue(s.organ, spec, s.probe, s.step_s);
 
   PbdRun run;
+  Eigen::Matrix3Xd unloaded(3, static_cast<Eigen::Index>(s.organ.fiducials_m.size()));
+  for (Eigen::Index i = 0; i < unloaded.cols(); ++i) unloaded.col(i) = s.organ.fiducials_m[static_cast<size_t>(i)];
+  run.fiducials_m.reserve(s.stage_depths_m.size() + 1);
   auto compare = [&](size_t stage, double depth) {
     const Eigen::Matrix3Xd& truth = ref.fiducials_m[stage];
     const Eigen::VectorXd err = (tissue.fiducials_m() - truth).colwise().norm();
@@ -174,6 +194,8 @@ PbdRun run_pbd_protocol(const CalibrationSetup& s, const SoftTissueSpec& spec_in
     e.std_m = std::sqrt((err.array() - e.mean_m).square().mean());
     e.max_m = err.maxCoeff();
     e.mean_displacement_m = (truth - ref.fiducials_m[0]).colwise().norm().mean();
+    run.fiducials_m.push_back(tissue.fiducials_m());
+    compare_fields(run.fiducials_m.back(), truth, run.fiducials_m.front(), ref.fiducials_m[0], unloaded, &e);
     run.stages.push_back(e);
   };
   compare(0, 0.0);

@@ -76,12 +76,30 @@ struct StageError {
   double depth_m = 0.0;  // the probe's travel at this stage
   double mean_m = 0.0, std_m = 0.0, max_m = 0.0;
   double mean_displacement_m = 0.0;  // how far the reference's fiducials moved from rest
+  // where the fields part (issue #31 item 1; compare_fields below)
+  Eigen::Vector3d mean_error_m = Eigen::Vector3d::Zero();
+  double shape_error_m = 0.0, response_ratio = 0.0;
+  double reference_from_unloaded_m = 0.0, model_from_unloaded_m = 0.0;
 };
+
+// The two fields compared, not only their mean distance (every argument one column per fiducial):
+//   mean_error_m     the mean of the error vectors model - reference: what a rigid shift of the
+//                    model would take away
+//   shape_error_m    the mean error once that shift is taken off
+//   response_ratio   the model's motion from its rest along the reference's, over the reference's:
+//                    sum d_model . d_ref / sum |d_ref|^2 (1: as far; < 1: stiffer); 0 at rest
+//   *_from_unloaded  each side's mean fiducial displacement from the unloaded organ (at rest: the
+//                    sag under gravity, the error of a model that does not sag)
+// Fills those fields of `e`; throws std::invalid_argument on mismatched sizes.
+void compare_fields(const Eigen::Matrix3Xd& model_m, const Eigen::Matrix3Xd& reference_m,
+                    const Eigen::Matrix3Xd& model_rest_m, const Eigen::Matrix3Xd& reference_rest_m,
+                    const Eigen::Matrix3Xd& unloaded_m, StageError* e);
 
 struct PbdRun {
   std::vector<StageError> stages;   // [0]: rest
   double mean_over_stages_m = 0.0;  // the mean over the pressed stages (pcisim-calibrate's objective adds rest)
   std::vector<double> step_ms;      // wall time of each step after the warm-up
+  std::vector<Eigen::Matrix3Xd> fiducials_m;  // the model's fiducials at each stage ([0]: rest)
 };
 
 // the PBD model of `spec` through the protocol; its fiducials against the reference's

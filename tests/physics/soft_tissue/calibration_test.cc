@@ -168,5 +168,37 @@ TEST(Calibration, TheCalibratedModelBeatsStandingStillAtTheLastStage) {
   }
 }
 
+// compare_fields on fields with exact truth: a model that is the reference shifted rigidly has
+// all its error in the mean vector and none in the shape; one that moves half as far from its
+// rest as the reference has a response ratio of 0.5; the sag from the unloaded organ per side
+TEST(Calibration, TheFieldComparisonSplitsAShiftFromAShapeAndMeasuresTheResponse) {
+  Eigen::Matrix3Xd unloaded(3, 4), rest(3, 4), pressed(3, 4);
+  unloaded << 0, 10, 0, 0,  //
+      0, 0, 10, 0,          //
+      0, 0, 0, 10;
+  unloaded *= 1e-3;
+  rest = unloaded.colwise() + Eigen::Vector3d(0, 2e-3, 0);  // sagged 2 mm
+  pressed = rest;
+  pressed.row(1) += Eigen::RowVector4d(1, 2, 3, 4) * 1e-3;  // pressed 1-4 mm along y
+
+  const Eigen::Vector3d shift(0.3e-3, -0.1e-3, 0.2e-3);
+  StageError e;
+  compare_fields(pressed.colwise() + shift, pressed, rest.colwise() + shift, rest, unloaded, &e);
+  EXPECT_LT((e.mean_error_m - shift).norm(), 1e-15);
+  EXPECT_LT(e.shape_error_m, 1e-15);
+  EXPECT_NEAR(e.response_ratio, 1.0, 1e-12) << "shifted, it moves as far";
+  EXPECT_NEAR(e.reference_from_unloaded_m, (3e-3 + 4e-3 + 5e-3 + 6e-3) / 4, 1e-15);
+
+  const Eigen::Matrix3Xd half = rest + 0.5 * (pressed - rest);
+  compare_fields(half, pressed, rest, rest, unloaded, &e);
+  EXPECT_NEAR(e.response_ratio, 0.5, 1e-12);
+  EXPECT_NEAR(e.model_from_unloaded_m, (2.5e-3 + 3e-3 + 3.5e-3 + 4e-3) / 4, 1e-15);
+  // the error is all shape here: its mean vector is the mean of the half-presses missed
+  EXPECT_NEAR(e.mean_error_m.y(), -0.5 * 2.5e-3, 1e-15);
+  EXPECT_NEAR(e.shape_error_m, (0.75e-3 + 0.25e-3 + 0.25e-3 + 0.75e-3) / 4, 1e-15);
+
+  EXPECT_THROW(compare_fields(half.leftCols(3), pressed, rest, rest, unloaded, &e), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace pcisim::physics::soft_tissue

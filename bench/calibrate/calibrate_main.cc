@@ -360,8 +360,9 @@ int main(int argc, char** argv) {
     md +=
         "**Where the model departs from the reference, each radius's optimum** (mm). *Shift*: the mean of the "
         "error vectors (x y z: what moving the whole model would take away); *shape*: the mean error once it is "
-        "taken off; *response*: the model's bead motion from its rest along the reference's, over the "
-        "reference's (1: as far; below 1: stiffer); *sag*: each side's mean bead displacement from the unloaded "
+        "taken off (both means of distances: they do not add up to the error); *response*: the model's bead "
+        "motion from its rest along the reference's, over the reference's (1: as far; below 1: stiffer; where the "
+        "reference's beads moved 0.5 mm or more); *sag*: each side's mean bead displacement from the unloaded "
         "organ (at rest the reference's is the error of a model that does not sag under gravity).\n\n"
         "| kidney | setting | travel | error | shift x / y / z | shape | response | sag: reference / model |\n"
         "|---|---|---|---|---|---|---|---|\n";
@@ -373,7 +374,7 @@ int main(int argc, char** argv) {
               "| {} | {} | {:.0f} | {:.2f} | {:+.2f} / {:+.2f} / {:+.2f} | {:.2f} | {} | {:.2f} / {:.2f} |\n",
               side == 0 ? "tuning" : "held-out", describe(best[ri].setting), e.depth_m * 1e3, e.mean_m * 1e3,
               e.mean_error_m.x() * 1e3, e.mean_error_m.y() * 1e3, e.mean_error_m.z() * 1e3, e.shape_error_m * 1e3,
-              e.depth_m > 0.0 ? fmt::format("{:.2f}", e.response_ratio) : std::string("-"),
+              e.mean_displacement_m >= 0.5e-3 ? fmt::format("{:.2f}", e.response_ratio) : std::string("-"),
               e.reference_from_unloaded_m * 1e3, e.model_from_unloaded_m * 1e3);
       }
     md += "\n";

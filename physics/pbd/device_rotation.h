@@ -14,9 +14,11 @@
 namespace pcisim::physics::pbd::device {
 
 // Started from the plane rotations V that orthogonalised the columns last time (*right, in and
-// out: M's right singular vectors change little between a cluster's solves, so its columns are
-// nearly orthogonal already and a sweep or two finish them). Any orthonormal start gives the same
-// R to rounding; the identity is the cold start.
+// out, orthonormal: M's right singular vectors change little between a cluster's solves, so its
+// columns are nearly orthogonal already and a sweep or two finish them). An orthonormal start
+// gives the cold start's R to rounding where R is unique; where it is not (sigma_2 ~ the
+// regulariser: collinear or coincident clusters, the free axes good to ~1e-7 either way; or
+// det M < 0 with sigma_2 = sigma_3) the two may differ by more. The identity is the cold start.
 PCISIM_HD inline Mat3 extract_rotation_from(const Mat3& a, const Mat3& previous, double rest_moment_kg_m2,
                                             Mat3* right) {
   // same regulariser as the CPU (kRotationRegularisation = 1e-9)

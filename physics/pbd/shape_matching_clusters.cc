@@ -61,25 +61,25 @@ void ShapeMatchingClusters::finalize(const Eigen::Matrix3Xd& rest_m, const Eigen
 // eq 9: A_pq = sum m p q^T (A_qq only matters for the linear blend and the volume). One pass over
 // the members: with y = x - x_first (the first member's position, so the sums stay small),
 // t = x_first + sum m y / M and A_pq = sum m y q^T - (t - x_first) sum m q^T (sum m q is zero
-// up to rounding: q is measured from the rest centre)
+// up to rounding: q is measured from the rest centre). my_kg_m, mq_kg_m: the sums of m y, m q
 void ShapeMatchingClusters::centre_and_moment(int c, const Eigen::Matrix3Xd& x_m, const Eigen::VectorXd& mass_kg,
                                               Eigen::Vector3d* t, Eigen::Matrix3d* a_pq) const {
   const Eigen::Vector3d origin = x_m.col(member_[begin(c)]);
   double m_sum = 0.0;
-  Eigen::Vector3d my = Eigen::Vector3d::Zero(), mq = Eigen::Vector3d::Zero();
+  Eigen::Vector3d my_kg_m = Eigen::Vector3d::Zero(), mq_kg_m = Eigen::Vector3d::Zero();
   a_pq->setZero();
   for (int s = begin(c); s < end(c); ++s) {
     const double m = mass_kg[member_[s]];
-    const Eigen::Vector3d y = m * (x_m.col(member_[s]) - origin);
+    const Eigen::Vector3d my = m * (x_m.col(member_[s]) - origin);
     const auto q = rest_offset_m_.col(s);
     m_sum += m;
-    my += y;
-    mq += m * q;
-    a_pq->noalias() += y * q.transpose();
+    my_kg_m += my;
+    mq_kg_m += m * q;
+    a_pq->noalias() += my * q.transpose();
   }
-  const Eigen::Vector3d shift = my / m_sum;
-  *t = origin + shift;
-  a_pq->noalias() -= shift * mq.transpose();
+  const Eigen::Vector3d shift_m = my_kg_m / m_sum;
+  *t = origin + shift_m;
+  a_pq->noalias() -= shift_m * mq_kg_m.transpose();
 }
 
 void ShapeMatchingClusters::goals(int c, const Eigen::Matrix3Xd& x_m, const Eigen::VectorXd& mass_kg,

@@ -137,12 +137,14 @@ TEST(RotationExtraction, AWarmStartedSvdGivesTheColdStartsRotation) {
   Eigen::Matrix3d right = Eigen::Matrix3d::Identity(), previous_warm = Eigen::Matrix3d::Identity(),
                   previous_cold = Eigen::Matrix3d::Identity();
   double worst = 0.0;
+  Eigen::Matrix3d last_a;
   for (int k = 0; k < 200; ++k) {
     const double s = 0.01 * k;
     Eigen::Matrix3d f = Eigen::AngleAxisd(s, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix() *
                         Eigen::Vector3d(1.0 + 0.5 * std::sin(s), 1.0 - 0.3 * s / 2.0, 0.8 + 0.1 * s).asDiagonal();
     if (k == 150) f.col(2) = -f.col(2);  // inverted: det R stays +1
     const Moments m = moments(q, [&](const Eigen::Vector3d& x) { return f * x; });
+    last_a = m.a;
     previous_warm = extract_rotation(m.a, previous_warm, m.rest_moment, &right);
     previous_cold = extract_rotation(m.a, previous_cold, m.rest_moment);
     expect_proper_rotation(previous_warm);
@@ -150,6 +152,23 @@ TEST(RotationExtraction, AWarmStartedSvdGivesTheColdStartsRotation) {
     EXPECT_LT((right.transpose() * right - Eigen::Matrix3d::Identity()).norm(), 1e-12) << "the start stays orthonormal";
   }
   EXPECT_LT(worst, 1e-13);
+  // what is kept is the last solve's right singular vectors: they diagonalise A^T A
+  const Eigen::Matrix3d d = right.transpose() * last_a.transpose() * last_a * right;
+  EXPECT_LT((d - Eigen::Matrix3d(d.diagonal().asDiagonal())).norm(), 1e-10 * d.norm());
+  EXPECT_GT((right.cwiseAbs() - Eigen::Matrix3d::Identity()).norm(), 0.1) << "not the cold start's identity";
+  // a start that is no orthonormal basis (none, not finite, two columns alike) gives the cold
+  // start's rotation and leaves an orthonormal one behind
+  const Moments m = moments(q, [&](const Eigen::Vector3d& x) { return random_rotation(4) * x; });
+  const Eigen::Matrix3d cold = extract_rotation(m.a, Eigen::Matrix3d::Identity(), m.rest_moment);
+  Eigen::Matrix3d alike = Eigen::Matrix3d::Identity();
+  alike.col(1) = alike.col(0);
+  for (Eigen::Matrix3d bad :
+       {Eigen::Matrix3d(Eigen::Matrix3d::Zero()),
+        Eigen::Matrix3d(Eigen::Matrix3d::Constant(std::numeric_limits<double>::quiet_NaN())), alike}) {
+    const Eigen::Matrix3d r = extract_rotation(m.a, Eigen::Matrix3d::Identity(), m.rest_moment, &bad);
+    EXPECT_LT((r - cold).cwiseAbs().maxCoeff(), 1e-13);
+    EXPECT_LT((bad.transpose() * bad - Eigen::Matrix3d::Identity()).norm(), 1e-12);
+  }
   Eigen::Matrix3d a = Eigen::Matrix3d::Identity();
   a(0, 1) = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ(extract_rotation(a, previous_warm, 1.0, &right), previous_warm);

@@ -193,9 +193,19 @@ TEST(Calibration, TheFieldComparisonSplitsAShiftFromAShapeAndMeasuresTheResponse
   compare_fields(half, pressed, rest, rest, unloaded, &e);
   EXPECT_NEAR(e.response_ratio, 0.5, 1e-12);
   EXPECT_NEAR(e.model_from_unloaded_m, (2.5e-3 + 3e-3 + 3.5e-3 + 4e-3) / 4, 1e-15);
-  // the error is all shape here: its mean vector is the mean of the half-presses missed
+  // its mean vector is the mean of the half-presses missed (along y), the rest is shape
   EXPECT_NEAR(e.mean_error_m.y(), -0.5 * 2.5e-3, 1e-15);
+  EXPECT_EQ(e.mean_error_m.x(), 0.0);
+  EXPECT_EQ(e.mean_error_m.z(), 0.0);
   EXPECT_NEAR(e.shape_error_m, (0.75e-3 + 0.25e-3 + 0.25e-3 + 0.75e-3) / 4, 1e-15);
+
+  // moved as far but across the reference's motion: no response; against it: -1
+  Eigen::Matrix3Xd across = rest;
+  across.row(0) += Eigen::RowVector4d(1, 2, 3, 4) * 1e-3;
+  compare_fields(across, pressed, rest, rest, unloaded, &e);
+  EXPECT_NEAR(e.response_ratio, 0.0, 1e-15);
+  compare_fields(rest - (pressed - rest), pressed, rest, rest, unloaded, &e);
+  EXPECT_NEAR(e.response_ratio, -1.0, 1e-12);
 
   EXPECT_THROW(compare_fields(half.leftCols(3), pressed, rest, rest, unloaded, &e), std::invalid_argument);
 }

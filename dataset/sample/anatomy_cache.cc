@@ -68,4 +68,30 @@ std::shared_ptr<const BuiltAnatomy> AnatomyCache::get(const SamplePlan& plan) {
   return built.get();
 }
 
+BeatCache::Kept BeatCache::get(const std::string& key, const std::function<Kept()>& make) {
+  std::promise<Kept> promise;
+  std::shared_future<Kept> kept;
+  bool mine = false;
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    auto it = kept_.find(key);
+    if (it == kept_.end()) {
+      it = kept_.emplace(key, promise.get_future().share()).first;
+      mine = true;
+    }
+    kept = it->second;
+  }
+  if (!mine) return kept.get();  // another job's (waits while it makes it; rethrows its failure)
+  try {
+    Kept beat = make();
+    promise.set_value(beat);
+    return beat;
+  } catch (...) {
+    promise.set_exception(std::current_exception());
+    const std::lock_guard<std::mutex> lock(mutex_);
+    kept_.erase(key);
+    throw;
+  }
+}
+
 }  // namespace pcisim::dataset

@@ -4,8 +4,10 @@
 // once built. A job asking for one another job is building waits for it. The most recently used few are kept (a phantom
 // case with its field is ~100 MB).
 #include <Eigen/Core>
+#include <functional>
 #include <future>
 #include <list>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -14,8 +16,29 @@
 #include "anatomy/case/case.h"
 #include "dataset/sample/sample_plan.h"
 #include "physics/guidewire/lumen_query.h"
+#include "xray/fluoro/beating_background.h"
 
 namespace pcisim::dataset {
+
+// One anatomy's beating background as its jobs share it, by the beat's key (the heart's and the
+// warp's settings: sample_runner.cc): the heart's cycle sampled and every bin's change of the CT.
+// The first job to ask makes them, the others wait and share them (with 16 jobs each made its
+// own on most samples: a third of a GPU host's labelled-frame time, issue #36). A make that throws
+// is forgotten, so the next ask tries again.
+struct SharedBeat {
+  xray::BeatSamples samples;
+  std::shared_ptr<const xray::BeatChanges> changes;  // null: too large to keep (each job writes its own)
+};
+class BeatCache {
+ public:
+  using Kept = std::shared_ptr<const SharedBeat>;
+  // the beat kept for `key`, or `make`'s (run here, once per key)
+  Kept get(const std::string& key, const std::function<Kept()>& make);
+
+ private:
+  std::mutex mutex_;
+  std::map<std::string, std::shared_future<Kept>> kept_;
+};
 
 struct BuiltAnatomy {
   std::string key;
@@ -26,6 +49,7 @@ struct BuiltAnatomy {
   // the CT the fluoroscopy projects (the case's, or the thorax phantom around its vessels); each
   // job's renderer takes a copy: generating the phantom costs far more than copying it
   anatomy::Volume background;
+  mutable BeatCache beats;  // its beating backgrounds, shared by the jobs
 };
 
 class AnatomyCache {

@@ -97,8 +97,21 @@ nlohmann::json SampleRunner::run(const SamplePlan& plan, FrameSink& sink) {
   xray::FluoroscopyRenderer& renderer = *a.renderer;
   times_.anatomy_s += seconds_since(t0);
   t0 = Clock::now();
-  if (beating && !keep_beat)
-    renderer.set_beat(server::beat_samples_mm(world.sample_beat_cycle(xs.heart_phase_bins)), server::beat_options(xs));
+  if (beating && !keep_beat) {
+    // this heart's cycle and the bins' changes of this CT: made by the first job to need them,
+    // shared by the others (each background still builds its warp's fields from the samples)
+    const xray::BeatingBackgroundOptions options = server::beat_options(xs);
+    bool made = false;
+    const BeatCache::Kept beat = built->beats.get(beat_key, [&] {
+      auto b = std::make_shared<SharedBeat>();
+      b->samples = server::beat_samples_mm(world.sample_beat_cycle(xs.heart_phase_bins));
+      renderer.set_beat(b->samples, options);
+      b->changes = renderer.beat()->changes();
+      made = true;
+      return b;
+    });
+    if (!made) renderer.set_beat(beat->samples, options, beat->changes);
+  }
   a.beat_key = beat_key;
   times_.beat_s += seconds_since(t0);
   t0 = Clock::now();

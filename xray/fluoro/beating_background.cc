@@ -38,37 +38,51 @@ const BeatingBackgroundOptions& checked(const BeatingBackgroundOptions& o) {
 }  // namespace
 
 BeatingBackground::BeatingBackground(const AttenuationVolume& ct, const BeatSamples& samples,
-                                     const BeatingBackgroundOptions& options)
+                                     const BeatingBackgroundOptions& options,
+                                     std::shared_ptr<const BeatChanges> changes)
     : options_(checked(options)),
       warp_(ct, samples, options.warp),
       change_(warp_.make_change_volume()),
       projector_(change_, options.projector),
       bin_images_(warp_.bins()),
       filled_(warp_.bins(), 0) {
-  const double mib = double(change_.padded_count()) * sizeof(float) * bins() / (1 << 20);
-  if (mib > options_.change_cache_mib) return;
-  // every bin's change now, bins split over two threads (each writes its own volume)
-  changes_.reserve(bins());
-  for (int b = 0; b < bins(); ++b) changes_.push_back(warp_.make_change_volume());
-  std::exception_ptr failed[2];
-  auto write = [this, &failed](int first) {
-    try {
-      for (int b = first; b < bins(); b += 2) warp_.write_change(b, &changes_[b]);
-    } catch (...) {
-      failed[first] = std::current_exception();
-    }
-  };
-  std::thread other(write, 1);
-  write(0);
-  other.join();
-  for (const auto& e : failed)
-    if (e) std::rethrow_exception(e);
+  if (changes) {
+    // another background's: one per bin, each over this warp's box
+    bool fits = static_cast<int>(changes->size()) == bins();
+    for (size_t b = 0; fits && b < changes->size(); ++b)
+      fits = (*changes)[b].dims() == change_.dims() && (*changes)[b].index_offset() == change_.index_offset() &&
+             (*changes)[b].index_from_physical() == change_.index_from_physical();
+    if (!fits)
+      throw std::invalid_argument("BeatingBackground: the shared changes are not one per bin of this warp's box");
+    changes_ = std::move(changes);
+  } else {
+    const double mib = double(change_.padded_count()) * sizeof(float) * bins() / (1 << 20);
+    if (mib > options_.change_cache_mib) return;
+    // every bin's change now, bins split over two threads (each writes its own volume)
+    auto written = std::make_shared<BeatChanges>();
+    written->reserve(bins());
+    for (int b = 0; b < bins(); ++b) written->push_back(warp_.make_change_volume());
+    std::exception_ptr failed[2];
+    auto write = [this, &written, &failed](int first) {
+      try {
+        for (int b = first; b < bins(); b += 2) warp_.write_change(b, &(*written)[b]);
+      } catch (...) {
+        failed[first] = std::current_exception();
+      }
+    };
+    std::thread other(write, 1);
+    write(0);
+    other.join();
+    for (const auto& e : failed)
+      if (e) std::rethrow_exception(e);
+    changes_ = std::move(written);
+  }
   if (!options_.gpu) return;
 #ifdef PCISIM_HAVE_CUDA
   std::string why;
   if (!CudaTrilinearProjector::available(&why)) throw std::runtime_error("BeatingBackground: no GPU: " + why);
   gpu_ = std::make_unique<Gpu>();
-  for (const AttenuationVolume& c : changes_)
+  for (const AttenuationVolume& c : *changes_)
     gpu_->bins.push_back(std::make_unique<CudaTrilinearProjector>(c, options_.projector));
 #else
   throw std::runtime_error("BeatingBackground: the GPU needs a build with CUDA");
@@ -76,7 +90,7 @@ BeatingBackground::BeatingBackground(const AttenuationVolume& ct, const BeatSamp
 }
 
 const AttenuationVolume& BeatingBackground::change(int bin) {
-  if (!changes_.empty()) return changes_[bin];
+  if (changes_) return (*changes_)[bin];
   warp_.write_change(bin, &change_);
   return change_;
 }

@@ -38,10 +38,18 @@ struct BeatingBackgroundOptions {
 // empty when usable, otherwise the field and its range
 std::string validate(const BeatingBackgroundOptions& options);
 
+// every bin's change of attenuation, written once (HeartWarp::write_change): the same for every
+// background over the same CT, samples and warp, so backgrounds may share them (a dataset's jobs)
+using BeatChanges = std::vector<AttenuationVolume>;
+
 class BeatingBackground {
  public:
-  // keeps a reference to ct (the static attenuation the renderer projects); builds the warp
-  BeatingBackground(const AttenuationVolume& ct, const BeatSamples& samples, const BeatingBackgroundOptions& options);
+  // keeps a reference to ct (the static attenuation the renderer projects); builds the warp.
+  // `changes`: every bin's change made by another background over the same CT, samples and warp
+  // (changes()), used instead of writing them; null: written here (when they fit
+  // change_cache_mib). Throws std::invalid_argument when they are not one per bin of the warp's box
+  BeatingBackground(const AttenuationVolume& ct, const BeatSamples& samples, const BeatingBackgroundOptions& options,
+                    std::shared_ptr<const BeatChanges> changes = nullptr);
   ~BeatingBackground();
 
   int bins() const { return warp_.bins(); }
@@ -67,7 +75,9 @@ class BeatingBackground {
   int fill_ahead();
 
   int filled_bins() const;  // the bins filled at the change detector's resolution
-  bool changes_cached() const { return !changes_.empty(); }
+  bool changes_cached() const { return changes_ != nullptr; }
+  // the bins' changes, to share with another background (null when not cached)
+  std::shared_ptr<const BeatChanges> changes() const { return changes_; }
   bool on_gpu() const { return gpu_ != nullptr; }
   int64_t bin_projections() const { return bin_projections_; }
 
@@ -77,9 +87,9 @@ class BeatingBackground {
 
   BeatingBackgroundOptions options_;
   HeartWarp warp_;
-  AttenuationVolume change_;                // scratch when the changes are not cached
-  std::vector<AttenuationVolume> changes_;  // per bin, when cached
-  struct Gpu;                               // per bin, the change uploaded (CUDA builds)
+  AttenuationVolume change_;                    // scratch when the changes are not cached
+  std::shared_ptr<const BeatChanges> changes_;  // per bin, when cached (perhaps another's)
+  struct Gpu;                                   // per bin, the change uploaded (CUDA builds)
   std::unique_ptr<Gpu> gpu_;
   TrilinearProjector projector_;
   DetectorGeometry geometry_;

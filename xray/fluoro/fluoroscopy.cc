@@ -183,8 +183,9 @@ void FluoroscopyRenderer::invalidate_background() {
   impl_->background_valid = false;
   impl_->refine_next_row = -1;  // the next frame projects again
 }
-void FluoroscopyRenderer::set_beat(const BeatSamples& samples, const BeatingBackgroundOptions& options) {
-  impl_->beat = std::make_unique<BeatingBackground>(impl_->drr.attenuation(), samples, options);
+void FluoroscopyRenderer::set_beat(const BeatSamples& samples, const BeatingBackgroundOptions& options,
+                                   std::shared_ptr<const BeatChanges> changes) {
+  impl_->beat = std::make_unique<BeatingBackground>(impl_->drr.attenuation(), samples, options, std::move(changes));
   impl_->background_valid = false;
   impl_->refine_next_row = -1;
 }

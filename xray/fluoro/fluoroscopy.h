@@ -122,7 +122,10 @@ class FluoroscopyRenderer {
   // in the CT's frame, mm), projected per phase bin for each pose and blended per frame at the
   // input's heart_phase; the next frame re-projects. Throws std::invalid_argument when the
   // samples or options are bad (naming the field)
-  void set_beat(const BeatSamples& samples, const BeatingBackgroundOptions& options = {});
+  // `changes`: the bins' changes another renderer's background made over the same CT, samples and
+  // options (beat()->changes()), shared instead of written again
+  void set_beat(const BeatSamples& samples, const BeatingBackgroundOptions& options = {},
+                std::shared_ptr<const BeatChanges> changes = nullptr);
   const BeatingBackground* beat() const;  // null while the background stands still
   // a C-arm move's first frame from a quick projection (issue #36: the whole one held the picture
   // for ~390 ms on 2 cores): the static background projected on the detector of every stride-th

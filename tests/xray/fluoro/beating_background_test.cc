@@ -189,6 +189,34 @@ TEST(BeatingBackground, BetweenBinsTheSpineStaysBitIdenticalAndTheUncachedPathMa
   }
 }
 
+// a background over another's changes (a dataset's jobs share them) gives the same frames bit for
+// bit and holds the very same volumes; changes of another beat's box are refused
+TEST(BeatingBackground, SharedChangesGiveTheSameFramesAndChangesOfAnotherBoxAreRefused) {
+  const AttenuationVolume mu(ct(Eigen::Vector3d::Zero()));
+  const DetectorGeometry g = ap();
+  const Image still = still_projection(mu, g, 1.0);
+  const BeatingBackgroundOptions options{.projector = {.step_voxels = 1.0, .threads = 1}};
+  BeatingBackground first(mu, rigid_beat(4), options);
+  ASSERT_NE(first.changes(), nullptr);
+  BeatingBackground second(mu, rigid_beat(4), options, first.changes());
+  EXPECT_EQ(second.changes(), first.changes()) << "shared, not copied";
+  first.set_pose(g, still);
+  second.set_pose(g, still);
+  Image a, b;
+  for (const double phase : {0.0, 0.3, 0.61}) {
+    first.at_phase(phase, &a);
+    second.at_phase(phase, &b);
+    EXPECT_EQ(a.pixels, b.pixels) << "phase " << phase;
+  }
+  // more bins, or a heart whose samples reach elsewhere (another box), do not fit
+  EXPECT_THROW(BeatingBackground(mu, rigid_beat(6), options, first.changes()), std::invalid_argument);
+  BeatSamples wider = rigid_beat(4);
+  for (auto& p : wider.rest_mm) p *= 1.5;
+  for (auto& bin : wider.at_bin_mm)
+    for (auto& p : bin) p *= 1.5;
+  EXPECT_THROW(BeatingBackground(mu, wider, options, first.changes()), std::invalid_argument);
+}
+
 TEST(BeatingBackground, TheCoarseDetectorIsCentredForAnyWidth) {
   const AttenuationVolume mu(ct(Eigen::Vector3d::Zero()));
   for (const int width : {157, 161}) {

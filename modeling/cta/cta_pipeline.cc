@@ -116,7 +116,19 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
   };
   fill_and_clip(o.segmentation, "");
   const RefillOptions& rf = o.refill;
-  if (rf.enabled && clip.root_sponges > 0 && clip.pieces.size() < 2 && o.segmentation.smoothing_mm <= 0) {
+  // (a tree's worth: its farthest voxel from its ostium, summed over the trees)
+  auto summed_reach_mm = [](const Clipping& c) {
+    double sum = 0;
+    for (const CoronaryPiece& p : c.pieces) sum += p.reach_mm;
+    return sum;
+  };
+  auto short_tree = [&](const Clipping& c) {
+    for (const CoronaryPiece& p : c.pieces)
+      if (p.reach_mm < rf.short_tree_mm) return true;
+    return false;
+  };
+  if (rf.enabled && clip.root_sponges > 0 && (clip.pieces.size() < 2 || short_tree(clip)) &&
+      o.segmentation.smoothing_mm <= 0) {
     // the smoothed copy of the CT must fit the memory bound too, and the first fill's crop beside
     // the second (7 bytes a voxel of the CT: estimated_memory_gb)
     if (const double need = estimated_memory_gb(ct, true, true) + double(ct.voxel_count()) * 7.0 / 1e9;
@@ -139,9 +151,14 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
       std::string second;  // why the second fill is not kept
       try {
         fill_and_clip(so, " (smoothed)");
-        // the smoothed fill only where it finds more trees than the first
-        if (clip.pieces.size() <= first_clip.pieces.size())
-          second = fmt::format("the smoothed fill found {} tree(s), no more than the first", clip.pieces.size());
+        // the smoothed fill only where it finds more trees than the first, or as many reaching
+        // further (a short tree of the first beside a sponge: the sponge took the real one)
+        const double first_reach = summed_reach_mm(first_clip), reach = summed_reach_mm(clip);
+        if (clip.pieces.size() < first_clip.pieces.size() ||
+            (clip.pieces.size() == first_clip.pieces.size() && !(reach > rf.further_factor * first_reach)))
+          second = fmt::format(
+              "the smoothed fill found {} tree(s) reaching {:.0f} mm in all, the first {} reaching {:.0f} mm",
+              clip.pieces.size(), reach, first_clip.pieces.size(), first_reach);
       } catch (const ModelingError& e) {
         second = std::string("the smoothed fill failed: ") + e.what();
       }

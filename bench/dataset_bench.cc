@@ -132,8 +132,10 @@ int run(const std::vector<std::string>& args) {
   md << "\nStage shares are of the summed stage times of every job (with several jobs they overlap in wall time). "
         "anatomy: the case, its contact field and its background CT, built once per anatomy and shared by the jobs, "
         "and each job's projector over that CT; world: the "
-        "scene's physics built per sample; beat: one heart cycle sampled and the CT's warp built (kept while the next "
-        "sample's heart is the same); projection: the background's static and phase-bin projections (per pose); "
+        "scene's physics built per sample; beat: one heart cycle sampled and the phase bins' changes of the CT written "
+        "(kept while the next sample's heart is the same, and shared by the jobs while one holds it: a job that waits "
+        "for another's counts the wait here), each background's warp field built and, on a GPU, its changes "
+        "uploaded; projection: the background's static and phase-bin projections (per pose); "
         "noise: quanta, Poisson noise, blur, log and window.\n\n";
   // the target is the beating background's (issue #36: the product's frames beat); the still
   // one's best beside it

@@ -70,26 +70,41 @@ std::shared_ptr<const BuiltAnatomy> AnatomyCache::get(const SamplePlan& plan) {
 
 BeatCache::Kept BeatCache::get(const std::string& key, const std::function<Kept()>& make) {
   std::promise<Kept> promise;
-  std::shared_future<Kept> kept;
-  bool mine = false;
+  std::shared_future<Kept> making;
   {
     const std::lock_guard<std::mutex> lock(mutex_);
-    auto it = kept_.find(key);
-    if (it == kept_.end()) {
-      it = kept_.emplace(key, promise.get_future().share()).first;
-      mine = true;
+    Entry& e = kept_[key];
+    if (Kept held = e.made.lock()) return held;
+    if (e.making.valid()) {
+      making = e.making;
+    } else {
+      e.making = promise.get_future().share();
     }
-    kept = it->second;
   }
-  if (!mine) return kept.get();  // another job's (waits while it makes it; rethrows its failure)
+  if (making.valid()) {
+    // another job's: wait while it makes it; where its make failed, make one here
+    try {
+      return making.get();
+    } catch (...) {
+      return get(key, make);
+    }
+  }
   try {
     Kept beat = make();
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      Entry& e = kept_[key];
+      e.made = beat;
+      e.making = {};  // (the waiters keep their copies of the future)
+    }
     promise.set_value(beat);
     return beat;
   } catch (...) {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      kept_.erase(key);  // before the waiters wake: they make their own
+    }
     promise.set_exception(std::current_exception());
-    const std::lock_guard<std::mutex> lock(mutex_);
-    kept_.erase(key);
     throw;
   }
 }

@@ -23,8 +23,12 @@ namespace pcisim::dataset {
 // One anatomy's beating background as its jobs share it, by the beat's key (the heart's and the
 // warp's settings: sample_runner.cc): the heart's cycle sampled and every bin's change of the CT.
 // The first job to ask makes them, the others wait and share them (with 16 jobs each made its
-// own on most samples: a third of a GPU host's labelled-frame time, issue #36). A make that throws
-// is forgotten, so the next ask tries again.
+// own on most samples: a third of a GPU host's labelled-frame time, issue #36). A beat is kept
+// only while a job holds it (its renderer's current beat: SampleRunner), so a spec that draws the
+// heart rate from a range, every sample its own key, keeps no more than one beat a job. A make
+// that throws is forgotten, and the jobs that waited for it make their own (each fails or not
+// by itself, as without the cache). The key alone says two beats are the same: the changes are
+// checked only for their box (BeatingBackground).
 struct SharedBeat {
   xray::BeatSamples samples;
   std::shared_ptr<const xray::BeatChanges> changes;  // null: too large to keep (each job writes its own)
@@ -32,12 +36,16 @@ struct SharedBeat {
 class BeatCache {
  public:
   using Kept = std::shared_ptr<const SharedBeat>;
-  // the beat kept for `key`, or `make`'s (run here, once per key)
+  // the beat a job holds for `key`, or `make`'s (run here: once per key while jobs hold it)
   Kept get(const std::string& key, const std::function<Kept()>& make);
 
  private:
+  struct Entry {
+    std::shared_future<Kept> making;  // valid while the first asker makes it
+    std::weak_ptr<const SharedBeat> made;
+  };
   std::mutex mutex_;
-  std::map<std::string, std::shared_future<Kept>> kept_;
+  std::map<std::string, Entry> kept_;
 };
 
 struct BuiltAnatomy {

@@ -111,7 +111,9 @@ nlohmann::json SampleRunner::run(const SamplePlan& plan, FrameSink& sink) {
       return b;
     });
     if (!made) renderer.set_beat(beat->samples, options, beat->changes);
+    a.beat = beat;
   }
+  if (!beating) a.beat = nullptr;
   a.beat_key = beat_key;
   times_.beat_s += seconds_since(t0);
   t0 = Clock::now();

@@ -71,7 +71,8 @@ class SampleRunner {
   struct Renderer {
     std::shared_ptr<const BuiltAnatomy> anatomy;
     std::unique_ptr<xray::FluoroscopyRenderer> renderer;
-    std::string renderer_key, beat_key;  // what the renderer and its beating background were built for
+    std::string renderer_key, beat_key;      // what the renderer and its beating background were built for
+    std::shared_ptr<const SharedBeat> beat;  // held while the background is this beat (BeatCache)
   };
   Renderer& renderer_for(std::shared_ptr<const BuiltAnatomy> anatomy);
 

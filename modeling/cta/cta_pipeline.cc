@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <limits>
 #include <atomic>
 #include <chrono>
 #include <thread>
@@ -122,12 +123,15 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
     for (const CoronaryPiece& p : c.pieces) sum += p.reach_mm;
     return sum;
   };
-  auto short_tree = [&](const Clipping& c) {
-    for (const CoronaryPiece& p : c.pieces)
-      if (p.reach_mm < rf.short_tree_mm) return true;
-    return false;
+  // the shortest tree's reach (infinite without trees)
+  auto shortest_mm = [](const Clipping& c) {
+    double least = std::numeric_limits<double>::infinity();
+    for (const CoronaryPiece& p : c.pieces) least = std::min(least, p.reach_mm);
+    return least;
   };
-  if (rf.enabled && clip.root_sponges > 0 && (clip.pieces.size() < 2 || short_tree(clip)) &&
+  // two trees or more, but one short: the trigger is that tree alone
+  const bool for_short_tree = clip.pieces.size() >= 2 && shortest_mm(clip) < rf.short_tree_mm;
+  if (rf.enabled && clip.root_sponges > 0 && (clip.pieces.size() < 2 || for_short_tree) &&
       o.segmentation.smoothing_mm <= 0) {
     // the smoothed copy of the CT must fit the memory bound too, and the first fill's crop beside
     // the second (7 bytes a voxel of the CT: estimated_memory_gb)
@@ -139,10 +143,12 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
           need, o.memory_limit_gb));
     } else {
       m.stages.back().notes.push_back(fmt::format(
-          "{} coronary tree(s) and {} sponge(s) of noise at the aortic root (the CT's noise strung a chamber or the "
+          "{} coronary tree(s){} and {} sponge(s) of noise at the aortic root (the CT's noise strung a chamber or the "
           "myocardium near the lower threshold of {:.0f} HU into the fill, and a tree with it): filled again on the CT "
           "smoothed by {:.1f} mm{}",
-          clip.pieces.size(), clip.root_sponges, seg.lower_hu, rf.smoothing_mm,
+          clip.pieces.size(),
+          for_short_tree ? fmt::format(", one reaching only {:.0f} mm from its ostium,", shortest_mm(clip)) : "",
+          clip.root_sponges, seg.lower_hu, rf.smoothing_mm,
           o.segmentation.tubes.enabled ? ", thin vessels grown along tubes" : ""));
       LumenSegmentation first_seg = std::move(seg);
       Clipping first_clip = std::move(clip);
@@ -151,11 +157,13 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
       std::string second;  // why the second fill is not kept
       try {
         fill_and_clip(so, " (smoothed)");
-        // the smoothed fill only where it finds more trees than the first, or as many reaching
-        // further (a short tree of the first beside a sponge: the sponge took the real one)
+        // the smoothed fill only where it finds more trees than the first (and, where a short tree
+        // asked for it, reaching as far in all: not one more spurious piece beside trees it lost),
+        // or as many reaching further_factor as far (the short tree's real one found)
         const double first_reach = summed_reach_mm(first_clip), reach = summed_reach_mm(clip);
-        if (clip.pieces.size() < first_clip.pieces.size() ||
-            (clip.pieces.size() == first_clip.pieces.size() && !(reach > rf.further_factor * first_reach)))
+        const bool more = clip.pieces.size() > first_clip.pieces.size() && (!for_short_tree || reach >= first_reach);
+        const bool further = clip.pieces.size() == first_clip.pieces.size() && reach > rf.further_factor * first_reach;
+        if (!more && !further)
           second = fmt::format(
               "the smoothed fill found {} tree(s) reaching {:.0f} mm in all, the first {} reaching {:.0f} mm",
               clip.pieces.size(), reach, first_clip.pieces.size(), first_reach);

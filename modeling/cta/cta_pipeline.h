@@ -38,12 +38,12 @@ namespace pcisim::modeling {
 // (clipping refuses the sponge by its volume: Clipping::root_sponges). When a sponge touches the
 // root and fewer than two trees were kept, or a kept tree reaches under short_tree_mm from its
 // ostium (a fragment beside the sponge that took the real tree: family seed 15's right atrium at
-// 207 HU under 40 HU of noise took the RCA, and a 28 mm piece by the root was kept), the fill and
+// 207 HU under 41 HU of noise took the RCA, and a 28 mm piece by the root was kept), the fill and
 // the clipping run again on the CT smoothed by smoothing_mm (SegmentationOptions::smoothing_mm:
 // the noise averaged away; the tube growth, when on, follows the thin vessels the smoothing
-// loses), and that fill is kept when it finds more trees, or as many reaching further_factor times
-// as far in all (and does not fail). Only then: on the other CTs the smoothed fill is the worse
-// one (docs/modeling.md)
+// loses), and that fill is kept when it finds more trees (where a short tree asked for it, reaching
+// as far in all), or as many reaching further_factor times as far in all (and does not fail). Only then: on the other
+// CTs the smoothed fill is the worse one (docs/modeling.md)
 struct RefillOptions {
   bool enabled = true;
   double smoothing_mm = 0.5;

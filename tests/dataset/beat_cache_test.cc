@@ -48,41 +48,53 @@ TEST(BeatCache, EightJobsAskingAtOnceShareOneWrite) {
             got.front());
 }
 
-TEST(BeatCache, AFailedWriteReachesItsWaitersAndIsNotKept) {
+// a make that fails is not kept: a job that waited for it, or asks after it, makes its own (the
+// failure stays the failing job's, as without the cache)
+TEST(BeatCache, AFailedMakeIsNotKeptAndTheWaitersMakeTheirOwn) {
   BeatCache cache;
-  std::atomic<bool> writing{false};
-  std::thread writer([&] {
+  std::atomic<bool> making{false};
+  std::atomic<int> makes{0};
+  std::thread failing([&] {
     EXPECT_THROW(cache.get("k",
                            [&]() -> Kept {
-                             writing = true;
-                             std::this_thread::sleep_for(std::chrono::milliseconds(50));
+                             making = true;
+                             std::this_thread::sleep_for(std::chrono::milliseconds(50));  // the other asks meanwhile
                              throw std::runtime_error("no memory for the changes");
                            }),
                  std::runtime_error);
   });
-  while (!writing) std::this_thread::yield();
-  // a job that asked while it was written sees the failure (or, coming after it, writes itself)
-  try {
-    const Kept c = cache.get("k", some_beat);
-    EXPECT_NE(c, nullptr);
-  } catch (const std::runtime_error& e) {
-    EXPECT_STREQ(e.what(), "no memory for the changes");
-  }
-  writer.join();
-  int writes = 0;
-  const Kept again = cache.get("k", [&] {
-    ++writes;
+  while (!making) std::this_thread::yield();
+  const Kept mine = cache.get("k", [&] {
+    ++makes;
     return some_beat();
   });
-  EXPECT_NE(again, nullptr);
-  EXPECT_LE(writes, 1);
-  // kept now
+  failing.join();
+  EXPECT_NE(mine, nullptr);
+  EXPECT_EQ(makes.load(), 1);
   EXPECT_EQ(cache.get("k",
                       [&]() -> Kept {
-                        ADD_FAILURE() << "written again";
+                        ADD_FAILURE() << "made again while held";
                         return nullptr;
                       }),
-            again);
+            mine);
+}
+
+// a beat is kept only while a job holds it: let go by all, the next ask makes it again
+TEST(BeatCache, ABeatNoJobHoldsIsMadeAgain) {
+  BeatCache cache;
+  int makes = 0;
+  auto make = [&] {
+    ++makes;
+    return some_beat();
+  };
+  Kept held = cache.get("72 bpm", make);
+  std::weak_ptr<const SharedBeat> watch = held;
+  EXPECT_EQ(cache.get("72 bpm", make), held);
+  EXPECT_EQ(makes, 1);
+  held.reset();
+  EXPECT_TRUE(watch.expired()) << "the cache holds no beat itself";
+  cache.get("72 bpm", make);
+  EXPECT_EQ(makes, 2);
 }
 
 }  // namespace

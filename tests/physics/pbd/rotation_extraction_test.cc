@@ -143,7 +143,7 @@ TEST(RotationExtraction, AWarmStartedSvdGivesTheColdStartsRotation) {
     Eigen::Matrix3d f = Eigen::AngleAxisd(s, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix() *
                         Eigen::Vector3d(1.0 + 0.5 * std::sin(s), 1.0 - 0.3 * s / 2.0, 0.8 + 0.1 * s).asDiagonal();
     if (k == 150) f.col(2) = -f.col(2);  // inverted: det R stays +1
-    const Moments m = moments(q, [&](const Eigen::Vector3d& x) { return f * x; });
+    const Moments m = moments(q, [&](const Eigen::Vector3d& x) -> Eigen::Vector3d { return f * x; });
     last_a = m.a;
     previous_warm = extract_rotation(m.a, previous_warm, m.rest_moment, &right);
     previous_cold = extract_rotation(m.a, previous_cold, m.rest_moment);
@@ -158,7 +158,8 @@ TEST(RotationExtraction, AWarmStartedSvdGivesTheColdStartsRotation) {
   EXPECT_GT((right.cwiseAbs() - Eigen::Matrix3d::Identity()).norm(), 0.1) << "not the cold start's identity";
   // a start that is no orthonormal basis (none, not finite, two columns alike) gives the cold
   // start's rotation and leaves an orthonormal one behind
-  const Moments m = moments(q, [&](const Eigen::Vector3d& x) { return random_rotation(4) * x; });
+  const Eigen::Matrix3d turn = random_rotation(4);
+  const Moments m = moments(q, [&](const Eigen::Vector3d& x) -> Eigen::Vector3d { return turn * x; });
   const Eigen::Matrix3d cold = extract_rotation(m.a, Eigen::Matrix3d::Identity(), m.rest_moment);
   Eigen::Matrix3d alike = Eigen::Matrix3d::Identity();
   alike.col(1) = alike.col(0);

@@ -432,6 +432,7 @@ void World::write_snapshot(WorldSnapshot& out) const {
     out.hub_force_n = w.rod->hub_axial_force_n();
     out.hub_torque_nm = w.rod->hub_torque_nm();
     out.tip_m = out.wire_nodes_m.back();
+    out.tip_rest_m = w.rod_in_world ? Eigen::Vector3d(nodes.back() - w.rod->wall_offset_m().back()) : nodes.back();
     return;
   }
   out.tip_force_n = 0.0;
@@ -441,6 +442,7 @@ void World::write_snapshot(WorldSnapshot& out) const {
     out.wire_contact_force_n.clear();
     out.hub_force_n = out.hub_torque_nm = 0.0;
     out.tip_m.setZero();
+    out.tip_rest_m.setZero();
     return;
   }
   const auto nodes = w.wire->nodes_m();
@@ -459,6 +461,7 @@ void World::write_snapshot(WorldSnapshot& out) const {
   out.hub_force_n = w.model.f0_n;
   out.hub_torque_nm = w.model.t0_nm;
   out.tip_m = out.wire_nodes_m.back();
+  out.tip_rest_m = nodes.back();  // (the chain-mail lives in the rest frame)
 }
 
 void World::write_tissue(WorldSnapshot& out) const {

@@ -20,6 +20,8 @@ struct WorldSnapshot {
   // (+ resists positive rotation): the rod's clamp multipliers, the chain-mail's [guidewire eq 19]
   double hub_force_n = 0.0, hub_torque_nm = 0.0;
   Eigen::Vector3d tip_m = Eigen::Vector3d::Zero();
+  // the tip in the vessels' rest frame (the heart's motion taken out): where the trainee steered it
+  Eigen::Vector3d tip_rest_m = Eigen::Vector3d::Zero();
   int tip_branch = -1;       // index into the vessel tree, -1 when unknown
   double insertion_m = 0.0;  // insertion the step used
   double rotation_rad = 0.0;

@@ -12,13 +12,14 @@
 namespace pcisim::server {
 
 LcmIo::LcmIo(lcm::LCM& lcm, SharedState& state, SessionLimits& limits, double scene_injection_ml, StatusSource status,
-             BranchNamer branch_name, Instrument instrument)
+             BranchNamer branch_name, Instrument instrument, SessionMetrics* metrics)
     : lcm_(lcm),
       state_(state),
       limits_(limits),
       scene_injection_ml_(scene_injection_ml),
       status_(std::move(status)),
-      branch_name_(std::move(branch_name)) {
+      branch_name_(std::move(branch_name)),
+      metrics_(metrics) {
   subscriptions_ = {instrument == Instrument::kProbe
                         ? lcm_.subscribe(protocol::kProbeChannel, &LcmIo::on_probe, this)
                         : lcm_.subscribe(protocol::kInstrumentChannel, &LcmIo::on_instrument, this),
@@ -250,6 +251,7 @@ void LcmIo::add_injection(double volume_ml, double rate_ml_per_s) {
       volume_ok && std::isfinite(rate_ml_per_s) && rate_ml_per_s > 0 ? volume_ml / rate_ml_per_s : 0.0;
   state_.injection_duration_s[n] = duration_s >= 0.2 && duration_s <= 10.0 ? duration_s : 0.0;
   state_.injections.store(n + 1, std::memory_order_release);
+  if (metrics_) metrics_->record_injection(injected_ml, realtime::monotonic_ns());
 }
 
 // parsing happens here, off the loops; a bad scene is refused and the running one stays
@@ -301,6 +303,10 @@ void LcmIo::publish_wire(const physics::WorldSnapshot& s) {
   m.heart_phase = s.heart_phase;
   tx_publisher_.publish(lcm_, wire_channel_, m);
   state_.lcm_tx.fetch_add(1, std::memory_order_relaxed);
+  // the debrief's figures from exactly the states the bus carried
+  if (metrics_)
+    metrics_->record_wire(s, state_.carm_primary_deg.load(std::memory_order_relaxed),
+                          state_.carm_secondary_deg.load(std::memory_order_relaxed), realtime::monotonic_ns());
 }
 
 void LcmIo::publish_forces() {

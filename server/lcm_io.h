@@ -15,6 +15,7 @@
 #include "pcisim_lcm/wire_state_t.hpp"
 #include "protocol/channels.h"
 #include "protocol/encoded_publisher.h"
+#include "server/debrief/session_metrics.h"
 #include "server/session_limits.h"
 #include "server/shared_state.h"
 
@@ -34,9 +35,10 @@ class LcmIo {
   enum class Instrument { kWire, kProbe };
 
   // `lcm` and `limits` must outlive this object; status is called once a second from the send
-  // thread. `scene_injection_ml` is what an injection that names no volume injects.
+  // thread. `scene_injection_ml` is what an injection that names no volume injects. `metrics`
+  // (optional, outliving this object) gets each wire state published and each injection accepted.
   LcmIo(lcm::LCM& lcm, SharedState& state, SessionLimits& limits, double scene_injection_ml, StatusSource status,
-        BranchNamer branch_name, Instrument instrument = Instrument::kWire);
+        BranchNamer branch_name, Instrument instrument = Instrument::kWire, SessionMetrics* metrics = nullptr);
   ~LcmIo();
 
   void start();
@@ -70,6 +72,7 @@ class LcmIo {
   double scene_injection_ml_;
   StatusSource status_;
   BranchNamer branch_name_;
+  SessionMetrics* metrics_;
   std::array<lcm::Subscription*, 2> subscriptions_{};
   std::thread rx_, tx_;
   std::atomic<bool> running_{false}, receiving_{false};

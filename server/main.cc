@@ -10,6 +10,7 @@
 #include "server/case_builder.h"
 #include "server/scene/scene.h"
 #include "server/session_runner.h"
+#include "realtime/clock.h"
 #include "realtime/stop_signal.h"
 
 namespace {}  // namespace
@@ -32,6 +33,10 @@ int main(int argc, char** argv) {
                  "LCM URL of the fluoroscopy frames (its own instance, so frames never delay the 1 kHz traffic)")
       ->capture_default_str();
   app.add_option("--stats-json", stats_path, "write loop statistics to this file at exit");
+  std::string debrief_path;
+  app.add_option("--debrief-json", debrief_path,
+                 "write the session's debrief at exit: fluoro and cine time, dose, contrast, C-arm poses, the tip's "
+                 "path, time in a wrong branch, tip forces and a timeline (docs/debrief.md)");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error or off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}))
       ->capture_default_str();
@@ -113,14 +118,27 @@ int main(int argc, char** argv) {
   // a scene loaded over LCM is built while the running one goes on, then takes over; --duration
   // counts the running time of the whole session (the first scene's build aside)
   SessionLimits limits;
+  SessionMetrics metrics;
   SessionOptions options;
   options.duration_s = duration_s;
   options.cpu_latency_us = cpu_latency_us;
   options.image_url = image_url;
   options.case_dir = case_dir;  // for every scene of the session, not only the first
   try {
-    const StatsReport stats = run_session(std::move(scene), lcm, options, pcisim::realtime::stop_flag(), limits);
+    const StatsReport stats =
+        run_session(std::move(scene), lcm, options, pcisim::realtime::stop_flag(), limits, &metrics);
     std::cout << human_summary(stats) << "\n";
+    if (!debrief_path.empty()) {
+      const DebriefFigures figures = metrics.figures(pcisim::realtime::monotonic_ns());
+      std::cout << human_debrief(figures) << "\n";
+      std::ofstream out(debrief_path);
+      out << to_json(figures).dump(2) << "\n";
+      if (!out.flush()) {
+        std::cerr << "pcisim-server: cannot write the debrief to " << debrief_path << "\n";
+        return 1;
+      }
+      std::cout << "  debrief " << debrief_path << "\n";
+    }
     if (!stats_path.empty()) {
       std::ofstream out(stats_path);
       out << to_json(stats).dump(2) << "\n";

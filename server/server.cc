@@ -31,6 +31,8 @@ struct Server::Impl {
   lcm::LCM* images;
   SessionLimits own_limits;
   SessionLimits* limits;
+  SessionMetrics own_metrics;
+  SessionMetrics* metrics;
   SharedState state;
   std::unique_ptr<PhysicsLoop> physics;
   std::unique_ptr<XrayLoop> xray;              // only when the scene lists xray
@@ -48,8 +50,8 @@ struct Server::Impl {
 
   // (the session's limits take this scene's bounds when it starts running: a server built while
   // another runs must not change the running one's)
-  Impl(const Scene& s, lcm::LCM& l, lcm::LCM* i, SessionLimits* lim)
-      : scene(s), lcm(l), images(i), limits(lim ? lim : &own_limits) {}
+  Impl(const Scene& s, lcm::LCM& l, lcm::LCM* i, SessionLimits* lim, SessionMetrics* met)
+      : scene(s), lcm(l), images(i), limits(lim ? lim : &own_limits), metrics(met ? met : &own_metrics) {}
   ~Impl() {
     if (builder.joinable()) builder.join();
   }
@@ -169,8 +171,8 @@ void Server::fill_status(pcisim_lcm::sim_status_t* m) {
   impl_->status(m);
 }
 
-Server::Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images, SessionLimits* limits)
-    : impl_(std::make_unique<Impl>(scene, control, images, limits)) {
+Server::Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images, SessionLimits* limits, SessionMetrics* metrics)
+    : impl_(std::make_unique<Impl>(scene, control, images, limits, metrics)) {
   spdlog::info("scene '{}' ({}): effects [{}], physics {} Hz", scene.name, scene.source,
                fmt::format("{}", fmt::join(scene.effects, ", ")), scene.physics_rate_hz);
   const int64_t t0 = realtime::monotonic_ns();
@@ -238,9 +240,22 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
   LcmIo io(
       m.lcm, m.state, *m.limits, m.scene.xray ? m.scene.xray->injection_volume_ml : 0.0,
       [this](pcisim_lcm::sim_status_t& s) { fill_status(&s); }, branch_namer,
-      m.scene.world.probe_contact ? LcmIo::Instrument::kProbe : LcmIo::Instrument::kWire);
+      m.scene.world.probe_contact ? LcmIo::Instrument::kProbe : LcmIo::Instrument::kWire, m.metrics);
 
   m.start_ns = m.last_status_ns = realtime::monotonic_ns();
+  // the debrief: this scene's thresholds and route; the rod computes the wall's force, the
+  // chain-mail does not; the dose is reckoned at this C-arm's reference point
+  {
+    const auto& g = m.scene.world.guidewire;
+    const bool forces = g && g->model == physics::GuidewireModel::kRod;
+    BeamGeometry beam;
+    if (m.scene.xray) {
+      const xray::CArmSpec& c = m.scene.xray->fluoro.c_arm;
+      beam = beam_geometry(c.source_to_axis_mm, c.source_to_image_mm, c.width * c.pixel_mm, c.height * c.pixel_mm);
+    }
+    m.metrics->begin_pipeline(m.scene.debrief, m.anatomy->vessels, forces, beam, m.start_ns);
+    if (m.xray) m.xray->set_metrics(m.metrics);
+  }
   io.start();
   HapticLoopConfig haptic_config;
   haptic_config.params = m.scene.haptics;

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "server/scene/scene.h"
+#include "server/debrief/session_metrics.h"
 #include "server/session_limits.h"
 #include "server/stats.h"
 
@@ -21,7 +22,9 @@ class Server {
   // no images instance they are rendered and counted but not sent.
   // `limits` carries the session's command bounds across scene reloads (owned by the caller, who
   // runs one server after another); without it the server keeps its own.
-  Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images = nullptr, SessionLimits* limits = nullptr);
+  // `metrics` likewise carries the session's debrief figures (server/debrief/session_metrics.h).
+  Server(const Scene& scene, lcm::LCM& control, lcm::LCM* images = nullptr, SessionLimits* limits = nullptr,
+         SessionMetrics* metrics = nullptr);
   ~Server();
 
   // runs until duration_s elapses (0 = no limit) or *stop becomes true; on the way out it stops

@@ -16,7 +16,7 @@
 namespace pcisim::server {
 
 StatsReport run_session(Scene scene, lcm::LCM& control, const SessionOptions& options, const std::atomic<bool>& stop,
-                        SessionLimits& limits) {
+                        SessionLimits& limits, SessionMetrics* metrics) {
   std::unique_ptr<lcm::LCM> images;  // frames get their own LCM instance, once a scene shows them
   // a scene's server; the first is built here, the next ones on the running server's builder
   // thread while it runs (Server::set_successor_builder), so a reload stops nothing until the
@@ -30,7 +30,7 @@ StatsReport run_session(Scene scene, lcm::LCM& control, const SessionOptions& op
       if (!opened->good()) throw std::runtime_error("cannot open the image LCM at " + options.image_url);
       images = std::move(opened);
     }
-    auto server = std::make_unique<Server>(next, control, images.get(), &limits);
+    auto server = std::make_unique<Server>(next, control, images.get(), &limits, metrics);
     server->cpu_latency_us = options.cpu_latency_us;
     server->set_successor_builder(build);
     return server;

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "server/scene/scene.h"
+#include "server/debrief/session_metrics.h"
 #include "server/session_limits.h"
 #include "server/stats.h"
 
@@ -29,7 +30,8 @@ struct SessionOptions {
 
 // throws when the first scene cannot be built (there is nothing to fall back to); returns the
 // figures of the last pipeline
+// `metrics` (optional) gathers the session's debrief figures across every pipeline
 StatsReport run_session(Scene scene, lcm::LCM& control, const SessionOptions& options, const std::atomic<bool>& stop,
-                        SessionLimits& limits);
+                        SessionLimits& limits, SessionMetrics* metrics = nullptr);
 
 }  // namespace pcisim::server

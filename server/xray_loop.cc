@@ -68,6 +68,7 @@ void XrayLoop::apply_carm_target() {
   state_.carm_primary_deg = primary;
   state_.carm_secondary_deg = secondary;
   state_.carm_moves.fetch_add(1, std::memory_order_relaxed);
+  if (metrics_) metrics_->record_carm(primary, secondary, now_ns);
 }
 
 void XrayLoop::render_and_publish(bool cine) {
@@ -166,18 +167,26 @@ void XrayLoop::run() {
     on = cine || state_.instrument_pedal_down(state_.fluoro_pedal_instrument, wake_ns) || state_.fluoro_pedal_console;
     if (cine && !was_cine_) ++cine_run_;
     was_cine_ = cine;
+    if (metrics_)
+      metrics_->record_pedals(
+          state_.instrument_pedal_down(state_.fluoro_pedal_instrument, wake_ns) || state_.fluoro_pedal_console, cine,
+          wake_ns);
     const double rate = cine ? spec_.cine_rate_fps : spec_.pulse_rate_fps;
     const auto every = std::max<int64_t>(1, std::llround(tick_hz / rate));
     const bool pulse = tick % every == 0;
     if (on) {
       // beam time: wall time with the pedal down, wake to wake (ticks a busy machine skipped still
       // count), and the first pulse of each press its period, so that n pulses stand for n periods
-      if (last_on_ns) state_.xray_on_ns.fetch_add(wake_ns - last_on_ns, std::memory_order_relaxed);
+      int64_t beam_ns = last_on_ns ? wake_ns - last_on_ns : 0;
       last_on_ns = wake_ns;
       if (pulse && !first_pulse_counted) {
-        state_.xray_on_ns.fetch_add(every * schedule.period_ns(), std::memory_order_relaxed);
+        beam_ns += every * schedule.period_ns();
         first_pulse_counted = true;
       }
+      state_.xray_on_ns.fetch_add(beam_ns, std::memory_order_relaxed);
+      if (metrics_)
+        metrics_->record_beam_time(beam_ns * 1e-9, cine, state_.carm_primary_deg.load(),
+                                   state_.carm_secondary_deg.load());
       if (moved || pulse) render_and_publish(cine);
     } else {
       last_on_ns = 0;
@@ -186,7 +195,10 @@ void XrayLoop::run() {
     // an extra frame: the pulse it came before still comes on time, unless the move's frame ran
     // past it (then that pulse's frame is the move's)
     const bool extra = moved && realtime::monotonic_ns() < schedule.deadline_ns();
-    if (on && pulse && !extra) state_.xray_pulses.fetch_add(1, std::memory_order_relaxed);
+    if (on && pulse && !extra) {
+      state_.xray_pulses.fetch_add(1, std::memory_order_relaxed);
+      if (metrics_) metrics_->record_pulse(cine);
+    }
     if (extra) continue;
     ++tick;
     schedule.complete(realtime::monotonic_ns());

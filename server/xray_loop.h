@@ -11,6 +11,7 @@
 #include "protocol/channels.h"
 #include "protocol/encoded_publisher.h"
 #include "server/scene/scene.h"
+#include "server/debrief/session_metrics.h"
 #include "server/shared_state.h"
 #include "xray/fluoro/fluoroscopy.h"
 
@@ -25,6 +26,8 @@ class XrayLoop {
   XrayLoop(const Scene& scene, const anatomy::Case& anatomy, SharedState& state, lcm::LCM* images,
            const xray::BeatSamples* beat = nullptr);
   void run();  // until state.stop
+  // the session's debrief figures: beam time, pulses, pedals and C-arm moves (nullptr: none)
+  void set_metrics(SessionMetrics* metrics) { metrics_ = metrics; }
   // one frame of the newest snapshot, published (public for the test that counts its allocations;
   // never while run() runs)
   void render_and_publish(bool cine);
@@ -48,6 +51,7 @@ class XrayLoop {
   int64_t applied_target_seq_ = 0, last_move_ns_ = INT64_MIN / 2, min_move_interval_ns_ = 0;
   int32_t cine_run_ = -1;
   bool was_cine_ = false;
+  SessionMetrics* metrics_ = nullptr;
 };
 
 }  // namespace pcisim::server

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "haptics/haptic_params.h"
+#include "server/debrief/debrief_params.h"
 #include "server/session_limits.h"
 #include "physics/world_spec.h"
 #include "ultrasound/probe/us_settings.h"
@@ -52,6 +53,7 @@ struct Scene {
   std::optional<XraySpec> xray;              // present when the scene lists "xray"
   std::optional<UltrasoundSpec> ultrasound;  // present when the scene lists "ultrasound"
   SessionLimitParams session;                // bounds on console commands
+  DebriefParams debrief;                     // what the session's debrief judges against
   std::vector<std::string> effects;          // the listed effects, in step order
 };
 

@@ -372,6 +372,19 @@ SessionLimitParams read_session(json::JsonReader r) {
   return p;
 }
 
+// what the debrief judges against (server/debrief/debrief_params.h, docs/debrief.md)
+DebriefParams read_debrief(json::JsonReader r) {
+  DebriefParams p;
+  p.target_branch = r.text("target_branch", "");
+  p.tip_force_threshold_n = r.number("tip_force_threshold_n", p.tip_force_threshold_n, 0.001, 10);
+  p.tip_force_risk_n = r.number("tip_force_risk_n", p.tip_force_risk_n, 0.001, 10);
+  p.tube_output_ugy_per_mas_at_1m = r.number("tube_output_ugy_per_mas_at_1m", p.tube_output_ugy_per_mas_at_1m, 1, 500);
+  p.fluoro_mas_per_pulse = r.number("fluoro_mas_per_pulse", p.fluoro_mas_per_pulse, 0.001, 10);
+  p.cine_mas_per_frame = r.number("cine_mas_per_frame", p.cine_mas_per_frame, 0.001, 50);
+  r.finish();
+  return p;
+}
+
 void read_contrast(json::JsonReader r, XraySpec& x) {
   x.contrast = true;
   x.fluoro.iodine_mu_per_mm = r.number("iodine_mu_per_mm", x.fluoro.iodine_mu_per_mm, 0, 2);
@@ -421,6 +434,7 @@ Scene parse(const nlohmann::json& doc, const std::string& source) {
 
   s.haptics = read_haptics(top.child("haptics"));
   s.session = read_session(top.child("session"));
+  s.debrief = read_debrief(top.child("debrief"));
 
   if (!doc.contains("effects")) top.fail("effects", "expected an object listing the effects to simulate");
   json::JsonReader effects = top.child("effects");

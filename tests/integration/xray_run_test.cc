@@ -11,8 +11,10 @@
 #include "pcisim_lcm/session_command_t.hpp"
 #include "pcisim_lcm/xray_frame_t.hpp"
 #include "pcisim_lcm/sim_status_t.hpp"
+#include "pcisim_lcm/wire_state_t.hpp"
 #include "protocol/channels.h"
 #include "protocol/message_checks.h"
+#include "realtime/clock.h"
 #include "server/server.h"
 
 namespace pcisim::server {
@@ -77,6 +79,18 @@ struct Statuses {
   }
 };
 
+// the wire states as the bus carried them (what lcm-logger would record)
+struct WireStates {
+  std::mutex mutex;
+  std::vector<pcisim_lcm::wire_state_t> all;
+  void on(const lcm::ReceiveBuffer* r, const std::string&) {
+    pcisim_lcm::wire_state_t m;
+    ASSERT_TRUE(protocol::decode_checked(*r, m));
+    std::lock_guard lock(mutex);
+    all.push_back(std::move(m));
+  }
+};
+
 // set by the server's first force command: its loops are running
 struct Started {
   std::atomic<bool> running{false};
@@ -104,11 +118,17 @@ TEST(XrayRun, PedalCarmAndContrastDriveTheFrames) {
   // deadlines, so a slow start or a late wake-up on a busy machine does not shift the later commands
   Started started;
   lcm::Subscription* first_force = lcm.subscribe(protocol::kForceChannel, &Started::on, &started);
-  Server server(parse_scene(kScene, "xray-test"), lcm, &lcm);
+  WireStates wires;
+  lcm.subscribe(protocol::kWireChannel, &WireStates::on, &wires);
+  // the session's debrief figures (issue #35), checked below against the script and the bus
+  SessionMetrics metrics;
+  Server server(parse_scene(kScene, "xray-test"), lcm, &lcm, nullptr, &metrics);
+  std::chrono::steady_clock::time_point pedal_down, pedal_up;
   std::thread console([&] {
     while (!started.running) std::this_thread::sleep_for(1ms);
     const auto t0 = std::chrono::steady_clock::now();
     std::this_thread::sleep_until(t0 + 1500ms);
+    pedal_down = std::chrono::steady_clock::now();
     send(lcm, C::CMD_FLUORO_PEDAL, 1);  // frames from 1.5 s
     std::this_thread::sleep_until(t0 + 2500ms);
     send(lcm, C::CMD_CARM, 0, 40, 25);  // LAO 40 CRA 25 from 2.5 s
@@ -116,6 +136,7 @@ TEST(XrayRun, PedalCarmAndContrastDriveTheFrames) {
     send(lcm, C::CMD_CONTRAST, 0, 0, 0, 5.0, 5.0);  // inject 5 ml over 1 s at 3 s
     std::this_thread::sleep_until(t0 + 4500ms);
     send(lcm, C::CMD_FLUORO_PEDAL, 0);  // no frames after 4.5 s
+    pedal_up = std::chrono::steady_clock::now();
   });
   std::atomic<bool> stop{false};
   const StatsReport r = server.run(5.5, stop);
@@ -183,6 +204,42 @@ TEST(XrayRun, PedalCarmAndContrastDriveTheFrames) {
   }
   EXPECT_EQ(with_contrast_before, 0);
   EXPECT_GT(with_contrast_after, 5);
+
+  // the debrief (issue #35): the beam's time against the pedal script to one pulse period. The
+  // x-ray thread sees the pedal at its ticks (30 a second here): the beam runs from the first tick
+  // after the press to the last before the release, 0-2 ticks short of the time between the two
+  // commands as sent, and the press's first pulse adds its period (1/15 s): between 0 and 1/15 s
+  // over the time pressed, 1/30 s over it in the middle
+  const DebriefFigures f = metrics.figures(realtime::monotonic_ns());
+  const double pressed_s = std::chrono::duration<double>(pedal_up - pedal_down).count();
+  EXPECT_NEAR(f.fluoro_time_s, pressed_s + 1.0 / 30, 1.0 / 15) << "pressed " << pressed_s << " s";
+  EXPECT_EQ(f.cine_runs, 0);
+  EXPECT_EQ(f.contrast_injections, 1);
+  EXPECT_DOUBLE_EQ(f.contrast_ml, 5.0) << "the volume commanded";
+  // the pulses: every frame but the C-arm move's refresh (one move: at most one extra frame); the
+  // dose a pulse is the scene's C-arm's (SAD 750, SID 1100 mm): 50 uGy/mAs 0.15 mAs / 0.6^2 m^2
+  EXPECT_LE(f.fluoro_pulses, static_cast<int64_t>(rec.frames.size()));
+  EXPECT_GE(f.fluoro_pulses, static_cast<int64_t>(rec.frames.size()) - 1);
+  EXPECT_NEAR(f.air_kerma_mgy, f.fluoro_pulses * 50 * 0.15 / 0.36 * 1e-3, 1e-9);
+  // the two poses the beam was on at, their beam times adding up to the whole
+  ASSERT_EQ(f.carm_poses.size(), 2u);
+  EXPECT_DOUBLE_EQ(f.carm_poses[0].primary_deg, -30.0);
+  EXPECT_DOUBLE_EQ(f.carm_poses[1].primary_deg, 40.0);
+  EXPECT_NEAR(f.carm_poses[0].beam_s + f.carm_poses[1].beam_s, f.fluoro_time_s, 1e-9);
+  // the tip's path: the one integrated here from the wire states the bus carried (as lcm-logger
+  // records them), step by step
+  std::lock_guard wire_lock(wires.mutex);
+  ASSERT_GT(wires.all.size(), 100u);
+  EXPECT_EQ(f.wire_states, static_cast<int64_t>(wires.all.size()));
+  double path_mm = 0.0;
+  for (size_t k = 1; k < wires.all.size(); ++k) {
+    ASSERT_GT(wires.all[k].seq, wires.all[k - 1].seq);
+    const Eigen::Vector3d a(wires.all[k - 1].tip_mm), b(wires.all[k].tip_mm);
+    path_mm += (b - a).norm();
+  }
+  EXPECT_GT(path_mm, 10.0) << "the wire was pushed in 20 mm (its first millimetres inside the catheter)";
+  EXPECT_NEAR(f.tip_path_mm, path_mm, 1e-9 * path_mm);
+  EXPECT_TRUE(to_json(f).at("peak_tip_force_n").is_null()) << "the chain-mail computes no wall force";
 }
 
 }  // namespace

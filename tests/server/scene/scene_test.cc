@@ -181,8 +181,10 @@ TEST(Scene, EachBadInputNamesItsJsonPathAndWhatWasExpected) {
   EXPECT_EQ(error_of(R"({"name": "x"})"), "test.json: effects: expected an object listing the effects to simulate");
   EXPECT_EQ(error_of(R"({"effects": [1, 2]})"), "test.json: effects: expected an object");
   EXPECT_EQ(error_of(R"({"effects": {}, "colour": "red"})"),
-            "test.json: colour: unknown key (this object accepts: anatomy, effects, haptics, name, physics_rate_hz, "
-            "session)");
+            "test.json: colour: unknown key (this object accepts: anatomy, debrief, effects, haptics, name, "
+            "physics_rate_hz, session)");
+  EXPECT_EQ(error_of(R"({"effects": {}, "debrief": {"tip_force_risk_n": 0}})"),
+            "test.json: debrief.tip_force_risk_n: expected a number in [0.001, 10], got 0");
   EXPECT_EQ(error_of(R"({"haptics": {"interpolation": "cubic"}, "effects": {}})"),
             "test.json: haptics.interpolation: expected one of \"local_model\", \"zero_order_hold\", "
             "\"linear_extrapolation\", got \"cubic\"");

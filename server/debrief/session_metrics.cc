@@ -1,0 +1,305 @@
+#include "server/debrief/session_metrics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+
+#include "anatomy/vessel/vessel_tree.h"
+#include "xray/geometry/c_arm.h"
+
+namespace pcisim::server {
+
+namespace {
+// the IRP lies this far from the isocentre toward the focal spot (IEC 60601-2-43)
+constexpr double kIrpBeforeIsocentreMm = 150.0;
+// two poses closer than this in both angles are one pose
+constexpr double kSamePoseDeg = 0.5;
+}  // namespace
+
+BeamGeometry beam_geometry(double source_to_axis_mm, double source_to_image_mm, double detector_width_mm,
+                           double detector_height_mm) {
+  BeamGeometry g;
+  g.source_to_irp_mm = source_to_axis_mm - kIrpBeforeIsocentreMm;
+  // the field's area scales with the square of the distance from the focal spot
+  const double scale = g.source_to_irp_mm / source_to_image_mm;
+  g.field_area_at_irp_cm2 = detector_width_mm * detector_height_mm * scale * scale * 1e-2;
+  return g;
+}
+
+const char* timeline_kind_name(TimelineKind k) {
+  switch (k) {
+    case TimelineKind::kFluoroOn:
+      return "fluoro_on";
+    case TimelineKind::kFluoroOff:
+      return "fluoro_off";
+    case TimelineKind::kCineOn:
+      return "cine_on";
+    case TimelineKind::kCineOff:
+      return "cine_off";
+    case TimelineKind::kCArm:
+      return "carm";
+    case TimelineKind::kContrast:
+      return "contrast";
+    case TimelineKind::kForceEvent:
+      return "force_event";
+    case TimelineKind::kReset:
+      return "wire_restart";
+  }
+  return "?";
+}
+
+SessionMetrics::SessionMetrics() = default;
+
+double SessionMetrics::session_s(int64_t now_ns) const {
+  return start_ns_ != 0 ? static_cast<double>(now_ns - start_ns_) * 1e-9 : 0.0;
+}
+
+void SessionMetrics::add_event(TimelineKind kind, double a, double b, int64_t now_ns) {
+  if (timeline_count_ >= kMaxTimeline) {
+    ++f_.timeline_dropped;
+    return;
+  }
+  timeline_[timeline_count_++] = {session_s(now_ns), kind, a, b};
+}
+
+void SessionMetrics::begin_pipeline(const DebriefParams& params, const anatomy::VesselTree& tree, bool tip_forces_known,
+                                    const BeamGeometry& beam, int64_t now_ns) {
+  std::lock_guard lock(mutex_);
+  if (start_ns_ == 0) start_ns_ = now_ns;
+  params_ = params;
+  beam_ = beam;
+  forces_known_ = tip_forces_known;
+  f_.tip_forces_known = f_.tip_forces_known || tip_forces_known;
+  f_.target_branch = params.target_branch;
+  // the route: the target and every branch it leaves from, up to the root
+  on_route_.assign(tree.branches.size(), 0);
+  target_ = params.target_branch.empty() ? -1 : tree.find(params.target_branch);
+  for (int b = target_, guard = 0; b >= 0 && b < static_cast<int>(tree.branches.size()) && guard < 10000; ++guard) {
+    on_route_[b] = 1;
+    b = tree.branches[b].parent;
+  }
+  f_.has_target = target_ >= 0;
+  // the wire of the new pipeline starts afresh
+  if (in_episode_) end_force_episode();
+  if (have_last_) ++f_.resets;
+  have_last_ = false;
+}
+
+void SessionMetrics::record_beam_time(double seconds, bool cine, double primary_deg, double secondary_deg) {
+  if (!(seconds > 0.0) || !std::isfinite(seconds)) return;
+  std::lock_guard lock(mutex_);
+  f_.fluoro_time_s += seconds;
+  if (cine) f_.cine_time_s += seconds;
+  for (int i = 0; i < pose_count_; ++i) {
+    CArmUse& p = poses_[i];
+    if (std::abs(p.primary_deg - primary_deg) < kSamePoseDeg &&
+        std::abs(p.secondary_deg - secondary_deg) < kSamePoseDeg) {
+      p.beam_s += seconds;
+      return;
+    }
+  }
+  if (pose_count_ < kMaxPoses) poses_[pose_count_++] = {primary_deg, secondary_deg, seconds};
+}
+
+// air kerma at the IRP a pulse: K = Y(1 m) (mA s) (1 m / d_IRP)^2 (the inverse-square law from
+// the tube's output at 1 m; docs/debrief.md), and the dose-area product K A_IRP
+void SessionMetrics::record_pulse(bool cine) {
+  std::lock_guard lock(mutex_);
+  (cine ? f_.cine_frames : f_.fluoro_pulses) += 1;
+  const double mas = cine ? params_.cine_mas_per_frame : params_.fluoro_mas_per_pulse;
+  const double d_m = beam_.source_to_irp_mm * 1e-3;
+  const double kerma_ugy = params_.tube_output_ugy_per_mas_at_1m * mas / (d_m * d_m);
+  f_.air_kerma_mgy += kerma_ugy * 1e-3;
+  f_.dap_gycm2 += kerma_ugy * 1e-6 * beam_.field_area_at_irp_cm2;
+}
+
+void SessionMetrics::record_pedals(bool fluoro, bool cine, int64_t now_ns) {
+  std::lock_guard lock(mutex_);
+  if (fluoro != fluoro_on_) add_event(fluoro ? TimelineKind::kFluoroOn : TimelineKind::kFluoroOff, 0, 0, now_ns);
+  if (cine != cine_on_) {
+    add_event(cine ? TimelineKind::kCineOn : TimelineKind::kCineOff, 0, 0, now_ns);
+    if (cine) ++f_.cine_runs;
+  }
+  fluoro_on_ = fluoro;
+  cine_on_ = cine;
+}
+
+void SessionMetrics::record_carm(double primary_deg, double secondary_deg, int64_t now_ns) {
+  std::lock_guard lock(mutex_);
+  add_event(TimelineKind::kCArm, primary_deg, secondary_deg, now_ns);
+}
+
+void SessionMetrics::record_injection(double volume_ml, int64_t now_ns) {
+  std::lock_guard lock(mutex_);
+  ++f_.contrast_injections;
+  f_.contrast_ml += volume_ml;
+  add_event(TimelineKind::kContrast, volume_ml, 0, now_ns);
+}
+
+void SessionMetrics::end_force_episode() {
+  ++f_.force_events;
+  const double sim_duration_s = last_time_s_ - episode_sim_start_s_;
+  // (the timeline's slot was reserved when the episode began: its time is the start)
+  if (timeline_count_ < kMaxTimeline) {
+    timeline_[timeline_count_++] = {episode_start_s_, TimelineKind::kForceEvent, episode_peak_n_, sim_duration_s};
+  } else {
+    ++f_.timeline_dropped;
+  }
+  in_episode_ = false;
+}
+
+// each interval between two wire states is booked with the earlier state's branch and force
+// (the state holds until the next one); a state whose step does not follow the last one's (a
+// reset, a new scene) starts the path afresh
+void SessionMetrics::record_wire(const physics::WorldSnapshot& s, double primary_deg, double secondary_deg,
+                                 int64_t now_ns) {
+  std::lock_guard lock(mutex_);
+  ++f_.wire_states;
+  if (s.wire_nodes_m.empty() || !s.tip_m.allFinite() || !s.tip_rest_m.allFinite() || !std::isfinite(s.time_s)) return;
+  const bool follows = have_last_ && s.step > last_step_ && s.time_s >= last_time_s_;
+  if (have_last_ && !follows) {
+    ++f_.resets;
+    if (in_episode_) end_force_episode();
+    add_event(TimelineKind::kReset, 0, 0, now_ns);
+  }
+  if (follows) {
+    const double dt_s = s.time_s - last_time_s_;
+    const Eigen::Vector3d d_mm = (s.tip_m - Eigen::Vector3d(last_tip_[0], last_tip_[1], last_tip_[2])) * 1e3;
+    f_.tip_path_mm += d_mm.norm();
+    const Eigen::Vector3d beam = xray::c_arm_beam_direction(primary_deg, secondary_deg);
+    f_.tip_path_projected_mm += (d_mm - d_mm.dot(beam) * beam).norm();
+    f_.tip_path_in_vessels_mm +=
+        (s.tip_rest_m - Eigen::Vector3d(last_tip_rest_[0], last_tip_rest_[1], last_tip_rest_[2])).norm() * 1e3;
+    if (target_ >= 0 && last_branch_ >= 0 && last_branch_ < static_cast<int>(on_route_.size()) &&
+        !on_route_[last_branch_])
+      f_.wrong_branch_s += dt_s;
+    if (forces_known_ && last_tip_force_n_ > params_.tip_force_threshold_n) f_.tip_force_above_threshold_s += dt_s;
+  }
+  if (target_ >= 0 && s.tip_branch == target_ && f_.target_reached_s < 0.0) f_.target_reached_s = session_s(now_ns);
+  const double force_n = std::isfinite(s.tip_force_n) ? s.tip_force_n : 0.0;
+  if (forces_known_) {
+    f_.peak_tip_force_n = std::max(f_.peak_tip_force_n, force_n);
+    if (force_n > params_.tip_force_risk_n) {
+      if (!in_episode_) {
+        in_episode_ = true;
+        episode_start_s_ = session_s(now_ns);
+        episode_sim_start_s_ = s.time_s;
+        episode_peak_n_ = 0.0;
+      }
+      episode_peak_n_ = std::max(episode_peak_n_, force_n);
+    } else if (in_episode_) {
+      last_time_s_ = s.time_s;  // the episode ends at this state
+      end_force_episode();
+    }
+  }
+  have_last_ = true;
+  last_step_ = s.step;
+  last_time_s_ = s.time_s;
+  for (int k = 0; k < 3; ++k) {
+    last_tip_[k] = s.tip_m[k];
+    last_tip_rest_[k] = s.tip_rest_m[k];
+  }
+  last_branch_ = s.tip_branch;
+  last_tip_force_n_ = force_n;
+}
+
+DebriefFigures SessionMetrics::figures(int64_t now_ns) const {
+  std::lock_guard lock(mutex_);
+  DebriefFigures f = f_;
+  f.procedure_time_s = session_s(now_ns);
+  f.params = params_;
+  f.carm_poses.assign(poses_.begin(), poses_.begin() + pose_count_);
+  f.timeline.assign(timeline_.begin(), timeline_.begin() + timeline_count_);
+  // an episode still above the risk force at the end counts
+  if (in_episode_) {
+    ++f.force_events;
+    if (f.timeline.size() < kMaxTimeline)
+      f.timeline.push_back(
+          {episode_start_s_, TimelineKind::kForceEvent, episode_peak_n_, last_time_s_ - episode_sim_start_s_});
+    else
+      ++f.timeline_dropped;
+  }
+  std::stable_sort(f.timeline.begin(), f.timeline.end(),
+                   [](const TimelineEntry& a, const TimelineEntry& b) { return a.time_s < b.time_s; });
+  return f;
+}
+
+nlohmann::json to_json(const DebriefFigures& f) {
+  using nlohmann::json;
+  json poses = json::array();
+  for (const CArmUse& p : f.carm_poses)
+    poses.push_back({{"primary_deg", p.primary_deg}, {"secondary_deg", p.secondary_deg}, {"beam_s", p.beam_s}});
+  json timeline = json::array();
+  for (const TimelineEntry& e : f.timeline) {
+    json j = {{"time_s", e.time_s}, {"kind", timeline_kind_name(e.kind)}};
+    if (e.kind == TimelineKind::kCArm) {
+      j["primary_deg"] = e.a;
+      j["secondary_deg"] = e.b;
+    } else if (e.kind == TimelineKind::kContrast) {
+      j["ml"] = e.a;
+    } else if (e.kind == TimelineKind::kForceEvent) {
+      j["peak_n"] = e.a;
+      j["duration_s"] = e.b;
+    }
+    timeline.push_back(std::move(j));
+  }
+  const json unknown = nullptr;
+  return {
+      {"procedure_time_s", f.procedure_time_s},
+      {"fluoro_time_s", f.fluoro_time_s},
+      {"cine_time_s", f.cine_time_s},
+      {"fluoro_pulses", f.fluoro_pulses},
+      {"cine_frames", f.cine_frames},
+      {"cine_runs", f.cine_runs},
+      {"contrast_injections", f.contrast_injections},
+      {"contrast_ml", f.contrast_ml},
+      {"air_kerma_mgy", f.air_kerma_mgy},
+      {"dap_gycm2", f.dap_gycm2},
+      {"carm_poses", poses},
+      {"tip_path_mm", f.tip_path_mm},
+      {"tip_path_projected_mm", f.tip_path_projected_mm},
+      {"tip_path_in_vessels_mm", f.tip_path_in_vessels_mm},
+      {"target_branch", f.target_branch},
+      {"wrong_branch_s", f.has_target ? json(f.wrong_branch_s) : unknown},
+      {"target_reached_s", f.has_target && f.target_reached_s >= 0.0 ? json(f.target_reached_s) : unknown},
+      // the chain-mail wire has no load response: no force figures rather than zeros
+      {"peak_tip_force_n", f.tip_forces_known ? json(f.peak_tip_force_n) : unknown},
+      {"tip_force_above_threshold_s", f.tip_forces_known ? json(f.tip_force_above_threshold_s) : unknown},
+      {"force_events", f.tip_forces_known ? json(f.force_events) : unknown},
+      {"wire_states", f.wire_states},
+      {"wire_restarts", f.resets},
+      {"timeline", timeline},
+      {"timeline_dropped", f.timeline_dropped},
+      {"thresholds",
+       {{"tip_force_threshold_n", f.params.tip_force_threshold_n},
+        {"tip_force_risk_n", f.params.tip_force_risk_n},
+        {"tube_output_ugy_per_mas_at_1m", f.params.tube_output_ugy_per_mas_at_1m},
+        {"fluoro_mas_per_pulse", f.params.fluoro_mas_per_pulse},
+        {"cine_mas_per_frame", f.params.cine_mas_per_frame}}},
+  };
+}
+
+std::string human_debrief(const DebriefFigures& f) {
+  std::string s = fmt::format(
+      "debrief: procedure {:.1f} s, beam {:.1f} s ({} cine run{}), {} pulses + {} cine frames, air kerma {:.2f} mGy, "
+      "DAP {:.3f} Gy cm2, contrast {:.1f} ml in {} injection{}\n",
+      f.procedure_time_s, f.fluoro_time_s, f.cine_runs, f.cine_runs == 1 ? "" : "s", f.fluoro_pulses, f.cine_frames,
+      f.air_kerma_mgy, f.dap_gycm2, f.contrast_ml, f.contrast_injections, f.contrast_injections == 1 ? "" : "s");
+  s += fmt::format("         tip path {:.0f} mm ({:.0f} mm across the beam, {:.0f} mm through the vessels), ",
+                   f.tip_path_mm, f.tip_path_projected_mm, f.tip_path_in_vessels_mm);
+  if (f.has_target)
+    s += fmt::format("{:.1f} s off the route to {}{}", f.wrong_branch_s, f.target_branch,
+                     f.target_reached_s >= 0.0 ? fmt::format(" (reached at {:.1f} s)", f.target_reached_s)
+                                               : std::string(" (not reached)"));
+  else
+    s += "no target branch";
+  if (f.tip_forces_known)
+    s += fmt::format(", tip force at most {:.3f} N, {:.1f} s above {} N, {} event{} above {} N", f.peak_tip_force_n,
+                     f.tip_force_above_threshold_s, f.params.tip_force_threshold_n, f.force_events,
+                     f.force_events == 1 ? "" : "s", f.params.tip_force_risk_n);
+  else
+    s += ", no tip forces (the chain-mail wire computes none)";
+  return s;
+}
+
+}  // namespace pcisim::server

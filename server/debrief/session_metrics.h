@@ -1,0 +1,141 @@
+#pragma once
+// What a session's debrief reports (issue #35), taken from the simulation's own truth as it runs:
+// the beam's time, pulses and dose, contrast, the C-arm's poses, the tip's path, time in a wrong
+// branch and the wall's force on the tip. One object per session, kept across scene reloads
+// (like SessionLimits); the server's threads record into it (the x-ray thread the beam, the LCM
+// receive thread injections, the send thread each wire state it publishes), never the 1 kHz loop.
+// Every record takes one short lock and allocates nothing (the timeline's storage is made up
+// front; a session past it keeps its figures and counts the events it could not list).
+// Definitions, formulas and sources: docs/debrief.md.
+#include <array>
+#include <cstdint>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "physics/world_snapshot.h"
+#include "server/debrief/debrief_params.h"
+
+namespace pcisim::anatomy {
+struct VesselTree;
+}
+
+namespace pcisim::server {
+
+// where the beam's dose is reckoned: the interventional reference point (IRP), 15 cm from the
+// isocentre toward the focal spot (IEC 60601-2-43), and the beam's area there
+struct BeamGeometry {
+  double source_to_irp_mm = 600.0;
+  double field_area_at_irp_cm2 = 0.0;
+};
+// the IRP and the detector's whole field carried back to it (no collimation is simulated)
+BeamGeometry beam_geometry(double source_to_axis_mm, double source_to_image_mm, double detector_width_mm,
+                           double detector_height_mm);
+
+enum class TimelineKind : uint8_t { kFluoroOn, kFluoroOff, kCineOn, kCineOff, kCArm, kContrast, kForceEvent, kReset };
+const char* timeline_kind_name(TimelineKind k);
+
+struct TimelineEntry {
+  double time_s = 0.0;  // since the session began
+  TimelineKind kind = TimelineKind::kFluoroOn;
+  double a = 0.0, b = 0.0;  // C-arm: primary, secondary deg; contrast: ml; force event: peak N, duration s
+};
+
+struct CArmUse {
+  double primary_deg = 0.0, secondary_deg = 0.0;
+  double beam_s = 0.0;  // beam time at this pose
+};
+
+struct DebriefFigures {
+  double procedure_time_s = 0.0;  // first scene running to the end (or the report)
+  double fluoro_time_s = 0.0;     // beam time, fluoroscopy and cine together (the lab's "fluoro time")
+  double cine_time_s = 0.0;       // of it, cine
+  int64_t fluoro_pulses = 0, cine_frames = 0;
+  int cine_runs = 0;
+  int contrast_injections = 0;
+  double contrast_ml = 0.0;
+  double air_kerma_mgy = 0.0;  // at the IRP
+  double dap_gycm2 = 0.0;      // dose-area product
+  std::vector<CArmUse> carm_poses;
+  double tip_path_mm = 0.0;             // the tip's 3-D path over the wire states
+  double tip_path_projected_mm = 0.0;   // the same across the beam: on the plane normal to the C-arm's central ray
+  double tip_path_in_vessels_mm = 0.0;  // in the vessels' rest frame: the heart's motion taken out
+  bool has_target = false;              // the scene names a target branch
+  std::string target_branch;
+  double wrong_branch_s = 0.0;     // the tip in a branch neither the target nor on the way to it
+  double target_reached_s = -1.0;  // sim time the tip first entered the target (-1: never)
+  bool tip_forces_known = false;   // the wire computes the wall's force (the rod; not the chain-mail)
+  double peak_tip_force_n = 0.0;
+  double tip_force_above_threshold_s = 0.0;
+  int force_events = 0;  // episodes above the risk force
+  int64_t wire_states = 0;
+  int resets = 0;  // the wire started over (a reset or a new scene): its path is not joined across
+  std::vector<TimelineEntry> timeline;
+  int64_t timeline_dropped = 0;
+  DebriefParams params;  // the last scene's
+};
+
+class SessionMetrics {
+ public:
+  static constexpr int kMaxTimeline = 8192;
+  static constexpr int kMaxPoses = 64;
+  SessionMetrics();
+
+  // a scene's pipeline starts: its thresholds, its tree (the route to the target), whether its
+  // wire computes the wall's force, and the beam's geometry. Not while a thread records
+  void begin_pipeline(const DebriefParams& params, const anatomy::VesselTree& tree, bool tip_forces_known,
+                      const BeamGeometry& beam, int64_t now_ns);
+
+  // the x-ray thread: beam time added (seconds, the mode), a pulse or cine frame, the pedals
+  void record_beam_time(double seconds, bool cine, double primary_deg, double secondary_deg);
+  void record_pulse(bool cine);
+  void record_pedals(bool fluoro, bool cine, int64_t now_ns);
+  void record_carm(double primary_deg, double secondary_deg, int64_t now_ns);
+  // the receive thread: an accepted injection
+  void record_injection(double volume_ml, int64_t now_ns);
+  // the send thread: each wire state as published; primary and secondary the C-arm's pose
+  void record_wire(const physics::WorldSnapshot& s, double primary_deg, double secondary_deg, int64_t now_ns);
+
+  // the figures so far (procedure time up to now_ns)
+  DebriefFigures figures(int64_t now_ns) const;
+
+ private:
+  void add_event(TimelineKind kind, double a, double b, int64_t now_ns);
+  void end_force_episode();
+  double session_s(int64_t now_ns) const;
+
+  mutable std::mutex mutex_;
+  DebriefParams params_;
+  BeamGeometry beam_;
+  bool forces_known_ = false;
+  int64_t start_ns_ = 0;
+  // per pipeline: which branches are the route (the target and its parents), the target's index
+  std::vector<uint8_t> on_route_;
+  int target_ = -1;
+  // the wire's last state (continuity)
+  bool have_last_ = false;
+  int64_t last_step_ = 0;
+  double last_time_s_ = 0.0;
+  double last_tip_[3] = {0, 0, 0};
+  double last_tip_rest_[3] = {0, 0, 0};
+  int last_branch_ = -1;
+  double last_tip_force_n_ = 0.0;
+  // the beam
+  bool fluoro_on_ = false, cine_on_ = false;
+  // a force episode above the risk force
+  bool in_episode_ = false;
+  double episode_start_s_ = 0.0, episode_peak_n_ = 0.0, episode_sim_start_s_ = 0.0;
+  DebriefFigures f_;
+  std::array<TimelineEntry, kMaxTimeline> timeline_{};
+  int timeline_count_ = 0;
+  std::array<CArmUse, kMaxPoses> poses_{};
+  int pose_count_ = 0;
+};
+
+// debrief.json (docs/debrief.md lists its keys)
+nlohmann::json to_json(const DebriefFigures& f);
+// a few lines for the server's exit summary
+std::string human_debrief(const DebriefFigures& f);
+
+}  // namespace pcisim::server

@@ -21,6 +21,28 @@ namespace {
 // filter tried; sparse 8-bit label images with run-length coding a fraction of a millisecond
 enum class Effort { kDefault, kFastNoisy, kFastSparse };
 
+// the image's rows through libpng on a write struct already pointed at its output (a file or
+// memory); false when libpng reported an error
+template <class RowFn>
+bool encode_rows(png_structp png, png_infop info, int width, int height, int channels, int bits, Effort effort,
+                 RowFn& row_of, std::vector<uint8_t>& row) {
+  if (!png || !info || setjmp(png_jmpbuf(png))) return false;
+  png_set_IHDR(png, info, width, height, bits, channels == 3 ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_GRAY,
+               PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  if (effort != Effort::kDefault) {
+    png_set_compression_level(png, 1);
+    png_set_filter(png, 0, effort == Effort::kFastNoisy ? PNG_FILTER_SUB : PNG_FILTER_NONE);
+    png_set_compression_strategy(png, effort == Effort::kFastNoisy ? Z_HUFFMAN_ONLY : Z_RLE);
+  }
+  png_write_info(png, info);
+  for (int r = 0; r < height; ++r) {
+    row_of(r, row.data());
+    png_write_row(png, row.data());
+  }
+  png_write_end(png, nullptr);
+  return true;
+}
+
 template <class RowFn>
 void write_image(const std::string& path, int width, int height, int channels, int bits, Effort effort, RowFn row_of) {
   if (width <= 0 || height <= 0) throw std::runtime_error(fmt::format("{}: empty image ({}x{})", path, width, height));
@@ -29,23 +51,8 @@ void write_image(const std::string& path, int width, int height, int channels, i
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   std::vector<uint8_t> row(static_cast<size_t>(width) * channels * bits / 8);
-  bool ok = png && info && !setjmp(png_jmpbuf(png));
-  if (ok) {
-    png_init_io(png, f);
-    png_set_IHDR(png, info, width, height, bits, channels == 3 ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_GRAY,
-                 PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-    if (effort != Effort::kDefault) {
-      png_set_compression_level(png, 1);
-      png_set_filter(png, 0, effort == Effort::kFastNoisy ? PNG_FILTER_SUB : PNG_FILTER_NONE);
-      png_set_compression_strategy(png, effort == Effort::kFastNoisy ? Z_HUFFMAN_ONLY : Z_RLE);
-    }
-    png_write_info(png, info);
-    for (int r = 0; r < height; ++r) {
-      row_of(r, row.data());
-      png_write_row(png, row.data());
-    }
-    png_write_end(png, nullptr);
-  }
+  if (png) png_init_io(png, f);
+  const bool ok = encode_rows(png, info, width, height, channels, bits, effort, row_of, row);
   png_destroy_write_struct(&png, &info);
   // the error of whichever step failed first: on NFS a full quota shows only at close
   const bool flushed = std::fflush(f) == 0 && !std::ferror(f);
@@ -54,6 +61,11 @@ void write_image(const std::string& path, int width, int height, int channels, i
   if (!closed && saved == 0) saved = errno;
   if (!ok || !flushed || !closed)
     throw std::runtime_error(fmt::format("{}: writing the PNG failed: {}", path, std::strerror(saved ? saved : EIO)));
+}
+
+void append_to_vector(png_structp png, png_bytep data, png_size_t length) {
+  auto* out = static_cast<std::vector<uint8_t>*>(png_get_io_ptr(png));
+  out->insert(out->end(), data, data + length);
 }
 
 // rows of a grey PNG of `bits` per sample, as stored (16-bit big-endian)
@@ -115,6 +127,20 @@ void write_png_gray8(const std::string& path, int width, int height, const uint8
   write_image(path, width, height, 1, 8, fast ? Effort::kFastSparse : Effort::kDefault, [&](int r, uint8_t* out) {
     std::memcpy(out, pixels + static_cast<size_t>(r) * width, static_cast<size_t>(width));
   });
+}
+
+std::vector<uint8_t> encode_png_rgb8(int width, int height, const uint8_t* rgb) {
+  if (width <= 0 || height <= 0) throw std::runtime_error(fmt::format("empty image ({}x{})", width, height));
+  std::vector<uint8_t> out;
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png ? png_create_info_struct(png) : nullptr;
+  std::vector<uint8_t> row(static_cast<size_t>(width) * 3);
+  if (png) png_set_write_fn(png, &out, append_to_vector, nullptr);
+  auto row_of = [&](int r, uint8_t* dst) { std::memcpy(dst, rgb + static_cast<size_t>(r) * width * 3, row.size()); };
+  const bool ok = encode_rows(png, info, width, height, 3, 8, Effort::kDefault, row_of, row);
+  png_destroy_write_struct(&png, &info);
+  if (!ok) throw std::runtime_error("encoding the PNG failed");
+  return out;
 }
 
 void write_png_rgb8(const std::string& path, int width, int height, const uint8_t* rgb) {

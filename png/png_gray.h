@@ -19,5 +19,7 @@ void write_png_gray8(const std::string& path, int width, int height, const uint8
 void read_png_gray16(const std::string& path, int* width, int* height, std::vector<uint16_t>* pixels);
 void read_png_gray8(const std::string& path, int* width, int* height, std::vector<uint8_t>* pixels);
 void write_png_rgb8(const std::string& path, int width, int height, const uint8_t* rgb);
+// the same picture as the bytes of a PNG file (to embed in a page); throws std::runtime_error
+std::vector<uint8_t> encode_png_rgb8(int width, int height, const uint8_t* rgb);
 
 }  // namespace pcisim::png

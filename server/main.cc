@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <spdlog/spdlog.h>
 
 #include "json/json_reader.h"
 #include "anatomy/case/case_folder.h"
 #include "server/case_builder.h"
+#include "server/debrief/debrief_page.h"
 #include "server/scene/scene.h"
 #include "server/session_runner.h"
 #include "realtime/clock.h"
@@ -33,10 +35,16 @@ int main(int argc, char** argv) {
                  "LCM URL of the fluoroscopy frames (its own instance, so frames never delay the 1 kHz traffic)")
       ->capture_default_str();
   app.add_option("--stats-json", stats_path, "write loop statistics to this file at exit");
-  std::string debrief_path;
+  std::string debrief_path, debrief_html_path, debrief_reference_path;
   app.add_option("--debrief-json", debrief_path,
                  "write the session's debrief at exit: fluoro and cine time, dose, contrast, C-arm poses, the tip's "
                  "path, time in a wrong branch, tip forces and a timeline (docs/debrief.md)");
+  app.add_option("--debrief-html", debrief_html_path,
+                 "write the session's debrief as one self-contained page at exit: the figures, a timeline, the tip's "
+                 "path on an angiogram frame, the tip's force against time");
+  app.add_option("--debrief-reference", debrief_reference_path,
+                 "another session's debrief.json (an expert's) shown beside this one in --debrief-html")
+      ->check(CLI::ExistingFile);
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error or off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}))
       ->capture_default_str();
@@ -117,6 +125,18 @@ int main(int argc, char** argv) {
 
   // a scene loaded over LCM is built while the running one goes on, then takes over; --duration
   // counts the running time of the whole session (the first scene's build aside)
+  // the reference run is read before the session: a bad file is said now, not after it
+  std::optional<nlohmann::json> reference;
+  if (!debrief_reference_path.empty()) {
+    std::ifstream in(debrief_reference_path);
+    reference = nlohmann::json::parse(in, nullptr, false);
+    if (reference->is_discarded() || !reference->is_object()) {
+      std::cerr << "pcisim-server: --debrief-reference " << debrief_reference_path
+                << ": not a debrief.json (a JSON object, as --debrief-json writes)\n";
+      return 2;
+    }
+  }
+  const std::string scene_name = scene.name;  // (the session may load others; the page names the first)
   SessionLimits limits;
   SessionMetrics metrics;
   SessionOptions options;
@@ -138,6 +158,16 @@ int main(int argc, char** argv) {
         return 1;
       }
       std::cout << "  debrief " << debrief_path << "\n";
+    }
+    if (!debrief_html_path.empty()) {
+      const DebriefFigures figures = metrics.figures(pcisim::realtime::monotonic_ns());
+      std::ofstream out(debrief_html_path);
+      out << debrief_html(figures, reference ? &*reference : nullptr, "pcisim debrief: " + scene_name);
+      if (!out.flush()) {
+        std::cerr << "pcisim-server: cannot write the debrief page to " << debrief_html_path << "\n";
+        return 1;
+      }
+      std::cout << "  page    " << debrief_html_path << "\n";
     }
     if (!stats_path.empty()) {
       std::ofstream out(stats_path);

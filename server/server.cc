@@ -249,11 +249,14 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
     const auto& g = m.scene.world.guidewire;
     const bool forces = g && g->model == physics::GuidewireModel::kRod;
     BeamGeometry beam;
+    int width = 0, height = 0;
     if (m.scene.xray) {
       const xray::CArmSpec& c = m.scene.xray->fluoro.c_arm;
       beam = beam_geometry(c.source_to_axis_mm, c.source_to_image_mm, c.width * c.pixel_mm, c.height * c.pixel_mm);
+      width = c.width;
+      height = c.height;
     }
-    m.metrics->begin_pipeline(m.scene.debrief, m.anatomy->vessels, forces, beam, m.start_ns);
+    m.metrics->begin_pipeline(m.scene.debrief, m.anatomy->vessels, forces, beam, m.start_ns, width, height);
     if (m.xray) m.xray->set_metrics(m.metrics);
   }
   io.start();

@@ -97,6 +97,10 @@ void XrayLoop::render_and_publish(bool cine) {
   const int64_t t0 = realtime::monotonic_ns();
   renderer_->render(in, frame_);
   state_.xray_render_ns.record(realtime::monotonic_ns() - t0);
+  // the debrief keeps the frame that showed the vessels best, to draw the tip's path on
+  if (metrics_ && !frame_.contrast_branches.empty())
+    metrics_->record_frame(frame_.pixels.data(), frame_.width, frame_.height, frame_.geometry, in.heart_phase,
+                           static_cast<int>(frame_.contrast_branches.size()), realtime::monotonic_ns());
   state_.xray_frames.fetch_add(1, std::memory_order_relaxed);
   if (!images_) {
     renderer_->work_ahead();

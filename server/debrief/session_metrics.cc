@@ -48,7 +48,7 @@ const char* timeline_kind_name(TimelineKind k) {
   return "?";
 }
 
-SessionMetrics::SessionMetrics() = default;
+SessionMetrics::SessionMetrics() : timeline_(kMaxTimeline), track_(kMaxTrack) {}
 
 double SessionMetrics::session_s(int64_t now_ns) const {
   return start_ns_ != 0 ? static_cast<double>(now_ns - start_ns_) * 1e-9 : 0.0;
@@ -63,9 +63,16 @@ void SessionMetrics::add_event(TimelineKind kind, double a, double b, int64_t no
 }
 
 void SessionMetrics::begin_pipeline(const DebriefParams& params, const anatomy::VesselTree& tree, bool tip_forces_known,
-                                    const BeamGeometry& beam, int64_t now_ns) {
+                                    const BeamGeometry& beam, int64_t now_ns, int detector_width, int detector_height) {
   std::lock_guard lock(mutex_);
-  if (start_ns_ == 0) start_ns_ = now_ns;
+  if (start_ns_ == 0) {
+    start_ns_ = now_ns;
+  } else {
+    ++pipeline_;
+  }
+  // the frame store sized for this scene's detector (nothing is allocated when a frame comes)
+  const size_t pixels = static_cast<size_t>(std::max(detector_width, 0)) * std::max(detector_height, 0);
+  if (angiogram_.pixels.capacity() < pixels) angiogram_.pixels.reserve(pixels);
   params_ = params;
   beam_ = beam;
   forces_known_ = tip_forces_known;
@@ -127,6 +134,25 @@ void SessionMetrics::record_pedals(bool fluoro, bool cine, int64_t now_ns) {
 void SessionMetrics::record_carm(double primary_deg, double secondary_deg, int64_t now_ns) {
   std::lock_guard lock(mutex_);
   add_event(TimelineKind::kCArm, primary_deg, secondary_deg, now_ns);
+}
+
+void SessionMetrics::record_frame(const uint16_t* pixels, int width, int height, const xray::DetectorGeometry& geometry,
+                                  double heart_phase, int contrast_branches, int64_t now_ns) {
+  std::lock_guard lock(mutex_);
+  const size_t n = static_cast<size_t>(std::max(width, 0)) * std::max(height, 0);
+  if (n == 0 || n > angiogram_.pixels.capacity()) return;  // (nothing allocated here)
+  // the frame with the most contrast (a later one as good replaces it): where the vessels show;
+  // a new scene's first one replaces the last scene's
+  const bool newer_scene = angiogram_.time_s >= 0.0 && angiogram_.pipeline != pipeline_;
+  if (contrast_branches <= 0 || (!newer_scene && contrast_branches < angiogram_.contrast_branches)) return;
+  angiogram_.pixels.assign(pixels, pixels + n);
+  angiogram_.width = width;
+  angiogram_.height = height;
+  angiogram_.geometry = geometry;
+  angiogram_.heart_phase = heart_phase;
+  angiogram_.time_s = session_s(now_ns);
+  angiogram_.contrast_branches = contrast_branches;
+  angiogram_.pipeline = pipeline_;
 }
 
 void SessionMetrics::record_injection(double volume_ml, int64_t now_ns) {
@@ -192,6 +218,23 @@ void SessionMetrics::record_wire(const physics::WorldSnapshot& s, double primary
       end_force_episode();
     }
   }
+  // the track: every stride-th state; full, every other point goes and the stride doubles
+  if (++track_skip_ >= track_stride_) {
+    track_skip_ = 0;
+    if (track_count_ == kMaxTrack) {
+      for (int i = 0; i < kMaxTrack / 2; ++i) track_[i] = track_[2 * i];
+      track_count_ = kMaxTrack / 2;
+      track_stride_ *= 2;
+    }
+    TrackPoint& p = track_[track_count_++];
+    p.time_s = session_s(now_ns);
+    for (int k = 0; k < 3; ++k) p.tip_mm[k] = static_cast<float>(s.tip_m[k] * 1e3);
+    p.tip_force_n = static_cast<float>(forces_known_ ? force_n : 0.0);
+    p.heart_phase = static_cast<float>(std::isfinite(s.heart_phase) ? s.heart_phase : 0.0);
+    p.off_route = target_ >= 0 && s.tip_branch >= 0 && s.tip_branch < static_cast<int>(on_route_.size()) &&
+                  !on_route_[s.tip_branch];
+    p.pipeline = pipeline_;
+  }
   have_last_ = true;
   last_step_ = s.step;
   last_time_s_ = s.time_s;
@@ -210,6 +253,8 @@ DebriefFigures SessionMetrics::figures(int64_t now_ns) const {
   f.params = params_;
   f.carm_poses.assign(poses_.begin(), poses_.begin() + pose_count_);
   f.timeline.assign(timeline_.begin(), timeline_.begin() + timeline_count_);
+  f.track.assign(track_.begin(), track_.begin() + track_count_);
+  f.angiogram = angiogram_;
   // an episode still above the risk force at the end counts
   if (in_episode_) {
     ++f.force_events;
@@ -243,6 +288,15 @@ nlohmann::json to_json(const DebriefFigures& f) {
     }
     timeline.push_back(std::move(j));
   }
+  // the tip's track, thinned to at most kJsonTrackPoints: [session s, x, y, z mm, tip N, off route,
+  // heart phase]
+  constexpr size_t kJsonTrackPoints = 1000;
+  json track = json::array();
+  const size_t every = f.track.size() / kJsonTrackPoints + 1;
+  for (size_t i = 0; i < f.track.size(); i += every) {
+    const TrackPoint& p = f.track[i];
+    track.push_back({p.time_s, p.tip_mm[0], p.tip_mm[1], p.tip_mm[2], p.tip_force_n, p.off_route, p.heart_phase});
+  }
   const json unknown = nullptr;
   return {
       {"procedure_time_s", f.procedure_time_s},
@@ -270,6 +324,7 @@ nlohmann::json to_json(const DebriefFigures& f) {
       {"wire_restarts", f.resets},
       {"timeline", timeline},
       {"timeline_dropped", f.timeline_dropped},
+      {"tip_track", track},
       {"thresholds",
        {{"tip_force_threshold_n", f.params.tip_force_threshold_n},
         {"tip_force_risk_n", f.params.tip_force_risk_n},

@@ -16,6 +16,7 @@
 
 #include "physics/world_snapshot.h"
 #include "server/debrief/debrief_params.h"
+#include "xray/geometry/detector_geometry.h"
 
 namespace pcisim::anatomy {
 struct VesselTree;
@@ -40,6 +41,28 @@ struct TimelineEntry {
   double time_s = 0.0;  // since the session began
   TimelineKind kind = TimelineKind::kFluoroOn;
   double a = 0.0, b = 0.0;  // C-arm: primary, secondary deg; contrast: ml; force event: peak N, duration s
+};
+
+// the tip over the session, for the debrief's pictures: thinned to every 2^k-th state once full
+struct TrackPoint {
+  double time_s = 0.0;  // session time
+  float tip_mm[3] = {0, 0, 0};
+  float tip_force_n = 0.0f;
+  float heart_phase = 0.0f;  // [0, 1) of the cardiac cycle (0 without a beating heart)
+  uint8_t off_route = 0;     // in a wrong branch (with a target)
+  uint16_t pipeline = 0;     // which scene of the session (a reload starts another)
+};
+
+// the frame the debrief draws the tip's path on: the one that showed the most contrast-filled
+// branches (the latest of those), 16-bit as rendered, with its projection
+struct Angiogram {
+  int width = 0, height = 0;
+  std::vector<uint16_t> pixels;
+  xray::DetectorGeometry geometry;
+  double time_s = -1.0;      // session time; < 0: no frame showed contrast
+  double heart_phase = 0.0;  // the heart's phase the frame shows (NaN: a still background)
+  int contrast_branches = 0;
+  uint16_t pipeline = 0;
 };
 
 struct CArmUse {
@@ -73,6 +96,8 @@ struct DebriefFigures {
   int resets = 0;  // the wire started over (a reset or a new scene): its path is not joined across
   std::vector<TimelineEntry> timeline;
   int64_t timeline_dropped = 0;
+  std::vector<TrackPoint> track;
+  Angiogram angiogram;
   DebriefParams params;  // the last scene's
 };
 
@@ -80,18 +105,22 @@ class SessionMetrics {
  public:
   static constexpr int kMaxTimeline = 8192;
   static constexpr int kMaxPoses = 64;
+  static constexpr int kMaxTrack = 16384;
   SessionMetrics();
 
   // a scene's pipeline starts: its thresholds, its tree (the route to the target), whether its
   // wire computes the wall's force, and the beam's geometry. Not while a thread records
   void begin_pipeline(const DebriefParams& params, const anatomy::VesselTree& tree, bool tip_forces_known,
-                      const BeamGeometry& beam, int64_t now_ns);
+                      const BeamGeometry& beam, int64_t now_ns, int detector_width = 0, int detector_height = 0);
 
   // the x-ray thread: beam time added (seconds, the mode), a pulse or cine frame, the pedals
   void record_beam_time(double seconds, bool cine, double primary_deg, double secondary_deg);
   void record_pulse(bool cine);
   void record_pedals(bool fluoro, bool cine, int64_t now_ns);
   void record_carm(double primary_deg, double secondary_deg, int64_t now_ns);
+  // a frame shown (its contrast-filled branches counted): kept when it shows more than the last kept
+  void record_frame(const uint16_t* pixels, int width, int height, const xray::DetectorGeometry& geometry,
+                    double heart_phase, int contrast_branches, int64_t now_ns);
   // the receive thread: an accepted injection
   void record_injection(double volume_ml, int64_t now_ns);
   // the send thread: each wire state as published; primary and secondary the C-arm's pose
@@ -127,8 +156,12 @@ class SessionMetrics {
   bool in_episode_ = false;
   double episode_start_s_ = 0.0, episode_peak_n_ = 0.0, episode_sim_start_s_ = 0.0;
   DebriefFigures f_;
-  std::array<TimelineEntry, kMaxTimeline> timeline_{};
+  std::vector<TimelineEntry> timeline_;  // kMaxTimeline, made up front
   int timeline_count_ = 0;
+  std::vector<TrackPoint> track_;  // kMaxTrack, made up front
+  int track_count_ = 0, track_stride_ = 1, track_skip_ = 0;
+  uint16_t pipeline_ = 0;
+  Angiogram angiogram_;  // its pixels sized by begin_pipeline
   std::array<CArmUse, kMaxPoses> poses_{};
   int pose_count_ = 0;
 };

@@ -15,6 +15,7 @@
 #include "pcisim_lcm/instrument_state_t.hpp"
 #include "pcisim_lcm/probe_state_t.hpp"
 #include "pcisim_lcm/session_command_t.hpp"
+#include "pcisim_lcm/session_metrics_t.hpp"
 #include "pcisim_lcm/sim_status_t.hpp"
 #include "pcisim_lcm/us_frame_t.hpp"
 #include "pcisim_lcm/wire_state_t.hpp"
@@ -150,6 +151,17 @@ inline MessageCase status_case() {
   return {"sim_status_t", good,
           all_mutants(good, {{length_field(good, cat(be32(5), text("EFFA"))), "num_effects"},
                              {name_len, "effect_name[0] length"}})};
+}
+
+inline MessageCase metrics_case() {
+  pcisim_lcm::session_metrics_t m{};
+  m.utime = 1;
+  m.has_target = 1;
+  m.target_branch = "TARGET-LAD";
+  m.target_reached_s = -1;
+  const Bytes good = encode(m);
+  return {"session_metrics_t", good,
+          all_mutants(good, {{length_field(good, text("TARGET-LAD")), "target_branch length"}})};
 }
 
 inline MessageCase wire_case() {

@@ -52,6 +52,18 @@ bool is_well_formed(const pcisim_lcm::sim_status_t& m) {
                 m.physics_rate_hz, m.physics_step_ms_p50, m.physics_step_ms_p99, m.physics_step_ms_max, m.xray_fps);
 }
 
+bool is_well_formed(const pcisim_lcm::session_metrics_t& m) {
+  if (m.cine_runs < 0 || m.fluoro_pulses < 0 || m.cine_frames < 0 || m.contrast_injections < 0 || m.force_events < 0 ||
+      m.wire_restarts < 0)
+    return false;
+  if (!finite(m.target_reached_s)) return false;
+  for (double v : {m.procedure_time_s, m.fluoro_time_s, m.cine_time_s, m.contrast_ml, m.air_kerma_mgy, m.dap_gycm2,
+                   m.tip_path_mm, m.tip_path_projected_mm, m.tip_path_in_vessels_mm, m.wrong_branch_s,
+                   m.peak_tip_force_n, m.tip_force_above_threshold_s})
+    if (!finite(v) || v < 0.0) return false;
+  return true;
+}
+
 bool is_well_formed(const pcisim_lcm::xray_frame_t& m) {
   if (m.width < 0 || m.height < 0 || m.num_bytes < 0 || m.num_wire_points < 0) return false;
   using F = pcisim_lcm::xray_frame_t;

@@ -8,6 +8,7 @@
 #include "pcisim_lcm/instrument_state_t.hpp"
 #include "pcisim_lcm/probe_state_t.hpp"
 #include "pcisim_lcm/session_command_t.hpp"
+#include "pcisim_lcm/session_metrics_t.hpp"
 #include "pcisim_lcm/sim_status_t.hpp"
 #include "pcisim_lcm/us_frame_t.hpp"
 #include "pcisim_lcm/wire_state_t.hpp"
@@ -21,6 +22,8 @@ bool is_well_formed(const pcisim_lcm::force_command_t& m);
 bool is_well_formed(const pcisim_lcm::session_command_t& m);
 bool is_well_formed(const pcisim_lcm::wire_state_t& m);
 bool is_well_formed(const pcisim_lcm::sim_status_t& m);
+// finite, counts and times not negative (target_reached_s: -1 until reached)
+bool is_well_formed(const pcisim_lcm::session_metrics_t& m);
 bool is_well_formed(const pcisim_lcm::xray_frame_t& m);
 // and for the probe: a position within 10 m of the scene's origin, a unit quaternion (norm within
 // 1 %: a pose, not a scaling; the receiver normalises it), a depth of 0 (the scene's) or 1-500 mm

@@ -326,10 +326,44 @@ void LcmIo::publish_forces() {
 }
 
 void LcmIo::publish_status() {
+  if (metrics_) publish_metrics();
   if (!status_) return;
   status_(status_msg_);
   status_msg_.seq = status_seq_++;
   tx_publisher_.publish(lcm_, status_channel_, status_msg_);
+  state_.lcm_tx.fetch_add(1, std::memory_order_relaxed);
+}
+
+// the debrief so far, its figures without their lists (nothing allocated once the branch's name fits)
+void LcmIo::publish_metrics() {
+  const int64_t now_ns = realtime::monotonic_ns();
+  const DebriefFigures f = metrics_->figures(now_ns, false);
+  auto& m = metrics_msg_;
+  m.utime = now_ns / 1000;
+  m.seq = metrics_seq_++;
+  m.procedure_time_s = f.procedure_time_s;
+  m.fluoro_time_s = f.fluoro_time_s;
+  m.cine_time_s = f.cine_time_s;
+  m.cine_runs = f.cine_runs;
+  m.fluoro_pulses = f.fluoro_pulses;
+  m.cine_frames = f.cine_frames;
+  m.contrast_injections = f.contrast_injections;
+  m.contrast_ml = f.contrast_ml;
+  m.air_kerma_mgy = f.air_kerma_mgy;
+  m.dap_gycm2 = f.dap_gycm2;
+  m.tip_path_mm = f.tip_path_mm;
+  m.tip_path_projected_mm = f.tip_path_projected_mm;
+  m.tip_path_in_vessels_mm = f.tip_path_in_vessels_mm;
+  m.has_target = f.has_target ? 1 : 0;
+  m.target_branch = f.target_branch;
+  m.wrong_branch_s = f.wrong_branch_s;
+  m.target_reached_s = f.target_reached_s;
+  m.tip_forces_known = f.tip_forces_known ? 1 : 0;
+  m.peak_tip_force_n = f.peak_tip_force_n;
+  m.tip_force_above_threshold_s = f.tip_force_above_threshold_s;
+  m.force_events = f.force_events;
+  m.wire_restarts = f.resets;
+  tx_publisher_.publish(lcm_, metrics_channel_, m);
   state_.lcm_tx.fetch_add(1, std::memory_order_relaxed);
 }
 

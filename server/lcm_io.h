@@ -11,6 +11,7 @@
 #include "pcisim_lcm/instrument_state_t.hpp"
 #include "pcisim_lcm/probe_state_t.hpp"
 #include "pcisim_lcm/session_command_t.hpp"
+#include "pcisim_lcm/session_metrics_t.hpp"
 #include "pcisim_lcm/sim_status_t.hpp"
 #include "pcisim_lcm/wire_state_t.hpp"
 #include "protocol/channels.h"
@@ -52,8 +53,10 @@ class LcmIo {
   // waiting in the shared queue, and one wire state
   void publish_forces();
   void publish_wire(const physics::WorldSnapshot& s);
-  // the status message (once a second from the send thread; public for the same test)
+  // the status message and, with metrics, the session's figures (once a second from the send
+  // thread; public for the same test)
   void publish_status();
+  void publish_metrics();
 
  private:
   void on_instrument(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
@@ -86,11 +89,12 @@ class LcmIo {
   pcisim_lcm::force_command_t force_msg_{};
   pcisim_lcm::wire_state_t wire_msg_{};
   pcisim_lcm::sim_status_t status_msg_{};
+  pcisim_lcm::session_metrics_t metrics_msg_{};
   protocol::EncodedPublisher tx_publisher_, zero_publisher_;
   const std::string force_channel_{protocol::kForceChannel}, wire_channel_{protocol::kWireChannel},
-      status_channel_{protocol::kStatusChannel};
+      status_channel_{protocol::kStatusChannel}, metrics_channel_{protocol::kMetricsChannel};
   int64_t last_instrument_seq_ = -1;
-  int64_t status_seq_ = 0;
+  int64_t status_seq_ = 0, metrics_seq_ = 0;
   // refusals are logged at most once a second (a flood must not flood the log); the rest counted
   int64_t last_refusal_log_ns_ = INT64_MIN / 2, refusals_unlogged_ = 0;
 };

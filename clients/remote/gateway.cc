@@ -37,6 +37,7 @@ Gateway::Gateway(const GatewayOptions& options, lcm::LCM& control, lcm::LCM& ima
   hub_ = std::make_unique<Hub>(options_.hub, options_.commands, sink, tracker_, keyboard_.get());
   control_subs_ = {control_.subscribe(protocol::kWireChannel, &Gateway::on_wire, this),
                    control_.subscribe(protocol::kStatusChannel, &Gateway::on_status, this),
+                   control_.subscribe(protocol::kMetricsChannel, &Gateway::on_metrics, this),
                    control_.subscribe(protocol::kSessionChannel, &Gateway::on_session, this),
                    control_.subscribe(protocol::kInstrumentChannel, &Gateway::on_instrument, this)};
   // the scene sends whichever modality it has; the page shows what comes
@@ -190,6 +191,13 @@ void Gateway::on_wire(const lcm::ReceiveBuffer* rbuf, const std::string&) {
 void Gateway::on_status(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   if (protocol::decode_checked(*rbuf, status_in_))
     tracker_.on_status(status_in_, monotonic_ns());
+  else
+    ++control_bad_;
+}
+
+void Gateway::on_metrics(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+  if (protocol::decode_checked(*rbuf, metrics_in_))
+    tracker_.on_metrics(metrics_in_, monotonic_ns());
   else
     ++control_bad_;
 }

@@ -67,6 +67,7 @@ class Gateway {
   void on_ultrasound(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void on_wire(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void on_status(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void on_metrics(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void on_session(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void on_instrument(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
 
@@ -92,6 +93,7 @@ class Gateway {
   pcisim_lcm::us_frame_t us_frame_in_;
   pcisim_lcm::wire_state_t wire_in_;
   pcisim_lcm::sim_status_t status_in_;
+  pcisim_lcm::session_metrics_t metrics_in_;
   pcisim_lcm::session_command_t session_in_;
   pcisim_lcm::instrument_state_t instrument_in_;
   std::atomic<int64_t> frames_received_{0}, frames_bad_{0}, frames_encoded_{0}, encode_errors_{0}, control_bad_{0};

@@ -164,7 +164,35 @@ nlohmann::json SessionTracker::state_json(int64_t now_ns) const {
   return j;
 }
 
+void SessionTracker::on_metrics(const pcisim_lcm::session_metrics_t& m, int64_t) {
+  std::lock_guard lock(mutex_);
+  metrics_ = m;
+}
+
+nlohmann::json SessionTracker::debrief_json() const {
+  std::lock_guard lock(mutex_);
+  if (!metrics_) return nullptr;
+  const auto& m = *metrics_;
+  const nlohmann::json unknown = nullptr;
+  return {{"seq", m.seq},
+          {"procedure_time_s", m.procedure_time_s},
+          {"fluoro_time_s", m.fluoro_time_s},
+          {"cine_runs", m.cine_runs},
+          {"contrast_ml", m.contrast_ml},
+          {"contrast_injections", m.contrast_injections},
+          {"air_kerma_mgy", m.air_kerma_mgy},
+          {"dap_gycm2", m.dap_gycm2},
+          {"tip_path_mm", m.tip_path_mm},
+          {"tip_path_in_vessels_mm", m.tip_path_in_vessels_mm},
+          {"target_branch", m.target_branch},
+          {"wrong_branch_s", m.has_target ? nlohmann::json(m.wrong_branch_s) : unknown},
+          {"target_reached_s", m.has_target && m.target_reached_s >= 0 ? nlohmann::json(m.target_reached_s) : unknown},
+          {"peak_tip_force_n", m.tip_forces_known ? nlohmann::json(m.peak_tip_force_n) : unknown},
+          {"force_events", m.tip_forces_known ? nlohmann::json(m.force_events) : unknown}};
+}
+
 nlohmann::json SessionTracker::status_json(int64_t now_ns) const {
+  nlohmann::json debrief = debrief_json();
   std::lock_guard lock(mutex_);
   if (!status_) return nullptr;
   const auto& s = *status_;
@@ -192,6 +220,7 @@ nlohmann::json SessionTracker::status_json(int64_t now_ns) const {
           {"xray", {{"frames", s.xray_frames}, {"fps", s.xray_fps}}},
           {"lcm", {{"rx", s.lcm_rx}, {"tx", s.lcm_tx}, {"dropped_bad", s.lcm_dropped_bad}}},
           {"effects", effects},
+          {"debrief", std::move(debrief)},
           {"paused", s.paused != 0}};
 }
 

@@ -14,6 +14,7 @@
 
 #include "pcisim_lcm/instrument_state_t.hpp"
 #include "pcisim_lcm/session_command_t.hpp"
+#include "pcisim_lcm/session_metrics_t.hpp"
 #include "pcisim_lcm/sim_status_t.hpp"
 #include "pcisim_lcm/wire_state_t.hpp"
 #include "pcisim_lcm/xray_frame_t.hpp"
@@ -37,10 +38,14 @@ class SessionTracker {
   void on_session(const pcisim_lcm::session_command_t& m, int64_t now_ns);
   void on_instrument(const pcisim_lcm::instrument_state_t& m, int64_t now_ns);
   void on_frame(const pcisim_lcm::xray_frame_t& m, int64_t now_ns);
+  // the server's debrief so far (session_metrics_t, once a second): shown with the status
+  void on_metrics(const pcisim_lcm::session_metrics_t& m, int64_t now_ns);
 
   nlohmann::json state_json(int64_t now_ns) const;   // {"type":"state", ...}
   nlohmann::json status_json(int64_t now_ns) const;  // {"type":"status", ...}; null before the first
-  int64_t status_seq() const;                        // changes when a new sim_status_t arrives
+  // the status's "debrief": the latest session_metrics_t (null before the first)
+  nlohmann::json debrief_json() const;
+  int64_t status_seq() const;  // changes when a new sim_status_t arrives
 
   double fluoro_time_s(int64_t now_ns) const;
   int injections() const;
@@ -57,6 +62,7 @@ class SessionTracker {
   mutable std::mutex mutex_;
   std::optional<pcisim_lcm::wire_state_t> wire_;
   std::optional<pcisim_lcm::sim_status_t> status_;
+  std::optional<pcisim_lcm::session_metrics_t> metrics_;
   int64_t status_ns_ = 0, wire_ns_ = 0, frame_ns_ = 0, frames_ = 0;
   std::optional<double> primary_deg_, secondary_deg_;
   bool console_fluoro_ = false, console_cine_ = false, instrument_fluoro_ = false, instrument_cine_ = false;

@@ -111,13 +111,14 @@ int main(int argc, char** argv) {
 
   // every type's malformed shapes, to go on every channel
   using namespace pcisim::fuzz;
-  const std::vector<MessageCase> cases = {instrument_case(), force_case(), session_case(),  status_case(),
-                                          wire_case(),       xray_case(),  us_frame_case(), probe_case()};
+  const std::vector<MessageCase> cases = {instrument_case(), force_case(), session_case(),
+                                          status_case(),     wire_case(),  xray_case(),
+                                          us_frame_case(),   probe_case(), metrics_case()};
   const std::vector<Bytes> poisoned = poisoned_messages();
   const std::vector<const char*> channels = {
-      pcisim::protocol::kInstrumentChannel, pcisim::protocol::kForceChannel,     pcisim::protocol::kWireChannel,
-      pcisim::protocol::kStatusChannel,     pcisim::protocol::kSessionChannel,   pcisim::protocol::kXrayChannel,
-      pcisim::protocol::kProbeChannel,      pcisim::protocol::kUltrasoundChannel};
+      pcisim::protocol::kInstrumentChannel, pcisim::protocol::kForceChannel,      pcisim::protocol::kWireChannel,
+      pcisim::protocol::kStatusChannel,     pcisim::protocol::kSessionChannel,    pcisim::protocol::kXrayChannel,
+      pcisim::protocol::kProbeChannel,      pcisim::protocol::kUltrasoundChannel, pcisim::protocol::kMetricsChannel};
   std::mt19937 rng(seed);
   std::map<std::string, std::map<std::string, int64_t>> sent;  // channel -> kind -> count
   const auto period = std::chrono::duration<double>(1.0 / rate_hz);

@@ -246,11 +246,15 @@ void SessionMetrics::record_wire(const physics::WorldSnapshot& s, double primary
   last_tip_force_n_ = force_n;
 }
 
-DebriefFigures SessionMetrics::figures(int64_t now_ns) const {
+DebriefFigures SessionMetrics::figures(int64_t now_ns, bool lists) const {
   std::lock_guard lock(mutex_);
   DebriefFigures f = f_;
   f.procedure_time_s = session_s(now_ns);
   f.params = params_;
+  if (!lists) {
+    f.force_events += in_episode_ ? 1 : 0;
+    return f;
+  }
   f.carm_poses.assign(poses_.begin(), poses_.begin() + pose_count_);
   f.timeline.assign(timeline_.begin(), timeline_.begin() + timeline_count_);
   f.track.assign(track_.begin(), track_.begin() + track_count_);

@@ -126,8 +126,9 @@ class SessionMetrics {
   // the send thread: each wire state as published; primary and secondary the C-arm's pose
   void record_wire(const physics::WorldSnapshot& s, double primary_deg, double secondary_deg, int64_t now_ns);
 
-  // the figures so far (procedure time up to now_ns)
-  DebriefFigures figures(int64_t now_ns) const;
+  // the figures so far (procedure time up to now_ns); without `lists` the poses, timeline, track
+  // and frame are left empty (the once-a-second message: nothing allocated)
+  DebriefFigures figures(int64_t now_ns, bool lists = true) const;
 
  private:
   void add_event(TimelineKind kind, double a, double b, int64_t now_ns);

@@ -91,6 +91,7 @@ TEST(HostileLcm, GatewayCountsEveryMalformedMessageOnEveryChannel) {
   int64_t control_sent = 0;
   control_sent += publish_all(g.control, protocol::kWireChannel, pcisim::fuzz::wire_case());
   control_sent += publish_all(g.control, protocol::kStatusChannel, pcisim::fuzz::status_case());
+  control_sent += publish_all(g.control, protocol::kMetricsChannel, pcisim::fuzz::metrics_case());
   control_sent += publish_all(g.control, protocol::kSessionChannel, pcisim::fuzz::session_case());
   control_sent += publish_all(g.control, protocol::kInstrumentChannel, pcisim::fuzz::instrument_case());
   const auto frames = pcisim::fuzz::xray_case();

@@ -44,6 +44,9 @@ TEST(HostileDecode, SessionCommand) {
 TEST(HostileDecode, SimStatus) {
   expect_refused<pcisim_lcm::sim_status_t>(fuzz::status_case());
 }
+TEST(HostileDecode, SessionMetrics) {
+  expect_refused<pcisim_lcm::session_metrics_t>(fuzz::metrics_case());
+}
 TEST(HostileDecode, WireState) {
   expect_refused<pcisim_lcm::wire_state_t>(fuzz::wire_case());
 }

@@ -228,6 +228,15 @@ def run(args):
         time.sleep(1.0)  # fluoro time and the frame settle for the picture
         fluoro_s = cdp.eval("window.pcisim.state.fluoro.time_s")
         assert fluoro_s > 1.0, "fluoroscopy time accumulates (%.2f s)" % fluoro_s
+        # the server's debrief so far (session_metrics_t, issue #35): on the page once a second
+        cdp.wait("window.pcisim.status && window.pcisim.status.debrief && "
+                 "window.pcisim.status.debrief.fluoro_time_s > 1.0", 5, "the debrief's beam time")
+        shown = cdp.eval("[document.getElementById('db-beam').textContent, "
+                         "document.getElementById('db-kerma').textContent, "
+                         "document.getElementById('db-path').textContent]")
+        assert shown[0].endswith(" s") and shown[1].endswith(" mGy") and shown[2].endswith(" mm"), \
+            "the debrief's figures on the page: %s" % shown
+        print("e2e_remote: debrief so far on the page: beam %s, air kerma %s, tip path %s" % tuple(shown))
         shot = os.path.join(out, "remote-client.png")
         cdp.screenshot(shot)
         print("e2e_remote: fluoro time %.1f s, contrast %.0f ml; screenshot %s"

@@ -228,6 +228,22 @@ function showStatus(s) {
   $("physics-rate").textContent = p.rate_hz.toFixed(1) + " Hz";
   $("physics-step").textContent = p.step_ms_p99.toFixed(1) + " ms";
   $("xray-fps").textContent = s.xray.fps.toFixed(1);
+  showDebrief(s.debrief);
+}
+
+// the server's debrief figures so far (session_metrics_t; docs/debrief.md); "—" where the session
+// cannot give one (no target branch, a wire that computes no wall force)
+function showDebrief(d) {
+  if (!d) return;
+  const fixed = (v, n, unit) => (v === null || v === undefined ? "—" : v.toFixed(n) + unit);
+  $("db-procedure").textContent = fixed(d.procedure_time_s, 0, " s");
+  $("db-beam").textContent = fixed(d.fluoro_time_s, 1, " s");
+  $("db-cine").textContent = d.cine_runs;
+  $("db-kerma").textContent = fixed(d.air_kerma_mgy, 2, " mGy");
+  $("db-dap").textContent = fixed(d.dap_gycm2, 3, " Gy·cm²");
+  $("db-path").textContent = fixed(d.tip_path_in_vessels_mm, 0, " mm");
+  $("db-wrong").textContent = d.wrong_branch_s === null ? "—" : d.wrong_branch_s.toFixed(1) + " s of " + d.target_branch;
+  $("db-force").textContent = fixed(d.peak_tip_force_n, 3, " N");
 }
 
 // ---- controls

@@ -93,6 +93,42 @@ TEST(RemoteTracker, ServerFiguresWinAndTheBusAddsWhatCameSince) {
   EXPECT_DOUBLE_EQ(t.state_json(6 * kS)["contrast"]["used_ml"].get<double>(), 40.0);
 }
 
+// issue #35: the server's debrief so far rides the status to the page; a figure the session cannot
+// give (no target, a wire without wall forces) goes as null, never as a made-up zero
+TEST(RemoteTracker, TheDebriefSoFarRidesTheStatus) {
+  SessionTracker t;
+  pcisim_lcm::sim_status_t s{};
+  t.on_status(s, kS);
+  EXPECT_TRUE(t.status_json(kS)["debrief"].is_null()) << "none before the first";
+  pcisim_lcm::session_metrics_t m{};
+  m.seq = 4;
+  m.fluoro_time_s = 12.5;
+  m.cine_runs = 2;
+  m.air_kerma_mgy = 3.9;
+  m.tip_path_in_vessels_mm = 124;
+  m.has_target = 1;
+  m.target_branch = "LAD";
+  m.wrong_branch_s = 0.5;
+  m.target_reached_s = -1;
+  t.on_metrics(m, 2 * kS);
+  const auto d = t.status_json(2 * kS)["debrief"];
+  EXPECT_EQ(d["seq"].get<int>(), 4);
+  EXPECT_DOUBLE_EQ(d["fluoro_time_s"].get<double>(), 12.5);
+  EXPECT_EQ(d["cine_runs"].get<int>(), 2);
+  EXPECT_DOUBLE_EQ(d["air_kerma_mgy"].get<double>(), 3.9);
+  EXPECT_DOUBLE_EQ(d["wrong_branch_s"].get<double>(), 0.5);
+  EXPECT_EQ(d["target_branch"], "LAD");
+  EXPECT_TRUE(d["target_reached_s"].is_null()) << "not reached yet";
+  EXPECT_TRUE(d["peak_tip_force_n"].is_null()) << "the chain-mail computes no wall force";
+  m.has_target = 0;
+  m.tip_forces_known = 1;
+  m.peak_tip_force_n = 0.2;
+  t.on_metrics(m, 3 * kS);
+  const auto e = t.status_json(3 * kS)["debrief"];
+  EXPECT_TRUE(e["wrong_branch_s"].is_null());
+  EXPECT_DOUBLE_EQ(e["peak_tip_force_n"].get<double>(), 0.2);
+}
+
 TEST(RemoteTracker, CarmFollowsAcceptedCommandsAndFrames) {
   SessionTracker t;
   EXPECT_TRUE(t.state_json(kS)["carm"]["primary_deg"].is_null()) << "unknown until told";

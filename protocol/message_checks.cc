@@ -1,6 +1,7 @@
 #include "protocol/message_checks.h"
 
 #include <cmath>
+#include <string>
 
 #include "protocol/probe_ranges.h"
 
@@ -10,6 +11,41 @@ namespace {
 template <class... T>
 bool finite(T... v) {
   return (std::isfinite(static_cast<double>(v)) && ...);
+}
+
+// a name that may reach a JSON text (the remote page) or a log: well-formed UTF-8 (RFC 3629: no
+// overlong forms, no surrogates, nothing past U+10FFFF), no NUL
+bool utf8(const std::string& s) {
+  size_t i = 0;
+  const size_t n = s.size();
+  while (i < n) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    if (c == 0) return false;
+    if (c < 0x80) {
+      ++i;
+      continue;
+    }
+    int more = 0;
+    uint32_t cp = 0, least = 0;
+    if ((c & 0xe0) == 0xc0) {
+      more = 1, cp = c & 0x1f, least = 0x80;
+    } else if ((c & 0xf0) == 0xe0) {
+      more = 2, cp = c & 0x0f, least = 0x800;
+    } else if ((c & 0xf8) == 0xf0) {
+      more = 3, cp = c & 0x07, least = 0x10000;
+    } else {
+      return false;
+    }
+    if (i + static_cast<size_t>(more) >= n) return false;  // cut short
+    for (int k = 1; k <= more; ++k) {
+      const auto d = static_cast<unsigned char>(s[i + k]);
+      if ((d & 0xc0) != 0x80) return false;
+      cp = cp << 6 | (d & 0x3f);
+    }
+    if (cp < least || cp > 0x10ffff || (cp >= 0xd800 && cp <= 0xdfff)) return false;
+    i += static_cast<size_t>(more) + 1;
+  }
+  return true;
 }
 
 }  // namespace
@@ -32,7 +68,7 @@ bool is_well_formed(const pcisim_lcm::session_command_t& m) {
 }
 
 bool is_well_formed(const pcisim_lcm::wire_state_t& m) {
-  if (m.num_nodes < 0 || m.node_mm.size() != static_cast<size_t>(m.num_nodes)) return false;
+  if (m.num_nodes < 0 || m.node_mm.size() != static_cast<size_t>(m.num_nodes) || !utf8(m.tip_branch)) return false;
   for (const auto& p : m.node_mm)
     if (!finite(p[0], p[1], p[2])) return false;
   if (m.contact_force_n.size() != static_cast<size_t>(m.num_nodes)) return false;
@@ -46,6 +82,8 @@ bool is_well_formed(const pcisim_lcm::sim_status_t& m) {
   if (m.num_effects < 0 || m.contrast_injections < 0) return false;
   for (double v : m.effect_step_ms_p50)
     if (!finite(v)) return false;
+  for (const std::string& name : m.effect_name)
+    if (!utf8(name)) return false;
   if (!finite(m.fluoro_time_s, m.carm_primary_deg, m.carm_secondary_deg, m.contrast_ml)) return false;
   return finite(m.haptic_rate_hz, m.haptic_period_us_p50, m.haptic_period_us_p99, m.haptic_period_us_p999,
                 m.haptic_period_us_max, m.haptic_compute_us_p50, m.haptic_compute_us_p99, m.haptic_compute_us_max,
@@ -54,7 +92,7 @@ bool is_well_formed(const pcisim_lcm::sim_status_t& m) {
 
 bool is_well_formed(const pcisim_lcm::session_metrics_t& m) {
   if (m.cine_runs < 0 || m.fluoro_pulses < 0 || m.cine_frames < 0 || m.contrast_injections < 0 || m.force_events < 0 ||
-      m.wire_restarts < 0)
+      m.wire_restarts < 0 || !utf8(m.target_branch))
     return false;
   if (!finite(m.target_reached_s)) return false;
   for (double v : {m.procedure_time_s, m.fluoro_time_s, m.cine_time_s, m.contrast_ml, m.air_kerma_mgy, m.dap_gycm2,
@@ -76,6 +114,8 @@ bool is_well_formed(const pcisim_lcm::xray_frame_t& m) {
     if (!finite(m.source_mm[k], m.detector_center_mm[k], m.detector_u[k], m.detector_v[k])) return false;
   for (const auto& p : m.wire_mm)
     if (!finite(p[0], p[1], p[2])) return false;
+  for (const std::string& name : m.contrast_branches)
+    if (!utf8(name)) return false;
   return finite(m.primary_angle_deg, m.secondary_angle_deg, m.source_to_image_mm, m.source_to_axis_mm, m.pixel_mm,
                 m.sim_time_s);
 }

@@ -16,7 +16,8 @@
 
 namespace pcisim::protocol {
 
-// true when every floating-point field is finite and sizes agree with their arrays
+// true when every floating-point field is finite, sizes agree with their arrays, and every name
+// (a branch's, an effect's) is well-formed UTF-8 without NUL: names reach JSON texts and logs
 bool is_well_formed(const pcisim_lcm::instrument_state_t& m);
 bool is_well_formed(const pcisim_lcm::force_command_t& m);
 bool is_well_formed(const pcisim_lcm::session_command_t& m);

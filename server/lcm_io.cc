@@ -208,6 +208,10 @@ void LcmIo::on_session(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     case C::CMD_CONTRAST:
       add_injection(session_msg_.contrast_ml, session_msg_.contrast_ml_s);
       break;
+    case C::CMD_DEBRIEF:
+      // written off this thread (a page takes tens of ms: the instrument's samples must not wait)
+      state_.debrief_requested = true;
+      break;
     default:
       refuse("command", fmt::format("unknown command {}", static_cast<int>(session_msg_.command)));
   }
@@ -337,7 +341,8 @@ void LcmIo::publish_status() {
 // the debrief so far, its figures without their lists (nothing allocated once the branch's name fits)
 void LcmIo::publish_metrics() {
   const int64_t now_ns = realtime::monotonic_ns();
-  const DebriefFigures f = metrics_->figures(now_ns, false);
+  DebriefFigures& f = metrics_figures_;
+  metrics_->figures_without_lists(now_ns, &f);
   auto& m = metrics_msg_;
   m.utime = now_ns / 1000;
   m.seq = metrics_seq_++;
@@ -355,7 +360,7 @@ void LcmIo::publish_metrics() {
   m.tip_path_projected_mm = f.tip_path_projected_mm;
   m.tip_path_in_vessels_mm = f.tip_path_in_vessels_mm;
   m.has_target = f.has_target ? 1 : 0;
-  m.target_branch = f.target_branch;
+  m.target_branch.assign(f.target_branch);
   m.wrong_branch_s = f.wrong_branch_s;
   m.target_reached_s = f.target_reached_s;
   m.tip_forces_known = f.tip_forces_known ? 1 : 0;

@@ -90,6 +90,7 @@ class LcmIo {
   pcisim_lcm::wire_state_t wire_msg_{};
   pcisim_lcm::sim_status_t status_msg_{};
   pcisim_lcm::session_metrics_t metrics_msg_{};
+  DebriefFigures metrics_figures_;  // filled in place each second
   protocol::EncodedPublisher tx_publisher_, zero_publisher_;
   const std::string force_channel_{protocol::kForceChannel}, wire_channel_{protocol::kWireChannel},
       status_channel_{protocol::kStatusChannel}, metrics_channel_{protocol::kMetricsChannel};

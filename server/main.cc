@@ -123,8 +123,6 @@ int main(int argc, char** argv) {
     return 3;
   }
 
-  // a scene loaded over LCM is built while the running one goes on, then takes over; --duration
-  // counts the running time of the whole session (the first scene's build aside)
   // the reference run is read before the session: a bad file is said now, not after it
   std::optional<nlohmann::json> reference;
   if (!debrief_reference_path.empty()) {
@@ -139,35 +137,50 @@ int main(int argc, char** argv) {
   const std::string scene_name = scene.name;  // (the session may load others; the page names the first)
   SessionLimits limits;
   SessionMetrics metrics;
+  // the debrief so far into its files (at the end, and when a session command asks: CMD_DEBRIEF);
+  // false when one could not be written
+  const auto write_debrief = [&](const DebriefFigures& figures) {
+    bool ok = true;
+    if (!debrief_path.empty()) {
+      std::ofstream out(debrief_path);
+      out << to_json(figures).dump(2) << "\n";
+      ok = static_cast<bool>(out.flush()) && ok;
+      if (!out) spdlog::error("cannot write the debrief to {}", debrief_path);
+    }
+    if (!debrief_html_path.empty()) {
+      std::ofstream out(debrief_html_path);
+      out << debrief_html(figures, reference ? &*reference : nullptr, "pcisim debrief: " + scene_name);
+      ok = static_cast<bool>(out.flush()) && ok;
+      if (!out) spdlog::error("cannot write the debrief page to {}", debrief_html_path);
+    }
+    return ok;
+  };
+  // a scene loaded over LCM is built while the running one goes on, then takes over; --duration
+  // counts the running time of the whole session (the first scene's build aside)
   SessionOptions options;
   options.duration_s = duration_s;
   options.cpu_latency_us = cpu_latency_us;
   options.image_url = image_url;
   options.case_dir = case_dir;  // for every scene of the session, not only the first
+  if (!debrief_path.empty() || !debrief_html_path.empty())
+    options.write_debrief = [&] {
+      const DebriefFigures figures = metrics.figures(pcisim::realtime::monotonic_ns());
+      if (write_debrief(figures))
+        spdlog::info("session: the debrief so far written ({:.0f} s of the session)", figures.procedure_time_s);
+    };
   try {
     const StatsReport stats =
         run_session(std::move(scene), lcm, options, pcisim::realtime::stop_flag(), limits, &metrics);
     std::cout << human_summary(stats) << "\n";
-    if (!debrief_path.empty()) {
+    if (!debrief_path.empty() || !debrief_html_path.empty()) {
       const DebriefFigures figures = metrics.figures(pcisim::realtime::monotonic_ns());
       std::cout << human_debrief(figures) << "\n";
-      std::ofstream out(debrief_path);
-      out << to_json(figures).dump(2) << "\n";
-      if (!out.flush()) {
-        std::cerr << "pcisim-server: cannot write the debrief to " << debrief_path << "\n";
+      if (!write_debrief(figures)) {
+        std::cerr << "pcisim-server: cannot write the debrief (" << debrief_path << " " << debrief_html_path << ")\n";
         return 1;
       }
-      std::cout << "  debrief " << debrief_path << "\n";
-    }
-    if (!debrief_html_path.empty()) {
-      const DebriefFigures figures = metrics.figures(pcisim::realtime::monotonic_ns());
-      std::ofstream out(debrief_html_path);
-      out << debrief_html(figures, reference ? &*reference : nullptr, "pcisim debrief: " + scene_name);
-      if (!out.flush()) {
-        std::cerr << "pcisim-server: cannot write the debrief page to " << debrief_html_path << "\n";
-        return 1;
-      }
-      std::cout << "  page    " << debrief_html_path << "\n";
+      if (!debrief_path.empty()) std::cout << "  debrief " << debrief_path << "\n";
+      if (!debrief_html_path.empty()) std::cout << "  page    " << debrief_html_path << "\n";
     }
     if (!stats_path.empty()) {
       std::ofstream out(stats_path);

@@ -279,6 +279,13 @@ StatsReport Server::run(double duration_s, const std::atomic<bool>& stop) {
       duration_s > 0 && duration_s < 9e9 ? m.start_ns + static_cast<int64_t>(duration_s * 1e9) : INT64_MAX;
   while (!stop.load() && !m.successor_ready(m.scene.source) && realtime::monotonic_ns() < end_ns) {
     realtime::sleep_until_ns(std::min(end_ns, realtime::monotonic_ns() + 20'000'000));
+    if (m.state.debrief_requested.exchange(false)) {
+      if (on_debrief_request) {
+        on_debrief_request();
+      } else {
+        spdlog::warn("session: a debrief was asked for, but this server writes none (--debrief-json, --debrief-html)");
+      }
+    }
     if (realtime::monotonic_ns() >= next_log_ns) {
       next_log_ns += 1'000'000'000;
       const double t_s = (realtime::monotonic_ns() - m.start_ns) * 1e-9;

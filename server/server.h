@@ -59,6 +59,9 @@ class Server {
   // are over the time since the last call (public for the test that counts its allocations:
   // none once warm, issue #36 item 5)
   void fill_status(pcisim_lcm::sim_status_t* m);
+  // a session command asked for the debrief so far (CMD_DEBRIEF): called on run()'s thread, between
+  // its looks at the clock (without one, the request is logged and dropped)
+  std::function<void()> on_debrief_request;
   // names of the vessel branches, for wire_state_t (index -> name, "" when unknown)
   std::function<const std::string&(int)> branch_namer;  // (LcmIo::BranchNamer)
 

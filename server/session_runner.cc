@@ -32,6 +32,7 @@ StatsReport run_session(Scene scene, lcm::LCM& control, const SessionOptions& op
     }
     auto server = std::make_unique<Server>(next, control, images.get(), &limits, metrics);
     server->cpu_latency_us = options.cpu_latency_us;
+    server->on_debrief_request = options.write_debrief;
     server->set_successor_builder(build);
     return server;
   };

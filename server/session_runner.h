@@ -5,6 +5,7 @@
 // and the running scene simply goes on. The session's command bounds (contrast used, refusals)
 // and its options (--case) carry across every pipeline.
 #include <atomic>
+#include <functional>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <string>
@@ -26,6 +27,8 @@ struct SessionOptions {
   // first scene builds, a signal ends the process at once (realtime/stop_signal.h); one that comes
   // while a reloaded scene builds ends it within this bound (that build cannot be cut short)
   double stop_within_s = 0.9;
+  // writes the debrief so far when a session command asks for it (CMD_DEBRIEF); empty: none
+  std::function<void()> write_debrief;
 };
 
 // throws when the first scene cannot be built (there is nothing to fall back to); returns the

@@ -81,7 +81,8 @@ struct SharedState {
   // session control from lcm rx, read by physics
   std::atomic<bool> paused{false};
   std::atomic<bool> reset_requested{false};
-  std::atomic<bool> stop{false};  // the physics, x-ray and ultrasound loops
+  std::atomic<bool> debrief_requested{false};  // CMD_DEBRIEF: the main thread writes it (Server::run)
+  std::atomic<bool> stop{false};               // the physics, x-ray and ultrasound loops
   // the haptic loop's own stop, set after the loops that feed its model have stopped: its force
   // stays fresh while they wind down (a reload hands over to the next pipeline meanwhile)
   std::atomic<bool> stop_haptic{false};

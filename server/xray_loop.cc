@@ -99,7 +99,9 @@ void XrayLoop::render_and_publish(bool cine) {
   state_.xray_render_ns.record(realtime::monotonic_ns() - t0);
   // the debrief keeps the frame that showed the vessels best, to draw the tip's path on
   if (metrics_ && !frame_.contrast_branches.empty())
-    metrics_->record_frame(frame_.pixels.data(), frame_.width, frame_.height, frame_.geometry, in.heart_phase,
+    metrics_->record_frame(frame_.pixels.data(), frame_.width, frame_.height, frame_.geometry,
+                           // the heart's phase the vessels in the frame are at (the background may stand still)
+                           snap.vessel_points_m.empty() ? std::nan("") : snap.heart_phase,
                            static_cast<int>(frame_.contrast_branches.size()), realtime::monotonic_ns());
   state_.xray_frames.fetch_add(1, std::memory_order_relaxed);
   if (!images_) {

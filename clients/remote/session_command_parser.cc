@@ -59,6 +59,8 @@ ParsedCommand parse_session_command(const nlohmann::json& msg, const CommandLimi
     c.command = C::CMD_PAUSE;
   } else if (name == "resume") {
     c.command = C::CMD_RESUME;
+  } else if (name == "debrief") {
+    c.command = C::CMD_DEBRIEF;
   } else {
     return CommandError{"bad_command", fmt::format("unknown or not permitted command '{}'", name)};
   }

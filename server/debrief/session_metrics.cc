@@ -73,6 +73,7 @@ void SessionMetrics::begin_pipeline(const DebriefParams& params, const anatomy::
   // the frame store sized for this scene's detector (nothing is allocated when a frame comes)
   const size_t pixels = static_cast<size_t>(std::max(detector_width, 0)) * std::max(detector_height, 0);
   if (angiogram_.pixels.capacity() < pixels) angiogram_.pixels.reserve(pixels);
+  if (incoming_.capacity() < pixels) incoming_.reserve(pixels);
   params_ = params;
   beam_ = beam;
   forces_known_ = tip_forces_known;
@@ -85,10 +86,13 @@ void SessionMetrics::begin_pipeline(const DebriefParams& params, const anatomy::
     on_route_[b] = 1;
     b = tree.branches[b].parent;
   }
-  f_.has_target = target_ >= 0;
+  f_.has_target = f_.has_target || target_ >= 0;
   // the wire of the new pipeline starts afresh
   if (in_episode_) end_force_episode();
-  if (have_last_) ++f_.resets;
+  if (have_last_) {
+    ++f_.resets;
+    add_event(TimelineKind::kReset, 0, 0, now_ns);
+  }
   have_last_ = false;
 }
 
@@ -136,16 +140,23 @@ void SessionMetrics::record_carm(double primary_deg, double secondary_deg, int64
   add_event(TimelineKind::kCArm, primary_deg, secondary_deg, now_ns);
 }
 
+// (the x-ray thread alone calls this: incoming_ is its own; the copy is made outside the lock, so
+// the send thread never waits behind half a megabyte)
 void SessionMetrics::record_frame(const uint16_t* pixels, int width, int height, const xray::DetectorGeometry& geometry,
                                   double heart_phase, int contrast_branches, int64_t now_ns) {
-  std::lock_guard lock(mutex_);
   const size_t n = static_cast<size_t>(std::max(width, 0)) * std::max(height, 0);
-  if (n == 0 || n > angiogram_.pixels.capacity()) return;  // (nothing allocated here)
-  // the frame with the most contrast (a later one as good replaces it): where the vessels show;
-  // a new scene's first one replaces the last scene's
-  const bool newer_scene = angiogram_.time_s >= 0.0 && angiogram_.pipeline != pipeline_;
-  if (contrast_branches <= 0 || (!newer_scene && contrast_branches < angiogram_.contrast_branches)) return;
-  angiogram_.pixels.assign(pixels, pixels + n);
+  if (n == 0 || contrast_branches <= 0) return;
+  {
+    std::lock_guard lock(mutex_);
+    if (n > angiogram_.pixels.capacity() || n > incoming_.capacity()) return;  // (nothing allocated here)
+    // the frame with the most contrast (a later one as good replaces it): where the vessels show;
+    // a new scene's first one replaces the last scene's
+    const bool newer_scene = angiogram_.time_s >= 0.0 && angiogram_.pipeline != pipeline_;
+    if (!newer_scene && contrast_branches < angiogram_.contrast_branches) return;
+  }
+  incoming_.assign(pixels, pixels + n);
+  std::lock_guard lock(mutex_);
+  angiogram_.pixels.swap(incoming_);
   angiogram_.width = width;
   angiogram_.height = height;
   angiogram_.geometry = geometry;
@@ -165,7 +176,7 @@ void SessionMetrics::record_injection(double volume_ml, int64_t now_ns) {
 void SessionMetrics::end_force_episode() {
   ++f_.force_events;
   const double sim_duration_s = last_time_s_ - episode_sim_start_s_;
-  // (the timeline's slot was reserved when the episode began: its time is the start)
+  // (listed at its start, when it ends: the timeline is sorted by time when it is read)
   if (timeline_count_ < kMaxTimeline) {
     timeline_[timeline_count_++] = {episode_start_s_, TimelineKind::kForceEvent, episode_peak_n_, sim_duration_s};
   } else {
@@ -246,15 +257,41 @@ void SessionMetrics::record_wire(const physics::WorldSnapshot& s, double primary
   last_tip_force_n_ = force_n;
 }
 
-DebriefFigures SessionMetrics::figures(int64_t now_ns, bool lists) const {
+void SessionMetrics::figures_without_lists(int64_t now_ns, DebriefFigures* out) const {
+  std::lock_guard lock(mutex_);
+  DebriefFigures& o = *out;
+  // field by field: the strings assigned into their own storage, the lists untouched
+  o.procedure_time_s = session_s(now_ns);
+  o.fluoro_time_s = f_.fluoro_time_s;
+  o.cine_time_s = f_.cine_time_s;
+  o.fluoro_pulses = f_.fluoro_pulses;
+  o.cine_frames = f_.cine_frames;
+  o.cine_runs = f_.cine_runs;
+  o.contrast_injections = f_.contrast_injections;
+  o.contrast_ml = f_.contrast_ml;
+  o.air_kerma_mgy = f_.air_kerma_mgy;
+  o.dap_gycm2 = f_.dap_gycm2;
+  o.tip_path_mm = f_.tip_path_mm;
+  o.tip_path_projected_mm = f_.tip_path_projected_mm;
+  o.tip_path_in_vessels_mm = f_.tip_path_in_vessels_mm;
+  o.has_target = f_.has_target;
+  o.target_branch.assign(f_.target_branch);
+  o.wrong_branch_s = f_.wrong_branch_s;
+  o.target_reached_s = f_.target_reached_s;
+  o.tip_forces_known = f_.tip_forces_known;
+  o.peak_tip_force_n = f_.peak_tip_force_n;
+  o.tip_force_above_threshold_s = f_.tip_force_above_threshold_s;
+  o.force_events = f_.force_events + (in_episode_ ? 1 : 0);
+  o.wire_states = f_.wire_states;
+  o.resets = f_.resets;
+  o.timeline_dropped = f_.timeline_dropped;
+}
+
+DebriefFigures SessionMetrics::figures(int64_t now_ns) const {
   std::lock_guard lock(mutex_);
   DebriefFigures f = f_;
   f.procedure_time_s = session_s(now_ns);
   f.params = params_;
-  if (!lists) {
-    f.force_events += in_episode_ ? 1 : 0;
-    return f;
-  }
   f.carm_poses.assign(poses_.begin(), poses_.begin() + pose_count_);
   f.timeline.assign(timeline_.begin(), timeline_.begin() + timeline_count_);
   f.track.assign(track_.begin(), track_.begin() + track_count_);

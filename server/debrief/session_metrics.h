@@ -4,8 +4,9 @@
 // branch and the wall's force on the tip. One object per session, kept across scene reloads
 // (like SessionLimits); the server's threads record into it (the x-ray thread the beam, the LCM
 // receive thread injections, the send thread each wire state it publishes), never the 1 kHz loop.
-// Every record takes one short lock and allocates nothing (the timeline's storage is made up
-// front; a session past it keeps its figures and counts the events it could not list).
+// Every record takes one short lock (with priority inheritance: the LCM send thread, which records
+// the wire states, runs SCHED_FIFO) and allocates nothing (the timeline's storage is made up front;
+// a session past it keeps its figures and counts the events it could not list).
 // Definitions, formulas and sources: docs/debrief.md.
 #include <array>
 #include <cstdint>
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "physics/world_snapshot.h"
+#include "realtime/pi_mutex.h"
 #include "server/debrief/debrief_params.h"
 #include "xray/geometry/detector_geometry.h"
 
@@ -84,10 +86,10 @@ struct DebriefFigures {
   double tip_path_mm = 0.0;             // the tip's 3-D path over the wire states
   double tip_path_projected_mm = 0.0;   // the same across the beam: on the plane normal to the C-arm's central ray
   double tip_path_in_vessels_mm = 0.0;  // in the vessels' rest frame: the heart's motion taken out
-  bool has_target = false;              // the scene names a target branch
+  bool has_target = false;              // a scene of the session named a target branch its tree has
   std::string target_branch;
   double wrong_branch_s = 0.0;     // the tip in a branch neither the target nor on the way to it
-  double target_reached_s = -1.0;  // sim time the tip first entered the target (-1: never)
+  double target_reached_s = -1.0;  // session time the tip first entered the target (-1: never)
   bool tip_forces_known = false;   // the wire computes the wall's force (the rod; not the chain-mail)
   double peak_tip_force_n = 0.0;
   double tip_force_above_threshold_s = 0.0;
@@ -126,16 +128,18 @@ class SessionMetrics {
   // the send thread: each wire state as published; primary and secondary the C-arm's pose
   void record_wire(const physics::WorldSnapshot& s, double primary_deg, double secondary_deg, int64_t now_ns);
 
-  // the figures so far (procedure time up to now_ns); without `lists` the poses, timeline, track
-  // and frame are left empty (the once-a-second message: nothing allocated)
-  DebriefFigures figures(int64_t now_ns, bool lists = true) const;
+  // the figures so far (procedure time up to now_ns), with their lists (poses, timeline, track, frame)
+  DebriefFigures figures(int64_t now_ns) const;
+  // the same without the lists, into `out` in place (its strings keep their storage: the
+  // once-a-second message allocates nothing once warm); out's lists are left as they are
+  void figures_without_lists(int64_t now_ns, DebriefFigures* out) const;
 
  private:
   void add_event(TimelineKind kind, double a, double b, int64_t now_ns);
   void end_force_episode();
   double session_s(int64_t now_ns) const;
 
-  mutable std::mutex mutex_;
+  mutable realtime::PiMutex mutex_;
   DebriefParams params_;
   BeamGeometry beam_;
   bool forces_known_ = false;
@@ -163,6 +167,8 @@ class SessionMetrics {
   int track_count_ = 0, track_stride_ = 1, track_skip_ = 0;
   uint16_t pipeline_ = 0;
   Angiogram angiogram_;  // its pixels sized by begin_pipeline
+  // the x-ray thread's copy of a frame to keep, made outside the lock and swapped in (same capacity)
+  std::vector<uint16_t> incoming_;
   std::array<CArmUse, kMaxPoses> poses_{};
   int pose_count_ = 0;
 };

@@ -57,6 +57,40 @@ TEST(HostileDecode, UltrasoundFrame) {
   expect_refused<pcisim_lcm::us_frame_t>(fuzz::us_frame_case());
 }
 
+// names reach the remote page's JSON (whose writer throws on bad UTF-8, which stopped the gateway's
+// tick: found in review, issue #35) and the logs: a name that is not well-formed UTF-8 is refused
+TEST(HostileDecode, NamesThatAreNotUtf8AreRefused) {
+  const auto round_trip = [](auto m) {
+    std::vector<uint8_t> bytes(static_cast<size_t>(m.getEncodedSize()));
+    m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    decltype(m) out;
+    return decode_checked(bytes.data(), static_cast<int64_t>(bytes.size()), out);
+  };
+  for (const std::string bad : {std::string("\xff\xfe"), std::string("LAD\xc0\x80"), std::string("\xed\xa0\x80"),
+                                std::string("\xf4\x90\x80\x80"), std::string("\xe2\x82"), std::string("a\0b", 3)}) {
+    pcisim_lcm::wire_state_t w{};
+    w.tip_branch = bad;
+    EXPECT_FALSE(round_trip(w)) << "tip_branch";
+    pcisim_lcm::session_metrics_t m{};
+    m.target_branch = bad;
+    EXPECT_FALSE(round_trip(m)) << "target_branch";
+    pcisim_lcm::sim_status_t st{};
+    st.num_effects = 1;
+    st.effect_name = {bad};
+    st.effect_step_ms_p50 = {1.0};
+    EXPECT_FALSE(round_trip(st)) << "effect_name";
+    pcisim_lcm::xray_frame_t x{};
+    x.pixel_format = pcisim_lcm::xray_frame_t::FORMAT_PNG;
+    x.num_contrast_branches = 1;
+    x.contrast_branches = {bad};
+    EXPECT_FALSE(round_trip(x)) << "contrast_branches";
+  }
+  // well-formed names in any script pass (two-, three- and four-byte forms)
+  pcisim_lcm::wire_state_t w{};
+  w.tip_branch = "D1 \xc3\xa9 \xe2\x86\x92 \xf0\x9f\xab\x80";
+  EXPECT_TRUE(round_trip(w));
+}
+
 // the finding itself: a 66-byte session command whose scene_path length is 0 (it threw
 // std::length_error out of the handler and ended the server)
 TEST(HostileDecode, SessionCommandWithZeroLengthPathIsRefused) {

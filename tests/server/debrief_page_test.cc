@@ -11,6 +11,8 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <regex>
 
@@ -52,7 +54,10 @@ Eigen::Vector2d pixel_of(const xray::DetectorGeometry& g, const Eigen::Vector3d&
 
 // a 12 s session: fluoroscopy 1-11 s, a cine run, an injection, a C-arm move; the tip along x in
 // the LM and LAD, then into the LCx; two force episodes
-DebriefFigures scripted_session(SessionMetrics& m, const std::string& target) {
+// `wrong`: the tip's state from which it is in the LCx (the reference goes there later);
+// `heart_phase`: the frame's (NaN: a still background, every state joined)
+DebriefFigures scripted_session(SessionMetrics& m, const std::string& target, int wrong = 200,
+                                double heart_phase = std::nan("")) {
   DebriefParams p;
   p.target_branch = target;
   const anatomy::VesselTree tree = two_branches();
@@ -68,7 +73,7 @@ DebriefFigures scripted_session(SessionMetrics& m, const std::string& target) {
   m.record_beam_time(1.0, true, 0, 0);
   std::vector<uint16_t> frame(kPixels * kPixels);
   for (int i = 0; i < kPixels * kPixels; ++i) frame[i] = static_cast<uint16_t>(1000 + 30 * (i % kPixels));
-  m.record_frame(frame.data(), kPixels, kPixels, small_detector(), std::nan(""), 3, 4 * kSecond);
+  m.record_frame(frame.data(), kPixels, kPixels, small_detector(), heart_phase, 3, 4 * kSecond);
   for (int k = 0; k <= 300; ++k) {
     physics::WorldSnapshot s;
     s.step = k;
@@ -76,7 +81,8 @@ DebriefFigures scripted_session(SessionMetrics& m, const std::string& target) {
     s.wire_nodes_m.assign(2, Eigen::Vector3d::Zero());
     s.tip_m = Eigen::Vector3d(-40e-3 + 0.25e-3 * k, 0.0, 10e-3 * std::sin(k / 40.0));
     s.tip_rest_m = s.tip_m;
-    s.tip_branch = k < 120 ? 0 : k < 200 ? 1 : 2;
+    s.tip_branch = k < 120 ? 0 : k < wrong ? 1 : 2;
+    s.heart_phase = std::fmod(k / 25.0, 1.0);  // 72 beats a minute at 30 states a second
     s.tip_force_n = (k > 50 && k < 60) || (k > 220 && k < 240) ? 0.3 : 0.02;
     m.record_wire(s, 0, 0, kSecond + static_cast<int64_t>(k * kSecond / 30));
   }
@@ -85,7 +91,7 @@ DebriefFigures scripted_session(SessionMetrics& m, const std::string& target) {
 
 TEST(DebriefPage, ASessionsPageHoldsItsFiguresItsFrameAndThePathWhereTheFrameShowsIt) {
   SessionMetrics expert_metrics, metrics;
-  const nlohmann::json reference = to_json(scripted_session(expert_metrics, "LAD"));
+  const nlohmann::json reference = to_json(scripted_session(expert_metrics, "LAD", 280));
   const DebriefFigures f = scripted_session(metrics, "LAD");
   const std::string page = debrief_html(f, &reference, "debrief <test> & check");
   {
@@ -99,14 +105,15 @@ TEST(DebriefPage, ASessionsPageHoldsItsFiguresItsFrameAndThePathWhereTheFrameSho
   EXPECT_NE(page.find("<title>debrief &lt;test&gt; &amp; check</title>"), std::string::npos) << "escaped";
   EXPECT_NE(page.find("<th>reference</th>"), std::string::npos);
   // the figures as the table states them (this session, then the reference: the same script)
-  const auto row = [&](const std::string& label, const std::string& value) {
-    return page.find("<td>" + label + "</td><td class=n>" + value + "</td><td class=n>" + value + "</td>");
+  const auto row = [&](const std::string& label, const std::string& value, const std::string& reference_value) {
+    return page.find("<td>" + label + "</td><td class=n>" + value + "</td><td class=n>" + reference_value + "</td>");
   };
-  EXPECT_NE(row("Procedure time (s)", "12.0"), std::string::npos);
-  EXPECT_NE(row("Cine runs", "1"), std::string::npos);
-  EXPECT_NE(row("Contrast (ml)", "8.0"), std::string::npos);
-  EXPECT_NE(row("Force events above the risk force", "2"), std::string::npos);
-  EXPECT_NE(row("Time off the route to the target (s)", "3.3"), std::string::npos) << "the LCx, 100 states";
+  EXPECT_NE(row("Procedure time (s)", "12.0", "12.0"), std::string::npos);
+  EXPECT_NE(row("Cine runs", "1", "1"), std::string::npos);
+  EXPECT_NE(row("Contrast (ml)", "8.0", "8.0"), std::string::npos);
+  EXPECT_NE(row("Force events above the risk force", "2", "2"), std::string::npos);
+  // this session in the LCx from state 200, the reference from 280: 100 and 20 states
+  EXPECT_NE(row("Time off the route to the target (s)", "3.3", "0.7"), std::string::npos);
   // the embedded frame: a PNG of the frame's size
   const std::smatch png = [&] {
     std::smatch m;
@@ -155,6 +162,31 @@ TEST(DebriefPage, ASessionsPageHoldsItsFiguresItsFrameAndThePathWhereTheFrameSho
   // nothing the page fetches: no script, no link, no source but the inline image
   for (const char* fetch : {"<script", "<link", "src=\"http", "href=\"http", "url("})
     EXPECT_EQ(page.find(fetch), std::string::npos) << fetch;
+}
+
+// with a beating heart the states at the frame's phase are joined (about one a beat), the rest faint
+TEST(DebriefPage, OnABeatingHeartThePathJoinsTheStatesAtTheFramesPhase) {
+  SessionMetrics m;
+  const DebriefFigures f = scripted_session(m, "LAD", 200, 0.4);
+  const std::string page = debrief_html(f, nullptr, "beating");
+  // states k with frac(k / 25) within 0.05 of 0.4: k = 9, 10, 11 of each 25 (phase 0.36-0.44)
+  int joined = 0;
+  for (int k = 0; k <= 300; ++k) {
+    const double d = std::abs(std::fmod(k / 25.0, 1.0) - 0.4);
+    joined += std::min(d, 1.0 - d) <= 0.05;
+  }
+  int drawn = 0;
+  for (const char* cls : {R"(class="pathon" points=")", R"(class="pathoff" points=")"}) {
+    for (size_t at = page.find(cls); at != std::string::npos; at = page.find(cls, at + 1)) {
+      const size_t end = page.find('"', at + std::string(cls).size());
+      const std::string points = page.substr(at + std::string(cls).size(), end - at - std::string(cls).size());
+      drawn += static_cast<int>(std::count(points.begin(), points.end(), ','));
+    }
+  }
+  // each run after the first starts at the last run's end point: one more point a change of colour
+  EXPECT_EQ(drawn, joined + 1);
+  EXPECT_NE(page.find(R"(class="pathall")"), std::string::npos);
+  EXPECT_NE(page.find("(0.40, within 0.05 of a beat)"), std::string::npos);
 }
 
 TEST(DebriefPage, WithoutAFrameOrForcesThePageSaysSo) {

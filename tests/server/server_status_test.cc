@@ -152,7 +152,8 @@ TEST(ServerStatus, TheMetricsMessageCarriesTheDebriefSoFarAndAllocatesNothingOnc
   EXPECT_DOUBLE_EQ(m.contrast_ml, 8.0);
   EXPECT_EQ(m.fluoro_pulses, 15);
   EXPECT_DOUBLE_EQ(m.fluoro_time_s, 1.0);
-  EXPECT_DOUBLE_EQ(m.air_kerma_mgy, f.air_kerma_mgy);
+  // 15 pulses of 50 uGy/mAs x 0.15 mAs at 0.6 m
+  EXPECT_NEAR(m.air_kerma_mgy, 15 * 50 * 0.15 / 0.36 * 1e-3, 1e-12);
   EXPECT_GE(m.procedure_time_s, 0.0);
   EXPECT_LE(m.procedure_time_s, f.procedure_time_s);
 }

@@ -253,8 +253,9 @@ TEST(SessionMetrics, TheBeamsTimeCineRunsAndDoseAtTheReferencePoint) {
 
 TEST(SessionMetrics, RecordingAllocatesNothingAndALongSessionKeepsItsFigures) {
   SessionMetrics m;
-  m.begin_pipeline(with_target("LAD"), small_tree(), true, beam_geometry(750, 1100, 204.8, 204.8), kSecond);
+  m.begin_pipeline(with_target("LAD"), small_tree(), true, beam_geometry(750, 1100, 204.8, 204.8), kSecond, 64, 64);
   physics::WorldSnapshot s = state(0, 0.0, Eigen::Vector3d::Zero(), 2, 0.0);
+  const std::vector<uint16_t> frame(64 * 64, 1000);
   {
     realtime::AllocationCount count;
     // more events than the timeline holds: force episodes every other state, pedals, injections
@@ -267,6 +268,8 @@ TEST(SessionMetrics, RecordingAllocatesNothingAndALongSessionKeepsItsFigures) {
       m.record_pedals(k % 3 == 0, false, kSecond + k);
       m.record_pulse(false);
       m.record_beam_time(1.0 / 30, false, 0, 0);
+      m.record_frame(frame.data(), 64, 64, xray::DetectorGeometry{}, 0.5, 1 + k % 3, kSecond + k);
+      if (k % 100 == 0) m.record_carm(k % 90, 10, kSecond + k);
     }
     m.record_injection(8.0, 2 * kSecond);
     EXPECT_EQ(count.allocations(), 0);

@@ -58,6 +58,10 @@ TEST(RemoteCommands, ParserKnowsThePermittedCommandsAndTheirRanges) {
 
   for (const char* name : {"reset", "pause", "resume"})
     EXPECT_TRUE(ok(parse_session_command(json{{"command", name}}, lim))) << name;
+  // the debrief so far, written where the server writes it (issue #35)
+  p = parse_session_command(json{{"command", "debrief"}}, lim);
+  ASSERT_TRUE(ok(p));
+  EXPECT_EQ(ok(p)->command, C::CMD_DEBRIEF);
   // loading a scene names a file on the server's host: not for remote pages
   EXPECT_EQ(code(parse_session_command(json{{"command", "load_scene"}, {"scene_path", "/etc/passwd"}}, lim)),
             "bad_command");

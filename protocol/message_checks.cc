@@ -92,7 +92,7 @@ bool is_well_formed(const pcisim_lcm::sim_status_t& m) {
 
 bool is_well_formed(const pcisim_lcm::session_metrics_t& m) {
   if (m.cine_runs < 0 || m.fluoro_pulses < 0 || m.cine_frames < 0 || m.contrast_injections < 0 || m.force_events < 0 ||
-      m.wire_restarts < 0 || !utf8(m.target_branch))
+      m.prolapse_events < 0 || m.buckling_events < 0 || m.wire_restarts < 0 || !utf8(m.target_branch))
     return false;
   if (!finite(m.target_reached_s)) return false;
   for (double v : {m.procedure_time_s, m.fluoro_time_s, m.cine_time_s, m.contrast_ml, m.air_kerma_mgy, m.dap_gycm2,

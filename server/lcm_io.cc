@@ -367,6 +367,8 @@ void LcmIo::publish_metrics() {
   m.peak_tip_force_n = f.peak_tip_force_n;
   m.tip_force_above_threshold_s = f.tip_force_above_threshold_s;
   m.force_events = f.force_events;
+  m.prolapse_events = f.prolapse_events;
+  m.buckling_events = f.buckling_events;
   m.wire_restarts = f.resets;
   tx_publisher_.publish(lcm_, metrics_channel_, m);
   state_.lcm_tx.fetch_add(1, std::memory_order_relaxed);

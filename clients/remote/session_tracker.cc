@@ -188,7 +188,9 @@ nlohmann::json SessionTracker::debrief_json() const {
           {"wrong_branch_s", m.has_target ? nlohmann::json(m.wrong_branch_s) : unknown},
           {"target_reached_s", m.has_target && m.target_reached_s >= 0 ? nlohmann::json(m.target_reached_s) : unknown},
           {"peak_tip_force_n", m.tip_forces_known ? nlohmann::json(m.peak_tip_force_n) : unknown},
-          {"force_events", m.tip_forces_known ? nlohmann::json(m.force_events) : unknown}};
+          {"force_events", m.tip_forces_known ? nlohmann::json(m.force_events) : unknown},
+          {"prolapse_events", m.prolapse_events},
+          {"buckling_events", m.buckling_events}};
 }
 
 nlohmann::json SessionTracker::status_json(int64_t now_ns) const {

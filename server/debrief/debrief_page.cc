@@ -85,6 +85,8 @@ const Row kRows[] = {
     {"peak_tip_force_n", "Peak tip force on the wall (N)", 3, "simulator truth (rod wire)"},
     {"tip_force_above_threshold_s", "Time above the force threshold (s)", 1, "simulator truth (rod wire)"},
     {"force_events", "Force events above the risk force", 0, "simulator truth (rod wire)"},
+    {"prolapse_events", "Prolapses (the wire folded back)", 0, "simulator truth"},
+    {"buckling_events", "Buckling (the feed not reaching the tip)", 0, "simulator truth"},
 };
 
 std::string figures_table(const nlohmann::json& trainee, const nlohmann::json* reference) {
@@ -106,8 +108,9 @@ std::string timeline_svg(const DebriefFigures& f) {
   for (const TimelineEntry& e : f.timeline) end_s = std::max(end_s, e.time_s);
   const double left = 150, width = 760, row_h = 26;
   const auto x_of = [&](double t) { return left + width * std::clamp(t / end_s, 0.0, 1.0); };
-  const char* rows[] = {"fluoroscopy", "cine", "contrast", "C-arm", "tip off route", "force events"};
-  const int n_rows = 6;
+  const char* rows[] = {"fluoroscopy",   "cine",         "contrast",          "C-arm",
+                        "tip off route", "force events", "prolapse, buckling"};
+  const int n_rows = 7;
   std::string s = fmt::format(R"(<svg class="timeline" width="{}" height="{}" xmlns="http://www.w3.org/2000/svg">)",
                               left + width + 20, row_h * n_rows + 40);
   for (int r = 0; r < n_rows; ++r)
@@ -145,6 +148,14 @@ std::string timeline_svg(const DebriefFigures& f) {
       s += fmt::format(
           R"(<circle cx="{:.1f}" cy="{}" r="{:.1f}" class="force"><title>{:.3f} N for {:.2f} s at {:.1f} s</title></circle>)",
           x, row_h * 5 + 13, 4.0 + 20.0 * std::min(e.a, 0.5), e.a, e.b, e.time_s);
+    if (e.kind == TimelineKind::kProlapse || e.kind == TimelineKind::kBuckling)
+      s += fmt::format(
+          R"(<rect x="{:.1f}" y="{}" width="{:.1f}" height="14" class="{}"><title>{} for {:.1f} s at {:.1f} s</title></rect>)",
+          x, row_h * 6 + 6, std::max(x_of(e.time_s + e.b) - x, 2.0),
+          e.kind == TimelineKind::kProlapse ? "prolapse" : "buckle",
+          e.kind == TimelineKind::kProlapse ? fmt::format("folded {:.0f}°", e.a)
+                                            : fmt::format("{:.1f} mm of feed not taken up", e.a),
+          e.b, e.time_s);
   }
   // the tip off its route: runs of track points
   double run_start = -1.0, last_t = 0.0;
@@ -281,7 +292,7 @@ table { border-collapse: collapse; } td, th { border-bottom: 1px solid #ddd; pad
 td.n { text-align: right; font-variant-numeric: tabular-nums; } td.src, .small { color: #777; font-size: 12px; }
 .lab { font-size: 13px; fill: #333; } .grid { stroke: #ccc; stroke-width: 1; } .risk { stroke: #d33; stroke-dasharray: 6 4; }
 .fluoro { fill: #4a90d9; } .cine { fill: #e08a1e; } .contrast { fill: #7b4fd0; } .carm { stroke: #333; stroke-width: 2; }
-.off { fill: #d33; } .force { fill: #d33; fill-opacity: 0.7; } .forceline { fill: none; stroke: #333; stroke-width: 1.2; }
+.off { fill: #d33; } .prolapse { fill: #b10dc9; } .buckle { fill: #ff851b; } .force { fill: #d33; fill-opacity: 0.7; } .forceline { fill: none; stroke: #333; stroke-width: 1.2; }
 .pathon { fill: none; stroke: #2ecc40; stroke-width: 2.5; } .pathoff { fill: none; stroke: #ff4136; stroke-width: 2.5; }
 .pathall { fill: none; stroke: #2ecc40; stroke-opacity: 0.25; stroke-width: 1; }
 .pathref { fill: none; stroke: #39cccc; stroke-width: 2; stroke-dasharray: 6 4; }

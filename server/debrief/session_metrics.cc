@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <fmt/format.h>
 
 #include "anatomy/vessel/vessel_tree.h"
@@ -44,6 +45,10 @@ const char* timeline_kind_name(TimelineKind k) {
       return "force_event";
     case TimelineKind::kReset:
       return "wire_restart";
+    case TimelineKind::kProlapse:
+      return "prolapse";
+    case TimelineKind::kBuckling:
+      return "buckling";
   }
   return "?";
 }
@@ -88,7 +93,7 @@ void SessionMetrics::begin_pipeline(const DebriefParams& params, const anatomy::
   }
   f_.has_target = f_.has_target || target_ >= 0;
   // the wire of the new pipeline starts afresh
-  if (in_episode_) end_force_episode();
+  end_episodes();
   if (have_last_) {
     ++f_.resets;
     add_event(TimelineKind::kReset, 0, 0, now_ns);
@@ -173,17 +178,69 @@ void SessionMetrics::record_injection(double volume_ml, int64_t now_ns) {
   add_event(TimelineKind::kContrast, volume_ml, 0, now_ns);
 }
 
-void SessionMetrics::end_force_episode() {
-  ++f_.force_events;
-  const double sim_duration_s = last_time_s_ - episode_sim_start_s_;
+void SessionMetrics::update_episode(Episode& e, bool on, double value, double sim_time_s, int64_t now_ns) {
+  if (on) {
+    if (!e.on) {
+      e.on = true;
+      e.start_s = session_s(now_ns);
+      e.sim_start_s = sim_time_s;
+      e.peak = value;
+    }
+    e.peak = std::max(e.peak, value);
+  } else if (e.on) {
+    end_episode(e, sim_time_s);  // it ends at this state
+  }
+}
+
+void SessionMetrics::end_episode(Episode& e, double sim_end_s) {
+  ++e.count;
   // (listed at its start, when it ends: the timeline is sorted by time when it is read)
   if (timeline_count_ < kMaxTimeline) {
-    timeline_[timeline_count_++] = {episode_start_s_, TimelineKind::kForceEvent, episode_peak_n_, sim_duration_s};
+    timeline_[timeline_count_++] = {e.start_s, e.kind, e.peak, sim_end_s - e.sim_start_s};
   } else {
     ++f_.timeline_dropped;
   }
-  in_episode_ = false;
+  e.on = false;
 }
+
+// the wire starts over (a reset, a new scene): what was going on ends with its last state
+void SessionMetrics::end_episodes() {
+  for (Episode* e : {&force_, &fold_, &feed_})
+    if (e->on) end_episode(*e, last_time_s_);
+  feed_count_ = 0;
+}
+
+namespace {
+
+// the point `back_m` along the wire behind its tip (nodes proximal to distal); false when the wire
+// is shorter
+bool point_behind_tip(const std::vector<Eigen::Vector3d>& nodes, double back_m, Eigen::Vector3d* p) {
+  double walked = 0.0;
+  for (size_t i = nodes.size() - 1; i > 0; --i) {
+    const double l = (nodes[i] - nodes[i - 1]).norm();
+    if (walked + l >= back_m && l > 0.0) {
+      *p = nodes[i] + (back_m - walked) / l * (nodes[i - 1] - nodes[i]);
+      return true;
+    }
+    walked += l;
+  }
+  return false;
+}
+
+// the angle (deg) between the wire's last 5 mm and its direction 10-30 mm behind the tip: near 0
+// along a vessel, 180 where the tip has turned back along the wire; 0 for a wire shorter than that
+double fold_angle_deg(const std::vector<Eigen::Vector3d>& nodes) {
+  Eigen::Vector3d p5, p10, p30;
+  if (nodes.size() < 2 || !point_behind_tip(nodes, 5e-3, &p5) || !point_behind_tip(nodes, 10e-3, &p10) ||
+      !point_behind_tip(nodes, 30e-3, &p30))
+    return 0.0;
+  const Eigen::Vector3d tip = nodes.back() - p5, body = p10 - p30;
+  const double n = tip.norm() * body.norm();
+  if (!(n > 0.0)) return 0.0;
+  return std::acos(std::clamp(tip.dot(body) / n, -1.0, 1.0)) * 180.0 / std::numbers::pi;
+}
+
+}  // namespace
 
 // each interval between two wire states is booked with the earlier state's branch and force
 // (the state holds until the next one); a state whose step does not follow the last one's (a
@@ -196,7 +253,7 @@ void SessionMetrics::record_wire(const physics::WorldSnapshot& s, double primary
   const bool follows = have_last_ && s.step > last_step_ && s.time_s >= last_time_s_;
   if (have_last_ && !follows) {
     ++f_.resets;
-    if (in_episode_) end_force_episode();
+    end_episodes();
     add_event(TimelineKind::kReset, 0, 0, now_ns);
   }
   if (follows) {
@@ -216,18 +273,33 @@ void SessionMetrics::record_wire(const physics::WorldSnapshot& s, double primary
   const double force_n = std::isfinite(s.tip_force_n) ? s.tip_force_n : 0.0;
   if (forces_known_) {
     f_.peak_tip_force_n = std::max(f_.peak_tip_force_n, force_n);
-    if (force_n > params_.tip_force_risk_n) {
-      if (!in_episode_) {
-        in_episode_ = true;
-        episode_start_s_ = session_s(now_ns);
-        episode_sim_start_s_ = s.time_s;
-        episode_peak_n_ = 0.0;
+    update_episode(force_, force_n > params_.tip_force_risk_n, force_n, s.time_s, now_ns);
+  }
+  // the wire folded back on itself (a prolapse)
+  const double fold_deg = fold_angle_deg(s.wire_nodes_m);
+  update_episode(fold_, fold_deg > kProlapseDeg, fold_deg, s.time_s, now_ns);
+  // the feed of the last second against the tip's motion through the vessels (a buckling wire
+  // stores the feed as a bend or a loop instead of carrying the tip on)
+  {
+    const FeedSample now{s.time_s, s.insertion_m, s.tip_rest_m};
+    const FeedSample* then = nullptr;
+    for (int k = 0; k < feed_count_; ++k) {
+      const FeedSample& c = feed_samples_[(feed_head_ - 1 - k + 64) % 64];
+      if (now.time_s - c.time_s >= 1.0 - 1e-9) {
+        then = &c;
+        break;
       }
-      episode_peak_n_ = std::max(episode_peak_n_, force_n);
-    } else if (in_episode_) {
-      last_time_s_ = s.time_s;  // the episode ends at this state
-      end_force_episode();
     }
+    double stored_mm = 0.0;
+    if (then) {
+      const double fed_mm = (now.insertion_m - then->insertion_m) * 1e3;
+      const double moved_mm = (now.tip_rest_m - then->tip_rest_m).norm() * 1e3;
+      if (fed_mm >= kBucklingFeedMm && moved_mm < 0.25 * fed_mm) stored_mm = fed_mm - moved_mm;
+    }
+    update_episode(feed_, stored_mm > 0.0, stored_mm, s.time_s, now_ns);
+    feed_samples_[feed_head_] = now;
+    feed_head_ = (feed_head_ + 1) % 64;
+    feed_count_ = std::min(feed_count_ + 1, 64);
   }
   // the track: every stride-th state; full, every other point goes and the stride doubles
   if (++track_skip_ >= track_stride_) {
@@ -281,7 +353,9 @@ void SessionMetrics::figures_without_lists(int64_t now_ns, DebriefFigures* out) 
   o.tip_forces_known = f_.tip_forces_known;
   o.peak_tip_force_n = f_.peak_tip_force_n;
   o.tip_force_above_threshold_s = f_.tip_force_above_threshold_s;
-  o.force_events = f_.force_events + (in_episode_ ? 1 : 0);
+  o.force_events = force_.count + (force_.on ? 1 : 0);
+  o.prolapse_events = fold_.count + (fold_.on ? 1 : 0);
+  o.buckling_events = feed_.count + (feed_.on ? 1 : 0);
   o.wire_states = f_.wire_states;
   o.resets = f_.resets;
   o.timeline_dropped = f_.timeline_dropped;
@@ -296,15 +370,17 @@ DebriefFigures SessionMetrics::figures(int64_t now_ns) const {
   f.timeline.assign(timeline_.begin(), timeline_.begin() + timeline_count_);
   f.track.assign(track_.begin(), track_.begin() + track_count_);
   f.angiogram = angiogram_;
-  // an episode still above the risk force at the end counts
-  if (in_episode_) {
-    ++f.force_events;
+  // an episode still going on at the end counts
+  for (const Episode* e : {&force_, &fold_, &feed_}) {
+    if (!e->on) continue;
     if (f.timeline.size() < kMaxTimeline)
-      f.timeline.push_back(
-          {episode_start_s_, TimelineKind::kForceEvent, episode_peak_n_, last_time_s_ - episode_sim_start_s_});
+      f.timeline.push_back({e->start_s, e->kind, e->peak, last_time_s_ - e->sim_start_s});
     else
       ++f.timeline_dropped;
   }
+  f.force_events = force_.count + (force_.on ? 1 : 0);
+  f.prolapse_events = fold_.count + (fold_.on ? 1 : 0);
+  f.buckling_events = feed_.count + (feed_.on ? 1 : 0);
   std::stable_sort(f.timeline.begin(), f.timeline.end(),
                    [](const TimelineEntry& a, const TimelineEntry& b) { return a.time_s < b.time_s; });
   return f;
@@ -325,6 +401,12 @@ nlohmann::json to_json(const DebriefFigures& f) {
       j["ml"] = e.a;
     } else if (e.kind == TimelineKind::kForceEvent) {
       j["peak_n"] = e.a;
+      j["duration_s"] = e.b;
+    } else if (e.kind == TimelineKind::kProlapse) {
+      j["fold_deg"] = e.a;
+      j["duration_s"] = e.b;
+    } else if (e.kind == TimelineKind::kBuckling) {
+      j["not_taken_up_mm"] = e.a;
       j["duration_s"] = e.b;
     }
     timeline.push_back(std::move(j));
@@ -361,6 +443,8 @@ nlohmann::json to_json(const DebriefFigures& f) {
       {"peak_tip_force_n", f.tip_forces_known ? json(f.peak_tip_force_n) : unknown},
       {"tip_force_above_threshold_s", f.tip_forces_known ? json(f.tip_force_above_threshold_s) : unknown},
       {"force_events", f.tip_forces_known ? json(f.force_events) : unknown},
+      {"prolapse_events", f.prolapse_events},
+      {"buckling_events", f.buckling_events},
       {"wire_states", f.wire_states},
       {"wire_restarts", f.resets},
       {"timeline", timeline},

@@ -36,13 +36,26 @@ struct BeamGeometry {
 BeamGeometry beam_geometry(double source_to_axis_mm, double source_to_image_mm, double detector_width_mm,
                            double detector_height_mm);
 
-enum class TimelineKind : uint8_t { kFluoroOn, kFluoroOff, kCineOn, kCineOff, kCArm, kContrast, kForceEvent, kReset };
+enum class TimelineKind : uint8_t {
+  kFluoroOn,
+  kFluoroOff,
+  kCineOn,
+  kCineOff,
+  kCArm,
+  kContrast,
+  kForceEvent,
+  kReset,
+  kProlapse,
+  kBuckling
+};
 const char* timeline_kind_name(TimelineKind k);
 
 struct TimelineEntry {
   double time_s = 0.0;  // since the session began
   TimelineKind kind = TimelineKind::kFluoroOn;
-  double a = 0.0, b = 0.0;  // C-arm: primary, secondary deg; contrast: ml; force event: peak N, duration s
+  // C-arm: primary, secondary deg; contrast: ml; force event: peak N, duration s; prolapse: the
+  // largest fold, deg, duration s; buckling: the most feed the tip did not take up, mm, duration s
+  double a = 0.0, b = 0.0;
 };
 
 // the tip over the session, for the debrief's pictures: thinned to every 2^k-th state once full
@@ -94,6 +107,10 @@ struct DebriefFigures {
   double peak_tip_force_n = 0.0;
   double tip_force_above_threshold_s = 0.0;
   int force_events = 0;  // episodes above the risk force
+  // the wire folded back: its last 5 mm turned more than kProlapseDeg from its direction 10-30 mm
+  // behind the tip; the feed not reaching the tip: over the last second the hub fed at least
+  // kBucklingFeedMm and the tip moved (through the vessels) less than a quarter of it
+  int prolapse_events = 0, buckling_events = 0;
   int64_t wire_states = 0;
   int resets = 0;  // the wire started over (a reset or a new scene): its path is not joined across
   std::vector<TimelineEntry> timeline;
@@ -108,6 +125,8 @@ class SessionMetrics {
   static constexpr int kMaxTimeline = 8192;
   static constexpr int kMaxPoses = 64;
   static constexpr int kMaxTrack = 16384;
+  static constexpr double kProlapseDeg = 150.0;
+  static constexpr double kBucklingFeedMm = 3.0;
   SessionMetrics();
 
   // a scene's pipeline starts: its thresholds, its tree (the route to the target), whether its
@@ -136,7 +155,18 @@ class SessionMetrics {
 
  private:
   void add_event(TimelineKind kind, double a, double b, int64_t now_ns);
-  void end_force_episode();
+  // an episode of a condition over successive wire states (the tip's force above the risk force,
+  // the wire folded back, the feed not reaching the tip): from the first state that meets it to the
+  // first that does not; listed on the timeline at its start with its peak and duration when it ends
+  struct Episode {
+    TimelineKind kind;
+    bool on = false;
+    double start_s = 0.0, sim_start_s = 0.0, peak = 0.0;
+    int count = 0;
+  };
+  void update_episode(Episode& e, bool on, double value, double sim_time_s, int64_t now_ns);
+  void end_episode(Episode& e, double sim_end_s);
+  void end_episodes();
   double session_s(int64_t now_ns) const;
 
   mutable realtime::PiMutex mutex_;
@@ -157,9 +187,14 @@ class SessionMetrics {
   double last_tip_force_n_ = 0.0;
   // the beam
   bool fluoro_on_ = false, cine_on_ = false;
-  // a force episode above the risk force
-  bool in_episode_ = false;
-  double episode_start_s_ = 0.0, episode_peak_n_ = 0.0, episode_sim_start_s_ = 0.0;
+  Episode force_{TimelineKind::kForceEvent}, fold_{TimelineKind::kProlapse}, feed_{TimelineKind::kBuckling};
+  // the last second or two of the hub's feed and the tip's place in the vessels (a ring)
+  struct FeedSample {
+    double time_s = 0.0, insertion_m = 0.0;
+    Eigen::Vector3d tip_rest_m = Eigen::Vector3d::Zero();
+  };
+  std::array<FeedSample, 64> feed_samples_{};
+  int feed_head_ = 0, feed_count_ = 0;
   DebriefFigures f_;
   std::vector<TimelineEntry> timeline_;  // kMaxTimeline, made up front
   int timeline_count_ = 0;

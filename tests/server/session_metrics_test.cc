@@ -206,6 +206,82 @@ TEST(SessionMetrics, ForceEpisodesAboveTheRiskForceAndTimeAboveTheThreshold) {
     EXPECT_TRUE(j.at(key).is_null()) << key;
 }
 
+// a 60 mm wire along +x at 1 mm nodes whose last `bent_mm` turn round a circle of radius 1.5 mm by
+// `turn_deg` (180: folded back along itself)
+std::vector<Eigen::Vector3d> wire_with_tip_turned(double turn_deg, double bent_mm) {
+  std::vector<Eigen::Vector3d> nodes;
+  const double r = 1.5e-3, straight = 60e-3 - bent_mm * 1e-3;
+  for (double a = 0.0; a <= 60e-3 + 1e-9; a += 1e-3) {
+    if (a <= straight) {
+      nodes.emplace_back(a, 0.0, 0.0);
+      continue;
+    }
+    // round the circle until turned, then straight on
+    const double arc = a - straight, turn = turn_deg * std::numbers::pi / 180.0, on_arc = std::min(arc, r * turn);
+    const double phi = on_arc / r;
+    Eigen::Vector3d p(straight + r * std::sin(phi), r * (1.0 - std::cos(phi)), 0.0);
+    p += (arc - on_arc) * Eigen::Vector3d(std::cos(turn), std::sin(turn), 0.0);
+    nodes.push_back(p);
+  }
+  return nodes;
+}
+
+TEST(SessionMetrics, AWireFoldedBackIsAProlapseATurnIntoABranchIsNot) {
+  SessionMetrics m;
+  m.begin_pipeline(DebriefParams{}, small_tree(), false, BeamGeometry{}, kSecond);
+  int64_t k = 0;
+  const auto hold = [&](const std::vector<Eigen::Vector3d>& nodes, int states) {
+    for (int i = 0; i < states; ++i, ++k) {
+      physics::WorldSnapshot s = state(k, k / 30.0, nodes.back() * 1e3);
+      s.wire_nodes_m = nodes;
+      m.record_wire(s, 0, 0, kSecond + k * kSecond / 30);
+    }
+  };
+  hold(wire_with_tip_turned(0, 10), 10);
+  hold(wire_with_tip_turned(90, 10), 20);   // the tip taken into a side branch at a right angle
+  hold(wire_with_tip_turned(180, 12), 15);  // folded back: the last 5 mm run along -x
+  hold(wire_with_tip_turned(0, 10), 10);
+  const DebriefFigures f = m.figures(5 * kSecond);
+  EXPECT_EQ(f.prolapse_events, 1);
+  int listed = 0;
+  for (const TimelineEntry& e : f.timeline) {
+    if (e.kind != TimelineKind::kProlapse) continue;
+    ++listed;
+    EXPECT_GT(e.a, 170.0) << "the fold (the point 10 mm back lies on the bend: a little short of 180)";
+    EXPECT_NEAR(e.b, 15 / 30.0, 1e-9) << "its duration";
+    EXPECT_NEAR(e.time_s, 30 / 30.0, 1e-6) << "from the first folded state";
+  }
+  EXPECT_EQ(listed, 1);
+}
+
+TEST(SessionMetrics, FeedTheTipDoesNotTakeUpIsBuckling) {
+  // fed 10 mm/s for 3 s; the tip follows but for a second in the middle, when it holds still
+  for (const bool stuck : {false, true}) {
+    SessionMetrics m;
+    m.begin_pipeline(DebriefParams{}, small_tree(), false, BeamGeometry{}, kSecond);
+    for (int k = 0; k <= 90; ++k) {
+      const double t = k / 30.0, fed_mm = 10.0 * t;
+      const double tip_mm = !stuck ? fed_mm : t < 1.0 ? fed_mm : t < 2.0 ? 10.0 : fed_mm - 10.0;
+      physics::WorldSnapshot s = state(k, t, Eigen::Vector3d(tip_mm, 0, 0));
+      s.insertion_m = fed_mm * 1e-3;
+      m.record_wire(s, 0, 0, kSecond + k * kSecond / 30);
+    }
+    const DebriefFigures f = m.figures(5 * kSecond);
+    if (!stuck) {
+      EXPECT_EQ(f.buckling_events, 0) << "the tip takes up the feed";
+      continue;
+    }
+    // over a second's window the tip moves under a quarter of the 10 mm fed from t = 1.75 s (it
+    // stopped at 1 s) until 2.25 s (it moved on at 2 s): one episode of half a second
+    EXPECT_EQ(f.buckling_events, 1);
+    for (const TimelineEntry& e : f.timeline) {
+      if (e.kind != TimelineKind::kBuckling) continue;
+      EXPECT_NEAR(e.b, 0.5, 1.5 / 30) << "its duration";
+      EXPECT_NEAR(e.a, 10.0, 1e-6) << "at most the whole second's feed not taken up";
+    }
+  }
+}
+
 TEST(SessionMetrics, TheBeamsTimeCineRunsAndDoseAtTheReferencePoint) {
   DebriefParams p;  // 50 uGy/mAs at 1 m, 0.15 mAs a fluoroscopy pulse, 1.5 mAs a cine frame
   SessionMetrics m;

@@ -105,7 +105,7 @@ void Gateway::accept() {
       socket.set_option(tcp::no_delay(true), ec);
       if (options_.hub.socket_send_buffer > 0)
         socket.set_option(net::socket_base::send_buffer_size(options_.hub.socket_send_buffer), ec);
-      std::make_shared<HttpSession>(std::move(socket), *hub_, tokens_)->run();
+      std::make_shared<HttpSession>(std::move(socket), *hub_, tokens_, options_.debrief_html)->run();
     }
     accept();
   });

@@ -32,7 +32,8 @@ struct GatewayOptions {
   TrackerOptions tracker;
   KeyboardOptions keyboard;
   bool keyboard_instrument = true;
-  double state_hz = 10;  // state messages per second
+  double state_hz = 10;      // state messages per second
+  std::string debrief_html;  // the server's debrief page on this host, served at /debrief.html ("": none)
 };
 
 struct GatewayCounters {

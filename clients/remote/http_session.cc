@@ -1,5 +1,7 @@
 #include "clients/remote/http_session.h"
 
+#include <fstream>
+
 #include <algorithm>
 #include <cmath>
 #include <boost/beast/websocket.hpp>
@@ -16,8 +18,9 @@ namespace pcisim::remote {
 namespace beast = boost::beast;
 namespace http = beast::http;
 
-HttpSession::HttpSession(boost::asio::ip::tcp::socket&& socket, Hub& hub, const AccessTokens& tokens)
-    : stream_(std::move(socket)), hub_(hub), tokens_(tokens) {}
+HttpSession::HttpSession(boost::asio::ip::tcp::socket&& socket, Hub& hub, const AccessTokens& tokens,
+                         const std::string& debrief_html)
+    : stream_(std::move(socket)), hub_(hub), tokens_(tokens), debrief_html_(debrief_html) {}
 
 void HttpSession::run() {
   read();
@@ -58,6 +61,7 @@ void HttpSession::on_read(beast::error_code ec, size_t) {
     res.keep_alive(keep_alive);
     return respond(std::move(res));
   }
+  if (target_path(sv(req.target())) == "/debrief.html") return debrief(req);
   const WebAsset* asset = find_web_asset(target_path(sv(req.target())));
   if (!asset) {
     auto res = plain(version, http::status::not_found, "not found\n");
@@ -78,6 +82,50 @@ void HttpSession::on_read(beast::error_code ec, size_t) {
   if (req.method() == http::verb::head) res.content_length(asset->body.size());
   res.keep_alive(keep_alive);
   respond(std::move(res));
+}
+
+// the server's debrief page, to a page that holds a token (it is the session's record): read from
+// the file the server writes at the end of a session or when asked (CMD_DEBRIEF)
+void HttpSession::debrief(const http::request<http::string_body>& req) {
+  const unsigned version = req.version();
+  const bool keep_alive = req.keep_alive();
+  const auto done = [&](http::response<http::string_body> res) {
+    res.keep_alive(keep_alive);
+    respond(std::move(res));
+  };
+  std::string token = query_param(sv(req.target()), "token").value_or("");
+  if (token.empty()) token = bearer_token(sv(req[http::field::authorization]));
+  if (token.empty()) return done(plain(version, http::status::unauthorized, "token required\n"));
+  if (!tokens_.role_of(token)) return done(plain(version, http::status::forbidden, "wrong token\n"));
+  if (debrief_html_.empty())
+    return done(plain(version, http::status::not_found, "this gateway serves no debrief (--debrief-html)\n"));
+  std::ifstream in(debrief_html_, std::ios::binary);
+  std::string body;
+  if (in) {
+    // (a page is under a megabyte or so; a file past 16 MB is not the server's)
+    in.seekg(0, std::ios::end);
+    const auto size = static_cast<std::streamoff>(in.tellg());
+    if (size > 0 && size <= (16 << 20)) {
+      body.resize(static_cast<size_t>(size));
+      in.seekg(0);
+      in.read(body.data(), size);
+      if (!in) body.clear();
+    }
+  }
+  if (body.empty())
+    return done(plain(version, http::status::not_found,
+                      "no debrief yet: the server writes it at the end of the session, or when asked\n"));
+  http::response<http::string_body> res{http::status::ok, version};
+  res.set(http::field::server, "pcisim-remote");
+  res.set(http::field::content_type, "text/html; charset=utf-8");
+  res.set(http::field::cache_control, "no-store");
+  // the page is self-contained: its own style and embedded images, no script, nothing fetched
+  res.set("Content-Security-Policy", "default-src 'none'; img-src data:; style-src 'unsafe-inline'");
+  res.set("X-Content-Type-Options", "nosniff");
+  res.set("Referrer-Policy", "no-referrer");
+  if (req.method() == http::verb::get) res.body() = std::move(body);
+  res.prepare_payload();
+  done(std::move(res));
 }
 
 void HttpSession::upgrade(http::request<http::string_body>&& req) {

@@ -78,6 +78,9 @@ int main(int argc, char** argv) {
   app.add_option("--keyboard-rotate-rad-s", o.keyboard.rotate_rad_s, "rotation speed of a held arrow key")
       ->check(CLI::Range(0.01, 20.0))
       ->capture_default_str();
+  app.add_option("--debrief-html", o.debrief_html,
+                 "the server's debrief page (its --debrief-html) on this host: served at /debrief.html to pages "
+                 "with a token, linked from the page's debrief card");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error or off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}))
       ->capture_default_str();

@@ -135,10 +135,13 @@ def run(args):
 
     profile = tempfile.mkdtemp(prefix="pcisim-chromium-")
     try:
+        debrief_page = os.path.join(out, "debrief.html")
+        if os.path.exists(debrief_page):
+            os.remove(debrief_page)
         start("server", [os.path.join(build, "server/pcisim-server"), "--duration", "60", "--lcm-url", url,
-                         "--lcm-image-url", image_url])
+                         "--lcm-image-url", image_url, "--debrief-html", debrief_page])
         remote = start("remote", [os.path.join(build, "clients/pcisim-remote"), "--port", "0", "--token-file", token_file,
-                                  "--lcm-url", url, "--lcm-image-url", image_url])
+                                  "--lcm-url", url, "--lcm-image-url", image_url, "--debrief-html", debrief_page])
         start("chromium", [shutil.which("chromium") or "chromium-browser", "--headless=new", "--no-sandbox", "--disable-gpu",
                            "--disable-dev-shm-usage", "--no-first-run", "--remote-debugging-port=0",
                            "--remote-allow-origins=*", "--user-data-dir=" + profile, "--window-size=1280,860",
@@ -237,6 +240,12 @@ def run(args):
         assert shown[0].endswith(" s") and shown[1].endswith(" mGy") and shown[2].endswith(" mm"), \
             "the debrief's figures on the page: %s" % shown
         print("e2e_remote: debrief so far on the page: beam %s, air kerma %s, tip path %s" % tuple(shown))
+        # "Write debrief" asks the server for its page now (CMD_DEBRIEF); the gateway serves it
+        cdp.click("#debrief-write")
+        status = cdp.wait("fetch('/debrief.html?token=' + encodeURIComponent(sessionStorage.getItem('pcisim-token') || '') + '&t=' + "
+                          "Date.now()).then(r => r.ok ? r.text() : '').then(t => t.includes('Figures') ? 200 : 0)",
+                          10, "the debrief page served")
+        print("e2e_remote: 'Write debrief' -> the server wrote its page, the gateway serves it (%s)" % status)
         shot = os.path.join(out, "remote-client.png")
         cdp.screenshot(shot)
         print("e2e_remote: fluoro time %.1f s, contrast %.0f ml; screenshot %s"

@@ -247,7 +247,7 @@ function showDebrief(d) {
 }
 
 // ---- controls
-const controls = ["pedal", "cine", "contrast", "carm-apply", "pause", "resume", "reset", "kbd-enable"];
+const controls = ["pedal", "cine", "contrast", "carm-apply", "pause", "resume", "reset", "kbd-enable", "debrief-write"];
 function setControls(on) {
   for (const id of controls) $(id).disabled = !on;
   for (const b of document.querySelectorAll(".preset")) b.disabled = !on;
@@ -258,6 +258,13 @@ $("pedal").onclick = () => command("fluoro", { down: !(view.state && view.state.
 $("cine").onclick = () => command("cine", { down: !(view.state && view.state.fluoro.cine_console) });
 $("contrast").onclick = () => command("contrast");
 $("pause").onclick = () => command("pause");
+// the server writes its debrief page at the end of the session, or now when asked; the gateway
+// serves it (to a page holding a token) where it was told the server writes it
+$("debrief-write").onclick = () => command("debrief");
+$("debrief-link").onclick = (e) => {
+  e.preventDefault();
+  window.open("/debrief.html?token=" + encodeURIComponent(token) + "&t=" + Date.now(), "_blank", "noopener");
+};
 $("resume").onclick = () => command("resume");
 $("reset").onclick = () => { if (confirm("Reset the session's wire and world?")) command("reset"); };
 for (const id of ["primary", "secondary"]) {

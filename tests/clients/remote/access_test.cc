@@ -4,6 +4,10 @@
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 #include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
 #include <set>
 
 #include "clients/remote/request_target.h"
@@ -120,6 +124,35 @@ TEST(RemoteAccess, TheBearerSchemeIsCaseInsensitive) {
   TestGateway g;
   WsClient lower;
   EXPECT_EQ(lower.connect(g.port(), "/ws", true, 0, std::string("bearer ") + kObserverToken), 101);
+}
+
+// issue #35: the server's debrief page, served to a page holding a token from the file the server
+// writes (read when asked: a debrief written later is the one served)
+TEST(RemoteAccess, TheDebriefPageNeedsATokenAndIsReadFromTheServersFile) {
+  const std::string path = ::testing::TempDir() + "pcisim-debrief-" + std::to_string(::getpid()) + ".html";
+  std::remove(path.c_str());
+  GatewayOptions o;
+  o.debrief_html = path;
+  TestGateway g(o);
+  EXPECT_EQ(http_get(g.port(), "/debrief.html").result(), http::status::unauthorized);
+  EXPECT_EQ(http_get(g.port(), "/debrief.html?token=nope").result(), http::status::forbidden);
+  const std::string with_token = std::string("/debrief.html?token=") + kObserverToken;
+  const auto none = http_get(g.port(), with_token);
+  EXPECT_EQ(none.result(), http::status::not_found);
+  EXPECT_NE(none.body().find("no debrief yet"), std::string::npos);
+  std::ofstream(path) << "<!DOCTYPE html><html><body>the debrief</body></html>\n";
+  const auto page = http_get(g.port(), with_token);
+  ASSERT_EQ(page.result(), http::status::ok);
+  EXPECT_EQ(page.body(), "<!DOCTYPE html><html><body>the debrief</body></html>\n");
+  EXPECT_EQ(page[http::field::content_type], "text/html; charset=utf-8");
+  EXPECT_NE(std::string(page["Content-Security-Policy"]).find("default-src 'none'"), std::string::npos)
+      << "nothing the page could fetch or run";
+  std::remove(path.c_str());
+  // a gateway told of no page says so
+  TestGateway plain;
+  const auto no_page = http_get(plain.port(), with_token);
+  EXPECT_EQ(no_page.result(), http::status::not_found);
+  EXPECT_NE(no_page.body().find("serves no debrief"), std::string::npos);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include "anatomy/heart/heart_pose.h"
 #include "anatomy/mesh/triangle_mesh.h"
 #include "anatomy/organ/organ.h"
+#include "anatomy/vessel/lesion.h"
 #include "anatomy/vessel/vessel_tree.h"
 #include "anatomy/volume/volume.h"
 
@@ -23,6 +24,7 @@ struct Landmark {
 struct Case {
   std::string name;                // for logs and status
   VesselTree vessels;              // centerlines and radii, metres
+  std::vector<Lesion> lesions;     // the stenoses of those vessels (lesions.json; none: empty)
   TriangleMesh lumen;              // the lumen surface, metres, closed; empty when the case has none
   std::optional<Volume> ct;        // CT in HU, mm
   bool ct_lumen_enhanced = false;  // the CT's lumens hold contrast (a CT angiogram) rather than blood

@@ -287,6 +287,61 @@ std::vector<Eigen::Vector3d> read_fiducials(const std::string& file, const Trian
   return fiducials_m;
 }
 
+void write_lesions(const std::vector<Lesion>& lesions, const std::string& path) {
+  Json list = Json::array();
+  for (const Lesion& l : lesions)
+    list.push_back({{"branch", l.branch},
+                    {"position_mm", l.position_mm},
+                    {"length_mm", l.length_mm},
+                    {"minimal_lumen_diameter_mm", l.minimal_lumen_diameter_mm},
+                    {"reference_diameter_mm", l.reference_diameter_mm},
+                    {"diameter_stenosis_pct", l.diameter_stenosis_pct},
+                    {"calcified_fraction", l.calcified_fraction},
+                    {"eccentricity", l.eccentricity}});
+  std::ofstream out(path);
+  out << Json{{"format", kLesionsFormat}, {"version", kCaseVersion}, {"lesions", list}}.dump(2) << '\n';
+  if (!out) throw CaseError(path + ": cannot write");
+}
+
+// lesions.json: each lesion on a branch of the case's vessels, within it, its figures consistent
+std::vector<Lesion> read_lesions(const std::string& file, const VesselTree& tree) {
+  std::vector<Lesion> lesions;
+  try {
+    const Json doc = json::parse_json_checked(io::read_file(file, kMaxLesionsFileBytes), file);
+    json::JsonReader r(doc, "");
+    if (r.text("format", "") != kLesionsFormat) r.fail("format", fmt::format("expected \"{}\"", kLesionsFormat));
+    r.integer("version", 0, kCaseVersion, kCaseVersion);
+    const Json& list = r.list("lesions");
+    if (list.size() > static_cast<size_t>(kMaxLesions))
+      r.fail("lesions", fmt::format("{} lesions, more than {} (the limit)", list.size(), kMaxLesions));
+    for (size_t i = 0; i < list.size(); ++i) {
+      json::JsonReader lr(list[i], fmt::format("lesions[{}]", i));
+      for (const char* key : {"branch", "position_mm", "length_mm", "minimal_lumen_diameter_mm",
+                              "reference_diameter_mm", "diameter_stenosis_pct"})
+        if (!lr.has(key)) lr.fail(key, "missing");
+      Lesion l;
+      l.branch = lr.text("branch", "");
+      l.position_mm = lr.number("position_mm", -1.0, 0.0, 1e4);
+      l.length_mm = lr.number("length_mm", -1.0, 0.0, 1e4);
+      l.minimal_lumen_diameter_mm = lr.number("minimal_lumen_diameter_mm", -1.0, 0.0, 50.0);
+      l.reference_diameter_mm = lr.number("reference_diameter_mm", -1.0, 0.0, 50.0);
+      l.diameter_stenosis_pct = lr.number("diameter_stenosis_pct", -1.0, 0.0, 100.0);
+      l.calcified_fraction = lr.number("calcified_fraction", 0.0, 0.0, 1.0);
+      l.eccentricity = lr.number("eccentricity", 0.0, 0.0, 1.0);
+      lr.finish();
+      if (const std::string why = validate_lesion(l, tree); !why.empty())
+        throw json::JsonError(fmt::format("lesions[{}].{}", i, why));
+      lesions.push_back(l);
+    }
+    r.finish();
+  } catch (const json::JsonError& e) {
+    throw CaseError(fmt::format("{}: {}", file, e.what()));
+  } catch (const VolumeIoError& e) {
+    throw CaseError(e.what());
+  }
+  return lesions;
+}
+
 // the signed volume of a closed surface (positive when wound counter-clockwise seen from outside)
 double signed_volume_m3(const TriangleMesh& m) {
   double six_v = 0.0;
@@ -349,6 +404,14 @@ Organ read_organ(json::JsonReader o, const fs::path& dir, const std::string& cas
 
 }  // namespace
 
+void write_lesions_json(const std::vector<Lesion>& lesions, const std::string& path) {
+  write_lesions(lesions, path);
+}
+
+std::vector<Lesion> read_lesions_json(const std::string& path, const VesselTree& tree) {
+  return read_lesions(path, tree);
+}
+
 void write_case(const Case& c, const std::string& dir_name) {
   const fs::path dir(dir_name);
   std::error_code ec;
@@ -359,6 +422,10 @@ void write_case(const Case& c, const std::string& dir_name) {
   if (!c.vessels.branches.empty()) {
     write_vessel_tree_json(c.vessels, (dir / "vessels.json").string());
     doc["vessels"] = "vessels.json";
+  }
+  if (!c.lesions.empty()) {
+    write_lesions(c.lesions, (dir / "lesions.json").string());
+    doc["lesions"] = "lesions.json";
   }
   if (!c.lumen.triangles.empty()) {
     write_stl(c.lumen, (dir / "lumen.stl").string(), "pcisim lumen");
@@ -433,7 +500,7 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
     throw CaseError(e.what());
   }
   Case c;
-  std::string vessels_file, ct_file, ct_dicom, organ_surface_file;
+  std::string vessels_file, ct_file, ct_dicom, organ_surface_file, lesions_file;
   try {
     const Json doc = json::parse_json_checked(case_text, case_json);
     json::JsonReader r(doc, "");
@@ -540,6 +607,7 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
       }
       h.finish();
     }
+    if (r.has("lesions")) lesions_file = member_file(dir, case_json, "lesions", r.text("lesions", ""));
     r.list("slicer_centerlines");  // written for viewers, not needed to simulate
     r.text("overview", "");        // a picture for people
     r.finish();
@@ -557,6 +625,10 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
     } catch (const std::runtime_error& e) {
       throw CaseError(e.what());
     }
+  }
+  if (!lesions_file.empty()) {
+    if (c.vessels.branches.empty()) fail(case_json, "lesions", "lesions need the case's vessels (vessels.json)");
+    c.lesions = read_lesions(lesions_file, c.vessels);
   }
   if (!ct_file.empty()) {
     try {

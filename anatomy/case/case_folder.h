@@ -7,6 +7,8 @@
 //   organ.ply      the soft-tissue scene's organ surface (optional), millimetres, LPS: written as
 //                  binary PLY of doubles; read from any mesh file read_mesh reads (STL, PLY, OBJ)
 //   fiducials.json the organ's bead centres (millimetres, LPS)
+//   lesions.json   the vessels' stenoses (optional; anatomy/vessel/lesion.h): branch, position along
+//                  it, length, minimal lumen and reference diameters, % stenosis
 //   slicer/<branch>.mrk.json   each centerline as a 3D Slicer markups curve (written, not read;
 //                              the name made safe: markups_file_stem)
 //   slicer/fiducials.mrk.json  the organ's beads as a 3D Slicer point list (written, not read)
@@ -27,6 +29,12 @@ struct CaseError : std::runtime_error {
 inline constexpr const char* kCaseFormat = "pcisim-case";
 inline constexpr int kCaseVersion = 1;
 inline constexpr const char* kFiducialsFormat = "pcisim-fiducials";  // fiducials.json
+inline constexpr const char* kLesionsFormat = "pcisim-lesions";      // lesions.json
+
+// lesions.json alone (a phantom's truth beside its CT; a case writes it with write_case): throws
+// CaseError naming the file, and on reading the lesion and field that do not fit `tree`
+void write_lesions_json(const std::vector<Lesion>& lesions, const std::string& path);
+std::vector<Lesion> read_lesions_json(const std::string& path, const VesselTree& tree);
 
 // writes the case into `dir` (created; files of the same names are replaced)
 void write_case(const Case& c, const std::string& dir);

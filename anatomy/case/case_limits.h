@@ -43,6 +43,9 @@ inline constexpr int64_t kMaxOrganTriangles = 500'000;
 inline constexpr int kMaxFiducials = 256;
 // named points for people and the C-arm's isocentre (the phantom writes 20)
 inline constexpr int kMaxLandmarks = 1000;
+// lesions.json: a tree has a few; a file that lists more is not a patient's
+inline constexpr int kMaxLesions = 256;
+inline constexpr int64_t kMaxLesionsFileBytes = int64_t{1} << 20;
 // case.json holds names and a few numbers (the phantom's is 4 KB). fiducials.json holds at most
 // kMaxFiducials lines of ~80 bytes; the file may be far larger (read, then refused by its count)
 inline constexpr int64_t kMaxCaseJsonBytes = int64_t{4} << 20;

@@ -23,6 +23,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "anatomy/case/case_folder.h"
 #include "anatomy/vessel/vessel_tree_json.h"
 #include "anatomy/volume/volume_io.h"
 #endif
@@ -556,6 +557,30 @@ double shell_radius_mm(const Matrix3d& rotation, const Matrix3d& heart, double s
 }
 
 }  // namespace
+
+std::vector<Lesion> phantom_cta_lesions(const PhantomCta& phantom, double edge_stenosis_pct) {
+  const PhantomCtaFacts& f = phantom.facts;
+  const int b = phantom.truth.find(f.stenosis_branch);
+  const double e = edge_stenosis_pct / 100.0;
+  if (b < 0 || !(f.stenosis_fraction > e)) return {};
+  // the narrowest point: the truth's point nearest the painted centre, its arc length
+  const auto& pts = phantom.truth.branches[b].points;
+  double best = std::numeric_limits<double>::infinity(), arc = 0.0, at = 0.0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    if (i > 0) arc += 1e3 * (pts[i].position_m - pts[i - 1].position_m).norm();
+    const double d = (1e3 * pts[i].position_m - f.stenosis_center_mm).norm();
+    if (d < best) best = d, at = arc;
+  }
+  Lesion l;
+  l.branch = f.stenosis_branch;
+  l.position_mm = at;
+  l.reference_diameter_mm = 2.0 * f.stenosis_reference_radius_mm;
+  l.minimal_lumen_diameter_mm = l.reference_diameter_mm * (1.0 - f.stenosis_fraction);
+  l.diameter_stenosis_pct = 100.0 * f.stenosis_fraction;
+  // r = r0 (1 - f (1 + cos(2 pi x / L)) / 2): narrowed by at least e where cos >= 2 e / f - 1
+  l.length_mm = f.stenosis_length_mm / kPi * std::acos(std::clamp(2.0 * e / f.stenosis_fraction - 1.0, -1.0, 1.0));
+  return {l};
+}
 
 double distance_to_painted_heart_mm(const PhantomCtaFacts& facts, const Eigen::Vector3d& p_mm) {
   const double r = kPhantomHeartRadiusMm * facts.heart_scale;
@@ -1359,6 +1384,7 @@ void write_phantom_cta(const PhantomCta& cta, const std::string& dir) {
   if (ec) throw std::runtime_error(dir + ": cannot create the folder: " + ec.message());
   write_nrrd(cta.ct, dir + "/ct.nrrd");
   write_vessel_tree_json(cta.truth, dir + "/truth.json");
+  write_lesions_json(phantom_cta_lesions(cta), dir + "/truth-lesions.json");
 
   const PhantomCtaSpec& s = cta.spec;
   const PhantomCtaFacts& f = cta.facts;

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "anatomy/case/case.h"
+#include "anatomy/vessel/lesion.h"
 #include "anatomy/vessel/vessel_tree.h"
 #include "anatomy/volume/volume.h"
 
@@ -172,6 +173,12 @@ struct PhantomCta {
   std::vector<Landmark> landmarks;
   PhantomCtaFacts facts;
 };
+
+// the painted stenosis as a lesion of the truth tree (anatomy/vessel/lesion.h), measured as
+// detect_lesions measures one: at the narrowest point (the raised cosine's centre), MLD
+// 2 r (1 - f) against the reference 2 r, over the extent narrowed by at least edge_stenosis_pct
+// (the raised cosine of length L: L / pi * acos(2 e / f - 1)); none when f does not reach the edge
+std::vector<Lesion> phantom_cta_lesions(const PhantomCta& phantom, double edge_stenosis_pct = 10.0);
 
 // how far p_mm (CT frame) lies from the painted heart's outer surface, the myocardium's sphere
 // (thorax_phantom.h kPhantomHeartRadiusMm x heart_scale about heart_center_mm), unsigned: the truth

@@ -356,6 +356,8 @@ CtaModel build_cta_model(const anatomy::Volume& ct, const std::vector<Vector3d>&
     if (b.parent == 0 && !b.points.empty())
       m.model.landmarks.push_back({b.name + " ostium", b.points.front().position_m});
   }
+  // the stenoses of the traced tree, as QCA measures them on its radius profile (lesions.json)
+  m.model.lesions = anatomy::detect_lesions(m.model.vessels);
   m.model.ct_lumen_enhanced = true;
   return m;
 }

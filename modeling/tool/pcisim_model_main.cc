@@ -132,7 +132,12 @@ int make_phantom(uint32_t seed, bool family, const std::string& out, const std::
                                  (fs::path(out) / "overview.png").string());
   std::printf("  aortic seed: --seed %.1f,%.1f,%.1f\n", cta.aortic_seed_mm.x(), cta.aortic_seed_mm.y(),
               cta.aortic_seed_mm.z());
-  std::printf("done in %.1f s: ct.nrrd, truth.json, phantom.json, overview.png\n", seconds_since(t0));
+  for (const anatomy::Lesion& l : anatomy::phantom_cta_lesions(cta))
+    std::printf("  stenosis: %s at %.1f mm, %.0f %% (MLD %.2f of %.2f mm) over %.1f mm\n", l.branch.c_str(),
+                l.position_mm, l.diameter_stenosis_pct, l.minimal_lumen_diameter_mm, l.reference_diameter_mm,
+                l.length_mm);
+  std::printf("done in %.1f s: ct.nrrd, truth.json, truth-lesions.json, phantom.json, overview.png\n",
+              seconds_since(t0));
   return 0;
 }
 
@@ -525,10 +530,16 @@ int main(int argc, char** argv) {
                                         m.model.name + " - HEART", (fs::path(out_dir) / "heart-fit.png").string());
     modeling::write_model_report((fs::path(out_dir) / "model-report.json").string(), ct_path, *m.model.ct, seed_mm, m,
                                  model_s);
+    for (const anatomy::Lesion& l : m.model.lesions)
+      std::printf("lesion: %s at %.1f mm, %.0f %% diameter stenosis (MLD %.2f of %.2f mm) over %.1f mm\n",
+                  l.branch.c_str(), l.position_mm, l.diameter_stenosis_pct, l.minimal_lumen_diameter_mm,
+                  l.reference_diameter_mm, l.length_mm);
     std::printf(
-        "done: %zu branches; case folder, model-report.json, overview.png%s in %s (%.1f s in all, peak %.0f MiB)\n",
-        m.model.vessels.branches.size(), m.model.heart_vertices_m.cols() > 0 ? " and heart-fit.png" : "",
-        out_dir.c_str(), seconds_since(t0), modeling::peak_memory_mib());
+        "done: %zu branches, %zu lesions; case folder, model-report.json, overview.png%s in %s (%.1f s in all, peak "
+        "%.0f MiB)\n",
+        m.model.vessels.branches.size(), m.model.lesions.size(),
+        m.model.heart_vertices_m.cols() > 0 ? " and heart-fit.png" : "", out_dir.c_str(), seconds_since(t0),
+        modeling::peak_memory_mib());
     return 0;
   } catch (const CLI::ParseError& e) {
     return app.exit(e);

@@ -127,6 +127,12 @@ TEST_F(CaseFolder, WrittenAndReadBackIsTheSameCase) {
   }
 }
 
+TEST_F(CaseFolder, ACaseWithoutLesionsNamesNoLesionsFile) {
+  EXPECT_FALSE(case_json().contains("lesions"));
+  EXPECT_FALSE(fs::exists(dir_ / "lesions.json"));
+  EXPECT_TRUE(read_case(dir_.string()).lesions.empty());
+}
+
 TEST_F(CaseFolder, SlicerCurvesAreLpsMillimetresAlongTheCenterline) {
   const auto& lad = small_case().vessels.branches.at(small_case().vessels.find("LAD"));
   const auto doc = nlohmann::json::parse(std::ifstream(dir_ / "slicer" / "LAD.mrk.json"));
@@ -355,6 +361,66 @@ TEST_F(CaseFolder, ABadVesselFileIsRefusedNamingItsField) {
 }
 
 // ---- a case with an organ (the soft-tissue scene's anatomy) ----
+
+// the small case with two lesions on its LAD (lesions.json, issue #34)
+const Case& case_with_lesions() {
+  static const Case c = [] {
+    Case k = small_case();
+    k.lesions.push_back({"LAD", 12.5, 6.0, 1.1, 3.2, 100.0 * (1.0 - 1.1 / 3.2), 0.25, 0.4});
+    k.lesions.push_back({"LAD", 30.0, 4.0, 0.8, 2.6, 100.0 * (1.0 - 0.8 / 2.6), 0.0, 0.0});
+    return k;
+  }();
+  return c;
+}
+
+class LesionCaseFolder : public CaseFolder {
+ protected:
+  const Case& written() const override { return case_with_lesions(); }
+  nlohmann::json lesions_json() const { return nlohmann::json::parse(std::ifstream(dir_ / "lesions.json")); }
+  void set_lesions_json(const nlohmann::json& j) const { std::ofstream(dir_ / "lesions.json") << j.dump(1); }
+};
+
+TEST_F(LesionCaseFolder, LesionsAreWrittenAndReadBack) {
+  EXPECT_EQ(case_json().at("lesions"), "lesions.json");
+  const Case b = read_case(dir_.string());
+  ASSERT_EQ(b.lesions.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    const Lesion &x = case_with_lesions().lesions[i], &y = b.lesions[i];
+    EXPECT_EQ(y.branch, x.branch);
+    EXPECT_EQ(y.position_mm, x.position_mm);
+    EXPECT_EQ(y.length_mm, x.length_mm);
+    EXPECT_EQ(y.minimal_lumen_diameter_mm, x.minimal_lumen_diameter_mm);
+    EXPECT_EQ(y.reference_diameter_mm, x.reference_diameter_mm);
+    EXPECT_EQ(y.diameter_stenosis_pct, x.diameter_stenosis_pct);
+    EXPECT_EQ(y.calcified_fraction, x.calcified_fraction);
+    EXPECT_EQ(y.eccentricity, x.eccentricity);
+  }
+}
+
+TEST_F(LesionCaseFolder, ALesionThatDoesNotFitTheVesselsIsRefusedNamingIt) {
+  const nlohmann::json original = lesions_json();
+  const auto with = [&](const char* key, const nlohmann::json& value) {
+    nlohmann::json j = original;
+    j["lesions"][1][key] = value;
+    set_lesions_json(j);
+    return refusal();
+  };
+  const std::string file = (dir_ / "lesions.json").string();
+  EXPECT_EQ(with("branch", "XYZ"), file + ": lesions[1].branch: 'XYZ' is not a branch of the case's vessels");
+  EXPECT_EQ(with("diameter_stenosis_pct", 50).rfind(file + ": lesions[1].diameter_stenosis_pct: expected 100", 0), 0u);
+  nlohmann::json j = original;
+  j["lesions"][1]["position_mm"] = 1e4;
+  set_lesions_json(j);
+  EXPECT_NE(refusal().find("lesions[1].position_mm"), std::string::npos) << refusal();
+  j["lesions"][1]["position_mm"] = 30.0;
+  j["lesions"][1].erase("reference_diameter_mm");
+  set_lesions_json(j);
+  EXPECT_EQ(refusal(), file + ": lesions[1].reference_diameter_mm: missing");
+  j = original;
+  j["format"] = "something";
+  set_lesions_json(j);
+  EXPECT_NE(refusal().find("format"), std::string::npos);
+}
 
 class OrganCaseFolder : public CaseFolder {
  protected:

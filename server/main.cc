@@ -1,6 +1,7 @@
 // pcisim-server: the real-time PCI training server (see docs/ and DESIGN.md).
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <optional>
@@ -139,20 +140,30 @@ int main(int argc, char** argv) {
   SessionMetrics metrics;
   // the debrief so far into its files (at the end, and when a session command asks: CMD_DEBRIEF);
   // false when one could not be written
+  // whole or not at all: written beside, then renamed over the last (a gateway serving the page may
+  // read it at any moment)
+  const auto write_whole = [](const std::string& path, const std::string& text) {
+    const std::string part = path + ".part";
+    {
+      std::ofstream out(part);
+      out << text;
+      if (!out.flush()) {
+        spdlog::error("cannot write {}", part);
+        return false;
+      }
+    }
+    std::error_code ec;
+    std::filesystem::rename(part, path, ec);
+    if (ec) spdlog::error("cannot put {} in place: {}", path, ec.message());
+    return !ec;
+  };
   const auto write_debrief = [&](const DebriefFigures& figures) {
     bool ok = true;
-    if (!debrief_path.empty()) {
-      std::ofstream out(debrief_path);
-      out << to_json(figures).dump(2) << "\n";
-      ok = static_cast<bool>(out.flush()) && ok;
-      if (!out) spdlog::error("cannot write the debrief to {}", debrief_path);
-    }
-    if (!debrief_html_path.empty()) {
-      std::ofstream out(debrief_html_path);
-      out << debrief_html(figures, reference ? &*reference : nullptr, "pcisim debrief: " + scene_name);
-      ok = static_cast<bool>(out.flush()) && ok;
-      if (!out) spdlog::error("cannot write the debrief page to {}", debrief_html_path);
-    }
+    if (!debrief_path.empty()) ok = write_whole(debrief_path, to_json(figures).dump(2) + "\n") && ok;
+    if (!debrief_html_path.empty())
+      ok = write_whole(debrief_html_path,
+                       debrief_html(figures, reference ? &*reference : nullptr, "pcisim debrief: " + scene_name)) &&
+           ok;
     return ok;
   };
   // a scene loaded over LCM is built while the running one goes on, then takes over; --duration

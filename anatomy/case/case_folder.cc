@@ -311,6 +311,7 @@ std::vector<Lesion> read_lesions(const std::string& file, const VesselTree& tree
     json::JsonReader r(doc, "");
     if (r.text("format", "") != kLesionsFormat) r.fail("format", fmt::format("expected \"{}\"", kLesionsFormat));
     r.integer("version", 0, kCaseVersion, kCaseVersion);
+    if (!r.has("lesions")) r.fail("lesions", "missing (a list of lesions, empty for none)");
     const Json& list = r.list("lesions");
     if (list.size() > static_cast<size_t>(kMaxLesions))
       r.fail("lesions", fmt::format("{} lesions, more than {} (the limit)", list.size(), kMaxLesions));
@@ -424,6 +425,10 @@ void write_case(const Case& c, const std::string& dir_name) {
     doc["vessels"] = "vessels.json";
   }
   if (!c.lesions.empty()) {
+    // a case that would be refused on reading is not written
+    for (size_t i = 0; i < c.lesions.size(); ++i)
+      if (const std::string why = validate_lesion(c.lesions[i], c.vessels); !why.empty())
+        throw CaseError(fmt::format("{}: lesions[{}].{}", (dir / "lesions.json").string(), i, why));
     write_lesions(c.lesions, (dir / "lesions.json").string());
     doc["lesions"] = "lesions.json";
   }

@@ -571,6 +571,9 @@ std::vector<Lesion> phantom_cta_lesions(const PhantomCta& phantom, double edge_s
     const double d = (1e3 * pts[i].position_m - f.stenosis_center_mm).norm();
     if (d < best) best = d, at = arc;
   }
+  // a branch the grid cut short of the stenosis, or through it, has no whole lesion to report
+  const double half_mm = 0.5 * f.stenosis_length_mm;
+  if (!(best < 0.5) || at - half_mm < 0.0 || at + half_mm > arc) return {};
   Lesion l;
   l.branch = f.stenosis_branch;
   l.position_mm = at;

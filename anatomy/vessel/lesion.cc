@@ -77,7 +77,7 @@ std::vector<Lesion> detect_lesions(const VesselTree& tree, const LesionDetection
       ds[i] = ref > 0.0 ? 100.0 * (1.0 - d[i] / ref) : 0.0;
     }
     for (size_t i = 0; i < n;) {
-      if (ds[i] < options.edge_stenosis_pct) {
+      if (!(ds[i] >= options.edge_stenosis_pct)) {  // (NaN too: a radius that is not a number)
         ++i;
         continue;
       }

@@ -105,7 +105,10 @@ void HttpSession::debrief(const http::request<http::string_body>& req) {
     // (a page is under a megabyte or so; a file past 16 MB is not the server's)
     in.seekg(0, std::ios::end);
     const auto size = static_cast<std::streamoff>(in.tellg());
-    if (size > 0 && size <= (16 << 20)) {
+    if (size > (16 << 20))
+      return done(plain(version, http::status::internal_server_error,
+                        "the debrief file is over 16 MB: not the server's page\n"));
+    if (size > 0) {
       body.resize(static_cast<size_t>(size));
       in.seekg(0);
       in.read(body.data(), size);
@@ -120,11 +123,14 @@ void HttpSession::debrief(const http::request<http::string_body>& req) {
   res.set(http::field::content_type, "text/html; charset=utf-8");
   res.set(http::field::cache_control, "no-store");
   // the page is self-contained: its own style and embedded images, no script, nothing fetched
-  res.set("Content-Security-Policy", "default-src 'none'; img-src data:; style-src 'unsafe-inline'");
+  res.set("Content-Security-Policy",
+          "default-src 'none'; img-src data:; style-src 'unsafe-inline'; frame-ancestors 'none'; sandbox");
   res.set("X-Content-Type-Options", "nosniff");
   res.set("Referrer-Policy", "no-referrer");
+  const size_t bytes = body.size();
   if (req.method() == http::verb::get) res.body() = std::move(body);
   res.prepare_payload();
+  if (req.method() == http::verb::head) res.content_length(bytes);
   done(std::move(res));
 }
 

@@ -297,9 +297,13 @@ void SessionMetrics::record_wire(const physics::WorldSnapshot& s, double primary
       if (fed_mm >= kBucklingFeedMm && moved_mm < 0.25 * fed_mm) stored_mm = fed_mm - moved_mm;
     }
     update_episode(feed_, stored_mm > 0.0, stored_mm, s.time_s, now_ns);
-    feed_samples_[feed_head_] = now;
-    feed_head_ = (feed_head_ + 1) % 64;
-    feed_count_ = std::min(feed_count_ + 1, 64);
+    // the ring spans two seconds at any physics rate: a sample every 1/32 s at most
+    const bool spaced = feed_count_ == 0 || now.time_s - feed_samples_[(feed_head_ + 63) % 64].time_s >= 1.0 / 32;
+    if (spaced) {
+      feed_samples_[feed_head_] = now;
+      feed_head_ = (feed_head_ + 1) % 64;
+      feed_count_ = std::min(feed_count_ + 1, 64);
+    }
   }
   // the track: every stride-th state; full, every other point goes and the stride doubles
   if (++track_skip_ >= track_stride_) {

@@ -417,6 +417,10 @@ TEST_F(LesionCaseFolder, ALesionThatDoesNotFitTheVesselsIsRefusedNamingIt) {
   set_lesions_json(j);
   EXPECT_EQ(refusal(), file + ": lesions[1].reference_diameter_mm: missing");
   j = original;
+  j.erase("lesions");
+  set_lesions_json(j);
+  EXPECT_NE(refusal().find("lesions: missing"), std::string::npos) << refusal();
+  j = original;
   j["format"] = "something";
   set_lesions_json(j);
   EXPECT_NE(refusal().find("format"), std::string::npos);

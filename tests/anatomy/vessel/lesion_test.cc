@@ -72,6 +72,10 @@ TEST(Lesion, AHealthyTaperAndAMildNarrowingAreNone) {
   milder.min_stenosis_pct = 15.0;
   EXPECT_EQ(detect_lesions(tube(60.0, 2.0, 1.6, {{30.0, 8.0, 0.2}}), milder).size(), 1u);
   EXPECT_TRUE(detect_lesions(tube(4.0, 2.0, 2.0, {{2.0, 2.0, 0.9}})).empty()) << "too short a branch to refer to";
+  // a narrowing that reaches within 2 mm of the branch's start or end has no healthy wall beyond it
+  EXPECT_TRUE(detect_lesions(tube(40.0, 2.0, 1.6, {{1.5, 4.0, 0.6}})).empty()) << "at the ostium";
+  EXPECT_TRUE(detect_lesions(tube(40.0, 2.0, 1.6, {{39.0, 4.0, 0.6}})).empty()) << "at the end";
+  EXPECT_EQ(detect_lesions(tube(40.0, 2.0, 1.6, {{6.0, 4.0, 0.6}})).size(), 1u) << "clear of both";
 }
 
 TEST(Lesion, AValidatorNamesTheFieldThatDoesNotFit) {

@@ -66,6 +66,8 @@ std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOption
   const int arm_samples = std::max(2, static_cast<int>(std::lround(o.arm_mm / o.sample_spacing_mm)));
   const int gap_samples = static_cast<int>(std::lround(o.crossing_gap_mm / o.sample_spacing_mm));
   const int skip = static_cast<int>(std::lround(o.arm_skip_mm / o.sample_spacing_mm));
+  const int far_samples = std::max(2, static_cast<int>(std::lround(o.far_arm_mm / o.sample_spacing_mm)));
+  const int far_skip = static_cast<int>(std::lround(o.far_skip_mm / o.sample_spacing_mm));
   for (size_t p = 0; p < b.size(); ++p) {
     const ModelBranch& parent = b[p];
     for (size_t c = 0; c < b.size(); ++c) {
@@ -75,17 +77,40 @@ std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOption
       // the arms at this junction: the vessel onwards (if it goes on), the children leaving near j
       struct Arm {
         Eigen::Vector3d dir;
-        int child;  // -1: the vessel's own continuation
+        Eigen::Vector3d far;  // past far_skip_mm; zero on an arm too short
+        int child;            // -1: the vessel's own continuation
+        // the child of the vessel this arm leaves (cut with it: the arm of an arm, family seed
+        // 12, where cutting the arm alone left its parent, the crossing vein's other arm); -1 when
+        // it leaves the vessel. Such an arm never carries the vessel on
+        int via = -1;
       };
       const Eigen::Vector3d incoming = -arm(parent, j - skip, -arm_samples);
       std::vector<Arm> arms;
       // (against the vessel's end as a cut at this junction left it: a second child near it is no
       // pair with the onward line already cut back)
-      if (j + skip + arm_samples < end[p]) arms.push_back({arm(parent, j + skip, arm_samples), -1});
+      if (j + skip + arm_samples < end[p]) {
+        const bool far = j + far_skip + far_samples < end[p];
+        arms.push_back({arm(parent, j + skip, arm_samples),
+                        far ? arm(parent, j + far_skip, far_samples) : Eigen::Vector3d::Zero(), -1});
+      }
+      auto long_enough = [&](size_t d) { return static_cast<int>(b[d].points_mm.size()) > skip + arm_samples; };
+      auto far_dir = [&](size_t d) {
+        return static_cast<int>(b[d].points_mm.size()) > far_skip + far_samples ? arm(b[d], far_skip, far_samples)
+                                                                                : Eigen::Vector3d::Zero();
+      };
       for (size_t d = 0; d < b.size(); ++d) {
-        if (b[d].parent == static_cast<int>(p) && !drop[d] && std::abs(b[d].parent_point - j) <= gap_samples &&
-            static_cast<int>(b[d].points_mm.size()) > skip + arm_samples)
-          arms.push_back({arm(b[d], skip, arm_samples), static_cast<int>(d)});
+        if (b[d].parent != static_cast<int>(p) || drop[d]) continue;
+        const int gap = std::abs(b[d].parent_point - j);
+        if (gap > gap_samples) continue;
+        if (long_enough(d)) arms.push_back({arm(b[d], skip, arm_samples), far_dir(d), static_cast<int>(d)});
+        // a child leaving that arm within the gap of the junction is an arm of it too: the tracer
+        // may follow one arm of a crossing vein and leave its other arm from there (family seed
+        // 2: a vein over OM1 traced as OM1-1 and OM1-1-1, leaving OM1-1's second sample)
+        for (size_t g = 0; g < b.size(); ++g) {
+          if (b[g].parent == static_cast<int>(d) && !drop[g] && gap + b[g].parent_point <= gap_samples &&
+              long_enough(g))
+            arms.push_back({arm(b[g], skip, arm_samples), far_dir(g), static_cast<int>(g), static_cast<int>(d)});
+        }
       }
       // two opposite arms across the vessel, a third carrying it on: of the pairs that qualify, the
       // most nearly opposite (a vein is straighter through the junction than a side branch with
@@ -95,14 +120,31 @@ std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOption
       double best_angle = 0.0;
       for (size_t x = 0; x < arms.size(); ++x) {
         for (size_t y = x + 1; y < arms.size(); ++y) {
-          const double apart = angle_deg(arms[x].dir, arms[y].dir);
-          if (apart < o.opposite_deg || apart <= best_angle) continue;
-          if (angle_deg(incoming, arms[x].dir) < o.across_deg || angle_deg(incoming, arms[y].dir) < o.across_deg)
-            continue;
+          // near the junction, or further out where the arms have left its blob and lie on the
+          // crossing vessel itself (family seed 2: a vein over OM1 traced from 8 mm before the
+          // crossing, its arms 50 deg apart over 2-6 mm and 165 deg over 6-12 mm)
+          auto qualifies = [&](const Eigen::Vector3d& u, const Eigen::Vector3d& v, double opposite) {
+            if (u.isZero() || v.isZero() || angle_deg(u, v) < opposite) return false;
+            return angle_deg(incoming, u) >= o.across_deg && angle_deg(incoming, v) >= o.across_deg;
+          };
+          double apart = 0.0, off = 0.0;  // off: the nearer of the pair to the incoming line
+          if (qualifies(arms[x].dir, arms[y].dir, o.opposite_deg)) {
+            apart = angle_deg(arms[x].dir, arms[y].dir);
+            off = std::min(angle_deg(incoming, arms[x].dir), angle_deg(incoming, arms[y].dir));
+          }
+          if (qualifies(arms[x].far, arms[y].far, o.far_opposite_deg) && angle_deg(arms[x].far, arms[y].far) > apart) {
+            apart = angle_deg(arms[x].far, arms[y].far);
+            off = std::min(angle_deg(incoming, arms[x].far), angle_deg(incoming, arms[y].far));
+          }
+          if (apart == 0.0 || apart <= best_angle) continue;
           bool goes_on = false;
           int onward_from = j;  // the last sample an onward arm leaves from
           for (size_t z = 0; z < arms.size(); ++z) {
-            if (z == x || z == y || angle_deg(incoming, arms[z].dir) >= o.on_deg) continue;
+            // within on_deg of the incoming line and nearer it than either crossing arm where
+            // they were judged (family seed 6: D1 bends by 48 deg where a vein crosses it at 64
+            // and 112 deg)
+            const double on = angle_deg(incoming, arms[z].dir);
+            if (z == x || z == y || arms[z].via >= 0 || on >= o.on_deg || on >= off) continue;
             goes_on = true;
             if (arms[z].child >= 0) onward_from = std::max(onward_from, b[arms[z].child].parent_point);
           }
@@ -116,7 +158,7 @@ std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOption
       if (best_x < 0) continue;
       for (const Arm* a : {&arms[best_x], &arms[best_y]}) {
         if (a->child >= 0) {
-          drop[a->child] = true;
+          drop[a->via >= 0 ? a->via : a->child] = true;
         } else {
           // the vessel's own line went onto the crossing one: cut back to the crossing, keeping
           // the sample the onward arm leaves from

@@ -30,17 +30,21 @@ struct BranchCheckOptions {
   double tissue_hu = 40;        // contrast is HU above this
   double min_radius_mm = 1.0;   // samples narrower than this are not compared
   double abrupt_end_radius_mm = 0.8;
-  // a crossing: arms leaving within crossing_gap_mm of each other along the vessel, their
+  // a crossing: arms leaving within crossing_gap_mm of each other along the vessel (or leaving
+  // such an arm within crossing_gap_mm of the junction, counted along both), their
   // directions over arm_mm past their first arm_skip_mm (an arm, the incoming vessel included,
   // shorter than both together is not judged); opposite when more than opposite_deg apart, across the
   // vessel when more than across_deg from its incoming direction; the vessel goes on along an arm
-  // within on_deg of its incoming direction
+  // within on_deg of its incoming direction, and nearer it than either of the pair
   double crossing_gap_mm = 3.0, arm_mm = 4.0;
   // each arm's direction is taken past its first arm_skip_mm: there the traced lines bend into
   // the junction's blob of lumen (family seed 2: a vein crossing the RCA, its arms 117 deg apart
   // over their first 4 mm, 167 deg from 2 to 6 mm)
   double arm_skip_mm = 2.0;
-  double opposite_deg = 130, across_deg = 35, on_deg = 45;
+  double opposite_deg = 130, across_deg = 35, on_deg = 60;
+  // and over far_arm_mm past far_skip_mm, where the arms have left the junction's blob: opposite
+  // when more than far_opposite_deg apart there
+  double far_skip_mm = 6.0, far_arm_mm = 6.0, far_opposite_deg = 150;
   double sample_spacing_mm = 0.5;  // of the branches' samples (build_cta_model sets the spline's)
   // a branch beside its parent: at least parallel_min_mm long, its course past its first
   // parallel_skip_mm within parallel_max_deg of the parent's direction where it leaves (either

@@ -11,6 +11,7 @@ namespace pcisim::modeling {
 namespace {
 
 using Eigen::Vector3d;
+constexpr double kPi = 3.14159265358979323846;
 
 // a straight branch from `from` along `dir` for `length_mm`, samples 0.5 mm apart, radius 1 mm
 ModelBranch line(const Vector3d& from, const Vector3d& dir, double length_mm, int parent = -1, int parent_point = -1) {
@@ -97,6 +98,7 @@ TEST(BranchChecks, ACrossingIsJudgedPastTheJunctionsBendAndTakesItsMostOppositeP
   vein.branches.push_back(bent_arm({0, -1, 0}, 40));
   BranchCheckOptions at_the_junction;
   at_the_junction.arm_skip_mm = 0;
+  at_the_junction.far_opposite_deg = 181;  // the far window off: never that far apart
   ModelTree unskipped = vein;
   EXPECT_TRUE(drop_crossings(&unskipped, at_the_junction).empty());
   ModelTree t = vein;
@@ -109,6 +111,77 @@ TEST(BranchChecks, ACrossingIsJudgedPastTheJunctionsBendAndTakesItsMostOppositeP
   EXPECT_NE(notes[0].find("180 deg"), std::string::npos) << notes[0];
   ASSERT_EQ(t.branches.size(), 2u);
   EXPECT_EQ(t.branches[1].parent_point, 38);  // D
+}
+
+// a crossing as family seed 2 traced one over OM1: the tracer left the vessel 8 mm before the
+// crossing (the vein runs beside it there), followed one vein arm, and left the other arm from
+// that arm's second sample. Over 2-6 mm the two arms are ~100 deg apart; over 6-12 mm, on the
+// vein itself, 180 deg: cut, with the branch beyond the first arm. The same with a real side
+// branch dividing at its second sample (a Y, 80 deg apart) is left alone
+TEST(BranchChecks, ACrossingTracedFromBeforeItAndAsAnArmOfAnArmIsCutAway) {
+  // from `from` 4 mm on to the vein beside the vessel (at x 24 mm, 1 mm off its axis), then along
+  // it (+-y) for 20 mm
+  auto onto_vein = [](const Vector3d& from, double side, int parent, int parent_point) {
+    const Vector3d to(24, side, 0);
+    ModelBranch b = line(from, to - from, (to - from).norm(), parent, parent_point);
+    const ModelBranch on = line(b.points_mm.back(), {0, side, 0}, 20);
+    b.points_mm.insert(b.points_mm.end(), on.points_mm.begin() + 1, on.points_mm.end());
+    b.radius_mm.assign(b.points_mm.size(), 1.0);
+    return b;
+  };
+  ModelTree t;
+  t.branches.push_back(line({0, 0, 0}, {1, 0, 0}, 40));
+  t.branches.push_back(onto_vein({20, 0, 0}, +1, 0, 40));
+  t.branches.push_back(onto_vein(t.branches[1].points_mm[1], -1, 1, 1));
+  t.branches.push_back(line(t.branches[1].points_mm[20], {0, 0, 1}, 10, 1, 20));  // beyond: goes too
+  t.branches.push_back(line({34, 0, 0}, {1, 1, 0}, 10, 0, 68));                   // a real side branch
+  BranchCheckOptions near_only;
+  near_only.far_opposite_deg = 181;
+  ModelTree judged_near = t;
+  EXPECT_TRUE(drop_crossings(&judged_near, near_only).empty());
+  const auto notes = drop_crossings(&t, BranchCheckOptions{});
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("180 deg"), std::string::npos) << notes[0];
+  ASSERT_EQ(t.branches.size(), 2u);
+  EXPECT_EQ(t.branches[0].points_mm.size(), 81u);  // the vessel whole
+  EXPECT_EQ(t.branches[1].parent_point, 68);       // the side branch kept
+
+  ModelTree y;
+  y.branches.push_back(line({0, 0, 0}, {1, 0, 0}, 40));
+  y.branches.push_back(line({20, 0, 0}, {0, 1, 0}, 1, 0, 40));
+  const Vector3d fork = y.branches[1].points_mm[1];
+  ModelBranch left = line(fork, {-0.64, 0.77, 0}, 20, 1, 1);
+  left.points_mm.insert(left.points_mm.begin(), y.branches[1].points_mm.front());
+  left.radius_mm.push_back(1.0);
+  left.parent = 0;
+  left.parent_point = 40;
+  y.branches[1] = left;                                         // the side branch, on to the left
+  y.branches.push_back(line(fork, {0.64, 0.77, 0}, 20, 1, 1));  // its daughter, 80 deg off it
+  EXPECT_TRUE(drop_crossings(&y, BranchCheckOptions{}).empty());
+  EXPECT_EQ(y.branches.size(), 3u);
+}
+
+// the vessel bends where a vein crosses it (family seed 6: D1 turns 48 deg, the vein's arms 64
+// and 112 deg off its incoming line): the vessel still goes on, along the arm nearest its line,
+// and the crossing is cut. Where a third arm is farther from the line than one of the pair (a
+// trifurcation: arms 50 and 130 deg off, the third 55), nothing is
+TEST(BranchChecks, AVesselThatBendsAtACrossingStillGoesOn) {
+  auto junction = [](double arm_deg, double onward_deg) {
+    const double a = arm_deg * kPi / 180, w = onward_deg * kPi / 180;
+    ModelTree t;
+    t.branches.push_back(line({0, 0, 0}, {1, 0, 0}, 20));
+    t.branches.push_back(line({20, 0, 0}, {std::cos(w), 0, std::sin(w)}, 20, 0, 40));  // onwards
+    t.branches.push_back(line({20, 0, 0}, {std::cos(a), std::sin(a), 0}, 15, 0, 40));
+    t.branches.push_back(line({20, 0, 0}, {-std::cos(a), -std::sin(a), 0}, 15, 0, 40));
+    return t;
+  };
+  ModelTree bend = junction(64, 48);
+  ASSERT_EQ(drop_crossings(&bend, BranchCheckOptions{}).size(), 1u);
+  ASSERT_EQ(bend.branches.size(), 2u);
+  EXPECT_NEAR(bend.branches[1].points_mm.back().z(), 20 * std::sin(48 * kPi / 180), 1e-9);
+  ModelTree trifurcation = junction(50, 55);
+  EXPECT_TRUE(drop_crossings(&trifurcation, BranchCheckOptions{}).empty());
+  EXPECT_EQ(trifurcation.branches.size(), 4u);
 }
 
 // what is not a crossing: a bifurcation (the vessel ends in two daughters 80 deg apart), two side

@@ -85,6 +85,14 @@ std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOption
         int via = -1;
       };
       const Eigen::Vector3d incoming = -arm(parent, j - skip, -arm_samples);
+      // median radii: the vessel's over the far window before the junction, an arm's past its skip
+      auto median_radius = [](const ModelBranch& br, int from, int to) {
+        std::vector<double> r;
+        for (int i = std::max(0, from); i < std::min(to, static_cast<int>(br.radius_mm.size())); ++i)
+          r.push_back(br.radius_mm[i]);
+        return r.empty() ? 0.0 : realtime::upper_median_in_place(std::span<double>(r));
+      };
+      const double incoming_radius = median_radius(parent, j - far_skip - far_samples, j - skip);
       std::vector<Arm> arms;
       // (against the vessel's end as a cut at this junction left it: a second child near it is no
       // pair with the onward line already cut back)
@@ -97,6 +105,11 @@ std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOption
       auto far_dir = [&](size_t d) {
         return static_cast<int>(b[d].points_mm.size()) > far_skip + far_samples ? arm(b[d], far_skip, far_samples)
                                                                                 : Eigen::Vector3d::Zero();
+      };
+      auto arm_radius = [&](const Arm& a) {
+        const ModelBranch& br = a.child >= 0 ? b[a.child] : parent;
+        const int from = a.child >= 0 ? skip : j + skip;
+        return median_radius(br, from, from + far_skip + far_samples - skip);
       };
       for (size_t d = 0; d < b.size(); ++d) {
         if (b[d].parent != static_cast<int>(p) || drop[d]) continue;
@@ -117,6 +130,7 @@ std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOption
       // one of its arms: family seed 7, where D1 leaves the LAD 5 mm from a vein crossing it, and
       // D1 went too when every pair was cut)
       int best_x = -1, best_y = -1, best_onward_from = j;
+      bool best_goes_on = true;
       double best_angle = 0.0;
       for (size_t x = 0; x < arms.size(); ++x) {
         for (size_t y = x + 1; y < arms.size(); ++y) {
@@ -148,11 +162,17 @@ std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOption
             goes_on = true;
             if (arms[z].child >= 0) onward_from = std::max(onward_from, b[arms[z].child].parent_point);
           }
-          if (!goes_on) continue;
+          // or nothing goes on but both arms are much wider than the vessel reaching them: a
+          // small artery that ends against a vein crossing it (family seed 20: an OM of radius
+          // 0.7 mm meeting a vein of 1.4; an artery's daughters are narrower than their parent)
+          if (!goes_on && !(arm_radius(arms[x]) > o.wider_ratio * incoming_radius &&
+                            arm_radius(arms[y]) > o.wider_ratio * incoming_radius))
+            continue;
           best_x = static_cast<int>(x);
           best_y = static_cast<int>(y);
           best_angle = apart;
           best_onward_from = onward_from;
+          best_goes_on = goes_on;
         }
       }
       if (best_x < 0) continue;
@@ -166,11 +186,10 @@ std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOption
         }
       }
       const Eigen::Vector3d& at = parent.points_mm[j];
-      notes.push_back(
-          fmt::format("cut away a vessel crossing over the tree at ({:.1f}, {:.1f}, {:.1f}) mm: two arms leave "
-                      "there {:.0f} deg "
-                      "apart, across the vessel, which goes on (a vein crossing an artery)",
-                      at.x(), at.y(), at.z(), best_angle));
+      notes.push_back(fmt::format(
+          "cut away a vessel crossing over the tree at ({:.1f}, {:.1f}, {:.1f}) mm: two arms leave "
+          "there {:.0f} deg apart, across the vessel, {} (a vein crossing an artery)",
+          at.x(), at.y(), at.z(), best_angle, best_goes_on ? "which goes on" : "which ends there, narrower than both"));
     }
   }
   if (!notes.empty()) prune(tree, drop, end);

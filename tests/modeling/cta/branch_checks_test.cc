@@ -184,6 +184,31 @@ TEST(BranchChecks, AVesselThatBendsAtACrossingStillGoesOn) {
   EXPECT_EQ(trifurcation.branches.size(), 4u);
 }
 
+// a small artery (radius 0.7 mm) that ends against a vein crossing it (radius 1.4): nothing goes
+// on, but both arms are twice its width (family seed 20), so they are cut and the vessel ends at
+// the junction. A T of daughters narrower than their parent (0.6 mm) is a branching: kept
+TEST(BranchChecks, AVesselEndingAgainstAWiderOneIsCutThere) {
+  auto tee = [](double arm_radius_mm) {
+    ModelTree t;
+    t.branches.push_back(line({0, 0, 0}, {1, 0, 0}, 20));
+    t.branches.back().radius_mm.assign(t.branches.back().points_mm.size(), 0.7);
+    for (double side : {1.0, -1.0}) {
+      t.branches.push_back(line({20, 0, 0}, {0, side, 0}, 20, 0, 40));
+      t.branches.back().radius_mm.assign(t.branches.back().points_mm.size(), arm_radius_mm);
+    }
+    return t;
+  };
+  ModelTree vein = tee(1.4);
+  const auto notes = drop_crossings(&vein, BranchCheckOptions{});
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("ends there"), std::string::npos) << notes[0];
+  ASSERT_EQ(vein.branches.size(), 1u);
+  EXPECT_EQ(vein.branches[0].points_mm.size(), 41u);
+  ModelTree branching = tee(0.6);
+  EXPECT_TRUE(drop_crossings(&branching, BranchCheckOptions{}).empty());
+  EXPECT_EQ(branching.branches.size(), 3u);
+}
+
 // what is not a crossing: a bifurcation (the vessel ends in two daughters 80 deg apart), two side
 // branches leaving one point 90 deg apart (a diagonal and a septal), and opposite arms where the
 // vessel does not go on

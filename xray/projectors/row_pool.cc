@@ -10,15 +10,7 @@ namespace pcisim::xray {
 RowPool::RowPool(int threads) {
   if (threads <= 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   workers_.reserve(threads - 1);
-  // a worker inherits the nice value of the thread that made the pool: one made while a scene is
-  // built below the loops' priority (the next scene's, on the server's builder thread) would keep
-  // it for good, so each takes the main thread's (best effort: lowering needs CAP_SYS_NICE)
-  const int nice = ::getpriority(PRIO_PROCESS, static_cast<id_t>(::getpid()));
-  for (int t = 1; t < threads; ++t)
-    workers_.emplace_back([this, nice] {
-      ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), nice);
-      work();
-    });
+  for (int t = 1; t < threads; ++t) workers_.emplace_back([this] { work(); });
 }
 
 RowPool::~RowPool() {
@@ -35,8 +27,13 @@ void RowPool::drain() {
 }
 
 void RowPool::run(int rows, RowFn fn, void* ctx) {
+  // the workers run the job at the caller's nice value: a scene built below the loops' priority
+  // (a reset's or the next scene's, on a builder thread) projects its background there too, and
+  // the same pool's frames later run at the x-ray thread's
+  const int nice = ::getpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()));
   {
     std::lock_guard lock(mutex_);
+    nice_ = nice;
     fn_ = fn;
     ctx_ = ctx;
     rows_ = rows;
@@ -52,13 +49,18 @@ void RowPool::run(int rows, RowFn fn, void* ctx) {
 
 void RowPool::work() {
   uint64_t seen = 0;
+  int my_nice = ::getpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()));
   for (;;) {
+    int nice = 0;
     {
       std::unique_lock lock(mutex_);
       wake_.wait(lock, [&] { return stop_ || generation_ != seen; });
       if (stop_) return;
       seen = generation_;
+      nice = nice_;
     }
+    // (best effort: raising a thread's priority again needs CAP_SYS_NICE)
+    if (nice != my_nice && ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), nice) == 0) my_nice = nice;
     drain();
     {
       std::lock_guard lock(mutex_);

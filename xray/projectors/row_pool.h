@@ -1,6 +1,7 @@
 #pragma once
 // A fixed pool of std::threads that runs "for each row" jobs: rows are handed out through an
-// atomic counter, the calling thread works too. Threads start once; a job allocates nothing.
+// atomic counter, the calling thread works too, the workers at its nice value. Threads start once;
+// a job allocates nothing.
 #include <atomic>
 #include <condition_variable>
 #include <mutex>
@@ -41,6 +42,7 @@ class RowPool {
   RowFn fn_ = nullptr;
   void* ctx_ = nullptr;
   int rows_ = 0;
+  int nice_ = 0;  // the caller's nice value: the workers run its job at it
   std::atomic<int> next_{0};
 };
 

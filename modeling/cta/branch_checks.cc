@@ -109,7 +109,8 @@ std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOption
       auto arm_radius = [&](const Arm& a) {
         const ModelBranch& br = a.child >= 0 ? b[a.child] : parent;
         const int from = a.child >= 0 ? skip : j + skip;
-        return median_radius(br, from, from + far_skip + far_samples - skip);
+        const int to = from + far_skip + far_samples - skip;
+        return median_radius(br, from, a.child >= 0 ? to : std::min(to, end[p]));
       };
       for (size_t d = 0; d < b.size(); ++d) {
         if (b[d].parent != static_cast<int>(p) || drop[d]) continue;
@@ -131,6 +132,7 @@ std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOption
       // D1 went too when every pair was cut)
       int best_x = -1, best_y = -1, best_onward_from = j;
       bool best_goes_on = true;
+      std::vector<int> onward, best_onward;
       double best_angle = 0.0;
       for (size_t x = 0; x < arms.size(); ++x) {
         for (size_t y = x + 1; y < arms.size(); ++y) {
@@ -153,6 +155,7 @@ std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOption
           if (apart == 0.0 || apart <= best_angle) continue;
           bool goes_on = false;
           int onward_from = j;  // the last sample an onward arm leaves from
+          onward.clear();       // the children carrying the vessel on
           for (size_t z = 0; z < arms.size(); ++z) {
             // within on_deg of the incoming line and nearer it than either crossing arm where
             // they were judged (family seed 6: D1 bends by 48 deg where a vein crosses it at 64
@@ -160,12 +163,16 @@ std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOption
             const double on = angle_deg(incoming, arms[z].dir);
             if (z == x || z == y || arms[z].via >= 0 || on >= o.on_deg || on >= off) continue;
             goes_on = true;
-            if (arms[z].child >= 0) onward_from = std::max(onward_from, b[arms[z].child].parent_point);
+            if (arms[z].child >= 0) {
+              onward_from = std::max(onward_from, b[arms[z].child].parent_point);
+              onward.push_back(arms[z].child);
+            }
           }
-          // or nothing goes on but both arms are much wider than the vessel reaching them: a
-          // small artery that ends against a vein crossing it (family seed 20: an OM of radius
-          // 0.7 mm meeting a vein of 1.4; an artery's daughters are narrower than their parent)
-          if (!goes_on && !(arm_radius(arms[x]) > o.wider_ratio * incoming_radius &&
+          // or the pair is all there is (a T) and both arms are much wider than the vessel
+          // reaching them: a small artery that ends against a vein crossing it (family seed 20:
+          // an OM of radius 0.7 mm meeting a vein of 1.4; an artery's daughters are narrower than
+          // their parent)
+          if (!goes_on && !(arms.size() == 2 && arm_radius(arms[x]) > o.wider_ratio * incoming_radius &&
                             arm_radius(arms[y]) > o.wider_ratio * incoming_radius))
             continue;
           best_x = static_cast<int>(x);
@@ -173,12 +180,15 @@ std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOption
           best_angle = apart;
           best_onward_from = onward_from;
           best_goes_on = goes_on;
+          best_onward = onward;
         }
       }
       if (best_x < 0) continue;
       for (const Arm* a : {&arms[best_x], &arms[best_y]}) {
         if (a->child >= 0) {
-          drop[a->via >= 0 ? a->via : a->child] = true;
+          // an arm of an arm goes with the arm it leaves, unless that arm carries the vessel on
+          const bool via_onward = std::find(best_onward.begin(), best_onward.end(), a->via) != best_onward.end();
+          drop[a->via >= 0 && !via_onward ? a->via : a->child] = true;
         } else {
           // the vessel's own line went onto the crossing one: cut back to the crossing, keeping
           // the sample the onward arm leaves from

@@ -45,9 +45,9 @@ struct BranchCheckOptions {
   // and over far_arm_mm past far_skip_mm, where the arms have left the junction's blob: opposite
   // when more than far_opposite_deg apart there
   double far_skip_mm = 6.0, far_arm_mm = 6.0, far_opposite_deg = 150;
-  // where nothing goes on, a pair whose arms are both wider than wider_ratio times the vessel
-  // reaching them (median radii over the arms' first 12 mm, the vessel's 2-12 mm before) is a
-  // vessel it ends against, cut too
+  // where nothing goes on and the pair is all there is (a T), a pair whose arms are both wider
+  // than wider_ratio times the vessel reaching them (median radii over the arms' 2-12 mm, the
+  // vessel's 2-12 mm before the junction) is a vessel it ends against, cut too
   double wider_ratio = 1.5;
   double sample_spacing_mm = 0.5;  // of the branches' samples (build_cta_model sets the spline's)
   // a branch beside its parent: at least parallel_min_mm long, its course past its first

@@ -204,9 +204,42 @@ TEST(BranchChecks, AVesselEndingAgainstAWiderOneIsCutThere) {
   EXPECT_NE(notes[0].find("ends there"), std::string::npos) << notes[0];
   ASSERT_EQ(vein.branches.size(), 1u);
   EXPECT_EQ(vein.branches[0].points_mm.size(), 41u);
+  // the vessel's own line ran on along one wide arm: cut back to the junction
+  ModelTree ran_on;
+  ModelBranch main = line({0, 0, 0}, {1, 0, 0}, 20);
+  const ModelBranch up = line({20, 0, 0}, {0, 1, 0}, 20);
+  main.points_mm.insert(main.points_mm.end(), up.points_mm.begin() + 1, up.points_mm.end());
+  main.radius_mm.assign(41, 0.7);
+  main.radius_mm.resize(main.points_mm.size(), 1.4);
+  ran_on.branches.push_back(main);
+  ran_on.branches.push_back(line({20, 0, 0}, {0, -1, 0}, 20, 0, 40));
+  ran_on.branches.back().radius_mm.assign(ran_on.branches.back().points_mm.size(), 1.4);
+  ASSERT_EQ(drop_crossings(&ran_on, BranchCheckOptions{}).size(), 1u);
+  ASSERT_EQ(ran_on.branches.size(), 1u);
+  EXPECT_EQ(ran_on.branches[0].points_mm.size(), 41u);
+
   ModelTree branching = tee(0.6);
   EXPECT_TRUE(drop_crossings(&branching, BranchCheckOptions{}).empty());
   EXPECT_EQ(branching.branches.size(), 3u);
+}
+
+// the trace ran from the vessel onto the vein, the vessel goes on as a child, and the vein's
+// other arm leaves that child at its second sample: the vessel's line is cut back to the
+// crossing and the other arm goes, but the child carrying the vessel on stays whole
+TEST(BranchChecks, AnArmLeavingTheOnwardVesselGoesAloneNotTheVessel) {
+  ModelTree t;
+  ModelBranch main = line({0, 0, 0}, {1, 0, 0}, 20);
+  const ModelBranch vein_arm = line({20, 0, 0}, {0, 1, 0}, 25);
+  main.points_mm.insert(main.points_mm.end(), vein_arm.points_mm.begin() + 1, vein_arm.points_mm.end());
+  main.radius_mm.assign(main.points_mm.size(), 1.0);
+  t.branches.push_back(main);
+  t.branches.push_back(line({20, 0, 0}, {1, 0, 0}, 20, 0, 40));                  // the vessel onwards
+  t.branches.push_back(line(t.branches[1].points_mm[1], {0, -1, 0}, 15, 1, 1));  // the vein's other arm
+  ASSERT_EQ(drop_crossings(&t, BranchCheckOptions{}).size(), 1u);
+  ASSERT_EQ(t.branches.size(), 2u);
+  EXPECT_EQ(t.branches[0].points_mm.size(), 41u);  // up to the crossing
+  EXPECT_EQ(t.branches[1].points_mm.size(), 41u);  // the vessel onwards, whole
+  EXPECT_EQ(t.branches[1].parent_point, 40);
 }
 
 // what is not a crossing: a bifurcation (the vessel ends in two daughters 80 deg apart), two side

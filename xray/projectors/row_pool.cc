@@ -27,9 +27,10 @@ void RowPool::drain() {
 }
 
 void RowPool::run(int rows, RowFn fn, void* ctx) {
-  // the workers run the job at the caller's nice value: a scene built below the loops' priority
-  // (a reset's or the next scene's, on a builder thread) projects its background there too, and
-  // the same pool's frames later run at the x-ray thread's
+  // the workers run the job at the caller's nice value: the next scene, built below the loops'
+  // priority on the server's builder thread, projects its background there too, and the same
+  // pool's frames later run at the x-ray thread's (where raising a thread back is permitted:
+  // CAP_SYS_NICE; else the workers stay lowered, as before, and retry each job)
   const int nice = ::getpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()));
   {
     std::lock_guard lock(mutex_);

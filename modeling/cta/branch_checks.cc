@@ -20,6 +20,14 @@ double median_hu(const ModelBranch& b, const FloatImage& hu, size_t from, size_t
   return realtime::upper_median_in_place(std::span<double>(v));
 }
 
+// median radius over samples [from, to), clamped to the branch; 0 when none
+double median_radius(const ModelBranch& b, int from, int to) {
+  std::vector<double> r;
+  for (int i = std::max(0, from); i < std::min(to, static_cast<int>(b.radius_mm.size())); ++i)
+    r.push_back(b.radius_mm[i]);
+  return r.empty() ? 0.0 : realtime::upper_median_in_place(std::span<double>(r));
+}
+
 // removes the branches marked (with everything beyond them) and truncates those given a new end,
 // re-indexing the parents; a child beyond a truncation goes too
 void prune(ModelTree* tree, std::vector<bool> drop, const std::vector<int>& end) {
@@ -85,13 +93,6 @@ std::vector<std::string> drop_crossings(ModelTree* tree, const BranchCheckOption
         int via = -1;
       };
       const Eigen::Vector3d incoming = -arm(parent, j - skip, -arm_samples);
-      // median radii: the vessel's over the far window before the junction, an arm's past its skip
-      auto median_radius = [](const ModelBranch& br, int from, int to) {
-        std::vector<double> r;
-        for (int i = std::max(0, from); i < std::min(to, static_cast<int>(br.radius_mm.size())); ++i)
-          r.push_back(br.radius_mm[i]);
-        return r.empty() ? 0.0 : realtime::upper_median_in_place(std::span<double>(r));
-      };
       const double incoming_radius = median_radius(parent, j - far_skip - far_samples, j - skip);
       std::vector<Arm> arms;
       // (against the vessel's end as a cut at this junction left it: a second child near it is no

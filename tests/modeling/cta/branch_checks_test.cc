@@ -25,6 +25,14 @@ ModelBranch line(const Vector3d& from, const Vector3d& dir, double length_mm, in
   return b;
 }
 
+// b run on straight from its last sample along `dir` for `length_mm` (samples 0.5 mm apart, radius 1 mm)
+ModelBranch then(ModelBranch b, const Vector3d& dir, double length_mm) {
+  const ModelBranch on = line(b.points_mm.back(), dir, length_mm);
+  b.points_mm.insert(b.points_mm.end(), on.points_mm.begin() + 1, on.points_mm.end());
+  b.radius_mm.assign(b.points_mm.size(), 1.0);
+  return b;
+}
+
 // the vessel along x, 40 mm; at 20 mm (sample 40) a vein crosses it along y
 TEST(BranchChecks, AVesselCrossingOverTheTreeIsCutAway) {
   ModelTree t;
@@ -46,10 +54,7 @@ TEST(BranchChecks, AVesselCrossingOverTheTreeIsCutAway) {
 // goes, the onward vessel stays
 TEST(BranchChecks, ACrossingTheTraceRanOntoIsCutBackToTheVessel) {
   ModelTree t;
-  ModelBranch main = line({0, 0, 0}, {1, 0, 0}, 20);
-  const ModelBranch vein_arm = line({20, 0, 0}, {0, 1, 0}, 25);
-  main.points_mm.insert(main.points_mm.end(), vein_arm.points_mm.begin() + 1, vein_arm.points_mm.end());
-  main.radius_mm.assign(main.points_mm.size(), 1.0);
+  const ModelBranch main = then(line({0, 0, 0}, {1, 0, 0}, 20), {0, 1, 0}, 25);  // onto the vein
   t.branches.push_back(main);
   t.branches.push_back(line({20, 0, 0}, {1, 0, 0}, 20, 0, 40));   // the vessel onwards
   t.branches.push_back(line({20, 0, 0}, {0, -1, 0}, 15, 0, 40));  // the vein's other arm
@@ -86,11 +91,7 @@ TEST(BranchChecks, ACrossingIsJudgedPastTheJunctionsBendAndTakesItsMostOppositeP
   // an arm leaving (20, 0, 0): its first 2 mm at 55 deg off `dir` towards +x, then along dir
   auto bent_arm = [](const Vector3d& dir, int parent_point) {
     const Vector3d off = std::cos(0.96) * dir + std::sin(0.96) * Vector3d::UnitX();
-    ModelBranch b = line({20, 0, 0}, off, 2.0, 0, parent_point);
-    const ModelBranch on = line(b.points_mm.back(), dir, 14);
-    b.points_mm.insert(b.points_mm.end(), on.points_mm.begin() + 1, on.points_mm.end());
-    b.radius_mm.assign(b.points_mm.size(), 1.0);
-    return b;
+    return then(line({20, 0, 0}, off, 2.0, 0, parent_point), dir, 14);
   };
   ModelTree vein;
   vein.branches.push_back(line({0, 0, 0}, {1, 0, 0}, 40));
@@ -123,11 +124,7 @@ TEST(BranchChecks, ACrossingTracedFromBeforeItAndAsAnArmOfAnArmIsCutAway) {
   // it (+-y) for 20 mm
   auto onto_vein = [](const Vector3d& from, double side, int parent, int parent_point) {
     const Vector3d to(24, side, 0);
-    ModelBranch b = line(from, to - from, (to - from).norm(), parent, parent_point);
-    const ModelBranch on = line(b.points_mm.back(), {0, side, 0}, 20);
-    b.points_mm.insert(b.points_mm.end(), on.points_mm.begin() + 1, on.points_mm.end());
-    b.radius_mm.assign(b.points_mm.size(), 1.0);
-    return b;
+    return then(line(from, to - from, (to - from).norm(), parent, parent_point), {0, side, 0}, 20);
   };
   ModelTree t;
   t.branches.push_back(line({0, 0, 0}, {1, 0, 0}, 40));
@@ -206,9 +203,7 @@ TEST(BranchChecks, AVesselEndingAgainstAWiderOneIsCutThere) {
   EXPECT_EQ(vein.branches[0].points_mm.size(), 41u);
   // the vessel's own line ran on along one wide arm: cut back to the junction
   ModelTree ran_on;
-  ModelBranch main = line({0, 0, 0}, {1, 0, 0}, 20);
-  const ModelBranch up = line({20, 0, 0}, {0, 1, 0}, 20);
-  main.points_mm.insert(main.points_mm.end(), up.points_mm.begin() + 1, up.points_mm.end());
+  ModelBranch main = then(line({0, 0, 0}, {1, 0, 0}, 20), {0, 1, 0}, 20);
   main.radius_mm.assign(41, 0.7);
   main.radius_mm.resize(main.points_mm.size(), 1.4);
   ran_on.branches.push_back(main);
@@ -228,10 +223,7 @@ TEST(BranchChecks, AVesselEndingAgainstAWiderOneIsCutThere) {
 // crossing and the other arm goes, but the child carrying the vessel on stays whole
 TEST(BranchChecks, AnArmLeavingTheOnwardVesselGoesAloneNotTheVessel) {
   ModelTree t;
-  ModelBranch main = line({0, 0, 0}, {1, 0, 0}, 20);
-  const ModelBranch vein_arm = line({20, 0, 0}, {0, 1, 0}, 25);
-  main.points_mm.insert(main.points_mm.end(), vein_arm.points_mm.begin() + 1, vein_arm.points_mm.end());
-  main.radius_mm.assign(main.points_mm.size(), 1.0);
+  const ModelBranch main = then(line({0, 0, 0}, {1, 0, 0}, 20), {0, 1, 0}, 25);  // onto the vein
   t.branches.push_back(main);
   t.branches.push_back(line({20, 0, 0}, {1, 0, 0}, 20, 0, 40));                  // the vessel onwards
   t.branches.push_back(line(t.branches[1].points_mm[1], {0, -1, 0}, 15, 1, 1));  // the vein's other arm

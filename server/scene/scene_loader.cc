@@ -264,6 +264,10 @@ UltrasoundSpec read_ultrasound(json::JsonReader r) {
   s.attenuation_db_per_cm_mhz = r.number("attenuation_db_per_cm_mhz", s.attenuation_db_per_cm_mhz, 0, 5);
   s.dynamic_range_db = r.number("dynamic_range_db", s.dynamic_range_db, 10, 120);
   s.speckle_cell_mm = r.number("speckle_cell_mm", s.speckle_cell_mm, 0.02, 2);
+  s.bandwidth = r.number("bandwidth", s.bandwidth, ultrasound::kUsBandwidthMin, ultrasound::kUsBandwidthMax);
+  s.f_number = r.number("f_number", s.f_number, ultrasound::kUsFNumberMin, ultrasound::kUsFNumberMax);
+  s.focus_mm = r.number("focus_mm", s.focus_mm, 1e-3, ultrasound::kUsMaxDepthMm);
+  s.specular_exponent = r.number("specular_exponent", s.specular_exponent, 0, ultrasound::kUsSpecularExponentMax);
   u.frame_rate_hz = r.number("frame_rate_hz", u.frame_rate_hz, 1, 60);
   u.speckle_seed = static_cast<uint32_t>(r.integer("speckle_seed", 1, 0, 1 << 30));
   r.finish();

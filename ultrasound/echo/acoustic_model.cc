@@ -1,8 +1,10 @@
 #include "ultrasound/echo/acoustic_model.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iterator>
+#include <numbers>
 
 namespace pcisim::ultrasound {
 namespace {
@@ -21,7 +23,11 @@ double piecewise(const Knot (&k)[N], double hu) {
 
 constexpr Knot kSpeed[] = {{-1000, 343}, {-100, 1450}, {0, 1480}, {40, 1540}, {300, 1600}, {1000, 3500}};
 constexpr Knot kScatter[] = {{-1000, 0.0}, {-100, 1.5}, {0, 0.05}, {30, 0.5}, {60, 0.8}, {150, 1.0}};
+constexpr Knot kAttenuation[] = {{-100, 1.1}, {-30, 1.1}, {0, 0.004},         {15, 0.004},
+                                 {30, 1.0},   {300, 1.0}, {1000, 20.0 / 0.54}};
 constexpr double kBackscatterScale = 1e-4;
+
+constexpr size_t kScatterers = 4096;  // a power of two
 
 uint64_t splitmix64(uint64_t x) {
   x += 0x9e3779b97f4a7c15ull;
@@ -50,8 +56,7 @@ double reflection(double z1, double z2) {
 }
 
 double attenuation_factor(double hu) {
-  if (hu <= 300.0) return 1.0;
-  return 1.0 + (20.0 / 0.54 - 1.0) * (std::min(hu, 1000.0) - 300.0) / 700.0;
+  return piecewise(kAttenuation, hu);
 }
 
 double attenuation_db(double alpha_db_cm_mhz, double hu, double frequency_mhz, double dx_cm) {
@@ -62,12 +67,71 @@ double backscatter(double hu) {
   return kBackscatterScale * piecewise(kScatter, hu);
 }
 
-double speckle(uint64_t seed, int64_t i, int64_t j, int64_t k) {
-  const uint64_t h =
-      splitmix64(splitmix64(splitmix64(splitmix64(seed) ^ static_cast<uint64_t>(i)) ^ static_cast<uint64_t>(j)) ^
-                 static_cast<uint64_t>(k));
-  const double u = (static_cast<double>(h >> 11) + 1.0) * 0x1.0p-53;  // (0, 1]
-  return -std::log(u);
+namespace {
+
+// the scatterers' table: Box-Muller on a fixed sequence, then its mean taken out and its mean
+// power made 1
+const std::array<std::complex<float>, kScatterers>& scatterer_table() {
+  static const std::array<std::complex<float>, kScatterers> table = [] {
+    std::array<std::complex<double>, kScatterers> a{};
+    std::complex<double> mean = 0.0;
+    for (size_t n = 0; n < a.size(); ++n) {
+      const uint64_t h = splitmix64(0x5ca77e25ull + 2 * n), g = splitmix64(0x5ca77e25ull + 2 * n + 1);
+      const double u = (static_cast<double>(h >> 11) + 1.0) * 0x1.0p-53;       // (0, 1]
+      const double v = static_cast<double>(g >> 11) * 0x1.0p-53;               // [0, 1)
+      a[n] = std::polar(std::sqrt(-std::log(u)), 2.0 * std::numbers::pi * v);  // E|a|^2 = 1
+      mean += a[n];
+    }
+    mean /= static_cast<double>(a.size());
+    double power = 0.0;
+    for (auto& x : a) {
+      x -= mean;
+      power += std::norm(x);
+    }
+    const double scale = 1.0 / std::sqrt(power / static_cast<double>(a.size()));
+    std::array<std::complex<float>, kScatterers> out{};
+    for (size_t n = 0; n < a.size(); ++n) out[n] = std::complex<float>(a[n] * scale);
+    return out;
+  }();
+  return table;
+}
+
+// a cell's coordinates, each times an odd constant, mixed once (splitmix64's finaliser
+// avalanches every input bit) with the seed's own mix
+constexpr uint64_t kCellI = 0x9e3779b97f4a7c15ull, kCellJ = 0xc2b2ae3d27d4eb4full, kCellK = 0x165667b19e3779f9ull;
+
+}  // namespace
+
+std::complex<float> scatterer(uint64_t seed, int64_t i, int64_t j, int64_t k) {
+  const uint64_t h = splitmix64(splitmix64(seed) ^ (static_cast<uint64_t>(i) * kCellI) ^
+                                (static_cast<uint64_t>(j) * kCellJ) ^ (static_cast<uint64_t>(k) * kCellK));
+  return scatterer_table()[h & (kScatterers - 1)];
+}
+
+std::complex<float> scatterer_field(uint64_t seed, const double (&u)[3]) {
+  const auto& table = scatterer_table();
+  const uint64_t mixed = splitmix64(seed);
+  // per axis: the two lattice lines' hashed coordinates and weights
+  uint64_t key[3][2];
+  float w[3][2];
+  constexpr uint64_t kAxis[3] = {kCellI, kCellJ, kCellK};
+  for (int a = 0; a < 3; ++a) {
+    const double fl = std::floor(u[a]);
+    const auto i0 = static_cast<uint64_t>(static_cast<int64_t>(fl));
+    key[a][0] = i0 * kAxis[a];
+    key[a][1] = (i0 + 1) * kAxis[a];
+    w[a][1] = static_cast<float>(u[a] - fl);
+    w[a][0] = 1.0f - w[a][1];
+  }
+  std::complex<float> sum = 0.0f;
+  float weight2 = 0.0f;
+  for (int corner = 0; corner < 8; ++corner) {
+    const int x = corner & 1, y = corner >> 1 & 1, z = corner >> 2 & 1;
+    const float wc = w[0][x] * w[1][y] * w[2][z];
+    sum += wc * table[splitmix64(mixed ^ key[0][x] ^ key[1][y] ^ key[2][z]) & (kScatterers - 1)];
+    weight2 += wc * wc;
+  }
+  return sum / std::sqrt(weight2);
 }
 
 double brightness_db(double intensity, double gain_db, double tgc_db_per_cm, double depth_cm) {

@@ -7,6 +7,7 @@
 // bone ~20 dB/cm/MHz); Wagner et al. 1983, IEEE Trans Sonics Ultrason 30:156 (fully developed
 // speckle: Rayleigh amplitude, exponential intensity); Goksel & Salcudean 2009, IEEE TMI 28:1657
 // (echo = reflection at impedance changes + scattering, attenuated with depth).
+#include <complex>
 #include <cstdint>
 
 namespace pcisim::ultrasound {
@@ -21,8 +22,11 @@ double speed_of_sound_m_s(double hu);
 double impedance_mrayl(double hu);
 // intensity reflection coefficient at normal incidence: R = ((Z2 - Z1) / (Z2 + Z1))^2
 double reflection(double z1, double z2);
-// attenuation multiplier on the soft-tissue coefficient: 1 up to 300 HU, rising linearly to
-// 20 / 0.54 at 1000 HU (bone ~20 dB/cm/MHz against soft tissue 0.54)   [Szabo 2004 table 4.2]
+// attenuation multiplier on the soft-tissue coefficient (0.54 dB/cm/MHz), piecewise linear in HU:
+// fat (-100 to -30 HU) 1.1 (0.6), fluid (0 to 15 HU: urine, bile, cysts) 0.004 (water 0.0022),
+// soft tissue (30 to 300 HU) 1, rising to 20 / 0.54 at 1000 HU (bone ~20)   [Szabo 2004 table
+// 4.2; Duck 1990 ch. 4]. Fluid that barely attenuates is what brightens the tissue behind it
+// (posterior enhancement) under a TGC set for soft tissue.
 double attenuation_factor(double hu);
 // one-way intensity loss (dB) over a path: L = alpha(HU) f dx_cm   (alpha in dB/cm/MHz)
 double attenuation_db(double alpha_db_cm_mhz, double hu, double frequency_mhz, double dx_cm);
@@ -31,12 +35,18 @@ double attenuation_db(double alpha_db_cm_mhz, double hu, double frequency_mhz, d
 // soft tissue 60 HU 0.8, 150 HU and above 1. An assumption of this model (no CT physics gives
 // it): fat bright, fluid dark, parenchyma grey, as B-mode shows them.
 double backscatter(double hu);
-// multiplicative speckle on the diffuse intensity: |A|^2 with A Rayleigh, E|A|^2 = 1, so
-// s = -ln(U), U uniform in (0, 1], U from a counter-based hash of (seed, i, j, k) [Wagner 1983].
-// (i, j, k) is the cell of the sample's point in the undeformed CT (cells of speckle_cell_mm):
-// the pattern belongs to the tissue, moves with it and does not flicker from frame to frame.
-// Deterministic per seed, no state.
-double speckle(uint64_t seed, int64_t i, int64_t j, int64_t k);
+// the tissue's scatterer in cell (i, j, k) of the undeformed CT (cells of speckle_cell_mm): a
+// complex amplitude, circular Gaussian with E a = 0 and E|a|^2 = 1 (the sum of many random
+// sub-resolution scatterers in the cell [Wagner 1983]), drawn from a fixed table of 4096 such
+// values by a counter-based hash of (seed, i, j, k). Fixed in the tissue: it moves with it and
+// does not flicker from frame to frame. Deterministic per seed.
+std::complex<float> scatterer(uint64_t seed, int64_t i, int64_t j, int64_t k);
+// the tissue's scatterer field at u (a point of the undeformed CT in cells, q / speckle_cell_mm):
+// the lattice's amplitudes at the cell's 8 corners, trilinear, over the square root of the
+// weights' squares, so it is continuous (tissue moved by less than a cell moves it smoothly) and
+// its power is 1 everywhere (plain trilinear falls to 1/8 of it at a cell's centre, a grid the
+// image would show): v(u) = sum w_c a_c / sqrt(sum w_c^2)
+std::complex<float> scatterer_field(uint64_t seed, const double (&u)[3]);
 // time-gain compensated, log-compressed brightness (dB): B = 10 log10(I) + gain + tgc d_cm
 double brightness_db(double intensity, double gain_db, double tgc_db_per_cm, double depth_cm);
 // 8-bit grey: g = round(255 (B + DR) / DR), clamped to [0, 255] (0 dB, a perfect reflector at the

@@ -35,6 +35,10 @@ void validate(const UsSettings& s) {
   check(s.attenuation_db_per_cm_mhz, 0.0, 5.0, "attenuation_db_per_cm_mhz");
   check(s.dynamic_range_db, 10.0, 120.0, "dynamic_range_db");
   check(s.speckle_cell_mm, 0.02, 2.0, "speckle_cell_mm");
+  check(s.bandwidth, kUsBandwidthMin, kUsBandwidthMax, "bandwidth");
+  check(s.f_number, kUsFNumberMin, kUsFNumberMax, "f_number");
+  check(s.focus_mm, 0.0, kUsMaxDepthMm, "focus_mm", true);
+  check(s.specular_exponent, 0.0, kUsSpecularExponentMax, "specular_exponent");
 }
 
 void validate(const ProbePose& p) {

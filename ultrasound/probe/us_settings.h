@@ -28,10 +28,26 @@ struct UsSettings {
   double frequency_mhz = 5.0;               // centre frequency, [1, 20]
   double attenuation_db_per_cm_mhz = 0.54;  // soft tissue, [0, 5] (Szabo 2004 table 4.1: ~0.5-0.7)
   double dynamic_range_db = 60.0;           // log-compression window, [10, 120]
-  // the speckle's grain in the undeformed tissue, [0.02, 2]: finer than the pixels (a 60 mm /
-  // 256 px image samples 0.23 mm apart) so neighbouring samples decorrelate as speckle does
-  double speckle_cell_mm = 0.2;
+  // the lattice of the tissue's scatterer field in the undeformed tissue, [0.02, 2] (issue #32;
+  // echo/acoustic_model.h scatterer_field): the speckle's grain is the point-spread function's
+  // where the cell is well under it; the pattern follows tissue moved by less than a sample where
+  // the cell spans two samples or more (finer, it changes instead: the samples meet other cells)
+  double speckle_cell_mm = 0.25;
+  // the pulse-echo -6 dB fractional bandwidth: the axial point-spread function, [0.1, 1.5]
+  double bandwidth = 0.5;
+  // receive F-number (dynamic receive focus: the aperture grows with depth up to the probe's
+  // width) and the transmit F-number at the transmit focus: the lateral point-spread function
+  double f_number = 2.0;
+  double focus_mm = 30.0;  // transmit focus depth, (0, 300]
+  // specular echoes fall off with the angle between the beam and the boundary's normal as
+  // cos^n (intensity), [0, 64]: a smooth boundary is bright where the beam meets it square
+  double specular_exponent = 6.0;
 };
+
+// the ranges of the imaging fields above that validate() and the scene loader share
+inline constexpr double kUsBandwidthMin = 0.1, kUsBandwidthMax = 1.5;
+inline constexpr double kUsFNumberMin = 0.5, kUsFNumberMax = 10.0;
+inline constexpr double kUsSpecularExponentMax = 64.0;
 
 // the probe in CT (LPS, mm): origin = centre of the transducer face on the skin, beam = into the
 // body, lateral = along the array (made orthogonal to beam)

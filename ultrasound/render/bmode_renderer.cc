@@ -8,12 +8,9 @@
 
 #include "png/png_gray.h"
 #include "ultrasound/echo/acoustic_model.h"
+#include "ultrasound/echo/point_spread.h"
 
 namespace pcisim::ultrasound {
-namespace {
-const Eigen::Vector3d kSpeckleLatticeShift(0.3183098861837907, 0.6180339887498949, 0.4142135623730950);
-}  // namespace
-
 void write_png(const std::string& path, const BModeImage& image) {
   png::write_png_gray8(path, image.width, image.height, image.pixels.data());
 }
@@ -26,12 +23,23 @@ BModeRenderer::BModeRenderer(const anatomy::Volume& ct, const UsSettings& settin
   // two wavelengths at the centre frequency in soft tissue (1540 m/s), at least one CT voxel
   pulse_mm_ = std::max(2.0 * 1.540 / settings_.frequency_mhz, ct.spacing_mm.maxCoeff());
   const size_t n = static_cast<size_t>(settings_.width_px) * settings_.height_px;
-  offset_lateral_.resize(n);
-  offset_beam_.resize(n);
+  line_start_.resize(settings_.width_px);
+  line_dir_.resize(settings_.width_px);
   hu_.resize(n);
   z_.resize(n);
-  speckle_.resize(n);
+  path_ratio_.resize(n);
+  scatterer_.resize(n);
+  field_.resize(n);
+  axial_.resize(n);
   echo_.resize(n);
+  constexpr size_t taps = 2 * kMaxKernelHalf + 1;
+  axial_kernel_.resize(taps);
+  steep_kernel_.resize(taps);
+  steepness_.resize(settings_.height_px);
+  lateral_kernel_.resize(taps * settings_.height_px);
+  lateral_half_.resize(settings_.height_px);
+  line_spacing_mm_.resize(settings_.height_px);
+  scatter_scale_.resize(settings_.height_px);
   beam_.width = image_.width = settings_.width_px;
   beam_.height = image_.height = settings_.height_px;
   beam_.pixels.resize(n);
@@ -55,18 +63,81 @@ void BModeRenderer::set_imaging(double depth_mm, double gain_db) {
   if (deeper) build_geometry();
 }
 
-// each pixel's place in the probe's frame and, for a curvilinear probe, its display pixel's
-// beam-space cell: both depend on the depth (sizes do not: nothing is allocated here)
+namespace {
+
+// the tissue's scatterer field correlates over its lattice: two samples tau cells apart along a
+// lattice axis correlate as the autocorrelation of the trilinear weight (a tent's with itself):
+//   rho(x) = 1 - 3/2 x^2 + 3/4 |x|^3 (|x| <= 1),  (2 - |x|)^3 / 4 (1 <= |x| <= 2),  0 beyond
+double lattice_correlation(double x) {
+  x = std::abs(x);
+  if (x >= 2.0) return 0.0;
+  if (x >= 1.0) return 0.25 * (2.0 - x) * (2.0 - x) * (2.0 - x);
+  return 1.0 - 1.5 * x * x + 0.75 * x * x * x;
+}
+
+// the power a kernel passes of a field sampled `step_cells` lattice cells apart:
+// sum_ij k_i k_j rho((i - j) step)   (k centred at kMaxKernelHalf, half-width half)
+double passed_power(const float* k, int half, double step_cells) {
+  double p = 0.0;
+  for (int i = -half; i <= half; ++i)
+    for (int j = -half; j <= half; ++j) p += k[i] * k[j] * lattice_correlation((i - j) * step_cells);
+  return p;
+}
+
+// Gaussian taps exp(-k^2 / (2 sigma^2)) for |k| <= half (half = ceil(3 sigma), at most
+// kMaxKernelHalf), into out[kMaxKernelHalf + k]; returns half
+int gaussian_taps(double sigma, float* out) {
+  const int half = std::clamp(static_cast<int>(std::ceil(3.0 * sigma)), 0, BModeRenderer::kMaxKernelHalf);
+  std::fill(out, out + 2 * BModeRenderer::kMaxKernelHalf + 1, 0.0f);
+  for (int k = -half; k <= half; ++k)
+    out[BModeRenderer::kMaxKernelHalf + k] =
+        sigma > 1e-6 ? static_cast<float>(std::exp(-0.5 * k * k / (sigma * sigma))) : (k == 0 ? 1.0f : 0.0f);
+  return half;
+}
+
+}  // namespace
+
+// each scanline's start and direction in the probe's frame, the point-spread kernels per row
+// and, for a curvilinear probe, each display pixel's beam-space cell: all depend on the depth
+// (sizes do not: nothing is allocated here)
 void BModeRenderer::build_geometry() {
   const int w = settings_.width_px, h = settings_.height_px;
-  ProbePose unit;  // origin 0, beam y, lateral x
-  for (int c = 0; c < w; ++c)
-    for (int r = 0; r < h; ++r) {
-      const Eigen::Vector3d p = pixel_to_world(settings_, unit, c, r);
-      offset_lateral_[static_cast<size_t>(c) * h + r] = p.x();
-      offset_beam_[static_cast<size_t>(c) * h + r] = p.y();
+  const bool curved = settings_.geometry == ProbeGeometry::kCurvilinear;
+  const double fan = settings_.fan_angle_deg * std::numbers::pi / 180.0, rc = settings_.radius_of_curvature_mm;
+  for (int c = 0; c < w; ++c) {
+    const double t = (c + 0.5) / w - 0.5;
+    if (curved) {
+      // the apex rc behind the face's centre; the line starts on the face
+      const Eigen::Vector2d dir(std::sin(t * fan), std::cos(t * fan));
+      line_dir_[c] = dir;
+      line_start_[c] = Eigen::Vector2d(0.0, -rc) + rc * dir;
+    } else {
+      line_dir_[c] = Eigen::Vector2d(0.0, 1.0);
+      line_start_[c] = Eigen::Vector2d(t * settings_.width_mm, 0.0);
     }
-  if (settings_.geometry != ProbeGeometry::kCurvilinear) return;
+  }
+  // the PSF: axial in samples (constant: depth is time), lateral in scanlines at each row's depth
+  const double dx_mm = settings_.depth_mm / h;
+  constexpr int mid = kMaxKernelHalf;
+  steep_half_ = gaussian_taps(0.25 * pulse_mm_ / dx_mm, steep_kernel_.data());
+  axial_half_ =
+      gaussian_taps(axial_psf_sigma_mm(settings_.frequency_mhz, settings_.bandwidth) / dx_mm, axial_kernel_.data());
+  // the scatterers' scale: the diffuse echo's mean is the tissue's backscatter whatever the PSF
+  // and the lattice (along the lattice's axes; a probe turned to them sees a slightly other grain)
+  const double cell = settings_.speckle_cell_mm;
+  const double axial_power = passed_power(&axial_kernel_[mid], axial_half_, dx_mm / cell);
+  for (int r = 0; r < h; ++r) {
+    const double d = (r + 0.5) * dx_mm;
+    line_spacing_mm_[r] = static_cast<float>(curved ? (rc + d) * fan / w : settings_.width_mm / w);
+    float* k = &lateral_kernel_[static_cast<size_t>(r) * (2 * mid + 1)];
+    lateral_half_[r] = gaussian_taps(lateral_psf_sigma_mm(settings_, d) / line_spacing_mm_[r], k);
+    double sum = 0.0;
+    for (int i = -lateral_half_[r]; i <= lateral_half_[r]; ++i) sum += k[mid + i];
+    for (int i = -lateral_half_[r]; i <= lateral_half_[r]; ++i) k[mid + i] = static_cast<float>(k[mid + i] / sum);
+    const double power = passed_power(&k[mid], lateral_half_[r], line_spacing_mm_[r] / cell);
+    scatter_scale_[r] = static_cast<float>(1.0 / std::sqrt(axial_power * power));
+  }
+  if (!curved) return;
   std::fill(convert_index_.begin(), convert_index_.end(), -1);
   std::fill(convert_fx_.begin(), convert_fx_.end(), 0.0f);
   std::fill(convert_fy_.begin(), convert_fy_.end(), 0.0f);
@@ -133,65 +204,150 @@ const BModeImage& BModeRenderer::render(const ProbePose& pose, uint64_t seed, co
     if (!have_mesh_) set_mesh(*deformed);
     locator_.refit(*deformed);
   }
-  const Eigen::Vector3d b = pose.beam.normalized();
-  const Eigen::Vector3d l = (pose.lateral - pose.lateral.dot(b) * b).normalized();
   const int w = settings_.width_px, h = settings_.height_px;
-  for (int c = 0; c < w; ++c) {
-    for (int r = 0; r < h; ++r) {
-      const size_t n = static_cast<size_t>(c) * h + r;
-      const Eigen::Vector3d p = pose.origin_mm + offset_lateral_[n] * l + offset_beam_[n] * b;
-      Eigen::Vector3d q = p;
-      if (mapped && !locator_.to_rest(p, &q)) q = p;
-      hu_[n] = sample_hu(q);
-      z_[n] = impedance_mrayl(hu_[n]);
-      // the lattice is shifted by irrational fractions of a cell: an image plane at round
-      // coordinates (z = 0) would otherwise lie on cell faces, where rounding picks either side
-      const Eigen::Vector3d cell = (q / settings_.speckle_cell_mm + kSpeckleLatticeShift).array().floor();
-      speckle_[n] =
-          speckle(seed, static_cast<int64_t>(cell[0]), static_cast<int64_t>(cell[1]), static_cast<int64_t>(cell[2]));
-    }
-    render_scanline(c);
-  }
+  for (int c = 0; c < w; ++c) march_scanline(c, pose, seed, mapped);
+  for (int c = 0; c < w; ++c) echo_scanline(c);
+  for (int c = 0; c < w; ++c) convolve_axial(c);
+  for (int r = 0; r < h; ++r) convolve_lateral(r);
   if (settings_.geometry == ProbeGeometry::kLinear) return beam_;
   scan_convert();
   return image_;
 }
 
-// Along one scanline (samples j at depth d_j = (j + 1/2) dx):
-//   R_j = ((Z(d_j + p/2) - Z(d_j - p/2)) / (Z(d_j + p/2) + Z(d_j - p/2)))^2   (p: pulse length;
-//         the impedance change across one pulse, so the echo does not depend on the sampling)
-//   T_{j+1} = T_j (1 - R_j)^(dx / p)                                   (one-way transmission)
-//   L_j = sum_{i<j} a_i dx + a_j dx / 2,  a_i = alpha(HU_i) f          (one-way loss, dB)
-//   I_j = T_j^2 10^(-2 L_j / 10) (R_j + sigma(HU_j) s_j)               (round trip)
-// [Goksel & Salcudean 2009: reflection + scattering, attenuated; shadowing through T]
-void BModeRenderer::render_scanline(int column) {
+// One scanline in time: screen sample j (depth d_j = (j + 1/2) dx, dx = depth / height) lies
+// s_j along the ray, s_0 = dx / 2, s_{j+1} = s_j + dx c(HU_j) / c0 (the pulse covers more tissue
+// per screen sample where sound is faster: a boundary behind fat, 1450 m/s, shows nearer than it
+// is). Each sample: its rest point through the tets, the HU there, the impedance, and the
+// tissue's scatterer in its cell of the undeformed CT.
+void BModeRenderer::march_scanline(int column, const ProbePose& pose, uint64_t seed, bool mapped) {
+  const int h = settings_.height_px;
+  const double dx_mm = settings_.depth_mm / h;
+  const Eigen::Vector3d b = pose.beam.normalized();
+  const Eigen::Vector3d l = (pose.lateral - pose.lateral.dot(b) * b).normalized();
+  const Eigen::Vector3d start = pose.origin_mm + line_start_[column].x() * l + line_start_[column].y() * b;
+  const Eigen::Vector3d dir = line_dir_[column].x() * l + line_dir_[column].y() * b;
+  const size_t base = static_cast<size_t>(column) * h;
+  double s = 0.5 * dx_mm;
+  for (int j = 0; j < h; ++j) {
+    const size_t n = base + j;
+    const Eigen::Vector3d p = start + s * dir;
+    Eigen::Vector3d q = p;
+    if (mapped && !locator_.to_rest(p, &q)) q = p;
+    const double hu = sample_hu(q);
+    hu_[n] = static_cast<float>(hu);
+    z_[n] = static_cast<float>(impedance_mrayl(hu));
+    path_ratio_[n] = static_cast<float>(speed_of_sound_m_s(hu) / kNominalSpeedMS);
+    const double u[3] = {q.x() / settings_.speckle_cell_mm, q.y() / settings_.speckle_cell_mm,
+                         q.z() / settings_.speckle_cell_mm};
+    scatterer_[n] = scatterer_field(seed, u);
+    s += dx_mm * path_ratio_[n];
+  }
+}
+
+// The echo field along one scanline, before the PSF (amplitudes; samples j, path step ds_j):
+//   r_j = (Z(s_j + p/2) - Z(s_j - p/2)) / (Z(s_j + p/2) + Z(s_j - p/2))   specular amplitude
+//         reflection, the impedance's change across the pulse p, at the sample where Z changes
+//         most steeply (|Z_{j+1} - Z_{j-1}| a local maximum), none elsewhere: a boundary the CT
+//         blurs over a voxel or two echoes as the sharp one it is, not as a ramp that the
+//         pulse, shorter than a voxel, would see as no boundary at all
+//   cos^2 theta_j = g_a^2 / (g_a^2 + g_l^2)                 g: Z's gradient in the image plane,
+//         along the beam and across scanlines: the boundary's normal against the beam (1 where
+//         the gradient vanishes)
+//   e_j = A_j (r_j cos^(n/2) theta_j + k_j sqrt(sigma(HU_j)) a_j)   a_j the tissue's scatterer,
+//         k_j the row's scatter scale, n the specular exponent (intensity ~ cos^n)
+//   A_j = T_j 10^(-L_j / 10)                                round trip: sqrt(T^2 10^(-2 L / 10))
+//   R_j = ((Z(s_j + p/2) - Z(s_j - p/2)) / (Z(s_j + p/2) + Z(s_j - p/2)))^2   over the pulse p
+//   T_{j+1} = T_j (1 - R_j)^(dx / p)                         one-way transmission (shadowing)
+//   L_j = sum_{i<j} a_i ds_i + a_j ds_j / 2,  a_i = alpha(HU_i) f     one-way loss, dB
+// [Goksel & Salcudean 2009: reflection + scattering, attenuated; Buerger et al. 2013: the
+// specular echo's fall-off with the angle of incidence]
+void BModeRenderer::echo_scanline(int column) {
   const int h = settings_.height_px, w = settings_.width_px;
-  const double dx_mm = settings_.depth_mm / h, dx_cm = dx_mm / 10.0;
+  const double dx_mm = settings_.depth_mm / h;
   const double half = 0.5 * pulse_mm_ / dx_mm;  // half window in samples
-  const double* z = &z_[static_cast<size_t>(column) * h];
-  const double* hu = &hu_[static_cast<size_t>(column) * h];
-  const double* spk = &speckle_[static_cast<size_t>(column) * h];
+  const size_t base = static_cast<size_t>(column) * h;
+  const float* z = &z_[base];
+  const float* hu = &hu_[base];
+  // the neighbouring scanlines' impedance, for the gradient across them (one-sided at the edges)
+  const int left = std::max(column - 1, 0), right = std::min(column + 1, w - 1);
+  const float* zl = &z_[static_cast<size_t>(left) * h];
+  const float* zr = &z_[static_cast<size_t>(right) * h];
+  const double across = std::max(right - left, 1);
   auto z_at = [&](double s) {
     s = std::clamp(s, 0.0, static_cast<double>(h - 1));
     const int i = std::min(static_cast<int>(s), h - 2);
     const double f = s - i;
     return z[i] * (1 - f) + z[i + 1] * f;
   };
+  // where Z changes most steeply: |g_j| a local maximum, g the central difference Z_{j+1} -
+  // Z_{j-1} smoothed by a Gaussian of a quarter pulse (a ramp then peaks at its middle, not
+  // anywhere along a flat top)
+  float* steep = &steepness_[0];
+  const float* g = &steep_kernel_[kMaxKernelHalf];
+  for (int j = 0; j < h; ++j) {
+    float sum = 0.0f;
+    for (int i = -steep_half_; i <= steep_half_; ++i) {
+      const int m = std::clamp(j + i, 1, h - 2);
+      sum += g[i] * (z[m + 1] - z[m - 1]);
+    }
+    steep[j] = sum;
+  }
   const double step_exponent = dx_mm / pulse_mm_;
+  const double quarter_n = 0.25 * settings_.specular_exponent;
+  const double db_to_ln = std::numbers::ln10 / 10.0;
   double transmitted = 1.0, loss_db = 0.0;
   for (int j = 0; j < h; ++j) {
-    const double a_db = attenuation_db(settings_.attenuation_db_per_cm_mhz, hu[j], settings_.frequency_mhz, dx_cm);
-    const double to_centre_db = loss_db + 0.5 * a_db;
+    const double ds_cm = dx_mm * path_ratio_[base + j] / 10.0;
+    const double a_db = attenuation_db(settings_.attenuation_db_per_cm_mhz, hu[j], settings_.frequency_mhz, ds_cm);
+    const double amplitude = transmitted * std::exp(-(loss_db + 0.5 * a_db) * db_to_ln);
+    double specular = 0.0;
+    const float here = std::abs(steep[j]);
+    if (j > 0 && j + 1 < h && here > 0.0f && here > std::abs(steep[j - 1]) && here >= std::abs(steep[j + 1])) {
+      const double z1 = z_at(j - half), z2 = z_at(j + half);
+      specular = (z2 - z1) / (z2 + z1);
+      const double g_a = (z[j + 1] - z[j - 1]) / (2.0 * dx_mm);
+      const double g_l = (zr[j] - zl[j]) / (across * line_spacing_mm_[j]);
+      // (a thin layer's middle: Z the same either side, no direction; the echo is square on)
+      const double g2 = g_a * g_a + g_l * g_l;
+      const double cos2 = g2 > 0.0 ? g_a * g_a / g2 : 1.0;
+      if (quarter_n > 0.0) specular *= std::exp(quarter_n * std::log(std::max(cos2, 1e-300)));
+    }
+    const double diffuse = scatter_scale_[j] * std::sqrt(backscatter(hu[j]));
+    field_[base + j] = static_cast<float>(amplitude) *
+                       (static_cast<float>(specular) + static_cast<float>(diffuse) * scatterer_[base + j]);
     const double refl = reflection(z_at(j - half), z_at(j + half));
-    const double intensity =
-        transmitted * transmitted * std::pow(10.0, -2.0 * to_centre_db / 10.0) * (refl + backscatter(hu[j]) * spk[j]);
-    const size_t out = static_cast<size_t>(j) * w + column;
-    echo_[out] = static_cast<float>(intensity);
-    const double depth_cm = (j + 0.5) * dx_cm;
-    beam_.pixels[out] = log_compress(brightness_db(intensity, settings_.gain_db, settings_.tgc_db_per_cm, depth_cm),
-                                     settings_.dynamic_range_db);
-    transmitted *= std::pow(1.0 - refl, step_exponent);
+    transmitted *= std::exp(step_exponent * std::log1p(-std::min(refl, 1.0 - 1e-12)));
     loss_db += a_db;
+  }
+}
+
+// the axial PSF along one scanline (the field clamped at its ends), into row-major order
+void BModeRenderer::convolve_axial(int column) {
+  const int h = settings_.height_px, w = settings_.width_px;
+  const std::complex<float>* f = &field_[static_cast<size_t>(column) * h];
+  const float* k = &axial_kernel_[kMaxKernelHalf];
+  for (int j = 0; j < h; ++j) {
+    std::complex<float> sum = 0.0f;
+    for (int i = -axial_half_; i <= axial_half_; ++i) sum += k[i] * f[std::clamp(j + i, 0, h - 1)];
+    axial_[static_cast<size_t>(j) * w + column] = sum;
+  }
+}
+
+// the lateral PSF across one row (clamped at the image's sides), the envelope squared, then
+// TGC, gain and log compression:  I = |e|^2,  B = 10 log10 I + gain + tgc d_cm
+void BModeRenderer::convolve_lateral(int row) {
+  const int w = settings_.width_px;
+  const std::complex<float>* a = &axial_[static_cast<size_t>(row) * w];
+  const float* k = &lateral_kernel_[static_cast<size_t>(row) * (2 * kMaxKernelHalf + 1) + kMaxKernelHalf];
+  const int half = lateral_half_[row];
+  const double depth_cm = (row + 0.5) * settings_.depth_mm / settings_.height_px / 10.0;
+  for (int c = 0; c < w; ++c) {
+    std::complex<float> sum = 0.0f;
+    for (int i = -half; i <= half; ++i) sum += k[i] * a[std::clamp(c + i, 0, w - 1)];
+    const size_t out = static_cast<size_t>(row) * w + c;
+    echo_[out] = std::norm(sum);
+    beam_.pixels[out] = log_compress(brightness_db(echo_[out], settings_.gain_db, settings_.tgc_db_per_cm, depth_cm),
+                                     settings_.dynamic_range_db);
   }
 }
 

@@ -1,13 +1,20 @@
 #pragma once
-// B-mode ultrasound from the preoperative CT through the deformed tissue (issue #16 item 4;
-// soft-tissue paper, "Weighted matrix blending"): each image sample in the deformed configuration
-// is carried to the undeformed CT through the tet holding it (outside every tet the CT is sampled
-// where the sample is: the organ's surroundings are undeformed), its HU give impedance,
-// scattering and attenuation (echo/acoustic_model.h), and each scanline accumulates what is
-// transmitted. render() returns the display image (display_pixel_to_world in
-// probe/us_settings.h: beam space for a linear probe, the scan-converted fan for a curvilinear
-// one); beam_image() the beam-space one (pixel_to_world). The constructor and set_mesh()
-// allocate; render() and set_imaging() allocate nothing.
+// B-mode ultrasound from the preoperative CT through the deformed tissue (issue #16 item 4,
+// issue #32; soft-tissue paper, "Weighted matrix blending"). Each scanline is marched in time:
+// a sample's depth on the screen is c0 t / 2, its place along the ray the distance the pulse
+// travelled at each tissue's speed of sound. Each sample in the deformed configuration is
+// carried to the undeformed CT through the tet holding it (outside every tet the CT is sampled
+// where the sample is: the organ's surroundings are undeformed); its HU give impedance,
+// scattering and attenuation (echo/acoustic_model.h), and its undeformed place the tissue's
+// scatterer. The echo field (specular reflection at impedance changes, with its fall-off with
+// the angle of incidence, plus the scatterers, attenuated and shadowed along the beam) is
+// convolved with the probe's point-spread function (echo/point_spread.h: separable, axial then
+// lateral), its envelope taken, time-gain compensated and log-compressed. render() returns the
+// display image (display_pixel_to_world in probe/us_settings.h: beam space for a linear probe,
+// the scan-converted fan for a curvilinear one); beam_image() the beam-space one
+// (pixel_to_world). The constructor and set_mesh() allocate; render() and set_imaging() allocate
+// nothing.
+#include <complex>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -45,31 +52,53 @@ class BModeRenderer {
   // set_mesh() (set_mesh() is called on first use).
   const BModeImage& render(const ProbePose& pose, uint64_t seed, const TetSnapshot* deformed = nullptr);
 
-  // the last frame's echo intensity per pixel (row-major; relative to a perfect reflector at the
-  // face, after attenuation and transmission, before gain, TGC and compression)
+  // the last frame's echo intensity per pixel, the envelope squared (row-major; relative to a
+  // perfect plane reflector square to the beam at the face, after attenuation, transmission and
+  // the point-spread function, before gain, TGC and compression)
   const std::vector<float>& echo_intensity() const { return echo_; }
   // the last frame in beam space (column = scanline, row = depth sample)
   const BModeImage& beam_image() const { return beam_; }
   const UsSettings& settings() const { return settings_; }
-  // axial window over which the impedance change is taken: max(2 wavelengths, CT voxel)
+  // axial window over which the impedance change that shadows is taken: max(2 wavelengths, CT voxel)
   double pulse_length_mm() const { return pulse_mm_; }
+
+  // the largest half-width of a point-spread kernel, samples or scanlines
+  static constexpr int kMaxKernelHalf = 64;
 
  private:
   void build_geometry();
   double sample_hu(const Eigen::Vector3d& p_mm) const;
-  void render_scanline(int column);
+  void march_scanline(int column, const ProbePose& pose, uint64_t seed, bool mapped);
+  void echo_scanline(int column);
+  void convolve_axial(int column);
+  void convolve_lateral(int row);
   void scan_convert();
 
   const anatomy::Volume& ct_;
   UsSettings settings_;
   Eigen::Matrix3d world_to_index_;
   double pulse_mm_ = 1.0;
-  std::vector<double> offset_lateral_, offset_beam_;  // per pixel, probe frame (mm)
+  // per scanline, in the probe's frame (lateral, beam; mm): where it starts on the face, its direction
+  std::vector<Eigen::Vector2d> line_start_, line_dir_;
   TetLocator locator_;
   bool have_mesh_ = false;
-  std::vector<double> hu_, z_;   // per pixel, column-major (scanline by scanline)
-  std::vector<double> speckle_;  // per pixel: the speckle of the tissue the sample maps to
+  // per sample, column-major (scanline by scanline): HU, impedance, the path's step (mm of
+  // tissue per screen sample, c / c0), the tissue's scatterer; the echo field before the PSF
+  std::vector<float> hu_, z_, path_ratio_;
+  std::vector<std::complex<float>> scatterer_, field_;
+  // row-major: the field after the axial PSF; the intensity after both
+  std::vector<std::complex<float>> axial_;
   std::vector<float> echo_;
+  // the PSF: the axial kernel (peak 1); per row its lateral kernel (sum 1), the scanlines'
+  // spacing there (mm) and the scatterers' scale (the diffuse intensity's mean is the tissue's
+  // backscatter whatever the PSF's size)
+  std::vector<float> axial_kernel_, lateral_kernel_, line_spacing_mm_, scatter_scale_;
+  int axial_half_ = 0;
+  // the smoothing of Z's change that finds a boundary's middle (a quarter pulse), and its result
+  // along the scanline being drawn
+  std::vector<float> steep_kernel_, steepness_;
+  int steep_half_ = 0;
+  std::vector<int> lateral_half_;
   BModeImage beam_, image_;
   // curvilinear display: per display pixel the beam-space cell (-1 outside the fan) and weights
   std::vector<int> convert_index_;

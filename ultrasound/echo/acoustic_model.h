@@ -23,7 +23,8 @@ double impedance_mrayl(double hu);
 // intensity reflection coefficient at normal incidence: R = ((Z2 - Z1) / (Z2 + Z1))^2
 double reflection(double z1, double z2);
 // attenuation multiplier on the soft-tissue coefficient (0.54 dB/cm/MHz), piecewise linear in HU:
-// fat (-100 to -30 HU) 1.1 (0.6), fluid (0 to 15 HU: urine, bile, cysts) 0.004 (water 0.0022),
+// fat (-100 to -30 HU) 1.1 (0.6), fluid (0 to 15 HU: urine, bile, cysts) 0.02 (water 0.0022
+// dB/cm/MHz^2, rising with f^2: ~0.011 dB/cm/MHz at 5 MHz; this model's loss is linear in f),
 // soft tissue (30 to 300 HU) 1, rising to 20 / 0.54 at 1000 HU (bone ~20)   [Szabo 2004 table
 // 4.2; Duck 1990 ch. 4]. Fluid that barely attenuates is what brightens the tissue behind it
 // (posterior enhancement) under a TGC set for soft tissue.

@@ -37,9 +37,11 @@ double probe_aperture_mm(const UsSettings& s) {
 }
 
 double lateral_psf_sigma_mm(const UsSettings& s, double depth_mm) {
-  const double tx = transmit_beam_sigma_mm(s.frequency_mhz, s.f_number, s.focus_mm, depth_mm);
-  const double rx =
-      focused_beam_sigma_mm(s.frequency_mhz, receive_f_number(s.f_number, depth_mm, probe_aperture_mm(s)));
+  const double aperture = probe_aperture_mm(s);
+  // the transmit aperture is the probe's at most too: a deep focus is focused at F / aperture
+  const double tx =
+      transmit_beam_sigma_mm(s.frequency_mhz, receive_f_number(s.f_number, s.focus_mm, aperture), s.focus_mm, depth_mm);
+  const double rx = focused_beam_sigma_mm(s.frequency_mhz, receive_f_number(s.f_number, depth_mm, aperture));
   return 1.0 / std::sqrt(1.0 / (tx * tx) + 1.0 / (rx * rx));
 }
 

@@ -33,7 +33,8 @@ double transmit_beam_sigma_mm(double frequency_mhz, double f_number, double focu
 double receive_f_number(double f_number, double depth_mm, double aperture_mm);
 
 // pulse-echo lateral sigma at depth d, mm: the PSF is the product of the transmit and the receive
-// beams, 1 / sigma^2 = 1 / sigma_tx^2 + 1 / sigma_rx^2
+// beams, 1 / sigma^2 = 1 / sigma_tx^2 + 1 / sigma_rx^2; the transmit beam focused at
+// F#_tx = max(F#, focus / aperture) (its aperture is the probe's at most)
 double lateral_psf_sigma_mm(const UsSettings& s, double depth_mm);
 
 // the probe's largest aperture, mm: a linear array's width; a curvilinear one's chord

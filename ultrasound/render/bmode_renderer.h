@@ -59,10 +59,14 @@ class BModeRenderer {
   // the last frame in beam space (column = scanline, row = depth sample)
   const BModeImage& beam_image() const { return beam_; }
   const UsSettings& settings() const { return settings_; }
-  // axial window over which the impedance change that shadows is taken: max(2 wavelengths, CT voxel)
+  // the pulse's length, max(2 wavelengths, CT voxel): the window over which a specular echo's
+  // and the shadowing's impedance change is taken, and (a quarter of it) the smoothing that
+  // finds a boundary's middle
   double pulse_length_mm() const { return pulse_mm_; }
 
-  // the largest half-width of a point-spread kernel, samples or scanlines
+  // the largest half-width of a point-spread kernel, samples or scanlines: a PSF wider than a
+  // third of it (21 samples sigma) is cut short of 3 sigma. The kernels repeat the image's edge
+  // samples beyond it, so the outermost scanlines' and rows' speckle is a few dB brighter
   static constexpr int kMaxKernelHalf = 64;
 
  private:

@@ -6,6 +6,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace pcisim::anatomy {
 
@@ -25,6 +26,12 @@ double kidney_tissue_hu(KidneyTissue t) {
       return kKidneyMedullaHu;
     case KidneyTissue::kPelvis:
       return kKidneyPelvisHu;
+    case KidneyTissue::kSinusFat:
+      return kKidneySinusFatHu;
+    case KidneyTissue::kVein:
+      return kKidneyVeinHu;
+    case KidneyTissue::kArtery:
+      return kKidneyArteryHu;
     case KidneyTissue::kTumour:
       return kKidneyTumourHu;
     case KidneyTissue::kBead:
@@ -48,6 +55,88 @@ double kidney_normalised_radius(const KidneySpec& spec, const Vector3d& p_mm) {
   return n / kidney_radius_mm(spec, p_mm / n);
 }
 
+double kidney_sinus_fraction(const KidneySpec& spec, const Vector3d& p_mm) {
+  const double n = p_mm.norm();
+  if (n == 0.0) return spec.sinus_fraction;
+  const double alpha = std::acos(std::clamp(-p_mm.x() / n, -1.0, 1.0));
+  const double w = 0.6 * spec.hilum_width_rad;
+  return spec.sinus_fraction + (1.0 - spec.sinus_fraction) * std::exp(-alpha * alpha / (2.0 * w * w));
+}
+
+const std::vector<Vector3d>& kidney_pyramid_axes() {
+  static const std::vector<Vector3d> axes = [] {
+    std::vector<Vector3d> a;
+    const double deg = std::numbers::pi / 180.0;
+    const auto add = [&](double latitude, double azimuth) {
+      a.emplace_back(std::cos(latitude * deg) * std::cos(azimuth * deg),
+                     std::cos(latitude * deg) * std::sin(azimuth * deg), std::sin(latitude * deg));
+    };
+    for (double latitude : {-50.0, -20.0, 20.0, 50.0})
+      for (double azimuth : {-90.0, 90.0}) add(latitude, azimuth);  // the anterior and posterior rows
+    for (double latitude : {-30.0, 0.0, 30.0}) add(latitude, 0.0);  // the lateral border
+    add(80.0, 0.0);                                                 // the poles
+    add(-80.0, 0.0);
+    for (Vector3d& v : a) v.normalize();
+    return a;
+  }();
+  return axes;
+}
+
+namespace {
+
+// the distance from p to the segment [a, b]
+double segment_distance(const Vector3d& p, const Vector3d& a, const Vector3d& b) {
+  const Vector3d ab = b - a;
+  const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+  return (p - a - t * ab).norm();
+}
+
+// a pyramid's calyx's centre, mm: half a calyx radius inside the sinus from the papilla (the
+// pyramid's apex, on the sinus's boundary along its axis)
+Vector3d calyx_centre_mm(const KidneySpec& spec, const Vector3d& axis) {
+  const Vector3d papilla = spec.sinus_fraction * axis.cwiseProduct(spec.semi_axes_mm);
+  return papilla - 0.5 * spec.calyx_radius_mm * papilla.normalized();
+}
+
+// inside the organ (s < 1): the sinus (urine in the pelvis, calyces and infundibula, else fat),
+// the cortex within cortex_mm of the surface, and between them a pyramid where the direction lies
+// within its cone (the half-angle growing linearly from 0 at the papilla to the base's at the
+// cortex), else a column of cortex
+KidneyTissue organ_tissue(const KidneySpec& spec, const Vector3d& p, double s) {
+  const auto& axes = kidney_pyramid_axes();
+  if ((p - spec.pelvis_centre_mm).cwiseQuotient(spec.pelvis_semi_axes_mm).squaredNorm() <= 1.0)
+    return KidneyTissue::kPelvis;
+  for (const Vector3d& a : axes) {
+    const Vector3d c = calyx_centre_mm(spec, a);
+    if ((p - c).norm() <= spec.calyx_radius_mm) return KidneyTissue::kPelvis;
+    if (s < spec.sinus_fraction && segment_distance(p, c, spec.pelvis_centre_mm) <= spec.infundibulum_radius_mm)
+      return KidneyTissue::kPelvis;
+  }
+  if (s < kidney_sinus_fraction(spec, p)) return KidneyTissue::kSinusFat;
+  const double n = p.norm();
+  const double depth = (1.0 - s) * (n > 0.0 ? n / s : 0.0);  // (1 - s) r along p's direction
+  if (depth < spec.cortex_mm) return KidneyTissue::kCortex;
+  const double s_base = 1.0 - spec.cortex_mm * s / n;  // s where the cortex begins along p's direction
+  const double grow = std::clamp((s - spec.sinus_fraction) / (s_base - spec.sinus_fraction), 0.0, 1.0);
+  const double cos_half = std::cos(grow * spec.pyramid_half_angle_deg * std::numbers::pi / 180.0);
+  const Vector3d u = p.cwiseQuotient(spec.semi_axes_mm).normalized();
+  for (const Vector3d& a : axes)
+    if (u.dot(a) >= cos_half) return KidneyTissue::kMedulla;
+  return KidneyTissue::kCortex;
+}
+
+// the renal vein and artery: cylinders along -x from the sinus's middle to beyond the organ
+KidneyTissue vessel_tissue(const KidneySpec& spec, const Vector3d& p, KidneyTissue otherwise) {
+  if (p.x() > spec.pelvis_centre_mm.x()) return otherwise;
+  const double dv = std::hypot(p.y() + spec.vein_offset_mm, p.z());
+  if (dv <= spec.vein_radius_mm) return KidneyTissue::kVein;
+  const double da = std::hypot(p.y() - spec.artery_offset_mm, p.z());
+  if (da <= spec.artery_radius_mm) return KidneyTissue::kArtery;
+  return otherwise;
+}
+
+}  // namespace
+
 KidneyTissue kidney_tissue_at(const KidneySpec& spec, const KidneyFacts& facts, const Vector3d& p_mm) {
   const double bead2 = spec.bead_radius_mm * spec.bead_radius_mm;
   for (const Vector3d& f : facts.fiducials_mm)
@@ -55,11 +144,15 @@ KidneyTissue kidney_tissue_at(const KidneySpec& spec, const KidneyFacts& facts, 
   if ((p_mm - facts.tumour_centre_mm).norm() <= facts.tumour_radius_mm) return KidneyTissue::kTumour;
   const double s = kidney_normalised_radius(spec, p_mm);
   if (s < 1.0) {
-    if (s < spec.pelvis_fraction) return KidneyTissue::kPelvis;
-    if (s < spec.medulla_fraction) return KidneyTissue::kMedulla;
-    return KidneyTissue::kCortex;
+    const KidneyTissue t = organ_tissue(spec, p_mm, s);
+    // the vessels run through the sinus's fat to the pelvis, not through the parenchyma
+    return t == KidneyTissue::kSinusFat ? vessel_tissue(spec, p_mm, t) : t;
   }
   if (p_mm.y() >= facts.table_top_y_mm && p_mm.y() <= facts.table_bottom_y_mm) return KidneyTissue::kTable;
+  if (p_mm.y() < facts.table_top_y_mm) {
+    const KidneyTissue v = vessel_tissue(spec, p_mm, KidneyTissue::kFat);
+    if (v != KidneyTissue::kFat) return v;
+  }
   if (p_mm.y() > facts.table_bottom_y_mm) return KidneyTissue::kAir;
   return KidneyTissue::kFat;
 }
@@ -158,12 +251,44 @@ KidneyPhantom make_kidney_phantom(const KidneySpec& spec) {
   std::array<int64_t, 3> dims{};
   for (int i = 0; i < 3; ++i) dims[i] = static_cast<int64_t>(std::ceil((hi[i] - lo[i]) / h)) + 1;
   out.ct = Volume::make(dims, Vector3d::Constant(h), lo, VoxelType::kInt16);
+  // each voxel centre's tissue, then partial volume where a face neighbour's differs: the HU
+  // averaged over 3 x 3 x 3 points of the voxel (a boundary's voxels mixed as a scanner's are,
+  // so what samples the CT between centres sees the shape, not its voxels' steps). A bead's
+  // voxels stay the bead's (a fiducial is found by its bright centre)
+  const auto at = [&](int64_t i, int64_t j, int64_t k) -> Vector3d {
+    return lo + h * Vector3d(static_cast<double>(i), static_cast<double>(j), static_cast<double>(k));
+  };
+  std::vector<uint8_t> label(static_cast<size_t>(dims[0] * dims[1] * dims[2]));
+  for (int64_t k = 0; k < dims[2]; ++k)
+    for (int64_t j = 0; j < dims[1]; ++j)
+      for (int64_t i = 0; i < dims[0]; ++i)
+        label[out.ct.linear_index(i, j, k)] = static_cast<uint8_t>(kidney_tissue_at(spec, facts, at(i, j, k)));
   for (int64_t k = 0; k < dims[2]; ++k)
     for (int64_t j = 0; j < dims[1]; ++j)
       for (int64_t i = 0; i < dims[0]; ++i) {
-        const Vector3d p = lo + h * Vector3d(static_cast<double>(i), static_cast<double>(j), static_cast<double>(k));
-        out.ct.hu_i16[out.ct.linear_index(i, j, k)] =
-            static_cast<int16_t>(kidney_tissue_hu(kidney_tissue_at(spec, facts, p)));
+        const int64_t n = out.ct.linear_index(i, j, k);
+        const auto tissue = static_cast<KidneyTissue>(label[n]);
+        double hu = kidney_tissue_hu(tissue);
+        bool mixed = false;
+        for (int a = 0; a < 3 && !mixed; ++a)
+          for (int step : {-1, 1}) {
+            int64_t c[3] = {i, j, k};
+            c[a] += step;
+            if (c[a] < 0 || c[a] >= dims[a]) continue;
+            mixed = mixed || label[out.ct.linear_index(c[0], c[1], c[2])] != label[n];
+          }
+        if (mixed && tissue != KidneyTissue::kBead) {
+          double sum = 0.0;
+          bool bead = false;
+          for (int c = 0; c < 27 && !bead; ++c) {
+            const Vector3d q = at(i, j, k) + (h / 3.0) * Vector3d(c % 3 - 1, c / 3 % 3 - 1, c / 9 - 1);
+            const KidneyTissue t = kidney_tissue_at(spec, facts, q);
+            bead = t == KidneyTissue::kBead;
+            sum += kidney_tissue_hu(t);
+          }
+          if (!bead) hu = sum / 27.0;
+        }
+        out.ct.hu_i16[n] = static_cast<int16_t>(std::lround(hu));
       }
   return out;
 }

@@ -22,7 +22,7 @@ double piecewise(const Knot (&k)[N], double hu) {
 }
 
 constexpr Knot kSpeed[] = {{-1000, 343}, {-100, 1450}, {0, 1480}, {40, 1540}, {300, 1600}, {1000, 3500}};
-constexpr Knot kScatter[] = {{-1000, 0.0}, {-100, 1.5}, {0, 0.05}, {30, 0.5}, {60, 0.8}, {150, 1.0}};
+constexpr Knot kScatter[] = {{-1000, 0.0}, {-100, 1.5}, {0, 0.05}, {30, 0.15}, {60, 0.8}, {150, 1.0}};
 constexpr Knot kAttenuation[] = {{-100, 1.1}, {-30, 1.1}, {0, 0.02},          {15, 0.02},
                                  {30, 1.0},   {300, 1.0}, {1000, 20.0 / 0.54}};
 constexpr double kBackscatterScale = 1e-4;

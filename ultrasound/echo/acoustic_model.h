@@ -32,7 +32,8 @@ double attenuation_factor(double hu);
 // one-way intensity loss (dB) over a path: L = alpha(HU) f dx_cm   (alpha in dB/cm/MHz)
 double attenuation_db(double alpha_db_cm_mhz, double hu, double frequency_mhz, double dx_cm);
 // diffuse backscatter (intensity, relative to a perfect reflector): sigma = 1e-4 s(HU), s
-// piecewise linear: air 0, fat 1.5 (echogenic), fluid 0 HU 0.05 (anechoic), medulla 30 HU 0.5,
+// piecewise linear: air 0, fat 1.5 (echogenic), fluid 0 HU 0.05 (anechoic), medulla 30 HU 0.15
+// (the pyramids hypoechoic against the cortex, ~8 dB),
 // soft tissue 60 HU 0.8, 150 HU and above 1. An assumption of this model (no CT physics gives
 // it): fat bright, fluid dark, parenchyma grey, as B-mode shows them.
 double backscatter(double hu);

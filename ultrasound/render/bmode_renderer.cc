@@ -21,7 +21,8 @@ BModeRenderer::BModeRenderer(const anatomy::Volume& ct, const UsSettings& settin
   if (!bad.empty()) throw std::invalid_argument("ultrasound: the CT is not usable: " + bad);
   world_to_index_ = (ct.direction * ct.spacing_mm.asDiagonal()).inverse();
   // two wavelengths at the centre frequency in soft tissue (1540 m/s), at least one CT voxel
-  pulse_mm_ = std::max(2.0 * 1.540 / settings_.frequency_mhz, ct.spacing_mm.maxCoeff());
+  voxel_mm_ = ct.spacing_mm.maxCoeff();
+  pulse_mm_ = std::max(2.0 * 1.540 / settings_.frequency_mhz, voxel_mm_);
   const size_t n = static_cast<size_t>(settings_.width_px) * settings_.height_px;
   line_start_.resize(settings_.width_px);
   line_dir_.resize(settings_.width_px);
@@ -130,7 +131,8 @@ void BModeRenderer::build_geometry() {
   constexpr int mid = kMaxKernelHalf;
   // (at most a third of the longest kernel: truncated further it would turn into a box, whose
   // flat top has no middle)
-  steep_half_ = gaussian_taps(std::min(0.25 * pulse_mm_ / dx_mm, kMaxKernelHalf / 3.0), steep_kernel_.data());
+  steep_half_ = gaussian_taps(std::min(std::max(0.25 * pulse_mm_, 0.5 * voxel_mm_) / dx_mm, kMaxKernelHalf / 3.0),
+                              steep_kernel_.data());
   axial_half_ =
       gaussian_taps(axial_psf_sigma_mm(settings_.frequency_mhz, settings_.bandwidth) / dx_mm, axial_kernel_.data());
   // the scatterers' scale: the diffuse echo's mean is the tissue's backscatter whatever the PSF
@@ -259,7 +261,7 @@ void BModeRenderer::march_scanline(int column, const ProbePose& pose, uint64_t s
 //   r_j = (Z(j + p/2) - Z(j - p/2)) / (Z(j + p/2) + Z(j - p/2))   specular amplitude
 //         reflection, the impedance's change across the pulse p (p / dx screen samples), at the
 //         sample where Z changes most steeply (|g_j| a local maximum, g the central difference
-//         smoothed over a quarter pulse), none elsewhere: a boundary the CT blurs over a voxel
+//         smoothed over a quarter pulse or half a voxel), none elsewhere: a boundary the CT blurs over a voxel
 //         or two echoes as the sharp line it is (a ramp of small steps, each its own echo, came
 //         out 6 dB weak under a PSF narrower than the ramp)
 //   cos^2 theta_j = g_a^2 / (g_a^2 + g_l^2)                 g: Z's gradient in the image plane,
@@ -281,10 +283,10 @@ void BModeRenderer::echo_scanline(int column) {
   const float* z = &z_[base];
   const float* hu = &hu_[base];
   // the neighbouring scanlines' impedance, for the gradient across them (one-sided at the edges)
-  const int left = std::max(column - 1, 0), right = std::min(column + 1, w - 1);
-  const float* zl = &z_[static_cast<size_t>(left) * h];
-  const float* zr = &z_[static_cast<size_t>(right) * h];
-  const double across = std::max(right - left, 1);
+  // Z's gradient over half a CT voxel either side (at least a sample): over less, the direction
+  // follows the trilinear field's kinks at the voxels' faces and a sloping boundary echoes in
+  // short level dashes
+  const int along = std::max(1, static_cast<int>(std::lround(0.5 * voxel_mm_ / dx_mm)));
   auto z_at = [&](double s) {
     s = std::clamp(s, 0.0, static_cast<double>(h - 1));
     const int i = std::min(static_cast<int>(s), h - 2);
@@ -292,8 +294,8 @@ void BModeRenderer::echo_scanline(int column) {
     return z[i] * (1 - f) + z[i + 1] * f;
   };
   // where Z changes most steeply: |g_j| a local maximum, g the central difference Z_{j+1} -
-  // Z_{j-1} smoothed by a Gaussian of a quarter pulse (a ramp then peaks at its middle, not
-  // anywhere along a flat top)
+  // Z_{j-1} smoothed by a Gaussian of a quarter pulse or half a CT voxel, the longer (a ramp then peaks at its middle,
+  // not anywhere along a flat top)
   float* steep = &steepness_[0];
   const float* g = &steep_kernel_[kMaxKernelHalf];
   for (int j = 0; j < h; ++j) {
@@ -317,8 +319,12 @@ void BModeRenderer::echo_scanline(int column) {
     if (j > 0 && j + 1 < h && here > 0.0f && here > std::abs(steep[j - 1]) && here >= std::abs(steep[j + 1])) {
       const double z1 = z_at(j - half), z2 = z_at(j + half);
       specular = (z2 - z1) / (z2 + z1);
-      const double g_a = (z[j + 1] - z[j - 1]) / (dx_mm * (path_ratio_[base + j - 1] + path_ratio_[base + j]));
-      const double g_l = (zr[j] - zl[j]) / (across * line_spacing_mm_[j]);
+      const int a0 = std::max(j - along, 0), a1 = std::min(j + along, h - 1);
+      const double g_a = (z[a1] - z[a0]) / ((a1 - a0) * dx_mm * path_ratio_[base + j]);
+      const int m = std::max(1, static_cast<int>(std::lround(0.5 * voxel_mm_ / line_spacing_mm_[j])));
+      const int left = std::max(column - m, 0), right = std::min(column + m, w - 1);
+      const double g_l = (z_[static_cast<size_t>(right) * h + j] - z_[static_cast<size_t>(left) * h + j]) /
+                         (std::max(right - left, 1) * line_spacing_mm_[j]);
       // (a thin layer's middle: Z the same either side, no direction; the echo is square on)
       const double g2 = g_a * g_a + g_l * g_l;
       const double cos2 = g2 > 0.0 ? g_a * g_a / g2 : 1.0;

@@ -60,7 +60,7 @@ class BModeRenderer {
   const BModeImage& beam_image() const { return beam_; }
   const UsSettings& settings() const { return settings_; }
   // the pulse's length, max(2 wavelengths, CT voxel): the window over which a specular echo's
-  // and the shadowing's impedance change is taken, and (a quarter of it) the smoothing that
+  // and the shadowing's impedance change is taken, and (a quarter of it, or half a CT voxel) the smoothing that
   // finds a boundary's middle
   double pulse_length_mm() const { return pulse_mm_; }
 
@@ -81,7 +81,7 @@ class BModeRenderer {
   const anatomy::Volume& ct_;
   UsSettings settings_;
   Eigen::Matrix3d world_to_index_;
-  double pulse_mm_ = 1.0;
+  double pulse_mm_ = 1.0, voxel_mm_ = 1.0;
   // per scanline, in the probe's frame (lateral, beam; mm): where it starts on the face, its direction
   std::vector<Eigen::Vector2d> line_start_, line_dir_;
   TetLocator locator_;
@@ -98,7 +98,7 @@ class BModeRenderer {
   // backscatter whatever the PSF's size)
   std::vector<float> axial_kernel_, lateral_kernel_, line_spacing_mm_, scatter_scale_;
   int axial_half_ = 0;
-  // the smoothing of Z's change that finds a boundary's middle (a quarter pulse), and its result
+  // the smoothing of Z's change that finds a boundary's middle (a quarter pulse or half a voxel), and its result
   // along the scanline being drawn
   std::vector<float> steep_kernel_, steepness_;
   int steep_half_ = 0;

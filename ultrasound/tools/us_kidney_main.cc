@@ -62,11 +62,13 @@ void press(TetSnapshot& m, double push_mm, double a_y) {
 }
 
 constexpr const char* kUsage =
-    "usage: pcisim-us-kidney OUT_DIR [FRAMES [SAMPLES]]\n"
+    "usage: pcisim-us-kidney OUT_DIR [FRAMES [SAMPLES [CT_UM]]]\n"
     "  B-mode images of the procedural kidney (linear and curvilinear probe) through a tet mesh pressed\n"
     "  by the probe: OUT_DIR/kidney_linear.png and kidney_curvilinear.png (created), and the time per\n"
     "  frame (median, p95, p99) over FRAMES frames of a pressing motion (default 200, 1..100000), 256\n"
-    "  scanlines of SAMPLES samples each (default 256, 8..4096; issue #16's target is 256 x 512).\n"
+    "  scanlines of SAMPLES samples each (default 256, 8..4096; issue #16's target is 256 x 512), the\n"
+    "  kidney's CT at CT_UM micrometre voxels (default 1000, 100..4000; finer shows its boundaries\n"
+    "  without the voxels' steps).\n"
     "  The deformation is analytic, not the physics (docs/ultrasound.md).\n";
 
 // an integer argument in [lo, hi]; false (and why, on stderr) otherwise
@@ -86,14 +88,15 @@ int run(int argc, char** argv) {
     std::printf("%s", kUsage);
     return 0;
   }
-  if (argc < 2 || argc > 4 || argv[1][0] == '-') {
+  if (argc < 2 || argc > 5 || argv[1][0] == '-') {
     std::fprintf(stderr, "%s", kUsage);
     return 2;
   }
   const std::string out = argv[1];
-  int frames = 200, samples = 256;
+  int frames = 200, samples = 256, ct_um = 1000;
   if ((argc > 2 && !read_count(argv[2], "FRAMES", 1, 100000, &frames)) ||
-      (argc > 3 && !read_count(argv[3], "SAMPLES", 8, 4096, &samples)))
+      (argc > 3 && !read_count(argv[3], "SAMPLES", 8, 4096, &samples)) ||
+      (argc > 4 && !read_count(argv[4], "CT_UM", 100, 4000, &ct_um)))
     return 2;
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
@@ -101,7 +104,9 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "pcisim-us-kidney: cannot create %s: %s\n", out.c_str(), ec.message().c_str());
     return 1;
   }
-  const auto kidney = pcisim::anatomy::make_kidney_phantom();
+  pcisim::anatomy::KidneySpec spec;
+  spec.ct_spacing_mm = ct_um * 1e-3;
+  const auto kidney = pcisim::anatomy::make_kidney_phantom(spec);
   TetSnapshot mesh = kidney_tets(kidney.spec, 11.0);
   pcisim::ultrasound::ProbePose pose;
   pose.origin_mm = Eigen::Vector3d(0.0, kidney.ct.origin_mm.y(), 0.0);  // anterior face of the CT

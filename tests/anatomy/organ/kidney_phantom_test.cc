@@ -1,6 +1,7 @@
-// The procedural kidney: a closed manifold surface whose volume is the implicit shape's, a CT whose
-// voxels are the layers the spec draws (judged from its semi-axes and shells, not by the function
-// that painted them), and beads spread through the organ.
+// The procedural kidney: a closed manifold surface whose volume is the implicit shape's, a CT that
+// holds the anatomy the spec draws (cortex, pyramids and columns, sinus fat, calyces and pelvis,
+// the hilum's vessels: checked at points worked out from the spec's numbers, not by the function
+// that painted them), partial volume at its boundaries, and beads spread through the organ.
 #include "anatomy/organ/kidney_phantom.h"
 
 #include <gtest/gtest.h>
@@ -49,100 +50,92 @@ TEST(KidneyPhantom, SurfaceIsClosedManifoldWithTheImplicitVolume) {
   EXPECT_GT(p.facts.implicit_volume_mm3, 0.85 * ellipsoid);
 }
 
-// The organ's layers from the spec alone, not from kidney_tissue_at: an ellipsoid of the spec's
-// semi-axes whose radius the hilum pulls in toward -x (docs/soft-tissue.md, "The organ"), shells at
-// normalised radius pelvis_fraction and medulla_fraction. The hilum only pulls the surface in: by at
-// most hilum_depth (on the medial axis), and on the lateral side (x >= 0) by under 9.1e-4
-// (0.4 exp(-(pi/2)^2 / (2 x 0.45^2)) = 9.04e-4). So at a voxel centre the true normalised radius
-// lies in [s_e, s_e / g], s_e the bare ellipsoid's, g = 1 - 9.1e-4 laterally and 1 - hilum_depth
-// medially; where that interval is inside one layer the layer is known, elsewhere the voxel is
-// not judged.
-enum class Expected { kUnknown, kAir, kFat, kTable, kCortex, kMedulla, kPelvis, kTumour, kBead };
-
-Expected expected_tissue(const KidneySpec& spec, const KidneyFacts& f, const Vector3d& p) {
-  const Vector3d a = spec.semi_axes_mm;
-  const double s_lo = p.cwiseQuotient(a).norm(), eps = 1e-9;
-  if (s_lo >= 1.0 + eps) {  // outside the ellipsoid: outside the organ, whatever the hilum does
-    const double table_top = a.y() + spec.table_gap_mm, table_bottom = table_top + spec.table_thickness_mm;
-    if (p.y() > table_bottom) return Expected::kAir;
-    return p.y() >= table_top ? Expected::kTable : Expected::kFat;
-  }
-  // beads and the tumour are drawn inside the organ, over the layers
-  const double bead2 = spec.bead_radius_mm * spec.bead_radius_mm;
-  for (const Vector3d& b : f.fiducials_mm)
-    if ((p - b).squaredNorm() <= bead2) return Expected::kBead;
-  if ((p - f.tumour_centre_mm).norm() <= spec.tumour_radius_mm) return Expected::kTumour;
-  const double s_hi = s_lo / (p.x() >= 0.0 ? 1.0 - 9.1e-4 : 1.0 - spec.hilum_depth);
-  if (s_hi < spec.pelvis_fraction - eps) return Expected::kPelvis;
-  if (s_lo > spec.pelvis_fraction + eps && s_hi < spec.medulla_fraction - eps) return Expected::kMedulla;
-  if (s_lo > spec.medulla_fraction + eps && s_hi < 1.0 - eps) return Expected::kCortex;
-  return Expected::kUnknown;
-}
-
-double expected_hu(Expected e) {
-  switch (e) {
-    case Expected::kAir:
-      return -1000.0;
-    case Expected::kFat:
-      return -100.0;
-    case Expected::kTable:
-      return 200.0;
-    case Expected::kCortex:
-      return 150.0;
-    case Expected::kMedulla:
-      return 30.0;
-    case Expected::kPelvis:
-      return 10.0;
-    case Expected::kTumour:
-      return 60.0;
-    case Expected::kBead:
-      return 2000.0;
-    case Expected::kUnknown:
-      break;
-  }
-  return std::nan("");
-}
-
+// The CT at points whose tissue the spec decides, worked out by hand from its numbers (semi-axes
+// 30 x 17.5 x 55 mm, hilum depth 0.4, cortex 7 mm, sinus below s = 0.35, pyramids of 17 degrees
+// at their base, calyces of 2.5 mm centred 1.25 mm inside the sinus, infundibula of 1.3 mm to the
+// pelvis, an ellipsoid centred (-10, 0, 0) of 8 x 4.5 x 11 mm; the vein 4 mm round y = -4.5, the
+// artery 2.5 mm round y = 3.5, medial of x = -10), each at least a millimetre from any boundary.
+// Voxel centres lie on whole millimetres in x and z and half millimetres in y (the CT starts at
+// -semi-axis - margin), so y = 0.5 stands for the axis (s moves < 0.2 %).
 TEST(KidneyPhantom, HuAtKnownPointsIsTheDrawnTissue) {
-  const KidneyPhantom& p = phantom();
-  const auto& f = p.facts;
-  Vector3d c;
-  EXPECT_EQ(hu_near(p.ct, f.tumour_centre_mm, &c), kKidneyTumourHu);
-  for (const Vector3d& b : f.fiducials_mm) EXPECT_EQ(hu_near(p.ct, b, &c), kKidneyBeadHu);
-  // the hilum: on the medial axis (-x) the capsule is pulled in to (1 - 0.4) x 30 = 18 mm, so the
-  // pelvis ends at 7.2 mm, the medulla at 14.4 mm, and 21 mm out (inside the bare ellipsoid) is fat.
-  // The nearest voxel centres are 0.5 mm off the axis (y on half millimetres): s moves < 0.2 %
-  const struct {
-    double x_mm;
-    Expected e;
-  } hilum[] = {
-      {-4.0, Expected::kPelvis}, {-10.0, Expected::kMedulla}, {-16.0, Expected::kCortex}, {-21.0, Expected::kFat}};
-  for (const auto& h : hilum) {
-    const double hu = hu_near(p.ct, Vector3d(h.x_mm, 0.0, 0.0), &c);
-    ASSERT_LT((c - Vector3d(h.x_mm, 0.0, 0.0)).norm(), 0.51);
-    EXPECT_EQ(hu, expected_hu(h.e)) << "medial axis at " << h.x_mm << " mm";
+  {
+    const KidneyPhantom& p = phantom();
+    Vector3d c;
+    EXPECT_EQ(hu_near(p.ct, p.facts.tumour_centre_mm, &c), kKidneyTumourHu);
+    for (const Vector3d& b : p.facts.fiducials_mm) EXPECT_EQ(hu_near(p.ct, b, &c), kKidneyBeadHu);
   }
-  // every voxel whose layer the spec decides, by layer: painted as that layer
-  std::array<int64_t, 9> judged{}, wrong{};
-  for (int64_t k = 0; k < p.ct.dims[2]; ++k)
-    for (int64_t j = 0; j < p.ct.dims[1]; ++j)
-      for (int64_t i = 0; i < p.ct.dims[0]; ++i) {
+  // the anatomy without the tumour and beads the seed places over it
+  KidneySpec bare;
+  bare.tumour_radius_mm = 0.0;
+  bare.fiducial_count = 0;
+  const KidneyPhantom p = make_kidney_phantom(bare);
+  Vector3d c;
+  const struct {
+    Vector3d at_mm;
+    double hu;
+    const char* what;
+  } known[] = {
+      // the lateral axis (+x) is a pyramid's: cortex to 30 - 7 = 23 mm, the pyramid down to its
+      // papilla at 0.35 x 30 = 10.5, its calyx 9.25 +- 2.5, the infundibulum along the axis to the
+      // pelvis, which spans x in [-18, -2]
+      {{27, 0.5, 0}, kKidneyCortexHu, "cortex on the lateral axis"},
+      {{17, 0.5, 0}, kKidneyMedullaHu, "the lateral pyramid"},
+      {{9, 0.5, 0}, kKidneyPelvisHu, "its calyx"},
+      {{3, 0.5, 0}, kKidneyPelvisHu, "its infundibulum"},
+      {{-10, 0.5, 0}, kKidneyPelvisHu, "the pelvis"},
+      // medially the sinus opens to the hilum (the surface at 0.6 x 30 = 18 mm): fat beyond, the
+      // vein and the artery running out through it
+      {{-22, 0.5, 0}, kKidneyFatHu, "fat at the hilum"},
+      {{-25, -4.5, 0}, kKidneyVeinHu, "the renal vein"},
+      {{-25, 3.5, 0}, kKidneyArteryHu, "the renal artery"},
+      // 45 degrees between the anterior row and the lateral border, s = 0.6 (9.8 mm deep):
+      // 45 degrees from any pyramid's axis, a column of cortex between them
+      {{13, -7.5, 0}, kKidneyCortexHu, "a column between pyramids"},
+      // in the sinus, clear of pelvis, calyces, infundibula (4 mm from the nearest) and vessels
+      {{5, 0.5, 12}, kKidneySinusFatHu, "the sinus's fat"},
+      // around the organ: perirenal fat, the table behind, air beyond it
+      {{0, -25.5, 0}, kKidneyFatHu, "fat in front"},
+      {{0, p.spec.semi_axes_mm.y() + p.spec.table_gap_mm + 5.5, 0}, kKidneyTableHu, "the table"},
+  };
+  for (const auto& k : known) {
+    const double hu = hu_near(p.ct, k.at_mm, &c);
+    ASSERT_LT((c - k.at_mm).norm(), 0.51) << k.what;
+    EXPECT_EQ(hu, k.hu) << k.what << " at " << k.at_mm.transpose();
+  }
+}
+
+// Partial volume: where a voxel's centre and its 8 corners (every other voxel) are one tissue it
+// holds that tissue's HU; at the capsule on the lateral axis (x = 30 mm, the voxel centred on the surface) the HU lies
+// between the fat's and the cortex's, one voxel either side pure
+TEST(KidneyPhantom, BoundaryVoxelsMixTheirTissuesAndTheRestArePure) {
+  const KidneyPhantom& p = phantom();
+  const double h = p.ct.spacing_mm.x();
+  int64_t pure = 0, wrong = 0;
+  for (int64_t k = 0; k < p.ct.dims[2]; k += 2)
+    for (int64_t j = 0; j < p.ct.dims[1]; j += 2)
+      for (int64_t i = 0; i < p.ct.dims[0]; i += 2) {
         const Vector3d x =
             p.ct.index_to_physical_mm(Vector3d(static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)));
-        const Expected e = expected_tissue(p.spec, f, x);
-        if (e == Expected::kUnknown) continue;
-        ++judged[static_cast<int>(e)];
-        wrong[static_cast<int>(e)] += p.ct.hu(i, j, k) != expected_hu(e);
+        const KidneyTissue t = kidney_tissue_at(p.spec, p.facts, x);
+        bool same = true;
+        for (int corner = 0; corner < 8 && same; ++corner) {
+          const Vector3d d(corner & 1 ? 0.5 : -0.5, corner & 2 ? 0.5 : -0.5, corner & 4 ? 0.5 : -0.5);
+          same = kidney_tissue_at(p.spec, p.facts, x + h * d) == t;
+        }
+        if (!same) continue;
+        ++pure;
+        wrong += p.ct.hu(i, j, k) != kidney_tissue_hu(t);
       }
-  const char* names[] = {"unknown", "air", "fat", "table", "cortex", "medulla", "pelvis", "tumour", "bead"};
-  std::printf("voxels judged:");
-  for (int e = 1; e < 9; ++e) std::printf(" %s %ld", names[e], static_cast<long>(judged[e]));
-  std::printf("\n");
-  for (int e = 1; e < 9; ++e) {
-    EXPECT_EQ(wrong[e], 0) << names[e] << ": " << wrong[e] << " of " << judged[e] << " voxels";
-    // each layer judged on many voxels (measured: pelvis 4517, the fewest; 188 in the 45 beads)
-    EXPECT_GT(judged[e], e == static_cast<int>(Expected::kBead) ? 90 : 1000) << names[e];
-  }
+  // (a voxel whose corners are one tissue may still hold a pyramid's thin tip between them: 10 of
+  // ~90 000 here, mixed as they should be)
+  EXPECT_GT(pure, 50000);
+  EXPECT_LE(wrong, pure / 2000) << "of " << pure << " voxels whose corners are one tissue";
+  Vector3d c;
+  const double surface = hu_near(p.ct, Vector3d(30, 0.5, 0), &c);
+  EXPECT_GT(surface, kKidneyFatHu + 20.0);
+  EXPECT_LT(surface, kKidneyCortexHu - 20.0);
+  EXPECT_EQ(hu_near(p.ct, Vector3d(28, 0.5, 0), &c), kKidneyCortexHu);
+  EXPECT_EQ(hu_near(p.ct, Vector3d(32, 0.5, 0), &c), kKidneyFatHu);
 }
 
 TEST(KidneyPhantom, BeadsAreInsideAndSpreadAndTheSeedVaries) {

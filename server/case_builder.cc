@@ -29,9 +29,10 @@ anatomy::PhantomCaseSpec phantom_case_spec(const Scene& scene) {
   return p;
 }
 
-anatomy::Case kidney_case(const Scene& scene) {
+anatomy::Case kidney_case(const Scene& scene, double ct_spacing_mm) {
   anatomy::KidneySpec spec;
   spec.seed = scene.world.anatomy.seed;
+  spec.ct_spacing_mm = ct_spacing_mm;
   anatomy::KidneyPhantom k = anatomy::make_kidney_phantom(spec);
   anatomy::Case c;
   c.name = "kidney phantom " + std::to_string(spec.seed);

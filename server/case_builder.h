@@ -15,8 +15,10 @@ namespace pcisim::server {
 anatomy::PhantomCaseSpec phantom_case_spec(const Scene& scene);
 
 // the soft-tissue scene's procedural organ (anatomy.organ "kidney", its seed): the organ and its
-// CT, no vessels (what --write-case writes for such a scene)
-anatomy::Case kidney_case(const Scene& scene);
+// CT (at ct_spacing_mm voxels: the scene's 1 mm; finer shows sloping boundaries without the
+// voxels' steps, at 4-5x the build time for 0.5 mm) and tissue map, no vessels (what
+// --write-case writes for such a scene)
+anatomy::Case kidney_case(const Scene& scene, double ct_spacing_mm = 1.0);
 
 // throws anatomy::CaseError (a case folder that is missing or wrong, or one that does not fit the
 // scene: no organ for a soft-tissue scene, no vessels for the others) naming the file and field

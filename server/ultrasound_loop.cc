@@ -15,7 +15,9 @@ UltrasoundLoop::UltrasoundLoop(const Scene& scene, const anatomy::Case& anatomy,
                                SharedState& state, lcm::LCM* images)
     : spec_(*scene.ultrasound), state_(state), images_(images), channel_(protocol::kUltrasoundChannel) {
   if (!anatomy.ct) throw std::invalid_argument("ultrasound: the case has no CT to image");
-  renderer_ = std::make_unique<ultrasound::BModeRenderer>(*anatomy.ct, spec_.settings);
+  // the organ's tissue map, where the case has one, gives each tissue's acoustic properties
+  const anatomy::TissueMap* tissue = anatomy.organ && anatomy.organ->tissue ? &*anatomy.organ->tissue : nullptr;
+  renderer_ = std::make_unique<ultrasound::BModeRenderer>(*anatomy.ct, spec_.settings, tissue);
   // the CT and the physics share the organ's frame (LPS, mm): rest = the model's tet vertices
   mesh_.rest_mm = rest_tet_vertices_m * 1e3;
   mesh_.current_mm = mesh_.rest_mm;

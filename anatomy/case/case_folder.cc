@@ -226,6 +226,25 @@ void write_fiducials(const std::vector<Eigen::Vector3d>& fiducials_m, const std:
   if (!out) throw CaseError(path + ": cannot write");
 }
 
+// a 3D Slicer colour table for the tissue map (label, name, R G B A per line; written for
+// viewing, not read): each tissue a distinct hue, label 0 transparent
+void write_tissue_colors(const std::vector<std::string>& names, const std::string& path) {
+  std::ofstream out(path);
+  out << "# pcisim tissue labels (tissue.nrrd)\n";
+  for (size_t i = 0; i < names.size(); ++i) {
+    // hues a golden angle apart, so neighbouring labels differ
+    const double hue = std::fmod(0.618033988749895 * static_cast<double>(i), 1.0) * 6.0;
+    const double x = 1.0 - std::abs(std::fmod(hue, 2.0) - 1.0);
+    const double rgb[6][3] = {{1, x, 0}, {x, 1, 0}, {0, 1, x}, {0, x, 1}, {x, 0, 1}, {1, 0, x}};
+    const double* c = rgb[static_cast<int>(hue) % 6];
+    std::string name = names[i];
+    std::replace(name.begin(), name.end(), ' ', '_');  // Slicer's table separates by spaces
+    out << fmt::format("{} {} {} {} {} {}\n", i, name, std::lround(55 + 200 * c[0]), std::lround(55 + 200 * c[1]),
+                       std::lround(55 + 200 * c[2]), i == 0 ? 0 : 255);
+  }
+  if (!out) throw CaseError(path + ": cannot write");
+}
+
 // the organ's files and support (case.json "organ"; docs/anatomy.md)
 Json write_organ(const Organ& o, const fs::path& dir) {
   // a PLY whose millimetres read back to the same doubles, not an STL's floats: the particle
@@ -240,6 +259,13 @@ Json write_organ(const Organ& o, const fs::path& dir) {
     // for 3D Slicer: the beads as a point list (written for viewing, not read)
     write_markups_fiducials(o.name.empty() ? "F" : o.name, o.fiducials_m, (dir / "slicer/fiducials.mrk.json").string());
     doc["slicer_fiducials"] = "slicer/fiducials.mrk.json";
+  }
+  if (o.tissue) {
+    // the CT's grid and int16 labels: a 3D Slicer labelmap, with its colour table beside it
+    write_nrrd(o.tissue->labels, (dir / "tissue.nrrd").string(), volume_io_has_gzip());
+    doc["tissue"] = {{"labels", "tissue.nrrd"}, {"names", o.tissue->names}};
+    write_tissue_colors(o.tissue->names, (dir / "slicer/tissue.ctbl").string());
+    doc["tissue"]["slicer_colors"] = "slicer/tissue.ctbl";
   }
   const Eigen::Vector3d n = o.support_normal.array() + 0.0;  // -0 written as 0
   doc["support"] = {{"normal", {n.x(), n.y(), n.z()}}, {"offset_mm", o.support_offset_m * 1e3}};
@@ -352,7 +378,8 @@ double signed_volume_m3(const TriangleMesh& m) {
 
 // case.json "organ": its surface (closed, manifold, wound outward), its beads (inside it) and the
 // support it rests on (a unit normal out of the support, the organ on its free side)
-Organ read_organ(json::JsonReader o, const fs::path& dir, const std::string& case_json, std::string* surface_file) {
+Organ read_organ(json::JsonReader o, const fs::path& dir, const std::string& case_json, std::string* surface_file,
+                 std::string* tissue_file) {
   Organ organ;
   organ.name = o.text("name", "organ");
   if (organ.name.empty()) o.fail("name", "expected a non-empty name");
@@ -398,6 +425,25 @@ Organ read_organ(json::JsonReader o, const fs::path& dir, const std::string& cas
     o.fail("support", fmt::format("the organ's centre lies {:.1f} mm inside the support (the normal points out of the "
                                   "support, toward the organ)",
                                   -above_mm));
+  if (o.has("tissue")) {
+    // the labels are read with the CT (they must lie on its grid); their names here
+    json::JsonReader t = o.child("tissue");
+    *tissue_file = member_file(dir, case_json, "organ.tissue.labels", t.text("labels", ""));
+    const auto& names = t.list("names");
+    if (names.empty() || names.size() > static_cast<size_t>(kMaxTissueNames))
+      t.fail("names", fmt::format("expected 1 to {} names, one per label (label 0 first); got {}", kMaxTissueNames,
+                                  names.size()));
+    TissueMap map;
+    for (const auto& n : names) {
+      if (!n.is_string() || n.get<std::string>().empty() || n.get<std::string>().size() > kMaxTissueNameChars)
+        t.fail("names", fmt::format("expected non-empty strings of at most {} characters (names[{}])",
+                                    kMaxTissueNameChars, map.names.size()));
+      map.names.push_back(n.get<std::string>());
+    }
+    t.text("slicer_colors", "");  // written for viewers, not read
+    t.finish();
+    organ.tissue = std::move(map);
+  }
   o.text("slicer_fiducials", "");  // written for viewers, not read
   o.finish();
   return organ;
@@ -439,6 +485,10 @@ void write_case(const Case& c, const std::string& dir_name) {
   if (c.ct) {
     write_nrrd(*c.ct, (dir / "ct.nrrd").string(), volume_io_has_gzip());
     doc["ct"] = {{"file", "ct.nrrd"}, {"lumen_enhanced", c.ct_lumen_enhanced}};
+  }
+  if (c.organ && c.organ->tissue) {
+    const std::string why = c.ct ? validate_tissue_map(*c.organ->tissue, *c.ct) : "the case has no CT";
+    if (!why.empty()) throw CaseError(fmt::format("{}: {}", (dir / "tissue.nrrd").string(), why));
   }
   if (c.organ) doc["organ"] = write_organ(*c.organ, dir);
   Json landmarks = Json::array();
@@ -505,7 +555,7 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
     throw CaseError(e.what());
   }
   Case c;
-  std::string vessels_file, ct_file, ct_dicom, organ_surface_file, lesions_file;
+  std::string vessels_file, ct_file, ct_dicom, organ_surface_file, tissue_file, lesions_file;
   try {
     const Json doc = json::parse_json_checked(case_text, case_json);
     json::JsonReader r(doc, "");
@@ -521,7 +571,7 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
     if (!r.has("organ") || r.has("vessels"))
       vessels_file = member_file(dir, case_json, "vessels", r.text("vessels", ""));
     if (r.has("organ")) {
-      c.organ = read_organ(r.child("organ"), dir, case_json, &organ_surface_file);
+      c.organ = read_organ(r.child("organ"), dir, case_json, &organ_surface_file, &tissue_file);
       if (!r.has("ct")) fail(case_json, "ct", "missing (an organ case needs a CT: the ultrasound images it)");
     }
     if (r.has("lumen")) {
@@ -653,6 +703,15 @@ Case read_case(const std::string& dir_name, const DicomFolderReader& read_dicom)
   }
   if (c.ct) check_vessels_inside(c.vessels, *c.ct, vessels_file, ct_file);
   if (c.organ) check_organ_inside(c.organ->surface, *c.ct, organ_surface_file, ct_file);
+  if (!tissue_file.empty()) {
+    try {
+      c.organ->tissue->labels = read_volume(tissue_file, /*require_spacing=*/true, DataFileScope::kHeaderFolder);
+    } catch (const VolumeIoError& e) {
+      throw CaseError(e.what());
+    }
+    if (const std::string why = validate_tissue_map(*c.organ->tissue, *c.ct); !why.empty())
+      throw CaseError(fmt::format("{}: {} (case.json organ.tissue; the CT is {})", tissue_file, why, ct_file));
+  }
   // the numbers of case.json that place things: in or near the CT (a heart centre 5 m away ran
   // and wrote samples of nothing)
   const NearBox box = near_box(c, ct_file, vessels_file);

@@ -7,6 +7,9 @@
 //   organ.ply      the soft-tissue scene's organ surface (optional), millimetres, LPS: written as
 //                  binary PLY of doubles; read from any mesh file read_mesh reads (STL, PLY, OBJ)
 //   fiducials.json the organ's bead centres (millimetres, LPS)
+//   tissue.nrrd    the organ's tissue map (optional): int16 labels on the CT's grid, their names
+//                  in case.json organ.tissue.names (the ultrasound's acoustic properties per
+//                  tissue); slicer/tissue.ctbl its 3D Slicer colour table (written, not read)
 //   lesions.json   the vessels' stenoses (optional; anatomy/vessel/lesion.h): branch, position along
 //                  it, length, minimal lumen and reference diameters, % stenosis
 //   slicer/<branch>.mrk.json   each centerline as a 3D Slicer markups curve (written, not read;

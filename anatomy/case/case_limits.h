@@ -38,6 +38,11 @@ inline constexpr int64_t kMaxLumenTriangles = 8'000'000;
 // triangle (kMaxFiducials x this is 1.3 x 10^8 triangle visits, about a second)
 inline constexpr int64_t kMaxOrganTriangles = 500'000;
 
+// tissue.nrrd's names: a labelmap of an abdomen names tens of tissues (the kidney phantom 11);
+// each name is a word or three
+inline constexpr int kMaxTissueNames = 256;
+inline constexpr int kMaxTissueNameChars = 64;
+
 // ---- case.json, fiducials.json, heart.node ----
 // a registration phantom carries tens of beads (the kidney phantom 45)
 inline constexpr int kMaxFiducials = 256;

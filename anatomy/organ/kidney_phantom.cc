@@ -40,6 +40,14 @@ double kidney_tissue_hu(KidneyTissue t) {
   return kKidneyFatHu;
 }
 
+const std::vector<std::string>& kidney_tissue_names() {
+  // the table an acrylic top; the beads steel
+  static const std::vector<std::string> names = {
+      "air",        "perirenal fat", "acrylic", "renal cortex", "renal medulla", "urine", "renal sinus fat",
+      "renal vein", "renal artery",  "tumour",  "steel"};
+  return names;
+}
+
 double kidney_radius_mm(const KidneySpec& spec, const Vector3d& d) {
   const Vector3d a = spec.semi_axes_mm;
   const double ellipsoid = 1.0 / std::sqrt(d.cwiseQuotient(a).squaredNorm());
@@ -258,11 +266,12 @@ KidneyPhantom make_kidney_phantom(const KidneySpec& spec) {
   const auto at = [&](int64_t i, int64_t j, int64_t k) -> Vector3d {
     return lo + h * Vector3d(static_cast<double>(i), static_cast<double>(j), static_cast<double>(k));
   };
-  std::vector<uint8_t> label(static_cast<size_t>(dims[0] * dims[1] * dims[2]));
+  out.tissue = Volume::make(dims, Vector3d::Constant(h), lo, VoxelType::kInt16);
+  std::vector<int16_t>& label = out.tissue.hu_i16;
   for (int64_t k = 0; k < dims[2]; ++k)
     for (int64_t j = 0; j < dims[1]; ++j)
       for (int64_t i = 0; i < dims[0]; ++i)
-        label[out.ct.linear_index(i, j, k)] = static_cast<uint8_t>(kidney_tissue_at(spec, facts, at(i, j, k)));
+        label[out.ct.linear_index(i, j, k)] = static_cast<int16_t>(kidney_tissue_at(spec, facts, at(i, j, k)));
   for (int64_t k = 0; k < dims[2]; ++k)
     for (int64_t j = 0; j < dims[1]; ++j)
       for (int64_t i = 0; i < dims[0]; ++i) {
@@ -305,6 +314,7 @@ Organ kidney_organ(const KidneyPhantom& phantom) {
   for (const Eigen::Vector3d& v : organ.surface.vertices_m) posterior_m = std::max(posterior_m, v.y());
   organ.support_normal = -Eigen::Vector3d::UnitY();
   organ.support_offset_m = -posterior_m;  // -y . x >= -posterior: y <= posterior
+  organ.tissue = TissueMap{phantom.tissue, kidney_tissue_names()};
   return organ;
 }
 

@@ -8,6 +8,7 @@
 // have exact truth. Organ frame = LPS, centre at the origin, long axis along S.
 #include <Eigen/Core>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "anatomy/mesh/triangle_mesh.h"
@@ -82,12 +83,16 @@ struct KidneyFacts {
 // kMedulla: a pyramid; kPelvis: urine (the pelvis, a calyx or an infundibulum)
 enum class KidneyTissue { kAir, kFat, kTable, kCortex, kMedulla, kPelvis, kSinusFat, kVein, kArtery, kTumour, kBead };
 double kidney_tissue_hu(KidneyTissue t);
+// each tissue's name, in the enum's order (a label's name in the tissue map; the ultrasound's
+// acoustic table knows each: ultrasound/echo/tissue_acoustics.h)
+const std::vector<std::string>& kidney_tissue_names();
 
 struct KidneyPhantom {
   KidneySpec spec;
   KidneyFacts facts;
   TriangleMesh surface;  // metres, LPS, closed, counter-clockwise seen from outside
   Volume ct;             // HU, int16
+  Volume tissue;         // the KidneyTissue at each CT voxel's centre (int16 labels, the CT's grid)
 };
 
 // the organ's radius toward unit direction d (mm)
@@ -109,8 +114,9 @@ KidneyTissue kidney_tissue_at(const KidneySpec& spec, const KidneyFacts& facts, 
 // throws std::invalid_argument on a spec that cannot be drawn (non-positive sizes, too many beads)
 KidneyPhantom make_kidney_phantom(const KidneySpec& spec = {});
 
-// the phantom as the soft-tissue scene's organ: its surface, beads (metres) and its support, the
-// plane touching its posterior surface (supine: posterior is +y, down, so the plane faces -y)
+// the phantom as the soft-tissue scene's organ: its surface, beads (metres), its support (the
+// plane touching its posterior surface; supine: posterior is +y, down, so the plane faces -y) and
+// its tissue map
 Organ kidney_organ(const KidneyPhantom& phantom);
 
 }  // namespace pcisim::anatomy

@@ -109,26 +109,41 @@ std::complex<float> scatterer(uint64_t seed, int64_t i, int64_t j, int64_t k) {
 }
 
 std::complex<float> scatterer_field(uint64_t seed, const double (&u)[3]) {
-  const auto& table = scatterer_table();
-  const uint64_t mixed = splitmix64(seed);
-  // per axis: the two lattice lines' hashed coordinates and weights
-  uint64_t key[3][2];
+  ScattererCell cell;
+  return scatterer_field(seed, u, &cell);
+}
+
+std::complex<float> scatterer_field(uint64_t seed, const double (&u)[3], ScattererCell* cell) {
+  // per axis: the cell's lower lattice line and the two lines' weights
+  int64_t i0[3];
   float w[3][2];
-  constexpr uint64_t kAxis[3] = {kCellI, kCellJ, kCellK};
   for (int a = 0; a < 3; ++a) {
     const double fl = std::floor(u[a]);
-    const auto i0 = static_cast<uint64_t>(static_cast<int64_t>(fl));
-    key[a][0] = i0 * kAxis[a];
-    key[a][1] = (i0 + 1) * kAxis[a];
+    i0[a] = static_cast<int64_t>(fl);
     w[a][1] = static_cast<float>(u[a] - fl);
     w[a][0] = 1.0f - w[a][1];
+  }
+  if (i0[0] != cell->index[0] || i0[1] != cell->index[1] || i0[2] != cell->index[2]) {
+    const auto& table = scatterer_table();
+    const uint64_t mixed = splitmix64(seed);
+    constexpr uint64_t kAxis[3] = {kCellI, kCellJ, kCellK};
+    uint64_t key[3][2];
+    for (int a = 0; a < 3; ++a) {
+      key[a][0] = static_cast<uint64_t>(i0[a]) * kAxis[a];
+      key[a][1] = (static_cast<uint64_t>(i0[a]) + 1) * kAxis[a];
+      cell->index[a] = i0[a];
+    }
+    for (int corner = 0; corner < 8; ++corner) {
+      const int x = corner & 1, y = corner >> 1 & 1, z = corner >> 2 & 1;
+      cell->corner[corner] = table[splitmix64(mixed ^ key[0][x] ^ key[1][y] ^ key[2][z]) & (kScatterers - 1)];
+    }
   }
   std::complex<float> sum = 0.0f;
   float weight2 = 0.0f;
   for (int corner = 0; corner < 8; ++corner) {
     const int x = corner & 1, y = corner >> 1 & 1, z = corner >> 2 & 1;
     const float wc = w[0][x] * w[1][y] * w[2][z];
-    sum += wc * table[splitmix64(mixed ^ key[0][x] ^ key[1][y] ^ key[2][z]) & (kScatterers - 1)];
+    sum += wc * cell->corner[corner];
     weight2 += wc * wc;
   }
   return sum / std::sqrt(weight2);

@@ -49,6 +49,14 @@ std::complex<float> scatterer(uint64_t seed, int64_t i, int64_t j, int64_t k);
 // its power is 1 everywhere (plain trilinear falls to 1/8 of it at a cell's centre, a grid the
 // image would show): v(u) = sum w_c a_c / sqrt(sum w_c^2)
 std::complex<float> scatterer_field(uint64_t seed, const double (&u)[3]);
+// the same, with the 8 corners' amplitudes kept in `cell` between calls: a scanline's samples
+// step a fraction of a cell, and most fall in the cell of the one before (the hashes are then
+// not redone; the result is bit for bit scatterer_field's). One cache per seed
+struct ScattererCell {
+  int64_t index[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
+  std::complex<float> corner[8];
+};
+std::complex<float> scatterer_field(uint64_t seed, const double (&u)[3], ScattererCell* cell);
 // time-gain compensated, log-compressed brightness (dB): B = 10 log10(I) + gain + tgc d_cm
 double brightness_db(double intensity, double gain_db, double tgc_db_per_cm, double depth_cm);
 // 8-bit grey: g = round(255 (B + DR) / DR), clamped to [0, 255] (0 dB, a perfect reflector at the

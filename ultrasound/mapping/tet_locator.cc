@@ -95,7 +95,22 @@ void TetLocator::refit(const TetSnapshot& mesh) {
 // barycentric coordinates in the deformed tet, lambda = E_current^-1 (p - v0), reused in the rest
 // tet: rest = r0 + E_rest lambda [soft-tissue paper, "Weighted matrix blending"]
 bool TetLocator::to_rest(const Eigen::Vector3d& p, Eigen::Vector3d* rest) const {
+  int hint = -1;
+  return to_rest(p, rest, &hint);
+}
+
+bool TetLocator::to_rest(const Eigen::Vector3d& p, Eigen::Vector3d* rest, int* hint) const {
   if (tet_count_ == 0) return false;
+  constexpr double kEps = 1e-9;
+  // inside when every barycentric coordinate is >= 0 (to kEps)
+  const auto inside = [&](int t) {
+    if (!valid_[t]) return false;
+    const Eigen::Vector3d l = inv_current_[t] * (p - v0_current_[t]);
+    if (!(l.minCoeff() >= -kEps && l.sum() <= 1.0 + kEps)) return false;
+    *rest = v0_rest_[t] + edges_rest_[t] * l;
+    return true;
+  };
+  if (*hint >= 0 && *hint < tet_count_ && inside(*hint)) return true;
   const Eigen::Vector3d u = (p - lo_).cwiseProduct(inv_cell_);
   Eigen::Vector3i c;
   for (int k = 0; k < 3; ++k) {
@@ -103,15 +118,11 @@ bool TetLocator::to_rest(const Eigen::Vector3d& p, Eigen::Vector3d* rest) const 
     c[k] = std::min(static_cast<int>(u[k]), dims_[k] - 1);
   }
   const int cell = c[0] + dims_[0] * (c[1] + dims_[1] * c[2]);
-  constexpr double kEps = 1e-9;
-  for (int e = cell_start_[cell]; e < cell_start_[cell + 1]; ++e) {
-    const int t = entries_[e];
-    const Eigen::Vector3d l = inv_current_[t] * (p - v0_current_[t]);
-    if (l.minCoeff() >= -kEps && l.sum() <= 1.0 + kEps) {
-      *rest = v0_rest_[t] + edges_rest_[t] * l;
+  for (int e = cell_start_[cell]; e < cell_start_[cell + 1]; ++e)
+    if (inside(entries_[e])) {
+      *hint = entries_[e];
       return true;
     }
-  }
   return false;
 }
 

@@ -21,6 +21,9 @@ class TetLocator {
   void refit(const TetSnapshot& mesh);
   // true and the rest-space point when p (current configuration) lies in a tet
   bool to_rest(const Eigen::Vector3d& p, Eigen::Vector3d* rest) const;
+  // the same, trying the tet in *hint first (the last one found: a scanline's next sample is
+  // mostly in its predecessor's tet) and leaving the one found there (-1: none yet)
+  bool to_rest(const Eigen::Vector3d& p, Eigen::Vector3d* rest, int* hint) const;
   bool empty() const { return tet_count_ == 0; }
   long entries_capacity() const { return static_cast<long>(entries_.capacity()); }
 

@@ -15,10 +15,23 @@ void write_png(const std::string& path, const BModeImage& image) {
   png::write_png_gray8(path, image.width, image.height, image.pixels.data());
 }
 
-BModeRenderer::BModeRenderer(const anatomy::Volume& ct, const UsSettings& settings) : ct_(ct), settings_(settings) {
+BModeRenderer::BModeRenderer(const anatomy::Volume& ct, const UsSettings& settings, const anatomy::TissueMap* tissue)
+    : ct_(ct), settings_(settings) {
   validate(settings_);
   const std::string bad = anatomy::validate(ct);
   if (!bad.empty()) throw std::invalid_argument("ultrasound: the CT is not usable: " + bad);
+  if (tissue) {
+    if (const std::string why = anatomy::validate_tissue_map(*tissue, ct); !why.empty())
+      throw std::invalid_argument("ultrasound: the tissue map is not usable: " + why);
+    for (size_t i = 0; i < tissue->names.size(); ++i) {
+      const TissueAcoustics* t = find_tissue_acoustics(tissue->names[i]);
+      if (!t)
+        throw std::invalid_argument("ultrasound: tissue \"" + tissue->names[i] + "\" (label " + std::to_string(i) +
+                                    ") has no acoustic properties (known: " + known_tissue_names() + ")");
+      label_acoustics_.push_back(acoustics_of(*t));
+    }
+    labels_ = &tissue->labels;
+  }
   world_to_index_ = (ct.direction * ct.spacing_mm.asDiagonal()).inverse();
   // two wavelengths at the centre frequency in soft tissue (1540 m/s), at least one CT voxel
   voxel_mm_ = ct.spacing_mm.maxCoeff();
@@ -26,9 +39,10 @@ BModeRenderer::BModeRenderer(const anatomy::Volume& ct, const UsSettings& settin
   const size_t n = static_cast<size_t>(settings_.width_px) * settings_.height_px;
   line_start_.resize(settings_.width_px);
   line_dir_.resize(settings_.width_px);
-  hu_.resize(n);
   z_.resize(n);
   path_ratio_.resize(n);
+  attenuation_.resize(n);
+  scatter_amplitude_.resize(n);
   scatterer_.resize(n);
   field_.resize(n);
   axial_.resize(n);
@@ -189,8 +203,11 @@ void BModeRenderer::set_mesh(const TetSnapshot& mesh) {
   have_mesh_ = true;
 }
 
-// trilinear HU at a CT point; outside the volume the nearest edge voxel (no artificial boundary)
-double BModeRenderer::sample_hu(const Eigen::Vector3d& p_mm) const {
+// the acoustic properties at a CT point: with a tissue map, the 8 voxels' tissues' properties
+// blended trilinearly (a boundary between voxel centres is a ramp over a voxel, as the HU's);
+// without one, the trilinear HU's. Outside the volume the nearest edge voxel (no artificial
+// boundary)
+Acoustics BModeRenderer::sample_acoustics(const Eigen::Vector3d& p_mm) const {
   const Eigen::Vector3d u = world_to_index_ * (p_mm - ct_.origin_mm);
   int64_t i0[3];
   double f[3];
@@ -201,13 +218,28 @@ double BModeRenderer::sample_hu(const Eigen::Vector3d& p_mm) const {
   }
   const int64_t i1[3] = {std::min(i0[0] + 1, ct_.dims[0] - 1), std::min(i0[1] + 1, ct_.dims[1] - 1),
                          std::min(i0[2] + 1, ct_.dims[2] - 1)};
+  if (labels_) {
+    const int16_t* label = labels_->hu_i16.data();
+    Acoustics out{0.0f, 0.0f, 0.0f, 0.0f};
+    for (int corner = 0; corner < 8; ++corner) {
+      const int x = corner & 1, y = corner >> 1 & 1, z = corner >> 2 & 1;
+      const auto w = static_cast<float>((x ? f[0] : 1 - f[0]) * (y ? f[1] : 1 - f[1]) * (z ? f[2] : 1 - f[2]));
+      const Acoustics& a =
+          label_acoustics_[label[labels_->linear_index(x ? i1[0] : i0[0], y ? i1[1] : i0[1], z ? i1[2] : i0[2])]];
+      out.impedance_mrayl += w * a.impedance_mrayl;
+      out.path_ratio += w * a.path_ratio;
+      out.attenuation_factor += w * a.attenuation_factor;
+      out.scatter_amplitude += w * a.scatter_amplitude;
+    }
+    return out;
+  }
   auto v = [&](int64_t i, int64_t j, int64_t k) { return static_cast<double>(ct_.hu(i, j, k)); };
   const double c00 = v(i0[0], i0[1], i0[2]) * (1 - f[0]) + v(i1[0], i0[1], i0[2]) * f[0];
   const double c10 = v(i0[0], i1[1], i0[2]) * (1 - f[0]) + v(i1[0], i1[1], i0[2]) * f[0];
   const double c01 = v(i0[0], i0[1], i1[2]) * (1 - f[0]) + v(i1[0], i0[1], i1[2]) * f[0];
   const double c11 = v(i0[0], i1[1], i1[2]) * (1 - f[0]) + v(i1[0], i1[1], i1[2]) * f[0];
   const double c0 = c00 * (1 - f[1]) + c10 * f[1], c1 = c01 * (1 - f[1]) + c11 * f[1];
-  return c0 * (1 - f[2]) + c1 * f[2];
+  return acoustics_of_hu(c0 * (1 - f[2]) + c1 * f[2]);
 }
 
 const BModeImage& BModeRenderer::render(const ProbePose& pose, uint64_t seed, const TetSnapshot* deformed) {
@@ -228,10 +260,10 @@ const BModeImage& BModeRenderer::render(const ProbePose& pose, uint64_t seed, co
 }
 
 // One scanline in time: screen sample j (depth d_j = (j + 1/2) dx, dx = depth / height) lies
-// s_j along the ray, s_0 = dx / 2, s_{j+1} = s_j + dx c(HU_j) / c0 (the pulse covers more tissue
+// s_j along the ray, s_0 = dx / 2, s_{j+1} = s_j + dx c_j / c0 (the pulse covers more tissue
 // per screen sample where sound is faster: a boundary behind fat, 1450 m/s, shows deeper than it
-// is: 20 mm of fat at 21.24 mm). Each sample: its rest point through the tets, the HU there, the impedance, and the
-// tissue's scatterer in its cell of the undeformed CT.
+// is: 20 mm of fat at 21.24 mm). Each sample: its rest point through the tets, the acoustic
+// properties there, and the tissue's scatterer in its cell of the undeformed CT.
 void BModeRenderer::march_scanline(int column, const ProbePose& pose, uint64_t seed, bool mapped) {
   const int h = settings_.height_px;
   const double dx_mm = settings_.depth_mm / h;
@@ -241,18 +273,21 @@ void BModeRenderer::march_scanline(int column, const ProbePose& pose, uint64_t s
   const Eigen::Vector3d dir = line_dir_[column].x() * l + line_dir_[column].y() * b;
   const size_t base = static_cast<size_t>(column) * h;
   double s = 0.5 * dx_mm;
+  ScattererCell cell;
+  int tet = -1;
   for (int j = 0; j < h; ++j) {
     const size_t n = base + j;
     const Eigen::Vector3d p = start + s * dir;
     Eigen::Vector3d q = p;
-    if (mapped && !locator_.to_rest(p, &q)) q = p;
-    const double hu = sample_hu(q);
-    hu_[n] = static_cast<float>(hu);
-    z_[n] = static_cast<float>(impedance_mrayl(hu));
-    path_ratio_[n] = static_cast<float>(speed_of_sound_m_s(hu) / kNominalSpeedMS);
+    if (mapped && !locator_.to_rest(p, &q, &tet)) q = p;
+    const Acoustics a = sample_acoustics(q);
+    z_[n] = a.impedance_mrayl;
+    path_ratio_[n] = a.path_ratio;
+    attenuation_[n] = a.attenuation_factor;
+    scatter_amplitude_[n] = a.scatter_amplitude;
     const double u[3] = {q.x() / settings_.speckle_cell_mm, q.y() / settings_.speckle_cell_mm,
                          q.z() / settings_.speckle_cell_mm};
-    scatterer_[n] = scatterer_field(seed, u);
+    scatterer_[n] = scatterer_field(seed, u, &cell);
     s += dx_mm * path_ratio_[n];
   }
 }
@@ -267,12 +302,12 @@ void BModeRenderer::march_scanline(int column, const ProbePose& pose, uint64_t s
 //   cos^2 theta_j = g_a^2 / (g_a^2 + g_l^2)                 g: Z's gradient in the image plane,
 //         along the beam and across scanlines: the boundary's normal against the beam (1 where
 //         the gradient vanishes)
-//   e_j = A_j (r_j cos^(n/2) theta_j + k_j sqrt(sigma(HU_j)) a_j)   a_j the tissue's scatterer,
+//   e_j = A_j (r_j cos^(n/2) theta_j + k_j sqrt(sigma_j) a_j)   a_j the tissue's scatterer,
 //         k_j the row's scatter scale, n the specular exponent (intensity ~ cos^n)
 //   A_j = T_j 10^(-L_j / 10)                                round trip: sqrt(T^2 10^(-2 L / 10))
 //   R_j = ((Z(s_j + p/2) - Z(s_j - p/2)) / (Z(s_j + p/2) + Z(s_j - p/2)))^2   over the pulse p
 //   T_{j+1} = T_j (1 - R_j)^(dx / p)                         one-way transmission (shadowing)
-//   L_j = sum_{i<j} a_i ds_i + a_j ds_j / 2,  a_i = alpha(HU_i) f     one-way loss, dB
+//   L_j = sum_{i<j} a_i ds_i + a_j ds_j / 2,  a_i = alpha_i f    one-way loss, dB
 // [Goksel & Salcudean 2009: reflection + scattering, attenuated; Buerger et al. 2013: the
 // specular echo's fall-off with the angle of incidence]
 void BModeRenderer::echo_scanline(int column) {
@@ -281,7 +316,6 @@ void BModeRenderer::echo_scanline(int column) {
   const double half = 0.5 * pulse_mm_ / dx_mm;  // half window in samples
   const size_t base = static_cast<size_t>(column) * h;
   const float* z = &z_[base];
-  const float* hu = &hu_[base];
   // the neighbouring scanlines' impedance, for the gradient across them (one-sided at the edges)
   // Z's gradient over half a CT voxel either side (at least a sample): over less, the direction
   // follows the trilinear field's kinks at the voxels' faces and a sloping boundary echoes in
@@ -312,7 +346,7 @@ void BModeRenderer::echo_scanline(int column) {
   double transmitted = 1.0, loss_db = 0.0;
   for (int j = 0; j < h; ++j) {
     const double ds_cm = dx_mm * path_ratio_[base + j] / 10.0;
-    const double a_db = attenuation_db(settings_.attenuation_db_per_cm_mhz, hu[j], settings_.frequency_mhz, ds_cm);
+    const double a_db = settings_.attenuation_db_per_cm_mhz * attenuation_[base + j] * settings_.frequency_mhz * ds_cm;
     const double amplitude = transmitted * std::exp(-(loss_db + 0.5 * a_db) * db_to_ln);
     double specular = 0.0;
     const float here = std::abs(steep[j]);
@@ -330,11 +364,12 @@ void BModeRenderer::echo_scanline(int column) {
       const double cos2 = g2 > 0.0 ? g_a * g_a / g2 : 1.0;
       if (quarter_n > 0.0) specular *= std::exp(quarter_n * std::log(std::max(cos2, 1e-300)));
     }
-    const double diffuse = scatter_scale_[j] * std::sqrt(backscatter(hu[j]));
+    const double diffuse = scatter_scale_[j] * scatter_amplitude_[base + j];
     field_[base + j] = static_cast<float>(amplitude) *
                        (static_cast<float>(specular) + static_cast<float>(diffuse) * scatterer_[base + j]);
+    // (within one tissue the window's ends are equal: nothing reflected, nothing to take)
     const double refl = reflection(z_at(j - half), z_at(j + half));
-    transmitted *= std::exp(step_exponent * std::log1p(-std::min(refl, 1.0 - 1e-12)));
+    if (refl > 0.0) transmitted *= std::exp(step_exponent * std::log1p(-std::min(refl, 1.0 - 1e-12)));
     loss_db += a_db;
   }
 }

@@ -4,14 +4,14 @@
 // a sample's depth on the screen is c0 t / 2, its place along the ray the distance the pulse
 // travelled at each tissue's speed of sound. Each sample in the deformed configuration is
 // carried to the undeformed CT through the tet holding it (outside every tet the CT is sampled
-// where the sample is: the organ's surroundings are undeformed); its HU give impedance,
-// scattering and attenuation (echo/acoustic_model.h), and its undeformed place the tissue's
-// scatterer. The echo field (specular reflection at impedance changes, with its fall-off with
-// the angle of incidence, plus the scatterers, attenuated and shadowed along the beam) is
-// convolved with the probe's point-spread function (echo/point_spread.h: separable, axial then
-// lateral), its envelope taken, time-gain compensated and log-compressed. render() returns the
-// display image (display_pixel_to_world in probe/us_settings.h: beam space for a linear probe,
-// the scan-converted fan for a curvilinear one); beam_image() the beam-space one
+// where the sample is: the organ's surroundings are undeformed); there the tissue map's tissues
+// give impedance, speed, scattering and attenuation (echo/tissue_acoustics.h, the 8 voxels'
+// properties blended trilinearly), or without a map the HU (echo/acoustic_model.h); its
+// undeformed place gives the tissue's scatterer. The echo field (specular reflection at impedance changes, with its
+// fall-off with the angle of incidence, plus the scatterers, attenuated and shadowed along the beam) is convolved with
+// the probe's point-spread function (echo/point_spread.h: separable, axial then lateral), its envelope taken, time-gain
+// compensated and log-compressed. render() returns the display image (display_pixel_to_world in probe/us_settings.h:
+// beam space for a linear probe, the scan-converted fan for a curvilinear one); beam_image() the beam-space one
 // (pixel_to_world). The constructor and set_mesh() allocate; render() and set_imaging() allocate
 // nothing.
 #include <complex>
@@ -19,7 +19,9 @@
 #include <string>
 #include <vector>
 
+#include "anatomy/organ/organ.h"
 #include "anatomy/volume/volume.h"
+#include "ultrasound/echo/tissue_acoustics.h"
 #include "ultrasound/mapping/tet_locator.h"
 #include "ultrasound/mapping/tet_snapshot.h"
 #include "ultrasound/probe/us_settings.h"
@@ -38,9 +40,11 @@ void write_png(const std::string& path, const BModeImage& image);
 
 class BModeRenderer {
  public:
-  // validates the settings (std::invalid_argument naming the field) and the CT; keeps a
-  // reference to ct, which must outlive the renderer
-  BModeRenderer(const anatomy::Volume& ct, const UsSettings& settings);
+  // validates the settings (std::invalid_argument naming the field), the CT and the tissue map
+  // (on the CT's grid, every tissue named in tissue_acoustics.h: the message names the one that
+  // is not); keeps references to ct and the map, which must outlive the renderer. tissue ==
+  // nullptr: the acoustic properties from the CT's HU
+  BModeRenderer(const anatomy::Volume& ct, const UsSettings& settings, const anatomy::TissueMap* tissue = nullptr);
 
   // the scanner's depth and overall gain from now on (the probe's knobs); throws
   // std::invalid_argument naming the field when out of range (us_settings.h), changing nothing
@@ -71,7 +75,7 @@ class BModeRenderer {
 
  private:
   void build_geometry();
-  double sample_hu(const Eigen::Vector3d& p_mm) const;
+  Acoustics sample_acoustics(const Eigen::Vector3d& p_mm) const;
   void march_scanline(int column, const ProbePose& pose, uint64_t seed, bool mapped);
   void echo_scanline(int column);
   void convolve_axial(int column);
@@ -79,6 +83,9 @@ class BModeRenderer {
   void scan_convert();
 
   const anatomy::Volume& ct_;
+  // with a tissue map: its labels and each label's properties
+  const anatomy::Volume* labels_ = nullptr;
+  std::vector<Acoustics> label_acoustics_;
   UsSettings settings_;
   Eigen::Matrix3d world_to_index_;
   double pulse_mm_ = 1.0, voxel_mm_ = 1.0;
@@ -86,9 +93,10 @@ class BModeRenderer {
   std::vector<Eigen::Vector2d> line_start_, line_dir_;
   TetLocator locator_;
   bool have_mesh_ = false;
-  // per sample, column-major (scanline by scanline): HU, impedance, the path's step (mm of
-  // tissue per screen sample, c / c0), the tissue's scatterer; the echo field before the PSF
-  std::vector<float> hu_, z_, path_ratio_;
+  // per sample, column-major (scanline by scanline): impedance, the path's step (mm of tissue per
+  // screen sample, c / c0), the attenuation factor, the scatterers' amplitude sqrt(sigma), the
+  // tissue's scatterer; the echo field before the PSF
+  std::vector<float> z_, path_ratio_, attenuation_, scatter_amplitude_;
   std::vector<std::complex<float>> scatterer_, field_;
   // row-major: the field after the axial PSF; the intensity after both
   std::vector<std::complex<float>> axial_;

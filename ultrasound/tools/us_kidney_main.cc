@@ -107,6 +107,8 @@ int run(int argc, char** argv) {
   pcisim::anatomy::KidneySpec spec;
   spec.ct_spacing_mm = ct_um * 1e-3;
   const auto kidney = pcisim::anatomy::make_kidney_phantom(spec);
+  // each voxel's tissue gives its acoustic properties (ultrasound/echo/tissue_acoustics.h)
+  const pcisim::anatomy::TissueMap tissue{kidney.tissue, pcisim::anatomy::kidney_tissue_names()};
   TetSnapshot mesh = kidney_tets(kidney.spec, 11.0);
   pcisim::ultrasound::ProbePose pose;
   pose.origin_mm = Eigen::Vector3d(0.0, kidney.ct.origin_mm.y(), 0.0);  // anterior face of the CT
@@ -121,7 +123,7 @@ int run(int argc, char** argv) {
   curved.geometry = pcisim::ultrasound::ProbeGeometry::kCurvilinear;
   curved.height_px = samples;
   for (const auto& [name, settings] : {std::pair{"linear", linear}, std::pair{"curvilinear", curved}}) {
-    pcisim::ultrasound::BModeRenderer renderer(kidney.ct, settings);
+    pcisim::ultrasound::BModeRenderer renderer(kidney.ct, settings, &tissue);
     renderer.set_mesh(mesh);
     std::vector<double> ms;
     ms.reserve(frames);

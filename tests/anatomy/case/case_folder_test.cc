@@ -499,6 +499,46 @@ TEST_F(OrganCaseFolder, TheBeadsOpenInSlicerAsAPointListAndTheOverviewShowsTheOr
   }
 }
 
+// the organ's tissue map (issue #32): tissue.nrrd on the CT's grid, its names in case.json, a
+// Slicer colour table beside it; names that do not cover a label, or labels off the CT's grid,
+// are refused naming the file and what is wrong
+TEST_F(OrganCaseFolder, TheTissueMapRoundTripsAndABadOneIsRefusedNamingIt) {
+  const Organ& x = *kidney_case().organ;
+  ASSERT_TRUE(x.tissue.has_value());
+  const Case b = read_case(dir_.string());
+  ASSERT_TRUE(b.organ->tissue.has_value());
+  EXPECT_EQ(b.organ->tissue->names, x.tissue->names);
+  EXPECT_EQ(b.organ->tissue->labels.dims, b.ct->dims);
+  EXPECT_EQ(b.organ->tissue->labels.hu_i16, x.tissue->labels.hu_i16);
+  const auto tissue = case_json().at("organ").at("tissue");
+  EXPECT_EQ(tissue.at("labels"), "tissue.nrrd");
+  EXPECT_EQ(tissue.at("names").size(), x.tissue->names.size());
+  std::ifstream colors(dir_ / "slicer" / "tissue.ctbl");
+  std::string line;
+  int rows = 0;
+  while (std::getline(colors, line)) rows += !line.empty() && line[0] != '#';
+  EXPECT_EQ(rows, static_cast<int>(x.tissue->names.size()));
+  // three names for eleven tissues: the first voxel of a later label is named
+  auto j = case_json();
+  j["organ"]["tissue"]["names"] = {"air", "perirenal fat", "acrylic"};
+  set_case_json(j);
+  std::string why = refusal();
+  EXPECT_NE(why.find((dir_ / "tissue.nrrd").string() + ": labels: voxel ("), std::string::npos) << why;
+  EXPECT_NE(why.find("not a label of the 3 names (0 to 2)"), std::string::npos) << why;
+  j["organ"]["tissue"]["names"] = {"air", 3};
+  set_case_json(j);
+  expect_refused("case.json", "organ.tissue.names", "expected non-empty strings");
+  // labels on another grid (a labelmap resampled, or another CT's)
+  j["organ"]["tissue"]["names"] = x.tissue->names;
+  set_case_json(j);
+  anatomy::Volume moved = x.tissue->labels;
+  moved.origin_mm.x() += 0.5;
+  write_nrrd(moved, (dir_ / "tissue.nrrd").string());
+  why = refusal();
+  EXPECT_NE(why.find("tissue.nrrd: labels: spacing, origin or direction differ from the CT's"), std::string::npos)
+      << why;
+}
+
 // a segmented organ as users bring it: an STL (floats), read to float precision
 TEST_F(OrganCaseFolder, AnStlSurfaceReadsToFloatPrecision) {
   const TriangleMesh& x = kidney_case().organ->surface;
@@ -750,6 +790,9 @@ TEST_F(CaseFolder, ACoronaryCaseStillNeedsItsVessels) {
       << refusal();
   Case both = small_case();
   both.organ = kidney_case().organ;
+  // (its tissue map lies on the kidney's CT, not this case's: refused on writing, as on reading)
+  EXPECT_THROW(write_case(both, dir_.string()), CaseError);
+  both.organ->tissue.reset();
   write_case(both, dir_.string());
   const Case b = read_case(dir_.string());
   EXPECT_EQ(b.vessels.branches.size(), small_case().vessels.branches.size());

@@ -104,6 +104,35 @@ TEST(KidneyPhantom, HuAtKnownPointsIsTheDrawnTissue) {
   }
 }
 
+// the tissue map: each voxel's label is the tissue at its centre, named; where the CT's voxel is
+// pure (not a boundary's) its HU is that tissue's; the organ carries the map, fitting its CT
+TEST(KidneyPhantom, TheTissueMapLabelsEachVoxelsCentre) {
+  const KidneyPhantom& p = phantom();
+  const auto& names = kidney_tissue_names();
+  ASSERT_EQ(names.size(), static_cast<size_t>(KidneyTissue::kBead) + 1);
+  EXPECT_EQ(names[static_cast<int>(KidneyTissue::kCortex)], "renal cortex");
+  EXPECT_EQ(names[static_cast<int>(KidneyTissue::kPelvis)], "urine");
+  EXPECT_EQ(names[static_cast<int>(KidneyTissue::kSinusFat)], "renal sinus fat");
+  ASSERT_EQ(p.tissue.dims, p.ct.dims);
+  int64_t checked = 0, pure = 0;
+  for (int64_t k = 0; k < p.ct.dims[2]; k += 3)
+    for (int64_t j = 0; j < p.ct.dims[1]; j += 3)
+      for (int64_t i = 0; i < p.ct.dims[0]; i += 3, ++checked) {
+        const Vector3d x =
+            p.ct.index_to_physical_mm(Vector3d(static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)));
+        const auto t = static_cast<int16_t>(kidney_tissue_at(p.spec, p.facts, x));
+        ASSERT_EQ(p.tissue.hu_i16[p.tissue.linear_index(i, j, k)], t) << i << " " << j << " " << k;
+        const float hu = p.ct.hu(i, j, k);
+        pure += hu == kidney_tissue_hu(static_cast<KidneyTissue>(t));
+      }
+  // most voxels are inside one tissue (boundaries are a thin shell)
+  EXPECT_GT(pure, checked * 9 / 10);
+  const Organ organ = kidney_organ(p);
+  ASSERT_TRUE(organ.tissue.has_value());
+  EXPECT_EQ(organ.tissue->names, names);
+  EXPECT_EQ(validate_tissue_map(*organ.tissue, p.ct), "");
+}
+
 // Partial volume: where a voxel's centre and its 8 corners (every other voxel) are one tissue it
 // holds that tissue's HU; at the capsule on the lateral axis (x = 30 mm, the voxel centred on the surface) the HU lies
 // between the fat's and the cortex's, one voxel either side pure

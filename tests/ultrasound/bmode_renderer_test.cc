@@ -346,6 +346,34 @@ TEST(AcousticModel, ImpedanceAndReflectionFollowTheirEquations) {
   EXPECT_NE(scatterer(9, 1, 2, 3), scatterer(10, 1, 2, 3));
 }
 
+// the scanline's cache of a lattice cell's corners (kept across a step to a face neighbour, up
+// or down any axis; refetched on any other move) gives the field bit for bit
+TEST(AcousticModel, TheCachedScattererFieldIsTheFieldBitForBit) {
+  ScattererCell cell;
+  double u[3] = {-3.7, 12.2, 0.4};
+  uint64_t state = 12345;
+  auto next = [&] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) * 0x1.0p-53;
+  };
+  int hits = 0;
+  for (int n = 0; n < 5000; ++n) {
+    const double kind = next();
+    if (kind < 0.7) {
+      for (double& x : u) x += 0.3 * (next() - 0.5);  // a sample's step: often the same cell
+    } else if (kind < 0.95) {
+      u[static_cast<int>(next() * 3)] += next() < 0.5 ? 1.0 : -1.0;  // a face neighbour
+    } else {
+      for (double& x : u) x += 10.0 * (next() - 0.5);  // anywhere
+    }
+    const int64_t before[3] = {cell.index[0], cell.index[1], cell.index[2]};
+    const std::complex<float> cached = scatterer_field(9, u, &cell), plain = scatterer_field(9, u);
+    ASSERT_EQ(cached, plain) << n;
+    hits += before[0] == cell.index[0] && before[1] == cell.index[1] && before[2] == cell.index[2];
+  }
+  EXPECT_GT(hits, 1000);  // the cache was used, not refilled every time
+}
+
 TEST(BModeRenderer, KidneyCortexEchoWhereThePhantomSaysAndPng) {
   const anatomy::KidneyPhantom kidney = anatomy::make_kidney_phantom();
   UsSettings s;

@@ -128,25 +128,40 @@ std::complex<float> scatterer_field(uint64_t seed, const double (&u)[3], Scatter
     const uint64_t mixed = splitmix64(seed);
     constexpr uint64_t kAxis[3] = {kCellI, kCellJ, kCellK};
     uint64_t key[3][2];
+    // a step to a face neighbour (one axis, by one) keeps the 4 corners of the shared face
+    // (differences taken unsigned: the empty cache's INT64_MIN must not overflow)
+    int moved = -1, steps = 0;
+    bool up = false;
     for (int a = 0; a < 3; ++a) {
+      const uint64_t d = static_cast<uint64_t>(i0[a]) - static_cast<uint64_t>(cell->index[a]);
+      if (d != 0) moved = (d == 1 || d == ~uint64_t{0}) ? a : 3, up = d == 1, ++steps;
       key[a][0] = static_cast<uint64_t>(i0[a]) * kAxis[a];
       key[a][1] = (static_cast<uint64_t>(i0[a]) + 1) * kAxis[a];
-      cell->index[a] = i0[a];
     }
+    // moved up along the axis: the new lower face is the old upper one; down: the reverse
+    const int bit = steps == 1 && moved < 3 ? 1 << moved : 0;
+    const int kept = up ? 0 : bit;
+    if (bit)
+      for (int corner = 0; corner < 8; ++corner)
+        if ((corner & bit) == kept) cell->corner[corner] = cell->corner[corner ^ bit];
     for (int corner = 0; corner < 8; ++corner) {
+      if (bit && (corner & bit) == kept) continue;
       const int x = corner & 1, y = corner >> 1 & 1, z = corner >> 2 & 1;
       cell->corner[corner] = table[splitmix64(mixed ^ key[0][x] ^ key[1][y] ^ key[2][z]) & (kScatterers - 1)];
     }
+    for (int a = 0; a < 3; ++a) cell->index[a] = i0[a];
   }
-  std::complex<float> sum = 0.0f;
-  float weight2 = 0.0f;
+  // (real and imaginary parts summed as floats: a complex product is not needed for a real weight)
+  float re = 0.0f, im = 0.0f, weight2 = 0.0f;
   for (int corner = 0; corner < 8; ++corner) {
     const int x = corner & 1, y = corner >> 1 & 1, z = corner >> 2 & 1;
     const float wc = w[0][x] * w[1][y] * w[2][z];
-    sum += wc * cell->corner[corner];
+    re += wc * cell->corner[corner].real();
+    im += wc * cell->corner[corner].imag();
     weight2 += wc * wc;
   }
-  return sum / std::sqrt(weight2);
+  const float norm = 1.0f / std::sqrt(weight2);
+  return {re * norm, im * norm};
 }
 
 double brightness_db(double intensity, double gain_db, double tgc_db_per_cm, double depth_cm) {

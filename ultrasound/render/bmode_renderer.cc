@@ -218,14 +218,23 @@ Acoustics BModeRenderer::sample_acoustics(const Eigen::Vector3d& p_mm) const {
   }
   const int64_t i1[3] = {std::min(i0[0] + 1, ct_.dims[0] - 1), std::min(i0[1] + 1, ct_.dims[1] - 1),
                          std::min(i0[2] + 1, ct_.dims[2] - 1)};
+  // (inside one tissue, 8 equal corners, the tissue's own numbers exactly: a blend's rounding
+  // would make Z differ in its last bits from sample to sample, and every sample a boundary)
   if (labels_) {
     const int16_t* label = labels_->hu_i16.data();
+    int16_t corners[8];
+    bool uniform = true;
+    for (int corner = 0; corner < 8; ++corner) {
+      const int x = corner & 1, y = corner >> 1 & 1, z = corner >> 2 & 1;
+      corners[corner] = label[labels_->linear_index(x ? i1[0] : i0[0], y ? i1[1] : i0[1], z ? i1[2] : i0[2])];
+      uniform = uniform && corners[corner] == corners[0];
+    }
+    if (uniform) return label_acoustics_[corners[0]];
     Acoustics out{0.0f, 0.0f, 0.0f, 0.0f};
     for (int corner = 0; corner < 8; ++corner) {
       const int x = corner & 1, y = corner >> 1 & 1, z = corner >> 2 & 1;
       const auto w = static_cast<float>((x ? f[0] : 1 - f[0]) * (y ? f[1] : 1 - f[1]) * (z ? f[2] : 1 - f[2]));
-      const Acoustics& a =
-          label_acoustics_[label[labels_->linear_index(x ? i1[0] : i0[0], y ? i1[1] : i0[1], z ? i1[2] : i0[2])]];
+      const Acoustics& a = label_acoustics_[corners[corner]];
       out.impedance_mrayl += w * a.impedance_mrayl;
       out.path_ratio += w * a.path_ratio;
       out.attenuation_factor += w * a.attenuation_factor;
@@ -234,6 +243,11 @@ Acoustics BModeRenderer::sample_acoustics(const Eigen::Vector3d& p_mm) const {
     return out;
   }
   auto v = [&](int64_t i, int64_t j, int64_t k) { return static_cast<double>(ct_.hu(i, j, k)); };
+  const double h000 = v(i0[0], i0[1], i0[2]);
+  if (h000 == v(i1[0], i0[1], i0[2]) && h000 == v(i0[0], i1[1], i0[2]) && h000 == v(i1[0], i1[1], i0[2]) &&
+      h000 == v(i0[0], i0[1], i1[2]) && h000 == v(i1[0], i0[1], i1[2]) && h000 == v(i0[0], i1[1], i1[2]) &&
+      h000 == v(i1[0], i1[1], i1[2]))
+    return acoustics_of_hu(h000);
   const double c00 = v(i0[0], i0[1], i0[2]) * (1 - f[0]) + v(i1[0], i0[1], i0[2]) * f[0];
   const double c10 = v(i0[0], i1[1], i0[2]) * (1 - f[0]) + v(i1[0], i1[1], i0[2]) * f[0];
   const double c01 = v(i0[0], i0[1], i1[2]) * (1 - f[0]) + v(i1[0], i0[1], i1[2]) * f[0];
@@ -332,7 +346,17 @@ void BModeRenderer::echo_scanline(int column) {
   // not anywhere along a flat top)
   float* steep = &steepness_[0];
   const float* g = &steep_kernel_[kMaxKernelHalf];
-  for (int j = 0; j < h; ++j) {
+  // (where Z is flat across the whole window, as inside one tissue, the sum is 0: skipped; the
+  // window's last change is tracked from its upper end)
+  int last_change = -1000000;
+  for (int j = -steep_half_; j < h; ++j) {
+    const int top = std::clamp(j + steep_half_, 1, h - 2);
+    if (z[top + 1] != z[top - 1]) last_change = j + steep_half_;
+    if (j < 0) continue;
+    if (last_change < j - steep_half_) {
+      steep[j] = 0.0f;
+      continue;
+    }
     float sum = 0.0f;
     for (int i = -steep_half_; i <= steep_half_; ++i) {
       const int m = std::clamp(j + i, 1, h - 2);
@@ -343,11 +367,17 @@ void BModeRenderer::echo_scanline(int column) {
   const double step_exponent = dx_mm / pulse_mm_;
   const double quarter_n = 0.25 * settings_.specular_exponent;
   const double db_to_ln = std::numbers::ln10 / 10.0;
-  double transmitted = 1.0, loss_db = 0.0;
+  // the loss as a running product, 10^(-L_j / 10) = prod_{i<j} 10^(-a_i / 10) (each step's factor
+  // taken again only where the tissue changes)
+  double transmitted = 1.0, passed = 1.0, last_a_db = -1.0, half_step = 1.0;
   for (int j = 0; j < h; ++j) {
     const double ds_cm = dx_mm * path_ratio_[base + j] / 10.0;
     const double a_db = settings_.attenuation_db_per_cm_mhz * attenuation_[base + j] * settings_.frequency_mhz * ds_cm;
-    const double amplitude = transmitted * std::exp(-(loss_db + 0.5 * a_db) * db_to_ln);
+    if (a_db != last_a_db) {
+      last_a_db = a_db;
+      half_step = std::exp(-0.5 * a_db * db_to_ln);
+    }
+    const double amplitude = transmitted * passed * half_step;
     double specular = 0.0;
     const float here = std::abs(steep[j]);
     if (j > 0 && j + 1 < h && here > 0.0f && here > std::abs(steep[j - 1]) && here >= std::abs(steep[j + 1])) {
@@ -370,7 +400,7 @@ void BModeRenderer::echo_scanline(int column) {
     // (within one tissue the window's ends are equal: nothing reflected, nothing to take)
     const double refl = reflection(z_at(j - half), z_at(j + half));
     if (refl > 0.0) transmitted *= std::exp(step_exponent * std::log1p(-std::min(refl, 1.0 - 1e-12)));
-    loss_db += a_db;
+    passed *= half_step * half_step;
   }
 }
 

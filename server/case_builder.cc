@@ -4,6 +4,7 @@
 
 #include "anatomy/case/case_folder.h"
 #include "anatomy/organ/kidney_phantom.h"
+#include "ultrasound/echo/tissue_acoustics.h"
 #ifdef PCISIM_HAVE_DICOM
 #include "anatomy/dicom/dicom_series.h"
 #endif
@@ -51,6 +52,15 @@ void check_case_fits(const anatomy::Case& c, const Scene& scene) {
   if (!scene.world.soft_tissue && c.vessels.branches.empty())
     throw anatomy::CaseError(case_json + ": vessels: missing (an organ case without vessels: scene '" + scene.name +
                              "' needs a coronary case)");
+  // the ultrasound takes each tissue's acoustic properties by its name: refused here, naming the
+  // file, rather than when the ultrasound thread starts (a Slicer labelmap names label 0
+  // "Background": it must be a tissue the table knows, say "air" or "water")
+  if (scene.ultrasound && c.organ && c.organ->tissue)
+    for (size_t i = 0; i < c.organ->tissue->names.size(); ++i)
+      if (!ultrasound::find_tissue_acoustics(c.organ->tissue->names[i]))
+        throw anatomy::CaseError(case_json + ": organ.tissue.names[" + std::to_string(i) + "]: \"" +
+                                 c.organ->tissue->names[i] +
+                                 "\" has no acoustic properties (known: " + ultrasound::known_tissue_names() + ")");
 }
 
 std::shared_ptr<const anatomy::Case> build_case(const Scene& scene) {

@@ -226,6 +226,22 @@ void write_fiducials(const std::vector<Eigen::Vector3d>& fiducials_m, const std:
   if (!out) throw CaseError(path + ": cannot write");
 }
 
+// the tissue map's names as case.json may hold them: 1 to kMaxTissueNames, each non-empty, at
+// most kMaxTissueNameChars, no control characters (a name is one line of the colour table)
+std::string tissue_names_problem(const std::vector<std::string>& names) {
+  if (names.empty() || names.size() > static_cast<size_t>(kMaxTissueNames))
+    return fmt::format("expected 1 to {} names, one per label (label 0 first); got {}", kMaxTissueNames, names.size());
+  for (size_t i = 0; i < names.size(); ++i) {
+    const std::string& n = names[i];
+    const bool control =
+        std::any_of(n.begin(), n.end(), [](char ch) { return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f; });
+    if (n.empty() || n.size() > static_cast<size_t>(kMaxTissueNameChars) || control)
+      return fmt::format("names[{}]: expected a non-empty name of at most {} characters, no control characters", i,
+                         kMaxTissueNameChars);
+  }
+  return "";
+}
+
 // a 3D Slicer colour table for the tissue map (label, name, R G B A per line; written for
 // viewing, not read): each tissue a distinct hue, label 0 transparent
 void write_tissue_colors(const std::vector<std::string>& names, const std::string& path) {
@@ -430,16 +446,14 @@ Organ read_organ(json::JsonReader o, const fs::path& dir, const std::string& cas
     json::JsonReader t = o.child("tissue");
     *tissue_file = member_file(dir, case_json, "organ.tissue.labels", t.text("labels", ""));
     const auto& names = t.list("names");
-    if (names.empty() || names.size() > static_cast<size_t>(kMaxTissueNames))
-      t.fail("names", fmt::format("expected 1 to {} names, one per label (label 0 first); got {}", kMaxTissueNames,
-                                  names.size()));
+    if (names.size() > static_cast<size_t>(kMaxTissueNames))
+      t.fail("names", fmt::format("{} names, more than {} (the limit)", names.size(), kMaxTissueNames));
     TissueMap map;
     for (const auto& n : names) {
-      if (!n.is_string() || n.get<std::string>().empty() || n.get<std::string>().size() > kMaxTissueNameChars)
-        t.fail("names", fmt::format("expected non-empty strings of at most {} characters (names[{}])",
-                                    kMaxTissueNameChars, map.names.size()));
+      if (!n.is_string()) t.fail("names", fmt::format("names[{}]: expected a string", map.names.size()));
       map.names.push_back(n.get<std::string>());
     }
+    if (const std::string why = tissue_names_problem(map.names); !why.empty()) t.fail("names", why);
     t.text("slicer_colors", "");  // written for viewers, not read
     t.finish();
     organ.tissue = std::move(map);
@@ -461,6 +475,12 @@ std::vector<Lesion> read_lesions_json(const std::string& path, const VesselTree&
 
 void write_case(const Case& c, const std::string& dir_name) {
   const fs::path dir(dir_name);
+  // a tissue map that would be refused on reading is not written (checked before any file is)
+  if (c.organ && c.organ->tissue) {
+    std::string why = tissue_names_problem(c.organ->tissue->names);
+    if (why.empty()) why = c.ct ? validate_tissue_map(*c.organ->tissue, *c.ct) : "the case has no CT";
+    if (!why.empty()) throw CaseError(fmt::format("{}: {}", (dir / "tissue.nrrd").string(), why));
+  }
   std::error_code ec;
   fs::create_directories(dir / "slicer", ec);
   if (ec) throw CaseError(fmt::format("{}: cannot create the case folder ({})", dir_name, ec.message()));
@@ -485,10 +505,6 @@ void write_case(const Case& c, const std::string& dir_name) {
   if (c.ct) {
     write_nrrd(*c.ct, (dir / "ct.nrrd").string(), volume_io_has_gzip());
     doc["ct"] = {{"file", "ct.nrrd"}, {"lumen_enhanced", c.ct_lumen_enhanced}};
-  }
-  if (c.organ && c.organ->tissue) {
-    const std::string why = c.ct ? validate_tissue_map(*c.organ->tissue, *c.ct) : "the case has no CT";
-    if (!why.empty()) throw CaseError(fmt::format("{}: {}", (dir / "tissue.nrrd").string(), why));
   }
   if (c.organ) doc["organ"] = write_organ(*c.organ, dir);
   Json landmarks = Json::array();

@@ -279,6 +279,9 @@ int main(int argc, char** argv) {
       if (touched_mm < 0.0 && physics.probe_force_n().norm() > 0.05) touched_mm = travelled_mm;
     }
     if (touched_mm < 0.0) throw std::runtime_error("the probe never touched the organ");
+    if (travelled_mm < touched_mm + press_mm - 1e-6)
+      throw std::runtime_error("the probe pressed " + std::to_string(travelled_mm - touched_mm) + " mm, not " +
+                               std::to_string(press_mm) + " (too many physics steps: a faster scene?)");
     for (int i = 0; i < static_cast<int>(1.0 / step_s); ++i) physics.step(&pose);
     const us::TetSnapshot pressed = snapshot(physics);
     std::printf("the probe touched the organ after %.1f mm and pressed %.1f mm more (force %.2f N)\n", touched_mm,

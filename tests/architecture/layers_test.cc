@@ -29,8 +29,8 @@ const std::map<std::string, std::vector<std::string>>& allowed() {
       {"png", {}},
       {"physics", {"anatomy"}},
       {"haptics", {"physics/local_force_model.h"}},
-      {"xray", {"anatomy", "png", "realtime/percentile.h"}},
-      {"ultrasound", {"anatomy", "png", "realtime/percentile.h"}},
+      {"xray", {"anatomy", "png", "realtime/percentile.h", "realtime/row_pool.h"}},
+      {"ultrasound", {"anatomy", "png", "realtime/percentile.h", "realtime/row_pool.h"}},
       {"modeling", {"anatomy", "json", "png", "realtime/percentile.h", "realtime/stop_signal.h"}},
       {"protocol", {"pcisim_lcm"}},
       {"server",
@@ -50,9 +50,11 @@ const std::map<std::string, std::vector<std::string>>& allowed() {
 const std::map<std::string, std::set<std::string>>& header_libraries() {
   static const std::map<std::string, std::set<std::string>> libs = {
       {"dataset", {"pcisim_scene", "pcisim_clients_lib"}},
-      // the one percentile (realtime/percentile.h) for the layers that take quantiles of samples
+      // the one percentile (realtime/percentile.h) for the layers that take quantiles of samples,
+      // and the row pool (realtime/row_pool.h) for those that spread a frame over threads
       {"anatomy", {"pcisim_realtime"}},
       {"xray", {"pcisim_realtime"}},
+      {"ultrasound", {"pcisim_realtime"}},
       {"modeling", {"pcisim_realtime"}},
   };
   return libs;

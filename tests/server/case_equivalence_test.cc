@@ -223,6 +223,17 @@ TEST_F(CaseEquivalence, ACaseThatDoesNotFitItsSceneIsRefusedNamingTheFolder) {
   lcm::LCM lcm("memq://");
   Server server(coronary, lcm);
   EXPECT_EQ(server.branch_namer(2), "LAD");
+  // the kidney scene (ultrasound) on a case whose tissue map names a tissue the ultrasound does
+  // not know (a Slicer labelmap's "Background"): refused naming case.json's field
+  const fs::path case_json = dir_ / "kidney" / "case.json";
+  nlohmann::json doc = nlohmann::json::parse(std::ifstream(case_json));
+  doc["organ"]["tissue"]["names"][0] = "Background";
+  std::ofstream(case_json) << doc.dump(1);
+  use_case_folder(kidney, (dir_ / "kidney").string());
+  EXPECT_NE(refusal(kidney).find(case_json.string() +
+                                 ": organ.tissue.names[0]: \"Background\" has no acoustic properties (known: air, "),
+            std::string::npos)
+      << refusal(kidney);
   // a scene put together in code with both the procedural organ and a case folder
   Scene two = kidney_scene(R"({"organ": "kidney"})", dir_);
   two.case_dir = (dir_ / "kidney").string();

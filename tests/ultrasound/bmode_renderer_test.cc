@@ -19,6 +19,7 @@
 #include "realtime/allocation_count.h"
 #include "ultrasound/echo/acoustic_model.h"
 #include "ultrasound/echo/point_spread.h"
+#include "ultrasound/mapping/tet_locator.h"
 #include "ultrasound/render/bmode_renderer.h"
 
 namespace pcisim::ultrasound {
@@ -243,6 +244,56 @@ TEST(BModeRenderer, SameSeedSameImageAndNothingAllocatedPerFrame) {
   EXPECT_EQ(allocations, 0);
   EXPECT_EQ(r.render(probe_at_top(), 42, &mesh).pixels, a.pixels);
   EXPECT_NE(r.render(probe_at_top(), 43, &mesh).pixels, a.pixels);
+}
+
+// the lookup that tries the last tet first finds what the plain lookup finds, along rays through
+// a deformed grid (the hint kept from sample to sample, as a scanline keeps it)
+TEST(TetLocator, TheHintedLookupIsThePlainOne) {
+  TetSnapshot mesh = grid_mesh(10.0);
+  for (int v = 0; v < mesh.current_mm.cols(); ++v)
+    mesh.current_mm.col(v) += Vector3d(0.3 * std::sin(0.1 * v), 0.1 * mesh.rest_mm(1, v), 0.2 * std::cos(0.07 * v));
+  TetLocator locator;
+  locator.build(mesh);
+  int found = 0, hinted = 0;
+  for (double x = -25.0; x <= 25.0; x += 2.5) {
+    int hint = -1;
+    for (double y = -2.0; y <= 90.0; y += 0.37) {
+      const Vector3d p(x, y, 0.3 * x);
+      Vector3d a, b;
+      const bool plain = locator.to_rest(p, &a), with = locator.to_rest(p, &b, &hint);
+      ASSERT_EQ(plain, with) << p.transpose();
+      if (!plain) continue;
+      ++found;
+      hinted += hint >= 0;
+      EXPECT_LT((a - b).norm(), 1e-9) << p.transpose();
+    }
+  }
+  EXPECT_GT(found, 1000);
+  EXPECT_EQ(hinted, found);
+}
+
+// a frame spread over threads is the one thread's frame, bit for bit, and allocates nothing
+TEST(BModeRenderer, ThreadsGiveTheSameFrameAndAllocateNothing) {
+  UsSettings s = test_settings(ProbeGeometry::kCurvilinear);
+  TetSnapshot mesh = grid_mesh(10.0);
+  mesh.current_mm.row(1) *= 0.9;
+  BModeRenderer one(sphere_phantom(), s);
+  const BModeImage a = one.render(probe_at_top(), 42, &mesh);
+  const std::vector<float> echo = one.echo_intensity();
+  s.threads = 3;
+  BModeRenderer three(sphere_phantom(), s);
+  three.render(probe_at_top(), 42, &mesh);
+  long allocations = -1;
+  {
+    realtime::AllocationCount count;
+    three.render(probe_at_top(), 42, &mesh);
+    allocations = count.allocations();
+  }
+  EXPECT_EQ(allocations, 0);
+  EXPECT_EQ(three.render(probe_at_top(), 42, &mesh).pixels, a.pixels);
+  EXPECT_EQ(three.echo_intensity(), echo);
+  s.threads = 0;
+  EXPECT_THROW(BModeRenderer(sphere_phantom(), s), std::invalid_argument);
 }
 
 // the probe's depth and gain knobs: turned on a running renderer, the frame is the one a renderer

@@ -28,6 +28,7 @@ void validate(const UsSettings& s) {
   }
   check(s.depth_mm, 0.0, kUsMaxDepthMm, "depth_mm", true);
   check(s.width_px, 8, 2048, "width_px");
+  check(s.threads, 1, kUsMaxThreads, "threads");
   check(s.height_px, 8, 4096, "height_px");
   check(s.gain_db, -kUsMaxGainDb, kUsMaxGainDb, "gain_db");
   check(s.tgc_db_per_cm, -20.0, 40.0, "tgc_db_per_cm");

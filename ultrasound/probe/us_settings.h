@@ -42,12 +42,16 @@ struct UsSettings {
   // specular echoes fall off with the angle between the beam and the boundary's normal as
   // cos^n (intensity), [0, 64]: a smooth boundary is bright where the beam meets it square
   double specular_exponent = 6.0;
+  // threads a frame is spread over, the calling one counted, [1, kUsMaxThreads]: each pass's
+  // scanlines (or rows) are handed out one at a time; the image is the same whatever the count
+  int threads = 1;
 };
 
 // the ranges of the imaging fields above that validate() and the scene loader share
 inline constexpr double kUsBandwidthMin = 0.1, kUsBandwidthMax = 1.5;
 inline constexpr double kUsFNumberMin = 0.5, kUsFNumberMax = 10.0;
 inline constexpr double kUsSpecularExponentMax = 64.0;
+inline constexpr int kUsMaxThreads = 8;
 
 // the probe in CT (LPS, mm): origin = centre of the transducer face on the skin, beam = into the
 // body, lateral = along the array (made orthogonal to beam)

@@ -16,8 +16,7 @@ void write_png(const std::string& path, const BModeImage& image) {
 }
 
 BModeRenderer::BModeRenderer(const anatomy::Volume& ct, const UsSettings& settings, const anatomy::TissueMap* tissue)
-    : ct_(ct), settings_(settings) {
-  validate(settings_);
+    : ct_(ct), settings_(settings), pool_((validate(settings), settings.threads)) {
   const std::string bad = anatomy::validate(ct);
   if (!bad.empty()) throw std::invalid_argument("ultrasound: the CT is not usable: " + bad);
   if (tissue) {
@@ -50,7 +49,7 @@ BModeRenderer::BModeRenderer(const anatomy::Volume& ct, const UsSettings& settin
   constexpr size_t taps = 2 * kMaxKernelHalf + 1;
   axial_kernel_.resize(taps);
   steep_kernel_.resize(taps);
-  steepness_.resize(settings_.height_px);
+  steepness_.resize(n);
   lateral_kernel_.resize(taps * settings_.height_px);
   lateral_half_.resize(settings_.height_px);
   line_spacing_mm_.resize(settings_.height_px);
@@ -230,15 +229,18 @@ Acoustics BModeRenderer::sample_acoustics(const Eigen::Vector3d& p_mm) const {
       uniform = uniform && corners[corner] == corners[0];
     }
     if (uniform) return label_acoustics_[corners[0]];
-    Acoustics out{0.0f, 0.0f, 0.0f, 0.0f};
-    for (int corner = 0; corner < 8; ++corner) {
+    // blended as corner 0's numbers plus the weighted differences: a number the corners share
+    // (cortex and medulla have one Z) stays exact across their boundary
+    const Acoustics& a0 = label_acoustics_[corners[0]];
+    Acoustics out = a0;
+    for (int corner = 1; corner < 8; ++corner) {
       const int x = corner & 1, y = corner >> 1 & 1, z = corner >> 2 & 1;
       const auto w = static_cast<float>((x ? f[0] : 1 - f[0]) * (y ? f[1] : 1 - f[1]) * (z ? f[2] : 1 - f[2]));
       const Acoustics& a = label_acoustics_[corners[corner]];
-      out.impedance_mrayl += w * a.impedance_mrayl;
-      out.path_ratio += w * a.path_ratio;
-      out.attenuation_factor += w * a.attenuation_factor;
-      out.scatter_amplitude += w * a.scatter_amplitude;
+      out.impedance_mrayl += w * (a.impedance_mrayl - a0.impedance_mrayl);
+      out.path_ratio += w * (a.path_ratio - a0.path_ratio);
+      out.attenuation_factor += w * (a.attenuation_factor - a0.attenuation_factor);
+      out.scatter_amplitude += w * (a.scatter_amplitude - a0.scatter_amplitude);
     }
     return out;
   }
@@ -264,10 +266,14 @@ const BModeImage& BModeRenderer::render(const ProbePose& pose, uint64_t seed, co
     locator_.refit(*deformed);
   }
   const int w = settings_.width_px, h = settings_.height_px;
-  for (int c = 0; c < w; ++c) march_scanline(c, pose, seed, mapped);
-  for (int c = 0; c < w; ++c) echo_scanline(c);
-  for (int c = 0; c < w; ++c) convolve_axial(c);
-  for (int r = 0; r < h; ++r) convolve_lateral(r);
+  // the passes, each over the pool: the echo needs every scanline's impedance (the boundary's
+  // direction across scanlines), the lateral PSF every scanline's axial result
+  auto march = [&](int c) { march_scanline(c, pose, seed, mapped); };
+  auto echo = [&](int c) { echo_and_axial(c); };
+  auto lateral = [&](int r) { convolve_lateral(r); };
+  pool_.for_each_row(w, march);
+  pool_.for_each_row(w, echo);
+  pool_.for_each_row(h, lateral);
   if (settings_.geometry == ProbeGeometry::kLinear) return beam_;
   scan_convert();
   return image_;
@@ -344,7 +350,7 @@ void BModeRenderer::echo_scanline(int column) {
   // where Z changes most steeply: |g_j| a local maximum, g the central difference Z_{j+1} -
   // Z_{j-1} smoothed by a Gaussian of a quarter pulse or half a CT voxel, the longer (a ramp then peaks at its middle,
   // not anywhere along a flat top)
-  float* steep = &steepness_[0];
+  float* steep = &steepness_[base];
   const float* g = &steep_kernel_[kMaxKernelHalf];
   // (where Z is flat across the whole window, as inside one tissue, the sum is 0: skipped; the
   // window's last change is tracked from its upper end)

@@ -21,6 +21,7 @@
 
 #include "anatomy/organ/organ.h"
 #include "anatomy/volume/volume.h"
+#include "realtime/row_pool.h"
 #include "ultrasound/echo/tissue_acoustics.h"
 #include "ultrasound/mapping/tet_locator.h"
 #include "ultrasound/mapping/tet_snapshot.h"
@@ -78,6 +79,10 @@ class BModeRenderer {
   Acoustics sample_acoustics(const Eigen::Vector3d& p_mm) const;
   void march_scanline(int column, const ProbePose& pose, uint64_t seed, bool mapped);
   void echo_scanline(int column);
+  void echo_and_axial(int column) {
+    echo_scanline(column);
+    convolve_axial(column);
+  }
   void convolve_axial(int column);
   void convolve_lateral(int row);
   void scan_convert();
@@ -107,7 +112,7 @@ class BModeRenderer {
   std::vector<float> axial_kernel_, lateral_kernel_, line_spacing_mm_, scatter_scale_;
   int axial_half_ = 0;
   // the smoothing of Z's change that finds a boundary's middle (a quarter pulse or half a voxel), and its result
-  // along the scanline being drawn
+  // per sample (column-major: scanlines are drawn on several threads)
   std::vector<float> steep_kernel_, steepness_;
   int steep_half_ = 0;
   std::vector<int> lateral_half_;
@@ -115,6 +120,8 @@ class BModeRenderer {
   // curvilinear display: per display pixel the beam-space cell (-1 outside the fan) and weights
   std::vector<int> convert_index_;
   std::vector<float> convert_fx_, convert_fy_;
+  // settings_.threads threads (the caller one of them); started once
+  realtime::RowPool pool_;
 };
 
 }  // namespace pcisim::ultrasound

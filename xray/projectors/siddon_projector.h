@@ -12,7 +12,7 @@
 #include "xray/geometry/detector_geometry.h"
 #include "xray/projectors/attenuation_volume.h"
 #include "xray/projectors/image.h"
-#include "xray/projectors/row_pool.h"
+#include "realtime/row_pool.h"
 
 namespace pcisim::xray {
 
@@ -35,7 +35,7 @@ class SiddonProjector {
   void make_coarse_bricks();
 
   const AttenuationVolume& volume_;
-  RowPool pool_;
+  realtime::RowPool pool_;
   int coarse_dims_[3] = {0, 0, 0};
   std::vector<float> coarse_max_;
 };

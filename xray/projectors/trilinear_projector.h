@@ -6,7 +6,7 @@
 #include "xray/geometry/detector_geometry.h"
 #include "xray/projectors/attenuation_volume.h"
 #include "xray/projectors/image.h"
-#include "xray/projectors/row_pool.h"
+#include "realtime/row_pool.h"
 
 namespace pcisim::xray {
 
@@ -47,7 +47,7 @@ class TrilinearProjector {
  private:
   const AttenuationVolume& volume_;
   TrilinearOptions options_;
-  RowPool pool_;
+  realtime::RowPool pool_;
 };
 
 }  // namespace pcisim::xray

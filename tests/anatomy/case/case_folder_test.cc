@@ -527,7 +527,16 @@ TEST_F(OrganCaseFolder, TheTissueMapRoundTripsAndABadOneIsRefusedNamingIt) {
   EXPECT_NE(why.find("not a label of the 3 names (0 to 2)"), std::string::npos) << why;
   j["organ"]["tissue"]["names"] = {"air", 3};
   set_case_json(j);
-  expect_refused("case.json", "organ.tissue.names", "expected non-empty strings");
+  expect_refused("case.json", "organ.tissue.names", "names[1]: expected a string");
+  j["organ"]["tissue"]["names"] = {"air", "fat\nmore"};
+  set_case_json(j);
+  expect_refused("case.json", "organ.tissue.names", "names[1]: expected a non-empty name");
+  // nor is such a map written (checked before any file is)
+  Case bad = kidney_case();
+  bad.organ->tissue->names[2] = std::string(65, 'x');
+  const fs::path other = dir_ / "other";
+  EXPECT_THROW(write_case(bad, other.string()), CaseError);
+  EXPECT_FALSE(fs::exists(other / "case.json"));
   // labels on another grid (a labelmap resampled, or another CT's)
   j["organ"]["tissue"]["names"] = x.tissue->names;
   set_case_json(j);

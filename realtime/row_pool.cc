@@ -1,11 +1,11 @@
-#include "xray/projectors/row_pool.h"
+#include "realtime/row_pool.h"
 
 #include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
 
-namespace pcisim::xray {
+namespace pcisim::realtime {
 
 RowPool::RowPool(int threads) {
   if (threads <= 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -71,4 +71,4 @@ void RowPool::work() {
   }
 }
 
-}  // namespace pcisim::xray
+}  // namespace pcisim::realtime

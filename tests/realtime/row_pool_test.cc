@@ -1,7 +1,7 @@
 // The row pool's workers run a job at the nice value of the thread that gave it (issue #36: a
 // scene built below the loops' priority projects its background there, and the same pool's
 // frames later run at the x-ray thread's).
-#include "xray/projectors/row_pool.h"
+#include "realtime/row_pool.h"
 
 #include <gtest/gtest.h>
 #include <sys/resource.h>
@@ -13,7 +13,7 @@
 #include <thread>
 #include <vector>
 
-namespace pcisim::xray {
+namespace pcisim::realtime {
 namespace {
 
 int own_nice() {
@@ -71,4 +71,4 @@ TEST(RowPool, WorkersRunAJobAtTheCallersNiceValue) {
 }
 
 }  // namespace
-}  // namespace pcisim::xray
+}  // namespace pcisim::realtime

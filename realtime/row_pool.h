@@ -8,7 +8,7 @@
 #include <thread>
 #include <vector>
 
-namespace pcisim::xray {
+namespace pcisim::realtime {
 
 class RowPool {
  public:
@@ -46,4 +46,4 @@ class RowPool {
   std::atomic<int> next_{0};
 };
 
-}  // namespace pcisim::xray
+}  // namespace pcisim::realtime

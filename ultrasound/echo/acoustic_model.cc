@@ -59,8 +59,8 @@ double attenuation_factor(double hu) {
   return piecewise(kAttenuation, hu);
 }
 
-double attenuation_db(double alpha_db_cm_mhz, double hu, double frequency_mhz, double dx_cm) {
-  return alpha_db_cm_mhz * attenuation_factor(hu) * frequency_mhz * dx_cm;
+double attenuation_db(double alpha_db_cm_mhz, double factor, double frequency_mhz, double dx_cm) {
+  return alpha_db_cm_mhz * factor * frequency_mhz * dx_cm;
 }
 
 double backscatter(double hu) {

@@ -29,8 +29,10 @@ double reflection(double z1, double z2);
 // 4.2; Duck 1990 ch. 4]. Fluid that barely attenuates is what brightens the tissue behind it
 // (posterior enhancement) under a TGC set for soft tissue.
 double attenuation_factor(double hu);
-// one-way intensity loss (dB) over a path: L = alpha(HU) f dx_cm   (alpha in dB/cm/MHz)
-double attenuation_db(double alpha_db_cm_mhz, double hu, double frequency_mhz, double dx_cm);
+// one-way intensity loss (dB) over a path: L = alpha k f dx_cm (alpha the soft tissue's
+// coefficient in dB/cm/MHz, k the tissue's factor over it: attenuation_factor(HU), or a tissue
+// map's, tissue_acoustics.h)
+double attenuation_db(double alpha_db_cm_mhz, double factor, double frequency_mhz, double dx_cm);
 // diffuse backscatter (intensity, relative to a perfect reflector): sigma = 1e-4 s(HU), s
 // piecewise linear: air 0, fat 1.5 (echogenic), fluid 0 HU 0.05 (anechoic), medulla 30 HU 0.15
 // (the pyramids hypoechoic against the cortex, ~8 dB),

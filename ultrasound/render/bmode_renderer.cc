@@ -269,7 +269,10 @@ const BModeImage& BModeRenderer::render(const ProbePose& pose, uint64_t seed, co
   // the passes, each over the pool: the echo needs every scanline's impedance (the boundary's
   // direction across scanlines), the lateral PSF every scanline's axial result
   auto march = [&](int c) { march_scanline(c, pose, seed, mapped); };
-  auto echo = [&](int c) { echo_and_axial(c); };
+  auto echo = [&](int c) {
+    echo_scanline(c);
+    convolve_axial(c);
+  };
   auto lateral = [&](int r) { convolve_lateral(r); };
   pool_.for_each_row(w, march);
   pool_.for_each_row(w, echo);
@@ -378,7 +381,8 @@ void BModeRenderer::echo_scanline(int column) {
   double transmitted = 1.0, passed = 1.0, last_a_db = -1.0, half_step = 1.0;
   for (int j = 0; j < h; ++j) {
     const double ds_cm = dx_mm * path_ratio_[base + j] / 10.0;
-    const double a_db = settings_.attenuation_db_per_cm_mhz * attenuation_[base + j] * settings_.frequency_mhz * ds_cm;
+    const double a_db =
+        attenuation_db(settings_.attenuation_db_per_cm_mhz, attenuation_[base + j], settings_.frequency_mhz, ds_cm);
     if (a_db != last_a_db) {
       last_a_db = a_db;
       half_step = std::exp(-0.5 * a_db * db_to_ln);

@@ -79,10 +79,6 @@ class BModeRenderer {
   Acoustics sample_acoustics(const Eigen::Vector3d& p_mm) const;
   void march_scanline(int column, const ProbePose& pose, uint64_t seed, bool mapped);
   void echo_scanline(int column);
-  void echo_and_axial(int column) {
-    echo_scanline(column);
-    convolve_axial(column);
-  }
   void convolve_axial(int column);
   void convolve_lateral(int row);
   void scan_convert();

@@ -4,6 +4,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include <spdlog/spdlog.h>
+
 #include "protocol/channels.h"
 #include "realtime/clock.h"
 #include "realtime/deadline_schedule.h"
@@ -88,7 +90,14 @@ void UltrasoundLoop::run() {
                                       static_cast<int64_t>(std::llround(1e9 / spec_.frame_rate_hz)));
   while (!state_.stop.load(std::memory_order_relaxed)) {
     realtime::sleep_until_ns(schedule.deadline_ns());
-    render_and_publish();
+    // a frame that cannot be drawn (the GPU renderer's CUDA failing) ends the ultrasound, said
+    // once, not the server: the physics and the force go on
+    try {
+      render_and_publish();
+    } catch (const std::exception& e) {
+      spdlog::error("ultrasound: no more frames: {}", e.what());
+      return;
+    }
     schedule.complete(realtime::monotonic_ns());
   }
 }

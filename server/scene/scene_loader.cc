@@ -269,6 +269,8 @@ UltrasoundSpec read_ultrasound(json::JsonReader r) {
   s.focus_mm = r.number("focus_mm", s.focus_mm, 1e-3, ultrasound::kUsMaxDepthMm);
   s.specular_exponent = r.number("specular_exponent", s.specular_exponent, 0, ultrasound::kUsSpecularExponentMax);
   s.threads = r.integer("threads", s.threads, 1, ultrasound::kUsMaxThreads);
+  s.renderer = r.text("renderer", "cpu", {"cpu", "cuda"}) == "cuda" ? ultrasound::UsRenderer::kCuda
+                                                                    : ultrasound::UsRenderer::kCpu;
   u.frame_rate_hz = r.number("frame_rate_hz", u.frame_rate_hz, 1, 60);
   u.speckle_seed = static_cast<uint32_t>(r.integer("speckle_seed", 1, 0, 1 << 30));
   r.finish();

@@ -162,14 +162,16 @@ TEST_F(CaseEquivalence, ServerBuildsOnACaseAndRefusesABadOne) {
 // same particles and beads as the procedural kidney, to the STL's float rounding of its surface
 TEST_F(CaseEquivalence, WrittenKidneyCaseBuildsTheProceduralKidneysTissue) {
   const Scene procedural = kidney_scene(R"({"organ": "kidney", "phantom_seed": 1})", dir_);
-  anatomy::write_case(kidney_case(procedural), (dir_ / "kidney").string());
+  // (build_case's kidney is kidney_case(scene), what --write-case writes: the phantom built once,
+  // the test's longest step under ASan)
+  const auto a = build_case(procedural);
+  anatomy::write_case(*a, (dir_ / "kidney").string());
   const Scene by_case = kidney_scene(R"({"case": "kidney"})", dir_);
   EXPECT_EQ(by_case.case_dir, (dir_ / "kidney").string());
   EXPECT_TRUE(by_case.organ.empty());
   Scene by_option = procedural;
   use_case_folder(by_option, (dir_ / "kidney").string());
 
-  const auto a = build_case(procedural);
   const physics::World wa(procedural.world, a->vessels, nullptr, a->heart, a->heart_vertices_m, &*a->organ);
   const physics::soft_tissue::TissueScene& ta = *wa.tissue_state();
   EXPECT_GT(ta.body().particle_count(), 100);
@@ -204,7 +206,8 @@ TEST_F(CaseEquivalence, ACaseThatDoesNotFitItsSceneIsRefusedNamingTheFolder) {
   Scene coronary = quick_scene(R"({"phantom_seed": 1})", dir_);
   anatomy::write_case(anatomy::make_phantom_case(phantom_case_spec(coronary)), (dir_ / "coronary").string());
   Scene kidney = kidney_scene(R"({"organ": "kidney"})", dir_);
-  anatomy::write_case(kidney_case(kidney), (dir_ / "kidney").string());
+  const anatomy::Case kidney_built = kidney_case(kidney);  // (the phantom built once: slow under ASan)
+  anatomy::write_case(kidney_built, (dir_ / "kidney").string());
   // the kidney scene on a coronary case
   use_case_folder(kidney, (dir_ / "coronary").string());
   EXPECT_EQ(refusal(kidney),
@@ -216,7 +219,7 @@ TEST_F(CaseEquivalence, ACaseThatDoesNotFitItsSceneIsRefusedNamingTheFolder) {
       << refusal(coronary);
   // a coronary case that also holds an organ: the coronary scene's server builds and names its branches
   anatomy::Case both = anatomy::make_phantom_case(phantom_case_spec(coronary));
-  both.organ = build_case(kidney_scene(R"({"organ": "kidney"})", dir_))->organ;
+  both.organ = kidney_built.organ;
   both.organ->tissue.reset();  // its tissue map lies on the kidney's CT, not this case's
   anatomy::write_case(both, (dir_ / "both").string());
   use_case_folder(coronary, (dir_ / "both").string());

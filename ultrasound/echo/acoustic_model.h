@@ -10,6 +10,10 @@
 #include <complex>
 #include <cstdint>
 
+// (reflection, attenuation_db, brightness_db, log_compress and the scatterer field's lattice:
+// the per-sample rules the CUDA twin shares)
+#include "ultrasound/echo/echo_rules.h"
+
 namespace pcisim::ultrasound {
 
 // density (g/cm^3): rho = max(1 + HU / 1000, 0.0012)   [Schneider 2000, soft-tissue segment]
@@ -20,8 +24,6 @@ double density_g_cm3(double hu);
 double speed_of_sound_m_s(double hu);
 // acoustic impedance (MRayl): Z = rho c   (rho in g/cm^3, c in km/s)
 double impedance_mrayl(double hu);
-// intensity reflection coefficient at normal incidence: R = ((Z2 - Z1) / (Z2 + Z1))^2
-double reflection(double z1, double z2);
 // attenuation multiplier on the soft-tissue coefficient (0.54 dB/cm/MHz), piecewise linear in HU:
 // fat (-100 to -30 HU) 1.1 (0.6), fluid (0 to 15 HU: urine, bile, cysts) 0.02 (water 0.0022
 // dB/cm/MHz^2, rising with f^2: ~0.011 dB/cm/MHz at 5 MHz; this model's loss is linear in f),
@@ -29,10 +31,6 @@ double reflection(double z1, double z2);
 // 4.2; Duck 1990 ch. 4]. Fluid that barely attenuates is what brightens the tissue behind it
 // (posterior enhancement) under a TGC set for soft tissue.
 double attenuation_factor(double hu);
-// one-way intensity loss (dB) over a path: L = alpha k f dx_cm (alpha the soft tissue's
-// coefficient in dB/cm/MHz, k the tissue's factor over it: attenuation_factor(HU), or a tissue
-// map's, tissue_acoustics.h)
-double attenuation_db(double alpha_db_cm_mhz, double factor, double frequency_mhz, double dx_cm);
 // diffuse backscatter (intensity, relative to a perfect reflector): sigma = 1e-4 s(HU), s
 // piecewise linear: air 0, fat 1.5 (echogenic), fluid 0 HU 0.05 (anechoic), medulla 30 HU 0.15
 // (the pyramids hypoechoic against the cortex, ~8 dB),
@@ -51,18 +49,10 @@ std::complex<float> scatterer(uint64_t seed, int64_t i, int64_t j, int64_t k);
 // its power is 1 everywhere (plain trilinear falls to 1/8 of it at a cell's centre, a grid the
 // image would show): v(u) = sum w_c a_c / sqrt(sum w_c^2)
 std::complex<float> scatterer_field(uint64_t seed, const double (&u)[3]);
-// the same, with the 8 corners' amplitudes kept in `cell` between calls: a scanline's samples
-// step a fraction of a cell, and most fall in the cell of the one before (the hashes are then
-// not redone; the result is bit for bit scatterer_field's). One cache per seed
-struct ScattererCell {
-  int64_t index[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
-  std::complex<float> corner[8];
-};
+// the same, with the 8 corners' amplitudes kept in `cell` between calls (echo_rules.h: the
+// result is bit for bit scatterer_field's). One cache per seed
 std::complex<float> scatterer_field(uint64_t seed, const double (&u)[3], ScattererCell* cell);
-// time-gain compensated, log-compressed brightness (dB): B = 10 log10(I) + gain + tgc d_cm
-double brightness_db(double intensity, double gain_db, double tgc_db_per_cm, double depth_cm);
-// 8-bit grey: g = round(255 (B + DR) / DR), clamped to [0, 255] (0 dB, a perfect reflector at the
-// face, is white; -DR is black)
-uint8_t log_compress(double brightness_db, double dynamic_range_db);
+// the table the lattice's amplitudes are drawn from (kScatterers entries), for a GPU's copy
+const Cf* scatterer_table();
 
 }  // namespace pcisim::ultrasound

@@ -92,38 +92,37 @@ void TetLocator::refit(const TetSnapshot& mesh) {
   }
 }
 
-// barycentric coordinates in the deformed tet, lambda = E_current^-1 (p - v0), reused in the rest
-// tet: rest = r0 + E_rest lambda [soft-tissue paper, "Weighted matrix blending"]
+LocatorView TetLocator::view() const {
+  LocatorView v;
+  v.tet_count = tet_count_;
+  // (Eigen's fixed-size matrices and vectors are their coefficients, column-major, unpadded)
+  static_assert(sizeof(Eigen::Matrix3d) == 9 * sizeof(double) && sizeof(Eigen::Vector3d) == 3 * sizeof(double));
+  v.inv_current = inv_current_.empty() ? nullptr : inv_current_[0].data();
+  v.v0_current = v0_current_.empty() ? nullptr : v0_current_[0].data();
+  v.edges_rest = edges_rest_.empty() ? nullptr : edges_rest_[0].data();
+  v.v0_rest = v0_rest_.empty() ? nullptr : v0_rest_[0].data();
+  v.valid = valid_.data();
+  for (int k = 0; k < 3; ++k) {
+    v.dims[k] = dims_[k];
+    v.lo[k] = lo_[k];
+    v.inv_cell[k] = inv_cell_[k];
+  }
+  v.cell_start = cell_start_.data();
+  v.entries = entries_.data();
+  return v;
+}
+
 bool TetLocator::to_rest(const Eigen::Vector3d& p, Eigen::Vector3d* rest) const {
   int hint = -1;
   return to_rest(p, rest, &hint);
 }
 
 bool TetLocator::to_rest(const Eigen::Vector3d& p, Eigen::Vector3d* rest, int* hint) const {
-  if (tet_count_ == 0) return false;
-  constexpr double kEps = 1e-9;
-  // inside when every barycentric coordinate is >= 0 (to kEps)
-  const auto inside = [&](int t) {
-    if (!valid_[t]) return false;
-    const Eigen::Vector3d l = inv_current_[t] * (p - v0_current_[t]);
-    if (!(l.minCoeff() >= -kEps && l.sum() <= 1.0 + kEps)) return false;
-    *rest = v0_rest_[t] + edges_rest_[t] * l;
-    return true;
-  };
-  if (*hint >= 0 && *hint < tet_count_ && inside(*hint)) return true;
-  const Eigen::Vector3d u = (p - lo_).cwiseProduct(inv_cell_);
-  Eigen::Vector3i c;
-  for (int k = 0; k < 3; ++k) {
-    if (!(u[k] >= 0.0 && u[k] <= dims_[k])) return false;
-    c[k] = std::min(static_cast<int>(u[k]), dims_[k] - 1);
-  }
-  const int cell = c[0] + dims_[0] * (c[1] + dims_[1] * c[2]);
-  for (int e = cell_start_[cell]; e < cell_start_[cell + 1]; ++e)
-    if (inside(entries_[e])) {
-      *hint = entries_[e];
-      return true;
-    }
-  return false;
+  const double q[3] = {p.x(), p.y(), p.z()};
+  double r[3];
+  if (!rest_point(view(), q, r, hint)) return false;
+  *rest = Eigen::Vector3d(r[0], r[1], r[2]);
+  return true;
 }
 
 }  // namespace pcisim::ultrasound

@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 #include <vector>
 
+#include "ultrasound/mapping/tet_lookup.h"
 #include "ultrasound/mapping/tet_snapshot.h"
 
 namespace pcisim::ultrasound {
@@ -26,6 +27,11 @@ class TetLocator {
   bool to_rest(const Eigen::Vector3d& p, Eigen::Vector3d* rest, int* hint) const;
   bool empty() const { return tet_count_ == 0; }
   long entries_capacity() const { return static_cast<long>(entries_.capacity()); }
+  // the arrays as the lookup (tet_lookup.h) reads them; valid until the next build() or refit()
+  LocatorView view() const;
+  // how many grid cells and entries view() holds
+  int cell_count() const { return dims_.prod(); }
+  int entry_count() const { return static_cast<int>(entries_.size()); }
 
  private:
   int tet_count_ = 0;

@@ -8,6 +8,9 @@
 namespace pcisim::ultrasound {
 
 enum class ProbeGeometry { kLinear, kCurvilinear };
+// where a frame is drawn: the CPU (over `threads` threads) or the GPU (render/cuda_bmode.h: the
+// same kernels; needs a CUDA build, a visible device and the case's tissue map)
+enum class UsRenderer { kCpu, kCuda };
 
 // the scanner's depth and gain ranges (validate() and whoever turns the knobs at run time)
 inline constexpr double kUsMaxDepthMm = 300.0;  // (0, max]
@@ -45,6 +48,7 @@ struct UsSettings {
   // threads a frame is spread over, the calling one counted, [1, kUsMaxThreads]: each pass's
   // scanlines (or rows) are handed out one at a time; the image is the same whatever the count
   int threads = 1;
+  UsRenderer renderer = UsRenderer::kCpu;
 };
 
 // the ranges of the imaging fields above that validate() and the scene loader share

@@ -6,13 +6,20 @@
 #include <numbers>
 #include <stdexcept>
 
+#ifdef PCISIM_US_HAVE_PNG
 #include "png/png_gray.h"
+#endif
 #include "ultrasound/echo/acoustic_model.h"
 #include "ultrasound/echo/point_spread.h"
 
 namespace pcisim::ultrasound {
 void write_png(const std::string& path, const BModeImage& image) {
+#ifdef PCISIM_US_HAVE_PNG
   png::write_png_gray8(path, image.width, image.height, image.pixels.data());
+#else
+  (void)image;
+  throw std::runtime_error(path + ": this build has no libpng (the ultrasound frame is not written)");
+#endif
 }
 
 BModeRenderer::BModeRenderer(const anatomy::Volume& ct, const UsSettings& settings, const anatomy::TissueMap* tissue)
@@ -32,6 +39,15 @@ BModeRenderer::BModeRenderer(const anatomy::Volume& ct, const UsSettings& settin
     labels_ = &tissue->labels;
   }
   world_to_index_ = (ct.direction * ct.spacing_mm.asDiagonal()).inverse();
+  if (labels_) {
+    for (int k = 0; k < 3; ++k) {
+      label_view_.dims[k] = labels_->dims[k];
+      label_view_.origin[k] = ct_.origin_mm[k];  // (the map's may differ by 1e-3 voxel: the CT's grid is used)
+      for (int c = 0; c < 3; ++c) label_view_.world_to_index[3 * k + c] = world_to_index_(k, c);
+    }
+    label_view_.labels = labels_->hu_i16.data();
+    label_view_.acoustics = label_acoustics_.data();
+  }
   // two wavelengths at the centre frequency in soft tissue (1540 m/s), at least one CT voxel
   voxel_mm_ = ct.spacing_mm.maxCoeff();
   pulse_mm_ = std::max(2.0 * 1.540 / settings_.frequency_mhz, voxel_mm_);
@@ -63,7 +79,36 @@ BModeRenderer::BModeRenderer(const anatomy::Volume& ct, const UsSettings& settin
     convert_fx_.resize(n);
     convert_fy_.resize(n);
   }
+  if (settings_.renderer == UsRenderer::kCuda) {
+#ifdef PCISIM_HAVE_CUDA
+    if (!labels_)
+      throw std::runtime_error(
+          "ultrasound: the cuda renderer needs the case's tissue map (it samples tissues, not HU)");
+    if (cuda::device_count() == 0) throw std::runtime_error("ultrasound: the cuda renderer: no CUDA device is visible");
+    device_ = std::make_unique<cuda::BModeDevice>(label_view_, static_cast<int64_t>(labels_->hu_i16.size()),
+                                                  static_cast<int>(label_acoustics_.size()), settings_.width_px,
+                                                  settings_.height_px);
+#else
+    throw std::runtime_error("ultrasound: the cuda renderer: this build has no CUDA (PCISIM_CUDA)");
+#endif
+  }
   build_geometry();
+}
+
+BModeRenderer::~BModeRenderer() = default;
+
+float BModeRenderer::last_gpu_kernel_ms() const {
+#ifdef PCISIM_HAVE_CUDA
+  if (device_) return device_->last_kernel_ms();
+#endif
+  return 0.0f;
+}
+
+const float* BModeRenderer::last_gpu_pass_ms() const {
+#ifdef PCISIM_HAVE_CUDA
+  if (device_) return device_->last_pass_ms();
+#endif
+  return nullptr;
 }
 
 void BModeRenderer::set_imaging(double depth_mm, double gain_db) {
@@ -163,7 +208,15 @@ void BModeRenderer::build_geometry() {
     const double power = passed_power(&k[mid], lateral_half_[r], line_spacing_mm_[r] / cell);
     scatter_scale_[r] = static_cast<float>(1.0 / std::sqrt(axial_power * power));
   }
-  if (!curved) return;
+  if (curved) build_scan_conversion();
+#ifdef PCISIM_HAVE_CUDA
+  if (device_) device_->upload_geometry(frame_view(), curved);
+#endif
+}
+
+// a curvilinear probe's display: each pixel's beam-space cell and weights
+void BModeRenderer::build_scan_conversion() {
+  const int w = settings_.width_px, h = settings_.height_px;
   std::fill(convert_index_.begin(), convert_index_.end(), -1);
   std::fill(convert_fx_.begin(), convert_fx_.end(), 0.0f);
   std::fill(convert_fy_.begin(), convert_fy_.end(), 0.0f);
@@ -181,33 +234,19 @@ void BModeRenderer::build_geometry() {
     }
 }
 
-// curvilinear display: bilinear in the beam-space grey levels, black outside the fan
-void BModeRenderer::scan_convert() {
-  const int w = settings_.width_px;
-  for (size_t k = 0; k < image_.pixels.size(); ++k) {
-    const int i = convert_index_[k];
-    if (i < 0) {
-      image_.pixels[k] = 0;
-      continue;
-    }
-    const float fx = convert_fx_[k], fy = convert_fy_[k];
-    const uint8_t* p = &beam_.pixels[i];
-    const float v = (p[0] * (1 - fx) + p[1] * fx) * (1 - fy) + (p[w] * (1 - fx) + p[w + 1] * fx) * fy;
-    image_.pixels[k] = static_cast<uint8_t>(std::lround(v));
-  }
-}
-
 void BModeRenderer::set_mesh(const TetSnapshot& mesh) {
   locator_.build(mesh);
   have_mesh_ = true;
+#ifdef PCISIM_HAVE_CUDA
+  if (device_) device_->upload_rest(locator_.view());
+#endif
 }
 
-// the acoustic properties at a CT point: with a tissue map, the 8 voxels' tissues' properties
-// blended trilinearly (a boundary between voxel centres is a ramp over a voxel, as the HU's);
-// without one, the trilinear HU's. Outside the volume the nearest edge voxel (no artificial
-// boundary)
-Acoustics BModeRenderer::sample_acoustics(const Eigen::Vector3d& p_mm) const {
-  const Eigen::Vector3d u = world_to_index_ * (p_mm - ct_.origin_mm);
+// the acoustic properties at a CT point without a tissue map: the trilinear HU's (a boundary
+// between voxel centres is a ramp over a voxel). Outside the volume the nearest edge voxel (no
+// artificial boundary). With a map: kernels::sample_labels
+Acoustics BModeRenderer::sample_hu(const double (&p_mm)[3]) const {
+  const Eigen::Vector3d u = world_to_index_ * (Eigen::Vector3d(p_mm[0], p_mm[1], p_mm[2]) - ct_.origin_mm);
   int64_t i0[3];
   double f[3];
   for (int k = 0; k < 3; ++k) {
@@ -217,33 +256,6 @@ Acoustics BModeRenderer::sample_acoustics(const Eigen::Vector3d& p_mm) const {
   }
   const int64_t i1[3] = {std::min(i0[0] + 1, ct_.dims[0] - 1), std::min(i0[1] + 1, ct_.dims[1] - 1),
                          std::min(i0[2] + 1, ct_.dims[2] - 1)};
-  // (inside one tissue, 8 equal corners, the tissue's own numbers exactly: a blend's rounding
-  // would make Z differ in its last bits from sample to sample, and every sample a boundary)
-  if (labels_) {
-    const int16_t* label = labels_->hu_i16.data();
-    int16_t corners[8];
-    bool uniform = true;
-    for (int corner = 0; corner < 8; ++corner) {
-      const int x = corner & 1, y = corner >> 1 & 1, z = corner >> 2 & 1;
-      corners[corner] = label[labels_->linear_index(x ? i1[0] : i0[0], y ? i1[1] : i0[1], z ? i1[2] : i0[2])];
-      uniform = uniform && corners[corner] == corners[0];
-    }
-    if (uniform) return label_acoustics_[corners[0]];
-    // blended as corner 0's numbers plus the weighted differences: a number the corners share
-    // (cortex and medulla have one Z) stays exact across their boundary
-    const Acoustics& a0 = label_acoustics_[corners[0]];
-    Acoustics out = a0;
-    for (int corner = 1; corner < 8; ++corner) {
-      const int x = corner & 1, y = corner >> 1 & 1, z = corner >> 2 & 1;
-      const auto w = static_cast<float>((x ? f[0] : 1 - f[0]) * (y ? f[1] : 1 - f[1]) * (z ? f[2] : 1 - f[2]));
-      const Acoustics& a = label_acoustics_[corners[corner]];
-      out.impedance_mrayl += w * (a.impedance_mrayl - a0.impedance_mrayl);
-      out.path_ratio += w * (a.path_ratio - a0.path_ratio);
-      out.attenuation_factor += w * (a.attenuation_factor - a0.attenuation_factor);
-      out.scatter_amplitude += w * (a.scatter_amplitude - a0.scatter_amplitude);
-    }
-    return out;
-  }
   auto v = [&](int64_t i, int64_t j, int64_t k) { return static_cast<double>(ct_.hu(i, j, k)); };
   const double h000 = v(i0[0], i0[1], i0[2]);
   if (h000 == v(i1[0], i0[1], i0[2]) && h000 == v(i0[0], i1[1], i0[2]) && h000 == v(i1[0], i1[1], i0[2]) &&
@@ -258,6 +270,48 @@ Acoustics BModeRenderer::sample_acoustics(const Eigen::Vector3d& p_mm) const {
   return acoustics_of_hu(c0 * (1 - f[2]) + c1 * f[2]);
 }
 
+kernels::FrameView BModeRenderer::frame_view() {
+  kernels::FrameView f;
+  f.width = settings_.width_px;
+  f.height = settings_.height_px;
+  f.dx_mm = settings_.depth_mm / settings_.height_px;
+  f.depth_mm = settings_.depth_mm;
+  f.pulse_mm = pulse_mm_;
+  f.voxel_mm = voxel_mm_;
+  f.speckle_cell_mm = settings_.speckle_cell_mm;
+  f.attenuation_db_per_cm_mhz = settings_.attenuation_db_per_cm_mhz;
+  f.frequency_mhz = settings_.frequency_mhz;
+  f.specular_exponent = settings_.specular_exponent;
+  f.gain_db = settings_.gain_db;
+  f.tgc_db_per_cm = settings_.tgc_db_per_cm;
+  f.dynamic_range_db = settings_.dynamic_range_db;
+  f.line_start = line_start_[0].data();
+  f.line_dir = line_dir_[0].data();
+  f.z = z_.data();
+  f.path_ratio = path_ratio_.data();
+  f.attenuation = attenuation_.data();
+  f.scatter_amplitude = scatter_amplitude_.data();
+  f.scatterer = scatterer_.data();
+  f.field = field_.data();
+  f.axial = axial_.data();
+  f.steepness = steepness_.data();
+  f.echo = echo_.data();
+  f.beam = beam_.pixels.data();
+  f.image = image_.pixels.data();
+  f.axial_kernel = axial_kernel_.data();
+  f.steep_kernel = steep_kernel_.data();
+  f.lateral_kernel = lateral_kernel_.data();
+  f.line_spacing_mm = line_spacing_mm_.data();
+  f.scatter_scale = scatter_scale_.data();
+  f.lateral_half = lateral_half_.data();
+  f.axial_half = axial_half_;
+  f.steep_half = steep_half_;
+  f.convert_index = convert_index_.data();
+  f.convert_fx = convert_fx_.data();
+  f.convert_fy = convert_fy_.data();
+  return f;
+}
+
 const BModeImage& BModeRenderer::render(const ProbePose& pose, uint64_t seed, const TetSnapshot* deformed) {
   validate(pose);
   const bool mapped = deformed != nullptr;
@@ -266,182 +320,50 @@ const BModeImage& BModeRenderer::render(const ProbePose& pose, uint64_t seed, co
     locator_.refit(*deformed);
   }
   const int w = settings_.width_px, h = settings_.height_px;
+  kernels::PoseView p;
+  const Eigen::Vector3d b = pose.beam.normalized();
+  const Eigen::Vector3d l = (pose.lateral - pose.lateral.dot(b) * b).normalized();
+  for (int k = 0; k < 3; ++k) {
+    p.origin[k] = pose.origin_mm[k];
+    p.lateral[k] = l[k];
+    p.beam[k] = b[k];
+  }
+  const kernels::FrameView f = frame_view();
+  const LocatorView locator = locator_.view();
+  const LocatorView* through = mapped ? &locator : nullptr;
+  const bool curved = settings_.geometry == ProbeGeometry::kCurvilinear;
+#ifdef PCISIM_HAVE_CUDA
+  if (device_) {
+    device_->render(f, p, through, locator_.cell_count(), locator_.entry_count(), locator_.entries_capacity(),
+                    splitmix64(seed), curved);
+    return curved ? image_ : beam_;
+  }
+#endif
   // the passes, each over the pool: the echo needs every scanline's impedance (the boundary's
   // direction across scanlines), the lateral PSF every scanline's axial result
-  auto march = [&](int c) { march_scanline(c, pose, seed, mapped); };
-  auto echo = [&](int c) {
-    echo_scanline(c);
-    convolve_axial(c);
+  const Cf* table = scatterer_table();
+  const uint64_t mixed = splitmix64(seed);
+  auto march = [&](int c) {
+    if (labels_)
+      kernels::march_scanline(
+          f, p, through, table, mixed, [&](const double(&q)[3]) { return kernels::sample_labels(label_view_, q); }, c);
+    else
+      kernels::march_scanline(
+          f, p, through, table, mixed, [&](const double(&q)[3]) { return sample_hu(q); }, c);
   };
-  auto lateral = [&](int r) { convolve_lateral(r); };
+  auto echo = [&](int c) {
+    kernels::echo_scanline(f, c);
+    for (int j = 0; j < h; ++j) kernels::axial_sample(f, c, j);
+  };
+  auto lateral = [&](int r) {
+    for (int c = 0; c < w; ++c) kernels::lateral_pixel(f, r, c);
+  };
   pool_.for_each_row(w, march);
   pool_.for_each_row(w, echo);
   pool_.for_each_row(h, lateral);
-  if (settings_.geometry == ProbeGeometry::kLinear) return beam_;
-  scan_convert();
+  if (!curved) return beam_;
+  for (size_t k = 0; k < image_.pixels.size(); ++k) kernels::scan_convert_pixel(f, static_cast<int64_t>(k));
   return image_;
-}
-
-// One scanline in time: screen sample j (depth d_j = (j + 1/2) dx, dx = depth / height) lies
-// s_j along the ray, s_0 = dx / 2, s_{j+1} = s_j + dx c_j / c0 (the pulse covers more tissue
-// per screen sample where sound is faster: a boundary behind fat, 1450 m/s, shows deeper than it
-// is: 20 mm of fat at 21.24 mm). Each sample: its rest point through the tets, the acoustic
-// properties there, and the tissue's scatterer in its cell of the undeformed CT.
-void BModeRenderer::march_scanline(int column, const ProbePose& pose, uint64_t seed, bool mapped) {
-  const int h = settings_.height_px;
-  const double dx_mm = settings_.depth_mm / h;
-  const Eigen::Vector3d b = pose.beam.normalized();
-  const Eigen::Vector3d l = (pose.lateral - pose.lateral.dot(b) * b).normalized();
-  const Eigen::Vector3d start = pose.origin_mm + line_start_[column].x() * l + line_start_[column].y() * b;
-  const Eigen::Vector3d dir = line_dir_[column].x() * l + line_dir_[column].y() * b;
-  const size_t base = static_cast<size_t>(column) * h;
-  double s = 0.5 * dx_mm;
-  ScattererCell cell;
-  int tet = -1;
-  for (int j = 0; j < h; ++j) {
-    const size_t n = base + j;
-    const Eigen::Vector3d p = start + s * dir;
-    Eigen::Vector3d q = p;
-    if (mapped && !locator_.to_rest(p, &q, &tet)) q = p;
-    const Acoustics a = sample_acoustics(q);
-    z_[n] = a.impedance_mrayl;
-    path_ratio_[n] = a.path_ratio;
-    attenuation_[n] = a.attenuation_factor;
-    scatter_amplitude_[n] = a.scatter_amplitude;
-    const double u[3] = {q.x() / settings_.speckle_cell_mm, q.y() / settings_.speckle_cell_mm,
-                         q.z() / settings_.speckle_cell_mm};
-    scatterer_[n] = scatterer_field(seed, u, &cell);
-    s += dx_mm * path_ratio_[n];
-  }
-}
-
-// The echo field along one scanline, before the PSF (amplitudes; samples j, path step ds_j):
-//   r_j = (Z(j + p/2) - Z(j - p/2)) / (Z(j + p/2) + Z(j - p/2))   specular amplitude
-//         reflection, the impedance's change across the pulse p (p / dx screen samples), at the
-//         sample where Z changes most steeply (|g_j| a local maximum, g the central difference
-//         smoothed over a quarter pulse or half a voxel), none elsewhere: a boundary the CT blurs over a voxel
-//         or two echoes as the sharp line it is (a ramp of small steps, each its own echo, came
-//         out 6 dB weak under a PSF narrower than the ramp)
-//   cos^2 theta_j = g_a^2 / (g_a^2 + g_l^2)                 g: Z's gradient in the image plane,
-//         along the beam and across scanlines: the boundary's normal against the beam (1 where
-//         the gradient vanishes)
-//   e_j = A_j (r_j cos^(n/2) theta_j + k_j sqrt(sigma_j) a_j)   a_j the tissue's scatterer,
-//         k_j the row's scatter scale, n the specular exponent (intensity ~ cos^n)
-//   A_j = T_j 10^(-L_j / 10)                                round trip: sqrt(T^2 10^(-2 L / 10))
-//   R_j = ((Z(s_j + p/2) - Z(s_j - p/2)) / (Z(s_j + p/2) + Z(s_j - p/2)))^2   over the pulse p
-//   T_{j+1} = T_j (1 - R_j)^(dx / p)                         one-way transmission (shadowing)
-//   L_j = sum_{i<j} a_i ds_i + a_j ds_j / 2,  a_i = alpha_i f    one-way loss, dB
-// [Goksel & Salcudean 2009: reflection + scattering, attenuated; Buerger et al. 2013: the
-// specular echo's fall-off with the angle of incidence]
-void BModeRenderer::echo_scanline(int column) {
-  const int h = settings_.height_px, w = settings_.width_px;
-  const double dx_mm = settings_.depth_mm / h;
-  const double half = 0.5 * pulse_mm_ / dx_mm;  // half window in samples
-  const size_t base = static_cast<size_t>(column) * h;
-  const float* z = &z_[base];
-  // the neighbouring scanlines' impedance, for the gradient across them (one-sided at the edges)
-  // Z's gradient over half a CT voxel either side (at least a sample): over less, the direction
-  // follows the trilinear field's kinks at the voxels' faces and a sloping boundary echoes in
-  // short level dashes
-  const int along = std::max(1, static_cast<int>(std::lround(0.5 * voxel_mm_ / dx_mm)));
-  auto z_at = [&](double s) {
-    s = std::clamp(s, 0.0, static_cast<double>(h - 1));
-    const int i = std::min(static_cast<int>(s), h - 2);
-    const double f = s - i;
-    return z[i] * (1 - f) + z[i + 1] * f;
-  };
-  // where Z changes most steeply: |g_j| a local maximum, g the central difference Z_{j+1} -
-  // Z_{j-1} smoothed by a Gaussian of a quarter pulse or half a CT voxel, the longer (a ramp then peaks at its middle,
-  // not anywhere along a flat top)
-  float* steep = &steepness_[base];
-  const float* g = &steep_kernel_[kMaxKernelHalf];
-  // (where Z is flat across the whole window, as inside one tissue, the sum is 0: skipped; the
-  // window's last change is tracked from its upper end)
-  int last_change = -1000000;
-  for (int j = -steep_half_; j < h; ++j) {
-    const int top = std::clamp(j + steep_half_, 1, h - 2);
-    if (z[top + 1] != z[top - 1]) last_change = j + steep_half_;
-    if (j < 0) continue;
-    if (last_change < j - steep_half_) {
-      steep[j] = 0.0f;
-      continue;
-    }
-    float sum = 0.0f;
-    for (int i = -steep_half_; i <= steep_half_; ++i) {
-      const int m = std::clamp(j + i, 1, h - 2);
-      sum += g[i] * (z[m + 1] - z[m - 1]);
-    }
-    steep[j] = sum;
-  }
-  const double step_exponent = dx_mm / pulse_mm_;
-  const double quarter_n = 0.25 * settings_.specular_exponent;
-  const double db_to_ln = std::numbers::ln10 / 10.0;
-  // the loss as a running product, 10^(-L_j / 10) = prod_{i<j} 10^(-a_i / 10) (each step's factor
-  // taken again only where the tissue changes)
-  double transmitted = 1.0, passed = 1.0, last_a_db = -1.0, half_step = 1.0;
-  for (int j = 0; j < h; ++j) {
-    const double ds_cm = dx_mm * path_ratio_[base + j] / 10.0;
-    const double a_db =
-        attenuation_db(settings_.attenuation_db_per_cm_mhz, attenuation_[base + j], settings_.frequency_mhz, ds_cm);
-    if (a_db != last_a_db) {
-      last_a_db = a_db;
-      half_step = std::exp(-0.5 * a_db * db_to_ln);
-    }
-    const double amplitude = transmitted * passed * half_step;
-    double specular = 0.0;
-    const float here = std::abs(steep[j]);
-    if (j > 0 && j + 1 < h && here > 0.0f && here > std::abs(steep[j - 1]) && here >= std::abs(steep[j + 1])) {
-      const double z1 = z_at(j - half), z2 = z_at(j + half);
-      specular = (z2 - z1) / (z2 + z1);
-      const int a0 = std::max(j - along, 0), a1 = std::min(j + along, h - 1);
-      const double g_a = (z[a1] - z[a0]) / ((a1 - a0) * dx_mm * path_ratio_[base + j]);
-      const int m = std::max(1, static_cast<int>(std::lround(0.5 * voxel_mm_ / line_spacing_mm_[j])));
-      const int left = std::max(column - m, 0), right = std::min(column + m, w - 1);
-      const double g_l = (z_[static_cast<size_t>(right) * h + j] - z_[static_cast<size_t>(left) * h + j]) /
-                         (std::max(right - left, 1) * line_spacing_mm_[j]);
-      // (a thin layer's middle: Z the same either side, no direction; the echo is square on)
-      const double g2 = g_a * g_a + g_l * g_l;
-      const double cos2 = g2 > 0.0 ? g_a * g_a / g2 : 1.0;
-      if (quarter_n > 0.0) specular *= std::exp(quarter_n * std::log(std::max(cos2, 1e-300)));
-    }
-    const double diffuse = scatter_scale_[j] * scatter_amplitude_[base + j];
-    field_[base + j] = static_cast<float>(amplitude) *
-                       (static_cast<float>(specular) + static_cast<float>(diffuse) * scatterer_[base + j]);
-    // (within one tissue the window's ends are equal: nothing reflected, nothing to take)
-    const double refl = reflection(z_at(j - half), z_at(j + half));
-    if (refl > 0.0) transmitted *= std::exp(step_exponent * std::log1p(-std::min(refl, 1.0 - 1e-12)));
-    passed *= half_step * half_step;
-  }
-}
-
-// the axial PSF along one scanline (the field clamped at its ends), into row-major order
-void BModeRenderer::convolve_axial(int column) {
-  const int h = settings_.height_px, w = settings_.width_px;
-  const std::complex<float>* f = &field_[static_cast<size_t>(column) * h];
-  const float* k = &axial_kernel_[kMaxKernelHalf];
-  for (int j = 0; j < h; ++j) {
-    std::complex<float> sum = 0.0f;
-    for (int i = -axial_half_; i <= axial_half_; ++i) sum += k[i] * f[std::clamp(j + i, 0, h - 1)];
-    axial_[static_cast<size_t>(j) * w + column] = sum;
-  }
-}
-
-// the lateral PSF across one row (clamped at the image's sides), the envelope squared, then
-// TGC, gain and log compression:  I = |e|^2,  B = 10 log10 I + gain + tgc d_cm
-void BModeRenderer::convolve_lateral(int row) {
-  const int w = settings_.width_px;
-  const std::complex<float>* a = &axial_[static_cast<size_t>(row) * w];
-  const float* k = &lateral_kernel_[static_cast<size_t>(row) * (2 * kMaxKernelHalf + 1) + kMaxKernelHalf];
-  const int half = lateral_half_[row];
-  const double depth_cm = (row + 0.5) * settings_.depth_mm / settings_.height_px / 10.0;
-  for (int c = 0; c < w; ++c) {
-    std::complex<float> sum = 0.0f;
-    for (int i = -half; i <= half; ++i) sum += k[i] * a[std::clamp(c + i, 0, w - 1)];
-    const size_t out = static_cast<size_t>(row) * w + c;
-    echo_[out] = std::norm(sum);
-    beam_.pixels[out] = log_compress(brightness_db(echo_[out], settings_.gain_db, settings_.tgc_db_per_cm, depth_cm),
-                                     settings_.dynamic_range_db);
-  }
 }
 
 }  // namespace pcisim::ultrasound

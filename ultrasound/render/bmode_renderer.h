@@ -13,9 +13,10 @@
 // compensated and log-compressed. render() returns the display image (display_pixel_to_world in probe/us_settings.h:
 // beam space for a linear probe, the scan-converted fan for a curvilinear one); beam_image() the beam-space one
 // (pixel_to_world). The constructor and set_mesh() allocate; render() and set_imaging() allocate
-// nothing.
-#include <complex>
+// nothing. The passes are bmode_kernels.h's: on the CPU over settings.threads threads, or, with
+// settings.renderer kCuda, on the GPU (cuda_bmode.h; the same kernels, a tissue map needed).
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,10 @@
 #include "ultrasound/mapping/tet_locator.h"
 #include "ultrasound/mapping/tet_snapshot.h"
 #include "ultrasound/probe/us_settings.h"
+#include "ultrasound/render/bmode_kernels.h"
+#ifdef PCISIM_HAVE_CUDA
+#include "ultrasound/render/cuda_bmode.h"
+#endif
 
 namespace pcisim::ultrasound {
 
@@ -44,8 +49,11 @@ class BModeRenderer {
   // validates the settings (std::invalid_argument naming the field), the CT and the tissue map
   // (on the CT's grid, every tissue named in tissue_acoustics.h: the message names the one that
   // is not); keeps references to ct and the map, which must outlive the renderer. tissue ==
-  // nullptr: the acoustic properties from the CT's HU
+  // nullptr: the acoustic properties from the CT's HU. settings.renderer kCuda: std::runtime_error
+  // when this build has no CUDA, no GPU is visible or there is no tissue map (the GPU samples
+  // tissues, not HU)
   BModeRenderer(const anatomy::Volume& ct, const UsSettings& settings, const anatomy::TissueMap* tissue = nullptr);
+  ~BModeRenderer();
 
   // the scanner's depth and overall gain from now on (the probe's knobs); throws
   // std::invalid_argument naming the field when out of range (us_settings.h), changing nothing
@@ -64,6 +72,10 @@ class BModeRenderer {
   // the last frame in beam space (column = scanline, row = depth sample)
   const BModeImage& beam_image() const { return beam_; }
   const UsSettings& settings() const { return settings_; }
+  // the GPU's passes in the last frame (ms, CUDA events; 0 on the CPU)
+  float last_gpu_kernel_ms() const;
+  // and each pass's (march, echo, axial PSF, lateral PSF, scan conversion; ms); nullptr on the CPU
+  const float* last_gpu_pass_ms() const;
   // the pulse's length, max(2 wavelengths, CT voxel): the window over which a specular echo's
   // and the shadowing's impedance change is taken, and (a quarter of it, or half a CT voxel) the smoothing that
   // finds a boundary's middle
@@ -72,21 +84,20 @@ class BModeRenderer {
   // the largest half-width of a point-spread kernel, samples or scanlines: a PSF wider than a
   // third of it (21 samples sigma) is cut short of 3 sigma. The kernels repeat the image's edge
   // samples beyond it, so the outermost scanlines' and rows' speckle is a few dB brighter
-  static constexpr int kMaxKernelHalf = 64;
+  static constexpr int kMaxKernelHalf = kernels::kMaxKernelHalf;
 
  private:
   void build_geometry();
-  Acoustics sample_acoustics(const Eigen::Vector3d& p_mm) const;
-  void march_scanline(int column, const ProbePose& pose, uint64_t seed, bool mapped);
-  void echo_scanline(int column);
-  void convolve_axial(int column);
-  void convolve_lateral(int row);
-  void scan_convert();
+  void build_scan_conversion();
+  Acoustics sample_hu(const double (&p_mm)[3]) const;
+  // this renderer's arrays and settings as the kernels read them
+  kernels::FrameView frame_view();
 
   const anatomy::Volume& ct_;
   // with a tissue map: its labels and each label's properties
   const anatomy::Volume* labels_ = nullptr;
   std::vector<Acoustics> label_acoustics_;
+  kernels::LabelView label_view_;
   UsSettings settings_;
   Eigen::Matrix3d world_to_index_;
   double pulse_mm_ = 1.0, voxel_mm_ = 1.0;
@@ -98,9 +109,9 @@ class BModeRenderer {
   // screen sample, c / c0), the attenuation factor, the scatterers' amplitude sqrt(sigma), the
   // tissue's scatterer; the echo field before the PSF
   std::vector<float> z_, path_ratio_, attenuation_, scatter_amplitude_;
-  std::vector<std::complex<float>> scatterer_, field_;
+  std::vector<Cf> scatterer_, field_;
   // row-major: the field after the axial PSF; the intensity after both
-  std::vector<std::complex<float>> axial_;
+  std::vector<Cf> axial_;
   std::vector<float> echo_;
   // the PSF: the axial kernel (peak 1); per row its lateral kernel (sum 1), the scanlines'
   // spacing there (mm) and the scatterers' scale (the diffuse intensity's mean is the tissue's
@@ -118,6 +129,9 @@ class BModeRenderer {
   std::vector<float> convert_fx_, convert_fy_;
   // settings_.threads threads (the caller one of them); started once
   realtime::RowPool pool_;
+#ifdef PCISIM_HAVE_CUDA
+  std::unique_ptr<cuda::BModeDevice> device_;  // the GPU's copy, with settings.renderer kCuda
+#endif
 };
 
 }  // namespace pcisim::ultrasound

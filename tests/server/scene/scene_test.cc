@@ -334,6 +334,7 @@ TEST(Scene, TheKidneySceneListsOnlyTheSoftTissueEffects) {
   EXPECT_EQ(s.ultrasound->settings.geometry, ultrasound::ProbeGeometry::kLinear);
   EXPECT_DOUBLE_EQ(s.ultrasound->settings.depth_mm, 60.0);
   EXPECT_DOUBLE_EQ(s.ultrasound->frame_rate_hz, 20.0);
+  EXPECT_EQ(s.ultrasound->settings.renderer, ultrasound::UsRenderer::kCpu);
 }
 
 TEST(Scene, SoftTissueMistakesNameTheirPath) {
@@ -370,6 +371,15 @@ TEST(Scene, SoftTissueMistakesNameTheirPath) {
   EXPECT_EQ(error_of("{" + organ +
                      R"("effects": {"soft_tissue": {}, "probe_contact": {}, "ultrasound": {"depth_mm": 400}}})"),
             "test.json: effects.ultrasound.depth_mm: expected a number in [1, 300], got 400");
+  EXPECT_EQ(error_of("{" + organ +
+                     R"("effects": {"soft_tissue": {}, "probe_contact": {}, "ultrasound": {"renderer": "gpu"}}})"),
+            "test.json: effects.ultrasound.renderer: expected one of \"cpu\", \"cuda\", got \"gpu\"");
+  {
+    const Scene gpu = parse_scene(
+        "{" + organ + R"("effects": {"soft_tissue": {}, "probe_contact": {}, "ultrasound": {"renderer": "cuda"}}})",
+        "test.json");
+    EXPECT_EQ(gpu.ultrasound->settings.renderer, ultrasound::UsRenderer::kCuda);
+  }
   EXPECT_EQ(error_of(R"({"anatomy": {"organ": "kidney"}, "effects": {"guidewire": {}}})"),
             "test.json: anatomy.organ: needs effect \"soft_tissue\" (an organ is the soft-tissue scene's anatomy)");
   EXPECT_EQ(error_of("{" + organ +

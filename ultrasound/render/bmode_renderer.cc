@@ -88,6 +88,10 @@ BModeRenderer::BModeRenderer(const anatomy::Volume& ct, const UsSettings& settin
     device_ = std::make_unique<cuda::BModeDevice>(label_view_, static_cast<int64_t>(labels_->hu_i16.size()),
                                                   static_cast<int>(label_acoustics_.size()), settings_.width_px,
                                                   settings_.height_px);
+    // (what each frame copies back: echo_ and the images are never resized after this)
+    device_->pin(echo_.data(), echo_.size() * sizeof(float));
+    device_->pin(beam_.pixels.data(), beam_.pixels.size());
+    device_->pin(image_.pixels.data(), image_.pixels.size());
 #else
     throw std::runtime_error("ultrasound: the cuda renderer: this build has no CUDA (PCISIM_CUDA)");
 #endif

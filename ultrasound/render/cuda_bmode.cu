@@ -129,6 +129,7 @@ struct BModeDevice::Buffers {
   Grow<int> cell_start, entries;
   cudaEvent_t mark[kPasses + 1] = {};  // before each pass, and after the last
   std::vector<void*> owned;
+  std::vector<void*> pinned;
   template <class T>
   T* own(size_t count, const char* what) {
     T* p = alloc<T>(count, what);
@@ -137,6 +138,7 @@ struct BModeDevice::Buffers {
   }
   ~Buffers() {
     for (void* p : owned) cudaFree(p);
+    for (void* p : pinned) cudaHostUnregister(p);
     for (cudaEvent_t e : mark)
       if (e) cudaEventDestroy(e);
   }
@@ -220,6 +222,12 @@ void BModeDevice::upload_geometry(const kernels::FrameView& host, bool curved) {
   }
   f.axial_half = host.axial_half;
   f.steep_half = host.steep_half;
+}
+
+void BModeDevice::pin(void* host, size_t bytes) {
+  if (!host || bytes == 0) return;
+  check(cudaHostRegister(host, bytes, cudaHostRegisterDefault), "cudaHostRegister");
+  b_->pinned.push_back(host);
 }
 
 void BModeDevice::upload_rest(const LocatorView& host) {

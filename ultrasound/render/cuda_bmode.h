@@ -6,6 +6,7 @@
 // types) so that only cuda_bmode.cu needs nvcc; BModeRenderer owns one when its settings ask for
 // the cuda renderer. Every call throws std::runtime_error naming the CUDA call and its error
 // string when CUDA fails.
+#include <cstddef>
 #include <cstdint>
 #include <string>
 
@@ -29,6 +30,9 @@ class BModeDevice {
 
   // what changes only with the depth: the scanlines, the kernels, the scan conversion (host's arrays)
   void upload_geometry(const kernels::FrameView& host, bool curved);
+  // page-locks host memory the frames are copied into (the copies then go straight to it, about
+  // twice as fast); undone by the destructor, which must run before that memory is freed
+  void pin(void* host, size_t bytes);
   // the tets' rest arrays (after TetLocator::build)
   void upload_rest(const LocatorView& host);
   // one frame: the tets' current arrays (cells + 1 starts, entries entries; the device's room for

@@ -23,7 +23,10 @@ void write_png(const std::string& path, const BModeImage& image) {
 }
 
 BModeRenderer::BModeRenderer(const anatomy::Volume& ct, const UsSettings& settings, const anatomy::TissueMap* tissue)
-    : ct_(ct), settings_(settings), pool_((validate(settings), settings.threads)) {
+    // (the GPU's frames use no CPU threads: the pool is the caller alone)
+    : ct_(ct),
+      settings_(settings),
+      pool_((validate(settings), settings.renderer == UsRenderer::kCuda ? 1 : settings.threads)) {
   const std::string bad = anatomy::validate(ct);
   if (!bad.empty()) throw std::invalid_argument("ultrasound: the CT is not usable: " + bad);
   if (tissue) {

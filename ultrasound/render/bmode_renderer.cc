@@ -111,6 +111,16 @@ float BModeRenderer::last_gpu_kernel_ms() const {
   return 0.0f;
 }
 
+const std::vector<float>& BModeRenderer::echo_intensity() const {
+#ifdef PCISIM_HAVE_CUDA
+  if (device_ && echo_on_device_) {
+    device_->download_echo(const_cast<float*>(echo_.data()));
+    echo_on_device_ = false;
+  }
+#endif
+  return echo_;
+}
+
 const float* BModeRenderer::last_gpu_pass_ms() const {
 #ifdef PCISIM_HAVE_CUDA
   if (device_) return device_->last_pass_ms();
@@ -343,6 +353,7 @@ const BModeImage& BModeRenderer::render(const ProbePose& pose, uint64_t seed, co
   if (device_) {
     device_->render(f, p, through, locator_.cell_count(), locator_.entry_count(), locator_.entries_capacity(),
                     splitmix64(seed), curved);
+    echo_on_device_ = true;
     return curved ? image_ : beam_;
   }
 #endif

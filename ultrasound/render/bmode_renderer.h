@@ -68,7 +68,8 @@ class BModeRenderer {
   // the last frame's echo intensity per pixel, the envelope squared (row-major; relative to a
   // perfect plane reflector square to the beam at the face, after attenuation, transmission and
   // the point-spread function, before gain, TGC and compression)
-  const std::vector<float>& echo_intensity() const { return echo_; }
+  // (on the GPU it is copied back when first asked for after a frame, not with every frame)
+  const std::vector<float>& echo_intensity() const;
   // the last frame in beam space (column = scanline, row = depth sample)
   const BModeImage& beam_image() const { return beam_; }
   const UsSettings& settings() const { return settings_; }
@@ -131,6 +132,7 @@ class BModeRenderer {
   realtime::RowPool pool_;
 #ifdef PCISIM_HAVE_CUDA
   std::unique_ptr<cuda::BModeDevice> device_;  // the GPU's copy, with settings.renderer kCuda
+  mutable bool echo_on_device_ = false;        // the last frame's echo_ not yet copied back
 #endif
 };
 

@@ -224,6 +224,11 @@ void BModeDevice::upload_geometry(const kernels::FrameView& host, bool curved) {
   f.steep_half = host.steep_half;
 }
 
+void BModeDevice::download_echo(float* host) const {
+  const size_t n = static_cast<size_t>(b_->samples);
+  check(cudaMemcpy(host, b_->frame.echo, n * sizeof(float), cudaMemcpyDeviceToHost), "cudaMemcpy echo");
+}
+
 void BModeDevice::pin(void* host, size_t bytes) {
   if (!host || bytes == 0) return;
   check(cudaHostRegister(host, bytes, cudaHostRegisterDefault), "cudaHostRegister");
@@ -302,7 +307,6 @@ void BModeDevice::render(const kernels::FrameView& host, const kernels::PoseView
     check(cudaEventElapsedTime(&last_pass_ms_[k], b.mark[k], b.mark[k + 1]), "cudaEventElapsedTime");
   const size_t n = static_cast<size_t>(b.samples);
   check(cudaMemcpy(host.beam, f.beam, n, cudaMemcpyDeviceToHost), "cudaMemcpy beam");
-  check(cudaMemcpy(host.echo, f.echo, n * sizeof(float), cudaMemcpyDeviceToHost), "cudaMemcpy echo");
   if (curved) check(cudaMemcpy(host.image, f.image, n, cudaMemcpyDeviceToHost), "cudaMemcpy image");
 }
 

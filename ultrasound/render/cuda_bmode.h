@@ -37,11 +37,12 @@ class BModeDevice {
   void upload_rest(const LocatorView& host);
   // one frame: the tets' current arrays (cells + 1 starts, entries entries; the device's room for
   // them grows to entries_capacity, the host's reserve, so frames allocate no more than the host
-  // does) when locator is given, the passes, and the beam-space grey levels, the echo intensity
-  // and (curved) the display image copied back into host's arrays; the scalars (gain, TGC...) are
-  // host's
+  // does) when locator is given, the passes, and the beam-space grey levels and (curved) the
+  // display image copied back into host's arrays; the scalars (gain, TGC...) are host's
   void render(const kernels::FrameView& host, const kernels::PoseView& pose, const LocatorView* locator, int cells,
               int entries, long entries_capacity, uint64_t mixed_seed, bool curved);
+  // the last frame's echo intensity (width x height floats) into host
+  void download_echo(float* host) const;
   // the last render()'s passes on the GPU (ms, CUDA events: the kernels, no copies), in all and
   // each pass's (march, echo, axial PSF, lateral PSF, scan conversion)
   static constexpr int kPasses = 5;

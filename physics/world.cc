@@ -75,6 +75,10 @@ void validate(const WorldSpec& s) {
   require(!s.soft_tissue || (!s.guidewire && !s.heart_beat),
           "soft_tissue: goes with probe_contact and ultrasound only (not guidewire or heart_beat)");
   if (s.soft_tissue) soft_tissue::validate(*s.soft_tissue);
+  if (s.soft_tissue && s.soft_tissue->params.solver == pbd::SolverKind::kJacobiCuda) {
+    std::string why;
+    require(pbd::pbd_cuda_available(&why), "soft_tissue.device: cuda needs a CUDA build and a GPU (" + why + ")");
+  }
   if (s.probe_contact) soft_tissue::validate(*s.probe_contact);
 }
 

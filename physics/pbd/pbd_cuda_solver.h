@@ -4,16 +4,19 @@
 //
 // PbdSystem::step builds one on the first step with SolverKind::kJacobiCuda and keeps it; it is
 // public for its timings and for pbd_cuda_available(). Built from a finalized system, it uploads
-// the topology once (distance, bending, clusters with their chunked reductions, CSR gathers,
-// masses) and sizes every device buffer; a step allocates nothing (a CUDA graph of the whole step
-// is re-captured only when dt or the PbdParams change). Each step uploads what the caller may
-// have edited since the last one (positions, velocities, states and inverse masses as they are
-// then, driven targets, cluster rotations and compliances), runs predict, the Jacobi iterations
-// and update on the device, and copies positions, velocities, states and rotations back.
+// the topology once (distance, bending, clusters with their chunked reductions and volumes, CSR
+// gathers, masses) and sizes every device buffer; a step allocates nothing (a CUDA graph of the
+// whole step is re-captured only when dt, the PbdParams or the contacts' setup change). Each step
+// uploads what the caller may have edited since the last one (positions, velocities, states and
+// inverse masses as they are then, driven targets, cluster rotations and compliances, the contact
+// bodies' substeps), runs predict, the contacts (device_contacts.h: find, stabilise, one pass after
+// every iteration, the forces), the Jacobi iterations and update on the device, and copies
+// positions, velocities, states, rotations and the contacts' results back.
 // Agreement with the CPU twin is measured in tests/physics/pbd/pbd_cuda_solver_test.cc.
 #include <memory>
 #include <string>
 
+#include "physics/pbd/contact_projector.h"
 #include "physics/pbd/pbd_params.h"
 
 namespace pcisim::physics::pbd {
@@ -35,17 +38,17 @@ struct PbdCudaStepTimings {
 
 class PbdCudaSolver {
  public:
-  // throws std::invalid_argument naming the volume when the system has cluster volume constraints
-  // (CPU only), naming kJacobiCuda when there is no CUDA build or no device; std::runtime_error on
-  // a CUDA error
+  // throws std::invalid_argument naming kJacobiCuda when there is no CUDA build or no device;
+  // std::runtime_error on a CUDA error
   explicit PbdCudaSolver(const PbdSystem& system);
   ~PbdCudaSolver();
   PbdCudaSolver(const PbdCudaSolver&) = delete;
   PbdCudaSolver& operator=(const PbdCudaSolver&) = delete;
 
   // the substeps of one PbdSystem::step (after its quarantine of non-finite inputs), on the
-  // device; system must be the one this was built from (same sizes, checked)
-  void run_step(PbdSystem& system, double dt_s, const PbdParams& params);
+  // device; system must be the one this was built from (same sizes, checked). contacts: null, or
+  // one whose device_setup() is true for this system's particles (checked)
+  void run_step(PbdSystem& system, double dt_s, const PbdParams& params, ContactProjector* contacts = nullptr);
   const PbdCudaStepTimings& last_timings() const { return timings_; }
 
  private:

@@ -19,16 +19,13 @@ std::string pbd_cuda_device_name() {
   return {};
 }
 
-PbdCudaSolver::PbdCudaSolver(const PbdSystem& sys) {
-  if (sys.clusters().any_volume())
-    throw std::invalid_argument(
-        "pbd: cluster volume constraints are solved on the CPU only; use kGaussSeidel or kJacobi");
+PbdCudaSolver::PbdCudaSolver(const PbdSystem&) {
   throw std::invalid_argument("pbd: solver kJacobiCuda needs CUDA, and this build has none");
 }
 
 PbdCudaSolver::~PbdCudaSolver() = default;
 
-void PbdCudaSolver::run_step(PbdSystem&, double, const PbdParams&) {
+void PbdCudaSolver::run_step(PbdSystem&, double, const PbdParams&, ContactProjector*) {
   throw std::invalid_argument("pbd: solver kJacobiCuda needs CUDA, and this build has none");
 }
 

@@ -167,17 +167,15 @@ void PbdSystem::quarantine_non_finite_inputs() {
 void PbdSystem::step(double dt_s, const PbdParams& params, ContactProjector* contacts) {
   if (!finalized_) throw std::logic_error("pbd: finalize() before step()");
   if (!(dt_s > 0.0) || !std::isfinite(dt_s)) return;
-  if (contacts && params.solver == SolverKind::kJacobiCuda)
-    throw std::invalid_argument("pbd: contacts are solved on the CPU only; use kGaussSeidel or kJacobi");
-  if (params.solver == SolverKind::kJacobiCuda && clusters_.any_volume())
-    throw std::invalid_argument(
-        "pbd: cluster volume constraints are solved on the CPU only; use kGaussSeidel or kJacobi");
+  ContactProjector::DeviceSetup device_contacts;
+  if (contacts && params.solver == SolverKind::kJacobiCuda && !contacts->device_setup(&device_contacts))
+    throw std::invalid_argument("pbd: these contacts are solved on the CPU only; use kGaussSeidel or kJacobi");
   if (params.solver == SolverKind::kJacobiCuda && !cuda_.solver)
     cuda_.solver = std::make_shared<PbdCudaSolver>(*this);  // throws std::invalid_argument without CUDA
   quarantine_non_finite_inputs();
   if (params.solver == SolverKind::kJacobiCuda) {
     // the same substeps as below, on the device (pbd_cuda_solver.h)
-    cuda_.solver->run_step(*this, dt_s, params);
+    cuda_.solver->run_step(*this, dt_s, params, contacts);
   } else {
     step_on_cpu(dt_s, params, contacts);
   }

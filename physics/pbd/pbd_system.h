@@ -28,8 +28,7 @@ class PbdSystem {
   // rest values are taken from the positions at the time of the call
   void add_distance(int i, int j, double compliance_m_per_n);
   void add_bending(int a, int b, int c, int d, double compliance_per_n_m);  // hinge a-b, wings c, d
-  // volume_compliance_per_j >= 0 adds the cluster's volume constraint (shape_matching_clusters.h);
-  // CPU solvers only: with kJacobiCuda a system that has one throws std::invalid_argument
+  // volume_compliance_per_j >= 0 adds the cluster's volume constraint (shape_matching_clusters.h)
   void add_cluster(std::span<const int> members, double compliance_s2, double volume_compliance_per_j = -1.0);
   void finalize();
   bool finalized() const { return finalized_; }
@@ -38,8 +37,9 @@ class PbdSystem {
   // where driven particle i is at the end of the next step; substeps move it on the straight
   // line from where it is, so it arrives there exactly
   void set_driven_target(int i, const Eigen::Vector3d& position_m);
-  // contacts (optional, not owned) are called inside each substep (contact_projector.h); CPU
-  // solvers only: with kJacobiCuda they throw std::invalid_argument
+  // contacts (optional, not owned) are called inside each substep (contact_projector.h); with
+  // kJacobiCuda they are solved on the device, and contacts whose device_setup() is false throw
+  // std::invalid_argument
   void step(double dt_s, const PbdParams& params, ContactProjector* contacts = nullptr);
   // quarantined particles return to what they were built as (free, pinned or driven), from where
   // they froze (the provocation is over); a driven one heads for its target again

@@ -32,6 +32,8 @@ class ShapeMatchingClusters {
   void set_rotation(int c, const Eigen::Matrix3d& r) const { rotation_[c] = r; }
   const Eigen::Matrix3Xd& rest_offsets_m() const { return rest_offset_m_; }
   double rest_moment_kg_m2(int c) const { return rest_moment_kg_m2_[c]; }
+  // (sum m q q^T)^-1 of cluster c at rest: the volume's F = A_pq A_qq^-1
+  const Eigen::Matrix3d& rest_aqq_inverse(int c) const { return rest_aqq_inverse_[c]; }
 
   // eqs 8-10: centre of mass t, A_pq = sum m p q^T, its rotation R, goals g = R q + t for the
   // members of c, written to goals_m[0 .. size). Updates the cluster's remembered rotation.

@@ -1,18 +1,19 @@
 #include "physics/soft_tissue/contact_rules.h"
 
+#include <algorithm>
+
 namespace pcisim::physics::soft_tissue {
 
 int least_penetration_face(std::span<const HalfSpace> faces, const ProbePose& pose, const Eigen::Vector3d& x_m,
                            double* signed_distance_m) {
-  const Eigen::Vector3d local = pose.rotation.conjugate() * (x_m - pose.position_m);
-  int best = -1;
-  double best_d = 0.0;
-  for (int i = 0; i < static_cast<int>(faces.size()); ++i) {
-    const double d = faces[i].normal.dot(local) - faces[i].offset_m;
-    if (best < 0 || d > best_d) best = i, best_d = d;  // strict: a tie keeps the first face
+  pbd::device::ContactFace world[pbd::device::kMaxContactFaces];
+  const int count = static_cast<int>(std::min<size_t>(faces.size(), pbd::device::kMaxContactFaces));
+  for (int i = 0; i < count; ++i) {
+    const ContactPlane p = world_face(faces[i], pose);
+    world[i] = {{p.normal.x(), p.normal.y(), p.normal.z()}, p.offset_m};
   }
-  *signed_distance_m = best_d;
-  return best;
+  *signed_distance_m = 0.0;
+  return pbd::device::least_penetration_face(world, count, {x_m.x(), x_m.y(), x_m.z()}, signed_distance_m);
 }
 
 }  // namespace pcisim::physics::soft_tissue

@@ -1,20 +1,29 @@
 #include "physics/soft_tissue/tissue_contacts.h"
 
 #include <algorithm>
-#include <cmath>
+#include <stdexcept>
+#include <string>
 #include <utility>
-
-#include "physics/soft_tissue/contact_rules.h"
 
 namespace pcisim::physics::soft_tissue {
 
 using Eigen::Vector3d;
+namespace device = pbd::device;
 
 namespace {
 
-// the tangential part of v on a plane of unit normal n
-Vector3d tangential(const Vector3d& v, const Vector3d& n) {
-  return v - n.dot(v) * n;
+device::Vec3 to_device(const Vector3d& v) {
+  return {v.x(), v.y(), v.z()};
+}
+
+device::Mat3 to_device(const Eigen::Quaterniond& q) {
+  device::Mat3 m;
+  Eigen::Map<Eigen::Matrix3d>(m.m) = q.toRotationMatrix();
+  return m;
+}
+
+device::ContactFace to_device(const ContactPlane& p) {
+  return {to_device(p.normal), p.offset_m};
 }
 
 }  // namespace
@@ -28,6 +37,9 @@ TissueContacts::TissueContacts(Eigen::VectorXd contact_radius_m, const TissuePar
       probe_step_start_(probe.pose),
       probe_target_(probe.pose),
       probe_now_(probe.pose) {
+  if (probe_.faces.size() > static_cast<size_t>(device::kMaxContactFaces))
+    throw std::invalid_argument("soft_tissue: the probe has " + std::to_string(probe_.faces.size()) +
+                                " faces; at most " + std::to_string(device::kMaxContactFaces));
   contacts_.resize(2 * static_cast<size_t>(radius_m_.size()));
 }
 
@@ -41,68 +53,63 @@ void TissueContacts::begin_step() {
   stabilisation_max_m_ = 0.0;
 }
 
-void TissueContacts::add_contact(int particle, bool probe, const ContactPlane& plane, const Vector3d& shift_m) {
-  if (count_ >= static_cast<int>(contacts_.size())) return;  // never: at most one per body and particle
-  Contact& c = contacts_[count_++];
-  c.particle = particle;
-  c.probe = probe;
-  c.plane = plane;
-  c.surface_shift_m = shift_m;
-  c.normal_m = 0.0;
-  c.friction_m.setZero();
+void TissueContacts::make_bodies(const ProbePose& from, const ProbePose& to, device::ContactBody* bodies) const {
+  device::ContactBody& s = bodies[kSupport];
+  s.faces = 1;
+  s.face[0] = to_device(support_);
+  s.moving = false;
+  s.mu_static = params_.support_mu_static;
+  s.mu_kinetic = params_.support_mu_kinetic;
+  device::ContactBody& p = bodies[kProbe];
+  p.faces = static_cast<int>(probe_.faces.size());
+  for (int f = 0; f < p.faces; ++f) p.face[f] = to_device(world_face(probe_.faces[f], to));
+  p.moving = true;
+  p.start_rotation = to_device(from.rotation);
+  p.start_position_m = to_device(from.position_m);
+  p.end_rotation = to_device(to.rotation);
+  p.end_position_m = to_device(to.position_m);
+  p.mu_static = params_.probe_mu_static;
+  p.mu_kinetic = params_.probe_mu_kinetic;
 }
 
-// [soft-tissue, Algorithm 1 lines 6-9] find solid contacts: a particle whose start or predicted
-// position is within the contact distance plus a margin of the support, or of the probe where the
-// probe is at the end of this substep (against its face of least penetration)
+// [soft-tissue, Algorithm 1 lines 6-9] find solid contacts (device::find_contact), the probe where
+// it is at the end of this substep
 void TissueContacts::begin_substep(pbd::Particles& particles, double h_s, double fraction_of_step) {
   (void)h_s;
   const ProbePose substep_start = probe_now_;
   probe_now_ = interpolate(probe_step_start_, probe_target_, fraction_of_step);
+  make_bodies(substep_start, probe_now_, bodies_);
   count_ = 0;
   probe_contacts_ = support_contacts_ = 0;
-  const bool have_probe = !probe_.faces.empty();
   // a body of another size than the radii were made for: no contacts rather than a read past them
   if (particles.size() != radius_m_.size()) return;
   for (int i = 0; i < particles.size(); ++i) {
     if (!(particles.inv_mass_per_kg[i] > 0.0)) continue;  // pinned, driven or quarantined
-    const Vector3d x = particles.position_m.col(i), xp = particles.predicted_m.col(i);
-    const double radius_m = radius_m_[i], reach_m = radius_m + params_.contact_margin_m;
-    if (std::min(plane_gap_m(x, support_, radius_m), plane_gap_m(xp, support_, radius_m)) < params_.contact_margin_m) {
-      add_contact(i, false, support_, Vector3d::Zero());
-      ++support_contacts_;
+    const device::Vec3 x = to_device(particles.position_m.col(i)), xp = to_device(particles.predicted_m.col(i));
+    for (int b = kSupport; b <= kProbe; ++b) {
+      Contact& c = contacts_[count_];  // two slots per particle: never past the end
+      if (!device::find_contact(bodies_[b], x, xp, radius_m_[i], params_.contact_margin_m, &c.slot)) continue;
+      c.particle = i;
+      c.body = b;
+      ++count_;
+      ++(b == kProbe ? probe_contacts_ : support_contacts_);
     }
-    if (!have_probe) continue;
-    double d_start = 0.0, d_pred = 0.0;
-    // the face is chosen from where the particle starts the substep, against the probe's pose at
-    // its end: the probe pushes a particle it has moved onto back out of the side it came from
-    const int face = least_penetration_face(probe_.faces, probe_now_, x, &d_start);
-    least_penetration_face(probe_.faces, probe_now_, xp, &d_pred);
-    if (face < 0 || std::min(d_start, d_pred) >= reach_m) continue;
-    // the probe's motion at the particle over the substep, for the relative slip of friction
-    const Vector3d local = substep_start.rotation.conjugate() * (x - substep_start.position_m);
-    const Vector3d shift = probe_now_.rotation * local + probe_now_.position_m - x;
-    add_contact(i, true, world_face(probe_.faces[face], probe_now_), shift);
-    ++probe_contacts_;
   }
   stabilise(particles);
 }
 
-// [soft-tissue, Algorithm 1 lines 10-15] stabilisation: the contacts are solved on the start
-// positions x and the same correction is added to x and x*, so x* - x (the velocity) is unchanged:
-// overlap that exists at the start of the substep (a probe moved onto a particle) is removed
-// without launching the particle. Sequential passes (each particle has at most two contacts, so
-// the paper's averaging dx/n is not needed)
+// [soft-tissue, Algorithm 1 lines 10-15] stabilisation (device::stabilise_contact). Sequential
+// passes (each particle has at most two contacts, so the paper's averaging dx/n is not needed)
 void TissueContacts::stabilise(pbd::Particles& particles) {
   for (int it = 0; it < params_.stabilisation_iterations; ++it) {
     for (int k = 0; k < count_; ++k) {
       const Contact& c = contacts_[k];
-      Vector3d x = particles.position_m.col(c.particle);
-      const double moved = non_penetration_m(c.plane, radius_m_[c.particle], &x);
+      device::Vec3 x = to_device(particles.position_m.col(c.particle));
+      device::Vec3 xp = to_device(particles.predicted_m.col(c.particle));
+      const double moved = device::stabilise_contact(c.slot, radius_m_[c.particle], &x, &xp);
       if (moved == 0.0) continue;
-      const Vector3d dx = x - particles.position_m.col(c.particle);
-      particles.position_m.col(c.particle) = x;
-      particles.predicted_m.col(c.particle) += dx;
+      particles.position_m.col(c.particle) = Vector3d(x.x, x.y, x.z);
+      particles.predicted_m.col(c.particle) = Vector3d(xp.x, xp.y, xp.z);
       stabilisation_max_m_ = std::max(stabilisation_max_m_, moved);
     }
   }
@@ -114,38 +121,53 @@ void TissueContacts::project(pbd::Particles& particles, double h_s) {
   (void)h_s;
   for (int k = 0; k < count_; ++k) {
     Contact& c = contacts_[k];
-    auto xp = particles.predicted_m.col(c.particle);
-    Vector3d x = xp;
-    c.normal_m += non_penetration_m(c.plane, radius_m_[c.particle], &x);
-    const double mu_s = c.probe ? params_.probe_mu_static : params_.support_mu_static;
-    const double mu_k = c.probe ? params_.probe_mu_kinetic : params_.support_mu_kinetic;
-    if (c.normal_m > 0.0 && mu_s > 0.0) {
-      // slip without friction = the slip now minus what friction already took away
-      const Vector3d slip =
-          tangential(x - particles.position_m.col(c.particle) - c.surface_shift_m, c.plane.normal) - c.friction_m;
-      const Vector3d total = coulomb_friction_m(slip, c.normal_m, mu_s, mu_k);
-      x += total - c.friction_m;
-      c.friction_m = total;
-    }
-    xp = x;
+    const device::ContactBody& body = bodies_[c.body];
+    device::Vec3 xp = to_device(particles.predicted_m.col(c.particle));
+    device::project_contact(&c.slot, radius_m_[c.particle], body.mu_static, body.mu_kinetic,
+                            to_device(particles.position_m.col(c.particle)), &xp);
+    particles.predicted_m.col(c.particle) = Vector3d(xp.x, xp.y, xp.z);
   }
 }
 
-// force on the body = -(the momentum its contacts gave the particles) / h: a correction dx is a
-// velocity change dx / h [soft-tissue eq 6], so F = -sum m dx / h^2 over the substep
+// force on each body (device::contact_force_n), summed over its contacts
 void TissueContacts::end_substep(const pbd::Particles& particles, double h_s) {
-  Vector3d probe_n = Vector3d::Zero(), support_n = Vector3d::Zero();
+  device::Vec3 sum[2];
   const double inv_h2 = 1.0 / (h_s * h_s);
   for (int k = 0; k < count_; ++k) {
     const Contact& c = contacts_[k];
-    const Vector3d f = -particles.mass_kg[c.particle] * inv_h2 * (c.normal_m * c.plane.normal + c.friction_m);
-    (c.probe ? probe_n : support_n) += f;
+    sum[c.body] += device::contact_force_n(c.slot, particles.mass_kg[c.particle], inv_h2);
   }
   ++substeps_seen_;
-  probe_force_sum_n_ += probe_n;
-  support_force_sum_n_ += support_n;
+  probe_force_sum_n_ += Vector3d(sum[kProbe].x, sum[kProbe].y, sum[kProbe].z);
+  support_force_sum_n_ += Vector3d(sum[kSupport].x, sum[kSupport].y, sum[kSupport].z);
   probe_force_n_ = probe_force_sum_n_ / substeps_seen_;
   support_force_n_ = support_force_sum_n_ / substeps_seen_;
+}
+
+bool TissueContacts::device_setup(DeviceSetup* setup) const {
+  setup->radius_m = radius_m_.data();
+  setup->particles = static_cast<int>(radius_m_.size());
+  setup->bodies = 2;
+  setup->margin_m = params_.contact_margin_m;
+  setup->stabilisation_iterations = params_.stabilisation_iterations;
+  return true;
+}
+
+// the same poses begin_substep would take, substep by substep
+void TissueContacts::device_bodies(int substeps, device::ContactBody* bodies) {
+  for (int s = 0; s < substeps; ++s) {
+    const ProbePose substep_start = probe_now_;
+    probe_now_ = interpolate(probe_step_start_, probe_target_, static_cast<double>(s + 1) / substeps);
+    make_bodies(substep_start, probe_now_, bodies + 2 * s);
+  }
+}
+
+void TissueContacts::device_results(const Vector3d* force_n, const int* contacts, double stabilisation_max_m) {
+  support_force_n_ = force_n[kSupport];
+  probe_force_n_ = force_n[kProbe];
+  support_contacts_ = contacts[kSupport];
+  probe_contacts_ = contacts[kProbe];
+  stabilisation_max_m_ = stabilisation_max_m;
 }
 
 }  // namespace pcisim::physics::soft_tissue

@@ -1,7 +1,9 @@
 #pragma once
 // The tissue's contacts with the support (a static plane) and the probe (a kinematic convex body),
 // solved inside the PBD step (pbd/contact_projector.h) [soft-tissue, Algorithm 1 lines 6-15 and
-// the contact group of lines 16-22]. Sized at construction; nothing allocates per step.
+// the contact group of lines 16-22], by the rules of pbd/device_contacts.h, on the CPU or, with
+// SolverKind::kJacobiCuda, on the device (the device_* calls). Sized at construction; nothing
+// allocates per step.
 #include <Eigen/Core>
 #include <vector>
 
@@ -16,7 +18,8 @@ class TissueContacts final : public pbd::ContactProjector {
  public:
   // contact_radius_m: each particle's contact distance (begin_substep needs one per particle);
   // support: its top plane (normal out of the
-  // support); probe: normalised, may have no faces
+  // support); probe: normalised, may have no faces. Throws std::invalid_argument when the probe
+  // has more than device::kMaxContactFaces faces
   TissueContacts(Eigen::VectorXd contact_radius_m, const TissueParams& params, const ContactPlane& support,
                  const ConvexProbe& probe);
 
@@ -28,6 +31,9 @@ class TissueContacts final : public pbd::ContactProjector {
   void begin_substep(pbd::Particles& particles, double h_s, double fraction_of_step) override;
   void project(pbd::Particles& particles, double h_s) override;
   void end_substep(const pbd::Particles& particles, double h_s) override;
+  bool device_setup(DeviceSetup* setup) const override;
+  void device_bodies(int substeps, pbd::device::ContactBody* bodies) override;
+  void device_results(const Eigen::Vector3d* force_n, const int* contacts, double stabilisation_max_m) override;
 
   const ProbePose& probe_pose() const { return probe_now_; }
   const ConvexProbe& probe() const { return probe_; }
@@ -44,15 +50,14 @@ class TissueContacts final : public pbd::ContactProjector {
   double stabilisation_max_m() const { return stabilisation_max_m_; }
 
  private:
+  static constexpr int kSupport = 0, kProbe = 1;  // body indices
   struct Contact {
     int particle = 0;
-    bool probe = false;
-    ContactPlane plane;
-    Eigen::Vector3d surface_shift_m = Eigen::Vector3d::Zero();  // the body's motion at the contact this substep
-    double normal_m = 0.0;                                      // normal correction so far this substep
-    Eigen::Vector3d friction_m = Eigen::Vector3d::Zero();       // friction correction so far this substep
+    int body = kSupport;
+    pbd::device::ContactSlot slot;
   };
-  void add_contact(int particle, bool probe, const ContactPlane& plane, const Eigen::Vector3d& shift_m);
+  // the support and the probe over a substep that takes the probe from `from` to `to`
+  void make_bodies(const ProbePose& from, const ProbePose& to, pbd::device::ContactBody* bodies) const;
   void stabilise(pbd::Particles& particles);
 
   Eigen::VectorXd radius_m_;
@@ -60,8 +65,9 @@ class TissueContacts final : public pbd::ContactProjector {
   ContactPlane support_;
   ConvexProbe probe_;
   ProbePose probe_step_start_, probe_target_, probe_now_;
-  std::vector<Contact> contacts_;  // two slots per particle (support, probe), sized once
-  int count_ = 0;                  // slots in use this substep
+  pbd::device::ContactBody bodies_[2];  // this substep's, on the CPU
+  std::vector<Contact> contacts_;       // two slots per particle (support, probe), sized once
+  int count_ = 0;                       // slots in use this substep
   int probe_contacts_ = 0, support_contacts_ = 0, substeps_seen_ = 0;
   Eigen::Vector3d probe_force_n_ = Eigen::Vector3d::Zero(), support_force_n_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d probe_force_sum_n_ = Eigen::Vector3d::Zero(), support_force_sum_n_ = Eigen::Vector3d::Zero();

@@ -22,8 +22,9 @@ void validate(const TissueParams& p) {
   check(p.bulk_modulus_pa, kTissueBulkModulusPa, "bulk_modulus_pa");
   check(p.substeps, kTissueSubsteps, "substeps");
   check(p.iterations, kTissueIterations, "iterations");
-  require(p.solver == pbd::SolverKind::kGaussSeidel || p.solver == pbd::SolverKind::kJacobi, "solver",
-          "{kGaussSeidel, kJacobi}");
+  require(p.solver == pbd::SolverKind::kGaussSeidel || p.solver == pbd::SolverKind::kJacobi ||
+              p.solver == pbd::SolverKind::kJacobiCuda,
+          "solver", "{kGaussSeidel, kJacobi, kJacobiCuda}");
   check(p.sor_w, kTissueSorW, "sor_w");
   check(p.stabilisation_iterations, kTissueStabilisationIterations, "stabilisation_iterations");
   check(p.damping_per_s, kTissueDampingPerS, "damping_per_s");

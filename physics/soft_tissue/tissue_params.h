@@ -37,7 +37,8 @@ struct TissueParams {
   int substeps = 3;    // [soft-tissue, Table 1]; [1, 100]
   int iterations = 9;  // solver passes per substep [soft-tissue, Table 1]; [1, 1000]
   // Gauss-Seidel, or Jacobi with SOR [soft-tissue eq 7] (the paper: "local" relaxation, factor 1);
-  // the contacts are one more group, applied at once. kJacobiCuda is refused (contacts are CPU only)
+  // the contacts are one more group, applied at once. kJacobiCuda: the Jacobi step with its
+  // contacts and volumes on a CUDA device (pbd_cuda_solver.h; its CPU twin is kJacobi)
   pbd::SolverKind solver = pbd::SolverKind::kGaussSeidel;
   double sor_w = 1.0;                                // [1, 2]
   int stabilisation_iterations = 1;                  // Algorithm 1 lines 10-15; [0, 100]

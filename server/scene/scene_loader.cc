@@ -189,9 +189,14 @@ physics::soft_tissue::SoftTissueSpec read_soft_tissue(json::JsonReader r) {
   p.bulk_modulus_pa = in_range(r, "bulk_modulus_pa", p.bulk_modulus_pa, st::kTissueBulkModulusPa);
   p.substeps = in_range(r, "substeps", p.substeps, st::kTissueSubsteps);
   p.iterations = in_range(r, "iterations", p.iterations, st::kTissueIterations);
-  p.solver = r.text("solver", "gauss_seidel", {"gauss_seidel", "jacobi"}) == "jacobi"
-                 ? physics::pbd::SolverKind::kJacobi
-                 : physics::pbd::SolverKind::kGaussSeidel;
+  const std::string solver = r.text("solver", "gauss_seidel", {"gauss_seidel", "jacobi"});
+  p.solver = solver == "jacobi" ? physics::pbd::SolverKind::kJacobi : physics::pbd::SolverKind::kGaussSeidel;
+  // the whole step (clusters, volumes, contacts) on a CUDA device: the Jacobi solver's twin
+  if (r.text("device", "cpu", {"cpu", "cuda"}) == "cuda") {
+    if (r.has("solver") && solver != "jacobi")
+      r.fail("device", "\"cuda\" solves with Jacobi: set solver \"jacobi\" or leave it out");
+    p.solver = physics::pbd::SolverKind::kJacobiCuda;
+  }
   p.sor_w = in_range(r, "sor_w", p.sor_w, st::kTissueSorW);
   p.stabilisation_iterations =
       in_range(r, "stabilisation_iterations", p.stabilisation_iterations, st::kTissueStabilisationIterations);

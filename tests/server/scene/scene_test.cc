@@ -362,6 +362,20 @@ TEST(Scene, SoftTissueMistakesNameTheirPath) {
             "test.json: effects.soft_tissue.bulk_modulus_pa: expected a number in [0, 1000000000], got -1");
   EXPECT_EQ(error_of("{" + organ + R"("effects": {"soft_tissue": {"solver": "sor"}}})"),
             "test.json: effects.soft_tissue.solver: expected one of \"gauss_seidel\", \"jacobi\", got \"sor\"");
+  {
+    // the whole step on the GPU: the Jacobi solver's device twin, with or without "solver": "jacobi"
+    for (const char* tissue : {R"({"device": "cuda"})", R"({"device": "cuda", "solver": "jacobi"})"}) {
+      const Scene gpu = parse_scene("{" + organ + R"("effects": {"soft_tissue": )" + tissue + "}}", "test.json");
+      EXPECT_EQ(gpu.world.soft_tissue->params.solver, physics::pbd::SolverKind::kJacobiCuda) << tissue;
+    }
+    const Scene cpu = parse_scene("{" + organ + R"("effects": {"soft_tissue": {"device": "cpu"}}})", "test.json");
+    EXPECT_EQ(cpu.world.soft_tissue->params.solver, physics::pbd::SolverKind::kGaussSeidel);
+  }
+  EXPECT_EQ(error_of("{" + organ + R"("effects": {"soft_tissue": {"device": "cuda", "solver": "gauss_seidel"}}})"),
+            "test.json: effects.soft_tissue.device: \"cuda\" solves with Jacobi: set solver \"jacobi\" or leave it "
+            "out");
+  EXPECT_EQ(error_of("{" + organ + R"("effects": {"soft_tissue": {"device": "gpu"}}})"),
+            "test.json: effects.soft_tissue.device: expected one of \"cpu\", \"cuda\", got \"gpu\"");
   EXPECT_EQ(error_of("{" + organ +
                      R"("effects": {"soft_tissue": {}, "probe_contact": {"start_orientation_wxyz": [0,0,0,0]}}})"),
             "test.json: effects.probe_contact.start_orientation_wxyz: expected a non-zero quaternion [w, x, y, z]");

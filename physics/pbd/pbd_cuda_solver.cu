@@ -582,7 +582,7 @@ struct PbdCudaSolver::Impl {
   // substep and the force partials per substep and block, sized when the substeps change
   int bodies = 0, stabilisation_iterations = 0;
   double margin_m = 0.0;
-  const double* radius_source = nullptr;  // the projector's radii last uploaded
+  std::vector<double> host_radius;  // the radii last uploaded
   DeviceArray<double> k_radius, k_partial;
   DeviceArray<ContactSlot> k_slot;
   DeviceArray<uint8_t> k_active;
@@ -856,12 +856,15 @@ void PbdCudaSolver::run_step(PbdSystem& sys, double dt_s, const PbdParams& param
     if (setup.particles != d.n || setup.bodies < 1 || setup.bodies > device::kMaxContactBodies || !setup.radius_m)
       throw std::logic_error("pbd: the contacts were made for another system");
   }
-  if (setup.bodies != d.bodies || (setup.bodies > 0 && setup.radius_m != d.radius_source)) {
+  // the radii compared by value (a new projector may sit where the last one was)
+  const bool new_radii =
+      setup.bodies > 0 && !std::equal(d.host_radius.begin(), d.host_radius.end(), setup.radius_m, setup.radius_m + d.n);
+  if (setup.bodies != d.bodies || new_radii) {
     if (d.graph) cudaGraphExecDestroy(d.graph), d.graph = nullptr;  // it points at the old arrays
     d.bodies = setup.bodies;
-    d.radius_source = setup.radius_m;
+    d.host_radius.assign(setup.radius_m, setup.radius_m + (d.bodies > 0 ? d.n : 0));
     if (d.bodies > 0) {
-      d.k_radius.upload(setup.radius_m, d.n);
+      d.k_radius.upload(d.host_radius);
       d.k_slot.allocate(static_cast<size_t>(d.n) * d.bodies);
       d.k_active.allocate(static_cast<size_t>(d.n) * d.bodies);
       d.k_stabilisation_max.allocate(1);

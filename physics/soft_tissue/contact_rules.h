@@ -35,7 +35,8 @@ inline Eigen::Vector3d coulomb_friction_m(const Eigen::Vector3d& slip_m, double 
 }
 
 // the probe's face of least penetration at a pose (device::least_penetration_face on the faces
-// in world coordinates); -1 when there are none
+// in world coordinates); -1 when there are none. Throws std::invalid_argument past
+// device::kMaxContactFaces faces
 int least_penetration_face(std::span<const HalfSpace> faces, const ProbePose& pose, const Eigen::Vector3d& x_m,
                            double* signed_distance_m);
 

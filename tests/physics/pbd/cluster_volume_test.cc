@@ -129,52 +129,61 @@ TEST(ClusterVolume, AFlatClusterCarriesNoVolumeConstraint) {
   EXPECT_TRUE(sys.particles().position_m.allFinite());
 }
 
-// the volumes on the device (PbdCudaSolver: cluster_volumes, volume_slots) against the CPU's
-// Jacobi, both averagings: two overlapping clusters squashed to 70 % of their height, one face
-// pinned, under gravity. Tolerance as pbd_cuda_solver_test.cc (1e-9 m); skips without a device
+// the volumes on the device against the CPU's Jacobi, both averagings: overlapping clusters
+// squashed to 70 % of their height, one face pinned, under gravity. Two bodies: two clusters that
+// each fit one block (cluster_volume_in_block), and the same with a third cluster of all 294
+// particles, more than a chunk (cluster_volumes, volume_slots). Tolerance as
+// pbd_cuda_solver_test.cc (1e-9 m); skips without a device
 TEST(ClusterVolume, TheCudaSolverKeepsVolumesAsItsCpuTwinDoes) {
   std::string why;
   if (!pbd_cuda_available(&why)) GTEST_SKIP() << "no usable CUDA device (" << why << ")";
-  auto make = [] {
+  auto make = [](bool global) {
     PbdSystem sys;
-    const Eigen::Matrix3Xd rest = lattice(4, 3, 3);
-    std::vector<int> left, right;
+    const int nx = global ? 7 : 4, ny = global ? 6 : 3, nz = global ? 7 : 3;
+    const Eigen::Matrix3Xd rest = lattice(nx, ny, nz);
+    std::vector<int> left, right, all;
     for (int i = 0; i < rest.cols(); ++i) {
       sys.add_particle(rest.col(i), kMassKg);
-      const int column = i % 4;
-      if (column <= 2) left.push_back(i);
-      if (column >= 1) right.push_back(i);
+      const int column = i % nx;
+      if (column <= nx / 2 + 1) left.push_back(i);
+      if (column >= nx / 2 - 1) right.push_back(i);
+      all.push_back(i);
       if (column == 0) sys.pin(i);
     }
     sys.add_cluster(left, 1e-4, 1e-3);
     sys.add_cluster(right, 1e-4, 1e-3);
+    if (global) sys.add_cluster(all, 1e-3, 1e-2);
     sys.finalize();
     for (int i = 0; i < rest.cols(); ++i)
-      if (i % 4 != 0) sys.particles().position_m(2, i) *= 0.7;
+      if (i % nx != 0) sys.particles().position_m(2, i) *= 0.7;
     return sys;
   };
-  for (JacobiAveraging averaging : {JacobiAveraging::kPerParticle, JacobiAveraging::kPerConstraint}) {
-    PbdSystem cpu = make(), gpu = make();
-    ASSERT_TRUE(cpu.clusters().any_volume());
-    PbdParams p;
-    p.gravity_m_per_s2 = Eigen::Vector3d(0, 0, -9.81);
-    p.averaging = averaging;
-    p.sor_w = 1.5;
-    PbdParams pg = p;
-    p.solver = SolverKind::kJacobi;
-    pg.solver = SolverKind::kJacobiCuda;
-    const double squashed_m3 = box_volume_m3(cpu.particles().position_m);
-    double gap_m = 0.0;
-    for (int k = 0; k < 60; ++k) {
-      cpu.step(1.0 / 30.0, p);
-      gpu.step(1.0 / 30.0, pg);
-      gap_m = std::max(gap_m, (cpu.particles().position_m - gpu.particles().position_m).colwise().norm().maxCoeff());
+  for (bool global : {false, true}) {
+    for (JacobiAveraging averaging : {JacobiAveraging::kPerParticle, JacobiAveraging::kPerConstraint}) {
+      PbdSystem cpu = make(global), gpu = make(global);
+      ASSERT_TRUE(cpu.clusters().any_volume());
+      ASSERT_EQ(global, cpu.clusters().end(2 * global) - cpu.clusters().begin(2 * global) > 256);
+      PbdParams p;
+      p.gravity_m_per_s2 = Eigen::Vector3d(0, 0, -9.81);
+      p.averaging = averaging;
+      p.sor_w = 1.5;
+      PbdParams pg = p;
+      p.solver = SolverKind::kJacobi;
+      pg.solver = SolverKind::kJacobiCuda;
+      const double squashed_m3 = box_volume_m3(cpu.particles().position_m);
+      double gap_m = 0.0;
+      for (int k = 0; k < 60; ++k) {
+        cpu.step(1.0 / 30.0, p);
+        gpu.step(1.0 / 30.0, pg);
+        gap_m = std::max(gap_m, (cpu.particles().position_m - gpu.particles().position_m).colwise().norm().maxCoeff());
+      }
+      std::printf("[ measured ] volumes, %s, %s: max |x_gpu - x_cpu| = %.3g m; box %.3g -> %.3g m^3\n",
+                  global ? "with a 294-slot cluster" : "clusters in one block",
+                  averaging == JacobiAveraging::kPerParticle ? "per particle" : "per constraint", gap_m, squashed_m3,
+                  box_volume_m3(gpu.particles().position_m));
+      EXPECT_LE(gap_m, 1e-9);
+      EXPECT_GT(box_volume_m3(gpu.particles().position_m), 1.2 * squashed_m3) << "the volumes pushed back";
     }
-    std::printf("[ measured ] volumes, %s: max |x_gpu - x_cpu| = %.3g m; box %.3g -> %.3g m^3\n",
-                averaging == JacobiAveraging::kPerParticle ? "per particle" : "per constraint", gap_m, squashed_m3,
-                box_volume_m3(gpu.particles().position_m));
-    EXPECT_LE(gap_m, 1e-9);
-    EXPECT_GT(box_volume_m3(gpu.particles().position_m), 1.2 * squashed_m3) << "the volumes pushed back";
   }
 }
 

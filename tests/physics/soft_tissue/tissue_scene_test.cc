@@ -4,10 +4,14 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <string>
 
 #include "anatomy/organ/kidney_phantom.h"
+#include "physics/pbd/pbd_cuda_solver.h"
 #include "physics/soft_tissue/tissue_scene.h"
 #include "physics/world.h"
 
@@ -195,6 +199,32 @@ TEST(TissueScene, TheProbePressesTheKidneyAndItRecovers) {
   EXPECT_LT(worst_m, 1e-3);
   EXPECT_EQ(world.force_model().f0_n, 0.0);
   std::printf("recovered to %.3f mm of rest\n", worst_m * 1e3);
+}
+
+// the scene's device "cuda" (effects.soft_tissue): the world steps the organ on the GPU as its
+// CPU twin (solver "jacobi") does, the probe pressing through the world's input (issue #31 item 4)
+TEST(TissueScene, TheWorldStepsTheOrganOnTheGpuAsItsCpuTwin) {
+  std::string why;
+  if (!pbd::pbd_cuda_available(&why)) GTEST_SKIP() << "no usable CUDA device (" << why << ")";
+  WorldSpec cpu_spec = tissue_spec(), gpu_spec = tissue_spec();
+  cpu_spec.soft_tissue->params.solver = pbd::SolverKind::kJacobi;
+  gpu_spec.soft_tissue->params.solver = pbd::SolverKind::kJacobiCuda;
+  World cpu(cpu_spec, anatomy::VesselTree{}, nullptr, {}, {}, &kidney());
+  World gpu(gpu_spec, anatomy::VesselTree{}, nullptr, {}, {}, &kidney());
+  double gap_m = 0.0;
+  for (int k = 0; k < 45; ++k) {
+    const double y = -0.0225 + 0.010 * std::min(1.0, k / 30.0);  // 5 mm above the skin to 5 mm into it
+    cpu.step(probe_at(y));
+    gpu.step(probe_at(y));
+    gap_m = std::max(gap_m, (cpu.tissue_state()->body().positions_m() - gpu.tissue_state()->body().positions_m())
+                                .colwise()
+                                .norm()
+                                .maxCoeff());
+  }
+  std::printf("[ measured ] the world's organ, CPU vs GPU over 45 steps: %.3g m; probe force %.3g N\n", gap_m,
+              gpu.tissue_state()->probe_force_n().norm());
+  EXPECT_GT(gpu.tissue_state()->body().contacts().probe_contacts(), 0);
+  EXPECT_LE(gap_m, 1e-9);
 }
 
 }  // namespace

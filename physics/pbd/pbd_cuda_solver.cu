@@ -307,6 +307,56 @@ __global__ void cluster_volumes(int count, const int* offset, const int* member,
   gradient[c] = g;
 }
 
+// thread's slot of the cluster this block does (block c = cluster c), its member's mass,
+// position and rest offset; mine is false for the threads past the cluster's slots
+struct BlockSlot {
+  bool mine = false;
+  int s = 0, i = 0;
+  double m = 0.0;
+  Vec3 x, q;
+};
+__device__ BlockSlot block_slot(const int* offset, const int* member, const double* mass, const double* xp,
+                                const double* rest_offset) {
+  BlockSlot b;
+  b.s = offset[blockIdx.x] + threadIdx.x;
+  b.mine = b.s < offset[blockIdx.x + 1];
+  if (!b.mine) return b;
+  b.i = member[b.s];
+  b.m = mass[b.i];
+  b.x = device::load(xp, b.i);
+  b.q = device::load(rest_offset, b.s);
+  return b;
+}
+
+// the centre t (every thread) and A_pq = sum m (x - t) q^T (thread 0) of a cluster that fits one
+// block (eqs 8-9), summed as cluster_mass_partials / cluster_moment_partials sum a one-chunk cluster;
+// every thread of the block must call it (it synchronises)
+__device__ void block_fit(const BlockSlot& b, double* sh, double* shared_t, Vec3* t, Mat3* apq) {
+  const bool mine = b.mine;
+  const double m = b.m;
+  const Vec3 x = b.x, q = b.q;
+  const Vec3 mx = m * x;
+  const double sums[4] = {block_sum(m, sh), block_sum(mx.x, sh), block_sum(mx.y, sh), block_sum(mx.z, sh)};
+  if (threadIdx.x == 0) {
+    // cluster_centre's order: 0 + the chunk's sum, then the division
+    const Vec3 c = (Vec3{} + Vec3{sums[1], sums[2], sums[3]}) / (0.0 + sums[0]);
+    shared_t[0] = c.x, shared_t[1] = c.y, shared_t[2] = c.z;
+  }
+  __syncthreads();
+  *t = Vec3{shared_t[0], shared_t[1], shared_t[2]};
+  double a[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  if (mine) {
+    const Vec3 mp = m * (x - *t);
+    const double qc[3] = {q.x, q.y, q.z};
+    for (int col = 0; col < 3; ++col)
+      a[3 * col] = mp.x * qc[col], a[3 * col + 1] = mp.y * qc[col], a[3 * col + 2] = mp.z * qc[col];
+  }
+  for (int k = 0; k < 9; ++k) {
+    const double total = block_sum(a[k], sh);
+    if (threadIdx.x == 0) apq->m[k] = 0.0 + total;
+  }
+}
+
 // eqs 8-10 and 12 for a cluster that fits one block (the kidney's do), one block per cluster:
 // cluster_mass_partials, cluster_moment_partials, cluster_rotations and project_goals in one
 // kernel, the same sums in the same order (a cluster of one chunk)
@@ -316,45 +366,24 @@ __global__ void cluster_goals_in_block(const int* offset, const int* member, con
                                        Mat3* rotation, double* lambda, double* slot, double h, double sor_w,
                                        bool per_particle) {
   __shared__ double sh[32], shared_t[3], shared_r[9];
-  const int c = blockIdx.x, s = offset[c] + threadIdx.x;
-  const bool mine = s < offset[c + 1];
-  const int i = mine ? member[s] : 0;
-  const double m = mine ? mass[i] : 0.0;
-  const Vec3 x = mine ? device::load(xp, i) : Vec3{};
-  const Vec3 mx = m * x;
-  const double sums[4] = {block_sum(m, sh), block_sum(mx.x, sh), block_sum(mx.y, sh), block_sum(mx.z, sh)};
-  if (threadIdx.x == 0) {
-    // cluster_centre's order: 0 + the chunk's sum, then the division
-    const Vec3 t = (Vec3{} + Vec3{sums[1], sums[2], sums[3]}) / (0.0 + sums[0]);
-    shared_t[0] = t.x, shared_t[1] = t.y, shared_t[2] = t.z;
-  }
-  __syncthreads();
-  const Vec3 t{shared_t[0], shared_t[1], shared_t[2]};
-  double a[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
-  const Vec3 q = mine ? device::load(rest_offset, s) : Vec3{};
-  if (mine) {
-    const Vec3 mp = m * (x - t);
-    const double qc[3] = {q.x, q.y, q.z};
-    for (int col = 0; col < 3; ++col)
-      a[3 * col] = mp.x * qc[col], a[3 * col + 1] = mp.y * qc[col], a[3 * col + 2] = mp.z * qc[col];
-  }
+  const int c = blockIdx.x;
+  const BlockSlot b = block_slot(offset, member, mass, xp, rest_offset);
+  Vec3 t;
   Mat3 apq;
-  for (int k = 0; k < 9; ++k) {
-    const double total = block_sum(a[k], sh);
-    if (threadIdx.x == 0) apq.m[k] = 0.0 + total;
-  }
+  block_fit(b, sh, shared_t, &t, &apq);
+  const int s = b.s, i = b.i;
   if (threadIdx.x == 0) {
     const Mat3 r = device::extract_rotation(apq, rotation[c], rest_moment[c]);
     rotation[c] = r;
     for (int k = 0; k < 9; ++k) shared_r[k] = r.m[k];
   }
   __syncthreads();
-  if (!mine) return;
+  if (!b.mine) return;
   Mat3 r;
   for (int k = 0; k < 9; ++k) r.m[k] = shared_r[k];
-  const Vec3 goal = r * q + t;
+  const Vec3 goal = r * b.q + t;
   Vec3 dl, dx;
-  if (device::project_to_goal(x, goal, w[i], m, compliance[c], h, device::load(lambda, s), &dl, &dx)) {
+  if (device::project_to_goal(b.x, goal, w[i], b.m, compliance[c], h, device::load(lambda, s), &dl, &dx)) {
     const double share = per_particle ? 1.0 : min_inv[c];
     device::store(lambda, s, device::load(lambda, s) + (sor_w * (per_particle ? inv_count[i] : share)) * dl);
     device::store(slot, s, share * dx);
@@ -370,32 +399,11 @@ __global__ void cluster_volume_in_block(const int* offset, const int* member, co
                                         const double* volume_compliance, const double* delivered, const double* min_inv,
                                         double* lambda, double* slot, double h, double sor_w, bool per_particle) {
   __shared__ double sh[32], shared_t[3], shared_g[9], shared_dl;
-  const int c = blockIdx.x, s = offset[c] + threadIdx.x;
-  const bool mine = s < offset[c + 1];
-  const int i = mine ? member[s] : 0;
-  const double m = mine ? mass[i] : 0.0;
-  const Vec3 x = mine ? device::load(xp, i) : Vec3{};
-  const Vec3 mx = m * x;
-  const double sums[4] = {block_sum(m, sh), block_sum(mx.x, sh), block_sum(mx.y, sh), block_sum(mx.z, sh)};
-  if (threadIdx.x == 0) {
-    const Vec3 t = (Vec3{} + Vec3{sums[1], sums[2], sums[3]}) / (0.0 + sums[0]);
-    shared_t[0] = t.x, shared_t[1] = t.y, shared_t[2] = t.z;
-  }
-  __syncthreads();
-  const Vec3 t{shared_t[0], shared_t[1], shared_t[2]};
-  double a[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
-  const Vec3 q = mine ? device::load(rest_offset, s) : Vec3{};
-  if (mine) {
-    const Vec3 mp = m * (x - t);
-    const double qc[3] = {q.x, q.y, q.z};
-    for (int col = 0; col < 3; ++col)
-      a[3 * col] = mp.x * qc[col], a[3 * col + 1] = mp.y * qc[col], a[3 * col + 2] = mp.z * qc[col];
-  }
-  Mat3 apq;
-  for (int k = 0; k < 9; ++k) {
-    const double total = block_sum(a[k], sh);
-    if (threadIdx.x == 0) apq.m[k] = 0.0 + total;
-  }
+  const BlockSlot b = block_slot(offset, member, mass, xp, rest_offset);
+  Vec3 t;
+  Mat3 apq;  // the volume's F = A_pq A_qq^-1 needs no centre beyond A_pq's
+  block_fit(b, sh, shared_t, &t, &apq);
+  const int c = blockIdx.x;
   if (threadIdx.x == 0) {
     double dl = 0.0;
     Mat3 g;
@@ -407,16 +415,16 @@ __global__ void cluster_volume_in_block(const int* offset, const int* member, co
     shared_dl = dl;
   }
   __syncthreads();
-  if (!mine) return;
+  if (!b.mine) return;
   const double dl = shared_dl;
   const double share = per_particle ? 1.0 : min_inv[c];
   if (dl == 0.0) {
-    device::store(slot, s, Vec3{});
+    device::store(slot, b.s, Vec3{});
     return;
   }
   Mat3 g;
   for (int k = 0; k < 9; ++k) g.m[k] = shared_g[k];
-  device::store(slot, s, share * ((w[i] * m * dl) * (g * q)));
+  device::store(slot, b.s, share * ((w[b.i] * b.m * dl) * (g * b.q)));
 }
 
 // eq 7's gather (see gather), then the contact group for the particle: the last group of an
@@ -612,6 +620,15 @@ struct PbdCudaSolver::Impl {
     if (stream) cudaStreamDestroy(stream);
   }
 
+  // each chunk's partial sums of m, m x (partial4) and A_pq (partial9) at the current x*
+  void chunk_sums() {
+    cluster_mass_partials<<<chunks, kChunk, 0, stream>>>(chunk_begin.ptr, chunk_end.ptr, member.ptr, mass.ptr, xp.ptr,
+                                                         partial4.ptr);
+    cluster_moment_partials<<<chunks, kChunk, 0, stream>>>(chunk_begin.ptr, chunk_end.ptr, chunk_cluster.ptr,
+                                                           cluster_chunks.ptr, partial4.ptr, member.ptr, mass.ptr,
+                                                           xp.ptr, rest_offset.ptr, partial9.ptr);
+  }
+
   // one Jacobi iteration (PbdSystem::solve_jacobi); with contacts, their group rides on the
   // iteration's last gather (gather_then_contacts)
   void solve_jacobi(double h, double sor_w, bool per_particle, const ContactBody* body) {
@@ -645,11 +662,7 @@ struct PbdCudaSolver::Impl {
             c_compliance.ptr, c_min_inv.ptr, c_gather.inv_count.ptr, rotation.ptr, c_lambda.ptr, c_slot.ptr, h, sor_w,
             per_particle);
       } else {
-        cluster_mass_partials<<<chunks, kChunk, 0, stream>>>(chunk_begin.ptr, chunk_end.ptr, member.ptr, mass.ptr,
-                                                             xp.ptr, partial4.ptr);
-        cluster_moment_partials<<<chunks, kChunk, 0, stream>>>(chunk_begin.ptr, chunk_end.ptr, chunk_cluster.ptr,
-                                                               cluster_chunks.ptr, partial4.ptr, member.ptr, mass.ptr,
-                                                               xp.ptr, rest_offset.ptr, partial9.ptr);
+        chunk_sums();
         cluster_rotations<<<blocks_for(clusters), kThreads, 0, stream>>>(
             clusters, cluster_chunks.ptr, partial4.ptr, partial9.ptr, rest_moment.ptr, rotation.ptr, centre.ptr);
         project_goals<<<blocks_for(slots), kThreads, 0, stream>>>(
@@ -666,11 +679,7 @@ struct PbdCudaSolver::Impl {
             c_offset.ptr, member.ptr, mass.ptr, inv_mass.ptr, xp.ptr, rest_offset.ptr, v_aqq_inverse.ptr,
             v_compliance.ptr, v_delivered.ptr, c_min_inv.ptr, v_lambda.ptr, c_slot.ptr, h, sor_w, per_particle);
       } else {
-        cluster_mass_partials<<<chunks, kChunk, 0, stream>>>(chunk_begin.ptr, chunk_end.ptr, member.ptr, mass.ptr,
-                                                             xp.ptr, partial4.ptr);
-        cluster_moment_partials<<<chunks, kChunk, 0, stream>>>(chunk_begin.ptr, chunk_end.ptr, chunk_cluster.ptr,
-                                                               cluster_chunks.ptr, partial4.ptr, member.ptr, mass.ptr,
-                                                               xp.ptr, rest_offset.ptr, partial9.ptr);
+        chunk_sums();
         cluster_volumes<<<blocks_for(clusters), kThreads, 0, stream>>>(
             clusters, c_offset.ptr, member.ptr, cluster_chunks.ptr, partial9.ptr, v_aqq_inverse.ptr, v_compliance.ptr,
             v_delivered.ptr, rest_offset.ptr, mass.ptr, inv_mass.ptr, v_lambda.ptr, v_dlambda.ptr, v_gradient.ptr, h,

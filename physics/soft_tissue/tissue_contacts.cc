@@ -53,6 +53,13 @@ void TissueContacts::begin_step() {
   stabilisation_max_m_ = 0.0;
 }
 
+// the probe moved on to `fraction_of_step` of its way to the target; the bodies of that substep
+void TissueContacts::advance_probe(double fraction_of_step, device::ContactBody* bodies) {
+  const ProbePose substep_start = probe_now_;
+  probe_now_ = interpolate(probe_step_start_, probe_target_, fraction_of_step);
+  make_bodies(substep_start, probe_now_, bodies);
+}
+
 void TissueContacts::make_bodies(const ProbePose& from, const ProbePose& to, device::ContactBody* bodies) const {
   device::ContactBody& s = bodies[kSupport];
   s.faces = 1;
@@ -76,9 +83,7 @@ void TissueContacts::make_bodies(const ProbePose& from, const ProbePose& to, dev
 // it is at the end of this substep
 void TissueContacts::begin_substep(pbd::Particles& particles, double h_s, double fraction_of_step) {
   (void)h_s;
-  const ProbePose substep_start = probe_now_;
-  probe_now_ = interpolate(probe_step_start_, probe_target_, fraction_of_step);
-  make_bodies(substep_start, probe_now_, bodies_);
+  advance_probe(fraction_of_step, bodies_);
   count_ = 0;
   probe_contacts_ = support_contacts_ = 0;
   // a body of another size than the radii were made for: no contacts rather than a read past them
@@ -155,11 +160,7 @@ bool TissueContacts::device_setup(DeviceSetup* setup) const {
 
 // the same poses begin_substep would take, substep by substep
 void TissueContacts::device_bodies(int substeps, device::ContactBody* bodies) {
-  for (int s = 0; s < substeps; ++s) {
-    const ProbePose substep_start = probe_now_;
-    probe_now_ = interpolate(probe_step_start_, probe_target_, static_cast<double>(s + 1) / substeps);
-    make_bodies(substep_start, probe_now_, bodies + 2 * s);
-  }
+  for (int s = 0; s < substeps; ++s) advance_probe(static_cast<double>(s + 1) / substeps, bodies + 2 * s);
 }
 
 void TissueContacts::device_results(const Vector3d* force_n, const int* contacts, double stabilisation_max_m) {

@@ -58,6 +58,7 @@ class TissueContacts final : public pbd::ContactProjector {
   };
   // the support and the probe over a substep that takes the probe from `from` to `to`
   void make_bodies(const ProbePose& from, const ProbePose& to, pbd::device::ContactBody* bodies) const;
+  void advance_probe(double fraction_of_step, pbd::device::ContactBody* bodies);
   void stabilise(pbd::Particles& particles);
 
   Eigen::VectorXd radius_m_;

@@ -4,9 +4,10 @@
 // volume constraint and the contact surface, minimising the mean fiducial error over the stages
 // (rest included) against a static neo-Hookean FEM of the same organ under the same probe,
 // support and gravity (physics/soft_tissue/calibration.h). The optimum of each radius is then run
-// on a held-out kidney it was not tuned on. Writes a JSON report and a Markdown summary: per stage
-// the reference's bead motion (the error of a model that does not deform), the model's mean / std
-// / max error and the fraction of the motion it explains, on both kidneys.
+// on a held-out kidney it was not tuned on. The solver is the CPU scene's Gauss-Seidel, or with
+// --solver jacobi the CPU twin of the GPU's step (a scene with soft_tissue device cuda). Writes a JSON report and a
+// Markdown summary: per stage the reference's bead motion (the error of a model that does not deform), the model's mean
+// / std / max error and the fraction of the motion it explains, on both kidneys.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -106,6 +107,9 @@ int main(int argc, char** argv) {
   std::string mesher = "tetgen";
   std::string out = "docs/benchmarks/soft-tissue-calibration";
   std::string references_dir = "docs/benchmarks";
+  std::string solver = "gauss_seidel";
+  double sor_w = 1.5;
+  int substeps = st::TissueParams{}.substeps, iterations = st::TissueParams{}.iterations;
   app.add_option("--radii-mm", radii_mm, "particle radii to calibrate (the paper: 2.2-3.3 mm)")
       ->check(CLI::Range(1.5, 20.0));
   app.add_option("--compliances", compliances, "the cluster compliances searched (s^2; smaller is stiffer)")
@@ -132,6 +136,17 @@ int main(int argc, char** argv) {
   app.add_option("--references-dir", references_dir,
                  "where the FEM references are kept (soft-tissue-reference-tuning.txt, "
                  "soft-tissue-reference-held-out.txt)");
+  app.add_option("--solver", solver,
+                 "the PBD solver calibrated: gauss_seidel (the CPU scene's) or jacobi (the CPU twin of the GPU's "
+                 "step, soft_tissue device cuda: the same answer to summation order)")
+      ->check(CLI::IsMember({"gauss_seidel", "jacobi"}));
+  app.add_option("--substeps", substeps, "PBD substeps a step (both kidney scenes': 3)")
+      ->check(CLI::Range(static_cast<int>(st::kTissueSubsteps.min), static_cast<int>(st::kTissueSubsteps.max)));
+  app.add_option("--iterations", iterations,
+                 "solver iterations a substep (scenes/kidney.json's: 9; kidney-gpu.json's: 27)")
+      ->check(CLI::Range(static_cast<int>(st::kTissueIterations.min), static_cast<int>(st::kTissueIterations.max)));
+  app.add_option("--sor-w", sor_w, "with --solver jacobi: its over-relaxation (the GPU scene's: 1.5)")
+      ->check(CLI::Range(1.0, 2.0));
   app.add_flag("--solve-references", solve, "solve both FEM references and write them to --references-dir");
   app.add_option("--out", out, "report path without extension");
   CLI11_PARSE(app, argc, argv);
@@ -149,6 +164,10 @@ int main(int argc, char** argv) {
       st::FemReference ref;
       std::vector<double> check_diff_mm;
     };
+    const bool jacobi = solver == "jacobi";
+    const std::string solver_words =
+        jacobi ? fmt::format("{} substeps x {} Jacobi iterations, SOR w {}", substeps, iterations, sor_w)
+               : fmt::format("{} substeps x {} Gauss-Seidel iterations", substeps, iterations);
     std::vector<Organ> organs;
     for (auto [name, which] :
          {std::pair{"tuning", st::CalibrationOrgan::kTuning}, std::pair{"held-out", st::CalibrationOrgan::kHeldOut}}) {
@@ -214,6 +233,12 @@ int main(int argc, char** argv) {
       spec.params.cluster_compliance_s2 = s.compliance;
       spec.params.bulk_modulus_pa = s.bulk_kpa * 1e3;
       spec.params.contact_surface = s.contact;
+      spec.params.substeps = substeps;
+      spec.params.iterations = iterations;
+      if (jacobi) {
+        spec.params.solver = pcisim::physics::pbd::SolverKind::kJacobi;
+        spec.params.sor_w = sor_w;
+      }
       return st::run_pbd_protocol(o.setup, spec, o.ref);
     };
     const size_t total = radii_mm.size() * compliances.size() * bulk_kpa.size() * contacts.size();
@@ -270,6 +295,8 @@ int main(int argc, char** argv) {
     for (double d : tuning.setup.stage_depths_m) stage_mm.push_back(d * 1e3);
     report["stages_probe_travel_mm"] = stage_mm;
     report["protocol"] = {{"warmup_steps", warmup}, {"steps_per_stage", per_stage}, {"step_s", tuning.setup.step_s}};
+    report["solver"] = {
+        {"kind", solver}, {"substeps", substeps}, {"iterations", iterations}, {"sor_w", jacobi ? sor_w : 1.0}};
     report["objective"] = "mean over the stages (rest included) of the mean fiducial error";
     nlohmann::json search = nlohmann::json::array();
     for (const Result& r : all)
@@ -305,13 +332,14 @@ int main(int argc, char** argv) {
         "Reference: static neo-Hookean FEM, E = {} kPa, nu = {}, linear tets: {} (tuning kidney {} nodes, "
         "held-out kidney {} nodes), the same probe and gravity as the PBD, the support sticking (a node that "
         "reaches it stays where it touched; PBD: sticking friction), the probe frictionless. Protocol: {} warm-up "
-        "steps, the probe moved over {} steps of 1/60 s to each stage. Search on the tuning kidney (the phantom's "
+        "steps, the probe moved over {} steps of 1/60 s to each stage; the PBD solved with {}. Search on the "
+        "tuning kidney (the phantom's "
         "defaults, seed {}): cluster compliance in {{{}}} s^2 x bulk modulus in {{{}}} kPa x contact surface in "
         "{{{}}}, objective the mean fiducial error over the stages, rest included. The held-out kidney ({} x {} x "
         "{} mm semi-axes, hilum {}, seed {}) was never run during the search. *Moved* is the reference's mean bead "
         "displacement from rest: the error of a model that does not deform. *Explained* = 1 - error / moved.\n\n",
-        young_kpa, poisson, mesh_words, tuning.ref.nodes, held_out.ref.nodes, warmup, per_stage, tuning.spec.seed,
-        fmt::join(compliances, ", "), fmt::join(bulk_kpa, ", "), fmt::join(contacts, ", "),
+        young_kpa, poisson, mesh_words, tuning.ref.nodes, held_out.ref.nodes, warmup, per_stage, solver_words,
+        tuning.spec.seed, fmt::join(compliances, ", "), fmt::join(bulk_kpa, ", "), fmt::join(contacts, ", "),
         held_out.spec.semi_axes_mm.x(), held_out.spec.semi_axes_mm.y(), held_out.spec.semi_axes_mm.z(),
         held_out.spec.hilum_depth, held_out.spec.seed);
     auto stage_table = [&](const char* title, const std::vector<const st::PbdRun*>& runs,
@@ -390,14 +418,15 @@ int main(int argc, char** argv) {
         md += fmt::format(" {:.2f} |", all[i + j].objective_m * 1e3);
       md += "\n";
     }
-    md +=
-        "\n**PBD step time at each optimum (ms, this machine, 3 substeps x 9 Gauss-Seidel iterations)**\n\n"
-        "| setting | p50 | p99 |\n|---|---|---|\n";
+    md += fmt::format(
+        "\n**PBD step time at each optimum (ms, this machine, {}, one thread)**\n\n"
+        "| setting | p50 | p99 |\n|---|---|---|\n",
+        solver_words);
     for (const Result& b : best)
       md += fmt::format("| {} | {:.1f} | {:.1f} |\n", describe(b.setting),
                         pcisim::realtime::percentile(b.run.step_ms, 0.5),
                         pcisim::realtime::percentile(b.run.step_ms, 0.99));
-    md += fmt::format("\n![error against stage](soft-tissue-calibration.png)\n");
+    md += fmt::format("\n![error against stage]({}.png)\n", std::filesystem::path(out).filename().string());
     std::ofstream(out + ".md") << md;
     fmt::print("wrote {}.json and {}.md\n", out, out);
   } catch (const std::exception& e) {  // a reference that is not this setup's, a file that cannot be written

@@ -337,6 +337,28 @@ TEST(Scene, TheKidneySceneListsOnlyTheSoftTissueEffects) {
   EXPECT_EQ(s.ultrasound->settings.renderer, ultrasound::UsRenderer::kCpu);
 }
 
+// the GPU's kidney: the CPU scene but for its solver (Jacobi on the device, 27 iterations: the
+// Jacobi calibration's); everything else as scenes/kidney.json has it
+TEST(Scene, TheGpuKidneySceneDiffersFromTheCpuOneOnlyInItsSolver) {
+  const Scene cpu = load_scene_file(PCISIM_SOURCE_DIR "/scenes/kidney.json");
+  const Scene gpu = load_scene_file(PCISIM_SOURCE_DIR "/scenes/kidney-gpu.json");
+  EXPECT_EQ(gpu.effects, cpu.effects);
+  ASSERT_TRUE(gpu.world.soft_tissue && gpu.world.probe_contact && gpu.ultrasound);
+  const physics::soft_tissue::TissueParams& g = gpu.world.soft_tissue->params;
+  const physics::soft_tissue::TissueParams& c = cpu.world.soft_tissue->params;
+  EXPECT_EQ(g.solver, physics::pbd::SolverKind::kJacobiCuda);
+  EXPECT_EQ(c.solver, physics::pbd::SolverKind::kGaussSeidel);
+  EXPECT_EQ(g.iterations, 27);
+  EXPECT_DOUBLE_EQ(g.sor_w, 1.5);
+  EXPECT_EQ(g.substeps, c.substeps);
+  EXPECT_DOUBLE_EQ(g.cluster_compliance_s2, 2e-5);
+  EXPECT_DOUBLE_EQ(g.bulk_modulus_pa, 100e3);
+  EXPECT_EQ(g.contact_surface, c.contact_surface);
+  EXPECT_DOUBLE_EQ(gpu.world.soft_tissue->model.particle_radius_m, cpu.world.soft_tissue->model.particle_radius_m);
+  EXPECT_DOUBLE_EQ(gpu.world.probe_contact->face_width_m, cpu.world.probe_contact->face_width_m);
+  EXPECT_EQ(gpu.ultrasound->settings.width_px, cpu.ultrasound->settings.width_px);
+}
+
 TEST(Scene, SoftTissueMistakesNameTheirPath) {
   const std::string organ = R"("anatomy": {"organ": "kidney"}, )";
   EXPECT_EQ(error_of("{" + organ + R"("effects": {"soft_tissue": {}, "guidewire": {}}})"),

@@ -185,7 +185,8 @@ Row run_kidney(double radius_mm, int iterations, int warmup, int steps, bool gpu
     b.step(kDtS);
     most_contacts = std::max(most_contacts, b.contacts().probe_contacts());
   });
-  std::printf("pbd-gpu: kidney r %.1f mm: the probe met up to %d particles\n", radius_mm, most_contacts);
+  std::printf("pbd-gpu: kidney r %.1f mm, 3 x %d: the probe met up to %d particles\n", radius_mm, iterations,
+              most_contacts);
   r.name = iterations == 9 ? fmt::format("kidney r {} mm", radius_mm)
                            : fmt::format("kidney r {} mm, 3 × {}", radius_mm, iterations);
   r.spacing_mm = radius_mm;
@@ -261,8 +262,9 @@ int run_bench(const std::vector<std::string>& args) {
   table(0, ventricles);
   f << "\n## The soft-tissue kidney, its whole step\n\n"
        "The kidney's `TissueBody::step` (`physics/soft_tissue`, issue #31 item 4) at the paper's particle radii 3.3 "
-       "and 2.2 mm (spacing column: the radius) with `scenes/kidney.json`'s knobs on the Jacobi solver: 3 substeps × "
-       "9 iterations, SOR w = 1.5, cluster compliance 2e-5 s², each cluster's volume at 100 kPa, damping 12/s, "
+       "and 2.2 mm (spacing column: the radius) with `scenes/kidney.json`'s calibrated knobs on the Jacobi solver "
+       "(as `scenes/kidney-gpu.json`, SOR w = 1.5): 3 substeps × 9 iterations, cluster compliance 2e-5 s², each "
+       "cluster's volume at 100 kPa, damping 12/s, "
        "gravity, 30 Hz steps; the whole step on both sides: the clusters and their volumes, the support's and a "
        "probe's contacts (found, stabilised, projected with Coulomb friction after every iteration, their forces "
        "summed). Released just above its support, the organ sags onto it while a 20 × 30 × 40 mm probe comes down "

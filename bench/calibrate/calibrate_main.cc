@@ -165,6 +165,10 @@ int main(int argc, char** argv) {
       std::vector<double> check_diff_mm;
     };
     const bool jacobi = solver == "jacobi";
+    if (!jacobi && app.count("--sor-w") > 0) {
+      fmt::print(stderr, "pcisim-calibrate: --sor-w is Jacobi's over-relaxation: give it with --solver jacobi\n");
+      return 2;
+    }
     const std::string solver_words =
         jacobi ? fmt::format("{} substeps x {} Jacobi iterations, SOR w {}", substeps, iterations, sor_w)
                : fmt::format("{} substeps x {} Gauss-Seidel iterations", substeps, iterations);

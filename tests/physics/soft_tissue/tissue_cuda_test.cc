@@ -132,13 +132,16 @@ TEST(TissueCuda, TheGpuStepWithItsContactsIsTheCpuJacobiStep) {
 }
 
 // the GPU scene's solver (scenes/kidney-gpu.json: 27 iterations, SOR w 1.5) is stiffer and
-// converges further, and there the run is sensitive sooner. Each press is held to the larger of
-// 1e-9 m and ten times what two CPU runs 1e-15 m apart part by: the probe held above the organ
-// (it only sags onto its support) and pressed 8 mm past its rest top
-TEST(TissueCuda, TheGpuScenesStepIsAsCloseToItsCpuTwinAsTheCpuToItself) {
+// converges further, and it is sensitive as soon as the probe pushes: two CPU runs 1e-15 m apart
+// part by 1.5e-9 m over a 5 mm press (0.09 N) and 1.8e-4 m over an 8 mm one (0.46 N; H200 host,
+// 2026-12-02). So the twin is held to ten times what the CPU parts from itself, and never looser
+// than 1e-9 m (1e-8 of the forces): sagging with the probe held above (4.5e-15 m measured),
+// pressed 5 mm (7.2e-9 m against 1.5e-8) and 8 mm (1.3e-4 m against 1.8e-3: there a wrong rule
+// below a millimetre would pass, so the contacts must also match one for one)
+TEST(TissueCuda, TheGpuScenesStepIsItsCpuTwin) {
   std::string why;
   if (!pbd::pbd_cuda_available(&why)) GTEST_SKIP() << "no usable CUDA device (" << why << ")";
-  for (double press_m : {-3e-3, 8e-3}) {
+  for (double press_m : {-3e-3, 5e-3, 8e-3}) {
     TissueBody cpu = make_body(pbd::SolverKind::kJacobi, 27, 1.5), nudged = cpu,
                gpu = make_body(pbd::SolverKind::kJacobiCuda, 27, 1.5);
     nudged.system().particles().position_m.array() += 1e-15;
@@ -148,10 +151,12 @@ TEST(TissueCuda, TheGpuScenesStepIsAsCloseToItsCpuTwinAsTheCpuToItself) {
     const std::string what = "27 iterations, w 1.5, press " + std::to_string(press_m * 1e3) + " mm";
     print(("CPU vs GPU, " + what).c_str(), g, gpu.particle_count());
     print(("CPU vs CPU nudged 1e-15 m, " + what).c_str(), self, gpu.particle_count());
-    EXPECT_GT(gpu.support_force_n().norm(), 0.5);
-    if (press_m > 0.0) EXPECT_GT(g.most_probe_contacts, 10);
+    EXPECT_GT(gpu.support_force_n().norm(), 0.5) << what;
+    if (press_m > 0.0) EXPECT_GT(g.most_probe_contacts, 10) << what;
     EXPECT_LE(g.position_m, std::max(1e-9, 10.0 * self.position_m)) << what;
-    EXPECT_LE(g.force, std::max(1e-9, 10.0 * self.force)) << what;
+    EXPECT_LE(g.force, std::max(1e-8, 10.0 * self.force)) << what;
+    EXPECT_EQ(g.count, 0) << what;
+    EXPECT_LE(g.stabilisation_m, 1e-9) << what;
   }
 }
 

@@ -338,8 +338,8 @@ TEST(Scene, TheKidneySceneListsOnlyTheSoftTissueEffects) {
 }
 
 // the GPU's kidney: the CPU scene but for its solver (Jacobi on the device, 27 iterations: the
-// Jacobi calibration's); everything else as scenes/kidney.json has it
-TEST(Scene, TheGpuKidneySceneDiffersFromTheCpuOneOnlyInItsSolver) {
+// Jacobi calibration's); the organ, its stiffness, contacts and probe as scenes/kidney.json has them
+TEST(Scene, TheGpuKidneySceneIsTheCpuOneWithTheDevicesSolver) {
   const Scene cpu = load_scene_file(PCISIM_SOURCE_DIR "/scenes/kidney.json");
   const Scene gpu = load_scene_file(PCISIM_SOURCE_DIR "/scenes/kidney-gpu.json");
   EXPECT_EQ(gpu.effects, cpu.effects);
@@ -354,6 +354,12 @@ TEST(Scene, TheGpuKidneySceneDiffersFromTheCpuOneOnlyInItsSolver) {
   EXPECT_DOUBLE_EQ(g.cluster_compliance_s2, 2e-5);
   EXPECT_DOUBLE_EQ(g.bulk_modulus_pa, 100e3);
   EXPECT_EQ(g.contact_surface, c.contact_surface);
+  EXPECT_DOUBLE_EQ(g.damping_per_s, c.damping_per_s);
+  EXPECT_DOUBLE_EQ(g.density_kg_per_m3, c.density_kg_per_m3);
+  EXPECT_DOUBLE_EQ(g.support_mu_static, c.support_mu_static);
+  EXPECT_DOUBLE_EQ(g.probe_mu_static, c.probe_mu_static);
+  EXPECT_EQ(g.stabilisation_iterations, c.stabilisation_iterations);
+  EXPECT_DOUBLE_EQ(gpu.world.soft_tissue->settle_s, cpu.world.soft_tissue->settle_s);
   EXPECT_DOUBLE_EQ(gpu.world.soft_tissue->model.particle_radius_m, cpu.world.soft_tissue->model.particle_radius_m);
   EXPECT_DOUBLE_EQ(gpu.world.probe_contact->face_width_m, cpu.world.probe_contact->face_width_m);
   EXPECT_EQ(gpu.ultrasound->settings.width_px, cpu.ultrasound->settings.width_px);
